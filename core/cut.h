@@ -1,0 +1,51 @@
+#pragma once
+/// Cut graph, combing and seam curves. DESIGN section 5.
+///
+/// CONVENTIONS (written once; see also topology.h and field.h):
+/// * A seam curve is a chain of cut interior edges between seam nodes. It is stored as corners
+///   c_0, c_1, ... whose faces lie on its LEFT: the edge of c_j (vertex(next c_j) ->
+///   vertex(prev c_j)) is traversed in the curve's direction. The RIGHT face of that edge is
+///   face(opposite(c_j)).
+/// * After combing, the combed direction of face f is rot^faceRotation[f](field.direction[f]) and
+///   combedMatching[c] is the matching (field.h) between combed directions: 0 across every
+///   non-cut edge, and the same value k on every edge of one seam curve (asserted).
+/// * Map across a seam (the solver's convention): crossing from the left face to the right face,
+///   q_right = r q_left + t with r = i^(-k) = conj(i^k), k = seam.matching, t in Z + iZ.
+#include <cstdint>
+#include <vector>
+
+#include "field.h"
+#include "mesh.h"
+#include "progress.h"
+#include "topology.h"
+
+namespace seamvox {
+
+struct SeamCurve {
+  std::vector<CornerId> corners;  ///< left-side corners in curve order
+  VertexId start = kInvalidId;    ///< first vertex of the curve (a seam node)
+  VertexId end = kInvalidId;      ///< last vertex (== start for a closed loop)
+  std::uint8_t matching = 0;      ///< combed matching k of every edge of the curve, left -> right
+};
+
+struct CutOptions {
+  ProgressFn progress;
+};
+
+struct CutResult {
+  std::vector<std::uint8_t> isCut;           ///< 3 #F: edge of corner c is cut (boundary incl.)
+  std::vector<std::uint8_t> faceRotation;    ///< #F, quarter turns applied by combing
+  std::vector<std::uint8_t> combedMatching;  ///< 3 #F, matching after combing
+  std::vector<SeamCurve> seams;
+  /// 3 #F: seam id of the edge of corner c, for corners on both sides; kInvalidId when the edge
+  /// is not on a seam (boundary edges are cut but are not seams).
+  std::vector<std::uint32_t> cornerSeam;
+  std::vector<VertexId> cones;  ///< copy of the field's cones; every one lies on the cut
+};
+
+/// Dual spanning tree per component, pruning to a cut through every cone (boundary edges kept),
+/// combing and seam curves. Each component's cut surface is a topological disk. Linear time.
+CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                    const FieldSingularities& singularities, const CutOptions& options = {});
+
+}  // namespace seamvox

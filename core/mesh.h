@@ -1,0 +1,52 @@
+#pragma once
+/// The in-memory triangle mesh: plain arrays indexed by 32-bit ids.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace seamvox {
+
+using VertexId = std::uint32_t;  ///< index into positions
+using FaceId = std::uint32_t;    ///< index into triangles
+using CornerId = std::uint32_t;  ///< 3 * face + k, k in {0, 1, 2}
+/// Marks "no such element" (e.g. the opposite of a boundary corner).
+constexpr std::uint32_t kInvalidId = 0xffffffffu;
+
+using Triangle = std::array<VertexId, 3>;
+using Vec3f = Eigen::Vector3f;
+using Vec3d = Eigen::Vector3d;
+using Vec2d = Eigen::Vector2d;
+
+/// A triangle soup or indexed mesh. Positions are float (scans; 12 bytes per vertex), all
+/// geometric computation is done in double. Triangles are counter-clockwise seen from outside.
+struct TriangleMesh {
+  std::vector<Vec3f> positions;     ///< #V
+  std::vector<Triangle> triangles;  ///< #F
+  /// Optional per-corner texture coordinates (u, v) in grid units, 3 * #F entries or empty.
+  /// Double: seam checks need 1e-6 absolute accuracy on coordinates of several thousand.
+  std::vector<Vec2d> cornerUV;
+
+  std::uint32_t numVertices() const { return static_cast<std::uint32_t>(positions.size()); }
+  std::uint32_t numFaces() const { return static_cast<std::uint32_t>(triangles.size()); }
+  bool hasUV() const { return !cornerUV.empty(); }
+  Vec3d position(VertexId v) const { return positions[v].cast<double>(); }
+};
+
+/// Axis-aligned bounding box of the positions (empty mesh: min > max).
+struct BoundingBox {
+  Vec3d min{Vec3d::Constant(1e300)};
+  Vec3d max{Vec3d::Constant(-1e300)};
+  bool isEmpty() const { return (min.array() > max.array()).any(); }
+  Vec3d extent() const { return isEmpty() ? Vec3d::Zero() : Vec3d(max - min); }
+  double diagonal() const { return extent().norm(); }
+};
+BoundingBox computeBoundingBox(const std::vector<Vec3f>& positions);
+
+/// Unit normal of a face (zero vector for a zero-area face).
+Vec3d faceNormal(const TriangleMesh& mesh, FaceId f);
+/// Area of a face.
+double faceArea(const TriangleMesh& mesh, FaceId f);
+
+}  // namespace seamvox

@@ -1,0 +1,31 @@
+#pragma once
+/// Atomic output: write to a temporary file next to the target, rename on commit.
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace seamvox {
+
+/// Opens "<path>.tmp-<pid>" for binary writing; commit() flushes, checks for write errors and
+/// renames it onto path. If the object is destroyed without commit() the temporary is removed.
+class AtomicFile {
+ public:
+  explicit AtomicFile(std::string path);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  std::FILE* handle() { return file_; }
+  void write(const void* data, std::size_t bytes);
+  void write(const std::string& text) { write(text.data(), text.size()); }
+  /// Throws IoError (disk full, permissions) naming the target path.
+  void commit();
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_, tmpPath_;
+  std::FILE* file_ = nullptr;
+  std::unique_ptr<char[]> buffer_;
+};
+
+}  // namespace seamvox

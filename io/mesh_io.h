@@ -1,0 +1,42 @@
+#pragma once
+/// Reading and writing triangle meshes: PLY (ascii, binary little/big endian, faces and
+/// tristrips), OBJ, OFF. Errors name the file, the line or element, and the problem.
+#include <memory>
+#include <string>
+
+#include "../core/mesh.h"
+#include "../stream/mesh_stream.h"
+
+namespace seamvox {
+
+enum class MeshFormat { Unknown, Ply, Obj, Off, Draco };
+/// Format from the file extension (case-insensitive): .ply .obj .off .drc.
+MeshFormat formatFromPath(const std::string& path);
+
+struct ReadOptions {
+  /// Also read per-corner texture coordinates (OBJ vt, PLY face texcoord). Off: they are ignored.
+  bool readUV = false;
+  /// Triangles per chunk handed out by the stream.
+  std::size_t chunkTriangles = 1u << 18;
+};
+
+/// Opens a mesh file as a chunked stream. The format is detected from the extension and checked
+/// against the content. Throws IoError (cannot open, unknown format) or InputError.
+std::unique_ptr<MeshStream> openMeshStream(const std::string& path, const ReadOptions& options = {});
+
+/// Reads a whole mesh. Throws InputError for an empty mesh (no faces), indices out of range and
+/// NaN/inf coordinates, naming the file and the element.
+TriangleMesh readMesh(const std::string& path, const ReadOptions& options = {});
+
+struct WriteOptions {
+  /// Write per-corner UVs when the mesh has them (OBJ vt per corner, PLY face "texcoord" list).
+  bool writeUV = true;
+  /// PLY: binary little endian (default) or ascii.
+  bool binary = true;
+};
+
+/// Writes a mesh; the format comes from the extension. The file is written to a temporary file
+/// in the same folder and renamed into place, so a failure never leaves a half-written output.
+void writeMesh(const std::string& path, const TriangleMesh& mesh, const WriteOptions& options = {});
+
+}  // namespace seamvox

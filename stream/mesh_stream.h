@@ -1,0 +1,50 @@
+#pragma once
+/// Chunked streaming of meshes: a reader hands out vertices and triangles in chunks, so a
+/// 20M-triangle file never needs two full copies in memory. Later stages (topology building,
+/// voxel filling) consume the chunks directly.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "../core/mesh.h"
+
+namespace seamvox {
+
+/// One chunk of a mesh stream. Vertices are numbered globally in stream order: the first
+/// position of a chunk has id firstVertex. Triangles index that global numbering and may refer
+/// to any vertex of the whole stream (validated by the reader once the vertex count is known).
+struct MeshChunk {
+  std::uint32_t firstVertex = 0;
+  std::vector<Vec3f> positions;
+  std::vector<Triangle> triangles;
+  /// Per-corner (u, v) of this chunk's triangles (3 per triangle) when the source has texture
+  /// coordinates and they were asked for; empty otherwise.
+  std::vector<Vec2d> cornerUV;
+  void clear() {
+    positions.clear();
+    triangles.clear();
+    cornerUV.clear();
+  }
+};
+
+/// A pull-style source of mesh chunks (files, generators, tile sets).
+class MeshStream {
+ public:
+  virtual ~MeshStream() = default;
+  /// Fills chunk (cleared first) with the next vertices and/or triangles. Returns false at the
+  /// end of the stream. Throws IoError / InputError naming the source and location.
+  virtual bool next(MeshChunk& chunk) = 0;
+  /// Name used in messages (usually the file path).
+  virtual const std::string& name() const = 0;
+  /// Vertex and face counts when the format declares them up front (0 when unknown; faces are
+  /// counted after triangulation only when known exactly).
+  virtual std::uint64_t declaredVertices() const { return 0; }
+  virtual std::uint64_t declaredFaces() const { return 0; }
+};
+
+/// Drains a stream into one TriangleMesh (validating every index against the final vertex
+/// count). Only the chunk buffer is held besides the result.
+TriangleMesh collectMesh(MeshStream& stream);
+
+}  // namespace seamvox

@@ -1,0 +1,64 @@
+#include "testing.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace seamvox::testing {
+
+std::string sharedMesh(const std::string& name) {
+  std::string dir = SEAMVOX_SHARED_DATA;
+  if (const char* env = std::getenv("SEAMVOX_DATA")) dir = env;
+  const std::string path = dir + "/" + name;
+  return std::filesystem::exists(path) ? path : std::string();
+}
+
+std::string missingSharedMessage(const std::string& name) {
+  return "shared test mesh " + name + " not found (looked in " SEAMVOX_SHARED_DATA
+         " and $SEAMVOX_DATA); skipping";
+}
+
+TempDir::TempDir() {
+  std::string pattern = (std::filesystem::temp_directory_path() / "seamvox-test-XXXXXX").string();
+  if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
+  dir_ = pattern;
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(dir_, ec);
+}
+
+int runSeamvox(const std::string& arguments, std::string* output) {
+  const std::string cmd = std::string(SEAMVOX_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) throw std::runtime_error("popen failed");
+  std::string text;
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) text.append(buf.data(), n);
+  const int status = pclose(pipe);
+  if (output) *output = text;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+void writeFile(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out << bytes;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace seamvox::testing

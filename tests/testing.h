@@ -1,0 +1,33 @@
+#pragma once
+/// Helpers shared by the test suites: shared-data lookup, temporary folders, running the CLI.
+#include <string>
+
+namespace seamvox::testing {
+
+/// Path of a file in ../shared/data (or $SEAMVOX_DATA), or "" when it is absent. Use
+///   auto path = sharedMesh("bunny.off"); if (path.empty()) GTEST_SKIP() << ...;
+std::string sharedMesh(const std::string& name);
+/// The message to skip with when sharedMesh returned "".
+std::string missingSharedMessage(const std::string& name);
+
+/// A fresh temporary folder, removed when the object goes away.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  std::string path(const std::string& name) const { return dir_ + "/" + name; }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+};
+
+/// Runs the seamvox binary with the given argument string (shell syntax); returns its exit code
+/// and fills output with stdout+stderr.
+int runSeamvox(const std::string& arguments, std::string* output = nullptr);
+
+/// Writes bytes to a file (for malformed-input tests).
+void writeFile(const std::string& path, const std::string& bytes);
+std::string readFile(const std::string& path);
+
+}  // namespace seamvox::testing

@@ -1,0 +1,147 @@
+#include "tools/cli.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <mutex>
+
+#include "io/atomic_file.h"
+
+namespace seamvox::cli {
+
+Args::Args(std::vector<std::string> tokens, std::vector<std::string> flagNames) {
+  for (std::size_t i = 0; i < tokens.size(); ++i) {
+    const std::string& tok = tokens[i];
+    if (tok.size() > 2 && tok.compare(0, 2, "--") == 0) {
+      std::string name = tok.substr(2), val;
+      const auto eq = name.find('=');
+      if (eq != std::string::npos) {
+        val = name.substr(eq + 1);
+        name = name.substr(0, eq);
+      } else if (std::find(flagNames.begin(), flagNames.end(), name) != flagNames.end()) {
+        val = "1";
+      } else {
+        if (i + 1 >= tokens.size()) throw UsageError("option --" + name + " needs a value");
+        val = tokens[++i];
+      }
+      values_[name] = val;
+    } else if (tok.size() == 2 && tok[0] == '-' && tok[1] == 'o') {
+      if (i + 1 >= tokens.size()) throw UsageError("option -o needs a value");
+      values_["output"] = tokens[++i];
+    } else {
+      positionals_.push_back(tok);
+    }
+  }
+}
+
+const std::string& Args::positional(std::size_t i, const char* what) const {
+  if (i >= positionals_.size()) throw UsageError(std::string("missing ") + what);
+  return positionals_[i];
+}
+
+bool Args::flag(const std::string& name) {
+  used_[name] = true;
+  auto it = values_.find(name);
+  return it != values_.end() && it->second != "0" && it->second != "false";
+}
+
+std::optional<std::string> Args::value(const std::string& name) {
+  used_[name] = true;
+  auto it = values_.find(name);
+  if (it == values_.end()) return std::nullopt;
+  return it->second;
+}
+
+std::string Args::value(const std::string& name, const std::string& fallback) {
+  return value(name).value_or(fallback);
+}
+
+double Args::number(const std::string& name, double fallback) {
+  auto v = value(name);
+  if (!v) return fallback;
+  try {
+    std::size_t pos = 0;
+    const double x = std::stod(*v, &pos);
+    if (pos == v->size()) return x;
+  } catch (const std::exception&) {
+  }
+  throw UsageError("option --" + name + " expects a number, got '" + *v + "'");
+}
+
+std::int64_t Args::integer(const std::string& name, std::int64_t fallback) {
+  auto v = value(name);
+  if (!v) return fallback;
+  try {
+    std::size_t pos = 0;
+    const long long x = std::stoll(*v, &pos);
+    if (pos == v->size()) return x;
+  } catch (const std::exception&) {
+  }
+  throw UsageError("option --" + name + " expects an integer, got '" + *v + "'");
+}
+
+void Args::finish(std::size_t maxPositionals) {
+  for (const auto& [name, val] : values_) {
+    if (!used_.count(name)) {
+      throw UsageError(name == "output" ? "this command takes no -o" : "unknown option --" + name);
+    }
+  }
+  if (positionals_.size() > maxPositionals) {
+    throw UsageError("unexpected argument '" + positionals_[maxPositionals] + "'");
+  }
+}
+
+static std::vector<Command>& registry() {
+  static std::vector<Command> all;
+  return all;
+}
+
+bool registerCommand(Command command) {
+  registry().push_back(std::move(command));
+  std::sort(registry().begin(), registry().end(),
+            [](const Command& a, const Command& b) { return std::string(a.name) < b.name; });
+  return true;
+}
+
+const std::vector<Command>& commands() { return registry(); }
+
+ProgressFn makeProgress(bool quiet) {
+  if (quiet || !isatty(STDERR_FILENO)) return {};
+  struct State {
+    std::mutex mutex;
+    std::string stage;
+    int percent = -1;
+    std::chrono::steady_clock::time_point last;
+  };
+  auto state = std::make_shared<State>();
+  return [state](const char* stage, double fraction) {
+    std::lock_guard<std::mutex> lock(state->mutex);
+    const int percent = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 100.0);
+    const auto now = std::chrono::steady_clock::now();
+    const bool newStage = state->stage != stage;
+    if (!newStage && percent == state->percent) return true;
+    if (!newStage && percent < 100 && now - state->last < std::chrono::milliseconds(100)) return true;
+    state->last = now;
+    if (newStage && !state->stage.empty() && state->percent < 100) std::fprintf(stderr, "\n");
+    state->stage = stage;
+    state->percent = percent;
+    std::fprintf(stderr, "\r%-24s %3d%%%s", stage, percent, percent >= 100 ? "\n" : "");
+    std::fflush(stderr);
+    return true;
+  };
+}
+
+void writeTextOutput(const std::string& path, const std::string& text) {
+  if (path == "-") {
+    std::cout << text << std::flush;
+    return;
+  }
+  AtomicFile file(path);
+  file.write(text);
+  file.commit();
+}
+
+}  // namespace seamvox::cli

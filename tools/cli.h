@@ -1,0 +1,68 @@
+#pragma once
+/// Shared pieces of the `seamvox` command line: argument parsing, command registry, progress.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/progress.h"
+
+namespace seamvox::cli {
+
+/// Wrong usage of a command: printed with the command's usage, exit code 2.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Arguments of one command: positionals and "--name value" / "--flag" options.
+/// Every option a command reads is marked used; finish() rejects the ones nobody read.
+class Args {
+ public:
+  Args(std::vector<std::string> tokens, std::vector<std::string> flagNames);
+  const std::vector<std::string>& positionals() const { return positionals_; }
+  /// The i-th positional or a UsageError naming `what`.
+  const std::string& positional(std::size_t i, const char* what) const;
+  bool flag(const std::string& name);
+  std::optional<std::string> value(const std::string& name);
+  std::string value(const std::string& name, const std::string& fallback);
+  double number(const std::string& name, double fallback);
+  std::int64_t integer(const std::string& name, std::int64_t fallback);
+  /// Throws UsageError for options given but never read and for extra positionals.
+  void finish(std::size_t maxPositionals);
+
+ private:
+  std::vector<std::string> positionals_;
+  std::map<std::string, std::string> values_;
+  std::map<std::string, bool> used_;
+};
+
+struct Command {
+  const char* name;
+  const char* summary;  ///< one line for `seamvox --help`
+  const char* usage;    ///< full usage text for `seamvox NAME --help`
+  /// Names of the options that take no value (everything else "--x" takes one).
+  std::vector<std::string> flags;
+  int (*run)(Args& args);
+};
+/// Adds a command to the registry (used by SEAMVOX_COMMAND at static initialization).
+bool registerCommand(Command command);
+const std::vector<Command>& commands();
+
+/// Progress reporting on stderr: a one-line percentage per stage when stderr is a terminal and
+/// quiet is false; nothing otherwise.
+ProgressFn makeProgress(bool quiet);
+/// Writes text to path atomically, or to stdout when path is "-".
+void writeTextOutput(const std::string& path, const std::string& text);
+
+}  // namespace seamvox::cli
+
+#define SEAMVOX_COMMAND_CAT2(a, b) a##b
+#define SEAMVOX_COMMAND_CAT(a, b) SEAMVOX_COMMAND_CAT2(a, b)
+/// Registers a command: SEAMVOX_COMMAND({"info", "summary", "usage", {"json"}, &runInfo});
+#define SEAMVOX_COMMAND(...)                                                          \
+  static const bool SEAMVOX_COMMAND_CAT(seamvoxCommandRegistered_, __LINE__) =       \
+      ::seamvox::cli::registerCommand(::seamvox::cli::Command __VA_ARGS__)
