@@ -30,7 +30,14 @@ struct CleanReport {
   std::uint64_t outputVertices = 0, outputFaces = 0;
 };
 
+/// Move-only: topology views mesh.triangles (no second copy of the faces).
 struct CleanResult {
+  CleanResult() = default;
+  CleanResult(CleanResult&&) = default;
+  CleanResult& operator=(CleanResult&&) = default;
+  CleanResult(const CleanResult&) = delete;
+  CleanResult& operator=(const CleanResult&) = delete;
+
   TriangleMesh mesh;  ///< cleaned positions and triangles (cornerUV carried along when present)
   Topology topology;  ///< corner table of mesh.triangles
   CleanReport report;

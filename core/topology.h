@@ -26,6 +26,22 @@ inline CornerId nextCorner(CornerId c) { return c % 3 == 2 ? c - 2 : c + 1; }
 inline CornerId prevCorner(CornerId c) { return c % 3 == 0 ? c + 2 : c - 1; }
 inline FaceId cornerFace(CornerId c) { return c / 3; }
 
+/// Read-only view of a triangle array (what Topology::triangles() returns).
+class TriangleSpan {
+ public:
+  TriangleSpan(const Triangle* data, std::size_t size) : data_(data), size_(size) {}
+  const Triangle& operator[](std::size_t f) const { return data_[f]; }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  const Triangle* begin() const { return data_; }
+  const Triangle* end() const { return data_ + size_; }
+  const Triangle* data() const { return data_; }
+
+ private:
+  const Triangle* data_;
+  std::size_t size_;
+};
+
 /// Immutable corner table. Requires an edge- and vertex-manifold, consistently oriented mesh
 /// without degenerate faces (cleanMesh produces one). About 16 bytes per face plus the triangles.
 class Topology {
@@ -35,13 +51,26 @@ class Topology {
   /// manifold (an edge shared by more than two faces or twice in the same direction, a vertex
   /// whose faces form more than one fan) or has an index >= numVertices.
   static Topology build(std::vector<Triangle> triangles, std::uint32_t numVertices);
+  /// Adopts an already computed table (as cleanMesh produces). Trusted: no checks beyond sizes;
+  /// call validate() when unsure.
+  static Topology fromParts(std::vector<Triangle> triangles, std::vector<CornerId> opposite,
+                            std::vector<CornerId> vertexCorner);
+  /// Like fromParts, but views the triangles instead of owning a copy (saves 12 bytes per face on
+  /// massive meshes). The vector's buffer must outlive the Topology and must not be resized;
+  /// moving the vector keeps the buffer (cleanMesh uses this for CleanResult::mesh.triangles).
+  static Topology viewParts(const std::vector<Triangle>& triangles, std::vector<CornerId> opposite,
+                            std::vector<CornerId> vertexCorner);
+  Topology(const Topology& other);
+  Topology& operator=(const Topology& other);
+  Topology(Topology&&) = default;
+  Topology& operator=(Topology&&) = default;
 
   std::uint32_t numVertices() const { return static_cast<std::uint32_t>(vertexCorner_.size()); }
-  std::uint32_t numFaces() const { return static_cast<std::uint32_t>(triangles_.size()); }
+  std::uint32_t numFaces() const { return numFaces_; }
   std::uint32_t numCorners() const { return 3 * numFaces(); }
-  const std::vector<Triangle>& triangles() const { return triangles_; }
+  TriangleSpan triangles() const { return {tris_, numFaces_}; }
 
-  VertexId vertex(CornerId c) const { return triangles_[c / 3][c % 3]; }
+  VertexId vertex(CornerId c) const { return tris_[c / 3][c % 3]; }
   CornerId opposite(CornerId c) const { return opposite_[c]; }
   bool isBoundaryEdge(CornerId c) const { return opposite_[c] == kInvalidId; }
   /// Start corner of the fan of v (see conventions); kInvalidId for an isolated vertex.
@@ -78,7 +107,9 @@ class Topology {
   std::size_t memoryBytes() const;
 
  private:
-  std::vector<Triangle> triangles_;
+  std::vector<Triangle> owned_;  // empty when viewing another array
+  const Triangle* tris_ = nullptr;
+  std::uint32_t numFaces_ = 0;
   std::vector<CornerId> opposite_;      // 3 #F
   std::vector<CornerId> vertexCorner_;  // #V
 };

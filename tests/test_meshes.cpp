@@ -1,0 +1,99 @@
+#include "test_meshes.h"
+
+#include <cmath>
+#include <map>
+#include <utility>
+
+namespace seamvox::testing {
+
+TriangleMesh gridMesh(int n, int m, double cell) {
+  TriangleMesh mesh;
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= n; ++i) mesh.positions.emplace_back(float(i * cell), float(j * cell), 0.f);
+  auto id = [&](int i, int j) { return VertexId(j * (n + 1) + i); };
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      mesh.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return mesh;
+}
+
+TriangleMesh torusMesh(int n, int m, double R, double r) {
+  TriangleMesh mesh;
+  const double pi = std::acos(-1.0);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double a = 2 * pi * i / n, b = 2 * pi * j / m;
+      mesh.positions.emplace_back(float((R + r * std::cos(b)) * std::cos(a)),
+                                  float((R + r * std::cos(b)) * std::sin(a)), float(r * std::sin(b)));
+    }
+  auto id = [&](int i, int j) { return VertexId(((i + n) % n) * m + (j + m) % m); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      mesh.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return mesh;
+}
+
+TriangleMesh icosphereMesh(int levels) {
+  TriangleMesh mesh;
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  const double raw[12][3] = {{-1, t, 0}, {1, t, 0},   {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                             {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  for (const auto& p : raw) mesh.positions.push_back(Vec3d(p[0], p[1], p[2]).normalized().cast<float>());
+  mesh.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                    {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<VertexId, VertexId>, VertexId> mid;
+    auto midpoint = [&](VertexId a, VertexId b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      const Vec3d p = (mesh.position(a) + mesh.position(b)).normalized();
+      mesh.positions.push_back(p.cast<float>());
+      return mid[key] = VertexId(mesh.positions.size() - 1);
+    };
+    std::vector<Triangle> finer;
+    for (const Triangle& tri : mesh.triangles) {
+      const VertexId a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+      finer.push_back({tri[0], a, c});
+      finer.push_back({tri[1], b, a});
+      finer.push_back({tri[2], c, b});
+      finer.push_back({a, b, c});
+    }
+    mesh.triangles = std::move(finer);
+  }
+  return mesh;
+}
+
+TriangleMesh cylinderMesh(int n, int m, double radius, double height) {
+  TriangleMesh mesh;
+  const double pi = std::acos(-1.0);
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * pi * i / n;
+      mesh.positions.emplace_back(float(radius * std::cos(a)), float(radius * std::sin(a)), float(height * j / m));
+    }
+  auto id = [&](int i, int j) { return VertexId(j * n + (i % n)); };
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      mesh.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return mesh;
+}
+
+TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts) {
+  TriangleMesh out;
+  for (const TriangleMesh& p : parts) {
+    const VertexId base = out.numVertices();
+    out.positions.insert(out.positions.end(), p.positions.begin(), p.positions.end());
+    for (Triangle t : p.triangles) out.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  }
+  return out;
+}
+
+}  // namespace seamvox::testing

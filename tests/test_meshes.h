@@ -1,0 +1,18 @@
+#pragma once
+/// Small meshes built in code for the test suites (closed, boundary, several components).
+#include "core/mesh.h"
+
+namespace seamvox::testing {
+
+/// Flat n x m grid of unit squares in the z = 0 plane, each split in two triangles (a disk).
+TriangleMesh gridMesh(int n, int m, double cell = 1.0);
+/// Torus with n segments around the big circle and m around the tube (closed, genus 1).
+TriangleMesh torusMesh(int n, int m, double bigRadius = 2.0, double tubeRadius = 0.7);
+/// Icosahedron subdivided `levels` times and projected on the unit sphere (closed, genus 0).
+TriangleMesh icosphereMesh(int levels);
+/// Open cylinder of radius r and height hgt, n segments around and m along (two boundary loops).
+TriangleMesh cylinderMesh(int n, int m, double radius = 1.0, double height = 2.0);
+/// Concatenates meshes into one with several components.
+TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts);
+
+}  // namespace seamvox::testing
