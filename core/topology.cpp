@@ -116,11 +116,16 @@ FanTable findFans(const VertexCorners& vc, const std::vector<CornerId>& opposite
       onFan(s);
     }
   };
+  // Pass 1 counts the fans and records the first start; pass 2 revisits only the (rare) vertices
+  // with several fans.
+  std::vector<CornerId> firstStart(numVertices, kInvalidId);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, numVertices, 2048),
                     [&](const tbb::blocked_range<std::uint32_t>& r) {
                       for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
                         std::uint32_t n = 0;
-                        forEachFan(v, 1, [&](CornerId) { ++n; });
+                        forEachFan(v, 1, [&](CornerId s) {
+                          if (n++ == 0) firstStart[v] = s;
+                        });
                         fans.fanOffsets[v + 1] = n;
                       }
                     });
@@ -130,7 +135,11 @@ FanTable findFans(const VertexCorners& vc, const std::vector<CornerId>& opposite
                     [&](const tbb::blocked_range<std::uint32_t>& r) {
                       for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
                         std::uint32_t k = fans.fanOffsets[v];
-                        forEachFan(v, 2, [&](CornerId s) { fans.fanStart[k++] = s; });
+                        if (fans.fanOffsets[v + 1] - k == 1) {
+                          fans.fanStart[k] = firstStart[v];
+                        } else if (fans.fanOffsets[v + 1] > k) {
+                          forEachFan(v, 2, [&](CornerId s) { fans.fanStart[k++] = s; });
+                        }
                       }
                     });
   return fans;
