@@ -41,10 +41,17 @@ class MeshStream {
   /// counted after triangulation only when known exactly).
   virtual std::uint64_t declaredVertices() const { return 0; }
   virtual std::uint64_t declaredFaces() const { return 0; }
+  /// Triangles to reserve room for: a hint that may be inexact (0 when unknown).
+  virtual std::uint64_t expectedTriangles() const { return declaredFaces(); }
 };
 
 /// Drains a stream into one TriangleMesh (validating every index against the final vertex
 /// count). Only the chunk buffer is held besides the result.
 TriangleMesh collectMesh(MeshStream& stream);
+
+/// A stream over a mesh held in memory: its vertices, then its triangles (and corner UVs) in
+/// chunks of chunkTriangles.
+std::unique_ptr<MeshStream> makeMemoryStream(std::string name, std::shared_ptr<const TriangleMesh> mesh,
+                                             std::size_t chunkTriangles = std::size_t(1) << 18);
 
 }  // namespace seamvox

@@ -1,0 +1,168 @@
+#pragma once
+/// Private pieces shared by the mesh readers and writers (io/*_io.cpp): buffered file input,
+/// token parsing, buffered output, and the per-format entry points. Not part of the public API.
+#include <charconv>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/mesh.h"
+#include "io/atomic_file.h"
+#include "io/mesh_io.h"
+#include "stream/mesh_stream.h"
+
+namespace seamvox::detail {
+
+/// A file read through one large buffer: binary blocks (ensure/data/advance) and text lines.
+class InputFile {
+ public:
+  /// Opens path for reading. Throws IoError when it is missing, a folder or unreadable.
+  explicit InputFile(std::string path);
+  ~InputFile();
+  InputFile(const InputFile&) = delete;
+  InputFile& operator=(const InputFile&) = delete;
+
+  const std::string& path() const { return path_; }
+  /// Size in bytes (the maximum value when the input is not a regular file).
+  std::uint64_t size() const { return size_; }
+  /// Bytes consumed so far.
+  std::uint64_t offset() const { return consumed_ + pos_; }
+  std::uint64_t remaining() const { return size_ > offset() ? size_ - offset() : 0; }
+
+  /// Makes n bytes available at data(); false when the file ends first (never allocates more
+  /// than the rest of the file).
+  bool ensure(std::size_t n) { return end_ - pos_ >= n || refill(n); }
+  const char* data() const { return buffer_.data() + pos_; }
+  void advance(std::size_t n) { pos_ += n; }
+  /// Skips n bytes; false when the file ends first.
+  bool skip(std::uint64_t n);
+
+  /// Next line without its "\n" or "\r\n"; false at the end of the file. The view stays valid
+  /// until the next call. A line longer than maxLength throws InputError.
+  bool readLine(std::string_view& line, std::size_t maxLength = SIZE_MAX);
+  /// Number of the line last returned by readLine (1-based).
+  std::uint64_t lineNumber() const { return line_; }
+
+ private:
+  bool refill(std::size_t n);
+
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  std::uint64_t size_ = 0;
+  std::uint64_t consumed_ = 0;  ///< file bytes before buffer_[0]
+  std::vector<char> buffer_;
+  std::size_t pos_ = 0, end_ = 0;
+  std::uint64_t line_ = 0;
+};
+
+/// Cuts the next whitespace-separated token off the front of text ("" when none is left).
+inline std::string_view nextToken(std::string_view& text) {
+  std::size_t i = 0;
+  const std::size_t n = text.size();
+  while (i < n && (text[i] == ' ' || text[i] == '\t' || text[i] == '\r' || text[i] == '\f' ||
+                   text[i] == '\v')) {
+    ++i;
+  }
+  std::size_t j = i;
+  while (j < n && !(text[j] == ' ' || text[j] == '\t' || text[j] == '\r' || text[j] == '\f' ||
+                    text[j] == '\v')) {
+    ++j;
+  }
+  const std::string_view token = text.substr(i, j - i);
+  text.remove_prefix(j);
+  return token;
+}
+
+/// Whole-token number parsing (std::from_chars, a leading '+' allowed). False on any garbage or
+/// overflow; "nan"/"inf" parse (callers check finiteness).
+template <class T>
+inline bool parseNumber(std::string_view token, T& value) {
+  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
+  if (token.empty() || token[0] == '+' || token[0] == ' ') return false;
+  const char* end = token.data() + token.size();
+  const auto result = std::from_chars(token.data(), end, value);
+  return result.ec == std::errc() && result.ptr == end;
+}
+
+/// Buffered output into an AtomicFile: numbers are formatted with std::to_chars (shortest
+/// round-trip form for float and double) into one large block.
+class OutputBuffer {
+ public:
+  explicit OutputBuffer(AtomicFile& file, std::size_t capacity = std::size_t(1) << 22)
+      : file_(file), buffer_(capacity) {}
+  ~OutputBuffer() = default;  // call flush(); an exception path must not write
+
+  /// Makes room for n more bytes (n at most the capacity).
+  void reserve(std::size_t n) {
+    if (buffer_.size() - used_ < n) flush();
+  }
+  void put(char c) {
+    reserve(1);
+    buffer_[used_++] = c;
+  }
+  void put(std::string_view text) {
+    if (text.size() > buffer_.size()) {
+      flush();
+      file_.write(text.data(), text.size());
+      return;
+    }
+    reserve(text.size());
+    std::memcpy(buffer_.data() + used_, text.data(), text.size());
+    used_ += text.size();
+  }
+  /// A number in text (shortest round-trip form for floating point).
+  template <class T>
+  void putNumber(T value) {
+    reserve(40);
+    char* begin = buffer_.data() + used_;
+    used_ += static_cast<std::size_t>(std::to_chars(begin, begin + 40, value).ptr - begin);
+  }
+  /// n numbers separated by spaces, then `end` (a text row: "x y z\n").
+  template <class T>
+  void putRow(const T* values, int n, char end = '\n') {
+    for (int i = 0; i < n; ++i) {
+      if (i) put(' ');
+      putNumber(values[i]);
+    }
+    put(end);
+  }
+  /// A value in little-endian binary.
+  template <class T>
+  void putLittle(T value) {
+    reserve(sizeof(T));
+    char bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
+#endif
+    std::memcpy(buffer_.data() + used_, bytes, sizeof(T));
+    used_ += sizeof(T);
+  }
+  void flush() {
+    file_.write(buffer_.data(), used_);
+    used_ = 0;
+  }
+
+ private:
+  AtomicFile& file_;
+  std::vector<char> buffer_;
+  std::size_t used_ = 0;
+};
+
+// Per-format entry points (io/ply_io.cpp, io/obj_io.cpp, io/off_io.cpp, io/draco_io.cpp).
+std::unique_ptr<MeshStream> openPlyStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
+std::unique_ptr<MeshStream> openObjStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
+std::unique_ptr<MeshStream> openOffStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
+void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
+void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
+void writeOff(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
+/// Draco decodes whole files (no streaming in the library); readDraco returns the mesh.
+TriangleMesh readDraco(const std::string& path, const ReadOptions& options);
+void writeDraco(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
+
+}  // namespace seamvox::detail

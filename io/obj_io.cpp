@@ -1,0 +1,206 @@
+// Wavefront OBJ reading (v, vt, f; everything else ignored) and writing (v, per-corner vt, f).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/errors.h"
+#include "io/detail_mesh_io.h"
+
+namespace seamvox::detail {
+namespace {
+
+class ObjReader final : public MeshStream {
+ public:
+  ObjReader(std::unique_ptr<InputFile> in, const ReadOptions& options)
+      : in_(std::move(in)),
+        readUV_(options.readUV),
+        limit_(std::max<std::size_t>(options.chunkTriangles, 1)) {}
+
+  bool next(MeshChunk& chunk) override {
+    chunk.clear();
+    chunk.firstVertex = static_cast<std::uint32_t>(vertices_);
+    if (done_) return false;
+    std::string_view line;
+    while (chunk.triangles.size() < limit_ && chunk.positions.size() < limit_) {
+      if (!in_->readLine(line)) {
+        finish();
+        break;
+      }
+      const std::string_view keyword = nextToken(line);
+      if (keyword == "v") readVertex(line, chunk);
+      else if (keyword == "vt") readTexcoord(line);
+      else if (keyword == "f") readFace(line, chunk);
+    }
+    return !chunk.positions.empty() || !chunk.triangles.empty();
+  }
+
+  const std::string& name() const override { return in_->path(); }
+
+ private:
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw InputError(in_->path() + ": line " + std::to_string(in_->lineNumber()) + ": " + problem);
+  }
+
+  void readVertex(std::string_view line, MeshChunk& chunk) {
+    Vec3f p;
+    for (int k = 0; k < 3; ++k) {
+      const std::string_view token = nextToken(line);
+      if (token.empty()) fail("vertex has fewer than 3 coordinates");
+      if (!parseNumber(token, p[k])) fail("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
+      if (!std::isfinite(p[k])) fail("vertex coordinate is NaN or infinite");
+    }
+    if (vertices_ + 1 >= std::numeric_limits<std::uint32_t>::max()) {
+      fail("more vertices than 32-bit ids allow");
+    }
+    chunk.positions.push_back(p);
+    ++vertices_;
+  }
+
+  void readTexcoord(std::string_view line) {
+    if (!readUV_) return;
+    Vec2d t(0.0, 0.0);
+    for (int k = 0; k < 2; ++k) {
+      const std::string_view token = nextToken(line);
+      if (token.empty() && k == 1) break;  // v is optional and defaults to 0
+      if (!parseNumber(token, t[k])) fail("bad texture coordinate '" + std::string(token.substr(0, 40)) + "'");
+      if (!std::isfinite(t[k])) fail("texture coordinate is NaN or infinite");
+    }
+    texcoords_.push_back(t);
+  }
+
+  /// 0-based index of an OBJ index (1-based, or negative = relative to the count so far).
+  std::uint64_t resolve(std::string_view token, std::uint64_t count, const char* what) const {
+    std::int64_t value;
+    if (!parseNumber(token, value)) fail(std::string("bad ") + what + " index '" + std::string(token.substr(0, 40)) + "'");
+    if (value == 0) fail(std::string(what) + " index 0 is invalid (OBJ indices start at 1)");
+    if (value > 0) {
+      if (static_cast<std::uint64_t>(value) >= std::numeric_limits<std::uint32_t>::max()) {
+        fail(std::string(what) + " index " + std::to_string(value) + " is beyond 32-bit ids");
+      }
+      return static_cast<std::uint64_t>(value - 1);
+    }
+    if (static_cast<std::uint64_t>(-value) > count) {
+      fail("relative " + std::string(what) + " index " + std::to_string(value) + " reaches before the first " +
+           what + " (only " + std::to_string(count) + " so far)");
+    }
+    return count - static_cast<std::uint64_t>(-value);
+  }
+
+  void readFace(std::string_view line, MeshChunk& chunk) {
+    corners_.clear();
+    cornerUV_.clear();
+    bool anyTexcoord = false, allTexcoords = true;
+    for (std::string_view token = nextToken(line); !token.empty() && token[0] != '#';
+         token = nextToken(line)) {
+      const std::size_t slash = token.find('/');
+      const std::uint64_t v = resolve(token.substr(0, slash), vertices_, "vertex");
+      if (v >= vertices_ && (maxIndexLine_ == 0 || v > maxIndex_)) {
+        maxIndex_ = v;  // a forward reference: checked once every vertex is known
+        maxIndexLine_ = in_->lineNumber();
+      }
+      corners_.push_back(static_cast<VertexId>(v));
+      std::string_view texcoord;
+      if (slash != std::string_view::npos) {
+        std::string_view rest = token.substr(slash + 1);
+        const std::size_t slash2 = rest.find('/');
+        texcoord = rest.substr(0, slash2);
+        if (slash2 != std::string_view::npos) {
+          std::int64_t normal;
+          const std::string_view n = rest.substr(slash2 + 1);
+          if (!n.empty() && !parseNumber(n, normal)) fail("bad face corner '" + std::string(token.substr(0, 40)) + "'");
+        }
+      }
+      if (texcoord.empty()) {
+        allTexcoords = false;
+        continue;
+      }
+      anyTexcoord = true;
+      if (!readUV_) continue;
+      const std::uint64_t t = resolve(texcoord, texcoords_.size(), "texture coordinate");
+      if (t >= texcoords_.size()) {
+        fail("texture coordinate " + std::to_string(t + 1) + " is used before it is defined (" +
+             std::to_string(texcoords_.size()) + " vt so far)");
+      }
+      cornerUV_.push_back(texcoords_[t]);
+    }
+    const std::size_t n = corners_.size();
+    if (n < 3) fail("face has " + std::to_string(n) + " vertices (at least 3 are needed)");
+
+    bool withUV = false;
+    if (readUV_) {
+      if (anyTexcoord && !allTexcoords) fail("face gives texture coordinates for some corners only");
+      if (uvState_ == UVState::Unknown) uvState_ = anyTexcoord ? UVState::With : UVState::Without;
+      withUV = uvState_ == UVState::With;
+      if (withUV != anyTexcoord) {
+        fail("some faces have texture coordinates and others do not (read without UVs to ignore them)");
+      }
+    }
+    for (std::size_t k = 2; k < n; ++k) {
+      chunk.triangles.push_back({corners_[0], corners_[k - 1], corners_[k]});
+      if (withUV) {
+        chunk.cornerUV.push_back(cornerUV_[0]);
+        chunk.cornerUV.push_back(cornerUV_[k - 1]);
+        chunk.cornerUV.push_back(cornerUV_[k]);
+      }
+    }
+  }
+
+  void finish() {
+    done_ = true;
+    if (maxIndexLine_ > 0 && maxIndex_ >= vertices_) {
+      throw InputError(in_->path() + ": line " + std::to_string(maxIndexLine_) + ": face refers to vertex " +
+                       std::to_string(maxIndex_ + 1) + " but the file has only " +
+                       std::to_string(vertices_) + " vertices");
+    }
+  }
+
+  enum class UVState { Unknown, With, Without };
+
+  std::unique_ptr<InputFile> in_;
+  bool readUV_;
+  std::size_t limit_;
+  bool done_ = false;
+  std::uint64_t vertices_ = 0;
+  std::uint64_t maxIndex_ = 0, maxIndexLine_ = 0;
+  UVState uvState_ = UVState::Unknown;
+  std::vector<Vec2d> texcoords_;
+  std::vector<VertexId> corners_;
+  std::vector<Vec2d> cornerUV_;
+};
+
+}  // namespace
+
+std::unique_ptr<MeshStream> openObjStream(std::unique_ptr<InputFile> in, const ReadOptions& options) {
+  return std::make_unique<ObjReader>(std::move(in), options);
+}
+
+void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
+  const bool withUV = options.writeUV && mesh.hasUV();
+  OutputBuffer out(file);
+  out.put("# written by seamvox\n");
+  for (const Vec3f& p : mesh.positions) {
+    out.put("v ");
+    out.putRow(p.data(), 3);
+  }
+  if (withUV) {
+    for (const Vec2d& t : mesh.cornerUV) {
+      out.put("vt ");
+      out.putRow(t.data(), 2);
+    }
+  }
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    out.put('f');
+    for (int k = 0; k < 3; ++k) {
+      out.put(' ');
+      out.putNumber(std::uint64_t(mesh.triangles[f][k]) + 1);
+      if (withUV) {
+        out.put('/');
+        out.putNumber(std::uint64_t(3 * f + k) + 1);
+      }
+    }
+    out.put('\n');
+  }
+  out.flush();
+}
+
+}  // namespace seamvox::detail

@@ -1,0 +1,103 @@
+#include "stream/mesh_stream.h"
+
+#include <algorithm>
+#include <limits>
+
+#include "core/errors.h"
+
+namespace seamvox {
+
+TriangleMesh collectMesh(MeshStream& stream) {
+  constexpr std::uint64_t kMaxIds = std::numeric_limits<std::uint32_t>::max();
+  const std::string& name = stream.name();
+  TriangleMesh mesh;
+  // Readers check declared counts against the file size, so these hints are safe to reserve.
+  mesh.positions.reserve(static_cast<std::size_t>(std::min(stream.declaredVertices(), kMaxIds)));
+  mesh.triangles.reserve(static_cast<std::size_t>(std::min(stream.expectedTriangles(), kMaxIds)));
+
+  MeshChunk chunk;
+  bool uvDecided = false, withUV = false;
+  while (stream.next(chunk)) {
+    if (chunk.firstVertex != mesh.positions.size()) {
+      throw InputError(name + ": stream chunk starts at vertex " + std::to_string(chunk.firstVertex) +
+                       " but " + std::to_string(mesh.positions.size()) + " vertices came before it");
+    }
+    if (mesh.positions.size() + chunk.positions.size() >= kMaxIds ||
+        mesh.triangles.size() + chunk.triangles.size() >= kMaxIds) {
+      throw InputError(name + ": more than 2^32 - 1 vertices or faces (ids are 32-bit)");
+    }
+    mesh.positions.insert(mesh.positions.end(), chunk.positions.begin(), chunk.positions.end());
+    if (chunk.triangles.empty()) continue;
+    const bool chunkUV = !chunk.cornerUV.empty();
+    if (chunkUV && chunk.cornerUV.size() != 3 * chunk.triangles.size()) {
+      throw InputError(name + ": stream chunk has " + std::to_string(chunk.cornerUV.size()) +
+                       " corner UVs for " + std::to_string(chunk.triangles.size()) + " triangles");
+    }
+    if (!uvDecided) {
+      withUV = chunkUV;
+      uvDecided = true;
+    } else if (withUV != chunkUV) {
+      throw InputError(name + ": some triangles have texture coordinates and others do not");
+    }
+    mesh.triangles.insert(mesh.triangles.end(), chunk.triangles.begin(), chunk.triangles.end());
+    mesh.cornerUV.insert(mesh.cornerUV.end(), chunk.cornerUV.begin(), chunk.cornerUV.end());
+  }
+
+  const std::uint32_t numVertices = mesh.numVertices();
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    for (const VertexId v : mesh.triangles[f]) {
+      if (v >= numVertices) {
+        throw InputError(name + ": face " + std::to_string(f) + " refers to vertex " +
+                         std::to_string(v) + " but there are only " + std::to_string(numVertices) +
+                         " vertices");
+      }
+    }
+  }
+  return mesh;
+}
+
+namespace {
+
+class MemoryStream final : public MeshStream {
+ public:
+  MemoryStream(std::string name, std::shared_ptr<const TriangleMesh> mesh, std::size_t chunk)
+      : name_(std::move(name)), mesh_(std::move(mesh)), chunk_(std::max<std::size_t>(chunk, 1)) {}
+
+  bool next(MeshChunk& chunk) override {
+    chunk.clear();
+    const TriangleMesh& m = *mesh_;
+    chunk.firstVertex = static_cast<std::uint32_t>(vertex_);
+    if (vertex_ < m.positions.size()) {
+      const std::size_t end = std::min(m.positions.size(), vertex_ + chunk_);
+      chunk.positions.assign(m.positions.begin() + vertex_, m.positions.begin() + end);
+      vertex_ = end;
+      return true;
+    }
+    if (face_ >= m.triangles.size()) return false;
+    const std::size_t end = std::min(m.triangles.size(), face_ + chunk_);
+    chunk.triangles.assign(m.triangles.begin() + face_, m.triangles.begin() + end);
+    if (m.hasUV()) {
+      chunk.cornerUV.assign(m.cornerUV.begin() + 3 * face_, m.cornerUV.begin() + 3 * end);
+    }
+    face_ = end;
+    return true;
+  }
+  const std::string& name() const override { return name_; }
+  std::uint64_t declaredVertices() const override { return mesh_->positions.size(); }
+  std::uint64_t declaredFaces() const override { return mesh_->triangles.size(); }
+
+ private:
+  std::string name_;
+  std::shared_ptr<const TriangleMesh> mesh_;
+  std::size_t chunk_;
+  std::size_t vertex_ = 0, face_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<MeshStream> makeMemoryStream(std::string name, std::shared_ptr<const TriangleMesh> mesh,
+                                             std::size_t chunkTriangles) {
+  return std::make_unique<MemoryStream>(std::move(name), std::move(mesh), chunkTriangles);
+}
+
+}  // namespace seamvox

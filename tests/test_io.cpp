@@ -1,0 +1,615 @@
+// Mesh readers and writers: round trips, every PLY encoding and element kind, OBJ and OFF
+// syntaxes, malformed input, atomic writes, the shared meshes.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <random>
+#include <set>
+
+#include "core/errors.h"
+#include "io/mesh_io.h"
+#include "stream/mesh_stream.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::TempDir;
+using testing::writeFile;
+
+/// A rows x cols grid of quads split into triangles, with awkward float positions and per-corner
+/// UVs that are not representable in short decimal form.
+TriangleMesh makeGrid(int rows, int cols, bool withUV) {
+  TriangleMesh mesh;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> jitter(-0.3f, 0.3f);
+  for (int i = 0; i <= rows; ++i) {
+    for (int j = 0; j <= cols; ++j) {
+      mesh.positions.emplace_back(j + jitter(rng), i * 1.1f + jitter(rng), std::sin(0.37f * i * j));
+    }
+  }
+  auto id = [&](int i, int j) { return static_cast<VertexId>(i * (cols + 1) + j); };
+  for (int i = 0; i < rows; ++i) {
+    for (int j = 0; j < cols; ++j) {
+      mesh.triangles.push_back({id(i, j), id(i, j + 1), id(i + 1, j + 1)});
+      mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i + 1, j)});
+    }
+  }
+  if (withUV) {
+    std::uniform_real_distribution<double> uv(-3000.0, 3000.0);
+    for (std::size_t c = 0; c < 3 * mesh.triangles.size(); ++c) mesh.cornerUV.emplace_back(uv(rng), uv(rng) / 3.0);
+  }
+  return mesh;
+}
+
+void expectSameMesh(const TriangleMesh& a, const TriangleMesh& b, bool compareUV) {
+  ASSERT_EQ(a.positions.size(), b.positions.size());
+  ASSERT_EQ(a.triangles.size(), b.triangles.size());
+  for (std::size_t v = 0; v < a.positions.size(); ++v) {
+    // Bitwise: float positions must round-trip exactly.
+    ASSERT_EQ(0, std::memcmp(a.positions[v].data(), b.positions[v].data(), sizeof(Vec3f))) << "vertex " << v;
+  }
+  EXPECT_EQ(a.triangles, b.triangles);
+  if (compareUV) {
+    ASSERT_EQ(a.cornerUV.size(), b.cornerUV.size());
+    for (std::size_t c = 0; c < a.cornerUV.size(); ++c) {
+      ASSERT_EQ(a.cornerUV[c][0], b.cornerUV[c][0]) << "corner " << c;
+      ASSERT_EQ(a.cornerUV[c][1], b.cornerUV[c][1]) << "corner " << c;
+    }
+  }
+}
+
+/// Runs f and returns the message of the exception of type E it must throw.
+template <class E>
+std::string messageOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+    return "";
+  }
+  ADD_FAILURE() << "no exception";
+  return "";
+}
+
+// --- round trips --------------------------------------------------------------------------------
+
+TEST(MeshIo, RoundTripsEveryFormatExactly) {
+  TempDir dir;
+  const TriangleMesh mesh = makeGrid(9, 13, true);
+  ReadOptions withUV;
+  withUV.readUV = true;
+  for (const char* name : {"a.ply", "b.obj", "c.off", "D.PLY"}) {
+    const std::string path = dir.path(name);
+    writeMesh(path, mesh);
+    const bool hasUV = formatFromPath(path) != MeshFormat::Off;
+    const TriangleMesh back = readMesh(path, withUV);
+    expectSameMesh(mesh, back, hasUV);
+    EXPECT_EQ(back.hasUV(), hasUV) << name;
+    // Without readUV the coordinates are ignored.
+    EXPECT_FALSE(readMesh(path).hasUV()) << name;
+  }
+  WriteOptions ascii;
+  ascii.binary = false;
+  writeMesh(dir.path("ascii.ply"), mesh, ascii);
+  expectSameMesh(mesh, readMesh(dir.path("ascii.ply"), withUV), true);
+  EXPECT_THAT(testing::readFile(dir.path("ascii.ply")), HasSubstr("format ascii 1.0"));
+
+  WriteOptions noUV;
+  noUV.writeUV = false;
+  writeMesh(dir.path("plain.obj"), mesh, noUV);
+  EXPECT_FALSE(readMesh(dir.path("plain.obj"), withUV).hasUV());
+}
+
+TEST(MeshIo, WrittenPlyHasTheDocumentedLayout) {
+  TempDir dir;
+  const TriangleMesh mesh = makeGrid(2, 2, true);
+  writeMesh(dir.path("m.ply"), mesh);
+  const std::string bytes = testing::readFile(dir.path("m.ply"));
+  EXPECT_THAT(bytes, HasSubstr("format binary_little_endian 1.0"));
+  EXPECT_THAT(bytes, HasSubstr("property float x\nproperty float y\nproperty float z\n"));
+  EXPECT_THAT(bytes, HasSubstr("property list uchar int vertex_indices\nproperty list uchar double texcoord\n"));
+  const std::size_t body = bytes.find("end_header\n") + 11;
+  EXPECT_EQ(bytes.size() - body, mesh.positions.size() * 12 + mesh.triangles.size() * (1 + 12 + 1 + 48));
+  const std::string obj = (writeMesh(dir.path("m.obj"), mesh), testing::readFile(dir.path("m.obj")));
+  EXPECT_THAT(obj, HasSubstr("\nf 1/1 2/2 5/3\n"));
+}
+
+TEST(MeshIo, StreamsInChunksOfTheRequestedSize) {
+  TempDir dir;
+  const TriangleMesh mesh = makeGrid(10, 10, true);  // 121 vertices, 200 triangles
+  for (const char* name : {"s.ply", "s.obj", "s.off"}) {
+    writeMesh(dir.path(name), mesh);
+    ReadOptions options;
+    options.chunkTriangles = 17;
+    options.readUV = true;
+    auto stream = openMeshStream(dir.path(name), options);
+    MeshChunk chunk;
+    std::size_t vertices = 0, triangles = 0, chunks = 0;
+    while (stream->next(chunk)) {
+      ++chunks;
+      EXPECT_EQ(chunk.firstVertex, vertices);
+      EXPECT_LE(chunk.triangles.size(), 17u);
+      EXPECT_LE(chunk.positions.size(), 17u);
+      EXPECT_TRUE(chunk.cornerUV.empty() || chunk.cornerUV.size() == 3 * chunk.triangles.size());
+      vertices += chunk.positions.size();
+      triangles += chunk.triangles.size();
+    }
+    EXPECT_EQ(vertices, mesh.positions.size()) << name;
+    EXPECT_EQ(triangles, mesh.triangles.size()) << name;
+    EXPECT_GE(chunks, (121 + 200) / 17u) << name;
+    EXPECT_FALSE(stream->next(chunk));
+    expectSameMesh(mesh, readMesh(dir.path(name), options), formatFromPath(name) != MeshFormat::Off);
+  }
+}
+
+TEST(MeshIo, MemoryStreamFeedsCollectMesh) {
+  auto mesh = std::make_shared<const TriangleMesh>(makeGrid(4, 5, true));
+  auto stream = makeMemoryStream("memory", mesh, 3);
+  expectSameMesh(*mesh, collectMesh(*stream), true);
+}
+
+// --- PLY bodies written by hand -----------------------------------------------------------------
+
+enum class Enc { Ascii, Little, Big };
+
+const char* encodingName(Enc e) {
+  return e == Enc::Ascii ? "ascii" : e == Enc::Little ? "binary_little_endian" : "binary_big_endian";
+}
+
+/// Appends values in one of the three PLY encodings.
+struct Body {
+  Enc enc;
+  std::string bytes;
+  template <class T>
+  Body& operator()(T value) {
+    if (enc == Enc::Ascii) {
+      char text[64];
+      char* end;
+      if constexpr (sizeof(T) == 1) end = std::to_chars(text, text + 64, static_cast<int>(value)).ptr;
+      else end = std::to_chars(text, text + 64, value).ptr;
+      bytes.append(text, end);
+      bytes += ' ';
+      return *this;
+    }
+    char raw[sizeof(T)];
+    std::memcpy(raw, &value, sizeof(T));
+    const bool hostBig = __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__;
+    if ((enc == Enc::Big) != hostBig) std::reverse(raw, raw + sizeof(T));
+    bytes.append(raw, sizeof(T));
+    return *this;
+  }
+  Body& end() {
+    if (enc == Enc::Ascii) bytes += '\n';
+    return *this;
+  }
+};
+
+std::string plyFile(Enc enc, const std::string& headerBody, const std::string& body) {
+  return std::string("ply\nformat ") + encodingName(enc) + " 1.0\n" + headerBody + "end_header\n" + body;
+}
+
+const char* kEveryTypeHeader =
+    "comment made by hand\n"
+    "obj_info every type and list\n"
+    "element material 2\n"
+    "property list uchar char names\n"
+    "property list ushort short s\n"
+    "property list uint ushort us\n"
+    "property list char int i\n"
+    "property list short uint u\n"
+    "property list int float f\n"
+    "property list uint8 double d\n"
+    "property uchar tag\n"
+    "element vertex 5\n"
+    "property char a\n"
+    "property uchar b\n"
+    "property short c\n"
+    "property ushort d\n"
+    "property int e\n"
+    "property uint f\n"
+    "property float x\n"
+    "property double y\n"
+    "property int8 g\n"
+    "property float32 z\n"
+    "property list uchar int neighbours\n"
+    "property float64 nx\n"
+    "element face 2\n"
+    "property uchar flags\n"
+    "property list ushort uint vertex_indices\n"
+    "property list int float other\n"
+    "property list uchar double texcoord\n"
+    "property int16 id\n"
+    "element edge 1\n"
+    "property int vertex1\n"
+    "property int vertex2\n"
+    "property list uint uint8 more\n";
+
+const float kX[5] = {0.1f, 1.7f, -2.25f, 3.0e-5f, 1234.5f};
+const double kY[5] = {0.25, -1.5, 7.0, 2.0, -0.125};
+const float kZ[5] = {1.0f / 3.0f, 0.0f, -7.75f, 5.5f, 0.2f};
+const double kUV[14] = {0.1, 0.2, 1.0 / 3.0, -5.5, 1e-9, 2999.999, 4.0, 5.0, 6.25, 7.5, -8.0, 9.0, 10.5, 11.0};
+
+std::string everyTypeBody(Enc enc) {
+  Body b{enc, {}};
+  for (int m = 0; m < 2; ++m) {
+    b(std::uint8_t(2))(std::int8_t(-3))(std::int8_t(4));
+    b(std::uint16_t(1))(std::int16_t(-300));
+    b(std::uint32_t(0));
+    b(std::int8_t(2))(std::int32_t(-70000))(std::int32_t(5));
+    b(std::int16_t(1))(std::uint32_t(4000000000u));
+    b(std::int32_t(2))(1.5f)(-2.5f);
+    b(std::uint8_t(1))(0.125);
+    b(std::uint8_t(9)).end();
+  }
+  for (int v = 0; v < 5; ++v) {
+    b(std::int8_t(-1))(std::uint8_t(200))(std::int16_t(-2))(std::uint16_t(60000))(std::int32_t(-5))(
+        std::uint32_t(7));
+    b(kX[v])(kY[v])(std::int8_t(3))(kZ[v]);
+    b(std::uint8_t(v % 3));
+    for (int k = 0; k < v % 3; ++k) b(std::int32_t(k));
+    b(0.5).end();
+  }
+  // A triangle and a quad, each with other values around the index list.
+  b(std::uint8_t(1))(std::uint16_t(3))(std::uint32_t(0))(std::uint32_t(1))(std::uint32_t(2));
+  b(std::int32_t(2))(9.5f)(8.5f)(std::uint8_t(6));
+  for (int k = 0; k < 6; ++k) b(kUV[k]);
+  b(std::int16_t(-1)).end();
+  b(std::uint8_t(0))(std::uint16_t(4))(std::uint32_t(1))(std::uint32_t(3))(std::uint32_t(4))(std::uint32_t(2));
+  b(std::int32_t(0))(std::uint8_t(8));
+  for (int k = 6; k < 14; ++k) b(kUV[k]);
+  b(std::int16_t(2)).end();
+  b(std::int32_t(0))(std::int32_t(1))(std::uint32_t(3))(std::uint8_t(1))(std::uint8_t(2))(std::uint8_t(3)).end();
+  return b.bytes;
+}
+
+TEST(PlyRead, EveryTypeAndListInAllThreeEncodings) {
+  TempDir dir;
+  ReadOptions withUV;
+  withUV.readUV = true;
+  for (const Enc enc : {Enc::Ascii, Enc::Little, Enc::Big}) {
+    SCOPED_TRACE(encodingName(enc));
+    const std::string path = dir.path(std::string(encodingName(enc)) + ".ply");
+    writeFile(path, plyFile(enc, kEveryTypeHeader, everyTypeBody(enc)));
+    const TriangleMesh mesh = readMesh(path, withUV);
+    ASSERT_EQ(mesh.numVertices(), 5u);
+    for (int v = 0; v < 5; ++v) {
+      EXPECT_EQ(mesh.positions[v][0], kX[v]);
+      EXPECT_EQ(mesh.positions[v][1], static_cast<float>(kY[v]));
+      EXPECT_EQ(mesh.positions[v][2], kZ[v]);
+    }
+    // The quad (1 3 4 2) is fan-triangulated from its first corner.
+    const std::vector<Triangle> expected = {{0, 1, 2}, {1, 3, 4}, {1, 4, 2}};
+    EXPECT_EQ(mesh.triangles, expected);
+    ASSERT_EQ(mesh.cornerUV.size(), 9u);
+    const int uvOfCorner[9] = {0, 1, 2, 3, 4, 5, 3, 5, 6};  // indices into the (u, v) pairs
+    for (int c = 0; c < 9; ++c) {
+      EXPECT_EQ(mesh.cornerUV[c][0], kUV[2 * uvOfCorner[c]]) << c;
+      EXPECT_EQ(mesh.cornerUV[c][1], kUV[2 * uvOfCorner[c] + 1]) << c;
+    }
+    EXPECT_FALSE(readMesh(path).hasUV());
+  }
+}
+
+TEST(PlyRead, VertexIndexNameSmallTypesAndCrlfHeader) {
+  TempDir dir;
+  for (const Enc enc : {Enc::Ascii, Enc::Little, Enc::Big}) {
+    Body b{enc, {}};
+    b(std::int16_t(0))(std::int16_t(0))(std::int16_t(0)).end();
+    b(std::int16_t(1))(std::int16_t(0))(std::int16_t(0)).end();
+    b(std::int16_t(0))(std::int16_t(1))(std::int16_t(0)).end();
+    b(std::uint8_t(3))(std::uint8_t(0))(std::uint8_t(1))(std::uint8_t(2)).end();
+    std::string header = std::string("ply\r\nformat ") + encodingName(enc) +
+                         " 1.0\r\nelement vertex 3\r\nproperty short x\r\nproperty short y\r\n"
+                         "property short z\r\nelement face 1\r\nproperty list uchar uchar vertex_index\r\n"
+                         "end_header\n";
+    const std::string path = dir.path("small.ply");
+    writeFile(path, header + b.bytes);
+    const TriangleMesh mesh = readMesh(path);
+    ASSERT_EQ(mesh.numFaces(), 1u);
+    EXPECT_EQ(mesh.triangles[0], (Triangle{0, 1, 2}));
+    EXPECT_EQ(mesh.positions[1], Vec3f(1, 0, 0));
+  }
+}
+
+/// Signed doubled area of a triangle in the xy plane.
+double orientation(const TriangleMesh& m, const Triangle& t) {
+  const Vec3f a = m.positions[t[0]], b = m.positions[t[1]], c = m.positions[t[2]];
+  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
+TEST(PlyRead, TristripsKeepOneOrientationAndSkipDegenerates) {
+  TempDir dir;
+  // A zigzag of 8 vertices: bottom row at y=0, top row at y=1.
+  const int strip[] = {0, 4, 1, 5, 2, 6, 3, 7, -1, 0, 4, 1, 1, 1, 5, 2, 6};
+  for (const Enc enc : {Enc::Ascii, Enc::Little, Enc::Big}) {
+    SCOPED_TRACE(encodingName(enc));
+    Body b{enc, {}};
+    for (int i = 0; i < 4; ++i) b(float(i))(0.0f)(0.0f).end();
+    for (int i = 0; i < 4; ++i) b(float(i))(1.0f)(0.0f).end();
+    b(std::int32_t(17));
+    for (const int s : strip) b(std::int32_t(s));
+    b.end();
+    const std::string path = dir.path("strips.ply");
+    writeFile(path, plyFile(enc,
+                            "element vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+                            "element tristrips 1\nproperty list int int vertex_indices\n",
+                            b.bytes));
+    const TriangleMesh mesh = readMesh(path);
+    // First strip: 6 triangles. Second: (0 4 1), three degenerate ones (the doubled repeat keeps
+    // the parity), then (1 5 2) and (5 2 6) flipped.
+    ASSERT_EQ(mesh.numFaces(), 6u + 3u);
+    const double first = orientation(mesh, mesh.triangles[0]);
+    EXPECT_NE(first, 0.0);
+    for (const Triangle& t : mesh.triangles) {
+      EXPECT_TRUE(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
+      EXPECT_GT(orientation(mesh, t) * first, 0.0) << t[0] << " " << t[1] << " " << t[2];
+    }
+    // The first strip covers the 3 x 1 band, the second 3 half cells of it again.
+    double area = 0;
+    for (const Triangle& t : mesh.triangles) area += std::abs(orientation(mesh, t)) / 2;
+    EXPECT_DOUBLE_EQ(area, 3.0 + 1.5);
+  }
+}
+
+// --- OBJ and OFF syntaxes -----------------------------------------------------------------------
+
+TEST(ObjRead, AllFaceSyntaxesNegativeIndicesPolygonsAndCrlf) {
+  TempDir dir;
+  const std::string path = dir.path("syntax.obj");
+  writeFile(path,
+            "# comment\r\n"
+            "mtllib x.mtl\r\n"
+            "o object\r\ng group\r\ns 1\r\nusemtl red\r\n"
+            "f 1 2 3\r\n"  // forward reference
+            "v 0 0 0\r\n"
+            "v 1 0 0 1.0\r\n"         // w ignored
+            "v 1 1 0 0.5 0.5 0.5\r\n"  // colour ignored
+            "v 0 1 0\r\n"
+            "vt 0.5 0.25\r\nvt 0.75 0.125\r\nvt 0.1 0.2\r\nvt 0.3 0.4\r\n"
+            "vn 0 0 1\r\n"
+            "f 1/1 2/2 3/3\r\n"
+            "f 1//1 3//1 4//1\r\n"
+            "f -4/-4/1 -3/-3/1 -2/-2/1 -1/-1/1\r\n"
+            "l 1 2\r\np 3\r\n"
+            "f 1 2 3 4 # trailing comment\r\n");
+  const TriangleMesh mesh = readMesh(path);
+  ASSERT_EQ(mesh.numVertices(), 4u);
+  EXPECT_EQ(mesh.positions[1], Vec3f(1, 0, 0));
+  const std::vector<Triangle> expected = {{0, 1, 2}, {0, 1, 2}, {0, 2, 3}, {0, 1, 2},
+                                          {0, 2, 3}, {0, 1, 2}, {0, 2, 3}};
+  EXPECT_EQ(mesh.triangles, expected);
+  EXPECT_FALSE(mesh.hasUV());
+}
+
+TEST(ObjRead, TexcoordsPerCornerWhenAsked) {
+  TempDir dir;
+  const std::string path = dir.path("uv.obj");
+  writeFile(path,
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+            "vt 0.5 0.25\nvt 0.75 0.125\nvt 0.1 0.2\nvt 0.3 0.4 0.0\n"
+            "f 1/4 2/3 3/2\n"
+            "f -4/-4/1 -3/-3/1 -2/-2/1 -1/-1/1\n");
+  ReadOptions options;
+  options.readUV = true;
+  const TriangleMesh mesh = readMesh(path, options);
+  ASSERT_EQ(mesh.numFaces(), 3u);
+  ASSERT_EQ(mesh.cornerUV.size(), 9u);
+  EXPECT_EQ(mesh.cornerUV[0], Vec2d(0.3, 0.4));
+  EXPECT_EQ(mesh.cornerUV[1], Vec2d(0.1, 0.2));
+  EXPECT_EQ(mesh.cornerUV[2], Vec2d(0.75, 0.125));
+  // The quad with relative indices: vt 1..4 on vertices 1..4, fan (1 2 3), (1 3 4).
+  EXPECT_EQ(mesh.cornerUV[3], Vec2d(0.5, 0.25));
+  EXPECT_EQ(mesh.cornerUV[7], Vec2d(0.1, 0.2));
+  EXPECT_EQ(mesh.cornerUV[8], Vec2d(0.3, 0.4));
+}
+
+TEST(OffRead, HeaderVariantsCommentsAndColours) {
+  TempDir dir;
+  const std::string faces = "3 0 1 2\n4 0 2 3 1 255 0 0\n";
+  const std::vector<std::pair<const char*, std::string>> files = {
+      {"plain.off", "OFF\n# a comment\n\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n" + faces},
+      {"oneline.off", "OFF 4 2 0\n0 0 0\n1 0 0 # comment\n1 1 0\n0 1 0\n" + faces},
+      {"colour.off", "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n1 1 0 0 0 255 255\n0 1 0 1 1 1 1\n" + faces},
+      {"normal.off", "NOFF\r\n4 2 0\r\n0 0 0 0 0 1\r\n1 0 0 0 0 1\r\n1 1 0 0 0 1\r\n0 1 0 0 0 1\r\n3 0 1 2\r\n4 0 2 3 1\r\n"},
+      {"texture.off", "STCOFF\n4 2 0\n0 0 0 0 0 1 1 1 1\n1 0 0 1 0 1 1 1 1\n1 1 0 1 1 1 1 1 1\n0 1 0 0 1 1 1 1 1\n" + faces},
+      {"four.off", "4OFF\n4 2 0\n0 0 0 1\n1 0 0 1\n1 1 0 1\n0 1 0 1\n" + faces},
+  };
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    writeFile(dir.path(name), text);
+    const TriangleMesh mesh = readMesh(dir.path(name));
+    ASSERT_EQ(mesh.numVertices(), 4u);
+    EXPECT_EQ(mesh.positions[2], Vec3f(1, 1, 0));
+    const std::vector<Triangle> expected = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}};
+    EXPECT_EQ(mesh.triangles, expected);
+  }
+}
+
+// --- malformed input ----------------------------------------------------------------------------
+
+struct BadCase {
+  const char* file;
+  std::string content;
+  bool isIoError;
+  std::vector<std::string> mustContain;  ///< besides the file name
+};
+
+TEST(MeshIo, MalformedInputNamesFileLocationAndProblem) {
+  TempDir dir;
+  const std::string v3 = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
+  auto binaryTriangle = [](int index, float x) {
+    Body b{Enc::Little, {}};
+    b(0.0f)(0.0f)(0.0f)(1.0f)(0.0f)(0.0f)(x)(1.0f)(0.0f);
+    b(std::uint8_t(3))(std::int32_t(0))(std::int32_t(1))(std::int32_t(index));
+    return b.bytes;
+  };
+  const std::vector<BadCase> cases = {
+      {"unknown.ply", plyFile(Enc::Ascii, "element vertex 3\nproperty int64 x\n", ""), false,
+       {"line 4", "unsupported PLY type 'int64'"}},
+      {"format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", false, {"line 2", "unknown PLY format"}},
+      {"keyword.ply", "ply\nformat ascii 1.0\nelemnt vertex 3\nend_header\n", false, {"line 3", "unknown PLY header keyword"}},
+      {"noend.ply", "ply\nformat ascii 1.0\n" + v3, false, {"no end_header"}},
+      {"notply.ply", "solid cube\nfacet normal 0 0 1\n", false, {"not a PLY file"}},
+      {"novertex.ply", plyFile(Enc::Ascii, "element vertex 1\nproperty float x\n", "1\n"), false, {"x, y and z"}},
+      {"range.ply", plyFile(Enc::Little, v3 + face, binaryTriangle(3, 1.0f)), false,
+       {"element 'face' 0", "vertex index 3 is out of range"}},
+      {"range_ascii.ply", plyFile(Enc::Ascii, v3 + face, "0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n"), false,
+       {"line 13", "vertex index -1 is out of range"}},
+      {"nan.ply", plyFile(Enc::Little, v3 + face, binaryTriangle(2, std::nanf(""))), false,
+       {"element 'vertex' 2", "NaN or infinite"}},
+      {"inf.ply", plyFile(Enc::Ascii, v3 + face, "0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n"), false,
+       {"line 11", "NaN or infinite"}},
+      {"twoface.ply", plyFile(Enc::Ascii, v3 + face, "0 0 0\n1 0 0\n0 1 0\n2 0 1\n"), false,
+       {"line 13", "at least 3"}},
+      {"badnumber.ply", plyFile(Enc::Ascii, v3 + face, "0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n"), false,
+       {"line 11", "bad number 'x'"}},
+      {"empty.ply", plyFile(Enc::Ascii, v3, "0 0 0\n1 0 0\n0 1 0\n"), false, {"no faces"}},
+      {"huge.ply", plyFile(Enc::Little, "element vertex 1000000000000\nproperty float x\nproperty float y\nproperty float z\n", "abc"),
+       true, {"1000000000000", "truncated or its header is wrong"}},
+      {"huge_ascii.ply", plyFile(Enc::Ascii, "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                              "element face 1000000000000\nproperty list uchar int vertex_indices\n",
+                                 "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+       true, {"'face'", "truncated or its header is wrong"}},
+      {"hugelist.ply", plyFile(Enc::Little, v3 + "element face 1\nproperty list uint int vertex_indices\n",
+                               binaryTriangle(2, 1.0f).substr(0, 36) + std::string("\xff\xff\xff\x7f", 4) + "12345678"),
+       true, {"element 'face' 0", "truncated"}},
+      {"short.ply", plyFile(Enc::Ascii, v3 + face, "0 0 0\n1 0 0\n0 1 0\n3 0 1\n"), true, {"line 13", "ends early"}},
+      {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\nf 1 2\n", false, {"line 6", "at least 3"}},
+      {"b.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 7\nv 1 1 1\n", false,
+       {"line 5", "vertex 7 but the file has only 4"}},
+      {"c.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", false, {"line 4", "reaches before the first"}},
+      {"d.obj", "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n", false, {"line 2", "NaN or infinite"}},
+      {"e.obj", "v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n", false, {"line 2", "fewer than 3"}},
+      {"f.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", false, {"line 4", "index 0 is invalid"}},
+      {"g.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3x\n", false, {"line 4", "bad vertex index"}},
+      {"h.obj", "# nothing\nv 0 0 0\n", false, {"no faces"}},
+      {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", false, {"line 6", "vertex index 3 is out of range"}},
+      {"b.off", "PLY\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", false, {"line 1", "not an OFF file"}},
+      {"c.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1 # padding\n", false, {"line 6", "at least 3"}},
+      {"d.off", "OFF\n3 1 0\n0 0 0\n1 0 inf\n0 1 0\n3 0 1 2\n", false, {"line 4", "NaN or infinite"}},
+      {"e.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n# padding padding padding padding\n", true, {"truncated", "2 of 3 vertices"}},
+      {"f.off", "OFF\n3000000000000 1 0\n0 0 0\n", true, {"line 2", "truncated or its header is wrong"}},
+      {"g.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", false, {"no faces"}},
+      {"h.off", "", false, {"not an OFF file"}},
+      {"mesh.stl", "solid\n", true, {"unknown mesh format"}},
+  };
+  for (const BadCase& bad : cases) {
+    SCOPED_TRACE(bad.file);
+    const std::string path = dir.path(bad.file);
+    writeFile(path, bad.content);
+    const std::string message = bad.isIoError ? messageOf<IoError>([&] { readMesh(path); })
+                                              : messageOf<InputError>([&] { readMesh(path); });
+    EXPECT_THAT(message, HasSubstr(path));
+    for (const std::string& part : bad.mustContain) EXPECT_THAT(message, HasSubstr(part));
+  }
+}
+
+TEST(MeshIo, MissingFilesAndFoldersAreIoErrors) {
+  TempDir dir;
+  EXPECT_THAT(messageOf<IoError>([&] { readMesh(dir.path("missing.ply")); }),
+              HasSubstr(dir.path("missing.ply") + ": cannot open"));
+  std::filesystem::create_directory(dir.path("folder.obj"));
+  EXPECT_THAT(messageOf<IoError>([&] { readMesh(dir.path("folder.obj")); }), HasSubstr("is a folder"));
+  EXPECT_THAT(messageOf<IoError>([&] { readMesh(dir.path("noextension")); }), HasSubstr("unknown mesh format"));
+}
+
+TEST(PlyRead, TruncatedBinaryFailsCleanlyAtEveryCut) {
+  TempDir dir;
+  const std::string whole = dir.path("whole.ply");
+  writeMesh(whole, makeGrid(5, 5, true));
+  const std::string bytes = testing::readFile(whole);
+  const std::size_t body = bytes.find("end_header\n") + 11;
+  ReadOptions options;
+  options.readUV = true;
+  std::size_t cuts = 0;
+  for (std::size_t cut = body; cut < bytes.size(); cut += 37, ++cuts) {
+    const std::string path = dir.path("cut.ply");
+    writeFile(path, bytes.substr(0, cut));
+    const std::string message = messageOf<IoError>([&] { readMesh(path, options); });
+    EXPECT_THAT(message, HasSubstr(path)) << cut;
+    EXPECT_THAT(message, HasSubstr("truncated")) << cut;
+  }
+  EXPECT_GT(cuts, 50u);
+  // Cuts inside the header are header errors.
+  writeFile(dir.path("header.ply"), bytes.substr(0, body - 11));
+  EXPECT_THAT(messageOf<InputError>([&] { readMesh(dir.path("header.ply")); }), HasSubstr("end_header"));
+}
+
+// --- writing ------------------------------------------------------------------------------------
+
+TEST(MeshIo, FailedWritesLeaveNoFile) {
+  TempDir dir;
+  const TriangleMesh mesh = makeGrid(2, 2, false);
+  EXPECT_THAT(messageOf<IoError>([&] { writeMesh(dir.path("missing/out.ply"), mesh); }),
+              HasSubstr(dir.path("missing/out.ply")));
+  EXPECT_FALSE(std::filesystem::exists(dir.path("missing")));
+
+  TriangleMesh broken = mesh;
+  broken.triangles[1][2] = 99;
+  EXPECT_THAT(messageOf<InputError>([&] { writeMesh(dir.path("broken.obj"), broken); }), HasSubstr("face 1"));
+  TriangleMesh badUV = mesh;
+  badUV.cornerUV.resize(5);
+  EXPECT_THAT(messageOf<InputError>([&] { writeMesh(dir.path("baduv.ply"), badUV); }), HasSubstr("corner UVs"));
+  EXPECT_THAT(messageOf<IoError>([&] { writeMesh(dir.path("x.unknown"), mesh); }), HasSubstr("unknown mesh format"));
+  EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));
+
+  // Overwriting replaces the old content completely.
+  writeMesh(dir.path("m.off"), makeGrid(6, 6, false));
+  writeMesh(dir.path("m.off"), mesh);
+  expectSameMesh(mesh, readMesh(dir.path("m.off")), false);
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.dir()), {}), 1);
+}
+
+// --- shared meshes ------------------------------------------------------------------------------
+
+TEST(SharedMeshes, FertilityCounts) {
+  const std::string path = testing::sharedMesh("fertility.off");
+  if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage("fertility.off");
+  const TriangleMesh mesh = readMesh(path);
+  EXPECT_EQ(mesh.numVertices(), 4494u);
+  EXPECT_EQ(mesh.numFaces(), 9000u);
+}
+
+TEST(SharedMeshes, EveryMeshReadsAndRoundTrips) {
+  const std::string readme = testing::sharedMesh("README.md");
+  if (readme.empty()) GTEST_SKIP() << testing::missingSharedMessage("README.md");
+  const std::filesystem::path folder = std::filesystem::path(readme).parent_path();
+  TempDir dir;
+  int read = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    const std::string path = entry.path().string();
+    if (formatFromPath(path) == MeshFormat::Unknown) continue;
+    SCOPED_TRACE(path);
+    ReadOptions options;
+    options.readUV = true;
+    const TriangleMesh mesh = readMesh(path, options);
+    EXPECT_GT(mesh.numFaces(), 1000u);
+    EXPECT_TRUE(mesh.cornerUV.empty() || mesh.cornerUV.size() == 3 * mesh.triangles.size());
+    ++read;
+    const std::string copy = dir.path("copy.ply");
+    writeMesh(copy, mesh);
+    expectSameMesh(mesh, readMesh(copy, options), true);
+  }
+  EXPECT_GE(read, 10);
+  const std::string spot = testing::sharedMesh("spot.obj");
+  if (!spot.empty()) {
+    ReadOptions options;
+    options.readUV = true;
+    EXPECT_TRUE(readMesh(spot, options).hasUV());
+    EXPECT_FALSE(readMesh(spot).hasUV());
+  }
+}
+
+}  // namespace
+}  // namespace seamvox
