@@ -1,0 +1,334 @@
+// Cross fields: Poincare-Hopf, index sign, smoothest field, curvature alignment, degenerate
+// faces, tangent projection and field files.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include "core/clean.h"
+#include "core/errors.h"
+#include "core/field.h"
+#include "core/generate.h"
+#include "core/topology.h"
+#include "io/field_io.h"
+#include "io/mesh_io.h"
+#include "test_meshes.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+struct Surface {
+  TriangleMesh mesh;
+  Topology topology;
+};
+
+Surface makeSurface(TriangleMesh mesh) {
+  Surface s;
+  s.topology = Topology::build(mesh.triangles, mesh.numVertices());
+  s.mesh = std::move(mesh);
+  return s;
+}
+
+Surface loadShared(const std::string& path) {
+  CleanResult cleaned = cleanMesh(readMesh(path));
+  return {std::move(cleaned.mesh), std::move(cleaned.topology)};
+}
+
+std::int64_t eulerCharacteristic(const Topology& topology) {
+  std::int64_t chi = 0;
+  for (const ComponentInfo& c : computeComponents(topology).components) chi += c.eulerCharacteristic;
+  return chi;
+}
+
+/// Unit tangent directions at pseudo-random angles (a field with many cones).
+CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed) {
+  std::vector<Vec3d> v(mesh.numFaces());
+  std::uint64_t state = seed * 0x9E3779B97F4A7C15ull + 1;
+  for (Vec3d& x : v) {
+    for (int k = 0; k < 3; ++k) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      x[k] = double(state >> 11) / 9007199254740992.0 - 0.5;
+    }
+  }
+  return projectToTangent(mesh, std::move(v));
+}
+
+/// Sum over interior edges of the squared residual rotation eps, recomputed from matchings:
+/// a smoothness figure that is independent of the solver's energy.
+double residualEnergy(const Surface& s, const CrossField& field) {
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  double sum = 0.0;
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    const CornerId o = s.topology.opposite(c);
+    if (o == kInvalidId || o < c) continue;
+    const FaceId f = cornerFace(c), g = cornerFace(o);
+    // Angle between u_g and the transported rot^k(u_f), measured in g's tangent plane: for
+    // nearly flat neighbours this is the residual eps up to the small dihedral correction.
+    const Vec3d nf = faceNormal(s.mesh, f), ng = faceNormal(s.mesh, g);
+    Vec3d u = field.direction[f];
+    for (int k = 0; k < sing.matching[c]; ++k) u = nf.cross(u);
+    const Vec3d axis = nf.cross(ng);
+    const double sinA = axis.norm(), cosA = nf.dot(ng);
+    if (sinA > 1e-12) {  // rotate u about the shared edge onto g's plane
+      const Vec3d k = axis / sinA;
+      u = u * cosA + k.cross(u) * sinA + k * k.dot(u) * (1 - cosA);
+    }
+    const double e = std::atan2(ng.dot(u.cross(field.direction[g])), u.dot(field.direction[g]));
+    sum += e * e;
+  }
+  return sum;
+}
+
+void expectPoincareHopf(const Surface& s, const CrossField& field, const std::string& what) {
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  EXPECT_EQ(sing.indexSum4(), 4 * eulerCharacteristic(s.topology)) << what;
+  std::size_t nonZero = 0;
+  for (std::int32_t i : sing.index4) nonZero += i != 0;
+  EXPECT_EQ(nonZero, sing.cones.size()) << what;
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    const CornerId o = s.topology.opposite(c);
+    if (o != kInvalidId) ASSERT_EQ((sing.matching[c] + sing.matching[o]) % 4, 0) << what;
+  }
+}
+
+TEST(Field, PoincareHopfOnGeneratedClosedMeshes) {
+  GenerateOptions genus2;
+  genus2.kind = MeshKind::Genus2;
+  genus2.faces = 6000;
+  const Surface surfaces[] = {makeSurface(testing::icosphereMesh(3)),
+                              makeSurface(testing::torusMesh(40, 16)),
+                              makeSurface(generateMesh(genus2).mesh)};
+  const std::int64_t expectedChi[] = {2, 0, -2};
+  for (int i = 0; i < 3; ++i) {
+    const Surface& s = surfaces[i];
+    ASSERT_EQ(eulerCharacteristic(s.topology), expectedChi[i]);
+    expectPoincareHopf(s, computeSmoothestField(s.mesh, s.topology), "smoothest #" + std::to_string(i));
+    expectPoincareHopf(s, randomField(s.mesh, 7 + i), "random #" + std::to_string(i));
+  }
+}
+
+TEST(Field, PoincareHopfOnSharedClosedMeshes) {
+  const std::pair<const char*, std::int64_t> cases[] = {{"fertility.off", -6}, {"3holes.off", -4}, {"bumpy.off", 2}};
+  for (const auto& [name, chi] : cases) {
+    const std::string path = testing::sharedMesh(name);
+    if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage(name);
+    const Surface s = loadShared(path);
+    ASSERT_EQ(eulerCharacteristic(s.topology), chi) << name;
+    const CrossField field = computeSmoothestField(s.mesh, s.topology);
+    expectPoincareHopf(s, field, name);
+    const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+    std::printf("[ info ] %s: smoothest field has %zu cones, index sum %lld/4\n", name,
+                sing.cones.size(), static_cast<long long>(sing.indexSum4()));
+  }
+}
+
+/// Flat fan of n triangles around vertex 0 at the origin; field at polar angle phi * s / 4.
+TEST(Field, IndexSignOnFlatFan) {
+  const int n = 12;
+  TriangleMesh mesh;
+  mesh.positions.emplace_back(0.f, 0.f, 0.f);
+  for (int j = 0; j < n; ++j) {
+    const double a = 2 * M_PI * j / n;
+    mesh.positions.emplace_back(float(std::cos(a)), float(std::sin(a)), 0.f);
+  }
+  for (int j = 0; j < n; ++j) mesh.triangles.push_back({0, VertexId(1 + j), VertexId(1 + (j + 1) % n)});
+  const Surface s = makeSurface(mesh);
+  for (const int sign : {+1, -1}) {
+    for (const double rotation : {0.0, 0.3, 2.0}) {  // adding a constant angle changes nothing
+      std::vector<Vec3d> dirs;
+      for (int j = 0; j < n; ++j) {
+        const double phi = 2 * M_PI * (j + 0.5) / n;
+        const double theta = sign * phi / 4 + rotation;
+        dirs.emplace_back(std::cos(theta), std::sin(theta), 0.0);
+      }
+      const FieldSingularities sing =
+          computeSingularities(s.mesh, s.topology, projectToTangent(s.mesh, dirs));
+      EXPECT_EQ(sing.index4[0], sign) << "sign " << sign << " rotation " << rotation;
+      for (VertexId v = 1; v <= VertexId(n); ++v) EXPECT_EQ(sing.index4[v], 0);  // boundary
+      ASSERT_EQ(sing.cones.size(), 1u);
+      EXPECT_EQ(sing.cones[0], 0u);
+    }
+  }
+  // Lifted into a cone (angle defect about 1.86): the index counts the field's turning against
+  // the transport, so a field that is constant seen from above still has index 0 and the
+  // quarter-turning one index +1.
+  TriangleMesh lifted = mesh;
+  lifted.positions[0].z() = 1.0f;
+  const Surface t = makeSurface(lifted);
+  for (const int turns : {0, 1}) {
+    std::vector<Vec3d> dirs;
+    for (int j = 0; j < n; ++j) {
+      const double theta = turns * 2 * M_PI * (j + 0.5) / n / 4;
+      dirs.emplace_back(std::cos(theta), std::sin(theta), 0.0);
+    }
+    const FieldSingularities sing = computeSingularities(t.mesh, t.topology, projectToTangent(t.mesh, dirs));
+    EXPECT_EQ(sing.index4[0], turns);
+  }
+}
+
+TEST(Field, SmoothestFieldOnBumpySphereAndTorus) {
+  const std::string path = testing::sharedMesh("bumpy.off");
+  if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage("bumpy.off");
+  const Surface bumpy = loadShared(path);
+  const CrossField field = computeSmoothestField(bumpy.mesh, bumpy.topology);
+  const FieldSingularities sing = computeSingularities(bumpy.mesh, bumpy.topology, field);
+  std::int64_t sum = 0;
+  for (VertexId v : sing.cones) sum += sing.index4[v];
+  EXPECT_EQ(sum, 8);  // cone indices sum to 2
+  EXPECT_GE(sing.cones.size(), 2u);
+  std::printf("[ info ] bumpy.off: %zu cones\n", sing.cones.size());
+  // Smoothest means: every random perturbation is rougher.
+  const double energy = residualEnergy(bumpy, field);
+  std::vector<Vec3d> perturbed = field.direction;
+  for (FaceId f = 0; f < perturbed.size(); ++f) {
+    const Vec3d n = faceNormal(bumpy.mesh, f);
+    const double a = 0.2 * std::sin(12.9898 * f);
+    perturbed[f] = std::cos(a) * perturbed[f] + std::sin(a) * n.cross(perturbed[f]);
+  }
+  EXPECT_LT(energy, residualEnergy(bumpy, projectToTangent(bumpy.mesh, perturbed)));
+
+  // A thin torus of revolution (tube radius / big radius = 1/6): cone-free at every resolution
+  // (thicker tori have smoothest fields with 4 to 12 cones, still summing to 0).
+  const Surface torus = makeSurface(testing::torusMesh(96, 16, 3.0, 0.5));
+  const FieldSingularities torusSing =
+      computeSingularities(torus.mesh, torus.topology, computeSmoothestField(torus.mesh, torus.topology));
+  EXPECT_EQ(torusSing.cones.size(), 0u);
+}
+
+TEST(Field, CurvatureAlignmentOnCylinder) {
+  // Flat cylinder: every constant-angle field is smoothest; curvature picks axis/circumference.
+  const Surface s = makeSurface(testing::cylinderMesh(48, 16, 1.0, 2.0));
+  auto alignment = [&](const CrossField& field) {
+    double sum = 0.0;
+    for (FaceId f = 0; f < s.mesh.numFaces(); ++f) {
+      const Vec3d n = faceNormal(s.mesh, f);
+      const Vec3d axis = (Vec3d::UnitZ() - n * n.z()).normalized();
+      const double a = std::atan2(n.dot(axis.cross(field.direction[f])), axis.dot(field.direction[f]));
+      sum += std::cos(4 * a);
+    }
+    return sum / s.mesh.numFaces();
+  };
+  SmoothFieldOptions options;
+  options.curvatureWeight = 1.0;
+  const CrossField aligned = computeSmoothestField(s.mesh, s.topology, options);
+  EXPECT_GT(alignment(aligned), 0.98);
+  EXPECT_TRUE(computeSingularities(s.mesh, s.topology, aligned).cones.empty());
+  // The smoothest field alone is parallel (no cones) at whatever constant angle.
+  const CrossField smooth = computeSmoothestField(s.mesh, s.topology);
+  EXPECT_TRUE(computeSingularities(s.mesh, s.topology, smooth).cones.empty());
+}
+
+TEST(Field, SeveralComponentsEachGetAField) {
+  const Surface s = makeSurface(testing::concatMeshes(
+      {testing::icosphereMesh(2), testing::torusMesh(30, 12), testing::gridMesh(6, 5)}));
+  const CrossField field = computeSmoothestField(s.mesh, s.topology);
+  for (const Vec3d& d : field.direction) ASSERT_NEAR(d.norm(), 1.0, 1e-9);
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  EXPECT_EQ(sing.indexSum4(), 8);  // sphere 8, torus 0, disk: interior cones only
+  // The flat grid's smoothest field is parallel: no cones and residuals ~0.
+  const FaceId gridStart = s.mesh.numFaces() - 60;
+  for (FaceId f = gridStart + 1; f < s.mesh.numFaces(); ++f) {
+    EXPECT_NEAR(std::cos(4 * std::acos(std::clamp(field.direction[f].dot(field.direction[gridStart]), -1.0, 1.0))), 1.0, 1e-6);
+  }
+}
+
+TEST(Field, ZeroAreaFacesGiveNoNaN) {
+  TriangleMesh mesh = testing::torusMesh(20, 10);
+  // Collapse one face onto a line (vertex on the midpoint of the opposite edge) and another to a
+  // point pair (two coincident vertices).
+  const Triangle a = mesh.triangles[10], b = mesh.triangles[101];
+  mesh.positions[a[2]] = 0.5f * (mesh.positions[a[0]] + mesh.positions[a[1]]);
+  mesh.positions[b[1]] = mesh.positions[b[0]];
+  const Surface s = makeSurface(mesh);
+  EXPECT_EQ(faceArea(s.mesh, 10), 0.0);
+  for (const CrossField& field : {computeSmoothestField(s.mesh, s.topology), randomField(s.mesh, 3)}) {
+    for (const Vec3d& d : field.direction) ASSERT_TRUE(d.allFinite());
+    expectPoincareHopf(s, field, "degenerate torus");
+  }
+}
+
+TEST(Field, ProjectToTangent) {
+  const Surface s = makeSurface(testing::gridMesh(2, 1));
+  const double nan = std::nan("");
+  const CrossField f = projectToTangent(s.mesh, {Vec3d(3, 4, 5), Vec3d(0, 0, 2), Vec3d(nan, 0, 0), Vec3d(0, 0, 0)});
+  EXPECT_NEAR((f.direction[0] - Vec3d(0.6, 0.8, 0)).norm(), 0, 1e-12);
+  for (FaceId x = 1; x < 4; ++x) {  // no tangent part: the first edge direction
+    const Triangle& t = s.mesh.triangles[x];
+    EXPECT_NEAR((f.direction[x] - (s.mesh.position(t[1]) - s.mesh.position(t[0])).normalized()).norm(), 0, 1e-12);
+  }
+  EXPECT_THROW(projectToTangent(s.mesh, {Vec3d(1, 0, 0)}), InputError);
+}
+
+TEST(FieldIo, PlainRoundTripAndHeaderlessFiles) {
+  testing::TempDir dir;
+  const std::vector<Vec3d> v = {Vec3d(1, 0, 0), Vec3d(0.1, -0.25, 1e-7), Vec3d(0, 0, 0)};
+  writeField(dir.path("a.field"), v);
+  const std::vector<Vec3d> back = readFieldVectors(dir.path("a.field"), 3);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR((back[i] - v[i]).norm(), 0.0, 1e-9 * (1 + v[i].norm()));
+  testing::writeFile(dir.path("b.field"), "# comment\n\n1 0 0\n0 1 0\r\n");
+  EXPECT_EQ(readFieldVectors(dir.path("b.field"), 2)[1], Vec3d(0, 1, 0));
+}
+
+TEST(FieldIo, BadFilesNameFileAndLine) {
+  testing::TempDir dir;
+  const std::pair<const char*, const char*> cases[] = {
+      {"1 3\n1 0 0\n0 1 0\n", ":3: file ends after 2"},
+      {"1 2\n1 0 0\n0 1 0\n", ":1: header declares 2 faces"},
+      {"1 0 0\n0 1 x\n0 0 1\n", ":2: 'x' is not a number"},
+      {"1 0 0\n0 1 nan\n0 0 1\n", ":2: "},
+      {"1 0 0\n0 1\n0 0 1\n", ":2: expected 3 numbers"},
+      {"1 0 0\n0 1 0\n0 0 1\n1 1 1\n", ":4: more field lines"},
+      {"2 3\n0 1 0 0 0 1 0\n0 1 0 0 0 1 0\n0 1 0 0 0 1\n", ":4: expected 7 values"},
+      {"3 3\n", ":1: header"},
+  };
+  for (const auto& [text, expected] : cases) {
+    const std::string path = dir.path("bad.field");
+    testing::writeFile(path, text);
+    try {
+      readFieldVectors(path, 3);
+      ADD_FAILURE() << "no error for " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path + expected), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(readFieldVectors(dir.path("missing.field"), 3), IoError);
+}
+
+TEST(FieldIo, LiliumCrossfieldImport) {
+  const std::string meshPath = testing::sharedMesh("lilium.obj");
+  const std::string fieldPath = testing::sharedMesh("lilium.crossfield");
+  if (meshPath.empty() || fieldPath.empty()) GTEST_SKIP() << testing::missingSharedMessage("lilium.*");
+  const TriangleMesh mesh = readMesh(meshPath);
+  const CrossField field = importField(fieldPath, mesh);
+  ASSERT_EQ(field.direction.size(), mesh.numFaces());
+  // Reference: parse both vectors of each face here and compare as crosses (4th powers).
+  std::ifstream in(fieldPath);
+  std::string header;
+  std::getline(in, header);
+  double worst = 0.0;
+  int checked = 0;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    int flag;
+    Vec3d a, b;
+    ASSERT_TRUE(in >> flag >> a.x() >> a.y() >> a.z() >> b.x() >> b.y() >> b.z());
+    const Vec3d n = faceNormal(mesh, f);
+    if (n.norm() == 0.0) continue;
+    const Vec3d& u = field.direction[f];
+    EXPECT_NEAR(u.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(u.dot(n), 0.0, 1e-9);
+    // The cross of u contains the file's first vector (the second is a conjugate direction,
+    // not always perpendicular in this file, and is not used).
+    const Vec3d t = (a - a.dot(n) * n).normalized();
+    const double angle = std::atan2(n.dot(u.cross(t)), u.dot(t));
+    worst = std::max(worst, 1.0 - std::cos(4 * angle));
+    ++checked;
+  }
+  EXPECT_GT(checked, 6500);
+  EXPECT_LT(worst, 1e-9);
+}
+
+}  // namespace
+}  // namespace seamvox
