@@ -1,0 +1,36 @@
+#pragma once
+/// The hat-basis seamless parameterization of a cut mesh: basis, reduction, assembly, solves,
+/// rounding and evaluation in one call (DESIGN sections 6-9).
+#include <vector>
+
+#include "cut.h"
+#include "field.h"
+#include "mesh.h"
+#include "progress.h"
+#include "round.h"
+#include "topology.h"
+
+namespace seamvox {
+
+struct ParamOptions {
+  double edgeLength = 1.0;  ///< h, target grid spacing in mesh units (> 0)
+  bool greedyRounding = false;
+  ProgressFn progress;
+};
+
+struct ParamResult {
+  std::vector<Vec2d> cornerUV;               ///< 3 #F, (u, v) in grid units
+  std::vector<std::complex<double>> translations;  ///< t per seam
+  SeamlessStats stats;
+  std::uint32_t basisFunctions = 0, domains = 0, seamAdjacencies = 0;
+  std::uint32_t translationConstraints = 0;  ///< cycle constraints found
+  double secondsBasis = 0.0, secondsReduce = 0.0, secondsEvaluate = 0.0;
+};
+
+/// Seamless map of a mesh cut to a disk per component (cutToDisk), following the combed field.
+/// Throws InputError for mismatched sizes, SolverError when a factorization fails.
+ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
+                             const CrossField& field, const CutResult& cut,
+                             const ParamOptions& options = {});
+
+}  // namespace seamvox
