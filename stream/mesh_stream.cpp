@@ -36,6 +36,7 @@ TriangleMesh collectMesh(MeshStream& stream) {
     if (!uvDecided) {
       withUV = chunkUV;
       uvDecided = true;
+      if (withUV) mesh.cornerUV.reserve(3 * std::max<std::size_t>(mesh.triangles.capacity(), 1));
     } else if (withUV != chunkUV) {
       throw InputError(name + ": some triangles have texture coordinates and others do not");
     }

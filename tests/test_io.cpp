@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -156,6 +157,45 @@ TEST(MeshIo, MemoryStreamFeedsCollectMesh) {
   auto mesh = std::make_shared<const TriangleMesh>(makeGrid(4, 5, true));
   auto stream = makeMemoryStream("memory", mesh, 3);
   expectSameMesh(*mesh, collectMesh(*stream), true);
+}
+
+/// The triangles as sorted lists of corner (position, UV) values, each rotated to start at its
+/// smallest corner: equal for meshes that differ only in vertex and face order.
+std::vector<std::array<std::array<double, 5>, 3>> canonicalTriangles(const TriangleMesh& m) {
+  std::vector<std::array<std::array<double, 5>, 3>> result;
+  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+    std::array<std::array<double, 5>, 3> corners;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3f& p = m.positions[m.triangles[f][k]];
+      const Vec2d uv = m.hasUV() ? m.cornerUV[3 * f + k] : Vec2d::Zero();
+      corners[k] = {p[0], p[1], p[2], uv[0], uv[1]};
+    }
+    const int first = static_cast<int>(std::min_element(corners.begin(), corners.end()) - corners.begin());
+    std::rotate(corners.begin(), corners.begin() + first, corners.end());
+    result.push_back(corners);
+  }
+  std::sort(result.begin(), result.end());
+  return result;
+}
+
+TEST(DracoIo, RoundTripKeepsGeometryAndUVsExactly) {
+  TempDir dir;
+  const TriangleMesh mesh = makeGrid(12, 9, true);
+  writeMesh(dir.path("m.drc"), mesh);
+  ReadOptions options;
+  options.readUV = true;
+  const TriangleMesh back = readMesh(dir.path("m.drc"), options);
+  EXPECT_EQ(back.numVertices(), mesh.numVertices());
+  ASSERT_TRUE(back.hasUV());
+  EXPECT_EQ(canonicalTriangles(back), canonicalTriangles(mesh));
+  EXPECT_FALSE(readMesh(dir.path("m.drc")).hasUV());
+  // Chunked like every other format.
+  options.chunkTriangles = 10;
+  EXPECT_EQ(canonicalTriangles(readMesh(dir.path("m.drc"), options)), canonicalTriangles(mesh));
+
+  writeFile(dir.path("bad.drc"), "DRACO not really");
+  EXPECT_THAT(messageOf<InputError>([&] { readMesh(dir.path("bad.drc")); }), HasSubstr(dir.path("bad.drc")));
+  EXPECT_THAT(messageOf<IoError>([&] { readMesh(dir.path("missing.drc")); }), HasSubstr("cannot open"));
 }
 
 // --- PLY bodies written by hand -----------------------------------------------------------------
