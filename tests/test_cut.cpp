@@ -1,0 +1,277 @@
+// Cut graph, combing and seams: the cut surface of every component is a disk, every cone is on
+// the cut, combed matchings vanish off the cut and are constant along each seam.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <string>
+
+#include "core/clean.h"
+#include "core/cut.h"
+#include "core/errors.h"
+#include "core/field.h"
+#include "core/generate.h"
+#include "core/topology.h"
+#include "io/field_io.h"
+#include "io/mesh_io.h"
+#include "test_meshes.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+struct Surface {
+  TriangleMesh mesh;
+  Topology topology;
+};
+
+Surface makeSurface(TriangleMesh mesh) {
+  Surface s;
+  s.topology = Topology::build(mesh.triangles, mesh.numVertices());
+  s.mesh = std::move(mesh);
+  return s;
+}
+
+Surface loadShared(const std::string& path) {
+  CleanResult cleaned = cleanMesh(readMesh(path));
+  return {std::move(cleaned.mesh), std::move(cleaned.topology)};
+}
+
+struct UnionFind {
+  std::vector<std::uint32_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) { parent[find(a)] = find(b); }
+};
+
+/// Builds the cut mesh independently of cutToDisk's own bookkeeping: corners at a vertex are
+/// glued across non-cut edges into wedges (the cut mesh's vertices); then per component counts
+/// V - E + F and the boundary loops (cut edges, each side once, chained wedge to wedge).
+void expectCutIsDiskPerComponent(const Surface& s, const CutResult& cut, const std::string& what) {
+  const Topology& t = s.topology;
+  const std::uint32_t numCorners = t.numCorners();
+  UnionFind wedges(numCorners), faces(t.numFaces());
+  for (CornerId c = 0; c < numCorners; ++c) {
+    const CornerId o = t.opposite(c);
+    if (o == kInvalidId) continue;
+    ASSERT_EQ(cut.isCut[c], cut.isCut[o]) << what;
+    faces.unite(cornerFace(c), cornerFace(o));
+    if (cut.isCut[c]) continue;
+    // The edge of c joins vertex(next c) and vertex(prev c) in both faces.
+    wedges.unite(nextCorner(c), prevCorner(o));
+    wedges.unite(prevCorner(c), nextCorner(o));
+  }
+  std::map<std::uint32_t, std::int64_t> chi;         // component root -> V - E + F
+  std::map<std::uint32_t, std::uint32_t> loops;      // component root -> boundary loops
+  std::vector<std::uint8_t> wedgeCounted(numCorners, 0);
+  std::map<std::uint32_t, std::uint32_t> boundaryNext;  // wedge -> next wedge along the boundary
+  for (CornerId c = 0; c < numCorners; ++c) {
+    const std::uint32_t comp = faces.find(cornerFace(c));
+    const std::uint32_t w = wedges.find(c);
+    if (!wedgeCounted[w]) {
+      wedgeCounted[w] = 1;
+      chi[comp] += 1;
+    }
+    if (c % 3 == 0) chi[comp] += 1;
+    const CornerId o = t.opposite(c);
+    if (o == kInvalidId || cut.isCut[c]) {
+      chi[comp] -= 1;  // each side of a cut edge is an edge of the cut mesh
+      const std::uint32_t from = wedges.find(nextCorner(c)), to = wedges.find(prevCorner(c));
+      ASSERT_EQ(boundaryNext.count(from), 0u) << what << ": cut mesh not a manifold at a wedge";
+      boundaryNext[from] = to;
+    } else if (c < o) {
+      chi[comp] -= 1;
+    }
+  }
+  std::map<std::uint32_t, std::uint32_t> wedgeComp;
+  for (CornerId c = 0; c < numCorners; ++c) wedgeComp[wedges.find(c)] = faces.find(cornerFace(c));
+  std::map<std::uint32_t, bool> visited;
+  for (const auto& [start, next] : boundaryNext) {
+    if (visited[start]) continue;
+    ++loops[wedgeComp[start]];
+    std::uint32_t w = start;
+    do {
+      visited[w] = true;
+      ASSERT_TRUE(boundaryNext.count(w)) << what << ": open boundary chain";
+      w = boundaryNext[w];
+    } while (w != start);
+  }
+  for (const auto& [comp, value] : chi) {
+    EXPECT_EQ(value, 1) << what << ": component of face " << comp;
+    EXPECT_EQ(loops[comp], 1u) << what << ": component of face " << comp;
+  }
+}
+
+/// Every cone on the cut; combed matchings are zero off the cut and equal to the matchings of
+/// the combed field recomputed from scratch; seams are consistent chains covering the cut.
+void expectCombedSeams(const Surface& s, const CrossField& field, const FieldSingularities& sing,
+                       const CutResult& cut, const std::string& what) {
+  const Topology& t = s.topology;
+  std::vector<std::uint32_t> cutDegree(t.numVertices(), 0);
+  for (CornerId c = 0; c < t.numCorners(); ++c) {
+    if (cut.isCut[c]) ++cutDegree[t.vertex(nextCorner(c))];
+  }
+  for (VertexId v : sing.cones) EXPECT_GT(cutDegree[v], 0u) << what << ": cone " << v << " off the cut";
+  EXPECT_EQ(cut.cones, sing.cones);
+
+  std::vector<Vec3d> combed(field.direction);
+  for (FaceId f = 0; f < t.numFaces(); ++f) {
+    ASSERT_LT(cut.faceRotation[f], 4);
+    for (int k = 0; k < cut.faceRotation[f]; ++k) combed[f] = faceNormal(s.mesh, f).cross(combed[f]);
+  }
+  const FieldSingularities recomputed = computeSingularities(s.mesh, t, CrossField{combed});
+  for (CornerId c = 0; c < t.numCorners(); ++c) {
+    const CornerId o = t.opposite(c);
+    if (o == kInvalidId) {
+      EXPECT_TRUE(cut.isCut[c]) << what;
+      EXPECT_EQ(cut.cornerSeam[c], kInvalidId) << what;
+      continue;
+    }
+    ASSERT_EQ(cut.combedMatching[c], recomputed.matching[c]) << what << ": corner " << c;
+    if (!cut.isCut[c]) {
+      ASSERT_EQ(cut.combedMatching[c], 0) << what << ": corner " << c;
+      EXPECT_EQ(cut.cornerSeam[c], kInvalidId) << what;
+    } else {
+      ASSERT_NE(cut.cornerSeam[c], kInvalidId) << what << ": cut edge of corner " << c << " in no seam";
+      EXPECT_EQ(cut.cornerSeam[c], cut.cornerSeam[o]);
+    }
+  }
+  std::size_t seamCorners = 0;
+  for (std::uint32_t id = 0; id < cut.seams.size(); ++id) {
+    const SeamCurve& seam = cut.seams[id];
+    ASSERT_FALSE(seam.corners.empty());
+    EXPECT_EQ(t.vertex(nextCorner(seam.corners.front())), seam.start);
+    EXPECT_EQ(t.vertex(prevCorner(seam.corners.back())), seam.end);
+    for (std::size_t j = 0; j < seam.corners.size(); ++j) {
+      const CornerId c = seam.corners[j];
+      EXPECT_EQ(cut.cornerSeam[c], id);
+      EXPECT_EQ(cut.combedMatching[c], seam.matching) << what << ": seam " << id;
+      if (j > 0) EXPECT_EQ(t.vertex(nextCorner(c)), t.vertex(prevCorner(seam.corners[j - 1])));
+      if (j + 1 < seam.corners.size()) {  // inner vertices: plain path points
+        const VertexId v = t.vertex(prevCorner(c));
+        EXPECT_EQ(cutDegree[v], 2u);
+        EXPECT_FALSE(t.isBoundaryVertex(v));
+        EXPECT_EQ(sing.index4[v], 0);
+      }
+    }
+    seamCorners += seam.corners.size();
+  }
+  std::size_t cutInterior = 0;
+  for (CornerId c = 0; c < t.numCorners(); ++c) cutInterior += cut.isCut[c] && t.opposite(c) != kInvalidId;
+  EXPECT_EQ(2 * seamCorners, cutInterior) << what << ": seams must cover each cut edge once";
+}
+
+void checkAll(const Surface& s, const CrossField& field, const std::string& what) {
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);
+  expectCutIsDiskPerComponent(s, cut, what);
+  expectCombedSeams(s, field, sing, cut, what);
+}
+
+CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed) {
+  std::vector<Vec3d> v(mesh.numFaces());
+  std::uint64_t state = seed * 0x9E3779B97F4A7C15ull + 1;
+  for (Vec3d& x : v) {
+    for (int k = 0; k < 3; ++k) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      x[k] = double(state >> 11) / 9007199254740992.0 - 0.5;
+    }
+  }
+  return projectToTangent(mesh, std::move(v));
+}
+
+TEST(Cut, GeneratedClosedAndOpenMeshes) {
+  GenerateOptions genus2;
+  genus2.kind = MeshKind::Genus2;
+  genus2.faces = 5000;
+  const std::pair<std::string, TriangleMesh> cases[] = {
+      {"icosphere", testing::icosphereMesh(3)},
+      {"thin torus", testing::torusMesh(96, 16, 3.0, 0.5)},
+      {"thick torus", testing::torusMesh(40, 20, 2.0, 1.0)},
+      {"genus 2", generateMesh(genus2).mesh},
+      {"grid", testing::gridMesh(12, 9)},
+      {"cylinder", testing::cylinderMesh(24, 8)},
+  };
+  for (const auto& [name, mesh] : cases) {
+    const Surface s = makeSurface(mesh);
+    checkAll(s, computeSmoothestField(s.mesh, s.topology), name + " smoothest");
+    checkAll(s, randomField(s.mesh, 5), name + " random");
+  }
+}
+
+TEST(Cut, SeveralComponents) {
+  const Surface s = makeSurface(testing::concatMeshes({testing::icosphereMesh(2), testing::torusMesh(30, 12),
+                                                       testing::gridMesh(5, 4), testing::cylinderMesh(12, 3),
+                                                       testing::icosphereMesh(1)}));
+  checkAll(s, computeSmoothestField(s.mesh, s.topology), "components smoothest");
+  checkAll(s, randomField(s.mesh, 9), "components random");
+}
+
+TEST(Cut, ClosedSphereWithAtMostOneConeKeepsOneEdge) {
+  // Not a valid field on a sphere (Poincare-Hopf wants 8 quarter turns), but the cut must still
+  // leave a disk: the pruned cut would vanish, so one edge (at the cone, if any) stays.
+  const Surface s = makeSurface(testing::icosphereMesh(2));
+  CrossField field;
+  field.direction.assign(s.mesh.numFaces(), Vec3d::Zero());
+  FieldSingularities sing;
+  sing.matching.assign(s.topology.numCorners(), 0);
+  sing.index4.assign(s.topology.numVertices(), 0);
+  for (int cones = 0; cones <= 1; ++cones) {
+    if (cones) {
+      sing.index4[7] = 8;
+      sing.cones = {7};
+    }
+    const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);
+    expectCutIsDiskPerComponent(s, cut, "sphere cones=" + std::to_string(cones));
+    ASSERT_EQ(cut.seams.size(), 1u);
+    ASSERT_EQ(cut.seams[0].corners.size(), 1u);
+    if (cones) EXPECT_TRUE(cut.seams[0].start == 7 || cut.seams[0].end == 7);
+    for (std::uint8_t k : cut.combedMatching) EXPECT_EQ(k, 0);
+  }
+}
+
+TEST(Cut, InconsistentMatchingsThrow) {
+  // Matchings that turn around vertices not marked as cones cannot be combed to 0 off the cut
+  // and constant along seams: cutToDisk must say so rather than return wrong seams.
+  const Surface s = makeSurface(testing::torusMesh(12, 8));
+  CrossField field;
+  field.direction.assign(s.mesh.numFaces(), Vec3d::Zero());
+  FieldSingularities sing;
+  sing.matching.assign(s.topology.numCorners(), 0);
+  sing.index4.assign(s.topology.numVertices(), 0);
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    const CornerId o = s.topology.opposite(c);
+    if (c < o && std::hash<CornerId>()(c * 2654435761u) % 3 == 0) {
+      sing.matching[c] = 1;
+      sing.matching[o] = 3;
+    }
+  }
+  EXPECT_THROW(cutToDisk(s.mesh, s.topology, field, sing), TopologyError);
+  sing.matching.pop_back();
+  EXPECT_THROW(cutToDisk(s.mesh, s.topology, field, sing), InputError);
+}
+
+TEST(Cut, SharedMeshes) {
+  for (const char* name : {"camelhead.off", "fertility.off", "bumpy.off"}) {
+    const std::string path = testing::sharedMesh(name);
+    if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage(name);
+    const Surface s = loadShared(path);
+    const CrossField field = computeSmoothestField(s.mesh, s.topology);
+    checkAll(s, field, name);
+    const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+    const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);
+    std::printf("[ info ] %s: %zu cones, %zu seams\n", name, sing.cones.size(), cut.seams.size());
+  }
+  const std::string lilium = testing::sharedMesh("lilium.obj");
+  const std::string liliumField = testing::sharedMesh("lilium.crossfield");
+  if (lilium.empty() || liliumField.empty()) GTEST_SKIP() << testing::missingSharedMessage("lilium.*");
+  const Surface s = makeSurface(readMesh(lilium));
+  checkAll(s, importField(liliumField, s.mesh), "lilium imported field");
+}
+
+}  // namespace
+}  // namespace seamvox
