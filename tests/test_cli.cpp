@@ -1,0 +1,307 @@
+// The `seamvox` command: gen, info, subdivide and demo run as a user would run them.
+#include <gtest/gtest.h>
+
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+using testing::runSeamvox;
+using testing::TempDir;
+
+// ---- a small JSON reader, enough to check the shape of reports --------------------------------
+
+struct Json {
+  enum Type { Null, Bool, Number, String, Array, Object } type = Null;
+  double number = 0;
+  std::string text;
+  std::vector<Json> items;
+  std::map<std::string, Json> members;
+
+  bool has(const std::string& key) const { return type == Object && members.count(key); }
+  const Json& operator[](const std::string& key) const { return members.at(key); }
+};
+
+class JsonParser {
+ public:
+  explicit JsonParser(const std::string& s) : s_(s) {}
+  /// Parses the whole input; throws std::runtime_error at the first syntax error.
+  Json parseDocument() {
+    Json v = parseValue();
+    skipSpace();
+    if (pos_ != s_.size()) fail("trailing characters");
+    return v;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) {
+    throw std::runtime_error("JSON: " + what + " at offset " + std::to_string(pos_));
+  }
+  void skipSpace() {
+    while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) ++pos_;
+  }
+  void expect(char c) {
+    skipSpace();
+    if (pos_ >= s_.size() || s_[pos_] != c) fail(std::string("expected '") + c + "'");
+    ++pos_;
+  }
+  bool consume(const char* word) {
+    const std::size_t n = std::strlen(word);
+    if (s_.compare(pos_, n, word) != 0) return false;
+    pos_ += n;
+    return true;
+  }
+  std::string parseString() {
+    expect('"');
+    std::string out;
+    while (pos_ < s_.size() && s_[pos_] != '"') {
+      if (s_[pos_] == '\\') {
+        if (++pos_ >= s_.size()) fail("bad escape");
+        const char e = s_[pos_];
+        if (e == 'u') {
+          if (pos_ + 4 >= s_.size()) fail("bad \\u escape");
+          pos_ += 4;
+          out += '?';
+        } else {
+          out += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'r' ? '\r' : e;
+        }
+        ++pos_;
+      } else {
+        out += s_[pos_++];
+      }
+    }
+    expect('"');
+    return out;
+  }
+  Json parseValue() {
+    skipSpace();
+    if (pos_ >= s_.size()) fail("unexpected end");
+    Json v;
+    const char c = s_[pos_];
+    if (c == '{') {
+      v.type = Json::Object;
+      ++pos_;
+      skipSpace();
+      if (pos_ < s_.size() && s_[pos_] == '}') {
+        ++pos_;
+        return v;
+      }
+      for (;;) {
+        const std::string key = parseString();
+        expect(':');
+        v.members[key] = parseValue();
+        skipSpace();
+        if (pos_ < s_.size() && s_[pos_] == ',') {
+          ++pos_;
+          continue;
+        }
+        expect('}');
+        return v;
+      }
+    }
+    if (c == '[') {
+      v.type = Json::Array;
+      ++pos_;
+      skipSpace();
+      if (pos_ < s_.size() && s_[pos_] == ']') {
+        ++pos_;
+        return v;
+      }
+      for (;;) {
+        v.items.push_back(parseValue());
+        skipSpace();
+        if (pos_ < s_.size() && s_[pos_] == ',') {
+          ++pos_;
+          continue;
+        }
+        expect(']');
+        return v;
+      }
+    }
+    if (c == '"') {
+      v.type = Json::String;
+      v.text = parseString();
+      return v;
+    }
+    if (consume("null")) return v;
+    if (consume("true") || consume("false")) {
+      v.type = Json::Bool;
+      return v;
+    }
+    std::size_t used = 0;
+    try {
+      v.number = std::stod(s_.substr(pos_, 64), &used);
+    } catch (const std::exception&) {
+      fail("bad value");
+    }
+    v.type = Json::Number;
+    pos_ += used;
+    return v;
+  }
+
+  const std::string& s_;
+  std::size_t pos_ = 0;
+};
+
+Json parseJson(const std::string& text) { return JsonParser(text).parseDocument(); }
+
+/// Runs seamvox, expects exit code `code`, returns the combined output.
+std::string run(const std::string& arguments, int code) {
+  std::string output;
+  EXPECT_EQ(runSeamvox(arguments, &output), code) << "seamvox " << arguments << "\n" << output;
+  return output;
+}
+
+/// Runs `seamvox info --json` and parses stdout (--quiet keeps stderr empty).
+Json infoJson(const std::string& arguments) {
+  return parseJson(run("info --quiet --json " + arguments, 0));
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(Cli, GenThenInfoReportsTheTopology) {
+  TempDir dir;
+  const std::string sphere = dir.path("sphere.ply"), genus2 = dir.path("g2.ply");
+  EXPECT_TRUE(contains(run("gen sphere --faces 3000 -o " + sphere, 0), "wrote"));
+  run("gen genus2 --faces 3000 --seed 5 -o " + genus2, 0);
+  const Json a = infoJson(sphere);
+  for (const char* key : {"file", "vertices", "faces", "input", "components", "boundaryLoops",
+                          "clean", "boundingBox", "timings", "peakResidentBytes"}) {
+    EXPECT_TRUE(a.has(key)) << key;
+  }
+  EXPECT_NEAR(a["faces"].number, 3000, 120);
+  EXPECT_EQ(a["components"]["count"].number, 1);
+  ASSERT_EQ(a["components"]["largest"].items.size(), 1u);
+  const Json& c = a["components"]["largest"].items[0];
+  for (const char* key : {"faces", "vertices", "boundaryLoops", "eulerCharacteristic", "genus"}) {
+    EXPECT_TRUE(c.has(key)) << key;
+  }
+  EXPECT_EQ(c["genus"].number, 0);
+  EXPECT_EQ(c["faces"].number, a["faces"].number);
+  EXPECT_EQ(a["boundingBox"]["min"].items.size(), 3u);
+  EXPECT_GT(a["peakResidentBytes"].number, 0);
+  EXPECT_EQ(infoJson(genus2)["components"]["largest"].items[0]["genus"].number, 2);
+
+  const std::string text = run("info " + genus2, 0);
+  for (const char* part : {"vertices", "faces", "components", "genus", "boundary loops", "cleaning",
+                           "bounding box", "peak memory"}) {
+    EXPECT_TRUE(contains(text, part)) << part << "\n" << text;
+  }
+}
+
+TEST(Cli, InfoOnAScanShowsWhatCleaningFixed) {
+  TempDir dir;
+  const std::string scan = dir.path("scan.obj"), report = dir.path("report.json");
+  run("gen scan --faces 4000 -o " + scan, 0);
+  const Json raw = infoJson(scan);
+  EXPECT_GT(raw["components"]["count"].number, 1);
+  EXPECT_GT(raw["boundaryLoops"].number, 1);
+  EXPECT_GT(raw["clean"]["degenerateFaces"].number, 0);
+  EXPECT_GT(raw["clean"]["duplicateFaces"].number, 0);
+  EXPECT_EQ(raw["clean"]["weldedVertices"].number, 0);
+  run("info --quiet --weld --report " + report + " " + scan, 0);
+  const Json welded = parseJson(testing::readFile(report));
+  EXPECT_GT(welded["clean"]["weldedVertices"].number, 0);
+  EXPECT_EQ(welded["boundaryLoops"].number, raw["boundaryLoops"].number - 1);
+}
+
+TEST(Cli, GenIsByteIdenticalForTheSameSeed) {
+  TempDir dir;
+  run("gen scan --faces 3000 --seed 9 -o " + dir.path("a.ply"), 0);
+  run("gen scan --faces 3000 --seed 9 -o " + dir.path("b.ply"), 0);
+  run("gen scan --faces 3000 --seed 10 -o " + dir.path("c.ply"), 0);
+  const std::string a = testing::readFile(dir.path("a.ply"));
+  EXPECT_FALSE(a.empty());
+  EXPECT_EQ(a, testing::readFile(dir.path("b.ply")));
+  EXPECT_NE(a, testing::readFile(dir.path("c.ply")));
+}
+
+TEST(Cli, SubdivideMultipliesFacesAndCarriesTheField) {
+  TempDir dir;
+  const std::string torus = dir.path("torus.off"), fine = dir.path("fine.ply");
+  const std::string field = dir.path("torus.field"), fineField = dir.path("fine.field");
+  run("gen torus --faces 1000 -o " + torus, 0);
+  const Json coarse = infoJson(torus);
+  const int faces = static_cast<int>(coarse["faces"].number);
+  {
+    std::ofstream out(field);
+    for (int f = 0; f < faces; ++f) out << f << " 1 0\n";
+  }
+  run("subdivide " + torus + " --levels 2 -o " + fine + " --field " + field + " --field-out " + fineField, 0);
+  const Json after = infoJson(fine);
+  EXPECT_EQ(after["faces"].number, 16.0 * faces);
+  EXPECT_EQ(after["components"]["largest"].items[0]["genus"].number, 1);
+  // Each coarse vector appears on exactly 16 fine faces.
+  std::ifstream in(fineField);
+  std::map<long, int> count;
+  std::string line;
+  int lines = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    double x, y, z;
+    if (!(ss >> x >> y >> z) || !ss.eof()) continue;  // the "1 F" header has two numbers
+    ++lines;
+    ++count[std::lround(x)];
+  }
+  EXPECT_EQ(lines, 16 * faces);
+  EXPECT_EQ(count.size(), static_cast<std::size_t>(faces));
+  for (const auto& [x, n] : count) EXPECT_EQ(n, 16) << x;
+}
+
+TEST(Cli, BadInputGivesAClearMessageAndNonZeroExit) {
+  TempDir dir;
+  const std::string missing = dir.path("missing.ply");
+  std::string out = run("info " + missing, 1);
+  EXPECT_TRUE(contains(out, missing)) << out;
+
+  const std::string corrupt = dir.path("corrupt.ply");
+  testing::writeFile(corrupt, "ply\nformat binary_little_endian 1.0\nelement vertex 10\n"
+                              "property float x\nend_header\n\x01\x02");
+  out = run("info " + corrupt, 1);
+  EXPECT_TRUE(contains(out, corrupt)) << out;
+
+  const std::string mesh = dir.path("m.ply");
+  run("gen sphere --faces 200 -o " + mesh, 0);
+  out = run("info " + mesh + " --bogus 3", 2);
+  EXPECT_TRUE(contains(out, "unknown option --bogus")) << out;
+  out = run("gen cube --faces 100 -o " + mesh, 2);
+  EXPECT_TRUE(contains(out, "unknown mesh kind 'cube'")) << out;
+  out = run("gen sphere --faces 100", 2);
+  EXPECT_TRUE(contains(out, "-o")) << out;
+  out = run("gen genus2 --faces 10 -o " + mesh, 1);
+  EXPECT_TRUE(contains(out, "at least")) << out;
+  out = run("subdivide " + mesh + " --levels 1 -o " + dir.path("f.ply") + " --field x.field", 2);
+  EXPECT_TRUE(contains(out, "--field-out")) << out;
+  const std::string shortField = dir.path("short.field");
+  testing::writeFile(shortField, "1 0 0\n");
+  out = run("subdivide " + mesh + " -o " + dir.path("f.ply") + " --field " + shortField +
+                " --field-out " + dir.path("g.field"), 1);
+  EXPECT_TRUE(contains(out, shortField)) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.path("f.ply")));
+}
+
+TEST(Cli, DemoRunsTheMainJobOnAGeneratedScan) {
+  TempDir dir;
+  const std::string out = run("demo --quiet --faces 5000 --keep " + dir.path("demo"), 0);
+  for (const char* part : {"generated", "components", "genus", "boundary loops", "cleaning"}) {
+    EXPECT_TRUE(contains(out, part)) << part << "\n" << out;
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir.path("demo/scan.ply")));
+  EXPECT_TRUE(contains(run("demo --faces 10", 2), "--faces"));
+}
+
+}  // namespace
+}  // namespace seamvox

@@ -1,0 +1,152 @@
+#include "tools/mesh_report.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdarg>
+#include <cstdio>
+
+#include "io/json.h"
+#include "io/mesh_io.h"
+#include "stream/memory.h"
+
+namespace seamvox::cli {
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string format(const char* pattern, ...) __attribute__((format(printf, 1, 2)));
+std::string format(const char* pattern, ...) {
+  char buffer[512];
+  va_list args;
+  va_start(args, pattern);
+  std::vsnprintf(buffer, sizeof buffer, pattern, args);
+  va_end(args);
+  return buffer;
+}
+
+unsigned long long ull(std::uint64_t x) { return static_cast<unsigned long long>(x); }
+
+}  // namespace
+
+MeshSummary summarizeMeshFile(const std::string& path, const SummarizeOptions& options) {
+  MeshSummary summary;
+  summary.path = path;
+  auto start = std::chrono::steady_clock::now();
+  TriangleMesh mesh = readMesh(path);
+  summary.readSeconds = secondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  CleanOptions cleanOptions;
+  cleanOptions.weldVertices = options.weld;
+  cleanOptions.weldTolerance = options.weldTolerance;
+  cleanOptions.progress = options.progress;
+  CleanResult cleaned = cleanMesh(std::move(mesh), cleanOptions);
+  summary.cleanSeconds = secondsSince(start);
+  summary.clean = cleaned.report;
+  summary.vertices = cleaned.mesh.numVertices();
+  summary.faces = cleaned.mesh.numFaces();
+
+  start = std::chrono::steady_clock::now();
+  ComponentsResult components = computeComponents(cleaned.topology);
+  summary.componentsSeconds = secondsSince(start);
+  summary.components = std::move(components.components);
+  summary.boundaryLoops = components.boundaryLoops;
+  summary.box = computeBoundingBox(cleaned.mesh.positions);
+  summary.peakResidentBytes = peakResidentBytes();
+  return summary;
+}
+
+std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
+  const CleanReport& c = s.clean;
+  std::string out;
+  out += format("mesh            %s\n", s.path.c_str());
+  out += format("vertices        %llu (input %llu)\n", ull(s.vertices), ull(c.inputVertices));
+  out += format("faces           %llu (input %llu)\n", ull(s.faces), ull(c.inputFaces));
+  out += format("components      %zu\n", s.components.size());
+  const std::size_t shown = std::min(largest, s.components.size());
+  if (shown > 0) {
+    out += "                    faces   vertices  boundary loops  euler  genus\n";
+    for (std::size_t i = 0; i < shown; ++i) {
+      const ComponentInfo& k = s.components[i];
+      out += format("  #%-12zu %9u  %9u  %14u  %5lld  %5lld\n", i, k.faces, k.vertices,
+                    k.boundaryLoops, static_cast<long long>(k.eulerCharacteristic),
+                    static_cast<long long>(k.genus));
+    }
+    if (shown < s.components.size()) {
+      out += format("  (%zu smaller components not listed)\n", s.components.size() - shown);
+    }
+  }
+  out += format("boundary loops  %u\n", s.boundaryLoops);
+  out += format("cleaning        welded vertices %llu, degenerate faces %llu, duplicate faces %llu,\n"
+                "                zero-area faces %llu (kept), unreferenced vertices %llu,\n"
+                "                non-manifold edges %llu, non-manifold vertices %llu, flipped faces %llu\n",
+                ull(c.weldedVertices), ull(c.degenerateFaces), ull(c.duplicateFaces),
+                ull(c.zeroAreaFaces), ull(c.unreferencedVertices), ull(c.nonManifoldEdges),
+                ull(c.nonManifoldVertices), ull(c.flippedFaces));
+  if (!s.box.isEmpty()) {
+    out += format("bounding box    (%g, %g, %g) - (%g, %g, %g), diagonal %g\n", s.box.min.x(),
+                  s.box.min.y(), s.box.min.z(), s.box.max.x(), s.box.max.y(), s.box.max.z(),
+                  s.box.diagonal());
+  }
+  out += format("time            read %.3f s, clean %.3f s, components %.3f s\n", s.readSeconds,
+                s.cleanSeconds, s.componentsSeconds);
+  out += format("peak memory     %.1f MB\n", s.peakResidentBytes / 1048576.0);
+  return out;
+}
+
+std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
+  const CleanReport& c = s.clean;
+  JsonWriter j;
+  j.beginObject();
+  j.key("file").value(s.path);
+  j.key("vertices").value(s.vertices);
+  j.key("faces").value(s.faces);
+  j.key("input").beginObject();
+  j.key("vertices").value(c.inputVertices);
+  j.key("faces").value(c.inputFaces);
+  j.endObject();
+  j.key("components").beginObject();
+  j.key("count").value(static_cast<std::uint64_t>(s.components.size()));
+  j.key("largest").beginArray();
+  for (std::size_t i = 0; i < std::min(largest, s.components.size()); ++i) {
+    const ComponentInfo& k = s.components[i];
+    j.beginObject();
+    j.key("faces").value(k.faces);
+    j.key("vertices").value(k.vertices);
+    j.key("edges").value(k.edges);
+    j.key("boundaryLoops").value(k.boundaryLoops);
+    j.key("eulerCharacteristic").value(k.eulerCharacteristic);
+    j.key("genus").value(k.genus);
+    j.endObject();
+  }
+  j.endArray();
+  j.endObject();
+  j.key("boundaryLoops").value(s.boundaryLoops);
+  j.key("clean").beginObject();
+  j.key("weldedVertices").value(c.weldedVertices);
+  j.key("degenerateFaces").value(c.degenerateFaces);
+  j.key("duplicateFaces").value(c.duplicateFaces);
+  j.key("zeroAreaFaces").value(c.zeroAreaFaces);
+  j.key("unreferencedVertices").value(c.unreferencedVertices);
+  j.key("nonManifoldEdges").value(c.nonManifoldEdges);
+  j.key("nonManifoldVertices").value(c.nonManifoldVertices);
+  j.key("flippedFaces").value(c.flippedFaces);
+  j.endObject();
+  j.key("boundingBox").beginObject();
+  j.key("min").beginArray().value(s.box.min.x()).value(s.box.min.y()).value(s.box.min.z()).endArray();
+  j.key("max").beginArray().value(s.box.max.x()).value(s.box.max.y()).value(s.box.max.z()).endArray();
+  j.key("diagonal").value(s.box.diagonal());
+  j.endObject();
+  j.key("timings").beginObject();
+  j.key("readSeconds").value(s.readSeconds);
+  j.key("cleanSeconds").value(s.cleanSeconds);
+  j.key("componentsSeconds").value(s.componentsSeconds);
+  j.endObject();
+  j.key("peakResidentBytes").value(s.peakResidentBytes);
+  j.endObject();
+  return j.str() + "\n";
+}
+
+}  // namespace seamvox::cli
