@@ -1,0 +1,456 @@
+// The volumetric basis: exact fragment integrals, partition of unity and linear reproduction on
+// elements, area, separation of thin sheets and of cut sides, domain counts along a seam, and
+// the Vox solver's exactness on developable meshes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <map>
+#include <random>
+#include <set>
+
+#include "core/cut.h"
+#include "core/field.h"
+#include "core/metrics.h"
+#include "core/topology.h"
+#include "core/voxel_basis.h"
+#include "core/voxel_clip.h"
+#include "stream/voxel_grid.h"
+#include "tests/test_meshes.h"
+
+namespace seamvox {
+namespace {
+
+using Complex = std::complex<double>;
+
+// Everything a basis needs, for a mesh whose cut is the boundary plus an optional seam.
+struct CutMesh {
+  TriangleMesh mesh;
+  Topology topology;
+  CrossField field;
+  CutResult cut;
+};
+
+CutMesh makeSetup(TriangleMesh mesh, const Vec3d& direction) {
+  CutMesh s;
+  s.mesh = std::move(mesh);
+  s.topology = Topology::build(s.mesh.triangles, s.mesh.numVertices());
+  std::vector<Vec3d> vectors(s.mesh.numFaces(), direction);
+  s.field = projectToTangent(s.mesh, vectors);
+  const std::uint32_t nc = s.topology.numCorners();
+  s.cut.isCut.assign(nc, 0);
+  s.cut.faceRotation.assign(s.mesh.numFaces(), 0);
+  s.cut.combedMatching.assign(nc, 0);
+  s.cut.cornerSeam.assign(nc, kInvalidId);
+  for (CornerId c = 0; c < nc; ++c) s.cut.isCut[c] = s.topology.isBoundaryEdge(c);
+  return s;
+}
+
+// Adds one seam (matching 0) along the chain of edges a -> b for which isSeamEdge(a, b) holds,
+// oriented so that its left corners traverse a -> b.
+template <class F>
+void addSeam(CutMesh& s, F isSeamEdge) {
+  SeamCurve seam;
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    const VertexId a = s.topology.vertex(nextCorner(c)), b = s.topology.vertex(prevCorner(c));
+    if (s.topology.isBoundaryEdge(c) || !isSeamEdge(a, b)) continue;
+    seam.corners.push_back(c);
+    for (CornerId side : {c, s.topology.opposite(c)}) {
+      s.cut.isCut[side] = 1;
+      s.cut.cornerSeam[side] = static_cast<std::uint32_t>(s.cut.seams.size());
+    }
+  }
+  ASSERT_FALSE(seam.corners.empty());
+  s.cut.seams.push_back(seam);
+}
+
+// Pure surface integrals (no regularization) unless asked.
+VoxelBuildResult build(const CutMesh& s, int resolution, double edgeLength = 1.0,
+                       double regularization = 0.0) {
+  VoxelBasisOptions options;
+  options.regularization = regularization;
+  options.gridResolution = resolution;
+  options.edgeLength = edgeLength;
+  options.chunkFaces = 7;  // several chunks even on small meshes
+  return buildVoxelBasis(s.mesh, s.topology, s.field, s.cut, options);
+}
+
+Vec3d cornerPosition(const VoxelGridGeometry& grid, const VoxelCoord& v, int k) {
+  return grid.origin +
+         grid.voxelSize * Vec3d(v[0] + (k & 1), v[1] + (k >> 1 & 1), v[2] + (k >> 2 & 1));
+}
+
+TriangleMesh rotated(TriangleMesh mesh, const Eigen::Matrix3d& rotation, const Vec3d& shift) {
+  for (Vec3f& p : mesh.positions) p = (rotation * p.cast<double>() + shift).cast<float>();
+  return mesh;
+}
+
+Eigen::Matrix3d tilt() {
+  return (Eigen::AngleAxisd(0.7, Vec3d(1, 2, 3).normalized()) *
+          Eigen::AngleAxisd(0.3, Vec3d::UnitX()))
+      .toRotationMatrix();
+}
+
+double meshArea(const TriangleMesh& mesh) {
+  double area = 0.0;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) area += faceArea(mesh, f);
+  return area;
+}
+
+// --- kernels ------------------------------------------------------------------------------------
+
+TEST(VoxelClip, PiecesPartitionTheTriangleAndStayInTheirVoxels) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coord(0.2, 15.8);
+  std::vector<VoxelPiece> pieces;
+  for (int trial = 0; trial < 50; ++trial) {
+    std::array<Vec3d, 3> g;
+    for (auto& p : g) p = Vec3d(coord(rng), coord(rng), coord(rng));
+    if (trial % 5 == 0) g[2][2] = g[1][2] = g[0][2] = 7.0;  // lying in a grid plane
+    const double area = 0.5 * (g[1] - g[0]).cross(g[2] - g[0]).norm();
+    clipTriangleToVoxels(g, 16, pieces);
+    double sum = 0.0;
+    std::set<VoxelCoord> seen;
+    for (const VoxelPiece& piece : pieces) {
+      sum += piece.area;
+      EXPECT_TRUE(seen.insert(piece.voxel).second);
+      for (int i = 0; i < piece.polygon.size; ++i) {
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_GE(piece.polygon.point[i][a], piece.voxel[a] - 1e-12);
+          EXPECT_LE(piece.polygon.point[i][a], piece.voxel[a] + 1 + 1e-12);
+        }
+      }
+      // The single-voxel clip finds the same piece.
+      double single = 0.0;
+      VoxelIntegrals a, b;
+      addFragmentIntegrals(piece.polygon, piece.voxel, 1.0, Vec3d::UnitZ(), Vec3d::UnitX(), 1.0, a);
+      addFragmentIntegrals(clipTriangleToVoxel(g, piece.voxel), piece.voxel, 1.0, Vec3d::UnitZ(),
+                           Vec3d::UnitX(), 1.0, b);
+      single = b.area;
+      EXPECT_NEAR(single, a.area, 1e-12 * std::max(1.0, a.area));
+    }
+    EXPECT_NEAR(sum, area, 1e-10 * area);
+  }
+}
+
+TEST(VoxelClip, FragmentIntegralsAreExactUnderSubdivision) {
+  // A degree-4 exact rule gives the same integrals on a triangle and on its 16 sub-triangles.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::array<Vec3d, 3> t;
+    for (auto& p : t) p = Vec3d(unit(rng), unit(rng), unit(rng)) + Vec3d(2, 3, 4);
+    const Vec3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
+    const Vec3d u = n.cross(Vec3d(0.3, -0.2, 0.9)).normalized();
+    const VoxelCoord voxel{2, 3, 4};
+    auto integrate = [&](const std::vector<std::array<Vec3d, 3>>& tris) {
+      VoxelIntegrals acc;
+      for (const auto& tri : tris) {
+        ClipPolygon poly;
+        for (const Vec3d& p : tri) poly.point[poly.size++] = p;
+        addFragmentIntegrals(poly, voxel, 0.5, n, u, 2.0, acc);
+      }
+      return acc;
+    };
+    std::vector<std::array<Vec3d, 3>> tris{t};
+    const VoxelIntegrals coarse = integrate(tris);
+    for (int level = 0; level < 2; ++level) {
+      std::vector<std::array<Vec3d, 3>> finer;
+      for (const auto& x : tris) {
+        const Vec3d m01 = 0.5 * (x[0] + x[1]), m12 = 0.5 * (x[1] + x[2]), m20 = 0.5 * (x[2] + x[0]);
+        finer.push_back({x[0], m01, m20});
+        finer.push_back({m01, x[1], m12});
+        finer.push_back({m20, m12, x[2]});
+        finer.push_back({m01, m12, m20});
+      }
+      tris = finer;
+    }
+    const VoxelIntegrals fine = integrate(tris);
+    double scale = 0.0;
+    for (double x : coarse.stiffness) scale = std::max(scale, std::abs(x));
+    for (int i = 0; i < 36; ++i) EXPECT_NEAR(coarse.stiffness[i], fine.stiffness[i], 1e-12 * scale);
+    for (int a = 0; a < 8; ++a) EXPECT_NEAR(std::abs(coarse.rhs[a] - fine.rhs[a]), 0.0, 1e-12);
+    EXPECT_NEAR(coarse.area, fine.area, 1e-14);
+  }
+}
+
+// --- elements ------------------------------------------------------------------------------------
+
+// Partition of unity (stiffness rows sum to zero, rhs sums to zero) and exact reproduction of a
+// linear function f = g.x: c^T L c = int |P g|^2 and c . rhs = int <P g, u> + i <P g, n x u> / h.
+void expectLinearReproduction(const CutMesh& s, int resolution, bool perElementPlane) {
+  const double h = 0.37;
+  VoxelBuildResult built = build(s, resolution, h);
+  const VoxelBasis& basis = *built.basis;
+  const VoxelGridGeometry& grid = basis.grid();
+  const Vec3d g(0.8, -1.3, 0.45);
+  double energy = 0.0, totalArea = 0.0;
+  Complex rhs = 0.0;
+  ElementIntegrals el;
+  for (std::uint64_t e = 0; e < basis.numElements(); ++e) {
+    basis.elementIntegrals(e, el);
+    ASSERT_EQ(el.count, 8u);
+    double scale = 0.0;
+    for (double x : el.stiffness) scale = std::max(scale, std::abs(x));
+    Complex rhsSum = 0.0;
+    for (int a = 0; a < 8; ++a) {
+      double row = 0.0;
+      for (int b = 0; b < 8; ++b) {
+        row += el.stiffness[8 * a + b];
+        EXPECT_EQ(el.stiffness[8 * a + b], el.stiffness[8 * b + a]);
+      }
+      EXPECT_NEAR(row, 0.0, 1e-12 * std::max(scale, 1e-300));
+      rhsSum += el.rhs[a];
+    }
+    EXPECT_LE(std::abs(rhsSum), 1e-12 * (1.0 + el.area / (h * grid.voxelSize)));
+    double c[8];
+    for (int k = 0; k < 8; ++k) c[k] = g.dot(cornerPosition(grid, basis.elementVoxel(e), k));
+    double quad = 0.0;
+    for (int a = 0; a < 8; ++a) {
+      for (int b = 0; b < 8; ++b) quad += c[a] * el.stiffness[8 * a + b] * c[b];
+      rhs += c[a] * el.rhs[a];
+    }
+    if (perElementPlane) {
+      const Vec3d n = faceNormal(s.mesh, 0);
+      const double expected = (g - n * n.dot(g)).squaredNorm() * el.area;
+      EXPECT_NEAR(quad, expected, 1e-9 * std::max(expected, 1e-12 * g.squaredNorm()));
+    }
+    energy += quad;
+    totalArea += el.area;
+  }
+  double expectedEnergy = 0.0;
+  Complex expectedRhs = 0.0;
+  for (FaceId f = 0; f < s.mesh.numFaces(); ++f) {
+    const Vec3d n = faceNormal(s.mesh, f);
+    const Vec3d pg = g - n * n.dot(g);
+    const double area = faceArea(s.mesh, f);
+    expectedEnergy += pg.squaredNorm() * area;
+    const Vec3d& u = s.field.direction[f];
+    expectedRhs += area * Complex(pg.dot(u), pg.dot(n.cross(u))) / h;
+  }
+  EXPECT_NEAR(energy, expectedEnergy, 1e-9 * expectedEnergy);
+  EXPECT_NEAR(std::abs(rhs - expectedRhs), 0.0, 1e-9 * std::abs(expectedRhs));
+  EXPECT_NEAR(totalArea, meshArea(s.mesh), 1e-9 * totalArea);
+}
+
+TEST(VoxelBasis, ReproducesLinearFunctionsOnATiltedPlane) {
+  // z = x / 2 + y / 4 on a grid of quarters: exactly planar in float positions.
+  TriangleMesh mesh = testing::gridMesh(6, 5, 0.25);
+  for (Vec3f& p : mesh.positions) p[2] = 0.5f * p[0] + 0.25f * p[1];
+  const CutMesh s = makeSetup(std::move(mesh), Vec3d(1, 0.2, 0.1));
+  for (int resolution : {8, 16, 64}) expectLinearReproduction(s, resolution, true);
+}
+
+TEST(VoxelBasis, ReproducesLinearFunctionsOnCurvedMeshes) {
+  expectLinearReproduction(makeSetup(testing::icosphereMesh(2), Vec3d(0.3, 1, 0.2)), 16, false);
+  expectLinearReproduction(makeSetup(rotated(testing::torusMesh(24, 12), tilt(), Vec3d::Zero()),
+                                     Vec3d(0, 0.2, 1)),
+                           32, false);
+}
+
+// Two sheets closer than a voxel, joined by a fold at x = 1: away from the fold every voxel they
+// cross holds one element per sheet, and the corners there get one basis function per sheet.
+TEST(VoxelBasis, ThinFoldedSheetGetsSeparateElementsPerSheet) {
+  const int n = 40, m = 6;
+  const double gap = 0.01;
+  TriangleMesh mesh;
+  std::vector<double> path;  // arc length along the fold: bottom 0..1, side, top back to 0
+  for (int i = 0; i <= n; ++i) path.push_back(double(i) / n);
+  path.push_back(1.0 + gap);
+  for (int i = n - 1; i >= 0; --i) path.push_back(1.0 + gap + double(n - i) / n);
+  auto lift = [&](double t, double y) {
+    if (t <= 1.0) return Vec3d(t, y, 0.0);
+    if (t <= 1.0 + gap) return Vec3d(1.0, y, t - 1.0);
+    return Vec3d(1.0 - (t - 1.0 - gap), y, gap);
+  };
+  const int columns = static_cast<int>(path.size());
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i < columns; ++i) mesh.positions.push_back(lift(path[i], 0.5 * j / m).cast<float>());
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i + 1 < columns; ++i) {
+      const VertexId a = j * columns + i, b = a + 1, c = a + columns, d = c + 1;
+      mesh.triangles.push_back({a, b, d});
+      mesh.triangles.push_back({a, d, c});
+    }
+  const CutMesh s = makeSetup(std::move(mesh), Vec3d::UnitX());
+  VoxelBuildResult built = build(s, 16);
+  const VoxelBasis& basis = *built.basis;
+  ASSERT_LT(gap, 0.5 * basis.grid().voxelSize);
+  // Which sheet each element's faces lie on: z < gap / 2 is the bottom.
+  std::map<std::uint32_t, std::set<int>> elementSheets;
+  for (FaceId f = 0; f < s.mesh.numFaces(); ++f) {
+    const Triangle& t = s.mesh.triangles[f];
+    const double z = (s.mesh.position(t[0]) + s.mesh.position(t[1]) + s.mesh.position(t[2]))[2] / 3;
+    const int sheet = z < 0.25 * gap ? 0 : z > 0.75 * gap ? 1 : 2;
+    for (std::uint32_t e : basis.faceElements(f)) elementSheets[e].insert(sheet);
+  }
+  int voxelsWithBoth = 0;
+  for (std::uint32_t v = 0; v < basis.voxelCoords().size(); ++v) {
+    std::set<int> sheets;
+    for (std::uint32_t e = basis.voxelElementStart()[v]; e < basis.voxelElementStart()[v + 1]; ++e) {
+      const auto& es = elementSheets[e];
+      if (es.count(2)) continue;  // the fold joins both sheets
+      EXPECT_EQ(es.size(), 1u) << "element " << e << " mixes the sheets";
+      sheets.insert(es.begin(), es.end());
+    }
+    if (sheets.size() == 2) {
+      ++voxelsWithBoth;
+      EXPECT_EQ(basis.voxelElementStart()[v + 1] - basis.voxelElementStart()[v], 2u);
+    }
+  }
+  EXPECT_GT(voxelsWithBoth, 10);
+  // Corners far from the fold (x < 0.5) whose support holds both sheets carry two basis
+  // functions, one per sheet; the others one.
+  std::map<VoxelCoord, int> perCorner;
+  for (const VoxelCoord& c : basis.basisCorner()) ++perCorner[c];
+  const double z0 = basis.grid().toGrid(Vec3d::Zero())[2];
+  const double z1 = basis.grid().toGrid(Vec3d(0, 0, gap))[2];
+  int doubled = 0;
+  for (const auto& [corner, count] : perCorner) {
+    const double x = basis.grid().origin[0] + basis.grid().voxelSize * corner[0];
+    if (x >= 0.5) continue;
+    const bool both = std::abs(z0 - corner[2]) < 1 && std::abs(z1 - corner[2]) < 1;
+    EXPECT_EQ(count, both ? 2 : 1) << corner[0] << " " << corner[1] << " " << corner[2];
+    doubled += both;
+  }
+  EXPECT_GT(doubled, 0);
+  EXPECT_EQ(basis.numDomains(), basis.numBasisFunctions());  // no seams
+}
+
+// Counts grid corners whose open support (the 8 voxels around it) meets segment a-b, sampling.
+int cornersMeetingSegment(const VoxelGridGeometry& grid, const Vec3d& a, const Vec3d& b) {
+  std::set<VoxelCoord> corners;
+  for (int i = 0; i <= 20000; ++i) {
+    const Vec3d g = grid.toGrid(a + (b - a) * (i / 20000.0));
+    for (int dz = 0; dz <= 1; ++dz)
+      for (int dy = 0; dy <= 1; ++dy)
+        for (int dx = 0; dx <= 1; ++dx) {
+          const VoxelCoord c{int(std::floor(g[0])) + dx, int(std::floor(g[1])) + dy,
+                             int(std::floor(g[2])) + dz};
+          if (std::abs(g[0] - c[0]) < 1 && std::abs(g[1] - c[1]) < 1 && std::abs(g[2] - c[2]) < 1) {
+            corners.insert(c);
+          }
+        }
+  }
+  return static_cast<int>(corners.size());
+}
+
+CutMesh cutCylinder(int n, int m) {
+  CutMesh s = makeSetup(testing::cylinderMesh(n, m, 1.0, 2.0), Vec3d::UnitZ());
+  addSeam(s, [&](VertexId a, VertexId b) { return a % n == 0 && b == a + VertexId(n); });
+  return s;
+}
+
+TEST(VoxelBasis, SeamSplitsSupportsIntoTwoAdjacentDomains) {
+  const int n = 48, m = 12;
+  const CutMesh s = cutCylinder(n, m);
+  for (int resolution : {16, 32}) {
+    VoxelBuildResult built = build(s, resolution);
+    const VoxelBasis& basis = *built.basis;
+    // Every support is one connected piece of the uncut cylinder: one function per corner.
+    std::set<VoxelCoord> corners(basis.basisCorner().begin(), basis.basisCorner().end());
+    EXPECT_EQ(corners.size(), basis.numBasisFunctions());
+    const int split = cornersMeetingSegment(basis.grid(), Vec3d(1, 0, 0), Vec3d(1, 0, 2));
+    EXPECT_GT(split, 0);
+    EXPECT_EQ(basis.numDomains(), basis.numBasisFunctions() + split) << "grid " << resolution;
+    // Each split function's two domains are adjacent across the seam, left to right, and the
+    // left domain is the one on the side of the seam's left faces (y < 0 near angle 0).
+    std::vector<int> domainsOf(basis.numBasisFunctions(), 0);
+    for (std::uint32_t d = 0; d < basis.numDomains(); ++d) ++domainsOf[basis.domainBasis()[d]];
+    std::set<std::uint32_t> adjacent;
+    for (const DomainAdjacency& a : basis.adjacencies()) {
+      EXPECT_EQ(a.seam, 0u);
+      EXPECT_NE(a.left, a.right);
+      EXPECT_EQ(basis.domainBasis()[a.left], basis.domainBasis()[a.right]);
+      adjacent.insert(basis.domainBasis()[a.left]);
+    }
+    for (std::uint32_t b = 0; b < basis.numBasisFunctions(); ++b) {
+      EXPECT_LE(domainsOf[b], 2);
+      EXPECT_EQ(domainsOf[b] == 2, adjacent.count(b) == 1) << "basis " << b;
+    }
+    // No element holds faces of both sides next to the seam.
+    for (const CornerId c : s.cut.seams[0].corners) {
+      const auto left = basis.faceElements(cornerFace(c));
+      const auto right = basis.faceElements(cornerFace(s.topology.opposite(c)));
+      for (std::uint32_t e : left) EXPECT_EQ(std::count(right.begin(), right.end(), e), 0);
+    }
+  }
+}
+
+TEST(VoxelBasis, UncutSurfacesHaveOneDomainPerFunction) {
+  const CutMesh s = makeSetup(testing::torusMesh(30, 16), Vec3d::UnitZ());
+  VoxelBuildResult built = build(s, 16);
+  EXPECT_EQ(built.basis->numDomains(), built.basis->numBasisFunctions());
+  EXPECT_TRUE(built.basis->adjacencies().empty());
+  // The OpenVDB grid finds every voxel's id, and nothing elsewhere.
+  for (std::uint32_t v = 0; v < built.grid.size(); ++v) {
+    EXPECT_EQ(built.grid.find(built.basis->voxelCoords()[v]), v);
+  }
+  EXPECT_EQ(built.grid.find({-5, 0, 0}), kInvalidId);
+}
+
+// --- the Vox solver ----------------------------------------------------------------------------
+
+TEST(VoxelSolver, FlatSquareWithConstantFieldIsExact) {
+  const double h = 0.05;
+  const CutMesh s = makeSetup(testing::gridMesh(12, 12, 1.0 / 12), Vec3d(1, 0, 0));
+  ParamOptions options;
+  options.edgeLength = h;
+  const VoxelParamResult result = parameterizeMeshVoxel(s.mesh, s.topology, s.field, s.cut, options, 16);
+  const auto& uv = result.param.cornerUV;
+  ASSERT_EQ(uv.size(), 3u * s.mesh.numFaces());
+  const Vec3d x0 = s.mesh.position(s.mesh.triangles[0][0]);
+  for (CornerId c = 0; c < uv.size(); ++c) {
+    const Vec3d x = s.mesh.position(s.mesh.triangles[cornerFace(c)][c % 3]);
+    EXPECT_NEAR(uv[c][0] - uv[0][0], (x[0] - x0[0]) / h, 1e-7);
+    EXPECT_NEAR(uv[c][1] - uv[0][1], (x[1] - x0[1]) / h, 1e-7);
+  }
+  EXPECT_TRUE(result.markedFaces.empty());
+}
+
+TEST(VoxelSolver, CylinderFollowsTheAxisExactlyAndIsSeamless) {
+  const int n = 32, m = 8;
+  const CutMesh s = cutCylinder(n, m);
+  ParamOptions options;
+  options.edgeLength = 0.25;
+  const VoxelParamResult result = parameterizeMeshVoxel(s.mesh, s.topology, s.field, s.cut, options, 16);
+  const auto& uv = result.param.cornerUV;
+  // The field is the axis: u = z / h exactly (linear), v goes around.
+  for (CornerId c = 0; c < uv.size(); ++c) {
+    const Vec3d x = s.mesh.position(s.mesh.triangles[cornerFace(c)][c % 3]);
+    EXPECT_NEAR(uv[c][0] - uv[0][0], (x[2] - s.mesh.position(s.mesh.triangles[0][0])[2]) / 0.25,
+                1e-7);
+  }
+  const SeamQuality seams = measureSeams(s.mesh, s.topology, s.cut, uv);
+  EXPECT_TRUE(seams.isSeamless()) << seams.maxResidual << " " << seams.maxIntegerDistance;
+  // Going once around is a whole number of grid cells near the perimeter / h.
+  ASSERT_EQ(result.param.translations.size(), 1u);
+  EXPECT_NEAR(std::abs(result.param.translations[0]), 2 * M_PI / 0.25, 1.5);
+  EXPECT_EQ(result.determinedBasis, 0u);
+}
+
+TEST(VoxelSolver, ConesAreMarkedForLocalRefinement) {
+  const TriangleMesh mesh = testing::icosphereMesh(3);
+  CutMesh s;
+  s.mesh = mesh;
+  s.topology = Topology::build(s.mesh.triangles, s.mesh.numVertices());
+  s.field = computeSmoothestField(s.mesh, s.topology);
+  const FieldSingularities singularities = computeSingularities(s.mesh, s.topology, s.field);
+  s.cut = cutToDisk(s.mesh, s.topology, s.field, singularities);
+  ASSERT_FALSE(s.cut.cones.empty());
+  ParamOptions options;
+  options.edgeLength = 0.1;
+  const VoxelParamResult result = parameterizeMeshVoxel(s.mesh, s.topology, s.field, s.cut, options, 16);
+  EXPECT_GT(result.determinedBasis, 0u);
+  std::set<FaceId> marked(result.markedFaces.begin(), result.markedFaces.end());
+  for (VertexId cone : s.cut.cones) {
+    s.topology.forEachCornerAround(cone, [&](CornerId c) {
+      EXPECT_TRUE(marked.count(cornerFace(c))) << "face around cone " << cone;
+    });
+  }
+  EXPECT_LT(marked.size(), s.mesh.numFaces());
+}
+
+}  // namespace
+}  // namespace seamvox
