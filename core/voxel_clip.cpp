@@ -163,6 +163,13 @@ void clipTriangleToVoxels(const std::array<Vec3d, 3>& g, std::int32_t resolution
 ClipPolygon clipTriangleToVoxel(const std::array<Vec3d, 3>& g, const VoxelCoord& voxel) {
   ClipPolygon poly;
   for (const Vec3d& p : g) push(poly, p);
+  const Vec3d lo(voxel[0], voxel[1], voxel[2]);
+  const Vec3d hi = lo + Vec3d::Ones();
+  if (std::all_of(g.begin(), g.end(), [&](const Vec3d& p) {
+        return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+      })) {
+    return poly;  // the common case on fine meshes: the whole triangle
+  }
   for (int a = 0; a < 3 && poly.size >= 3; ++a) {
     keepSide(poly, a, double(voxel[a]), +1.0);
     if (poly.size >= 3) keepSide(poly, a, double(voxel[a] + 1), -1.0);
