@@ -1,0 +1,152 @@
+// Quality figures: seam residuals (from a cut and reconstructed from UVs), flips, collapses and
+// the relative gradient error.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+
+#include "core/errors.h"
+#include "core/gaussian_int.h"
+#include "core/metrics.h"
+#include "core/topology.h"
+#include "tests/test_meshes.h"
+
+namespace seamvox {
+namespace {
+
+using Complex = std::complex<double>;
+
+struct SplitGrid {
+  TriangleMesh mesh;
+  Topology topology;
+  CutResult cut;  // seam along x = n/2, left side = faces with x < n/2
+};
+
+// An n x n grid cut along its middle column line; q = position (x + i y) / h on the left half
+// and r q + t on the right half.
+SplitGrid splitGrid(int n, Complex r, Complex t, std::uint8_t matching) {
+  SplitGrid g;
+  g.mesh = testing::gridMesh(n, n, 1.0);
+  g.topology = Topology::build(g.mesh.triangles, g.mesh.numVertices());
+  const double middle = n / 2;
+  auto faceCenterX = [&](FaceId f) {
+    double x = 0;
+    for (VertexId v : g.mesh.triangles[f]) x += g.mesh.positions[v].x();
+    return x / 3;
+  };
+  g.cut.isCut.assign(g.topology.numCorners(), 0);
+  g.cut.faceRotation.assign(g.topology.numFaces(), 0);
+  g.cut.combedMatching.assign(g.topology.numCorners(), 0);
+  g.cut.cornerSeam.assign(g.topology.numCorners(), kInvalidId);
+  SeamCurve seam;
+  seam.matching = matching;
+  for (CornerId c = 0; c < g.topology.numCorners(); ++c) {
+    const CornerId o = g.topology.opposite(c);
+    if (o == kInvalidId) {
+      g.cut.isCut[c] = 1;
+      continue;
+    }
+    const bool leftHere = faceCenterX(c / 3) < middle, leftThere = faceCenterX(o / 3) < middle;
+    if (leftHere && !leftThere) seam.corners.push_back(c);
+    if (leftHere != leftThere) g.cut.isCut[c] = 1, g.cut.cornerSeam[c] = 0;
+  }
+  g.cut.seams.push_back(seam);
+  g.mesh.cornerUV.resize(g.topology.numCorners());
+  for (CornerId c = 0; c < g.topology.numCorners(); ++c) {
+    const Vec3f& p = g.mesh.positions[g.topology.vertex(c)];
+    Complex q(p.x(), p.y());
+    if (faceCenterX(c / 3) > middle) q = r * q + t;
+    g.mesh.cornerUV[c] = Vec2d(q.real(), q.imag());
+  }
+  return g;
+}
+
+TEST(SeamMetrics, ExactSeamHasZeroResidual) {
+  // r = i = i^(-3): matching 3.
+  const SplitGrid g = splitGrid(6, Complex(0, 1), Complex(3, -2), 3);
+  const SeamQuality fromCut = measureSeams(g.mesh, g.topology, g.cut, g.mesh.cornerUV);
+  EXPECT_EQ(fromCut.seamEdges, 6u);
+  EXPECT_LT(fromCut.maxResidual, 1e-12);
+  EXPECT_LT(fromCut.maxIntegerDistance, 1e-12);
+  EXPECT_TRUE(fromCut.isSeamless());
+  const SeamQuality rebuilt = measureSeamsFromUV(g.mesh, g.topology, g.mesh.cornerUV);
+  EXPECT_EQ(rebuilt.seamEdges, 6u);
+  EXPECT_LT(rebuilt.maxResidual, 1e-12);
+  EXPECT_LT(rebuilt.maxIntegerDistance, 1e-12);
+  EXPECT_NEAR(rebuilt.seamLength, 6.0, 1e-12);
+}
+
+TEST(SeamMetrics, FractionalTranslationIsNotSeamless) {
+  const SplitGrid g = splitGrid(6, Complex(-1, 0), Complex(2.5, 0.25), 2);
+  const SeamQuality fromCut = measureSeams(g.mesh, g.topology, g.cut, g.mesh.cornerUV);
+  EXPECT_NEAR(fromCut.maxIntegerDistance, std::hypot(0.5, 0.25), 1e-12);
+  EXPECT_LT(fromCut.maxResidual, 1e-12);
+  const SeamQuality rebuilt = measureSeamsFromUV(g.mesh, g.topology, g.mesh.cornerUV);
+  EXPECT_NEAR(rebuilt.maxIntegerDistance, std::hypot(0.5, 0.25), 1e-12);
+  EXPECT_FALSE(rebuilt.isSeamless());
+}
+
+TEST(SeamMetrics, PerturbedCornerShowsAsResidual) {
+  SplitGrid g = splitGrid(6, Complex(0, -1), Complex(1, 1), 1);
+  const CornerId c = g.cut.seams[0].corners[2];
+  const CornerId moved = g.topology.opposite(c);  // a right-side corner on the seam
+  const CornerId corner = nextCorner(moved);
+  g.mesh.cornerUV[corner] += Vec2d(0.0, 1e-3);
+  const SeamQuality fromCut = measureSeams(g.mesh, g.topology, g.cut, g.mesh.cornerUV);
+  EXPECT_NEAR(fromCut.maxResidual, 1e-3, 1e-9);
+  EXPECT_FALSE(fromCut.isSeamless());
+  const SeamQuality rebuilt = measureSeamsFromUV(g.mesh, g.topology, g.mesh.cornerUV);
+  EXPECT_GT(rebuilt.maxResidual + rebuilt.maxIntegerDistance, 5e-4);
+  EXPECT_FALSE(rebuilt.isSeamless());
+}
+
+TEST(SeamMetrics, ContinuousMapHasNoSeamEdges) {
+  SplitGrid g = splitGrid(4, Complex(1, 0), Complex(0, 0), 0);
+  EXPECT_EQ(measureSeamsFromUV(g.mesh, g.topology, g.mesh.cornerUV).seamEdges, 0u);
+  std::vector<Vec2d> wrongSize(3);
+  EXPECT_THROW(measureSeamsFromUV(g.mesh, g.topology, wrongSize), InputError);
+}
+
+std::vector<Vec2d> linearUV(const TriangleMesh& mesh, Complex scale) {
+  std::vector<Vec2d> uv(3 * mesh.numFaces());
+  for (CornerId c = 0; c < uv.size(); ++c) {
+    const Vec3f& p = mesh.positions[mesh.triangles[c / 3][c % 3]];
+    const Complex q = scale * Complex(p.x(), p.y());
+    uv[c] = Vec2d(q.real(), q.imag());
+  }
+  return uv;
+}
+
+TEST(MapMetrics, GradientErrorFlipsAndCollapses) {
+  const TriangleMesh mesh = testing::gridMesh(5, 5, 0.5);
+  CrossField field;
+  field.direction.assign(mesh.numFaces(), Vec3d(1, 0, 0));
+  const double h = 0.25;
+  // q = (x + i y) / h follows w = u + i n x u exactly; so does i q (the cross is symmetric).
+  for (Complex rotation : {Complex(1, 0), Complex(0, 1), Complex(-1, 0)}) {
+    const MapQuality exact = measureMap(mesh, linearUV(mesh, rotation / h), &field, h);
+    EXPECT_LT(exact.relativeGradientError, 1e-12);
+    EXPECT_EQ(exact.flipped, 0u);
+    EXPECT_EQ(exact.collapsed, 0u);
+  }
+  // Twice the target gradient: error |2w - w| / |w| = 1; a fitted h finds the scale.
+  const MapQuality doubled = measureMap(mesh, linearUV(mesh, 2.0 / h), &field, h);
+  EXPECT_NEAR(doubled.relativeGradientError, 1.0, 1e-12);
+  const MapQuality fitted = measureMap(mesh, linearUV(mesh, 2.0 / h), &field, 0.0);
+  EXPECT_NEAR(fitted.edgeLength, h / 2, 1e-12);
+  EXPECT_LT(fitted.relativeGradientError, 1e-12);
+  // Mirrored: every triangle flipped. Without a field the error is NaN.
+  std::vector<Vec2d> mirrored = linearUV(mesh, 1.0 / h);
+  for (Vec2d& q : mirrored) q.y() = -q.y();
+  const MapQuality flipped = measureMap(mesh, mirrored, nullptr, h);
+  EXPECT_EQ(flipped.flipped, mesh.numFaces());
+  EXPECT_DOUBLE_EQ(flipped.flippedFraction, 1.0);
+  EXPECT_TRUE(std::isnan(flipped.relativeGradientError));
+  // One triangle squashed to a point.
+  std::vector<Vec2d> squashed = linearUV(mesh, 1.0 / h);
+  squashed[4] = squashed[3], squashed[5] = squashed[3];
+  EXPECT_EQ(measureMap(mesh, squashed, &field, h).collapsed, 1u);
+}
+
+}  // namespace
+}  // namespace seamvox

@@ -1,0 +1,210 @@
+// seamvox param: seamless parameterization of a mesh with the hat-basis solver.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "core/clean.h"
+#include "core/cut.h"
+#include "core/errors.h"
+#include "core/field.h"
+#include "core/metrics.h"
+#include "core/param.h"
+#include "io/field_io.h"
+#include "io/json.h"
+#include "io/mesh_io.h"
+#include "stream/memory.h"
+#include "tools/cli.h"
+
+namespace seamvox::cli {
+namespace {
+
+/// Grid cells along the bounding-box diagonal when neither --edge-length nor --cells is given.
+constexpr double kDefaultCells = 100.0;
+
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+int runParam(Args& args) {
+  const std::string input = args.positional(0, "the input mesh (seamvox param MESH -o OUT)");
+  const auto output = args.value("output");
+  if (!output) throw UsageError("missing -o OUT (.obj, .ply or .drc)");
+  if (formatFromPath(*output) == MeshFormat::Unknown || formatFromPath(*output) == MeshFormat::Off) {
+    throw UsageError("output must be .obj, .ply or .drc (OFF has no texture coordinates): " + *output);
+  }
+  const std::string solver = args.value("solver", "hat");
+  if (solver != "hat") throw UsageError("unknown --solver '" + solver + "' (available: hat)");
+  const std::string fieldSource = args.value("field", "smooth");
+  const double edgeLengthArg = args.number("edge-length", 0.0);
+  const double cellsArg = args.number("cells", 0.0);
+  if (args.value("edge-length") && args.value("cells")) {
+    throw UsageError("give either --edge-length or --cells, not both");
+  }
+  if (args.value("edge-length") && !(edgeLengthArg > 0.0 && std::isfinite(edgeLengthArg))) {
+    throw UsageError("--edge-length must be a positive number");
+  }
+  if (args.value("cells") && !(cellsArg > 0.0 && std::isfinite(cellsArg))) {
+    throw UsageError("--cells must be a positive number");
+  }
+  const bool greedy = args.flag("greedy");
+  const bool weld = args.flag("weld");
+  const auto reportPath = args.value("report");
+  const ProgressFn progress = makeProgress(args.flag("quiet"));
+  args.finish(1);
+
+  Stopwatch clock, total;
+  TriangleMesh raw = readMesh(input);
+  const std::uint64_t inputFaces = raw.numFaces();
+  const double secondsRead = clock.lap();
+  CleanOptions cleanOptions;
+  cleanOptions.weldVertices = weld;
+  cleanOptions.progress = progress;
+  raw.cornerUV.clear();
+  CleanResult clean = cleanMesh(std::move(raw), cleanOptions);
+  TriangleMesh& mesh = clean.mesh;
+  const Topology& topology = clean.topology;
+  const double secondsClean = clock.lap();
+
+  CrossField field;
+  if (fieldSource == "smooth") {
+    SmoothFieldOptions fieldOptions;
+    fieldOptions.progress = progress;
+    field = computeSmoothestField(mesh, topology, fieldOptions);
+  } else {
+    // The file has one vector per input face; cleaning may have dropped or reordered faces.
+    const std::vector<Vec3d> vectors = readFieldVectors(fieldSource, static_cast<std::uint32_t>(inputFaces));
+    std::vector<Vec3d> perFace(mesh.numFaces());
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) perFace[f] = vectors[clean.faceOrigin[f]];
+    field = projectToTangent(mesh, std::move(perFace));
+  }
+  const FieldSingularities singularities = computeSingularities(mesh, topology, field);
+  const double secondsField = clock.lap();
+  CutOptions cutOptions;
+  cutOptions.progress = progress;
+  const CutResult cut = cutToDisk(mesh, topology, field, singularities, cutOptions);
+  const double secondsCut = clock.lap();
+
+  const double diagonal = computeBoundingBox(mesh.positions).diagonal();
+  ParamOptions options;
+  options.edgeLength = edgeLengthArg > 0.0 ? edgeLengthArg
+                                           : diagonal / (cellsArg > 0.0 ? cellsArg : kDefaultCells);
+  if (!(options.edgeLength > 0.0)) throw InputError(input + ": the mesh has zero extent");
+  options.greedyRounding = greedy;
+  options.progress = progress;
+  clock.lap();
+  ParamResult result = parameterizeMesh(mesh, topology, field, cut, options);
+  const double secondsParam = clock.lap();
+
+  const SeamQuality seams = measureSeams(mesh, topology, cut, result.cornerUV);
+  const MapQuality map = measureMap(mesh, result.cornerUV, &field, options.edgeLength);
+  const double secondsMetrics = clock.lap();
+  mesh.cornerUV = std::move(result.cornerUV);
+  writeMesh(*output, mesh);
+  const double secondsWrite = clock.lap();
+  const double secondsTotal = total.lap();
+  const std::uint64_t peak = peakResidentBytes();
+  const bool seamless = seams.isSeamless();
+  const SeamlessStats& st = result.stats;
+
+  std::printf("%s -> %s: %u faces, %zu cones, %zu seams, h = %.6g (%.1f cells on the diagonal)\n",
+              input.c_str(), output->c_str(), mesh.numFaces(), cut.cones.size(), cut.seams.size(),
+              options.edgeLength, diagonal / options.edgeLength);
+  std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
+              st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
+              peak / 1048576.0);
+  std::printf("seam residual %.3g, integer distance %.3g, gradient error %.4f, flipped %llu, "
+              "collapsed %llu: %s\n",
+              seams.maxResidual, seams.maxIntegerDistance, map.relativeGradientError,
+              static_cast<unsigned long long>(map.flipped),
+              static_cast<unsigned long long>(map.collapsed), seamless ? "seamless" : "NOT seamless");
+  std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", secondsTotal, secondsField,
+              secondsCut, secondsParam);
+
+  if (reportPath) {
+    JsonWriter j;
+    j.beginObject();
+    j.key("input").value(input).key("output").value(*output).key("solver").value(solver);
+    j.key("field").value(fieldSource);
+    j.key("faces").value(static_cast<std::uint64_t>(mesh.numFaces()));
+    j.key("vertices").value(static_cast<std::uint64_t>(mesh.numVertices()));
+    j.key("components").value(static_cast<std::uint64_t>(st.components));
+    j.key("cones").value(static_cast<std::uint64_t>(cut.cones.size()));
+    j.key("seams").value(static_cast<std::uint64_t>(cut.seams.size()));
+    j.key("seamEdges").value(seams.seamEdges).key("seamLength").value(seams.seamLength);
+    j.key("edgeLength").value(options.edgeLength);
+    j.key("cellsOnDiagonal").value(diagonal / options.edgeLength);
+    j.key("system").beginObject();
+    j.key("basisFunctions").value(static_cast<std::uint64_t>(result.basisFunctions));
+    j.key("domains").value(static_cast<std::uint64_t>(result.domains));
+    j.key("unknowns").value(static_cast<std::uint64_t>(st.unknowns));
+    j.key("positional").value(static_cast<std::uint64_t>(st.positional));
+    j.key("translational").value(static_cast<std::uint64_t>(st.translational));
+    j.key("conePositions").value(static_cast<std::uint64_t>(st.determinedPositions));
+    j.key("translationConstraints").value(static_cast<std::uint64_t>(result.translationConstraints));
+    j.key("nonUnitConstraints").value(static_cast<std::uint64_t>(st.nonUnitConstraints));
+    j.key("pinnedFirstSolve").value(static_cast<std::uint64_t>(st.pinnedFirst));
+    j.key("pinnedSecondSolve").value(static_cast<std::uint64_t>(st.pinnedSecond));
+    j.key("matrixNonzeros").value(st.systemNonzeros);
+    j.key("factorNonzeros").value(st.factorNonzeros);
+    j.key("factorBytes").value(st.factorBytes);
+    j.key("factorPeakBytes").value(st.factorPeakBytes);
+    j.key("realFallback").value(st.realFallback);
+    j.key("maxRoundingShift").value(st.maxRoundingShift);
+    j.endObject();
+    j.key("quality").beginObject();
+    j.key("seamless").value(seamless);
+    j.key("maxSeamResidual").value(seams.maxResidual);
+    j.key("maxIntegerDistance").value(seams.maxIntegerDistance);
+    j.key("relativeGradientError").value(map.relativeGradientError);
+    j.key("flipped").value(map.flipped).key("flippedFraction").value(map.flippedFraction);
+    j.key("collapsed").value(map.collapsed);
+    j.endObject();
+    j.key("seconds").beginObject();
+    j.key("read").value(secondsRead).key("clean").value(secondsClean);
+    j.key("field").value(secondsField).key("cut").value(secondsCut);
+    j.key("basis").value(result.secondsBasis).key("reduce").value(result.secondsReduce);
+    j.key("assemble").value(st.secondsAssemble).key("firstSolve").value(st.secondsFirstSolve);
+    j.key("round").value(st.secondsRound).key("secondSolve").value(st.secondsSecondSolve);
+    j.key("evaluate").value(result.secondsEvaluate).key("metrics").value(secondsMetrics);
+    j.key("write").value(secondsWrite).key("total").value(secondsTotal);
+    j.endObject();
+    j.key("peakResidentBytes").value(peak);
+    j.endObject();
+    writeTextOutput(*reportPath, j.str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
+                 "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver hat] [--field FILE|smooth]\n"
+                 "                     [--edge-length H | --cells N] [--greedy] [--weld] [--report R.json]\n"
+                 "\n"
+                 "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
+                 "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
+                 "quarter turn and t an integer vector, and grad q follows the field with spacing H.\n"
+                 "\n"
+                 "  --solver hat        the per-vertex hat-basis solver (default)\n"
+                 "  --field FILE        per-face field (.crossfield or plain, one vector per input\n"
+                 "                      face); default 'smooth': the smoothest cross field\n"
+                 "  --edge-length H     grid spacing in mesh units\n"
+                 "  --cells N           H = bounding-box diagonal / N (default N = 100)\n"
+                 "  --greedy            round translations in batches, re-solving in between\n"
+                 "  --weld              weld coincident vertices before cleaning\n"
+                 "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"
+                 "                      stage timings, peak memory\n"
+                 "  --quiet             no progress on stderr\n",
+                 {"greedy", "weld"},
+                 &runParam});
+
+}  // namespace seamvox::cli
