@@ -224,16 +224,20 @@ void appendBoxSphere(TriangleMesh& mesh, const BoxLattice& box, const Vec3d& cen
   const std::uint64_t v0 = mesh.positions.size(), f0 = mesh.triangles.size();
   mesh.positions.resize(v0 + box.numVertices());
   mesh.triangles.resize(f0 + box.numFaces());
+  // Equal-angle warp of each axis: lattice i -> tan(pi/4 (2 i / n - 1)).
+  std::vector<double> warp[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::uint32_t i = 0; i <= box.n[axis]; ++i) {
+      double s, c;
+      sinCosTurns((2.0 * i / box.n[axis] - 1.0) / 8.0, s, c);
+      warp[axis].push_back(s / c);
+    }
+  }
   parallelRange(box.numVertices(), [&](std::uint64_t begin, std::uint64_t end) {
     for (std::uint64_t v = begin; v < end; ++v) {
       std::uint32_t ijk[3];
       box.point(v, ijk[0], ijk[1], ijk[2]);
-      Vec3d d;
-      for (int axis = 0; axis < 3; ++axis) {
-        double s, c;
-        sinCosTurns((2.0 * ijk[axis] / box.n[axis] - 1.0) / 8.0, s, c);  // tan(pi/4 x)
-        d[axis] = s / c;
-      }
+      Vec3d d(warp[0][ijk[0]], warp[1][ijk[1]], warp[2][ijk[2]]);
       d /= d.norm();
       double r = radius * (1.0 + bumps(d));
       if (jitter != 0.0) r *= 1.0 + jitter * (2.0 * unitFromBits(mix64(seed ^ mix64(v))) - 1.0);
