@@ -361,8 +361,7 @@ void compactVertices(TriangleMesh& mesh) {
       newId[v] = kInvalidId;
     }
   }
-  mesh.positions.resize(next);
-  mesh.positions.shrink_to_fit();
+  mesh.positions.resize(next);  // keeps the capacity: no second copy of the positions
   parallelRange(mesh.triangles.size(), [&](std::uint64_t begin, std::uint64_t end) {
     for (std::uint64_t f = begin; f < end; ++f) {
       for (VertexId& v : mesh.triangles[f]) v = newId[v];

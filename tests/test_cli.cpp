@@ -219,13 +219,15 @@ TEST(Cli, InfoOnAScanShowsWhatCleaningFixed) {
 
 TEST(Cli, GenIsByteIdenticalForTheSameSeed) {
   TempDir dir;
-  run("gen scan --faces 3000 --seed 9 -o " + dir.path("a.ply"), 0);
-  run("gen scan --faces 3000 --seed 9 -o " + dir.path("b.ply"), 0);
+  run("gen scan --faces 30000 --seed 9 -o " + dir.path("a.ply"), 0);
+  run("gen scan --faces 30000 --seed 9 -o " + dir.path("b.ply"), 0);
   run("gen scan --faces 3000 --seed 10 -o " + dir.path("c.ply"), 0);
+  run("gen scan --faces 30000 --seed 9 --threads 1 -o " + dir.path("d.ply"), 0);
   const std::string a = testing::readFile(dir.path("a.ply"));
   EXPECT_FALSE(a.empty());
   EXPECT_EQ(a, testing::readFile(dir.path("b.ply")));
   EXPECT_NE(a, testing::readFile(dir.path("c.ply")));
+  EXPECT_EQ(a, testing::readFile(dir.path("d.ply"))) << "the thread count must not matter";
 }
 
 TEST(Cli, SubdivideMultipliesFacesAndCarriesTheField) {
