@@ -45,6 +45,9 @@ struct CutResult {
 
 /// Dual spanning tree per component, pruning to a cut through every cone (boundary edges kept),
 /// combing and seam curves. Each component's cut surface is a topological disk. Linear time.
+/// A closed genus-0 component with at most one cone would prune to nothing: it keeps one edge
+/// (at the cone if any), one seam of one edge, and is cut open along it. Throws TopologyError
+/// when the matchings disagree with the cones (a rotation left off the cut or along a seam).
 CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                     const FieldSingularities& singularities, const CutOptions& options = {});
 

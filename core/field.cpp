@@ -32,9 +32,10 @@ struct FaceAngles {
   double corner[3];  ///< interior angle at corner k (they sum to pi)
 };
 
+/// a wrapped into (-pi, pi].
 double wrapAngle(double a) {
   constexpr double kTwoPi = 2.0 * M_PI;
-  a = std::fmod(a, kTwoPi);  // (-2 pi, 2 pi)
+  if (!(a > -3.0 * M_PI && a <= 3.0 * M_PI)) a = std::fmod(a, kTwoPi);  // rare: far out
   if (a > M_PI) a -= kTwoPi;
   if (a <= -M_PI) a += kTwoPi;
   return a;
@@ -73,6 +74,20 @@ double frameAngle(const FaceFrame& frame, const Vec3d& v) {
   return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : std::atan2(y, x);
 }
 
+/// Interior angles at the three corners from the frame angles of their edges. Turning angle at
+/// corner k: from the incoming edge (corner k+1) to the outgoing one (corner k+2). The third is
+/// set so the turns sum to exactly 2 pi, hence the corner angles to pi, also for degenerate
+/// faces; every value agrees with the frame angles modulo 2 pi.
+template <class T>
+void cornerAngles(const T edge[3], double corner[3]) {
+  const double turn0 = wrapAngle(double(edge[2]) - double(edge[1]));
+  const double turn1 = wrapAngle(double(edge[0]) - double(edge[2]));
+  const double turn2 = 2.0 * M_PI - turn0 - turn1;
+  corner[0] = M_PI - turn0;
+  corner[1] = M_PI - turn1;
+  corner[2] = M_PI - turn2;
+}
+
 FaceAngles faceAngles(const TriangleMesh& mesh, FaceId f) {
   const Triangle& t = mesh.triangles[f];
   const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
@@ -80,15 +95,7 @@ FaceAngles faceAngles(const TriangleMesh& mesh, FaceId f) {
   a.frame = faceFrame(mesh, f);
   // Corner k names the edge from vertex k+1 to vertex k+2 (topology.h).
   for (int k = 0; k < 3; ++k) a.edge[k] = frameAngle(a.frame, p[(k + 2) % 3] - p[(k + 1) % 3]);
-  // Turning angle at corner k: from the incoming edge (corner k+1) to the outgoing one (corner
-  // k+2). The third is set so the turns sum to exactly 2 pi, hence the corner angles to pi, also
-  // for degenerate faces; every value agrees with the frame angles modulo 2 pi.
-  const double turn0 = wrapAngle(a.edge[2] - a.edge[1]);
-  const double turn1 = wrapAngle(a.edge[0] - a.edge[2]);
-  const double turn2 = 2.0 * M_PI - turn0 - turn1;
-  a.corner[0] = M_PI - turn0;
-  a.corner[1] = M_PI - turn1;
-  a.corner[2] = M_PI - turn2;
+  cornerAngles(a.edge, a.corner);
   return a;
 }
 
@@ -118,29 +125,36 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
   FieldSingularities out;
   out.matching.assign(3 * std::size_t(numFaces), 0);
   out.index4.assign(numVertices, 0);
-  std::vector<float> eps(3 * std::size_t(numFaces), 0.0f);  // residual rotation per corner
-
-  // Matchings and residuals: once per interior edge (from its smaller corner), so that the two
-  // sides are exactly opposite.
+  // Per face, once: the field angle and the edge angles in the face frame (16 bytes per face;
+  // float is ample for rounding to quarter turns).
+  struct FaceData {
+    float theta, edge[3];
+  };
+  std::vector<FaceData> faceData(numFaces);
   tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
-      const FaceAngles af = faceAngles(mesh, f);
-      const double thetaF = frameAngle(af.frame, field.direction[f]);
-      for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-        const CornerId o = topology.opposite(c);
-        if (o == kInvalidId || o < c) continue;
-        const FaceId g = cornerFace(o);
-        const FaceAngles ag = faceAngles(mesh, g);
-        const double thetaG = frameAngle(ag.frame, field.direction[g]);
-        const double kappa = transportAngle(c, o, af, ag);
-        const double d = wrapAngle(thetaG - thetaF - kappa);
-        const long k = std::lround(d / (0.5 * M_PI));  // in [-2, 2]
-        const double e = d - k * (0.5 * M_PI);
-        out.matching[c] = static_cast<std::uint8_t>(((k % 4) + 4) % 4);
-        out.matching[o] = static_cast<std::uint8_t>((4 - out.matching[c]) % 4);
-        eps[c] = static_cast<float>(e);
-        eps[o] = static_cast<float>(-e);
-      }
+      const FaceAngles a = faceAngles(mesh, f);
+      faceData[f] = {float(frameAngle(a.frame, field.direction[f])), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
+    }
+  });
+
+  // Matchings and residuals: once per interior edge (from its smaller corner), so that the two
+  // sides are exactly opposite. kappa as in transportAngle.
+  std::vector<float> eps(3 * std::size_t(numFaces), 0.0f);  // residual rotation per corner
+  tbb::parallel_for(tbb::blocked_range<CornerId>(0, 3 * numFaces, 8192), [&](const auto& range) {
+    for (CornerId c = range.begin(); c != range.end(); ++c) {
+      const CornerId o = topology.opposite(c);
+      if (o == kInvalidId || o < c) continue;
+      const FaceData& f = faceData[cornerFace(c)];
+      const FaceData& g = faceData[cornerFace(o)];
+      const double kappa = wrapAngle(double(g.edge[o % 3]) + M_PI - double(f.edge[c % 3]));
+      const double d = wrapAngle(double(g.theta) - double(f.theta) - kappa);
+      const long k = std::lround(d / (0.5 * M_PI));  // in [-2, 2]
+      const double e = d - k * (0.5 * M_PI);
+      out.matching[c] = static_cast<std::uint8_t>(((k % 4) + 4) % 4);
+      out.matching[o] = static_cast<std::uint8_t>((4 - out.matching[c]) % 4);
+      eps[c] = static_cast<float>(e);
+      eps[o] = static_cast<float>(-e);
     }
   });
 
@@ -151,8 +165,9 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
       if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) continue;
       double sum = 2.0 * M_PI;
       topology.forEachCornerAround(v, [&](CornerId c) {
-        sum -= faceAngles(mesh, cornerFace(c)).corner[c % 3];
-        sum += eps[nextCorner(c)];
+        double corner[3];
+        cornerAngles(faceData[cornerFace(c)].edge, corner);
+        sum += eps[nextCorner(c)] - corner[c % 3];
       });
       out.index4[v] = static_cast<std::int32_t>(std::lround(4.0 * sum / (2.0 * M_PI)));
     }

@@ -131,6 +131,20 @@ CrossField importField(const std::string& path, const TriangleMesh& mesh) {
   return projectToTangent(mesh, readFieldVectors(path, mesh.numFaces()));
 }
 
+CrossField importField(const std::string& path, const TriangleMesh& mesh,
+                       const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces) {
+  const std::vector<Vec3d> vectors = readFieldVectors(path, inputFaces);
+  if (faceOrigin.size() != mesh.numFaces()) {
+    throw InputError(path + ": importField needs one origin per mesh face");
+  }
+  std::vector<Vec3d> perFace(mesh.numFaces());
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    if (faceOrigin[f] >= inputFaces) throw InputError(path + ": face origin out of range");
+    perFace[f] = vectors[faceOrigin[f]];
+  }
+  return projectToTangent(mesh, std::move(perFace));
+}
+
 void writeField(const std::string& path, const std::vector<Vec3d>& vectors) {
   AtomicFile file(path);
   file.write("# seamvox field: one tangent vector (x y z) per face, in face order\n1 " +

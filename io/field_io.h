@@ -24,6 +24,10 @@ std::vector<Vec3d> readFieldVectors(const std::string& path, std::uint32_t expec
 
 /// readFieldVectors followed by projectToTangent on mesh (faces in mesh order).
 CrossField importField(const std::string& path, const TriangleMesh& mesh);
+/// The same for a cleaned mesh whose face f comes from input face faceOrigin[f] (CleanResult):
+/// the file holds one vector per input face (inputFaces of them).
+CrossField importField(const std::string& path, const TriangleMesh& mesh,
+                       const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces);
 
 /// Writes per-face vectors in the plain format (header `1 F`), atomically. Throws IoError.
 void writeField(const std::string& path, const std::vector<Vec3d>& vectors);

@@ -330,5 +330,60 @@ TEST(FieldIo, LiliumCrossfieldImport) {
   EXPECT_LT(worst, 1e-9);
 }
 
+/// Count of `key` lines (e.g. "l ", "p ") in a text.
+std::size_t countLines(const std::string& text, const std::string& key) {
+  std::size_t n = 0;
+  for (std::size_t pos = 0; pos < text.size();) {
+    if (text.compare(pos, key.size(), key) == 0) ++n;
+    pos = text.find('\n', pos);
+    if (pos == std::string::npos) break;
+    ++pos;
+  }
+  return n;
+}
+
+/// The integer after "key": in a JSON document (-1 when absent).
+long jsonInteger(const std::string& json, const std::string& key) {
+  const std::size_t pos = json.find("\"" + key + "\": ");
+  return pos == std::string::npos ? -1 : std::stol(json.substr(pos + key.size() + 4));
+}
+
+TEST(FieldCommand, WritesFieldConesSeamsAndReimportsTheSameField) {
+  testing::TempDir dir;
+  GenerateOptions options;
+  options.kind = MeshKind::Torus;
+  options.faces = 3000;
+  writeMesh(dir.path("t.obj"), generateMesh(options).mesh);
+  std::string out;
+  ASSERT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("t.field") + " --cones " +
+                                    dir.path("cones.obj") + " --seams " + dir.path("seams.obj") + " --json",
+                                &out),
+            0)
+      << out;
+  const long cones = jsonInteger(out, "cones"), seams = jsonInteger(out, "seams");
+  EXPECT_EQ(jsonInteger(out, "indexSum4"), 0) << out;  // torus: chi = 0
+  EXPECT_GT(jsonInteger(out, "peakResidentBytes"), 0) << out;
+  EXPECT_EQ(long(countLines(testing::readFile(dir.path("cones.obj")), "p ")), cones);
+  EXPECT_EQ(long(countLines(testing::readFile(dir.path("seams.obj")), "l ")), seams);
+  EXPECT_EQ(countLines(testing::readFile(dir.path("t.field")), "1 "), 1u);  // the header
+  // Importing the written field gives the same cones and seams.
+  std::string again;
+  ASSERT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("u.field") + " --import " +
+                                    dir.path("t.field") + " --json",
+                                &again),
+            0)
+      << again;
+  EXPECT_EQ(jsonInteger(again, "cones"), cones);
+  EXPECT_EQ(jsonInteger(again, "seams"), seams);
+  // Bad input: exit code 1 and a message naming the file.
+  testing::writeFile(dir.path("bad.field"), "1 5\n");
+  EXPECT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("v.field") + " --import " +
+                                    dir.path("bad.field"),
+                                &out),
+            1);
+  EXPECT_NE(out.find(dir.path("bad.field") + ":1:"), std::string::npos) << out;
+  EXPECT_EQ(testing::runSeamvox("field " + dir.path("t.obj"), &out), 2) << out;  // no -o
+}
+
 }  // namespace
 }  // namespace seamvox

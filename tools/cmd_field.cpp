@@ -1,0 +1,207 @@
+// seamvox field: cross field (smoothest, curvature-aligned or imported), cones, cut and seams.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "core/clean.h"
+#include "core/cut.h"
+#include "core/errors.h"
+#include "core/field.h"
+#include "io/field_io.h"
+#include "io/json.h"
+#include "io/mesh_io.h"
+#include "stream/memory.h"
+#include "tools/cli.h"
+
+namespace seamvox::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point& mark) {
+  const Clock::time_point now = Clock::now();
+  const double s = std::chrono::duration<double>(now - mark).count();
+  mark = now;
+  return s;
+}
+
+/// Cones as OBJ points: a comment with vertex id and index, `v x y z r g b` (red for positive,
+/// blue for negative index), then one `p` element per cone.
+void writeConesObj(const std::string& path, const TriangleMesh& mesh, const FieldSingularities& sing) {
+  std::string text = "# seamvox cones: " + std::to_string(sing.cones.size()) +
+                     " vertices with nonzero index (in quarter turns)\n";
+  char buf[200];
+  for (VertexId v : sing.cones) {
+    const Vec3d p = mesh.position(v);
+    const int k = sing.index4[v];
+    std::snprintf(buf, sizeof buf, "# cone vertex %u index4 %+d (index %+g)\nv %.9g %.9g %.9g %s\n", v, k,
+                  k / 4.0, p.x(), p.y(), p.z(), k > 0 ? "1 0 0" : "0 0 1");
+    text += buf;
+  }
+  for (std::size_t i = 0; i < sing.cones.size(); ++i) text += "p " + std::to_string(i + 1) + "\n";
+  writeTextOutput(path, text);
+}
+
+/// Seams as OBJ polylines: the seam vertices once each, then one `l` element per seam.
+void writeSeamsObj(const std::string& path, const TriangleMesh& mesh, const Topology& topology,
+                   const CutResult& cut) {
+  std::map<VertexId, std::size_t> objIndex;
+  std::string vertices, lines;
+  char buf[128];
+  auto index = [&](VertexId v) {
+    auto [it, added] = objIndex.emplace(v, objIndex.size() + 1);
+    if (added) {
+      const Vec3d p = mesh.position(v);
+      std::snprintf(buf, sizeof buf, "v %.9g %.9g %.9g\n", p.x(), p.y(), p.z());
+      vertices += buf;
+    }
+    return it->second;
+  };
+  for (std::size_t s = 0; s < cut.seams.size(); ++s) {
+    const SeamCurve& seam = cut.seams[s];
+    lines += "# seam " + std::to_string(s) + " rotation " + std::to_string(seam.matching) +
+             " quarter turns, " + std::to_string(seam.corners.size()) + " edges\nl " +
+             std::to_string(index(seam.start));
+    for (CornerId c : seam.corners) lines += " " + std::to_string(index(topology.vertex(prevCorner(c))));
+    lines += "\n";
+  }
+  writeTextOutput(path, "# seamvox seams: " + std::to_string(cut.seams.size()) + " curves\n" + vertices + lines);
+}
+
+int runField(Args& args) {
+  const std::string input = args.positional(0, "the input mesh (seamvox field MESH -o FIELD)");
+  const auto output = args.value("output");
+  if (!output) throw UsageError("missing -o FIELD (the field file to write)");
+  const auto importPath = args.value("import");
+  const double curvature = args.number("curvature", 0.0);
+  if (!(curvature >= 0.0 && std::isfinite(curvature))) throw UsageError("--curvature must be >= 0");
+  if (importPath && args.value("curvature")) throw UsageError("--curvature has no effect with --import");
+  const auto conesPath = args.value("cones");
+  const auto seamsPath = args.value("seams");
+  const bool json = args.flag("json");
+  const bool weld = args.flag("weld");
+  const ProgressFn progress = makeProgress(args.flag("quiet"));
+  args.finish(1);
+
+  Clock::time_point mark = Clock::now();
+  std::map<std::string, double> seconds;
+  TriangleMesh raw = readMesh(input);
+  const std::uint32_t inputFaces = raw.numFaces();
+  raw.cornerUV.clear();
+  seconds["read"] = secondsSince(mark);
+  CleanOptions cleanOptions;
+  cleanOptions.weldVertices = weld;
+  cleanOptions.progress = progress;
+  CleanResult clean = cleanMesh(std::move(raw), cleanOptions);
+  const TriangleMesh& mesh = clean.mesh;
+  const Topology& topology = clean.topology;
+  seconds["clean"] = secondsSince(mark);
+
+  CrossField field;
+  if (importPath) {
+    field = importField(*importPath, mesh, clean.faceOrigin, inputFaces);  // per input face
+  } else {
+    SmoothFieldOptions options;
+    options.curvatureWeight = curvature;
+    options.progress = progress;
+    field = computeSmoothestField(mesh, topology, options);
+  }
+  seconds["field"] = secondsSince(mark);
+  const FieldSingularities sing = computeSingularities(mesh, topology, field);
+  seconds["singularities"] = secondsSince(mark);
+  CutOptions cutOptions;
+  cutOptions.progress = progress;
+  const CutResult cut = cutToDisk(mesh, topology, field, sing, cutOptions);
+  seconds["cut"] = secondsSince(mark);
+
+  // Written per input face (faces cleaning dropped get a zero vector: "no preference").
+  std::vector<Vec3d> perInputFace(inputFaces, Vec3d::Zero());
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) perInputFace[clean.faceOrigin[f]] = field.direction[f];
+  writeField(*output, perInputFace);
+  if (conesPath) writeConesObj(*conesPath, mesh, sing);
+  if (seamsPath) writeSeamsObj(*seamsPath, mesh, topology, cut);
+  seconds["write"] = secondsSince(mark);
+
+  std::int64_t chi = 0;
+  std::uint32_t closedComponents = 0;
+  for (const ComponentInfo& c : computeComponents(topology).components) {
+    chi += c.eulerCharacteristic;
+    closedComponents += c.boundaryLoops == 0;
+  }
+  std::map<int, std::uint64_t> conesByIndex;
+  for (VertexId v : sing.cones) ++conesByIndex[sing.index4[v]];
+  std::uint64_t cutEdges = 0, seamEdges = 0;
+  for (CornerId c = 0; c < topology.numCorners(); ++c) {
+    const CornerId o = topology.opposite(c);
+    if (cut.isCut[c] && (o == kInvalidId || c < o)) ++cutEdges;
+  }
+  for (const SeamCurve& s : cut.seams) seamEdges += s.corners.size();
+  double total = 0.0;
+  for (const auto& [stage, s] : seconds) total += s;
+  const std::uint64_t peak = peakResidentBytes();
+
+  if (json) {
+    JsonWriter j;
+    j.beginObject();
+    j.key("input").value(input).key("output").value(*output);
+    j.key("field").value(importPath ? "import" : curvature > 0.0 ? "curvature" : "smoothest");
+    j.key("faces").value(std::uint64_t{mesh.numFaces()}).key("vertices").value(std::uint64_t{mesh.numVertices()});
+    j.key("eulerCharacteristic").value(chi);
+    j.key("cones").value(std::uint64_t{sing.cones.size()});
+    j.key("conesByIndex4").beginObject();
+    for (const auto& [k, n] : conesByIndex) j.key(std::to_string(k)).value(n);
+    j.endObject();
+    j.key("indexSum4").value(sing.indexSum4());
+    j.key("seams").value(std::uint64_t{cut.seams.size()});
+    j.key("seamEdges").value(seamEdges).key("cutEdges").value(cutEdges);
+    j.key("seconds").beginObject();
+    for (const auto& [stage, s] : seconds) j.key(stage).value(s);
+    j.key("total").value(total).endObject();
+    j.key("peakResidentBytes").value(peak);
+    j.endObject();
+    std::printf("%s\n", j.str().c_str());
+    return 0;
+  }
+  std::printf("%s -> %s: %u faces, %u vertices, chi %lld\n", input.c_str(), output->c_str(),
+              mesh.numFaces(), mesh.numVertices(), static_cast<long long>(chi));
+  std::printf("field: %s; %zu cones (", importPath ? "imported" : curvature > 0.0 ? "curvature-aligned" : "smoothest",
+              sing.cones.size());
+  bool first = true;
+  for (const auto& [k, n] : conesByIndex) {
+    std::printf("%s%llu of index %+g", first ? "" : ", ", static_cast<unsigned long long>(n), k / 4.0);
+    first = false;
+  }
+  std::printf("), index sum %+g%s\n", sing.indexSum4() / 4.0,
+              closedComponents ? " (Poincare-Hopf: chi on closed components)" : "");
+  std::printf("cut: %llu edges, %zu seams with %llu edges\n", static_cast<unsigned long long>(cutEdges),
+              cut.seams.size(), static_cast<unsigned long long>(seamEdges));
+  std::printf("time: read %.2fs, clean %.2fs, field %.2fs, singularities %.2fs, cut %.2fs, write %.2fs\n",
+              seconds["read"], seconds["clean"], seconds["field"], seconds["singularities"], seconds["cut"],
+              seconds["write"]);
+  std::printf("peak memory: %.1f MB\n", peak / 1048576.0);
+  return 0;
+}
+
+}  // namespace
+
+SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
+                 "usage: seamvox field MESH -o FIELD [--import FILE] [--curvature W] [--cones OUT.obj]\n"
+                 "                     [--seams OUT.obj] [--json] [--weld]\n"
+                 "\n"
+                 "Cleans MESH, computes the smoothest cross field (or imports one), its cones and the\n"
+                 "cut to a disk per component, and writes the field in the plain per-face format\n"
+                 "(header `1 F`, one `x y z` line per input face; see io/field_io.h), which\n"
+                 "`seamvox param --field FIELD` reads back.\n"
+                 "\n"
+                 "  --import FILE     use the field in FILE (.crossfield `2 F` or plain) instead\n"
+                 "  --curvature W     align with principal curvature, weight W > 0 (0: smoothest)\n"
+                 "  --cones OUT.obj   cones as OBJ points (red: positive index, blue: negative)\n"
+                 "  --seams OUT.obj   seam curves as OBJ polylines\n"
+                 "  --json            print a JSON report (cones, index sum, seams, times, memory)\n"
+                 "  --weld            weld coincident vertices before cleaning\n"
+                 "  --quiet           no progress on stderr\n",
+                 {"json", "weld"},
+                 &runField});
+
+}  // namespace seamvox::cli
