@@ -629,6 +629,9 @@ GenerateResult generateScan(const GenerateOptions& options) {
   const double spacing = 1.5707963267948966 / w;  // about one edge length on the unit sphere
   Bumps bumps = kSphereBumps;
   bumps.seed = options.seed;
+  // Room for the seam copies, islands and bad faces, so that nothing is reallocated later.
+  mesh.positions.reserve(box.numVertices() + box.sideWidth(5) + 4096);
+  mesh.triangles.reserve(box.numFaces() + plan.islandFaces + 64);
   appendBoxSphere(mesh, box, Vec3d::Zero(), 1.0, bumps, 0.1 * spacing, options.seed);
   reportProgress(options.progress, "generate", 0.5);
 
