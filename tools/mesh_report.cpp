@@ -92,7 +92,7 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
   }
   out += format("time            read %.3f s, clean %.3f s, components %.3f s\n", s.readSeconds,
                 s.cleanSeconds, s.componentsSeconds);
-  out += format("peak memory     %.1f MB\n", s.peakResidentBytes / 1048576.0);
+  out += format("peak memory     %.1f MiB\n", s.peakResidentBytes / 1048576.0);
   return out;
 }
 
