@@ -193,14 +193,16 @@ struct BoxLattice {
   }
 };
 
-/// Box dimensions near a cube with 4 (ab + bc + ca) as close as possible to faces.
+/// Box dimensions a <= b <= c near a cube with 4 (ab + bc + ca) as close as possible to faces
+/// (ties: the first found, i.e. the smallest a).
 BoxLattice chooseBox(std::uint64_t faces) {
   const auto n0 = static_cast<std::int64_t>(std::sqrt(static_cast<double>(faces) / 12.0));
   BoxLattice best;
   std::uint64_t bestError = std::numeric_limits<std::uint64_t>::max();
-  for (std::int64_t a = std::max<std::int64_t>(1, n0 - 1); a <= n0 + 2; ++a) {
-    for (std::int64_t b = a; b <= n0 + 2; ++b) {
-      for (std::int64_t c = b; c <= n0 + 2; ++c) {
+  // Sides may differ by up to 4 cells (a nearly cubic box), which gives fine steps in 4 (ab+bc+ca).
+  for (std::int64_t a = std::max<std::int64_t>(1, n0 - 3); a <= n0 + 2; ++a) {
+    for (std::int64_t b = a; b <= a + 4; ++b) {
+      for (std::int64_t c = b; c <= a + 4; ++c) {
         BoxLattice box;
         box.n[0] = static_cast<std::uint32_t>(a);
         box.n[1] = static_cast<std::uint32_t>(b);
@@ -573,6 +575,8 @@ struct ScanPlan {
 };
 
 constexpr double kScanHoleFraction = 0.03;  // of the sphere's area, over 5 holes
+constexpr std::uint32_t kScanDegenerateFaces = 3, kScanDuplicateFaces = 5;
+constexpr std::uint64_t kScanBadFaces = kScanDegenerateFaces + kScanDuplicateFaces;
 
 ScanPlan planScan(const BoxLattice& box, std::uint64_t seed) {
   ScanPlan plan;
@@ -615,15 +619,24 @@ GenerateResult generateScan(const GenerateOptions& options) {
   GenerateResult result;
   TriangleMesh& mesh = result.mesh;
   ScanDefects& defects = result.defects;
-  // Choose the sphere so that sphere - holes + islands comes close to the target.
+  // Choose the sphere so that sphere - holes + islands + bad faces comes close to the target
+  // (the plan predicts the count exactly; a few rounds of correction, keep the best).
+  const auto predicted = [](const BoxLattice& b, const ScanPlan& p) {
+    return static_cast<std::int64_t>(b.numFaces() - p.removedFaces + p.islandFaces + kScanBadFaces);
+  };
+  const auto target = static_cast<std::int64_t>(options.faces);
   BoxLattice box = chooseBox(static_cast<std::uint64_t>(options.faces / (1.0 - kScanHoleFraction)));
   ScanPlan plan = planScan(box, options.seed);
-  for (int iteration = 0; iteration < 3; ++iteration) {
-    const std::int64_t sphereFaces = static_cast<std::int64_t>(options.faces) +
-                                     static_cast<std::int64_t>(plan.removedFaces) -
-                                     static_cast<std::int64_t>(plan.islandFaces);
-    box = chooseBox(static_cast<std::uint64_t>(std::max<std::int64_t>(sphereFaces, 12)));
-    plan = planScan(box, options.seed);
+  BoxLattice candidate = box;
+  for (int round = 0; round < 4; ++round) {
+    const ScanPlan candidatePlan = planScan(candidate, options.seed);
+    if (std::llabs(predicted(candidate, candidatePlan) - target) < std::llabs(predicted(box, plan) - target)) {
+      box = candidate;
+      plan = candidatePlan;
+    }
+    const std::int64_t sphereFaces = target + static_cast<std::int64_t>(candidatePlan.removedFaces) -
+                                     static_cast<std::int64_t>(candidatePlan.islandFaces + kScanBadFaces);
+    candidate = chooseBox(static_cast<std::uint64_t>(std::max<std::int64_t>(sphereFaces, 12)));
   }
   const std::uint32_t w = box.n[0];
   const double spacing = 1.5707963267948966 / w;  // about one edge length on the unit sphere
@@ -693,14 +706,16 @@ GenerateResult generateScan(const GenerateOptions& options) {
   // Bad faces, as scanners and converters leave them: repeated vertices and duplicates.
   Rng rng(mix64(options.seed));
   const auto sphereFaces = static_cast<std::uint32_t>(box.numFaces() / 2);  // all still main surface
-  for (std::uint32_t k = 0; k < 3; ++k) {
-    const Triangle t = mesh.triangles[k * (sphereFaces / 3) + rng.below(sphereFaces / 3)];
+  for (std::uint32_t k = 0; k < kScanDegenerateFaces; ++k) {
+    const std::uint32_t stride = sphereFaces / kScanDegenerateFaces;
+    const Triangle t = mesh.triangles[k * stride + rng.below(stride)];
     mesh.triangles.push_back({t[0], t[1], t[1]});
     ++defects.degenerateFaces;
   }
-  for (std::uint32_t k = 0; k < 5; ++k) {
-    const Triangle t = mesh.triangles[k * (sphereFaces / 5) + rng.below(sphereFaces / 5)];
-    if (k == 4) mesh.triangles.push_back({t[0], t[2], t[1]});  // reversed copy
+  for (std::uint32_t k = 0; k < kScanDuplicateFaces; ++k) {
+    const std::uint32_t stride = sphereFaces / kScanDuplicateFaces;
+    const Triangle t = mesh.triangles[k * stride + rng.below(stride)];
+    if (k + 1 == kScanDuplicateFaces) mesh.triangles.push_back({t[0], t[2], t[1]});  // reversed copy
     else mesh.triangles.push_back({t[1], t[2], t[0]});
     ++defects.duplicateFaces;
   }
