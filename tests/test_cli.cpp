@@ -301,6 +301,8 @@ TEST(Cli, DemoRunsTheMainJobOnAGeneratedScan) {
   for (const char* part : {"generated", "components", "genus", "boundary loops", "cleaning"}) {
     EXPECT_TRUE(contains(out, part)) << part << "\n" << out;
   }
+  EXPECT_TRUE(contains(out, "welded vertices ")) << out;
+  EXPECT_FALSE(contains(out, "welded vertices 0,")) << "the demo welds the scan's seam\n" << out;
   EXPECT_TRUE(std::filesystem::exists(dir.path("demo/scan.ply")));
   EXPECT_TRUE(contains(run("demo --faces 10", 2), "--faces"));
 }

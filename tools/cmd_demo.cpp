@@ -44,10 +44,11 @@ class WorkFolder {
   bool temporary_ = false;
 };
 
-/// The main pipeline run on one mesh file. Today: read, clean and report; later stages
-/// (field, cut, parameterization) plug in here.
+/// The main pipeline run on one mesh file. Today: read, clean (welding the scan's seam) and
+/// report; later stages (field, cut, parameterization) plug in here.
 void runMainPipeline(const std::string& meshPath, const ProgressFn& progress) {
   SummarizeOptions options;
+  options.weld = true;
   options.progress = progress;
   std::printf("%s", formatSummaryText(summarizeMeshFile(meshPath, options)).c_str());
 }
@@ -92,8 +93,8 @@ SEAMVOX_COMMAND({"demo", "run the main job on a generated scan-like mesh",
                  "usage: seamvox demo [--faces N] [--seed S] [--keep DIR]\n"
                  "\n"
                  "Generates a scan-like mesh (holes, floating islands, an unwelded seam, bad\n"
-                 "faces) and runs the main pipeline on it: today reading, cleaning and the\n"
-                 "mesh report of `seamvox info`.\n"
+                 "faces) and runs the main pipeline on it: today reading, cleaning (with welding)\n"
+                 "and the mesh report of `seamvox info --weld`.\n"
                  "\n"
                  "  --faces N    size of the generated mesh (default 200000)\n"
                  "  --seed S     random seed (default 1)\n"
