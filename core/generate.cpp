@@ -511,7 +511,7 @@ GenerateResult generateGenus2(const GenerateOptions& options) {
   return result;
 }
 
-/// Radial direction of a random point, away from the poles of no axis in particular.
+/// A uniformly random unit vector (rejection sampling in the unit ball).
 Vec3d randomDirection(Rng& rng) {
   for (;;) {
     const Vec3d d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
