@@ -19,7 +19,7 @@ namespace seamvox {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr std::uint32_t kMaxSide = 16384;
+constexpr std::uint32_t kMaxSide = 8192;
 /// Sample buffers stay within this many samples (8 bytes of depth + id and 3 of colour each).
 constexpr std::uint64_t kMaxSamples = 4096ull * 4096ull;
 constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
@@ -57,7 +57,7 @@ void checkOptions(const RenderOptions& options) {
   if (options.width < 1 || options.height < 1 || options.width > kMaxSide ||
       options.height > kMaxSide) {
     fail("image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
-         " is outside 1..16384");
+         " is outside 1..8192");
   }
   if (!(options.checker > 0.0) || !std::isfinite(options.checker)) {
     fail("checker cells per unit must be a positive number");

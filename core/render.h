@@ -36,7 +36,8 @@ struct RenderCamera {
 };
 
 struct RenderOptions {
-  std::uint32_t width = 1024, height = 1024;  ///< output size in pixels, each in [1, 16384]
+  /// Output size in pixels, each in [1, 8192] (8192 x 8192 needs about 1.2 GB).
+  std::uint32_t width = 1024, height = 1024;
   /// View in degrees around the bounding-box centre. Azimuth 0, elevation 0: image right is +x
   /// (+y when up = x) and the eye lies on right x up (up = y: eye on +z; up = z: eye on -y).
   /// Azimuth turns the eye counter-clockwise about the up axis; elevation raises it towards up
@@ -81,6 +82,7 @@ RenderCamera frameMesh(const TriangleMesh& mesh, const RenderOptions& options);
 /// Interior edges (named by their smaller corner, topology.h) whose two sides disagree in (u, v).
 std::vector<CornerId> findSeamEdges(const TriangleMesh& mesh, const Topology& topology,
                                     double tolerance = 1e-6);
+
 struct MapCones {
   std::vector<RenderCone> cones;
   /// Interior vertices whose angle sum is no multiple of pi / 2 (the map is not seamless there).

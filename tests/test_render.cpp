@@ -420,6 +420,9 @@ TEST(Render, BadOptionsAreRejected) {
   RenderOptions checker;
   checker.checker = -1.0;
   EXPECT_THROW(renderCheckerboard(mesh, topology, checker), InputError);
+  RenderOptions huge;
+  huge.width = 9000;
+  EXPECT_THROW(renderCheckerboard(mesh, topology, huge), InputError);
   TriangleMesh shortUV = mesh;
   shortUV.cornerUV.pop_back();
   EXPECT_THROW(renderCheckerboard(shortUV, topology), InputError);
@@ -485,11 +488,35 @@ TEST(Png, RenderCommandWritesAValidPicture) {
   }
   EXPECT_GT(covered, image.width * image.height / 5);  // the torus is there
   // Usage errors: exit code 2 and no output.
-  for (const char* bad : {" --size 0x10", " --size 12", " --view 10", " --checker 0", " --up w"}) {
+  for (const char* bad : {" --size 0x10", " --size 12", " --size 9000x10", " --view 10", " --checker 0", " --up w"}) {
     EXPECT_EQ(testing::runSeamvox("render " + meshPath + " -o " + dir.path("bad.png") + bad, &output), 2)
         << bad << "\n" << output;
   }
   EXPECT_FALSE(std::ifstream(dir.path("bad.png")).good());
+}
+
+TEST(Png, RenderCommandWeldsFilesSplitAlongSeams) {
+  // The seamed grid with its right half on vertices of its own: the seam is an open boundary
+  // until --weld joins the two halves.
+  TriangleMesh mesh = gridWithSeam();
+  const VertexId base = mesh.numVertices();
+  mesh.positions.insert(mesh.positions.end(), mesh.positions.begin(), mesh.positions.begin() + base);
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    if (mesh.cornerUV[3 * f].x() != mesh.positions[mesh.triangles[f][0]].x()) {
+      for (VertexId& v : mesh.triangles[f]) v += base;  // a right-half face
+    }
+  }
+  TempDir dir;
+  const std::string path = dir.path("split.obj");
+  writeMesh(path, mesh);
+  std::string output;
+  ASSERT_EQ(testing::runSeamvox("render " + path + " -o " + dir.path("a.png") + " --seams", &output), 0)
+      << output;
+  EXPECT_NE(output.find(" 0 seam edges"), std::string::npos) << output;
+  ASSERT_EQ(testing::runSeamvox("render " + path + " -o " + dir.path("b.png") + " --seams --weld", &output),
+            0)
+      << output;
+  EXPECT_NE(output.find(" 4 seam edges"), std::string::npos) << output;
 }
 
 }  // namespace

@@ -37,8 +37,8 @@ int runRender(Args& args) {
   RenderOptions options;
   if (const auto size = args.value("size")) {
     const auto [w, h] = parsePair(*size, 'x', "size");
-    if (!(w >= 1 && w <= 16384 && h >= 1 && h <= 16384) || w != std::floor(w) || h != std::floor(h)) {
-      throw UsageError("--size must be WxH with whole numbers in 1..16384, got '" + *size + "'");
+    if (!(w >= 1 && w <= 8192 && h >= 1 && h <= 8192) || w != std::floor(w) || h != std::floor(h)) {
+      throw UsageError("--size must be WxH with whole numbers in 1..8192, got '" + *size + "'");
     }
     options.width = static_cast<std::uint32_t>(w);
     options.height = static_cast<std::uint32_t>(h);
@@ -115,7 +115,7 @@ SEAMVOX_COMMAND({"render", "checkerboard picture (PNG) of a mesh's texture coord
                  "(u, v), orthographic, framing the whole mesh.\n"
                  "\n"
                  "  -o OUT.png         the picture (8-bit RGB PNG)\n"
-                 "  --size WxH         picture size in pixels (default 1024x1024, at most 16384)\n"
+                 "  --size WxH         picture size in pixels (default 1024x1024, at most 8192)\n"
                  "  --view AZ,EL       azimuth and elevation in degrees around the bounding-box\n"
                  "                     centre (default 30,20; 0,90 looks straight down the up axis)\n"
                  "  --up x|y|z         the axis that points up in the picture (default y)\n"
