@@ -293,8 +293,8 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   reportProgress(options.progress, "cleaning", 0.75);
 
   // 5. Non-manifold vertices: every fan beyond the first gets its own copy of the vertex.
-  const detail::FanTable fans = detail::findFans(*vc, opposite);
   vc.reset();
+  const detail::FanTable fans = detail::findFans(mesh.triangles, mesh.numVertices(), opposite);
   const std::uint32_t nv = mesh.numVertices();
   std::vector<CornerId> vertexCorner(fans.fanOffsets.back() , kInvalidId);
   std::vector<VertexId> firstExtra(nv);

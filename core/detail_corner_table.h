@@ -44,7 +44,11 @@ struct FanTable {
   std::vector<std::uint32_t> fanOffsets;  // #V + 1
   std::vector<CornerId> fanStart;
 };
-FanTable findFans(const VertexCorners& vc, const std::vector<CornerId>& opposite);
+/// Needs only the triangles and opposite (the vertex-corner table can be freed before): fans
+/// are walked from one corner per vertex; only vertices whose fan misses some of their corners
+/// (non-manifold, rare) get a second, slower look.
+FanTable findFans(const std::vector<Triangle>& triangles, std::uint32_t numVertices,
+                  const std::vector<CornerId>& opposite);
 
 /// Walks the fan starting at corner start counter-clockwise and calls f(corner) for each.
 template <class F>

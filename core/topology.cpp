@@ -56,92 +56,138 @@ GlueStats glueEdges(const std::vector<Triangle>& tris, const VertexCorners& vc,
                     std::vector<CornerId>& opposite) {
   const std::size_t numCorners = tris.size() * 3;
   opposite.assign(numCorners, kInvalidId);
+  auto vertexOf = [&](CornerId x) { return tris[x / 3][x % 3]; };
   struct Acc {
     std::uint64_t nonManifold = 0, clashes = 0;
     CornerId first = kInvalidId;
   };
-  const Acc total = tbb::parallel_reduce(
+  auto countProblem = [](const EdgeMatch& m, CornerId c, Acc& acc) {
+    const std::uint32_t faces = m.sameDirection + m.reverseDirection;
+    if (faces <= 1 || m.smallestCorner != c) return;  // boundary, or counted at another corner
+    if (faces > 2) {
+      ++acc.nonManifold;
+    } else {
+      ++acc.clashes;
+    }
+    acc.first = std::min(acc.first, c);
+  };
+  auto join = [](Acc x, const Acc& y) {
+    x.nonManifold += y.nonManifold;
+    x.clashes += y.clashes;
+    x.first = std::min(x.first, y.first);
+    return x;
+  };
+  // Pass 1: corners whose edge runs from a smaller to a larger vertex id scan the edge and glue
+  // both sides, so each manifold edge is looked up once and no two threads write one entry.
+  Acc total = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, numCorners, 4096), Acc{},
       [&](const tbb::blocked_range<std::size_t>& r, Acc acc) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
           const CornerId c = static_cast<CornerId>(i);
+          if (vertexOf(nextCorner(c)) > vertexOf(prevCorner(c))) continue;
           const EdgeMatch m = matchEdge(tris, vc, c);
           if (m.isManifold()) {
             opposite[c] = m.reverseCorner;
-            continue;
-          }
-          const std::uint32_t faces = m.sameDirection + m.reverseDirection;
-          if (faces <= 1 || m.smallestCorner != c) continue;  // boundary, or counted elsewhere
-          if (faces > 2) {
-            ++acc.nonManifold;
+            opposite[m.reverseCorner] = c;
           } else {
-            ++acc.clashes;
+            countProblem(m, c, acc);
           }
-          acc.first = std::min(acc.first, c);
         }
         return acc;
       },
-      [](Acc x, const Acc& y) {
-        x.nonManifold += y.nonManifold;
-        x.clashes += y.clashes;
-        x.first = std::min(x.first, y.first);
-        return x;
-      });
+      join);
+  // Pass 2: the other corners that pass 1 left unglued (boundary or non-manifold edges: rare).
+  total = join(total, tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, numCorners, 4096), Acc{},
+      [&](const tbb::blocked_range<std::size_t>& r, Acc acc) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const CornerId c = static_cast<CornerId>(i);
+          if (opposite[c] != kInvalidId || vertexOf(nextCorner(c)) < vertexOf(prevCorner(c))) continue;
+          countProblem(matchEdge(tris, vc, c), c, acc);
+        }
+        return acc;
+      },
+      join));
   return {total.nonManifold, total.clashes, total.first};
 }
 
-FanTable findFans(const VertexCorners& vc, const std::vector<CornerId>& opposite) {
-  const std::uint32_t numVertices = static_cast<std::uint32_t>(vc.offsets.size() - 1);
-  FanTable fans;
-  fans.fanOffsets.assign(std::size_t(numVertices) + 1, 0);
-  // mark[c]: pass number in which corner c was reached (each corner belongs to one vertex, so the
-  // per-vertex loops below never touch the same entry from two threads).
-  std::vector<std::uint8_t> mark(vc.corners.size(), 0);
+FanTable findFans(const std::vector<Triangle>& tris, std::uint32_t numVertices,
+                  const std::vector<CornerId>& opposite) {
+  const std::size_t numCorners = tris.size() * 3;
+  auto vertexOf = [&](CornerId x) { return tris[x / 3][x % 3]; };
+  // Most clockwise corner of the fan through d (d itself when the fan is closed).
   auto mostClockwise = [&](CornerId d) {
     CornerId s = d;
     for (;;) {
       const CornerId o = opposite[prevCorner(s)];
       if (o == kInvalidId) return s;
       const CornerId cwCorner = prevCorner(o);
-      if (cwCorner == d) return d;  // closed fan
+      if (cwCorner == d) return d;
       s = cwCorner;
     }
   };
-  auto forEachFan = [&](std::uint32_t v, std::uint8_t pass, auto&& onFan) {
-    for (std::uint32_t i = vc.offsets[v]; i < vc.offsets[v + 1]; ++i) {
-      const CornerId d = vc.corners[i];
-      if (mark[d] == pass) continue;
-      const CornerId s = mostClockwise(d);
-      walkFan(opposite, s, [&](CornerId c) { mark[c] = pass; });
-      onFan(s);
-    }
-  };
-  // Pass 1 counts the fans and records the first start; pass 2 revisits only the (rare) vertices
-  // with several fans.
-  std::vector<CornerId> firstStart(numVertices, kInvalidId);
+  std::vector<std::uint32_t> count(numVertices, 0);
+  std::vector<CornerId> start(numVertices, kInvalidId);
+  for (std::size_t c = 0; c < numCorners; ++c) {
+    const VertexId v = vertexOf(CornerId(c));
+    ++count[v];
+    start[v] = CornerId(c);
+  }
+  // One walk per vertex; a fan that reaches all corners of its vertex is the only one.
+  std::vector<std::uint8_t> several(numVertices, 0);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, numVertices, 2048),
                     [&](const tbb::blocked_range<std::uint32_t>& r) {
                       for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
+                        if (!count[v]) continue;
+                        const CornerId s = mostClockwise(start[v]);
                         std::uint32_t n = 0;
-                        forEachFan(v, 1, [&](CornerId s) {
-                          if (n++ == 0) firstStart[v] = s;
-                        });
-                        fans.fanOffsets[v + 1] = n;
+                        walkFan(opposite, s, [&](CornerId) { ++n; });
+                        start[v] = s;
+                        several[v] = n != count[v];
                       }
                     });
+  // Vertices with several fans: gather their corners and walk every fan.
+  std::vector<VertexId> multi;
+  for (VertexId v = 0; v < numVertices; ++v) {
+    if (several[v]) multi.push_back(v);
+  }
+  std::vector<std::vector<CornerId>> multiStarts(multi.size());
+  if (!multi.empty()) {
+    std::vector<std::uint32_t> slot(numVertices, kInvalidId);
+    for (std::uint32_t i = 0; i < multi.size(); ++i) slot[multi[i]] = i;
+    std::vector<std::vector<CornerId>> corners(multi.size());
+    for (std::size_t c = 0; c < numCorners; ++c) {
+      const std::uint32_t i = slot[vertexOf(CornerId(c))];
+      if (i != kInvalidId) corners[i].push_back(CornerId(c));
+    }
+    for (std::uint32_t i = 0; i < multi.size(); ++i) {
+      std::vector<CornerId>& mine = corners[i];
+      std::vector<std::uint8_t> seen(mine.size(), 0);
+      auto indexOf = [&](CornerId c) {
+        return std::size_t(std::lower_bound(mine.begin(), mine.end(), c) - mine.begin());
+      };
+      for (std::size_t k = 0; k < mine.size(); ++k) {
+        if (seen[k]) continue;
+        const CornerId s = mostClockwise(mine[k]);
+        walkFan(opposite, s, [&](CornerId c) { seen[indexOf(c)] = 1; });
+        multiStarts[i].push_back(s);
+      }
+    }
+  }
+  FanTable fans;
+  fans.fanOffsets.assign(std::size_t(numVertices) + 1, 0);
+  for (std::uint32_t v = 0; v < numVertices; ++v) fans.fanOffsets[v + 1] = count[v] ? 1 : 0;
+  for (std::uint32_t i = 0; i < multi.size(); ++i) {
+    fans.fanOffsets[multi[i] + 1] = static_cast<std::uint32_t>(multiStarts[i].size());
+  }
   for (std::uint32_t v = 0; v < numVertices; ++v) fans.fanOffsets[v + 1] += fans.fanOffsets[v];
   fans.fanStart.resize(fans.fanOffsets[numVertices]);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, numVertices, 2048),
-                    [&](const tbb::blocked_range<std::uint32_t>& r) {
-                      for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
-                        std::uint32_t k = fans.fanOffsets[v];
-                        if (fans.fanOffsets[v + 1] - k == 1) {
-                          fans.fanStart[k] = firstStart[v];
-                        } else if (fans.fanOffsets[v + 1] > k) {
-                          forEachFan(v, 2, [&](CornerId s) { fans.fanStart[k++] = s; });
-                        }
-                      }
-                    });
+  for (std::uint32_t v = 0; v < numVertices; ++v) {
+    if (count[v]) fans.fanStart[fans.fanOffsets[v]] = start[v];
+  }
+  for (std::uint32_t i = 0; i < multi.size(); ++i) {
+    std::copy(multiStarts[i].begin(), multiStarts[i].end(), fans.fanStart.begin() + fans.fanOffsets[multi[i]]);
+  }
   return fans;
 }
 
@@ -179,7 +225,7 @@ Topology Topology::build(std::vector<Triangle> triangles, std::uint32_t numVerti
                         " edges traversed twice in the same direction (first at " +
                         faceText(glue.firstProblem) + "); clean the mesh first");
   }
-  const detail::FanTable fans = detail::findFans(vc, opposite);
+  const detail::FanTable fans = detail::findFans(triangles, numVertices, opposite);
   std::vector<CornerId> vertexCorner(numVertices, kInvalidId);
   for (std::uint32_t v = 0; v < numVertices; ++v) {
     const std::uint32_t n = fans.fanOffsets[v + 1] - fans.fanOffsets[v];
