@@ -1,4 +1,4 @@
-// seamvox param: seamless parameterization of a mesh with the hat-basis solver.
+// seamvox param: seamless parameterization of a mesh (hat, vox or vox + local hat refinement).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +13,7 @@
 #include "io/json.h"
 #include "io/mesh_io.h"
 #include "stream/memory.h"
+#include "stream/param_solver.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
@@ -41,8 +42,21 @@ int runParam(Args& args) {
   if (formatFromPath(*output) == MeshFormat::Unknown || formatFromPath(*output) == MeshFormat::Off) {
     throw UsageError("output must be .obj, .ply or .drc (OFF has no texture coordinates): " + *output);
   }
-  const std::string solver = args.value("solver", "hat");
-  if (solver != "hat") throw UsageError("unknown --solver '" + solver + "' (available: hat)");
+  const std::string solver = args.value("solver", "voxloc");
+  SolverOptions solverOptions;
+  try {
+    solverOptions.solver = parseParamSolver(solver);
+  } catch (const InputError& e) {
+    throw UsageError(std::string("--solver: ") + e.what());
+  }
+  const std::int64_t grid = args.integer("grid", 128);
+  if (grid < 4 || grid > 1024 || (grid & (grid - 1)) != 0) {
+    throw UsageError("--grid must be a power of two between 4 and 1024");
+  }
+  solverOptions.gridResolution = static_cast<std::int32_t>(grid);
+  const std::int64_t rings = args.integer("rings", solverOptions.refine.rings);
+  if (rings < 0 || rings > 64) throw UsageError("--rings must be between 0 and 64");
+  solverOptions.refine.rings = static_cast<std::uint32_t>(rings);
   const std::string fieldSource = args.value("field", "smooth");
   const double edgeLengthArg = args.number("edge-length", 0.0);
   const double cellsArg = args.number("cells", 0.0);
@@ -101,7 +115,9 @@ int runParam(Args& args) {
   options.greedyRounding = greedy;
   options.progress = progress;
   clock.lap();
-  ParamResult result = parameterizeMesh(mesh, topology, field, cut, options);
+  SolverResult solved = parameterizeMeshWithSolver(mesh, topology, field, cut, options, solverOptions);
+  ParamResult& result = solved.param;
+  const RefineStats& refine = solved.refine;
   const double secondsParam = clock.lap();
 
   const SeamQuality seams = measureSeams(mesh, topology, cut, result.cornerUV);
@@ -126,6 +142,13 @@ int runParam(Args& args) {
               seams.maxResidual, seams.maxIntegerDistance, map.relativeGradientError,
               static_cast<unsigned long long>(map.flipped),
               static_cast<unsigned long long>(map.collapsed), seamless ? "seamless" : "NOT seamless");
+  if (solved.refined) {
+    std::printf("refined %u vertices (%.3f%%) in %llu faces: %u local unknowns, factor %.1f MB, "
+                "%.2f s\n",
+                refine.freeVertices, 100.0 * refine.refinedVertexFraction,
+                static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
+                refine.factorBytes / 1048576.0, refine.secondsTotal);
+  }
   std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", secondsTotal, secondsField,
               secondsCut, secondsParam);
 
@@ -160,6 +183,35 @@ int runParam(Args& args) {
     j.key("realFallback").value(st.realFallback);
     j.key("maxRoundingShift").value(st.maxRoundingShift);
     j.endObject();
+    if (solverOptions.solver != ParamSolver::Hat) {
+      j.key("voxel").beginObject();
+      j.key("grid").value(static_cast<std::uint64_t>(solverOptions.gridResolution));
+      j.key("voxels").value(solved.basisStats.voxels);
+      j.key("elements").value(solved.basisStats.elements);
+      j.key("basisBytes").value(solved.basisStats.bytes);
+      j.key("conePositions").value(static_cast<std::uint64_t>(solved.determinedBasis));
+      j.key("inconsistentBasis").value(static_cast<std::uint64_t>(solved.inconsistentBasis));
+      j.key("markedFaces").value(solved.markedFaces);
+      j.endObject();
+    }
+    if (solved.refined) {
+      j.key("refine").beginObject();
+      j.key("refinedVertexFraction").value(refine.refinedVertexFraction);
+      j.key("freeVertices").value(static_cast<std::uint64_t>(refine.freeVertices));
+      j.key("lockedVertices").value(static_cast<std::uint64_t>(refine.lockedVertices));
+      j.key("regionFaces").value(refine.regionFaces);
+      j.key("markedFaces").value(refine.markedFaces);
+      j.key("collapsedFaces").value(refine.collapsedFaces);
+      j.key("flippedFaces").value(refine.flippedFaces);
+      j.key("rings").value(static_cast<std::uint64_t>(solverOptions.refine.rings));
+      j.key("localUnknowns").value(static_cast<std::uint64_t>(refine.unknowns));
+      j.key("localNonzeros").value(refine.systemNonzeros);
+      j.key("factorNonzeros").value(refine.factorNonzeros);
+      j.key("factorBytes").value(refine.factorBytes);
+      j.key("factorPeakBytes").value(refine.factorPeakBytes);
+      j.key("seconds").value(refine.secondsTotal);
+      j.endObject();
+    }
     j.key("quality").beginObject();
     j.key("seamless").value(seamless);
     j.key("maxSeamResidual").value(seams.maxResidual);
@@ -174,7 +226,7 @@ int runParam(Args& args) {
     j.key("basis").value(result.secondsBasis).key("reduce").value(result.secondsReduce);
     j.key("assemble").value(st.secondsAssemble).key("firstSolve").value(st.secondsFirstSolve);
     j.key("round").value(st.secondsRound).key("secondSolve").value(st.secondsSecondSolve);
-    j.key("evaluate").value(result.secondsEvaluate).key("metrics").value(secondsMetrics);
+    j.key("evaluate").value(result.secondsEvaluate).key("refine").value(refine.secondsTotal).key("metrics").value(secondsMetrics);
     j.key("write").value(secondsWrite).key("total").value(secondsTotal);
     j.endObject();
     j.key("peakResidentBytes").value(peak);
@@ -187,14 +239,20 @@ int runParam(Args& args) {
 }  // namespace
 
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
-                 "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver hat] [--field FILE|smooth]\n"
-                 "                     [--edge-length H | --cells N] [--greedy] [--weld] [--report R.json]\n"
+                 "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver hat|vox|voxloc] [--grid N]\n"
+                 "                     [--rings K] [--field FILE|smooth] [--edge-length H | --cells N]\n"
+                 "                     [--greedy] [--weld] [--report R.json]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
                  "quarter turn and t an integer vector, and grad q follows the field with spacing H.\n"
                  "\n"
-                 "  --solver hat        the per-vertex hat-basis solver (default)\n"
+                 "  --solver voxloc     volumetric B-spline basis on an N^3 grid, then a local hat\n"
+                 "                      solve near cones and on collapsed or flipped triangles (default)\n"
+                 "  --solver vox        the volumetric basis alone\n"
+                 "  --solver hat        the per-vertex hat basis (exact reference, one global solve)\n"
+                 "  --grid N            voxels per axis for vox and voxloc: 64, 128 (default), 256, 512\n"
+                 "  --rings K           rings of neighbours added around the voxloc region (default 1)\n"
                  "  --field FILE        per-face field (.crossfield or plain, one vector per input\n"
                  "                      face); default 'smooth': the smoothest cross field\n"
                  "  --edge-length H     grid spacing in mesh units\n"

@@ -1,0 +1,115 @@
+#pragma once
+/// Local refinement of a seamless map in the hat basis near cones: the "HatLoc" half of the
+/// Vox+HatLoc solver (DESIGN section 10). A region of triangles (marked faces, triangles the input
+/// map collapsed or flipped, plus rings of neighbours) is cut out as a mesh of its own; vertices
+/// whose triangles all lie in the region are re-solved with the seam translations fixed, every
+/// other vertex keeps the input map's values (per wedge) and enters the right-hand side.
+#include <complex>
+#include <cstdint>
+#include <vector>
+
+#include "cut.h"
+#include "field.h"
+#include "mesh.h"
+#include "progress.h"
+#include "topology.h"
+
+namespace seamvox {
+
+struct RefineOptions {
+  double edgeLength = 1.0;  ///< h, as in the map being refined (> 0)
+  /// Faces to refine whatever the map looks like there (e.g. VoxelParamResult::markedFaces).
+  std::vector<FaceId> markedFaces;
+  /// A face whose signed parameter-space area is below this fraction of its expected area
+  /// A_T / h^2 is added to the region (collapsed; negative area = flipped is always added).
+  double collapseThreshold = 0.1;
+  /// Rings of neighbouring faces (sharing a vertex) added around the region.
+  std::uint32_t rings = 1;
+  ProgressFn progress;
+};
+
+struct RefineStats {
+  std::uint64_t markedFaces = 0, collapsedFaces = 0, flippedFaces = 0;  ///< found in the input
+  std::uint64_t regionFaces = 0;
+  std::uint32_t freeVertices = 0;  ///< re-solved vertices (all their faces in the region)
+  std::uint32_t lockedVertices = 0;  ///< region vertices kept at the input values
+  double refinedVertexFraction = 0.0;  ///< freeVertices / #V
+  std::uint32_t unknowns = 0;  ///< size of the local system
+  /// Translation unknowns solved locally: seams among free vertices only, e.g. between two cones
+  /// (their input t is not trusted; rounded to Gaussian integers and solved again).
+  std::uint32_t freeTranslations = 0;
+  std::uint32_t pinned = 0;    ///< region components without any locked vertex or rotation
+  std::uint64_t systemNonzeros = 0, factorNonzeros = 0, factorBytes = 0, factorPeakBytes = 0;
+  double secondsRegion = 0.0, secondsExtract = 0.0, secondsSolve = 0.0, secondsTotal = 0.0;
+};
+
+/// New (u, v) of the corners of the free vertices: cornerUV[k] belongs to corner corners[k].
+/// Every other corner keeps the input value exactly. Seams whose translation was re-solved
+/// (all their edges among free vertices) get seamT[k] for seam seams[k].
+struct RefineResult {
+  std::vector<CornerId> corners;
+  std::vector<Vec2d> cornerUV;
+  std::vector<std::uint32_t> seams;
+  std::vector<std::complex<double>> seamT;
+  RefineStats stats;
+};
+
+/// The region's triangles as a mesh of their own, with index maps back to the whole mesh. Sub
+/// face i is whole face faceOrigin[i] with its corners in the same order (sub corner 3 i + k is
+/// whole corner 3 faceOrigin[i] + k). A locked vertex whose region faces form several fans gets
+/// one sub vertex per fan, so the sub mesh is manifold; a free vertex keeps its whole fan. The
+/// cut keeps the seam edges with both faces in the region (local seam ids, seamOrigin maps back);
+/// region-border edges are boundary edges.
+struct RegionMesh {
+  TriangleMesh mesh;
+  Topology topology;
+  CrossField field;
+  CutResult cut;
+  std::vector<FaceId> faceOrigin;          ///< #sub faces, increasing
+  std::vector<VertexId> vertexOrigin;      ///< #sub vertices
+  std::vector<std::uint8_t> vertexFree;    ///< #sub vertices: all its whole-mesh faces are here
+  std::vector<std::uint32_t> seamOrigin;   ///< #local seams
+};
+
+/// Faces to refine: marked faces, faces whose input parameter area is below the collapse
+/// threshold or negative, then options.rings rings of neighbours. Sorted, unique. Linear in #F
+/// (one pass over the map) plus the region's size times the valence.
+std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
+                                       const std::vector<Vec2d>& cornerUV,
+                                       const RefineOptions& options, RefineStats* stats = nullptr);
+
+/// Cuts the given faces (sorted, unique) out of the mesh. Cost: the region's size times the
+/// valence; no per-face array of the whole mesh. Throws InputError on bad sizes or ids.
+RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
+                         const CrossField& field, const CutResult& cut,
+                         const std::vector<FaceId>& regionFaces);
+
+/// The region's corner values (3 #sub faces) and translations (per local seam) after the solve.
+struct RegionSolution {
+  std::vector<Vec2d> cornerUV;
+  std::vector<std::complex<double>> seamT;
+};
+
+/// Re-solves the free vertices of a region in the hat basis (DESIGN section 10): locked wedges
+/// fixed to the given corner values (3 #sub faces, the input map on the region) and moved to the
+/// right-hand side; translations fixed to seamT (per local seam) except on seams among free
+/// vertices only, which are solved, rounded to Gaussian integers and solved again (solveSeamless).
+/// Locked corners keep their input values exactly. Throws SolverError when a factorization fails.
+RegionSolution solveRegion(const RegionMesh& region, const std::vector<Vec2d>& cornerUV,
+                           const std::vector<std::complex<double>>& seamT, double edgeLength,
+                           RefineStats* stats = nullptr);
+
+/// The whole stage: select, extract, solve. cornerUV is the input map (3 #F), seamT its rounded
+/// translation per seam of cut (Gaussian integers). Throws InputError on bad sizes.
+RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
+                             const CrossField& field, const CutResult& cut,
+                             const std::vector<Vec2d>& cornerUV,
+                             const std::vector<std::complex<double>>& seamT,
+                             const RefineOptions& options = {});
+
+/// Writes a refinement's corner values into a whole-mesh map (3 #F) and, when given, its
+/// re-solved translations into the per-seam translations.
+void applyRefinement(const RefineResult& refinement, std::vector<Vec2d>& cornerUV,
+                     std::vector<std::complex<double>>* translations = nullptr);
+
+}  // namespace seamvox

@@ -1,0 +1,48 @@
+#pragma once
+/// Solver selection for the seamless parameterization (DESIGN sections 6-10): the hat solver
+/// (core/param.h), the Vox solver (voxel_grid.h) and Vox+HatLoc, the Vox map repaired near cones
+/// by a local hat solve (core/refine.h). Lives in stream/ because the voxel basis does.
+#include <cstdint>
+#include <string>
+
+#include "../core/param.h"
+#include "../core/refine.h"
+#include "../core/voxel_basis.h"
+
+namespace seamvox {
+
+enum class ParamSolver {
+  Hat,     ///< per-vertex hat basis, one global solve (exact reference)
+  Vox,     ///< volumetric basis on a 2^D grid
+  VoxLoc,  ///< Vox, then refineNearCones on its marked, collapsed and flipped faces (default)
+};
+/// "hat", "vox", "voxloc".
+const char* paramSolverName(ParamSolver solver);
+/// Parses a solver name; throws InputError listing the known names.
+ParamSolver parseParamSolver(const std::string& name);
+
+struct SolverOptions {
+  ParamSolver solver = ParamSolver::VoxLoc;
+  std::int32_t gridResolution = 128;  ///< voxels per axis (vox, voxloc)
+  /// Region and rings of the local refinement (voxloc); markedFaces and edgeLength are filled in.
+  RefineOptions refine;
+};
+
+struct SolverResult {
+  ParamResult param;  ///< the final map (refined for voxloc)
+  ParamSolver solver = ParamSolver::Hat;
+  VoxelBasisStats basisStats;  ///< vox, voxloc
+  std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
+  std::uint64_t markedFaces = 0;  ///< faces of marked voxel basis functions
+  bool refined = false;           ///< voxloc ran the local refinement
+  RefineStats refine;
+};
+
+/// Runs the chosen solver on a mesh cut to a disk per component (cutToDisk). Throws like
+/// parameterizeMesh and refineNearCones.
+SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology& topology,
+                                        const CrossField& field, const CutResult& cut,
+                                        const ParamOptions& options,
+                                        const SolverOptions& solverOptions = {});
+
+}  // namespace seamvox

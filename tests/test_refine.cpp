@@ -1,0 +1,438 @@
+// Local refinement near cones (Vox+HatLoc, DESIGN section 10): a hat map damaged around its cones
+// is repaired exactly by the local solve, locked vertices keep their values, region extraction
+// gives a manifold sub mesh with the right index maps, and the voxloc solver is seamless.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <deque>
+#include <memory>
+#include <set>
+
+#include "core/clean.h"
+#include "core/cut.h"
+#include "core/errors.h"
+#include "core/field.h"
+#include "core/gaussian_int.h"
+#include "core/generate.h"
+#include "core/metrics.h"
+#include "core/param.h"
+#include "core/refine.h"
+#include "core/topology.h"
+#include "io/mesh_io.h"
+#include "stream/param_solver.h"
+#include "tests/test_meshes.h"
+#include "tests/testing.h"
+
+namespace seamvox {
+namespace {
+
+using Complex = std::complex<double>;
+
+// A cleaned mesh with its smoothest field, cut and hat solution.
+struct Scene {
+  CleanResult clean;
+  CrossField field;
+  CutResult cut;
+  ParamOptions options;
+  ParamResult hat;
+  const TriangleMesh& mesh() const { return clean.mesh; }
+  const Topology& topology() const { return clean.topology; }
+};
+
+std::unique_ptr<Scene> makeScene(TriangleMesh input, double cellsOnDiagonal) {
+  auto s = std::make_unique<Scene>();
+  s->clean = cleanMesh(std::move(input));
+  s->field = computeSmoothestField(s->mesh(), s->topology());
+  const FieldSingularities singularities = computeSingularities(s->mesh(), s->topology(), s->field);
+  s->cut = cutToDisk(s->mesh(), s->topology(), s->field, singularities);
+  s->options.edgeLength = computeBoundingBox(s->mesh().positions).diagonal() / cellsOnDiagonal;
+  s->hat = parameterizeMesh(s->mesh(), s->topology(), s->field, s->cut, s->options);
+  return s;
+}
+
+// Vertices within `rings` edges of a cone, each with the cone it was reached from.
+std::vector<VertexId> coneNeighbourhood(const Topology& topology, const std::vector<VertexId>& cones,
+                                        int rings, std::vector<VertexId>* source = nullptr) {
+  std::vector<int> distance(topology.numVertices(), -1);
+  std::vector<VertexId> from(topology.numVertices(), kInvalidId);
+  std::deque<VertexId> queue;
+  for (VertexId c : cones) {
+    distance[c] = 0;
+    from[c] = c;
+    queue.push_back(c);
+  }
+  std::vector<VertexId> out;
+  while (!queue.empty()) {
+    const VertexId v = queue.front();
+    queue.pop_front();
+    out.push_back(v);
+    if (distance[v] == rings) continue;
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      const VertexId w = topology.vertex(nextCorner(c));
+      if (distance[w] >= 0) return;
+      distance[w] = distance[v] + 1;
+      from[w] = from[v];
+      queue.push_back(w);
+    });
+  }
+  if (source) *source = from;
+  return out;
+}
+
+// The hat map with every corner of the damaged vertices moved onto its cone's first corner: the
+// triangles there collapse to points. Returns the faces touching a damaged vertex.
+std::vector<FaceId> damageAroundCones(const Scene& s, int rings, std::vector<Vec2d>& uv,
+                                      std::vector<VertexId>* damaged = nullptr) {
+  const Topology& topology = s.topology();
+  std::vector<VertexId> source;
+  const std::vector<VertexId> near = coneNeighbourhood(topology, s.cut.cones, rings, &source);
+  uv = s.hat.cornerUV;
+  std::set<FaceId> faces;
+  for (VertexId v : near) {
+    const Vec2d target = s.hat.cornerUV[topology.vertexCorner(source[v])];
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      uv[c] = target;
+      faces.insert(cornerFace(c));
+    });
+  }
+  if (damaged) *damaged = near;
+  return {faces.begin(), faces.end()};
+}
+
+double maxCornerDistance(const std::vector<Vec2d>& a, const std::vector<Vec2d>& b) {
+  double out = 0.0;
+  for (std::size_t c = 0; c < a.size(); ++c) out = std::max(out, (a[c] - b[c]).norm());
+  return out;
+}
+
+class RefineSphere : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    GenerateOptions options;
+    options.kind = MeshKind::Sphere;
+    options.faces = 6000;
+    scene_ = makeScene(generateMesh(options).mesh, 40.0).release();
+  }
+  static void TearDownTestSuite() {
+    delete scene_;
+    scene_ = nullptr;
+  }
+  static Scene* scene_;
+
+  // Refines uv and checks: seamless with the hat's integer translations, no collapsed or flipped
+  // triangle beyond the hat's, gradient error within 1% of the hat's; returns the map.
+  std::vector<Vec2d> refineAndCheck(const std::vector<Vec2d>& uv, const RefineOptions& options,
+                                    RefineStats* stats = nullptr) {
+    const Scene& s = *scene_;
+    const RefineResult result = refineNearCones(s.mesh(), s.topology(), s.field, s.cut, uv,
+                                                s.hat.translations, options);
+    std::vector<Vec2d> refined = uv;
+    applyRefinement(result, refined);
+    const SeamQuality seams = measureSeams(s.mesh(), s.topology(), s.cut, refined);
+    EXPECT_LT(seams.maxResidual, 1e-6);
+    EXPECT_LT(seams.maxIntegerDistance, 1e-6);
+    EXPECT_LT(measureSeamsFromUV(s.mesh(), s.topology(), refined).maxResidual, 1e-6);
+    const MapQuality hat = measureMap(s.mesh(), s.hat.cornerUV, &s.field, s.options.edgeLength);
+    const MapQuality map = measureMap(s.mesh(), refined, &s.field, s.options.edgeLength);
+    EXPECT_LE(map.flipped, hat.flipped);
+    EXPECT_LE(map.collapsed, hat.collapsed);
+    EXPECT_LE(map.relativeGradientError, 1.01 * hat.relativeGradientError);
+    if (stats) *stats = result.stats;
+    return refined;
+  }
+};
+Scene* RefineSphere::scene_ = nullptr;
+
+TEST_F(RefineSphere, HatMapHasConesAndIsClean) {
+  const Scene& s = *scene_;
+  ASSERT_GE(s.cut.cones.size(), 4u);
+  const MapQuality hat = measureMap(s.mesh(), s.hat.cornerUV, &s.field, s.options.edgeLength);
+  EXPECT_EQ(hat.flipped, 0u);
+  EXPECT_EQ(hat.collapsed, 0u);
+  EXPECT_TRUE(measureSeams(s.mesh(), s.topology(), s.cut, s.hat.cornerUV).isSeamless());
+}
+
+TEST_F(RefineSphere, MarkedDamageAroundConesIsRepairedToTheHatMap) {
+  const Scene& s = *scene_;
+  std::vector<Vec2d> damaged;
+  std::vector<VertexId> damagedVertices;
+  RefineOptions options;
+  options.edgeLength = s.options.edgeLength;
+  options.markedFaces = damageAroundCones(s, 2, damaged, &damagedVertices);
+  options.rings = 0;
+  const MapQuality before = measureMap(s.mesh(), damaged, &s.field, s.options.edgeLength);
+  ASSERT_GT(before.collapsed, 0u);
+  RefineStats stats;
+  const std::vector<Vec2d> refined = refineAndCheck(damaged, options, &stats);
+  // With the exact values on the locked border, the local optimum is the global one.
+  EXPECT_LT(maxCornerDistance(refined, s.hat.cornerUV), 1e-6);
+  EXPECT_EQ(stats.regionFaces, options.markedFaces.size());
+  EXPECT_GE(stats.freeVertices, damagedVertices.size());
+  EXPECT_GT(stats.lockedVertices, 0u);
+  EXPECT_GT(stats.unknowns, 0u);
+  EXPECT_GT(stats.factorBytes, 0u);
+  EXPECT_NEAR(stats.refinedVertexFraction, double(stats.freeVertices) / s.mesh().numVertices(),
+              1e-12);
+}
+
+TEST_F(RefineSphere, CollapsedTrianglesAreFoundWithoutMarks) {
+  const Scene& s = *scene_;
+  std::vector<Vec2d> damaged;
+  damageAroundCones(s, 2, damaged);
+  RefineOptions options;
+  options.edgeLength = s.options.edgeLength;
+  options.rings = 1;  // the outer damaged vertices touch collapsed faces only on one side
+  RefineStats stats;
+  const std::vector<Vec2d> refined = refineAndCheck(damaged, options, &stats);
+  EXPECT_LT(maxCornerDistance(refined, s.hat.cornerUV), 1e-6);
+  EXPECT_EQ(stats.markedFaces, 0u);
+  EXPECT_GT(stats.collapsedFaces + stats.flippedFaces, 0u);
+}
+
+TEST_F(RefineSphere, LockedVerticesKeepTheirValuesExactly) {
+  const Scene& s = *scene_;
+  const Topology& topology = s.topology();
+  std::vector<Vec2d> damaged;
+  RefineOptions options;
+  options.edgeLength = s.options.edgeLength;
+  options.markedFaces = damageAroundCones(s, 2, damaged);
+  // Disturb the whole map a little: locked values are then not the hat's, yet must be kept.
+  for (std::size_t c = 0; c < damaged.size(); ++c) damaged[c] += Vec2d(1e-3 * (c % 7), 0.0);
+  const RefineResult result = refineNearCones(s.mesh(), topology, s.field, s.cut, damaged,
+                                              s.hat.translations, options);
+  const std::vector<FaceId> region = selectRefineRegion(s.mesh(), topology, damaged, options);
+  std::vector<std::uint8_t> inRegion(s.mesh().numFaces(), 0);
+  for (FaceId f : region) inRegion[f] = 1;
+  std::set<CornerId> changed(result.corners.begin(), result.corners.end());
+  EXPECT_EQ(changed.size(), result.corners.size());
+  std::uint32_t locked = 0;
+  for (VertexId v = 0; v < topology.numVertices(); ++v) {
+    bool free = true, touches = false;
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      free = free && inRegion[cornerFace(c)];
+      touches = touches || inRegion[cornerFace(c)];
+    });
+    locked += touches && !free;
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      EXPECT_EQ(changed.count(c) != 0, free) << "vertex " << v << " corner " << c;
+    });
+  }
+  EXPECT_EQ(result.stats.lockedVertices >= locked, true);
+  EXPECT_GT(locked, 0u);
+  std::vector<Vec2d> refined = damaged;
+  applyRefinement(result, refined);
+  for (CornerId c = 0; c < refined.size(); ++c) {
+    if (!changed.count(c)) ASSERT_EQ(refined[c], damaged[c]) << "corner " << c;
+  }
+}
+
+TEST_F(RefineSphere, RegionWithoutFreeVertexChangesNothing) {
+  const Scene& s = *scene_;
+  RefineOptions options;
+  options.edgeLength = s.options.edgeLength;
+  options.rings = 0;
+  options.markedFaces = {0, 1};
+  const RefineResult result = refineNearCones(s.mesh(), s.topology(), s.field, s.cut,
+                                              s.hat.cornerUV, s.hat.translations, options);
+  EXPECT_EQ(result.stats.regionFaces, 2u);
+  EXPECT_EQ(result.stats.freeVertices, 0u);
+  EXPECT_TRUE(result.corners.empty());
+}
+
+TEST_F(RefineSphere, GoodMapWithoutMarksChangesNothing) {
+  const Scene& s = *scene_;
+  RefineOptions options;
+  options.edgeLength = s.options.edgeLength;
+  const RefineResult result = refineNearCones(s.mesh(), s.topology(), s.field, s.cut,
+                                              s.hat.cornerUV, s.hat.translations, options);
+  EXPECT_EQ(result.stats.regionFaces, 0u);
+  EXPECT_TRUE(result.corners.empty());
+}
+
+TEST_F(RefineSphere, ExtractedRegionIsAManifoldSubMeshWithIndexMaps) {
+  const Scene& s = *scene_;
+  const Topology& topology = s.topology();
+  std::vector<Vec2d> damaged;
+  std::vector<FaceId> faces = damageAroundCones(s, 2, damaged);
+  const RegionMesh region = extractRegion(s.mesh(), topology, s.field, s.cut, faces);
+  ASSERT_EQ(region.topology.numFaces(), faces.size());
+  EXPECT_NO_THROW(region.topology.validate());
+  for (std::uint32_t i = 0; i < faces.size(); ++i) {
+    EXPECT_EQ(region.faceOrigin[i], faces[i]);
+    for (int k = 0; k < 3; ++k) {
+      const VertexId sv = region.mesh.triangles[i][k];
+      EXPECT_EQ(region.vertexOrigin[sv], s.mesh().triangles[faces[i]][k]);
+      EXPECT_EQ(region.cut.faceRotation[i], s.cut.faceRotation[faces[i]]);
+    }
+  }
+  for (VertexId sv = 0; sv < region.vertexOrigin.size(); ++sv) {
+    const VertexId v = region.vertexOrigin[sv];
+    if (region.vertexFree[sv]) {
+      EXPECT_EQ(region.topology.valence(sv), topology.valence(v));
+      EXPECT_FALSE(region.topology.isBoundaryVertex(sv));
+    } else {
+      EXPECT_TRUE(region.topology.isBoundaryVertex(sv));
+    }
+  }
+  // Seam edges inside the region keep their curve's matching and face the same way.
+  for (std::uint32_t j = 0; j < region.cut.seams.size(); ++j) {
+    const SeamCurve& local = region.cut.seams[j];
+    EXPECT_EQ(local.matching, s.cut.seams[region.seamOrigin[j]].matching);
+    for (CornerId sc : local.corners) {
+      const CornerId c = 3 * region.faceOrigin[sc / 3] + sc % 3;
+      EXPECT_EQ(s.cut.cornerSeam[c], region.seamOrigin[j]);
+      EXPECT_EQ(region.cut.cornerSeam[region.topology.opposite(sc)], j);
+    }
+  }
+  // Every cone's neighbourhood was damaged, so every cone is a free vertex of the region.
+  std::size_t freeCones = 0;
+  for (VertexId sv : region.cut.cones) freeCones += region.vertexFree[sv];
+  EXPECT_EQ(freeCones, s.cut.cones.size());
+}
+
+// A flat mesh's cut: its boundary only (no seams, no combing), and a field along x.
+CutResult boundaryCut(const Topology& topology) {
+  CutResult cut;
+  cut.isCut.assign(topology.numCorners(), 0);
+  for (CornerId c = 0; c < topology.numCorners(); ++c) cut.isCut[c] = topology.isBoundaryEdge(c);
+  cut.faceRotation.assign(topology.numFaces(), 0);
+  cut.combedMatching.assign(topology.numCorners(), 0);
+  cut.cornerSeam.assign(topology.numCorners(), kInvalidId);
+  return cut;
+}
+CrossField constantField(const TriangleMesh& mesh) {
+  CrossField field;
+  field.direction.assign(mesh.numFaces(), Vec3d::UnitX());
+  return field;
+}
+
+TEST(RefineRegion, PinchedVertexGetsOneSubVertexPerFan) {
+  const TriangleMesh mesh = testing::gridMesh(4, 4);
+  const Topology topology = Topology::build(mesh.triangles, mesh.numVertices());
+  // Two faces touching the centre vertex (2, 2) = 12 only there: opposite quadrants.
+  const VertexId centre = 12;
+  std::vector<FaceId> faces;
+  std::vector<CornerId> fan;
+  topology.forEachCornerAround(centre, [&](CornerId c) { fan.push_back(c); });
+  ASSERT_EQ(fan.size(), 6u);
+  faces = {cornerFace(fan[0]), cornerFace(fan[3])};
+  std::sort(faces.begin(), faces.end());
+  const CrossField field = constantField(mesh);
+  const CutResult cut = boundaryCut(topology);
+  const RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
+  EXPECT_NO_THROW(region.topology.validate());
+  EXPECT_EQ(region.mesh.numVertices(), 6u);  // the centre twice
+  EXPECT_EQ(std::count(region.vertexOrigin.begin(), region.vertexOrigin.end(), centre), 2);
+  EXPECT_EQ(std::count(region.vertexFree.begin(), region.vertexFree.end(), 1), 0);
+  EXPECT_THROW(extractRegion(mesh, topology, field, cut, {faces[1], faces[0]}), InputError);
+}
+
+TEST(RefineRegion, WholeFlatSquareIsSolvedExactly) {
+  // Every vertex free (a boundary vertex with all its faces in the region is free): the
+  // component has no locked vertex and no rotation, so one value is pinned to the input; the
+  // constant field then gives the exact linear map whatever the input elsewhere.
+  const TriangleMesh mesh = testing::gridMesh(5, 5, 0.2);
+  const Topology topology = Topology::build(mesh.triangles, mesh.numVertices());
+  const CrossField field = constantField(mesh);
+  const CutResult cut = boundaryCut(topology);
+  std::vector<Vec2d> uv(topology.numCorners(), Vec2d(3.0, -1.0));  // collapsed everywhere
+  RefineOptions options;
+  options.edgeLength = 0.1;
+  const RefineResult result = refineNearCones(mesh, topology, field, cut, uv, {}, options);
+  EXPECT_EQ(result.stats.regionFaces, mesh.numFaces());
+  EXPECT_EQ(result.stats.freeVertices, mesh.numVertices());
+  EXPECT_EQ(result.stats.pinned, 1u);
+  applyRefinement(result, uv);
+  for (CornerId c = 0; c < uv.size(); ++c) {
+    const Vec3d p = mesh.position(mesh.triangles[c / 3][c % 3]);
+    const Vec2d& q0 = uv[0];
+    const Vec3d p0 = mesh.position(mesh.triangles[0][0]);
+    EXPECT_NEAR(uv[c].x() - q0.x(), (p.x() - p0.x()) / 0.1, 1e-9);
+    EXPECT_NEAR(uv[c].y() - q0.y(), (p.y() - p0.y()) / 0.1, 1e-9);
+  }
+}
+
+TEST(RefineRegion, BadInputIsRejected) {
+  const TriangleMesh mesh = testing::gridMesh(2, 2);
+  const Topology topology = Topology::build(mesh.triangles, mesh.numVertices());
+  const CrossField field = constantField(mesh);
+  const CutResult cut = boundaryCut(topology);
+  std::vector<Vec2d> uv(topology.numCorners(), Vec2d::Zero());
+  RefineOptions options;
+  EXPECT_THROW(refineNearCones(mesh, topology, field, cut, {}, {}, options), InputError);
+  EXPECT_THROW(refineNearCones(mesh, topology, field, cut, uv, {Complex(1, 0)}, options),
+               InputError);
+  options.markedFaces = {99};
+  EXPECT_THROW(refineNearCones(mesh, topology, field, cut, uv, {}, options), InputError);
+  options.markedFaces.clear();
+  options.edgeLength = 0.0;
+  EXPECT_THROW(refineNearCones(mesh, topology, field, cut, uv, {}, options), InputError);
+}
+
+// --- the voxloc solver ----------------------------------------------------------------------------
+
+struct SolverFigures {
+  SeamQuality seams;
+  MapQuality map;
+  SolverResult result;
+};
+
+SolverFigures runSolver(const Scene& s, ParamSolver solver, std::int32_t grid) {
+  SolverOptions options;
+  options.solver = solver;
+  options.gridResolution = grid;
+  SolverFigures out;
+  out.result = parameterizeMeshWithSolver(s.mesh(), s.topology(), s.field, s.cut, s.options, options);
+  out.seams = measureSeams(s.mesh(), s.topology(), s.cut, out.result.param.cornerUV);
+  out.map = measureMap(s.mesh(), out.result.param.cornerUV, &s.field, s.options.edgeLength);
+  return out;
+}
+
+TEST_F(RefineSphere, VoxLocIsSeamlessAndCloseToHat) {
+  const Scene& s = *scene_;
+  const MapQuality hat = measureMap(s.mesh(), s.hat.cornerUV, &s.field, s.options.edgeLength);
+  const SolverFigures vox = runSolver(s, ParamSolver::Vox, 32);
+  const SolverFigures voxloc = runSolver(s, ParamSolver::VoxLoc, 32);
+  EXPECT_TRUE(voxloc.seams.isSeamless()) << voxloc.seams.maxResidual;
+  EXPECT_LT(measureSeamsFromUV(s.mesh(), s.topology(), voxloc.result.param.cornerUV).maxResidual,
+            1e-6);
+  for (const Complex& t : voxloc.result.param.translations) EXPECT_LT(gaussianIntegerDistance(t), 1e-9);
+  EXPECT_TRUE(voxloc.result.refined);
+  EXPECT_GT(voxloc.result.refine.freeVertices, 0u);
+  EXPECT_LT(voxloc.result.refine.refinedVertexFraction, 0.5);
+  EXPECT_EQ(voxloc.map.flipped, 0u);
+  EXPECT_LE(voxloc.map.relativeGradientError, vox.map.relativeGradientError);
+  EXPECT_LE(voxloc.map.relativeGradientError, 1.25 * hat.relativeGradientError);
+  RecordProperty("hat", std::to_string(hat.relativeGradientError));
+  RecordProperty("vox", std::to_string(vox.map.relativeGradientError));
+  RecordProperty("voxloc", std::to_string(voxloc.map.relativeGradientError));
+}
+
+TEST(RefineCommand, ParamVoxLocReportsTheRefinement) {
+  GenerateOptions options;
+  options.kind = MeshKind::Sphere;
+  options.faces = 3000;
+  TriangleMesh mesh = generateMesh(options).mesh;
+  testing::TempDir dir;
+  writeMesh(dir.path("s.obj"), mesh);
+  std::string output;
+  const int code = testing::runSeamvox("param " + dir.path("s.obj") + " -o " + dir.path("o.obj") +
+                                           " --solver voxloc --grid 32 --cells 30 --quiet --report " +
+                                           dir.path("r.json"),
+                                       &output);
+  ASSERT_EQ(code, 0) << output;
+  const std::string report = testing::readFile(dir.path("r.json"));
+  EXPECT_NE(report.find("\"solver\": \"voxloc\""), std::string::npos) << report;
+  EXPECT_NE(report.find("\"refinedVertexFraction\""), std::string::npos) << report;
+  EXPECT_NE(report.find("\"localUnknowns\""), std::string::npos) << report;
+  EXPECT_NE(report.find("\"seamless\": true"), std::string::npos) << report;
+  EXPECT_EQ(testing::runSeamvox("check " + dir.path("o.obj"), &output), 0) << output;
+  EXPECT_NE(testing::runSeamvox("param " + dir.path("s.obj") + " -o " + dir.path("o.obj") +
+                                    " --solver nope --quiet"),
+            0);
+}
+
+}  // namespace
+}  // namespace seamvox
