@@ -219,6 +219,16 @@ TEST(Field, CurvatureAlignmentOnCylinder) {
   // The smoothest field alone is parallel (no cones) at whatever constant angle.
   const CrossField smooth = computeSmoothestField(s.mesh, s.topology);
   EXPECT_TRUE(computeSingularities(s.mesh, s.topology, smooth).cones.empty());
+  // A flat component has no curvature target: it keeps its (parallel) smoothest field.
+  const Surface two = makeSurface(testing::concatMeshes({testing::cylinderMesh(24, 8), testing::gridMesh(6, 5)}));
+  const CrossField both = computeSmoothestField(two.mesh, two.topology, options);
+  const FaceId gridStart = two.mesh.numFaces() - 60;
+  for (FaceId f = 0; f < two.mesh.numFaces(); ++f) {
+    ASSERT_TRUE(both.direction[f].allFinite());
+    if (f > gridStart) {
+      EXPECT_NEAR(std::cos(4 * std::acos(std::clamp(both.direction[f].dot(both.direction[gridStart]), -1.0, 1.0))), 1.0, 1e-6);
+    }
+  }
 }
 
 TEST(Field, SeveralComponentsEachGetAField) {
