@@ -143,11 +143,11 @@ int runParam(Args& args) {
               static_cast<unsigned long long>(map.flipped),
               static_cast<unsigned long long>(map.collapsed), seamless ? "seamless" : "NOT seamless");
   if (solved.refined) {
-    std::printf("refined %u vertices (%.3f%%) in %llu faces: %u local unknowns, factor %.1f MB, "
-                "%.2f s\n",
+    std::printf("refined %u vertices (%.3f%%) in %llu faces: %u local unknowns (%u translations), "
+                "factor %.1f MB, %.2f s\n",
                 refine.freeVertices, 100.0 * refine.refinedVertexFraction,
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
-                refine.factorBytes / 1048576.0, refine.secondsTotal);
+                refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
   std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", secondsTotal, secondsField,
               secondsCut, secondsParam);
@@ -205,6 +205,7 @@ int runParam(Args& args) {
       j.key("flippedFaces").value(refine.flippedFaces);
       j.key("rings").value(static_cast<std::uint64_t>(solverOptions.refine.rings));
       j.key("localUnknowns").value(static_cast<std::uint64_t>(refine.unknowns));
+      j.key("localTranslations").value(static_cast<std::uint64_t>(refine.freeTranslations));
       j.key("localNonzeros").value(refine.systemNonzeros);
       j.key("factorNonzeros").value(refine.factorNonzeros);
       j.key("factorBytes").value(refine.factorBytes);
