@@ -23,7 +23,7 @@ struct VoxelBasisOptions {
   /// voxel units). Restricted B-splines are linearly dependent on surfaces parallel to grid
   /// planes (and nearly so on flat regions); this tiny term makes the system definite. 0 = off
   /// (pure surface integrals). Rows still sum to zero; linear maps change by O(weight).
-  double regularization = 1e-9;
+  double regularization = 1e-6;
   ProgressFn progress;
 };
 

@@ -308,7 +308,7 @@ TEST(HatCommand, ParamThenCheck) {
   if (bunny.empty()) GTEST_SKIP() << testing::missingSharedMessage("bunny.off");
   testing::TempDir dir;
   std::string log;
-  ASSERT_EQ(testing::runSeamvox("param '" + bunny + "' -o '" + dir.path("uv.obj") + "' --cells 60 --report '" +
+  ASSERT_EQ(testing::runSeamvox("param '" + bunny + "' -o '" + dir.path("uv.obj") + "' --solver hat --cells 60 --report '" +
                                     dir.path("r.json") + "' --quiet",
                                 &log),
             0)
