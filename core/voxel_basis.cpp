@@ -58,28 +58,6 @@ Vec3d combedDirection(const TriangleMesh& mesh, const CrossField& field, const C
   return u;
 }
 
-// int over the unit cube of <grad phi_a, grad phi_b> for the 8 trilinear B-splines (packed).
-std::array<double, 36> unitCubeStiffness() {
-  const double mass[2][2] = {{1.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 3}};
-  const double stiff[2][2] = {{1.0, -1.0}, {-1.0, 1.0}};
-  std::array<double, 36> out{};
-  for (int a = 0; a < 8; ++a) {
-    for (int b = a; b < 8; ++b) {
-      double sum = 0.0;
-      for (int d = 0; d < 3; ++d) {
-        double term = 1.0;
-        for (int x = 0; x < 3; ++x) {
-          const int i = a >> x & 1, j = b >> x & 1;
-          term *= x == d ? stiff[i][j] : mass[i][j];
-        }
-        sum += term;
-      }
-      out[packedIndex(a, b)] = sum;
-    }
-  }
-  return out;
-}
-
 struct SeamLink {
   std::uint32_t left, right, seam;  // element-function nodes 8 e + k
 };
@@ -186,20 +164,12 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
         if (n.squaredNorm() == 0.0) continue;  // zero-area face: nothing to integrate
         const ClipPolygon piece = clipTriangleToVoxel(faceGridCoords(mesh, grid_, f), voxelCoords_[v]);
         addFragmentIntegrals(piece, voxelCoords_[v], grid_.voxelSize, n, u, options.edgeLength,
-                             records_[fragmentElement_[i]]);
+                             records_[fragmentElement_[i]], options.regularization);
       }
     }
   });
   voxelFragmentStart = {};
   voxelFragments = {};
-  if (options.regularization > 0.0) {
-    const std::array<double, 36> cube = unitCubeStiffness();
-    const double toGrid = 1.0 / (grid_.voxelSize * grid_.voxelSize);
-    for (VoxelIntegrals& r : records_) {
-      const double weight = options.regularization * r.area * toGrid;
-      for (int i = 0; i < 36; ++i) r.stiffness[i] += weight * cube[i];
-    }
-  }
   reportProgress(options.progress, "voxel basis", 0.5);
 
   // Domains: element functions (nodes 8 e + k) of one grid corner joined inside its support.

@@ -19,11 +19,12 @@ struct VoxelBasisOptions {
   std::int32_t gridResolution = 128;  ///< voxels per axis: 64, 128, 256 or 512 (any 2^D, 4..1024)
   double edgeLength = 1.0;            ///< h: one unit of (u, v) is h on the surface
   std::uint32_t chunkFaces = 1u << 14;  ///< triangles per parallel clipping task
-  /// Weight of a volumetric Dirichlet term added to each element's stiffness (times its area in
-  /// voxel units). Restricted B-splines are linearly dependent on surfaces parallel to grid
-  /// planes (and nearly so on flat regions); this tiny term makes the system definite. 0 = off
-  /// (pure surface integrals). Rows still sum to zero; linear maps change by O(weight).
-  double regularization = 1e-6;
+  /// Weight of the normal-derivative term int (n . grad phi_a)(n . grad phi_b) added to each
+  /// element's stiffness. Restricted B-splines are linearly dependent on planes (and nearly so on
+  /// flat regions, e.g. big triangles that fill a scan's holes); this term makes the system
+  /// definite. It vanishes on maps whose gradient is tangent (linear maps on planes, maps along a
+  /// cylinder's axis stay exact). 0 = off (pure surface integrals). Rows still sum to zero.
+  double regularization = 1e-5;
   ProgressFn progress;
 };
 

@@ -214,7 +214,8 @@ void trilinearWeights(const Vec3d& t, double weights[8]) {
 }
 
 void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
-                          const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc) {
+                          const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc,
+                          double normalWeight) {
   if (fragment.size < 3) return;
   const Vec3d base(voxel[0], voxel[1], voxel[2]);
   const Vec3d v = n.cross(u);
@@ -230,16 +231,20 @@ void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, 
       const double w = q.w * area;
       // Tangential gradients of the 8 B-splines.
       Vec3d grad[8];
+      double normal[8];
       for (int k = 0; k < 8; ++k) {
         const double fx = (k & 1) ? t[0] : 1.0 - t[0], dx = (k & 1) ? 1.0 : -1.0;
         const double fy = (k & 2) ? t[1] : 1.0 - t[1], dy = (k & 2) ? 1.0 : -1.0;
         const double fz = (k & 4) ? t[2] : 1.0 - t[2], dz = (k & 4) ? 1.0 : -1.0;
         const Vec3d g(dx * fy * fz, fx * dy * fz, fx * fy * dz);
-        grad[k] = g - n * n.dot(g);
+        normal[k] = n.dot(g);
+        grad[k] = g - n * normal[k];
       }
       int idx = 0;
       for (int a = 0; a < 8; ++a) {
-        for (int b = a; b < 8; ++b) acc.stiffness[idx++] += w * grad[a].dot(grad[b]);
+        for (int b = a; b < 8; ++b) {
+          acc.stiffness[idx++] += w * (grad[a].dot(grad[b]) + normalWeight * normal[a] * normal[b]);
+        }
         acc.rhs[a] += w * rhsScale * std::complex<double>(grad[a].dot(u), grad[a].dot(v));
       }
     }

@@ -86,8 +86,12 @@ inline int packedIndex(int a, int b) {
 /// Adds the exact integrals of the voxel's 8 B-splines over a planar fragment (grid coordinates,
 /// unit normal n of its triangle) to acc: L_ab = int <grad_M phi_a, grad_M phi_b>,
 /// rhs_a = int <grad_M phi_a, u> + i <grad_M phi_a, n x u>, u scaled by 1 / edgeLength.
+/// With normalWeight > 0, L_ab also gets normalWeight * int (n . grad phi_a)(n . grad phi_b): it
+/// removes the null space of B-splines restricted to a surface (they are linearly dependent on
+/// planes) without touching maps whose 3D gradient is tangent (linear maps on planes stay exact).
 /// Fan triangulation with a degree-4 exact triangle rule (the integrands have degree <= 4).
 void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
-                          const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc);
+                          const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc,
+                          double normalWeight = 0.0);
 
 }  // namespace seamvox
