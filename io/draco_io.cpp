@@ -1,17 +1,75 @@
-// Draco (.drc) reading and writing. Positions are float32 and UVs float64 per corner, both
-// stored without quantization: seam checks need UVs exact to 1e-6 on values of thousands, which
-// even 30-bit quantization does not give. Draco merges vertices with equal positions.
+// Draco (.drc) reading and writing. Positions are float32 (lossless, or quantized on request).
+// UVs are rounded to a lattice of step 2^-k grid units with an integer origin and stored with
+// Draco's own quantization, chosen so that every Draco decoder returns the lattice values exactly:
+// the range fits 24 bits, so the float32 values, the quantizer's delta 2^-k and the decoder's
+// q * delta + origin are all exact. Rounding to such a lattice commutes with integer translations
+// and quarter turns (up to ties), so q' = r q + t across a seam survives; a corner moves by at
+// most 2^-k / sqrt(2). UVs too large for that range are stored losslessly as float64.
+// Draco merges vertices with equal positions.
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
 #include <draco/mesh/triangle_soup_mesh_builder.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "core/errors.h"
 #include "io/detail_mesh_io.h"
 
-namespace seamvox::detail {
+namespace seamvox {
+namespace {
+
+/// Largest magnitude (in lattice steps) a float32 holds exactly.
+constexpr double kExactFloatSteps = 16777216.0;  // 2^24
+
+/// The lattice a Draco write rounds UVs to: step 2^-bits, per-component integer origin, and the
+/// quantization bits covering the range; bits == 0 when UVs are stored losslessly.
+struct UVLattice {
+  int bits = 0;
+  int quantizationBits = 0;
+  float origin[2] = {0.0f, 0.0f};
+  double step = 0.0;
+};
+
+UVLattice chooseUVLattice(const TriangleMesh& mesh, const WriteOptions& options) {
+  UVLattice lattice;
+  if (!mesh.hasUV() || options.dracoUVBits <= 0) return lattice;
+  double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+  for (const Vec2d& uv : mesh.cornerUV) {
+    if (!std::isfinite(uv[0]) || !std::isfinite(uv[1])) return lattice;
+    for (int c = 0; c < 2; ++c) {
+      lo[c] = std::min(lo[c], uv[c]);
+      hi[c] = std::max(hi[c], uv[c]);
+    }
+  }
+  const double scale = std::ldexp(1.0, options.dracoUVBits);
+  double steps = 0.0, magnitude = 0.0;
+  for (int c = 0; c < 2; ++c) {
+    lo[c] = std::floor(lo[c]);
+    steps = std::max(steps, std::ceil((hi[c] - lo[c]) * scale));
+    magnitude = std::max({magnitude, std::abs(lo[c]), std::abs(hi[c]) + 1.0});
+  }
+  int quantizationBits = 1;
+  while (quantizationBits < 24 && std::ldexp(1.0, quantizationBits) - 1.0 < steps) ++quantizationBits;
+  if (std::ldexp(1.0, quantizationBits) - 1.0 < steps || magnitude * scale >= kExactFloatSteps) {
+    return lattice;
+  }
+  lattice.bits = options.dracoUVBits;
+  lattice.quantizationBits = quantizationBits;
+  lattice.origin[0] = static_cast<float>(lo[0]);
+  lattice.origin[1] = static_cast<float>(lo[1]);
+  lattice.step = 1.0 / scale;
+  return lattice;
+}
+
+}  // namespace
+
+int dracoUVBitsFor(const TriangleMesh& mesh, const WriteOptions& options) {
+  return options.writeUV ? chooseUVLattice(mesh, options).bits : 0;
+}
+
+namespace detail {
 
 TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
   InputFile in(path);  // missing file / folder errors, and the size
@@ -40,8 +98,10 @@ TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
   // Vertices are the distinct position values; points (position + UV pairs) map onto them.
   mesh.positions.resize(position->size());
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    float p[3];
-    position->ConvertValue<float>(draco::AttributeValueIndex(static_cast<std::uint32_t>(v)), 3, p);
+    float p[3] = {0.0f, 0.0f, 0.0f};
+    if (!position->ConvertValue<float>(draco::AttributeValueIndex(static_cast<std::uint32_t>(v)), 3, p)) {
+      throw InputError(path + ": vertex " + std::to_string(v) + ": unreadable position");
+    }
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
       throw InputError(path + ": vertex " + std::to_string(v) + ": coordinate is NaN or infinite");
     }
@@ -58,8 +118,10 @@ TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
       }
       mesh.triangles[f][k] = v;
       if (!texcoord) continue;
-      double t[2];
-      texcoord->ConvertValue<double>(texcoord->mapped_index(face[k]), 2, t);
+      double t[2] = {0.0, 0.0};
+      if (!texcoord->ConvertValue<double>(texcoord->mapped_index(face[k]), 2, t)) {
+        throw InputError(path + ": face " + std::to_string(f) + ": unreadable texture coordinate");
+      }
       mesh.cornerUV[3 * f + k] = Vec2d(t[0], t[1]);
     }
   }
@@ -71,30 +133,56 @@ void writeDraco(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& 
   if (mesh.triangles.size() >= static_cast<std::size_t>(std::numeric_limits<int>::max())) {
     throw InputError(file.path() + ": too many faces for Draco");
   }
+  if (options.dracoPositionBits < 0 || options.dracoPositionBits > 30) {
+    throw InputError(file.path() + ": Draco position bits must be between 0 (lossless) and 30");
+  }
+  const UVLattice lattice = withUV ? chooseUVLattice(mesh, options) : UVLattice{};
   draco::TriangleSoupMeshBuilder builder;
   builder.Start(static_cast<int>(mesh.triangles.size()));
   const int position = builder.AddAttribute(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32);
-  const int texcoord =
-      withUV ? builder.AddAttribute(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT64) : -1;
+  const int texcoord = !withUV ? -1
+                       : builder.AddAttribute(draco::GeometryAttribute::TEX_COORD, 2,
+                                              lattice.bits ? draco::DT_FLOAT32 : draco::DT_FLOAT64);
+  const double scale = lattice.bits ? 1.0 / lattice.step : 0.0;
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
     const Triangle& t = mesh.triangles[f];
     const draco::FaceIndex face(static_cast<std::uint32_t>(f));
     builder.SetAttributeValuesForFace(position, face, mesh.positions[t[0]].data(),
                                       mesh.positions[t[1]].data(), mesh.positions[t[2]].data());
-    if (withUV) {
-      builder.SetAttributeValuesForFace(texcoord, face, mesh.cornerUV[3 * f].data(),
-                                        mesh.cornerUV[3 * f + 1].data(), mesh.cornerUV[3 * f + 2].data());
+    if (!withUV) continue;
+    const Vec2d* uv = &mesh.cornerUV[3 * f];
+    if (lattice.bits) {
+      // Lattice values: exact in float32 by the choice of the lattice.
+      float rounded[3][2];
+      for (int k = 0; k < 3; ++k) {
+        for (int c = 0; c < 2; ++c) {
+          rounded[k][c] = static_cast<float>(std::nearbyint(uv[k][c] * scale) * lattice.step);
+        }
+      }
+      builder.SetAttributeValuesForFace(texcoord, face, rounded[0], rounded[1], rounded[2]);
+    } else {
+      builder.SetAttributeValuesForFace(texcoord, face, uv[0].data(), uv[1].data(), uv[2].data());
     }
   }
   const std::unique_ptr<draco::Mesh> built = builder.Finalize();
   if (!built) throw InputError(file.path() + ": Draco could not build the mesh");
 
   draco::Encoder encoder;
-  encoder.SetSpeedOptions(5, 5);  // no quantization is set: attributes are stored losslessly
+  encoder.SetSpeedOptions(5, 5);
+  if (options.dracoPositionBits > 0) {
+    encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.dracoPositionBits);
+  }
+  if (lattice.bits) {
+    // delta = range / (2^bits - 1) = 2^-k exactly: every quantized value is a lattice index.
+    const float range = static_cast<float>((std::ldexp(1.0, lattice.quantizationBits) - 1.0) * lattice.step);
+    encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::TEX_COORD,
+                                             lattice.quantizationBits, 2, lattice.origin, range);
+  }
   draco::EncoderBuffer buffer;
   const draco::Status status = encoder.EncodeMeshToBuffer(*built, &buffer);
   if (!status.ok()) throw IoError(file.path() + ": Draco encoding failed: " + status.error_msg_string());
   file.write(buffer.data(), buffer.size());
 }
 
-}  // namespace seamvox::detail
+}  // namespace detail
+}  // namespace seamvox

@@ -49,6 +49,8 @@ int runSeamvox(const std::string& arguments, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+std::string seamvoxBinary() { return SEAMVOX_BINARY; }
+
 void writeFile(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary);
   out << bytes;

@@ -26,6 +26,9 @@ class TempDir {
 /// and fills output with stdout+stderr.
 int runSeamvox(const std::string& arguments, std::string* output = nullptr);
 
+/// Path of the seamvox binary under test (for commands that wrap it, e.g. mpirun).
+std::string seamvoxBinary();
+
 /// Writes bytes to a file (for malformed-input tests).
 void writeFile(const std::string& path, const std::string& bytes);
 std::string readFile(const std::string& path);

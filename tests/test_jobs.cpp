@@ -1,0 +1,288 @@
+// The job runner: manifest parsing, the scheduling rule, tile welding and splitting, and
+// `seamvox jobs` end to end (failures recorded, resume, --force, tiles, MPI).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "core/clean.h"
+#include "core/errors.h"
+#include "core/generate.h"
+#include "core/metrics.h"
+#include "io/mesh_io.h"
+#include "stream/jobs.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::readFile;
+using testing::runSeamvox;
+using testing::TempDir;
+using testing::writeFile;
+namespace fs = std::filesystem;
+
+std::vector<std::string> fakeGlob(const std::string& pattern) {
+  if (pattern == "/data/scans/*.ply") return {"/data/scans/a.ply", "/data/scans/b.ply"};
+  if (pattern == "/data/site/t*.ply") return {"/data/site/t0.ply", "/data/site/t1.ply"};
+  if (pattern.find('*') != std::string::npos) return {};
+  return {pattern};
+}
+
+template <class E, class F>
+std::string messageOf(F&& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  }
+  return "(no exception)";
+}
+
+TEST(JobManifest, DirectivesDefaultsGlobsAndTiles) {
+  const std::string text =
+      "# nightly batch\n"
+      "output results\n"
+      "param --solver hat --cells 80\n"
+      "mesh scans/*.ply\n"
+      "format obj\n"
+      "mesh /abs/c.off : --greedy   # per-job option\n"
+      "param --solver vox\n"
+      "tiles site site/t*.ply : --grid 64\n";
+  const Manifest m = parseManifest(text, "m.txt", "/data", fakeGlob);
+  EXPECT_EQ(m.outputDir, "/data/results");
+  ASSERT_EQ(m.jobs.size(), 4u);
+  EXPECT_EQ(m.jobs[0].name, "a");
+  EXPECT_EQ(m.jobs[1].inputs, std::vector<std::string>{"/data/scans/b.ply"});
+  EXPECT_EQ(m.jobs[1].format, "drc");
+  EXPECT_EQ(m.jobs[1].paramArgs, (std::vector<std::string>{"--solver", "hat", "--cells", "80"}));
+  EXPECT_EQ(m.jobs[2].name, "c");
+  EXPECT_EQ(m.jobs[2].format, "obj");
+  EXPECT_EQ(m.jobs[2].paramArgs, (std::vector<std::string>{"--solver", "hat", "--cells", "80", "--greedy"}));
+  EXPECT_EQ(m.jobs[2].line, 6u);
+  EXPECT_TRUE(m.jobs[3].tiled);
+  EXPECT_EQ(m.jobs[3].name, "site");
+  EXPECT_EQ(m.jobs[3].inputs, (std::vector<std::string>{"/data/site/t0.ply", "/data/site/t1.ply"}));
+  EXPECT_EQ(m.jobs[3].paramArgs, (std::vector<std::string>{"--solver", "vox", "--grid", "64"}));
+  EXPECT_EQ(parseManifest("mesh x.ply\n", "m", "/d", fakeGlob).outputDir, "/d/out");
+}
+
+TEST(JobManifest, ErrorsNameTheLine) {
+  auto parse = [](const std::string& text) { return parseManifest(text, "m.txt", "/d", fakeGlob); };
+  EXPECT_THAT(messageOf<InputError>([&] { parse("mesh a.ply\nbake x\n"); }), HasSubstr("m.txt:2: unknown directive 'bake'"));
+  EXPECT_THAT(messageOf<InputError>([&] { parse("mesh nothing/*.ply\n"); }), HasSubstr("m.txt:1: no file matches"));
+  EXPECT_THAT(messageOf<InputError>([&] { parse("mesh a.ply : -o x.obj\n"); }), HasSubstr("set by the job runner"));
+  EXPECT_THAT(messageOf<InputError>([&] { parse("format stl\n"); }), HasSubstr("unknown format"));
+  EXPECT_THAT(messageOf<InputError>([&] { parse("mesh a.ply\nmesh other/a.off\n"); }),
+              HasSubstr("m.txt:2: two jobs named 'a'"));
+  EXPECT_THAT(messageOf<InputError>([&] { parse("tiles site\n"); }), HasSubstr("needs a name and at least one tile"));
+}
+
+TEST(JobSchedule, FirstPendingJobThatFitsTheBudget) {
+  EXPECT_EQ(pickNextJob({5, 3}, 0, 10), 0);
+  EXPECT_EQ(pickNextJob({5, 3}, 6, 10), 1);  // the first does not fit next to the running 6
+  EXPECT_EQ(pickNextJob({5, 5}, 6, 10), -1);
+  EXPECT_EQ(pickNextJob({}, 0, 10), -1);
+  EXPECT_EQ(pickNextJob({4}, 12, 10), -1);  // over budget already (no underflow)
+  // Estimates grow with faces and, for the voxel solvers, with the grid.
+  const std::vector<std::string> hat = {"--solver", "hat"}, vox = {"--grid", "256"};
+  EXPECT_LT(estimateJobPeakBytes(1000, hat), estimateJobPeakBytes(1000000, hat));
+  EXPECT_LT(estimateJobPeakBytes(1000, hat), estimateJobPeakBytes(1000, {}));
+  EXPECT_LT(estimateJobPeakBytes(1000, {}), estimateJobPeakBytes(1000, vox));
+}
+
+/// A generated sphere cut into three tiles by face centroid x, each tile with its own vertices.
+std::vector<TriangleMesh> cutIntoTiles(const TriangleMesh& mesh) {
+  std::vector<TriangleMesh> tiles(3);
+  std::vector<std::vector<VertexId>> map(3, std::vector<VertexId>(mesh.numVertices(), kInvalidId));
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    double x = 0.0;
+    for (const VertexId v : mesh.triangles[f]) x += mesh.positions[v][0] / 3.0;
+    const int t = x < -0.3 ? 0 : x < 0.3 ? 1 : 2;
+    Triangle tri;
+    for (int k = 0; k < 3; ++k) {
+      VertexId& m = map[t][mesh.triangles[f][k]];
+      if (m == kInvalidId) {
+        m = tiles[t].numVertices();
+        tiles[t].positions.push_back(mesh.positions[mesh.triangles[f][k]]);
+      }
+      tri[k] = m;
+    }
+    tiles[t].triangles.push_back(tri);
+  }
+  return tiles;
+}
+
+TriangleMesh generatedSphere(std::uint64_t faces) {
+  GenerateOptions options;
+  options.faces = faces;
+  return generateMesh(options).mesh;
+}
+
+TEST(JobTiles, WeldThenSplitRestoresEveryTile) {
+  const TriangleMesh mesh = generatedSphere(3000);
+  const std::vector<TriangleMesh> tiles = cutIntoTiles(mesh);
+  for (const TriangleMesh& t : tiles) ASSERT_GT(t.numFaces(), 100u);
+  const WeldedTiles welded = weldTiles(tiles);
+  EXPECT_EQ(welded.mesh.numFaces(), mesh.numFaces());
+  EXPECT_EQ(welded.mesh.numVertices(), mesh.numVertices()) << "every border vertex welded once";
+  EXPECT_GT(welded.weldedVertices, 0u);
+  // A closed surface again: cleaning finds no boundary.
+  const CleanResult clean = cleanMesh(welded.mesh);
+  EXPECT_EQ(clean.report.outputFaces, mesh.numFaces());
+
+  TriangleMesh withUV = welded.mesh;
+  for (FaceId f = 0; f < withUV.numFaces(); ++f) {
+    for (int k = 0; k < 3; ++k) withUV.cornerUV.emplace_back(f, k);
+  }
+  std::swap(withUV.triangles.front(), withUV.triangles.back());  // order and rotation do not matter
+  std::swap(withUV.cornerUV[0], withUV.cornerUV[3 * (withUV.numFaces() - 1)]);
+  const SplitTiles split = splitTiles(withUV, tiles);
+  EXPECT_EQ(split.missingFaces, 0u);
+  for (std::size_t t = 0; t < tiles.size(); ++t) {
+    EXPECT_EQ(split.tiles[t].numFaces(), tiles[t].numFaces());
+    EXPECT_EQ(split.tiles[t].numVertices(), tiles[t].numVertices());
+    EXPECT_EQ(split.tiles[t].cornerUV.size(), 3u * tiles[t].numFaces());
+  }
+  TriangleMesh stranger = withUV;
+  stranger.positions[stranger.triangles[7][0]] += Vec3f(0.5f, 0.0f, 0.0f);
+  EXPECT_THROW(splitTiles(stranger, tiles), InputError);
+}
+
+/// A folder with three generated meshes, one corrupt file and a manifest over them.
+struct Batch {
+  TempDir dir;
+  Batch() {
+    fs::create_directories(dir.path("in"));
+    std::string log;
+    const char* kinds[] = {"sphere", "torus", "sphere"};
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(runSeamvox(std::string("gen ") + kinds[i] + " --faces 3000 --seed " + std::to_string(i + 1) +
+                               " -o " + dir.path("in/m" + std::to_string(i) + ".ply"), &log), 0) << log;
+    }
+    writeFile(dir.path("in/broken.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nend_header\n1 2\n");
+    writeFile(dir.path("jobs.txt"), "output out\nparam --solver hat --cells 30\nmesh in/*.ply\n");
+  }
+  int run(const std::string& extra, std::string* log) {
+    return runSeamvox("jobs " + dir.path("jobs.txt") + " --quiet --workers 2 " + extra, log);
+  }
+};
+
+fs::file_time_type mtime(const std::string& path) { return fs::last_write_time(path); }
+
+TEST(JobsCommand, FailuresAreRecordedRerunsSkipAndForceRedoes) {
+  Batch batch;
+  std::string log, first;
+  EXPECT_EQ(batch.run("", &first), 6) << first;
+  EXPECT_THAT(first, HasSubstr("4 jobs: 1 failed"));
+  const std::string csv = readFile(batch.dir.path("out/summary.csv"));
+  EXPECT_THAT(csv, HasSubstr("\"broken\",failed"));
+  EXPECT_THAT(csv, HasSubstr("broken.ply"));  // the reader's message names the file
+  for (const char* name : {"m0", "m1", "m2"}) {
+    EXPECT_THAT(csv, HasSubstr(std::string("\"") + name + "\",done")) << csv;
+    const std::string output = batch.dir.path(std::string("out/") + name + ".drc");
+    ASSERT_TRUE(fs::exists(output));
+    const std::string report = readFile(batch.dir.path(std::string("out/") + name + ".json"));
+    EXPECT_THAT(report, HasSubstr("\"seamless\": true"));
+    EXPECT_THAT(report, HasSubstr("\"param\": {"));
+    EXPECT_EQ(runSeamvox("check " + output + " --tolerance 1e-4", &log), 0) << log;
+  }
+  EXPECT_FALSE(fs::exists(batch.dir.path("out/broken.json")));
+
+  const auto before = mtime(batch.dir.path("out/m1.drc"));
+  EXPECT_EQ(batch.run("", &log), 6) << log;
+  const std::string again = readFile(batch.dir.path("out/summary.csv"));
+  for (const char* name : {"m0", "m1", "m2"}) EXPECT_THAT(again, HasSubstr(std::string("\"") + name + "\",skipped"));
+  EXPECT_EQ(mtime(batch.dir.path("out/m1.drc")), before);
+
+  // A changed input is redone; the others stay skipped.
+  EXPECT_EQ(runSeamvox("gen sphere --faces 3000 --seed 9 -o " + batch.dir.path("in/m2.ply"), &log), 0);
+  EXPECT_EQ(batch.run("", &log), 6) << log;
+  EXPECT_THAT(readFile(batch.dir.path("out/summary.csv")), HasSubstr("\"m2\",done"));
+  EXPECT_THAT(readFile(batch.dir.path("out/summary.csv")), HasSubstr("\"m1\",skipped"));
+
+  fs::remove(batch.dir.path("in/broken.ply"));
+  EXPECT_EQ(batch.run("--force", &log), 0) << log;
+  for (const char* name : {"m0", "m1", "m2"}) {
+    EXPECT_THAT(readFile(batch.dir.path("out/summary.csv")), HasSubstr(std::string("\"") + name + "\",done"));
+  }
+  EXPECT_NE(mtime(batch.dir.path("out/m1.drc")), before);
+}
+
+TEST(JobsCommand, JobsOverTheBudgetFailWithoutRunning) {
+  Batch batch;
+  std::string log;
+  EXPECT_EQ(batch.run("--memory-budget 0.001", &log), 6) << log;
+  const std::string csv = readFile(batch.dir.path("out/summary.csv"));
+  EXPECT_THAT(csv, HasSubstr("exceeds the memory budget"));
+  EXPECT_FALSE(fs::exists(batch.dir.path("out/m0.drc")));
+}
+
+TEST(JobsCommand, TilesAreParameterizedAsOneSeamlessSurface) {
+  TempDir dir;
+  const TriangleMesh mesh = generatedSphere(3000);
+  const std::vector<TriangleMesh> tiles = cutIntoTiles(mesh);
+  fs::create_directories(dir.path("site"));
+  for (std::size_t t = 0; t < tiles.size(); ++t) writeMesh(dir.path("site/tile" + std::to_string(t) + ".ply"), tiles[t]);
+  writeFile(dir.path("jobs.txt"), "tiles site site/tile*.ply : --solver hat --cells 30\n");
+  std::string log;
+  ASSERT_EQ(runSeamvox("jobs " + dir.path("jobs.txt") + " --quiet", &log), 0) << log;
+
+  // Reassemble the three Draco outputs: the map must be seamless across the tile borders too.
+  ReadOptions options;
+  options.readUV = true;
+  TriangleMesh whole;
+  for (std::size_t t = 0; t < tiles.size(); ++t) {
+    const TriangleMesh part = readMesh(dir.path("out/site/tile" + std::to_string(t) + ".drc"), options);
+    EXPECT_EQ(part.numFaces(), tiles[t].numFaces());
+    const VertexId offset = whole.numVertices();
+    whole.positions.insert(whole.positions.end(), part.positions.begin(), part.positions.end());
+    for (Triangle tri : part.triangles) {
+      for (VertexId& v : tri) v += offset;
+      whole.triangles.push_back(tri);
+    }
+    whole.cornerUV.insert(whole.cornerUV.end(), part.cornerUV.begin(), part.cornerUV.end());
+  }
+  CleanOptions weld;
+  weld.weldVertices = true;
+  const CleanResult clean = cleanMesh(std::move(whole), weld);
+  EXPECT_EQ(clean.mesh.numFaces(), mesh.numFaces());
+  EXPECT_EQ(clean.mesh.numVertices(), mesh.numVertices());
+  const SeamQuality seams = measureSeamsFromUV(clean.mesh, clean.topology, clean.mesh.cornerUV);
+  EXPECT_LE(seams.maxResidual, 1e-4);
+  EXPECT_LE(seams.maxIntegerDistance, 1e-4);
+  EXPECT_THAT(readFile(dir.path("out/site.json")), HasSubstr("\"kind\": \"tiles\""));
+}
+
+TEST(JobsCommand, MpiRanksShareTheJobs) {
+  Batch batch;
+  fs::remove(batch.dir.path("in/broken.ply"));
+  std::string log;
+  // Started without mpirun, --mpi either explains that MPI is missing or that it needs 2 ranks.
+  EXPECT_NE(batch.run("--mpi", &log), 0);
+  if (log.find("built without MPI") != std::string::npos) GTEST_SKIP() << "seamvox was built without MPI";
+  EXPECT_THAT(log, HasSubstr("at least 2 ranks"));
+  if (std::system("command -v mpirun > /dev/null 2>&1") != 0) GTEST_SKIP() << "mpirun is not installed";
+  // Root may run mpirun in containers only when asked to.
+  const std::string mpirun =
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np 3 ";
+  const std::string command = mpirun + testing::seamvoxBinary() + " jobs " + batch.dir.path("jobs.txt") +
+                              " --quiet 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  char buffer[4096];
+  std::string output;
+  std::size_t n;
+  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) output.append(buffer, n);
+  const int status = pclose(pipe);
+  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+  EXPECT_THAT(output, HasSubstr("3 jobs: 0 failed"));
+  const std::string csv = readFile(batch.dir.path("out/summary.csv"));
+  for (const char* name : {"m0", "m1", "m2"}) EXPECT_THAT(csv, HasSubstr(std::string("\"") + name + "\",done")) << csv;
+}
+
+}  // namespace
+}  // namespace seamvox
