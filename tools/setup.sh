@@ -8,7 +8,8 @@ cd "$(dirname "$0")/.."
 # libopenblas0-pthread is not linked directly: it replaces Debian's reference BLAS/LAPACK behind
 # CHOLMOD's supernodal factorization (about 2x faster factorizations measured here).
 packages=(cmake make g++ libopenvdb-dev libboost-iostreams-dev zlib1g-dev libtbb-dev
-  libeigen3-dev libsuitesparse-dev libdraco-dev libgtest-dev libopenblas0-pthread)
+  libeigen3-dev libsuitesparse-dev libdraco-dev libgtest-dev libopenblas0-pthread
+  libopenmpi-dev openmpi-bin)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
