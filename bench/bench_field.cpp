@@ -15,6 +15,7 @@
 #include "core/generate.h"
 #include "io/mesh_io.h"
 #include "stream/memory.h"
+#include "stream/blas_threads.h"
 
 namespace {
 
@@ -31,6 +32,7 @@ void report(const char* stage, Clock::time_point& mark) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  seamvox::limitBlasThreads(1);
   using namespace seamvox;
   if (argc < 2) {
     std::fprintf(stderr, "usage: bench_field MESH | --generate KIND FACES  [--curvature W]\n");

@@ -22,6 +22,7 @@
 #include "core/subdivide.h"
 #include "io/mesh_io.h"
 #include "stream/memory.h"
+#include "stream/blas_threads.h"
 
 using namespace seamvox;
 
@@ -110,6 +111,7 @@ void runCase(const std::string& label, const TriangleMesh& inputMesh, const Cros
 }  // namespace
 
 int main(int argc, char** argv) {
+  seamvox::limitBlasThreads(1);
   std::string dir = "../shared/data";
   int levels = 4;
   double cells = 100;

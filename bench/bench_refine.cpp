@@ -20,6 +20,7 @@
 #include "io/mesh_io.h"
 #include "stream/memory.h"
 #include "stream/voxel_grid.h"
+#include "stream/blas_threads.h"
 
 using namespace seamvox;
 
@@ -118,6 +119,7 @@ void runCase(const std::string& label, const TriangleMesh& input, const CrossFie
 }  // namespace
 
 int main(int argc, char** argv) {
+  seamvox::limitBlasThreads(1);
   std::string dir = "../shared/data";
   Options options;
   int levels = 1;

@@ -17,6 +17,7 @@
 #include "core/topology.h"
 #include "stream/memory.h"
 #include "stream/voxel_grid.h"
+#include "stream/blas_threads.h"
 
 namespace {
 
@@ -31,6 +32,7 @@ double mib(std::uint64_t bytes) { return bytes / 1048576.0; }
 }  // namespace
 
 int main(int argc, char** argv) {
+  seamvox::limitBlasThreads(1);
   const std::uint64_t faces = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 2000000;
   const int threads = argc > 2 ? std::atoi(argv[2]) : 2;
   const std::string kind = argc > 3 ? argv[3] : "sphere";

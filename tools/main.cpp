@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/errors.h"
+#include "stream/blas_threads.h"
 #include "tools/cli.h"
 
 namespace {
@@ -55,6 +56,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<tbb::global_control> threads;
     const std::int64_t n = args.integer("threads", 0);
     if (n < 0 || n > 4096) throw cli::UsageError("--threads must be between 1 and 4096");
+    limitBlasThreads(1);
     if (n > 0) {
       threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                       static_cast<std::size_t>(n));
