@@ -31,8 +31,18 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     out.param = parameterizeMesh(mesh, topology, field, cut, options);
     return out;
   }
-  VoxelParamResult vox = parameterizeMeshVoxel(mesh, topology, field, cut, options,
-                                               solverOptions.gridResolution);
+  VoxelParamResult vox;
+  try {
+    vox = parameterizeMeshVoxel(mesh, topology, field, cut, options, solverOptions.gridResolution);
+  } catch (const SolverError& e) {
+    // The voxel system could not be factored: the hat solver gives the same kind of map.
+    out.fallbackReason = e.what();
+    out.solver = ParamSolver::Hat;
+    out.param = parameterizeMesh(mesh, topology, field, cut, options);
+    return out;
+  }
+  out.regularization = vox.regularization;
+  out.failedAttempts = vox.failedAttempts;
   out.param = std::move(vox.param);
   out.basisStats = vox.basisStats;
   out.determinedBasis = vox.determinedBasis;

@@ -36,10 +36,17 @@ struct SolverResult {
   std::uint64_t markedFaces = 0;  ///< faces of marked voxel basis functions
   bool refined = false;           ///< voxloc ran the local refinement
   RefineStats refine;
+  /// vox/voxloc: regularization the voxel solve succeeded with and failed factorizations before.
+  double regularization = 0.0;
+  std::uint32_t failedAttempts = 0;
+  /// Set when the voxel system could not be factored and the hat solver ran instead (solver is
+  /// then Hat): CHOLMOD's message. Reported, never silent.
+  std::string fallbackReason;
 };
 
 /// Runs the chosen solver on a mesh cut to a disk per component (cutToDisk). Throws like
-/// parameterizeMesh and refineNearCones.
+/// parameterizeMesh and refineNearCones. vox and voxloc fall back to the hat solver when the
+/// voxel system cannot be factored (see SolverResult::fallbackReason).
 SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology& topology,
                                         const CrossField& field, const CutResult& cut,
                                         const ParamOptions& options,

@@ -62,7 +62,13 @@ struct VoxelParamResult {
   std::vector<FaceId> markedFaces;
   VoxelBasisStats basisStats;
   std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
+  /// Normal-derivative regularization the solve succeeded with (VoxelBasisOptions), and how many
+  /// factorizations failed before (nearly dependent B-splines on coarse or thin regions).
+  double regularization = 0.0;
+  std::uint32_t failedAttempts = 0;
 };
+/// The Vox solver. When CHOLMOD finds the system indefinite, the basis is rebuilt with a 100x
+/// stronger regularization (up to 1e-3) before giving up with the last SolverError.
 VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology& topology,
                                        const CrossField& field, const CutResult& cut,
                                        const ParamOptions& options,

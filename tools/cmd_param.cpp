@@ -149,6 +149,10 @@ int runParam(Args& args) {
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
+  if (!solved.fallbackReason.empty()) {
+    std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
+                solver.c_str(), solved.fallbackReason.c_str());
+  }
   std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", secondsTotal, secondsField,
               secondsCut, secondsParam);
 
@@ -156,6 +160,8 @@ int runParam(Args& args) {
     JsonWriter j;
     j.beginObject();
     j.key("input").value(input).key("output").value(*output).key("solver").value(solver);
+    j.key("solverUsed").value(paramSolverName(solved.solver));
+    if (!solved.fallbackReason.empty()) j.key("fallbackReason").value(solved.fallbackReason);
     j.key("field").value(fieldSource);
     j.key("faces").value(static_cast<std::uint64_t>(mesh.numFaces()));
     j.key("vertices").value(static_cast<std::uint64_t>(mesh.numVertices()));
@@ -183,9 +189,11 @@ int runParam(Args& args) {
     j.key("realFallback").value(st.realFallback);
     j.key("maxRoundingShift").value(st.maxRoundingShift);
     j.endObject();
-    if (solverOptions.solver != ParamSolver::Hat) {
+    if (solved.solver != ParamSolver::Hat) {
       j.key("voxel").beginObject();
       j.key("grid").value(static_cast<std::uint64_t>(solverOptions.gridResolution));
+      j.key("regularization").value(solved.regularization);
+      j.key("failedFactorizations").value(static_cast<std::uint64_t>(solved.failedAttempts));
       j.key("voxels").value(solved.basisStats.voxels);
       j.key("elements").value(solved.basisStats.elements);
       j.key("basisBytes").value(solved.basisStats.bytes);
