@@ -4,7 +4,9 @@
 #include "core/clean.h"
 #include "core/errors.h"
 #include "core/topology.h"
+#include "io/mesh_io.h"
 #include "test_meshes.h"
+#include "testing.h"
 
 namespace seamvox {
 namespace {
@@ -242,6 +244,46 @@ TEST(Clean, CountsZeroAreaFacesAndKeepsThem) {
   EXPECT_EQ(r.report.zeroAreaFaces, 1u);
   EXPECT_EQ(r.mesh.numFaces(), 5u);
 }
+
+struct SharedTopology {
+  const char* file;
+  std::uint32_t components, boundaryLoops;
+  std::int64_t genus;
+};
+
+class SharedMeshTopology : public ::testing::TestWithParam<SharedTopology> {};
+
+TEST_P(SharedMeshTopology, HasTheExpectedComponentsLoopsAndGenus) {
+  const SharedTopology expected = GetParam();
+  const std::string path = testing::sharedMesh(expected.file);
+  if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage(expected.file);
+  CleanResult r = cleanMesh(readMesh(path));
+  expectConventions(r.topology);
+  const ComponentsResult comps = computeComponents(r.topology);
+  ASSERT_EQ(comps.components.size(), expected.components) << expected.file;
+  EXPECT_EQ(comps.boundaryLoops, expected.boundaryLoops) << expected.file;
+  EXPECT_EQ(comps.components[0].genus, expected.genus) << expected.file;
+  EXPECT_EQ(r.report.nonManifoldEdges + r.report.nonManifoldVertices, 0u) << expected.file;
+  if (std::string(expected.file) == "fertility.off") {
+    EXPECT_EQ(r.mesh.numVertices(), 4494u);
+    EXPECT_EQ(r.mesh.numFaces(), 9000u);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Shared, SharedMeshTopology,
+    ::testing::Values(SharedTopology{"fertility.off", 1, 0, 4}, SharedTopology{"3holes.off", 1, 0, 3},
+                      SharedTopology{"bunny.off", 1, 0, 0}, SharedTopology{"camelhead.off", 1, 1, 0},
+                      SharedTopology{"lilium.obj", 1, 1, 0}, SharedTopology{"rocker-arm.obj", 1, 0, 1},
+                      SharedTopology{"cheburashka.off", 1, 0, 0}, SharedTopology{"bumpy.off", 1, 0, 0},
+                      SharedTopology{"spot.obj", 1, 0, 0}, SharedTopology{"armadillo.obj", 1, 0, 0}),
+    [](const ::testing::TestParamInfo<SharedTopology>& info) {
+      std::string name = info.param.file;
+      for (char& ch : name) {
+        if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+      }
+      return name;
+    });
 
 }  // namespace
 }  // namespace seamvox
