@@ -495,6 +495,33 @@ TEST(Png, RenderCommandWritesAValidPicture) {
   EXPECT_FALSE(std::ifstream(dir.path("bad.png")).good());
 }
 
+TEST(Png, ParamRendersItsResult) {
+  TempDir dir;
+  const std::string meshPath = dir.path("sphere.obj"), png = dir.path("sphere.png");
+  writeMesh(meshPath, testing::icosphereMesh(3));
+  std::string output;
+  ASSERT_EQ(testing::runSeamvox("param " + meshPath + " -o " + dir.path("uv.ply") + " --solver hat --cells 20 --render " +
+                                    png + " --quiet",
+                                &output),
+            0)
+      << output;
+  const RgbImage image = decodePng(testing::readFile(png));
+  EXPECT_EQ(image.width, 1024u);
+  EXPECT_EQ(image.height, 1024u);
+  const RenderOptions defaults;
+  std::uint64_t seamPixels = 0, checkerPixels = 0;
+  for (std::uint32_t y = 0; y < image.height; ++y) {
+    for (std::uint32_t x = 0; x < image.width; ++x) {
+      const std::uint8_t* c = image.pixel(x, y);
+      const Rgb rgb{c[0], c[1], c[2]};
+      seamPixels += rgb == defaults.seamColor;
+      checkerPixels += rgb != defaults.background && rgb != defaults.seamColor;
+    }
+  }
+  EXPECT_GT(checkerPixels, image.width * image.height / 5);  // the sphere is there
+  EXPECT_GT(seamPixels, 0u);                                  // a sphere map has seams to draw
+}
+
 TEST(Png, RenderCommandWeldsFilesSplitAlongSeams) {
   // The seamed grid with its right half on vertices of its own: the seam is an open boundary
   // until --weld joins the two halves.

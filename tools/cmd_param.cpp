@@ -9,9 +9,11 @@
 #include "core/field.h"
 #include "core/metrics.h"
 #include "core/param.h"
+#include "core/render.h"
 #include "io/field_io.h"
 #include "io/json.h"
 #include "io/mesh_io.h"
+#include "io/png_io.h"
 #include "stream/memory.h"
 #include "stream/param_solver.h"
 #include "tools/cli.h"
@@ -72,6 +74,7 @@ int runParam(Args& args) {
   const bool greedy = args.flag("greedy");
   const bool weld = args.flag("weld");
   const auto reportPath = args.value("report");
+  const auto renderPath = args.value("render");
   const ProgressFn progress = makeProgress(args.flag("quiet"));
   args.finish(1);
 
@@ -126,6 +129,12 @@ int runParam(Args& args) {
   mesh.cornerUV = std::move(result.cornerUV);
   writeMesh(*output, mesh);
   const double secondsWrite = clock.lap();
+  if (renderPath) {
+    RenderOptions renderOptions;
+    renderOptions.drawSeams = renderOptions.drawCones = true;
+    renderOptions.progress = progress;
+    writePng(*renderPath, renderCheckerboard(mesh, topology, renderOptions).image);
+  }
   const double secondsTotal = total.lap();
   const std::uint64_t peak = peakResidentBytes();
   const bool seamless = seams.isSeamless();
@@ -250,7 +259,7 @@ int runParam(Args& args) {
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--field FILE|smooth] [--edge-length H | --cells N]\n"
-                 "                     [--greedy] [--weld] [--report R.json]\n"
+                 "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
@@ -270,6 +279,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --weld              weld coincident vertices before cleaning\n"
                  "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"
                  "                      stage timings, peak memory\n"
+                 "  --render OUT.png    also render the result (checkerboard, seams, cones; 1024x1024,\n"
+                 "                      default view of seamvox render)\n"
                  "  --quiet             no progress on stderr\n",
                  {"greedy", "weld"},
                  &runParam});
