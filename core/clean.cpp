@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/detail_corner_table.h"
+#include "core/detail_union_find.h"
 #include "core/errors.h"
 
 namespace seamvox {
@@ -40,28 +41,12 @@ void checkInput(const TriangleMesh& mesh) {
   }
 }
 
-/// Union-find with path halving; representative = smallest index of the set.
-struct DisjointSets {
-  std::vector<std::uint32_t> parent;
-  explicit DisjointSets(std::uint32_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a < b) parent[b] = a;
-    else if (b < a) parent[a] = b;
-  }
-};
-
 /// Representative (smallest index) of each vertex's weld cluster. tolerance 0: equal positions.
 std::vector<VertexId> weldMap(const std::vector<Vec3f>& positions, double tolerance) {
   const std::uint32_t nv = static_cast<std::uint32_t>(positions.size());
   std::vector<VertexId> order(nv);
   std::iota(order.begin(), order.end(), 0u);
-  DisjointSets sets(nv);
+  detail::UnionFind sets(nv);
   if (tolerance <= 0.0) {
     auto less = [&](VertexId a, VertexId b) {
       const Vec3f &p = positions[a], &q = positions[b];
