@@ -430,6 +430,46 @@ TEST(VoxelSolver, CylinderFollowsTheAxisExactlyAndIsSeamless) {
   EXPECT_EQ(result.determinedBasis, 0u);
 }
 
+// DESIGN section 7: only marked (inconsistent or cone-overlapping) basis functions may break
+// the seam relation, so seam edges whose faces lie outside their supports are seamless, and every
+// translation is a Gaussian integer.
+TEST(VoxelSolver, SeamlessAwayFromMarkedFunctions) {
+  CutMesh s;
+  s.mesh = testing::icosphereMesh(4);
+  for (Vec3f& p : s.mesh.positions) p *= 1.0f + 0.15f * std::sin(3.0f * p.x()) * std::cos(2.0f * p.y());
+  s.topology = Topology::build(s.mesh.triangles, s.mesh.numVertices());
+  s.field = computeSmoothestField(s.mesh, s.topology);
+  s.cut = cutToDisk(s.mesh, s.topology, s.field, computeSingularities(s.mesh, s.topology, s.field));
+  ASSERT_FALSE(s.cut.seams.empty());
+  ParamOptions options;
+  options.edgeLength = 0.08;
+  const VoxelParamResult result = parameterizeMeshVoxel(s.mesh, s.topology, s.field, s.cut, options, 32);
+  const std::vector<Vec2d>& uv = result.param.cornerUV;
+  std::set<FaceId> marked(result.markedFaces.begin(), result.markedFaces.end());
+  ASSERT_EQ(result.param.translations.size(), s.cut.seams.size());
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < s.cut.seams.size(); ++i) {
+    const SeamCurve& seam = s.cut.seams[i];
+    const std::complex<double> t = result.param.translations[i];
+    EXPECT_NEAR(t.real(), std::round(t.real()), 1e-9);
+    EXPECT_NEAR(t.imag(), std::round(t.imag()), 1e-9);
+    std::complex<double> r(1.0, 0.0);
+    for (int k = 0; k < seam.matching % 4; ++k) r *= std::complex<double>(0.0, -1.0);  // i^(-k)
+    for (CornerId c : seam.corners) {
+      const CornerId o = s.topology.opposite(c);
+      if (marked.count(cornerFace(c)) || marked.count(cornerFace(o))) continue;
+      // The edge runs vertex(next c) -> vertex(prev c) on the left, prev o -> next o on the right.
+      for (const auto& [left, right] : {std::pair{nextCorner(c), prevCorner(o)}, std::pair{prevCorner(c), nextCorner(o)}}) {
+        const std::complex<double> ql(uv[left].x(), uv[left].y()), qr(uv[right].x(), uv[right].y());
+        EXPECT_LT(std::abs(qr - (r * ql + t)), 1e-6) << "seam " << i << " corner " << c;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 20u) << "too few unmarked seam edges to show anything";
+  EXPECT_LT(marked.size(), s.mesh.numFaces());
+}
+
 TEST(VoxelSolver, ConesAreMarkedForLocalRefinement) {
   const TriangleMesh mesh = testing::icosphereMesh(3);
   CutMesh s;
