@@ -2,8 +2,6 @@
 /// The seamless solve (DESIGN sections 8-9): assemble, first solve with the translations s free
 /// (one pinned positional unknown per component), rounding of s to Gaussian integers (direct or
 /// greedy), second solve with s fixed (pinned only on components whose seams all have r = 1).
-/// The positional block is factored once; in the first solve s goes through a dense Schur
-/// complement (see RoundOptions::maxSchurOrder).
 #include <complex>
 #include <cstdint>
 #include <vector>
@@ -20,10 +18,6 @@ struct RoundOptions {
   /// integer first, re-solving in between.
   bool greedy = false;
   std::uint32_t greedyRounds = 4;
-  /// Largest dense Schur complement (free s plus gauge pins; 16 bytes per entry, twice) for the
-  /// first solve; above it, or when predicted slower, the first solve factors its own sparse
-  /// system (0: always). The second solve always reuses the positional factor.
-  std::uint32_t maxSchurOrder = 5000;
   ProgressFn progress;
 };
 
@@ -32,12 +26,9 @@ struct SeamlessStats {
   std::uint32_t determinedPositions = 0, nonUnitConstraints = 0, components = 0;
   std::uint32_t pinnedFirst = 0, pinnedSecond = 0;
   std::uint64_t systemNonzeros = 0;      ///< lower triangle of K
-  std::uint64_t factorNonzeros = 0;      ///< largest sparse factor
-  std::uint64_t factorBytes = 0;         ///< largest factor (plus the dense Schur part, if any)
-  std::uint64_t factorPeakBytes = 0;     ///< CHOLMOD's peak (plus the dense Schur part)
-  /// Order of the dense Schur complement (free s plus first-solve gauge pins) when only the
-  /// positional block was factored; 0 when the first solve factored its own system.
-  std::uint32_t schurOrder = 0;
+  std::uint64_t factorNonzeros = 0;      ///< largest factor
+  std::uint64_t factorBytes = 0;         ///< largest factor
+  std::uint64_t factorPeakBytes = 0;     ///< CHOLMOD's peak
   bool realFallback = false;
   double maxRoundingShift = 0.0;         ///< max |s - round(s)| after the first solve
   double secondsAssemble = 0.0, secondsFirstSolve = 0.0, secondsRound = 0.0,

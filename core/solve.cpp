@@ -3,7 +3,6 @@
 #include <cholmod.h>
 
 #include <algorithm>
-#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -17,7 +16,6 @@ struct CholmodFactor::Impl {
   bool realForm = false;
   std::int64_t n = 0;
   std::uint64_t factorBytes = 0, peakBytes = 0, nonzeros = 0;
-  double flops = 0.0;
   Impl() {
     cholmod_l_start(&common);
     common.print = 0;  // core never prints; failures become exceptions
@@ -49,7 +47,6 @@ struct CholmodFactor::Impl {
       return false;
     }
     nonzeros = static_cast<std::uint64_t>(common.lnz);
-    flops = common.fl;
     return true;
   }
 };
@@ -138,67 +135,40 @@ void CholmodFactor::factor(const ComplexSparse& lowerIn) {
 }
 
 ComplexVector CholmodFactor::solve(const ComplexVector& rhs) const {
-  return solve(ComplexMatrix(rhs)).col(0);
-}
-
-// Applies the CHOLMOD solves `systems` in turn (CHOLMOD_A, or CHOLMOD_P then CHOLMOD_L, ...).
-ComplexMatrix CholmodFactor::solveWith(const ComplexMatrix& rhs, std::initializer_list<int> systems) const {
   const Impl& m = *impl_;
-  const std::int64_t cols = rhs.cols();
-  if (m.n == 0 || cols == 0) return ComplexMatrix(m.n, cols);
+  if (m.n == 0) return ComplexVector();
   if (!m.L) throw SolverError("CHOLMOD: solve called without a factor");
   auto& common = const_cast<cholmod_common&>(m.common);
-  // Complex form: interleaved (re, im) per entry. Real form: the 2n rows [Re; Im] per column.
   const std::int64_t rows = m.realForm ? 2 * m.n : m.n;
-  cholmod_dense* X = cholmod_l_allocate_dense(rows, cols, rows,
-                                              m.realForm ? CHOLMOD_REAL : CHOLMOD_COMPLEX, &common);
-  if (!X) throw SolverError("CHOLMOD: out of memory allocating " + std::to_string(cols) + " right-hand sides");
-  auto* b = static_cast<double*>(X->x);
-  for (std::int64_t j = 0; j < cols; ++j) {
-    double* col = b + (m.realForm ? rows : 2 * rows) * j;
-    for (std::int64_t k = 0; k < m.n; ++k) {
-      if (m.realForm) {
-        col[k] = rhs(k, j).real();
-        col[m.n + k] = rhs(k, j).imag();
-      } else {
-        col[2 * k] = rhs(k, j).real();
-        col[2 * k + 1] = rhs(k, j).imag();
-      }
+  cholmod_dense* B = cholmod_l_allocate_dense(rows, 1, rows, m.realForm ? CHOLMOD_REAL : CHOLMOD_COMPLEX,
+                                              &common);
+  if (!B) throw SolverError("CHOLMOD: out of memory allocating the right-hand side");
+  auto* b = static_cast<double*>(B->x);
+  for (std::int64_t k = 0; k < m.n; ++k) {
+    if (m.realForm) {
+      b[k] = rhs[k].real();
+      b[m.n + k] = rhs[k].imag();
+    } else {
+      b[2 * k] = rhs[k].real();
+      b[2 * k + 1] = rhs[k].imag();
     }
   }
-  for (int system : systems) {
-    cholmod_dense* Y = cholmod_l_solve(system, m.L, X, &common);
-    cholmod_l_free_dense(&X, &common);
-    if (!Y) throw SolverError("CHOLMOD: solve failed (status " + std::to_string(common.status) + ")");
-    X = Y;
-  }
-  ComplexMatrix out(m.n, cols);
+  cholmod_dense* X = cholmod_l_solve(CHOLMOD_A, m.L, B, &common);
+  cholmod_l_free_dense(&B, &common);
+  if (!X) throw SolverError("CHOLMOD: solve failed (status " + std::to_string(common.status) + ")");
+  ComplexVector out(m.n);
   const auto* xv = static_cast<const double*>(X->x);
-  for (std::int64_t j = 0; j < cols; ++j) {
-    const double* col = xv + (m.realForm ? X->d : 2 * X->d) * j;
-    for (std::int64_t k = 0; k < m.n; ++k) {
-      out(k, j) = m.realForm ? std::complex<double>(col[k], col[m.n + k])
-                             : std::complex<double>(col[2 * k], col[2 * k + 1]);
-    }
+  for (std::int64_t k = 0; k < m.n; ++k) {
+    out[k] = m.realForm ? std::complex<double>(xv[k], xv[m.n + k])
+                        : std::complex<double>(xv[2 * k], xv[2 * k + 1]);
   }
   cholmod_l_free_dense(&X, &common);
   return out;
 }
 
-ComplexMatrix CholmodFactor::solve(const ComplexMatrix& rhs) const {
-  return solveWith(rhs, {CHOLMOD_A});
-}
-
-ComplexMatrix CholmodFactor::solveForward(const ComplexMatrix& rhs) const {
-  const Impl& m = *impl_;
-  if (m.realForm || !m.L || !m.L->is_ll) return ComplexMatrix();
-  return solveWith(rhs, {CHOLMOD_P, CHOLMOD_L});
-}
-
 std::uint64_t CholmodFactor::factorNonzeros() const { return impl_->nonzeros; }
 std::uint64_t CholmodFactor::factorBytes() const { return impl_->factorBytes; }
 std::uint64_t CholmodFactor::peakBytes() const { return impl_->peakBytes; }
-double CholmodFactor::factorFlops() const { return impl_->flops; }
 bool CholmodFactor::usedRealFallback() const { return impl_->realForm; }
 bool CholmodFactor::isSupernodal() const { return impl_->L && impl_->L->is_super; }
 

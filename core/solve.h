@@ -2,14 +2,11 @@
 /// Owning CHOLMOD factorization of a Hermitian positive definite complex matrix (DESIGN
 /// section 8). CHOLMOD's headers stay in solve.cpp.
 #include <cstdint>
-#include <initializer_list>
 #include <memory>
 
 #include "assemble.h"
 
 namespace seamvox {
-
-using ComplexMatrix = Eigen::MatrixXcd;
 
 /// Supernodal complex Hermitian Cholesky; falls back to the real 2n x 2n form [Re -Im; Im Re]
 /// only when the complex factorization fails. Move-only.
@@ -27,21 +24,14 @@ class CholmodFactor {
   void factor(const ComplexSparse& lower);
   /// Solves K x = rhs with the last factor.
   ComplexVector solve(const ComplexVector& rhs) const;
-  /// Solves K X = rhs for every column at once (one blocked CHOLMOD solve).
-  ComplexMatrix solve(const ComplexMatrix& rhs) const;
-  /// W = L^-1 P rhs for the complex factor P* L L* P = K, so that rhs* K^-1 rhs = W* W (half the
-  /// work of solve). Empty when the factor has another form (real fallback, LDL*).
-  ComplexMatrix solveForward(const ComplexMatrix& rhs) const;
 
   std::uint64_t factorNonzeros() const;  ///< entries of L (complex or real form)
   std::uint64_t factorBytes() const;     ///< memory held by the factor
   std::uint64_t peakBytes() const;       ///< CHOLMOD's peak memory during analyse + factor
-  double factorFlops() const;            ///< CHOLMOD's flop count of the factorization (real)
   bool usedRealFallback() const;
   bool isSupernodal() const;
 
  private:
-  ComplexMatrix solveWith(const ComplexMatrix& rhs, std::initializer_list<int> systems) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

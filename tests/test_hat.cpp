@@ -16,7 +16,6 @@
 #include "core/metrics.h"
 #include "core/param.h"
 #include "core/reduce.h"
-#include "core/round.h"
 #include "core/topology.h"
 #include "io/field_io.h"
 #include "io/mesh_io.h"
@@ -302,50 +301,6 @@ TEST(HatPipeline, SeveralComponentsAreSeamless) {
   const TriangleMesh mesh = testing::concatMeshes(
       {testing::torusMesh(40, 16), testing::icosphereMesh(3), testing::gridMesh(6, 6, 0.2)});
   expectSeamless(runPipeline(mesh), "torus+sphere+square");
-}
-
-// The Schur-complement solve (positional block factored once) against two direct factorizations:
-// the same gauge, so the same unknowns, with and without greedy rounding; two components, one
-// with cones (gauge pin of the first solve only) and a flat square without (pinned in both).
-TEST(HatSolver, SchurSolveMatchesDirectSolves) {
-  GenerateOptions generate;
-  generate.kind = MeshKind::Genus2;
-  generate.faces = std::max<std::uint64_t>(3000, minimumFaces(MeshKind::Genus2));
-  CleanResult clean = cleanMesh(
-      testing::concatMeshes({generateMesh(generate).mesh, testing::gridMesh(8, 8, 0.5)}));
-  const TriangleMesh& mesh = clean.mesh;
-  const Topology& topology = clean.topology;
-  const CrossField field = computeSmoothestField(mesh, topology);
-  const CutResult cut = cutToDisk(mesh, topology, field, computeSingularities(mesh, topology, field));
-  HatBasisOptions basisOptions;
-  basisOptions.edgeLength = computeBoundingBox(mesh.positions).diagonal() / 30.0;
-  const HatBasis basis(mesh, topology, field, cut, basisOptions);
-  const Reduction reduction = reduceBasis(basis);
-  ASSERT_GT(reduction.numTranslational, 0u);
-  for (const bool greedy : {false, true}) {
-    RoundOptions schurOptions, directOptions;
-    schurOptions.greedy = directOptions.greedy = greedy;
-    directOptions.maxSchurOrder = 0;
-    const SeamlessSolution schur = solveSeamless(basis, reduction, schurOptions);
-    const SeamlessSolution direct = solveSeamless(basis, reduction, directOptions);
-    EXPECT_GT(schur.stats.schurOrder, 0u);
-    EXPECT_EQ(direct.stats.schurOrder, 0u);
-    EXPECT_EQ(schur.stats.pinnedFirst, direct.stats.pinnedFirst);
-    EXPECT_EQ(schur.stats.pinnedSecond, direct.stats.pinnedSecond);
-    EXPECT_EQ(schur.stats.pinnedSecond, 1u);  // the square
-    EXPECT_EQ(schur.stats.pinnedFirst, 2u);
-    ASSERT_EQ(schur.translations.size(), direct.translations.size());
-    for (std::size_t j = 0; j < schur.translations.size(); ++j) {
-      EXPECT_EQ(schur.translations[j], direct.translations[j]) << "seam " << j;
-    }
-    double scale = 0.0, diff = 0.0;
-    for (std::size_t j = 0; j < schur.unknowns.size(); ++j) {
-      scale = std::max(scale, std::abs(direct.unknowns[j]));
-      diff = std::max(diff, std::abs(schur.unknowns[j] - direct.unknowns[j]));
-    }
-    EXPECT_GT(scale, 1.0);
-    EXPECT_LT(diff, 1e-8 * scale) << (greedy ? "greedy" : "direct rounding");
-  }
 }
 
 TEST(HatCommand, ParamThenCheck) {
