@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <deque>
 #include <numeric>
+#include <unordered_map>
 
 #include "core/errors.h"
 
@@ -35,6 +36,79 @@ struct Group {
 GaussVector unitVector(std::uint32_t s) { return {{s, GaussInt(1)}}; }
 
 }  // namespace
+
+/// Two free translations whose columns of P are parallel (every domain sees them in the same
+/// ratio) move only seams that no basis adjacency crosses: the energy cannot see that direction
+/// and K is singular along it. The later one is fixed at s = 0 (still an integer solution).
+void dropInvisibleTranslations(Reduction& out) {
+  const ReducedMap& P = out.map;
+  const std::uint32_t np = out.numPositional, nt = out.numTranslational;
+  if (nt < 2) return;
+  std::vector<double> norm2(nt, 0.0);
+  std::unordered_map<std::uint64_t, std::complex<double>> gram;  // (i, j), i < j
+  std::vector<std::pair<std::uint32_t, std::complex<double>>> entries;
+  for (std::size_t d = 0; d + 1 < P.rowStart.size(); ++d) {
+    entries.clear();
+    for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+      if (P.column[k] >= np) entries.emplace_back(P.column[k] - np, P.value[k]);
+    }
+    for (std::size_t a = 0; a < entries.size(); ++a) {
+      norm2[entries[a].first] += std::norm(entries[a].second);
+      for (std::size_t b = a + 1; b < entries.size(); ++b) {
+        auto [i, x] = entries[a];
+        auto [j, y] = entries[b];
+        if (i > j) std::swap(i, j), std::swap(x, y);
+        gram[(std::uint64_t(i) << 32) | j] += std::conj(x) * y;
+      }
+    }
+  }
+  std::vector<std::uint8_t> dropped(nt, 0);
+  std::vector<std::uint64_t> keys;
+  for (const auto& entry : gram) keys.push_back(entry.first);
+  std::sort(keys.begin(), keys.end());  // deterministic
+  for (std::uint64_t key : keys) {
+    const std::uint32_t i = std::uint32_t(key >> 32), j = std::uint32_t(key);
+    if (dropped[i] || dropped[j] || norm2[i] == 0.0 || norm2[j] == 0.0) continue;
+    if (std::norm(gram[key]) >= (1.0 - 1e-9) * norm2[i] * norm2[j]) dropped[j] = 1;
+  }
+  std::vector<std::uint32_t> newIndex(nt, kInvalidId);
+  std::uint32_t kept = 0;
+  for (std::uint32_t j = 0; j < nt; ++j) {
+    if (!dropped[j]) newIndex[j] = kept++;
+  }
+  if (kept == nt) return;
+  out.invisibleTranslations = nt - kept;
+  ReducedMap map;
+  map.rowStart.assign(P.rowStart.size(), 0);
+  map.offset = P.offset;
+  for (std::size_t d = 0; d + 1 < P.rowStart.size(); ++d) {
+    for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+      std::uint32_t c = P.column[k];
+      if (c >= np) {
+        if (dropped[c - np]) continue;
+        c = np + newIndex[c - np];
+      }
+      map.column.push_back(c);
+      map.value.push_back(P.value[k]);
+    }
+    map.rowStart[d + 1] = map.column.size();
+  }
+  out.map = std::move(map);
+  for (GaussVector& t : out.seamTranslation) {
+    GaussVector kept;
+    for (const auto& [j, x] : t) {
+      if (!dropped[j]) kept.emplace_back(newIndex[j], x);
+    }
+    t = std::move(kept);
+  }
+  std::vector<std::uint32_t> component(out.unknownComponent.begin(), out.unknownComponent.begin() + np);
+  for (std::uint32_t j = 0; j < nt; ++j) {
+    if (!dropped[j]) component.push_back(out.unknownComponent[np + j]);
+  }
+  out.unknownComponent = std::move(component);
+  out.numTranslational = kept;
+}
+
 
 Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
   const std::uint32_t nd = basis.numDomains();
@@ -262,6 +336,7 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
       out.unknownComponent[out.numPositional + j] = seamComponent[s];
     }
   }
+  dropInvisibleTranslations(out);
   reportProgress(options.progress, "reduce", 1.0);
   return out;
 }

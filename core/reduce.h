@@ -47,6 +47,9 @@ struct Reduction {
   /// Basis functions whose own cycle constraints are not implied (only with given constraints).
   std::vector<std::uint32_t> inconsistentBasis;
   std::uint32_t nonUnitConstraints = 0;  ///< constraints needing Euclid steps
+  /// Free translations fixed at s = 0 because their column of P is parallel to another's: they
+  /// only move seams no basis adjacency crosses, so the energy cannot see them (voxel bases).
+  std::uint32_t invisibleTranslations = 0;
   /// Connected components of the surface (through elements), per unknown and per seam.
   std::uint32_t numComponents = 0;
   std::vector<std::uint32_t> unknownComponent;  ///< #unknowns

@@ -43,6 +43,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   }
   out.regularization = vox.regularization;
   out.failedAttempts = vox.failedAttempts;
+  out.invisibleTranslations = vox.invisibleTranslations;
   out.param = std::move(vox.param);
   out.basisStats = vox.basisStats;
   out.determinedBasis = vox.determinedBasis;

@@ -39,6 +39,7 @@ struct SolverResult {
   /// vox/voxloc: regularization the voxel solve succeeded with and failed factorizations before.
   double regularization = 0.0;
   std::uint32_t failedAttempts = 0;
+  std::uint32_t invisibleTranslations = 0;  ///< Reduction::invisibleTranslations (vox, voxloc)
   /// Set when the voxel system could not be factored and the hat solver ran instead (solver is
   /// then Hat): CHOLMOD's message. Reported, never silent.
   std::string fallbackReason;

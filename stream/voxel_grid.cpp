@@ -197,6 +197,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
     out.determinedBasis = static_cast<std::uint32_t>(reduction.determinedBasis.size());
     out.inconsistentBasis = static_cast<std::uint32_t>(reduction.inconsistentBasis.size());
     out.markedFaces = basis.markedFaces(reduction);
+    out.invisibleTranslations = reduction.invisibleTranslations;
 
     RoundOptions roundOptions;
     roundOptions.greedy = options.greedyRounding;

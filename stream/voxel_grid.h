@@ -66,6 +66,7 @@ struct VoxelParamResult {
   /// factorizations failed before (nearly dependent B-splines on coarse or thin regions).
   double regularization = 0.0;
   std::uint32_t failedAttempts = 0;
+  std::uint32_t invisibleTranslations = 0;  ///< Reduction::invisibleTranslations
 };
 /// The Vox solver. When CHOLMOD finds the system indefinite, the basis is rebuilt with a 100x
 /// stronger regularization (up to 1e-3) before giving up with the last SolverError.

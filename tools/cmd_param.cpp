@@ -203,6 +203,7 @@ int runParam(Args& args) {
       j.key("grid").value(static_cast<std::uint64_t>(solverOptions.gridResolution));
       j.key("regularization").value(solved.regularization);
       j.key("failedFactorizations").value(static_cast<std::uint64_t>(solved.failedAttempts));
+      j.key("invisibleTranslations").value(static_cast<std::uint64_t>(solved.invisibleTranslations));
       j.key("voxels").value(solved.basisStats.voxels);
       j.key("elements").value(solved.basisStats.elements);
       j.key("basisBytes").value(solved.basisStats.bytes);
