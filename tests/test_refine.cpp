@@ -21,6 +21,7 @@
 #include "core/param.h"
 #include "core/reduce.h"
 #include "core/refine.h"
+#include "core/subdivide.h"
 #include "core/topology.h"
 #include "io/mesh_io.h"
 #include "stream/param_solver.h"
@@ -471,22 +472,44 @@ TEST_F(RefineSphere, VoxLocIsSeamlessAndCloseToHat) {
 
 // The paper's figure of merit at 128^3 on a shared mesh (fertility subdivided and armadillo run
 // in bench_refine: about 20 s each).
-TEST(RefineShared, VoxLocOnFertilityIsSeamlessAndWithinAQuarterOfHat) {
-  const std::string path = testing::sharedMesh("fertility.off");
-  if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage("fertility.off");
-  const std::unique_ptr<Scene> s = makeScene(readMesh(path), 100.0);
+// Issue bound: voxloc at grid 128 within 1.25x of the hat solver's relative L2 gradient error,
+// seamless, and no more flips than hat plus 0.1% of the faces. Fertility subdivided once (36K
+// faces) and armadillo (86K); fertility itself is the quick case.
+class VoxLocShared : public ::testing::TestWithParam<std::pair<const char*, int>> {};
+
+TEST_P(VoxLocShared, SeamlessAndWithinAQuarterOfHat) {
+  const auto [file, levels] = GetParam();
+  const std::string path = testing::sharedMesh(file);
+  if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage(file);
+  TriangleMesh mesh = readMesh(path);
+  if (levels > 0) {
+    CleanResult coarse = cleanMesh(std::move(mesh));
+    SubdivideOptions subdivide;
+    subdivide.levels = static_cast<std::uint32_t>(levels);
+    mesh = subdivideMesh(coarse.mesh, coarse.topology, subdivide).mesh;
+  }
+  const std::unique_ptr<Scene> s = makeScene(std::move(mesh), 100.0);
   const MapQuality hat = measureMap(s->mesh(), s->hat.cornerUV, &s->field, s->options.edgeLength);
   const SolverFigures voxloc = runSolver(*s, ParamSolver::VoxLoc, 128);
+  EXPECT_EQ(voxloc.result.solver, ParamSolver::VoxLoc) << voxloc.result.fallbackReason;
   EXPECT_TRUE(voxloc.seams.isSeamless()) << voxloc.seams.maxResidual;
   EXPECT_LT(measureSeamsFromUV(s->mesh(), s->topology(), voxloc.result.param.cornerUV).maxResidual,
             1e-6);
   for (const Complex& t : voxloc.result.param.translations) EXPECT_LT(gaussianIntegerDistance(t), 1e-9);
   EXPECT_LE(voxloc.map.relativeGradientError, 1.25 * hat.relativeGradientError);
-  EXPECT_LE(voxloc.map.flipped, 2 * hat.flipped + 5);
+  EXPECT_LE(double(voxloc.map.flipped), double(hat.flipped) + 0.001 * s->mesh().numFaces());
   EXPECT_LT(voxloc.result.refine.refinedVertexFraction, 0.5);
-  RecordProperty("hat", std::to_string(hat.relativeGradientError));
-  RecordProperty("voxloc", std::to_string(voxloc.map.relativeGradientError));
+  std::printf("%s x4^%d: hat L2 %.5f, voxloc L2 %.5f (%.3fx), flips %llu / %llu\n", file, levels,
+              hat.relativeGradientError, voxloc.map.relativeGradientError,
+              voxloc.map.relativeGradientError / hat.relativeGradientError,
+              static_cast<unsigned long long>(hat.flipped),
+              static_cast<unsigned long long>(voxloc.map.flipped));
 }
+
+INSTANTIATE_TEST_SUITE_P(Meshes, VoxLocShared,
+                         ::testing::Values(std::pair<const char*, int>{"fertility.off", 0},
+                                           std::pair<const char*, int>{"fertility.off", 1},
+                                           std::pair<const char*, int>{"armadillo.obj", 0}));
 
 // Armadillo at grid 64 has pairs of free translations that every voxel domain sees in the same
 // ratio (they only move seams no voxel adjacency crosses): K was singular and CHOLMOD failed until
