@@ -5,24 +5,14 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "core/detail_union_find.h"
 #include "core/errors.h"
 
 namespace seamvox {
 
 namespace {
 
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::uint32_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
+using detail::UnionFind;
 
 // One BFS-connected group of domains of a basis function: its own c_0.
 struct Group {
