@@ -21,22 +21,9 @@
 namespace seamvox {
 namespace {
 
-struct Surface {
-  TriangleMesh mesh;
-  Topology topology;
-};
-
-Surface makeSurface(TriangleMesh mesh) {
-  Surface s;
-  s.topology = Topology::build(mesh.triangles, mesh.numVertices());
-  s.mesh = std::move(mesh);
-  return s;
-}
-
-Surface loadShared(const std::string& path) {
-  CleanResult cleaned = cleanMesh(readMesh(path));
-  return {std::move(cleaned.mesh), std::move(cleaned.topology)};
-}
+using testing::loadShared;
+using testing::makeSurface;
+using testing::Surface;
 
 struct UnionFind {
   std::vector<std::uint32_t> parent;

@@ -4,6 +4,9 @@
 #include <map>
 #include <utility>
 
+#include "core/clean.h"
+#include "io/mesh_io.h"
+
 namespace seamvox::testing {
 
 TriangleMesh gridMesh(int n, int m, double cell) {
@@ -94,6 +97,18 @@ TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts) {
     for (Triangle t : p.triangles) out.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
   }
   return out;
+}
+
+Surface makeSurface(TriangleMesh mesh) {
+  Surface s;
+  s.topology = Topology::build(mesh.triangles, mesh.numVertices());
+  s.mesh = std::move(mesh);
+  return s;
+}
+
+Surface loadShared(const std::string& path) {
+  CleanResult cleaned = cleanMesh(readMesh(path));
+  return {std::move(cleaned.mesh), std::move(cleaned.topology)};
 }
 
 }  // namespace seamvox::testing

@@ -1,6 +1,9 @@
 #pragma once
 /// Small meshes built in code for the test suites (closed, boundary, several components).
+#include <string>
+
 #include "core/mesh.h"
+#include "core/topology.h"
 
 namespace seamvox::testing {
 
@@ -14,5 +17,15 @@ TriangleMesh icosphereMesh(int levels);
 TriangleMesh cylinderMesh(int n, int m, double radius = 1.0, double height = 2.0);
 /// Concatenates meshes into one with several components.
 TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts);
+
+/// A mesh with its corner table (the table views mesh.triangles, whose buffer moves with it).
+struct Surface {
+  TriangleMesh mesh;
+  Topology topology;
+};
+/// Corner table of a mesh that is already clean (Topology::build throws otherwise).
+Surface makeSurface(TriangleMesh mesh);
+/// Reads and cleans a mesh file.
+Surface loadShared(const std::string& path);
 
 }  // namespace seamvox::testing
