@@ -159,17 +159,7 @@ void checkAll(const Surface& s, const CrossField& field, const std::string& what
   expectCombedSeams(s, field, sing, cut, what);
 }
 
-CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed) {
-  std::vector<Vec3d> v(mesh.numFaces());
-  std::uint64_t state = seed * 0x9E3779B97F4A7C15ull + 1;
-  for (Vec3d& x : v) {
-    for (int k = 0; k < 3; ++k) {
-      state = state * 6364136223846793005ull + 1442695040888963407ull;
-      x[k] = double(state >> 11) / 9007199254740992.0 - 0.5;
-    }
-  }
-  return projectToTangent(mesh, std::move(v));
-}
+using testing::randomField;
 
 TEST(Cut, GeneratedClosedAndOpenMeshes) {
   GenerateOptions genus2;

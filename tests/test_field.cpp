@@ -30,18 +30,7 @@ std::int64_t eulerCharacteristic(const Topology& topology) {
   return chi;
 }
 
-/// Unit tangent directions at pseudo-random angles (a field with many cones).
-CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed) {
-  std::vector<Vec3d> v(mesh.numFaces());
-  std::uint64_t state = seed * 0x9E3779B97F4A7C15ull + 1;
-  for (Vec3d& x : v) {
-    for (int k = 0; k < 3; ++k) {
-      state = state * 6364136223846793005ull + 1442695040888963407ull;
-      x[k] = double(state >> 11) / 9007199254740992.0 - 0.5;
-    }
-  }
-  return projectToTangent(mesh, std::move(v));
-}
+using testing::randomField;
 
 /// Sum over interior edges of the squared residual rotation eps, recomputed from matchings:
 /// a smoothness figure that is independent of the solver's energy.

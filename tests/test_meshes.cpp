@@ -111,4 +111,16 @@ Surface loadShared(const std::string& path) {
   return {std::move(cleaned.mesh), std::move(cleaned.topology)};
 }
 
+CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed) {
+  std::vector<Vec3d> v(mesh.numFaces());
+  std::uint64_t state = seed * 0x9E3779B97F4A7C15ull + 1;
+  for (Vec3d& x : v) {
+    for (int k = 0; k < 3; ++k) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      x[k] = double(state >> 11) / 9007199254740992.0 - 0.5;
+    }
+  }
+  return projectToTangent(mesh, std::move(v));
+}
+
 }  // namespace seamvox::testing

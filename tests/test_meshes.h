@@ -2,6 +2,7 @@
 /// Small meshes built in code for the test suites (closed, boundary, several components).
 #include <string>
 
+#include "core/field.h"
 #include "core/mesh.h"
 #include "core/topology.h"
 
@@ -27,5 +28,7 @@ struct Surface {
 Surface makeSurface(TriangleMesh mesh);
 /// Reads and cleans a mesh file.
 Surface loadShared(const std::string& path);
+/// Unit tangent directions at pseudo-random angles (a field with many cones); deterministic.
+CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed);
 
 }  // namespace seamvox::testing
