@@ -41,6 +41,28 @@ EdgeSides edgeSides(const std::vector<Vec2d>& uv, CornerId c, CornerId o) {
 
 }  // namespace
 
+double parameterAreaRatio(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV, FaceId f,
+                          double edgeLength) {
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d p0 = mesh.position(t[0]);
+  const double area = 0.5 * (mesh.position(t[1]) - p0).cross(mesh.position(t[2]) - p0).norm();
+  const Vec2d a = cornerUV[3 * f + 1] - cornerUV[3 * f], b = cornerUV[3 * f + 2] - cornerUV[3 * f];
+  const double uvArea = 0.5 * (a.x() * b.y() - a.y() * b.x());
+  return uvArea * (edgeLength * edgeLength) / area;
+}
+
+bool collapsesBetweenCones(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV, FaceId f,
+                           const std::vector<std::uint8_t>& isCone) {
+  const Triangle& t = mesh.triangles[f];
+  for (int k = 0; k < 3; ++k) {
+    const int l = (k + 1) % 3;
+    if (isCone[t[k]] && isCone[t[l]] && (cornerUV[3 * f + k] - cornerUV[3 * f + l]).norm() <= 1e-9) {
+      return true;
+    }
+  }
+  return false;
+}
+
 SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                          const std::vector<Vec2d>& cornerUV) {
   checkSizes(mesh, cornerUV);
@@ -98,7 +120,8 @@ SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topolog
 }
 
 MapQuality measureMap(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV,
-                      const CrossField* field, double edgeLength) {
+                      const CrossField* field, double edgeLength,
+                      const std::vector<VertexId>* cones) {
   checkSizes(mesh, cornerUV);
   if (field && field->direction.size() != mesh.numFaces()) {
     throw InputError("metrics: field has " + std::to_string(field->direction.size()) +
@@ -183,22 +206,30 @@ MapQuality measureMap(const TriangleMesh& mesh, const std::vector<Vec2d>& corner
   out.relativeGradientError = field && sums.target > 0.0
                                   ? std::sqrt(sums.error / sums.target)
                                   : std::numeric_limits<double>::quiet_NaN();
-  std::uint64_t flipped = 0, collapsed = 0;
+  std::vector<std::uint8_t> isCone;
+  if (cones) {
+    isCone.assign(mesh.numVertices(), 0);
+    for (VertexId v : *cones) {
+      if (v >= mesh.numVertices()) {
+        throw InputError("metrics: cone " + std::to_string(v) + " out of range (" +
+                         std::to_string(mesh.numVertices()) + " vertices)");
+      }
+      isCone[v] = 1;
+    }
+  }
+  std::uint64_t flipped = 0, collapsed = 0, collapsedAtCones = 0;
   for (FaceId f = 0; f < nf; ++f) {
-    const Triangle& t = mesh.triangles[f];
-    const Vec3d a = mesh.position(t[0]), b = mesh.position(t[1]), c = mesh.position(t[2]);
-    const double area = 0.5 * (b - a).cross(c - a).norm();
-    const Complex q0 = toComplex(cornerUV[3 * f]), q1 = toComplex(cornerUV[3 * f + 1]),
-                  q2 = toComplex(cornerUV[3 * f + 2]);
-    const double uvArea = 0.5 * std::imag(std::conj(q1 - q0) * (q2 - q0));
-    if (std::abs(uvArea) < 1e-6 * area / (h * h)) {
+    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
+    if (std::abs(ratio) < kCollapsedAreaFraction) {
       ++collapsed;
-    } else if (uvArea < 0.0) {
+      collapsedAtCones += cones && collapsesBetweenCones(mesh, cornerUV, f, isCone);
+    } else if (ratio < 0.0) {
       ++flipped;
     }
   }
   out.flipped = flipped;
   out.collapsed = collapsed;
+  out.collapsedAtCones = collapsedAtCones;
   out.flippedFraction = nf ? static_cast<double>(flipped) / nf : 0.0;
   return out;
 }

@@ -34,10 +34,34 @@ SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, con
 SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topology,
                                const std::vector<Vec2d>& cornerUV);
 
+/// A face whose |parameter area| is below this fraction of its expected area A_T / h^2 is collapsed.
+constexpr double kCollapsedAreaFraction = 1e-6;
+
+/// Signed parameter-space area of face f (corners 3 f .. 3 f + 2 of cornerUV) over its expected
+/// area A_T / h^2: 1 for a map with |grad q| = 1/h and no shear, negative when flipped, +-inf or
+/// NaN for a face of zero 3D area.
+double parameterAreaRatio(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV, FaceId f,
+                          double edgeLength);
+
+/// True when face f has an edge between two cones (isCone per vertex) whose corners have the same
+/// (u, v) within 1e-9. In a seamless map a cone sits where the rotations of its seams fix it
+/// (DESIGN section 7: c_0 = beta . t / alpha), on the half-integer lattice once the translations
+/// are rounded, whatever the other vertices do. Two cones closer than about h/2 (cone pairs of a
+/// noisy field, often one edge apart) then land on the same point and their shared triangles
+/// collapse in every solver (hat included): only other translations could separate them, at the
+/// price of a large distortion. This collapse belongs to the field and the rounding, not to the
+/// basis, so it is counted apart (MapQuality::collapsedAtCones).
+bool collapsesBetweenCones(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV, FaceId f,
+                           const std::vector<std::uint8_t>& isCone);
+
 struct MapQuality {
   std::uint64_t faces = 0;
   std::uint64_t flipped = 0;    ///< negative parameter-space area (not collapsed)
-  std::uint64_t collapsed = 0;  ///< |parameter area| < 1e-6 of the expected area A / h^2
+  /// |parameter area| < kCollapsedAreaFraction of the expected area A / h^2
+  std::uint64_t collapsed = 0;
+  /// Of the collapsed faces, those between two coincident cones (collapsesBetweenCones); 0 when
+  /// measureMap was given no cones.
+  std::uint64_t collapsedAtCones = 0;
   double flippedFraction = 0.0;
   /// sqrt(sum A |grad q - w/h|^2 / sum A |w/h|^2), w the nearest of the 4 cross directions;
   /// NaN without a field.
@@ -46,8 +70,10 @@ struct MapQuality {
 };
 
 /// Flips, collapses and the gradient error against a field (may be null) for target spacing h
-/// (<= 0: fitted). Linear, parallel.
+/// (<= 0: fitted); with the cones (vertex ids, e.g. CutResult::cones) also collapsedAtCones.
+/// Linear, parallel.
 MapQuality measureMap(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV,
-                      const CrossField* field, double edgeLength);
+                      const CrossField* field, double edgeLength,
+                      const std::vector<VertexId>* cones = nullptr);
 
 }  // namespace seamvox

@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +13,7 @@
 #include "core/errors.h"
 #include "core/evaluate.h"
 #include "core/gaussian_int.h"
+#include "core/metrics.h"
 #include "core/reduce.h"
 #include "core/round.h"
 
@@ -25,22 +27,16 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Why a face is in the region (before the rings are added).
-enum FaceFlag : std::uint8_t { kOutside = 0, kMarked = 1, kCollapsed = 2, kFlipped = 3 };
+// Why a face is in the region (kOutside: it is not).
+enum FaceFlag : std::uint8_t { kOutside = 0, kMarked = 1, kCollapsed = 2, kFlipped = 3, kRing = 4 };
 
-// Signed parameter-space area of face f against its expected area A_T / h^2: kCollapsed below
-// threshold times the expected area (non-finite values included), kFlipped when negative.
+// kCollapsed when the parameter area of face f is below threshold times its expected area
+// (non-finite values included), kFlipped when negative.
 FaceFlag classifyFace(const TriangleMesh& mesh, const std::vector<Vec2d>& uv, FaceId f,
-                      double threshold, double inverseH2) {
-  const Triangle& t = mesh.triangles[f];
-  const Vec3d p0 = mesh.position(t[0]);
-  const double expected = 0.5 * (mesh.position(t[1]) - p0).cross(mesh.position(t[2]) - p0).norm() *
-                          inverseH2;
-  if (!(expected > 0.0)) return kOutside;  // zero-area face: no energy, nothing to repair
-  const Vec2d a = uv[3 * f + 1] - uv[3 * f], b = uv[3 * f + 2] - uv[3 * f];
-  const double area = 0.5 * (a.x() * b.y() - a.y() * b.x());
-  if (area >= threshold * expected) return kOutside;
-  return area < 0.0 ? kFlipped : kCollapsed;
+                      double threshold, double edgeLength) {
+  const double ratio = parameterAreaRatio(mesh, uv, f, edgeLength);
+  if (std::isnan(ratio) || ratio >= threshold) return kOutside;  // NaN: zero-area face, no energy
+  return ratio < 0.0 ? kFlipped : kCollapsed;
 }
 
 bool isSortedUnique(const std::vector<FaceId>& faces) {
@@ -50,11 +46,36 @@ bool isSortedUnique(const std::vector<FaceId>& faces) {
   return true;
 }
 
-}  // namespace
+// Every face sharing a vertex with the frontier joins the region (flag kRing), rings times.
+void addRings(const Topology& topology, std::vector<FaceId> frontier, std::uint32_t rings,
+              std::vector<std::uint8_t>& flag, std::vector<FaceId>& region) {
+  std::vector<std::uint8_t> vertexSeen(topology.numVertices(), 0);
+  for (std::uint32_t ring = 0; ring < rings && !frontier.empty(); ++ring) {
+    std::vector<FaceId> added;
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) {
+        const VertexId v = topology.vertex(3 * f + k);
+        if (vertexSeen[v]) continue;
+        vertexSeen[v] = 1;
+        topology.forEachCornerAround(v, [&](CornerId c) {
+          const FaceId g = cornerFace(c);
+          if (flag[g] == kOutside) {
+            flag[g] = kRing;
+            added.push_back(g);
+          }
+        });
+      }
+    }
+    region.insert(region.end(), added.begin(), added.end());
+    frontier = std::move(added);
+  }
+  std::sort(region.begin(), region.end());
+}
 
-std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
-                                       const std::vector<Vec2d>& cornerUV,
-                                       const RefineOptions& options, RefineStats* stats) {
+// selectRefineRegion with the per-face flags kept for later rounds.
+std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topology,
+                                  const std::vector<Vec2d>& cornerUV, const RefineOptions& options,
+                                  std::vector<std::uint8_t>& flag, RefineStats* stats) {
   const FaceId nf = topology.numFaces();
   if (cornerUV.size() != 3u * static_cast<std::size_t>(nf) || mesh.numFaces() != nf) {
     throw InputError("refine: " + std::to_string(cornerUV.size()) + " corner UVs for " +
@@ -63,7 +84,7 @@ std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology&
   if (!(options.edgeLength > 0.0) || !std::isfinite(options.edgeLength)) {
     throw InputError("refine: edge length must be positive and finite");
   }
-  std::vector<std::uint8_t> flag(nf, kOutside);
+  flag.assign(nf, kOutside);
   for (FaceId f : options.markedFaces) {
     if (f >= nf) {
       throw InputError("refine: marked face " + std::to_string(f) + " out of range (" +
@@ -71,11 +92,10 @@ std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology&
     }
     flag[f] = kMarked;
   }
-  const double inverseH2 = 1.0 / (options.edgeLength * options.edgeLength);
   tbb::parallel_for(tbb::blocked_range<FaceId>(0, nf, 1u << 14), [&](const auto& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       if (flag[f] != kOutside) continue;
-      flag[f] = classifyFace(mesh, cornerUV, f, options.collapseThreshold, inverseH2);
+      flag[f] = classifyFace(mesh, cornerUV, f, options.collapseThreshold, options.edgeLength);
     }
   });
   RefineStats counts;
@@ -88,30 +108,7 @@ std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology&
     counts.flippedFaces += flag[f] == kFlipped;
   }
   reportProgress(options.progress, "refine region", 0.5);
-
-  // Rings: every face sharing a vertex with the region joins it, options.rings times.
-  std::vector<std::uint8_t> vertexSeen(topology.numVertices(), 0);
-  std::vector<FaceId> frontier = region;
-  for (std::uint32_t ring = 0; ring < options.rings && !frontier.empty(); ++ring) {
-    std::vector<FaceId> added;
-    for (FaceId f : frontier) {
-      for (int k = 0; k < 3; ++k) {
-        const VertexId v = topology.vertex(3 * f + k);
-        if (vertexSeen[v]) continue;
-        vertexSeen[v] = 1;
-        topology.forEachCornerAround(v, [&](CornerId c) {
-          const FaceId g = cornerFace(c);
-          if (flag[g] == kOutside) {
-            flag[g] = kMarked;  // any value but kOutside
-            added.push_back(g);
-          }
-        });
-      }
-    }
-    region.insert(region.end(), added.begin(), added.end());
-    frontier = std::move(added);
-  }
-  std::sort(region.begin(), region.end());
+  addRings(topology, region, options.rings, flag, region);
   counts.regionFaces = region.size();
   if (stats) {
     stats->markedFaces = counts.markedFaces;
@@ -121,6 +118,29 @@ std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology&
   }
   reportProgress(options.progress, "refine region", 1.0);
   return region;
+}
+
+// Collapsed and flipped faces by MapQuality's criteria.
+struct FaceCounts {
+  std::uint64_t collapsed = 0, collapsedAtCones = 0, flipped = 0;
+  void add(const TriangleMesh& mesh, const std::vector<Vec2d>& uv, FaceId f, double ratio,
+           const std::vector<std::uint8_t>& isCone) {
+    if (std::abs(ratio) < kCollapsedAreaFraction) {
+      ++collapsed;
+      collapsedAtCones += collapsesBetweenCones(mesh, uv, f, isCone);
+    } else if (ratio < 0.0) {
+      ++flipped;
+    }
+  }
+};
+
+}  // namespace
+
+std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
+                                       const std::vector<Vec2d>& cornerUV,
+                                       const RefineOptions& options, RefineStats* stats) {
+  std::vector<std::uint8_t> flag;
+  return selectFlagged(mesh, topology, cornerUV, options, flag, stats);
 }
 
 RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
@@ -460,50 +480,116 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
   RefineResult out;
   RefineStats& stats = out.stats;
   auto lap = std::chrono::steady_clock::now();
-  const std::vector<FaceId> faces = selectRefineRegion(mesh, topology, cornerUV, options, &stats);
+  std::vector<std::uint8_t> flag;
+  std::vector<FaceId> faces = selectFlagged(mesh, topology, cornerUV, options, flag, &stats);
   stats.secondsRegion = secondsSince(lap);
-  if (faces.empty()) {
-    stats.secondsTotal = secondsSince(start);
-    return out;
-  }
-
-  lap = std::chrono::steady_clock::now();
-  const RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
-  const std::uint32_t rf = region.topology.numFaces();
-  std::vector<Vec2d> regionUV(3u * rf);
-  for (std::uint32_t i = 0; i < rf; ++i) {
-    for (int k = 0; k < 3; ++k) regionUV[3 * i + k] = cornerUV[3 * region.faceOrigin[i] + k];
-  }
-  std::vector<Complex> regionT(region.seamOrigin.size());
-  for (std::size_t s = 0; s < regionT.size(); ++s) regionT[s] = seamT[region.seamOrigin[s]];
-  for (std::uint8_t free : region.vertexFree) {
-    if (free) {
-      ++stats.freeVertices;
-    } else {
-      ++stats.lockedVertices;
+  const double h = options.edgeLength;
+  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
+  for (VertexId v : cut.cones) {
+    if (v >= mesh.numVertices()) {
+      throw InputError("refine: cone " + std::to_string(v) + " out of range (" +
+                       std::to_string(mesh.numVertices()) + " vertices)");
     }
-  }
-  stats.refinedVertexFraction =
-      mesh.numVertices() ? double(stats.freeVertices) / mesh.numVertices() : 0.0;
-  stats.secondsExtract = secondsSince(lap);
-  reportProgress(options.progress, "refine", 0.3);
-  if (stats.freeVertices == 0) {
-    stats.secondsTotal = secondsSince(start);
-    return out;
+    isCone[v] = 1;
   }
 
-  lap = std::chrono::steady_clock::now();
-  const RegionSolution solved = solveRegion(region, regionUV, regionT, options.edgeLength, &stats);
-  stats.secondsSolve = secondsSince(lap);
-  for (CornerId c = 0; c < 3u * rf; ++c) {
-    if (!region.vertexFree[region.mesh.triangles[c / 3][c % 3]]) continue;
-    out.corners.push_back(3 * region.faceOrigin[c / 3] + c % 3);
-    out.cornerUV.push_back(solved.cornerUV[c]);
+  // Rounds: solve the region from the input map, grow it around faces still bad at its border.
+  const std::uint32_t maxRounds = std::max(1u, options.maxRounds);
+  std::uint64_t seeds = stats.markedFaces + stats.collapsedFaces + stats.flippedFaces;
+  RegionMesh region;
+  RegionSolution solved;
+  FaceCounts inRegion;
+  for (std::uint32_t round = 0; !faces.empty(); ++round) {
+    const auto roundStart = std::chrono::steady_clock::now();
+    RefineRound figures;
+    figures.seedFaces = seeds;
+    figures.regionFaces = faces.size();
+    lap = roundStart;
+    region = extractRegion(mesh, topology, field, cut, faces);
+    const std::uint32_t rf = region.topology.numFaces();
+    std::vector<Vec2d> regionUV(3u * rf);
+    for (std::uint32_t i = 0; i < rf; ++i) {
+      for (int k = 0; k < 3; ++k) regionUV[3 * i + k] = cornerUV[3 * region.faceOrigin[i] + k];
+    }
+    std::vector<Complex> regionT(region.seamOrigin.size());
+    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
+    const std::uint32_t numFree = static_cast<std::uint32_t>(
+        std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
+    stats.regionFaces = rf;
+    stats.freeVertices = figures.freeVertices = numFree;
+    stats.lockedVertices = static_cast<std::uint32_t>(region.vertexFree.size()) - numFree;
+    stats.refinedVertexFraction = mesh.numVertices() ? double(numFree) / mesh.numVertices() : 0.0;
+    stats.secondsExtract += secondsSince(lap);
+
+    lap = std::chrono::steady_clock::now();
+    if (numFree > 0) {
+      solved = solveRegion(region, regionUV, regionT, h, &stats);
+      figures.unknowns = stats.unknowns;
+    } else {
+      solved.cornerUV = std::move(regionUV);
+      solved.seamT = std::move(regionT);
+    }
+    stats.secondsSolve += secondsSince(lap);
+
+    // Measure the region again; bad faces touching a locked vertex seed the next round.
+    std::vector<std::uint8_t> subCone(region.mesh.numVertices(), 0);
+    for (VertexId v : region.cut.cones) subCone[v] = 1;
+    inRegion = FaceCounts();
+    std::vector<FaceId> border;
+    for (std::uint32_t i = 0; i < rf; ++i) {
+      const double ratio = parameterAreaRatio(region.mesh, solved.cornerUV, i, h);
+      inRegion.add(region.mesh, solved.cornerUV, i, ratio, subCone);
+      if (std::isnan(ratio) || ratio >= options.collapseThreshold) continue;
+      const Triangle& t = region.mesh.triangles[i];
+      const bool locked = !region.vertexFree[t[0]] || !region.vertexFree[t[1]] || !region.vertexFree[t[2]];
+      if (locked && !collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone)) {
+        border.push_back(region.faceOrigin[i]);
+      }
+    }
+    figures.collapsed = inRegion.collapsed;
+    figures.collapsedAtCones = inRegion.collapsedAtCones;
+    figures.flipped = inRegion.flipped;
+    figures.borderFaces = border.size();
+    figures.seconds = secondsSince(roundStart);
+    stats.rounds.push_back(figures);
+    reportProgress(options.progress, "refine", double(round + 1) / maxRounds);
+    if (border.empty() || round + 1 >= maxRounds) break;
+    seeds = border.size();
+    addRings(topology, std::move(border), std::max(1u, options.rings), flag, faces);
   }
-  for (std::uint32_t j = 0; j < regionT.size(); ++j) {
-    if (solved.seamT[j] == regionT[j]) continue;
-    out.seams.push_back(region.seamOrigin[j]);
-    out.seamT.push_back(solved.seamT[j]);
+  if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
+
+  // Whole-map counts: the last region's faces as solved, every other face as in the input.
+  const FaceCounts outside = tbb::parallel_reduce(
+      tbb::blocked_range<FaceId>(0, mesh.numFaces(), 1u << 14), FaceCounts(),
+      [&](const tbb::blocked_range<FaceId>& range, FaceCounts counts) {
+        for (FaceId f = range.begin(); f != range.end(); ++f) {
+          if (flag[f] != kOutside) continue;
+          counts.add(mesh, cornerUV, f, parameterAreaRatio(mesh, cornerUV, f, h), isCone);
+        }
+        return counts;
+      },
+      [](FaceCounts a, const FaceCounts& b) {
+        a.collapsed += b.collapsed, a.collapsedAtCones += b.collapsedAtCones, a.flipped += b.flipped;
+        return a;
+      });
+  stats.collapsedAfter = outside.collapsed + inRegion.collapsed;
+  stats.collapsedAtConesAfter = outside.collapsedAtCones + inRegion.collapsedAtCones;
+  stats.flippedAfter = outside.flipped + inRegion.flipped;
+
+  if (stats.freeVertices > 0) {
+    const std::uint32_t rf = region.topology.numFaces();
+    for (CornerId c = 0; c < 3u * rf; ++c) {
+      if (!region.vertexFree[region.mesh.triangles[c / 3][c % 3]]) continue;
+      out.corners.push_back(3 * region.faceOrigin[c / 3] + c % 3);
+      out.cornerUV.push_back(solved.cornerUV[c]);
+    }
+    for (std::uint32_t j = 0; j < region.seamOrigin.size(); ++j) {
+      const Complex input = seamT[region.seamOrigin[j]];
+      if (solved.seamT[j] == input) continue;
+      out.seams.push_back(region.seamOrigin[j]);
+      out.seamT.push_back(solved.seamT[j]);
+    }
   }
   reportProgress(options.progress, "refine", 1.0);
   stats.secondsTotal = secondsSince(start);

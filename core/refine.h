@@ -4,6 +4,15 @@
 /// map collapsed or flipped, plus rings of neighbours) is cut out as a mesh of its own; vertices
 /// whose triangles all lie in the region are re-solved with the seam translations fixed, every
 /// other vertex keeps the input map's values (per wedge) and enters the right-hand side.
+///
+/// Rounds: the locked border keeps the input map, which may itself be damaged just outside the
+/// first region. After each solve the region's faces are measured again; a face still collapsed
+/// (below collapseThreshold) or flipped that touches a locked vertex grows the region by rings
+/// around it and the grown region is solved again from the input map, up to maxRounds solves.
+/// Faces whose vertices are all free are not grown around: the local hat solve is then exact for
+/// its border, and what remains there (flips next to cones) is what the hat solver has too. Faces
+/// between two coincident cones (metrics.h collapsesBetweenCones) are not grown around either: the
+/// cones' positions follow from the rounded translations, no free vertex moves them.
 #include <complex>
 #include <cstdint>
 #include <vector>
@@ -23,11 +32,31 @@ struct RefineOptions {
   /// A face whose signed parameter-space area is below this fraction of its expected area
   /// A_T / h^2 is added to the region (collapsed; negative area = flipped is always added).
   double collapseThreshold = 0.1;
-  /// Rings of neighbouring faces (sharing a vertex) added around the region.
+  /// Rings of neighbouring faces (sharing a vertex) added around the region, and around the
+  /// faces that grow it in later rounds (at least one ring there).
   std::uint32_t rings = 1;
+  /// Solves at most (>= 1; 1: no re-detection).
+  std::uint32_t maxRounds = 4;
   ProgressFn progress;
 };
 
+/// One solve of the (grown) region.
+struct RefineRound {
+  /// Faces the region grew around: round 0 the input's marked, collapsed and flipped faces; later
+  /// rounds the previous round's borderFaces.
+  std::uint64_t seedFaces = 0;
+  std::uint64_t regionFaces = 0;
+  std::uint32_t freeVertices = 0;
+  std::uint32_t unknowns = 0;
+  /// The region's faces after this solve, by MapQuality's criteria (metrics.h).
+  std::uint64_t collapsed = 0, collapsedAtCones = 0, flipped = 0;
+  /// Region faces after this solve below collapseThreshold or flipped, touching a locked vertex
+  /// and not between coincident cones: the next round's seeds.
+  std::uint64_t borderFaces = 0;
+  double seconds = 0.0;
+};
+
+/// Figures of the last round unless said otherwise.
 struct RefineStats {
   std::uint64_t markedFaces = 0, collapsedFaces = 0, flippedFaces = 0;  ///< found in the input
   std::uint64_t regionFaces = 0;
@@ -40,7 +69,13 @@ struct RefineStats {
   std::uint32_t freeTranslations = 0;
   std::uint32_t pinned = 0;    ///< region components without any locked vertex or rotation
   std::uint64_t systemNonzeros = 0, factorNonzeros = 0, factorBytes = 0, factorPeakBytes = 0;
-  double secondsRegion = 0.0, secondsExtract = 0.0, secondsSolve = 0.0, secondsTotal = 0.0;
+  double secondsRegion = 0.0, secondsExtract = 0.0, secondsSolve = 0.0, secondsTotal = 0.0;  ///< all rounds
+  std::vector<RefineRound> rounds;  ///< empty when the region is empty
+  /// The whole refined map by MapQuality's criteria (metrics.h), cones from the cut: what
+  /// measureMap(mesh, refined, field, h, &cut.cones) counts.
+  std::uint64_t collapsedAfter = 0, collapsedAtConesAfter = 0, flippedAfter = 0;
+  /// Last round's borderFaces: 0 unless maxRounds ran out.
+  std::uint64_t unresolvedFaces = 0;
 };
 
 /// New (u, v) of the corners of the free vertices: cornerUV[k] belongs to corner corners[k].
@@ -99,8 +134,10 @@ RegionSolution solveRegion(const RegionMesh& region, const std::vector<Vec2d>& c
                            const std::vector<std::complex<double>>& seamT, double edgeLength,
                            RefineStats* stats = nullptr);
 
-/// The whole stage: select, extract, solve. cornerUV is the input map (3 #F), seamT its rounded
-/// translation per seam of cut (Gaussian integers). Throws InputError on bad sizes.
+/// The whole stage: select, extract, solve, re-detect and grow (rounds, above). cornerUV is the
+/// input map (3 #F), seamT its rounded translation per seam of cut (Gaussian integers). Holds one
+/// byte per face and per vertex of the whole mesh besides the region. Throws InputError on bad
+/// sizes.
 RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,
                              const std::vector<Vec2d>& cornerUV,

@@ -148,5 +148,48 @@ TEST(MapMetrics, GradientErrorFlipsAndCollapses) {
   EXPECT_EQ(measureMap(mesh, squashed, &field, h).collapsed, 1u);
 }
 
+// Two unit right triangles sharing the edge 1-2: (0, 1, 2) and (2, 1, 3).
+TEST(MapMetrics, CollapsesBetweenCoincidentConesAreCountedApart) {
+  TriangleMesh mesh;
+  mesh.positions = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0), Vec3f(1, 1, 0)};
+  mesh.triangles = {Triangle{0, 1, 2}, Triangle{2, 1, 3}};
+  const double h = 0.5;
+  std::vector<Vec2d> uv(6);
+  for (CornerId c = 0; c < 6; ++c) {
+    const Vec3d p = mesh.position(mesh.triangles[c / 3][c % 3]);
+    uv[c] = Vec2d(p.x(), p.y()) / h;
+  }
+  EXPECT_NEAR(parameterAreaRatio(mesh, uv, 0, h), 1.0, 1e-12);
+  EXPECT_NEAR(parameterAreaRatio(mesh, uv, 1, h), 1.0, 1e-12);
+  const std::vector<VertexId> edgeCones = {1, 2}, oneCone = {1}, farCones = {0, 3};
+  EXPECT_EQ(measureMap(mesh, uv, nullptr, h, &edgeCones).collapsed, 0u);
+  // Vertex 2 moved onto vertex 1: both triangles collapse along the edge between the two cones.
+  std::vector<Vec2d> merged = uv;
+  merged[2] = merged[1], merged[3] = merged[4];
+  EXPECT_NEAR(parameterAreaRatio(mesh, merged, 0, h), 0.0, 1e-12);
+  const MapQuality atCones = measureMap(mesh, merged, nullptr, h, &edgeCones);
+  EXPECT_EQ(atCones.collapsed, 2u);
+  EXPECT_EQ(atCones.collapsedAtCones, 2u);
+  EXPECT_EQ(measureMap(mesh, merged, nullptr, h, &oneCone).collapsedAtCones, 0u);
+  EXPECT_EQ(measureMap(mesh, merged, nullptr, h, &farCones).collapsedAtCones, 0u);
+  EXPECT_EQ(measureMap(mesh, merged, nullptr, h).collapsedAtCones, 0u);
+  EXPECT_EQ(measureMap(mesh, merged, nullptr, h).collapsed, 2u);
+  // Vertex 0 on the segment between the cones, which stay apart: collapsed, not at cones.
+  std::vector<Vec2d> collinear = uv;
+  collinear[0] = 0.5 * (uv[1] + uv[2]);
+  const MapQuality line = measureMap(mesh, collinear, nullptr, h, &edgeCones);
+  EXPECT_EQ(line.collapsed, 1u);
+  EXPECT_EQ(line.collapsedAtCones, 0u);
+  // Mirrored: ratio -1; a zero-area triangle has no ratio.
+  std::vector<Vec2d> mirrored = uv;
+  for (Vec2d& q : mirrored) q.y() = -q.y();
+  EXPECT_NEAR(parameterAreaRatio(mesh, mirrored, 1, h), -1.0, 1e-12);
+  TriangleMesh flat = mesh;
+  flat.positions[2] = Vec3f(0.5f, 0, 0);
+  EXPECT_TRUE(std::isnan(parameterAreaRatio(flat, std::vector<Vec2d>(6, Vec2d::Zero()), 0, h)));
+  const std::vector<VertexId> badCones = {7};
+  EXPECT_THROW(measureMap(mesh, uv, nullptr, h, &badCones), InputError);
+}
+
 }  // namespace
 }  // namespace seamvox

@@ -180,7 +180,7 @@ TEST_F(RefineSphere, MarkedDamageAroundConesIsRepairedToTheHatMap) {
               1e-12);
 }
 
-TEST_F(RefineSphere, CollapsedTrianglesAreFoundWithoutMarks) {
+TEST_F(RefineSphere, CollapsedTrianglesAreFoundWithoutMarksAndRoundsGrowTheRegion) {
   const Scene& s = *scene_;
   std::vector<Vec2d> damaged;
   damageAroundCones(s, 2, damaged);
@@ -188,10 +188,47 @@ TEST_F(RefineSphere, CollapsedTrianglesAreFoundWithoutMarks) {
   options.edgeLength = s.options.edgeLength;
   options.rings = 1;  // the outer damaged vertices touch collapsed faces only on one side
   RefineStats stats;
-  const std::vector<Vec2d> refined = refineAndCheck(damaged, options, &stats);
+  std::vector<Vec2d> refined = refineAndCheck(damaged, options, &stats);
   EXPECT_LT(maxCornerDistance(refined, s.hat.cornerUV), 1e-6);
   EXPECT_EQ(stats.markedFaces, 0u);
   EXPECT_GT(stats.collapsedFaces + stats.flippedFaces, 0u);
+
+  // Without rings the first region locks the outer damaged vertices at their wrong values: one
+  // round leaves bad faces at its border, more rounds grow the region around them until the hat
+  // map comes back.
+  options.rings = 0;
+  options.maxRounds = 1;
+  const RefineResult once = refineNearCones(s.mesh(), s.topology(), s.field, s.cut, damaged,
+                                            s.hat.translations, options);
+  ASSERT_EQ(once.stats.rounds.size(), 1u);
+  EXPECT_GT(once.stats.unresolvedFaces, 0u);
+  EXPECT_EQ(once.stats.unresolvedFaces, once.stats.rounds[0].borderFaces);
+  std::vector<Vec2d> onceMap = damaged;
+  applyRefinement(once, onceMap);
+  EXPECT_GT(maxCornerDistance(onceMap, s.hat.cornerUV), 1e-3);
+
+  options.maxRounds = 8;
+  refined = refineAndCheck(damaged, options, &stats);
+  EXPECT_LT(maxCornerDistance(refined, s.hat.cornerUV), 1e-6);
+  ASSERT_GE(stats.rounds.size(), 2u);
+  EXPECT_EQ(stats.unresolvedFaces, 0u);
+  EXPECT_EQ(stats.rounds.back().borderFaces, 0u);
+  for (std::size_t k = 1; k < stats.rounds.size(); ++k) {
+    EXPECT_EQ(stats.rounds[k].seedFaces, stats.rounds[k - 1].borderFaces);
+    EXPECT_GT(stats.rounds[k].regionFaces, stats.rounds[k - 1].regionFaces);
+    EXPECT_GE(stats.rounds[k].freeVertices, stats.rounds[k - 1].freeVertices);
+  }
+  EXPECT_EQ(stats.regionFaces, stats.rounds.back().regionFaces);
+  EXPECT_EQ(stats.freeVertices, stats.rounds.back().freeVertices);
+  // The whole-map counts the stage reports are the metric's.
+  const MapQuality map = measureMap(s.mesh(), refined, &s.field, s.options.edgeLength, &s.cut.cones);
+  EXPECT_EQ(stats.collapsedAfter, map.collapsed);
+  EXPECT_EQ(stats.collapsedAtConesAfter, map.collapsedAtCones);
+  EXPECT_EQ(stats.flippedAfter, map.flipped);
+  const MapQuality before = measureMap(s.mesh(), onceMap, &s.field, s.options.edgeLength, &s.cut.cones);
+  EXPECT_EQ(once.stats.collapsedAfter, before.collapsed);
+  EXPECT_EQ(once.stats.flippedAfter, before.flipped);
+  EXPECT_GT(before.collapsed + before.flipped, 0u);
 }
 
 TEST_F(RefineSphere, LockedVerticesKeepTheirValuesExactly) {
@@ -201,6 +238,7 @@ TEST_F(RefineSphere, LockedVerticesKeepTheirValuesExactly) {
   RefineOptions options;
   options.edgeLength = s.options.edgeLength;
   options.markedFaces = damageAroundCones(s, 2, damaged);
+  options.maxRounds = 1;  // the free vertices are then those of selectRefineRegion's region
   // Disturb the whole map a little: locked values are then not the hat's, yet must be kept.
   for (std::size_t c = 0; c < damaged.size(); ++c) damaged[c] += Vec2d(1e-3 * (c % 7), 0.0);
   const RefineResult result = refineNearCones(s.mesh(), topology, s.field, s.cut, damaged,
@@ -446,13 +484,44 @@ SolverFigures runSolver(const Scene& s, ParamSolver solver, std::int32_t grid) {
   SolverFigures out;
   out.result = parameterizeMeshWithSolver(s.mesh(), s.topology(), s.field, s.cut, s.options, options);
   out.seams = measureSeams(s.mesh(), s.topology(), s.cut, out.result.param.cornerUV);
-  out.map = measureMap(s.mesh(), out.result.param.cornerUV, &s.field, s.options.edgeLength);
+  out.map = measureMap(s.mesh(), out.result.param.cornerUV, &s.field, s.options.edgeLength,
+                       &s.cut.cones);
   return out;
+}
+
+// Edges whose two endpoints are cones.
+std::uint32_t coneEdges(const Topology& topology, const std::vector<VertexId>& cones) {
+  std::vector<std::uint8_t> isCone(topology.numVertices(), 0);
+  for (VertexId v : cones) isCone[v] = 1;
+  std::uint32_t out = 0;
+  for (CornerId c = 0; c < topology.numCorners(); ++c) {
+    const CornerId o = topology.opposite(c);
+    if (o != kInvalidId && o < c) continue;
+    out += isCone[topology.vertex(nextCorner(c))] && isCone[topology.vertex(prevCorner(c))];
+  }
+  return out;
+}
+
+// The collapse bound of the issue: voxloc collapses no triangle except between two coincident
+// cones (metrics.h collapsesBetweenCones), the hat solver neither; each edge between two cones
+// collapses at most its two triangles; the stage's whole-map counts are the metric's; no bad face
+// is left at the region's border.
+void expectNoCollapseBeyondCones(const Scene& s, const MapQuality& hat, const SolverFigures& voxloc) {
+  EXPECT_EQ(hat.collapsed, hat.collapsedAtCones);
+  EXPECT_EQ(voxloc.map.collapsed, voxloc.map.collapsedAtCones);
+  EXPECT_LE(voxloc.map.collapsedAtCones, 2u * coneEdges(s.topology(), s.cut.cones));
+  const RefineStats& refine = voxloc.result.refine;
+  EXPECT_EQ(refine.collapsedAfter, voxloc.map.collapsed);
+  EXPECT_EQ(refine.collapsedAtConesAfter, voxloc.map.collapsedAtCones);
+  EXPECT_EQ(refine.flippedAfter, voxloc.map.flipped);
+  EXPECT_EQ(refine.unresolvedFaces, 0u);
+  EXPECT_FALSE(refine.rounds.empty());
 }
 
 TEST_F(RefineSphere, VoxLocIsSeamlessAndCloseToHat) {
   const Scene& s = *scene_;
-  const MapQuality hat = measureMap(s.mesh(), s.hat.cornerUV, &s.field, s.options.edgeLength);
+  const MapQuality hat = measureMap(s.mesh(), s.hat.cornerUV, &s.field, s.options.edgeLength,
+                                    &s.cut.cones);
   const SolverFigures vox = runSolver(s, ParamSolver::Vox, 32);
   const SolverFigures voxloc = runSolver(s, ParamSolver::VoxLoc, 32);
   EXPECT_TRUE(voxloc.seams.isSeamless()) << voxloc.seams.maxResidual;
@@ -463,11 +532,35 @@ TEST_F(RefineSphere, VoxLocIsSeamlessAndCloseToHat) {
   EXPECT_GT(voxloc.result.refine.freeVertices, 0u);
   EXPECT_LT(voxloc.result.refine.refinedVertexFraction, 0.5);
   EXPECT_EQ(voxloc.map.flipped, 0u);
+  EXPECT_EQ(voxloc.map.collapsed, 0u);
+  expectNoCollapseBeyondCones(s, hat, voxloc);
   EXPECT_LE(voxloc.map.relativeGradientError, vox.map.relativeGradientError);
   EXPECT_LE(voxloc.map.relativeGradientError, 1.25 * hat.relativeGradientError);
   RecordProperty("hat", std::to_string(hat.relativeGradientError));
   RecordProperty("vox", std::to_string(vox.map.relativeGradientError));
   RecordProperty("voxloc", std::to_string(voxloc.map.relativeGradientError));
+}
+
+// A scan-like mesh with holes and floating islands (several components) at a coarse grid, where
+// the voxel map alone collapses and flips triangles: voxloc leaves none beyond the hat's.
+TEST(RefineScan, VoxLocLeavesNoCollapsedTriangleOnASurfaceWithHolesAndIslands) {
+  GenerateOptions options;
+  options.kind = MeshKind::Scan;
+  options.faces = 6000;
+  const std::unique_ptr<Scene> s = makeScene(generateMesh(options).mesh, 100.0);
+  const ComponentsResult components = computeComponents(s->topology());
+  ASSERT_GE(components.components.size(), 2u);
+  ASSERT_GT(components.boundaryLoops, 1u);
+  const MapQuality hat = measureMap(s->mesh(), s->hat.cornerUV, &s->field, s->options.edgeLength,
+                                    &s->cut.cones);
+  const SolverFigures vox = runSolver(*s, ParamSolver::Vox, 16);
+  ASSERT_GT(vox.map.collapsed + vox.map.flipped, 0u);  // something to repair
+  const SolverFigures voxloc = runSolver(*s, ParamSolver::VoxLoc, 16);
+  EXPECT_EQ(voxloc.result.solver, ParamSolver::VoxLoc) << voxloc.result.fallbackReason;
+  EXPECT_TRUE(voxloc.seams.isSeamless()) << voxloc.seams.maxResidual;
+  expectNoCollapseBeyondCones(*s, hat, voxloc);
+  EXPECT_LE(voxloc.map.collapsed, hat.collapsed);
+  EXPECT_LE(double(voxloc.map.flipped), double(hat.flipped) + 0.001 * s->mesh().numFaces());
 }
 
 // The paper's figure of merit at 128^3 on a shared mesh (fertility subdivided and armadillo run
@@ -489,8 +582,10 @@ TEST_P(VoxLocShared, SeamlessAndWithinAQuarterOfHat) {
     mesh = subdivideMesh(coarse.mesh, coarse.topology, subdivide).mesh;
   }
   const std::unique_ptr<Scene> s = makeScene(std::move(mesh), 100.0);
-  const MapQuality hat = measureMap(s->mesh(), s->hat.cornerUV, &s->field, s->options.edgeLength);
+  const MapQuality hat = measureMap(s->mesh(), s->hat.cornerUV, &s->field, s->options.edgeLength,
+                                    &s->cut.cones);
   const SolverFigures voxloc = runSolver(*s, ParamSolver::VoxLoc, 128);
+  expectNoCollapseBeyondCones(*s, hat, voxloc);
   EXPECT_EQ(voxloc.result.solver, ParamSolver::VoxLoc) << voxloc.result.fallbackReason;
   EXPECT_TRUE(voxloc.seams.isSeamless()) << voxloc.seams.maxResidual;
   EXPECT_LT(measureSeamsFromUV(s->mesh(), s->topology(), voxloc.result.param.cornerUV).maxResidual,
@@ -499,11 +594,15 @@ TEST_P(VoxLocShared, SeamlessAndWithinAQuarterOfHat) {
   EXPECT_LE(voxloc.map.relativeGradientError, 1.25 * hat.relativeGradientError);
   EXPECT_LE(double(voxloc.map.flipped), double(hat.flipped) + 0.001 * s->mesh().numFaces());
   EXPECT_LT(voxloc.result.refine.refinedVertexFraction, 0.5);
-  std::printf("%s x4^%d: hat L2 %.5f, voxloc L2 %.5f (%.3fx), flips %llu / %llu\n", file, levels,
-              hat.relativeGradientError, voxloc.map.relativeGradientError,
+  std::printf("%s x4^%d: hat L2 %.5f, voxloc L2 %.5f (%.3fx), flips %llu / %llu, collapsed "
+              "(all between coincident cones) %llu / %llu, refine rounds %zu\n",
+              file, levels, hat.relativeGradientError, voxloc.map.relativeGradientError,
               voxloc.map.relativeGradientError / hat.relativeGradientError,
               static_cast<unsigned long long>(hat.flipped),
-              static_cast<unsigned long long>(voxloc.map.flipped));
+              static_cast<unsigned long long>(voxloc.map.flipped),
+              static_cast<unsigned long long>(hat.collapsed),
+              static_cast<unsigned long long>(voxloc.map.collapsed),
+              voxloc.result.refine.rounds.size());
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, VoxLocShared,

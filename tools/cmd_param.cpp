@@ -229,6 +229,25 @@ int runParam(Args& args) {
       j.key("factorBytes").value(refine.factorBytes);
       j.key("factorPeakBytes").value(refine.factorPeakBytes);
       j.key("seconds").value(refine.secondsTotal);
+      // Whole refined map (metrics.h criteria); collapsedAtCones: between coincident cones.
+      j.key("collapsedAfter").value(refine.collapsedAfter);
+      j.key("collapsedAtConesAfter").value(refine.collapsedAtConesAfter);
+      j.key("collapsedBeyondConesAfter").value(refine.collapsedAfter - refine.collapsedAtConesAfter);
+      j.key("flippedAfter").value(refine.flippedAfter);
+      j.key("unresolvedFaces").value(refine.unresolvedFaces);
+      j.key("maxRounds").value(static_cast<std::uint64_t>(solverOptions.refine.maxRounds));
+      j.key("rounds").beginArray();
+      for (const RefineRound& round : refine.rounds) {
+        j.beginObject();
+        j.key("seedFaces").value(round.seedFaces).key("regionFaces").value(round.regionFaces);
+        j.key("freeVertices").value(static_cast<std::uint64_t>(round.freeVertices));
+        j.key("unknowns").value(static_cast<std::uint64_t>(round.unknowns));
+        j.key("collapsed").value(round.collapsed).key("collapsedAtCones").value(round.collapsedAtCones);
+        j.key("flipped").value(round.flipped).key("borderFaces").value(round.borderFaces);
+        j.key("seconds").value(round.seconds);
+        j.endObject();
+      }
+      j.endArray();
       j.endObject();
     }
     j.key("quality").beginObject();
