@@ -1,7 +1,9 @@
-// Field + cut benchmark: time and peak memory of the smoothest field (CHOLMOD), singularities and
-// the cut on a mesh file or a generated mesh.
-//   bench_field MESH [--curvature W]
-//   bench_field --generate sphere|torus|genus2 FACES [--curvature W]
+// Field + cut benchmark: time and peak memory of the smoothest field (direct CHOLMOD solve or the
+// proxy field), singularities and the cut on a mesh file or a generated mesh; cones and the
+// smoothness energy (measureFieldEnergy) of the result. One method per run, so the peak memory
+// is that method's.
+//   bench_field MESH [--method direct|proxy] [--grid N] [--sweeps K] [--curvature W]
+//   bench_field --generate sphere|torus|genus2 FACES [same options]
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +14,7 @@
 #include "core/cut.h"
 #include "core/errors.h"
 #include "core/field.h"
+#include "core/field_proxy.h"
 #include "core/generate.h"
 #include "io/mesh_io.h"
 #include "stream/memory.h"
@@ -35,7 +38,9 @@ int main(int argc, char** argv) {
   seamvox::limitBlasThreads(1);
   using namespace seamvox;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_field MESH | --generate KIND FACES  [--curvature W]\n");
+    std::fprintf(stderr,
+                 "usage: bench_field MESH | --generate KIND FACES  [--method direct|proxy] [--grid N]\n"
+                 "                   [--sweeps K] [--curvature W]\n");
     return 2;
   }
   try {
@@ -57,8 +62,14 @@ int main(int argc, char** argv) {
       ++steps;
       return true;
     };
+    FieldMethod method = FieldMethod::Direct;
+    ProxyFieldOptions proxyOptions;
+    proxyOptions.progress = fieldOptions.progress;
     for (int i = 1; i + 1 < argc; ++i) {
       if (!std::strcmp(argv[i], "--curvature")) fieldOptions.curvatureWeight = std::atof(argv[i + 1]);
+      if (!std::strcmp(argv[i], "--method")) method = parseFieldMethod(argv[i + 1]);
+      if (!std::strcmp(argv[i], "--grid")) proxyOptions.gridResolution = std::atoi(argv[i + 1]);
+      if (!std::strcmp(argv[i], "--sweeps")) proxyOptions.smoothingSweeps = std::atoi(argv[i + 1]);
     }
     Clock::time_point mark = Clock::now();
     TriangleMesh raw;
@@ -75,14 +86,28 @@ int main(int argc, char** argv) {
     const CleanResult clean = cleanMesh(std::move(raw));
     std::printf("faces %u vertices %u\n", clean.mesh.numFaces(), clean.mesh.numVertices());
     report("clean", mark);
-    const CrossField field = computeSmoothestField(clean.mesh, clean.topology, fieldOptions);
-    report("field", mark);
+    method = resolveFieldMethod(method, clean.mesh.numFaces());
+    CrossField field;
+    if (method == FieldMethod::Proxy) {
+      ProxyFieldResult proxy = computeProxyField(clean.mesh, clean.topology, proxyOptions);
+      fieldOptions.progress("done", 1.0);
+      std::printf("proxy: grid %d, %u elements, %llu element pairs, %u colours, %d sweeps\n",
+                  proxyOptions.gridResolution, proxy.elements,
+                  static_cast<unsigned long long>(proxy.elementEdges), proxy.colours,
+                  proxyOptions.smoothingSweeps);
+      field = std::move(proxy.field);
+    } else {
+      field = computeSmoothestField(clean.mesh, clean.topology, fieldOptions);
+      fieldOptions.progress("done", 1.0);
+    }
+    report(method == FieldMethod::Proxy ? "proxy field" : "direct field", mark);
     const FieldSingularities sing = computeSingularities(clean.mesh, clean.topology, field);
     report("singularities", mark);
     const CutResult cut = cutToDisk(clean.mesh, clean.topology, field, sing);
     report("cut", mark);
     std::printf("cones %zu (index sum %lld/4), seams %zu\n", sing.cones.size(),
                 static_cast<long long>(sing.indexSum4()), cut.seams.size());
+    std::printf("energy %.6g\n", measureFieldEnergy(clean.mesh, clean.topology, field));
   } catch (const Error& e) {
     std::fprintf(stderr, "bench_field: %s\n", e.what());
     return 1;

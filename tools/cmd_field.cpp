@@ -8,6 +8,7 @@
 #include "core/cut.h"
 #include "core/errors.h"
 #include "core/field.h"
+#include "core/field_proxy.h"
 #include "io/field_io.h"
 #include "io/json.h"
 #include "io/mesh_io.h"
@@ -77,6 +78,14 @@ int runField(Args& args) {
   const double curvature = args.number("curvature", 0.0);
   if (!(curvature >= 0.0 && std::isfinite(curvature))) throw UsageError("--curvature must be >= 0");
   if (importPath && args.value("curvature")) throw UsageError("--curvature has no effect with --import");
+  if (importPath && args.value("field")) throw UsageError("--field has no effect with --import");
+  FieldMethod method;
+  try {
+    method = parseFieldMethod(args.value("field", "auto"));
+  } catch (const InputError& e) {
+    throw UsageError(std::string("--field: ") + e.what());
+  }
+  if (curvature > 0.0 && method == FieldMethod::Proxy) throw UsageError("--curvature needs --field smooth or auto");
   const auto conesPath = args.value("cones");
   const auto seamsPath = args.value("seams");
   const bool json = args.flag("json");
@@ -99,13 +108,19 @@ int runField(Args& args) {
   seconds["clean"] = secondsSince(mark);
 
   CrossField field;
+  method = resolveFieldMethod(method, mesh.numFaces());
+  if (curvature > 0.0 && method == FieldMethod::Proxy) {
+    throw UsageError("--curvature needs the direct field (--field smooth): the proxy field is the smoothest field only");
+  }
   if (importPath) {
     field = importField(*importPath, mesh, clean.faceOrigin, inputFaces);  // per input face
   } else {
     SmoothFieldOptions options;
     options.curvatureWeight = curvature;
     options.progress = progress;
-    field = computeSmoothestField(mesh, topology, options);
+    ProxyFieldOptions proxyOptions;
+    proxyOptions.progress = progress;
+    field = computeCrossField(mesh, topology, method, options, proxyOptions);
   }
   seconds["field"] = secondsSince(mark);
   const FieldSingularities sing = computeSingularities(mesh, topology, field);
@@ -146,6 +161,7 @@ int runField(Args& args) {
     j.beginObject();
     j.key("input").value(input).key("output").value(*output);
     j.key("field").value(importPath ? "import" : curvature > 0.0 ? "curvature" : "smoothest");
+    j.key("fieldMethod").value(importPath ? "import" : fieldMethodName(method));
     j.key("faces").value(std::uint64_t{mesh.numFaces()}).key("vertices").value(std::uint64_t{mesh.numVertices()});
     j.key("eulerCharacteristic").value(chi);
     j.key("cones").value(std::uint64_t{sing.cones.size()});
@@ -165,8 +181,8 @@ int runField(Args& args) {
   }
   std::printf("%s -> %s: %u faces, %u vertices, chi %lld\n", input.c_str(), output->c_str(),
               mesh.numFaces(), mesh.numVertices(), static_cast<long long>(chi));
-  std::printf("field: %s; %zu cones (", importPath ? "imported" : curvature > 0.0 ? "curvature-aligned" : "smoothest",
-              sing.cones.size());
+  std::printf("field: %s%s; %zu cones (", importPath ? "imported" : curvature > 0.0 ? "curvature-aligned" : "smoothest",
+              importPath ? "" : method == FieldMethod::Proxy ? " (proxy)" : " (direct)", sing.cones.size());
   bool first = true;
   for (const auto& [k, n] : conesByIndex) {
     std::printf("%s%llu of index %+g", first ? "" : ", ", static_cast<unsigned long long>(n), k / 4.0);
@@ -186,7 +202,8 @@ int runField(Args& args) {
 }  // namespace
 
 SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
-                 "usage: seamvox field MESH -o FIELD [--import FILE] [--curvature W] [--cones OUT.obj]\n"
+                 "usage: seamvox field MESH -o FIELD [--field auto|smooth|proxy] [--import FILE]\n"
+                 "                     [--curvature W] [--cones OUT.obj]\n"
                  "                     [--seams OUT.obj] [--json] [--weld]\n"
                  "\n"
                  "Cleans MESH, computes the smoothest cross field (or imports one), its cones and the\n"
@@ -194,6 +211,10 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "(header `1 F`, one `x y z` line per input face; see io/field_io.h), which\n"
                  "`seamvox param --field FIELD` reads back.\n"
                  "\n"
+                 "  --field auto      smooth up to 1M faces, proxy above (default)\n"
+                 "  --field smooth    one solve over all faces (exact; up to a few million faces)\n"
+                 "  --field proxy     solved on a coarse grid proxy, then smoothed on the faces\n"
+                 "                    (linear time and memory; massive meshes; no --curvature)\n"
                  "  --import FILE     use the field in FILE (.crossfield `2 F` or plain) instead\n"
                  "  --curvature W     align with principal curvature, weight W > 0 (0: smoothest)\n"
                  "  --cones OUT.obj   cones as OBJ points (red: positive index, blue: negative)\n"

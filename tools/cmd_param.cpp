@@ -7,6 +7,7 @@
 #include "core/cut.h"
 #include "core/errors.h"
 #include "core/field.h"
+#include "core/field_proxy.h"
 #include "core/metrics.h"
 #include "core/param.h"
 #include "core/render.h"
@@ -59,7 +60,7 @@ int runParam(Args& args) {
   const std::int64_t rings = args.integer("rings", solverOptions.refine.rings);
   if (rings < 0 || rings > 64) throw UsageError("--rings must be between 0 and 64");
   solverOptions.refine.rings = static_cast<std::uint32_t>(rings);
-  const std::string fieldSource = args.value("field", "smooth");
+  const std::string fieldSource = args.value("field", "auto");
   const double edgeLengthArg = args.number("edge-length", 0.0);
   const double cellsArg = args.number("cells", 0.0);
   if (args.value("edge-length") && args.value("cells")) {
@@ -92,10 +93,15 @@ int runParam(Args& args) {
   const double secondsClean = clock.lap();
 
   CrossField field;
-  if (fieldSource == "smooth") {
+  std::string fieldMethod = "file";
+  if (fieldSource == "auto" || fieldSource == "smooth" || fieldSource == "proxy") {
+    const FieldMethod method = resolveFieldMethod(parseFieldMethod(fieldSource), mesh.numFaces());
+    fieldMethod = fieldMethodName(method);
     SmoothFieldOptions fieldOptions;
     fieldOptions.progress = progress;
-    field = computeSmoothestField(mesh, topology, fieldOptions);
+    ProxyFieldOptions proxyOptions;
+    proxyOptions.progress = progress;
+    field = computeCrossField(mesh, topology, method, fieldOptions, proxyOptions);
   } else {
     // The file has one vector per input face; cleaning may have dropped or reordered faces.
     const std::vector<Vec3d> vectors = readFieldVectors(fieldSource, static_cast<std::uint32_t>(inputFaces));
@@ -171,7 +177,7 @@ int runParam(Args& args) {
     j.key("input").value(input).key("output").value(*output).key("solver").value(solver);
     j.key("solverUsed").value(paramSolverName(solved.solver));
     if (!solved.fallbackReason.empty()) j.key("fallbackReason").value(solved.fallbackReason);
-    j.key("field").value(fieldSource);
+    j.key("field").value(fieldSource).key("fieldMethod").value(fieldMethod);
     j.key("faces").value(static_cast<std::uint64_t>(mesh.numFaces()));
     j.key("vertices").value(static_cast<std::uint64_t>(mesh.numVertices()));
     j.key("components").value(static_cast<std::uint64_t>(st.components));
@@ -278,7 +284,8 @@ int runParam(Args& args) {
 
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver hat|vox|voxloc] [--grid N]\n"
-                 "                     [--rings K] [--field FILE|smooth] [--edge-length H | --cells N]\n"
+                 "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
+                 "                     [--edge-length H | --cells N]\n"
                  "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
@@ -291,8 +298,12 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --solver hat        the per-vertex hat basis (exact reference, one global solve)\n"
                  "  --grid N            voxels per axis for vox and voxloc: 64, 128 (default), 256, 512\n"
                  "  --rings K           rings of neighbours added around the voxloc region (default 1)\n"
-                 "  --field FILE        per-face field (.crossfield or plain, one vector per input\n"
-                 "                      face); default 'smooth': the smoothest cross field\n"
+                 "  --field auto        the smoothest cross field: smooth up to 1M faces, proxy above\n"
+                 "                      (default)\n"
+                 "  --field smooth      the smoothest cross field by one solve over all faces (exact)\n"
+                 "  --field proxy       the smoothest cross field solved on a coarse grid proxy, then\n"
+                 "                      smoothed on the faces (linear time and memory; massive meshes)\n"
+                 "  --field FILE        per-face field (.crossfield or plain, one vector per input face)\n"
                  "  --edge-length H     grid spacing in mesh units\n"
                  "  --cells N           H = bounding-box diagonal / N (default N = 100)\n"
                  "  --greedy            round translations in batches, re-solving in between\n"

@@ -1,0 +1,256 @@
+// Proxy cross field: Poincare-Hopf, the cut of a proxy field is a disk, constant on a plane, two
+// sheets in one cell stay apart, deterministic across thread counts, cones and smoothness close
+// to the direct field on the shared meshes; method selection.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/cut.h"
+#include "core/detail_union_find.h"
+#include "core/errors.h"
+#include "core/field.h"
+#include "core/field_proxy.h"
+#include "core/generate.h"
+#include "core/topology.h"
+#include "test_meshes.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+using testing::loadShared;
+using testing::makeSurface;
+using testing::Surface;
+
+ProxyFieldResult proxyField(const Surface& s, std::int32_t grid = 32, std::int32_t sweeps = 6) {
+  ProxyFieldOptions options;
+  options.gridResolution = grid;
+  options.smoothingSweeps = sweeps;
+  return computeProxyField(s.mesh, s.topology, options);
+}
+
+/// Euler characteristic of the cut surface of each component, counted independently of
+/// cutToDisk: a vertex with k > 0 cut edges around it splits into k copies (k + 1 on the
+/// boundary, where boundary edges are not counted in k), a cut interior edge into two. Also
+/// checks that the faces of each component stay connected through uncut edges. Then
+/// chi == 1 per component means a disk (connected, orientable, with boundary).
+void expectCutIsDisk(const Surface& s, const CutResult& cut, const std::string& what) {
+  const Topology& t = s.topology;
+  const ComponentsResult comps = computeComponents(t);
+  std::vector<std::int64_t> chi(comps.components.size(), 0);
+  detail::UnionFind pieces(t.numFaces());
+  for (CornerId c = 0; c < t.numCorners(); ++c) {
+    const std::uint32_t k = comps.faceComponent[cornerFace(c)];
+    if (c % 3 == 0) chi[k] += 1;
+    const CornerId o = t.opposite(c);
+    if (o == kInvalidId || cut.isCut[c]) {
+      chi[k] -= 1;  // each side of a cut edge, and a boundary edge, once
+    } else if (c < o) {
+      chi[k] -= 1;
+      pieces.unite(cornerFace(c), cornerFace(o));
+    }
+  }
+  for (VertexId v = 0; v < t.numVertices(); ++v) {
+    if (t.isIsolatedVertex(v)) continue;
+    std::int64_t cutEdges = 0;
+    t.forEachCornerAround(v, [&](CornerId c) {
+      const CornerId e = nextCorner(c);  // edge from v to the next vertex of the fan
+      if (t.opposite(e) != kInvalidId && cut.isCut[e]) ++cutEdges;
+    });
+    const bool boundary = t.isBoundaryVertex(v);
+    chi[comps.faceComponent[cornerFace(t.vertexCorner(v))]] +=
+        boundary ? cutEdges + 1 : std::max<std::int64_t>(cutEdges, 1);
+  }
+  std::vector<std::uint32_t> rootOfComponent(comps.components.size(), kInvalidId);
+  for (FaceId f = 0; f < t.numFaces(); ++f) {
+    std::uint32_t& root = rootOfComponent[comps.faceComponent[f]];
+    if (root == kInvalidId) root = pieces.find(f);
+    ASSERT_EQ(pieces.find(f), root) << what << ": face " << f << " cut off from its component";
+  }
+  for (std::size_t k = 0; k < chi.size(); ++k) EXPECT_EQ(chi[k], 1) << what << ": component " << k;
+}
+
+std::int64_t eulerCharacteristic(const Topology& topology) {
+  std::int64_t chi = 0;
+  for (const ComponentInfo& c : computeComponents(topology).components) chi += c.eulerCharacteristic;
+  return chi;
+}
+
+/// Poincare-Hopf on a closed surface, and the cut through the field's cones is a disk.
+void expectValidField(const Surface& s, const CrossField& field, const std::string& what) {
+  ASSERT_EQ(field.direction.size(), s.mesh.numFaces()) << what;
+  for (FaceId f = 0; f < s.mesh.numFaces(); ++f) {
+    ASSERT_TRUE(field.direction[f].allFinite()) << what << ": face " << f;
+    ASSERT_NEAR(field.direction[f].norm(), 1.0, 1e-9) << what << ": face " << f;
+    const Vec3d n = faceNormal(s.mesh, f);
+    ASSERT_LT(std::abs(n.dot(field.direction[f])), 1e-6) << what << ": face " << f << " not tangent";
+  }
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  if (computeComponents(s.topology).boundaryLoops == 0) {
+    EXPECT_EQ(sing.indexSum4(), 4 * eulerCharacteristic(s.topology)) << what;
+  }
+  expectCutIsDisk(s, cutToDisk(s.mesh, s.topology, field, sing), what);
+}
+
+TEST(ProxyField, PoincareHopfAndDiskCutOnGeneratedClosedMeshes) {
+  GenerateOptions genus2;
+  genus2.kind = MeshKind::Genus2;
+  genus2.faces = 20000;
+  const std::vector<std::pair<std::string, TriangleMesh>> meshes = {
+      {"icosphere", testing::icosphereMesh(4)},
+      {"torus", testing::torusMesh(60, 24)},
+      {"genus2", generateMesh(genus2).mesh},
+      {"torus+sphere", testing::concatMeshes({testing::torusMesh(40, 16), testing::icosphereMesh(3)})}};
+  for (const auto& [name, mesh] : meshes) {
+    const Surface s = makeSurface(mesh);
+    for (std::int32_t grid : {8, 32, 128}) {
+      const ProxyFieldResult proxy = proxyField(s, grid);
+      EXPECT_GT(proxy.elements, 0u);
+      EXPECT_LE(proxy.colours, 4u);
+      expectValidField(s, proxy.field, name + " grid " + std::to_string(grid));
+    }
+  }
+}
+
+TEST(ProxyField, SmoothSphereHasEightQuarterCones) {
+  const Surface s = makeSurface(testing::icosphereMesh(5));
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, proxyField(s, 32).field);
+  EXPECT_EQ(sing.indexSum4(), 8);
+  EXPECT_EQ(sing.cones.size(), 8u);
+  for (VertexId v : sing.cones) EXPECT_EQ(sing.index4[v], 1) << "vertex " << v;
+}
+
+TEST(ProxyField, ConstantOnAPlane) {
+  const Surface s = makeSurface(testing::gridMesh(60, 40, 0.5));
+  for (std::int32_t grid : {4, 16, 64}) {
+    const ProxyFieldResult proxy = proxyField(s, grid);
+    // A constant cross: the same 4th power on every face (all frames share the plane's axes
+    // up to the face's first-edge angle, so compare angles in world coordinates).
+    auto fourth = [](const Vec3d& u) {
+      std::complex<double> z(u.x(), u.y());
+      z *= z;
+      return z * z;
+    };
+    const std::complex<double> z0 = fourth(proxy.field.direction[0]);
+    double worst = 0.0;
+    for (const Vec3d& u : proxy.field.direction) worst = std::max(worst, std::abs(fourth(u) - z0));
+    EXPECT_LT(worst, 1e-6) << "grid " << grid;
+    EXPECT_LT(measureFieldEnergy(s.mesh, s.topology, proxy.field), 1e-9) << "grid " << grid;
+    EXPECT_TRUE(computeSingularities(s.mesh, s.topology, proxy.field).cones.empty()) << "grid " << grid;
+    expectValidField(s, proxy.field, "plane grid " + std::to_string(grid));
+  }
+}
+
+TEST(ProxyField, TwoSheetsInOneCellAreSeparateElements) {
+  // Two parallel squares 0.01 apart; 5 cells of 0.2 centred on them: every cell that holds
+  // faces holds both sheets.
+  TriangleMesh lower = testing::gridMesh(8, 8, 0.125);
+  TriangleMesh upper = lower;
+  for (Vec3f& p : upper.positions) p.z() = 0.01f;
+  const Surface s = makeSurface(testing::concatMeshes({lower, upper}));
+  const ProxyFieldResult one = proxyField(makeSurface(lower), 5);
+  const ProxyFieldResult two = proxyField(s, 5);
+  EXPECT_EQ(two.elements, 2 * one.elements);
+  expectValidField(s, two.field, "two sheets");
+}
+
+TEST(ProxyField, SameResultForOneAndTwoThreads) {
+  GenerateOptions options;
+  options.kind = MeshKind::Torus;
+  options.faces = 30000;
+  const Surface s = makeSurface(generateMesh(options).mesh);
+  CrossField serial;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    serial = proxyField(s, 32).field;
+  }
+  const CrossField parallel = proxyField(s, 32).field;
+  for (FaceId f = 0; f < s.mesh.numFaces(); ++f) {
+    ASSERT_EQ(serial.direction[f], parallel.direction[f]) << "face " << f;
+  }
+}
+
+TEST(ProxyField, SweepsLowerTheEnergy) {
+  GenerateOptions options;
+  options.kind = MeshKind::Sphere;
+  options.faces = 40000;
+  const Surface s = makeSurface(generateMesh(options).mesh);
+  const double transferred = measureFieldEnergy(s.mesh, s.topology, proxyField(s, 32, 0).field);
+  const double smoothed = measureFieldEnergy(s.mesh, s.topology, proxyField(s, 32, 6).field);
+  EXPECT_GT(transferred, 0.0);
+  EXPECT_LT(smoothed, transferred);
+}
+
+TEST(ProxyField, ZeroAreaFacesGiveNoNaN) {
+  // A grid whose middle row of vertices is moved onto the row below: its faces have zero area.
+  TriangleMesh mesh = testing::gridMesh(6, 6);
+  for (Vec3f& p : mesh.positions) {
+    if (p.y() == 3.0f) p.y() = 2.0f;
+  }
+  const Surface s = makeSurface(mesh);
+  const CrossField field = proxyField(s, 8).field;
+  for (const Vec3d& u : field.direction) EXPECT_TRUE(u.allFinite());
+}
+
+TEST(ProxyField, ComparableToTheDirectFieldOnSharedMeshes) {
+  for (const char* name : {"bumpy.off", "bunny.off", "fertility.off", "3holes.off", "cheburashka.off",
+                           "rocker-arm.obj", "camelhead.off", "armadillo.obj"}) {
+    const std::string path = testing::sharedMesh(name);
+    if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage(name);
+    const Surface s = loadShared(path);
+    const CrossField direct = computeSmoothestField(s.mesh, s.topology);
+    const std::size_t directCones = computeSingularities(s.mesh, s.topology, direct).cones.size();
+    const double directEnergy = measureFieldEnergy(s.mesh, s.topology, direct);
+    // Grid 32: a few faces to a few dozen per element on these meshes; 128: about one.
+    for (std::int32_t grid : {32, 128}) {
+      const std::string what = std::string(name) + " grid " + std::to_string(grid);
+      const ProxyFieldResult proxy = proxyField(s, grid);
+      expectValidField(s, proxy.field, what);
+      const std::size_t proxyCones = computeSingularities(s.mesh, s.topology, proxy.field).cones.size();
+      const double proxyEnergy = measureFieldEnergy(s.mesh, s.topology, proxy.field);
+      EXPECT_LE(proxyCones, 2 * directCones + 8) << what << ": direct " << directCones;
+      EXPECT_LE(proxyEnergy, 2.0 * directEnergy) << what;
+      std::printf("%-26s %6u faces %6u elements  cones direct %4zu proxy %4zu  energy direct %8.1f proxy %8.1f\n",
+                  what.c_str(), s.mesh.numFaces(), proxy.elements, directCones, proxyCones, directEnergy,
+                  proxyEnergy);
+    }
+  }
+}
+
+TEST(ProxyField, MethodSelection) {
+  EXPECT_EQ(resolveFieldMethod(FieldMethod::Auto, 1000), FieldMethod::Direct);
+  EXPECT_EQ(resolveFieldMethod(FieldMethod::Auto, kDirectFieldMaxFaces), FieldMethod::Direct);
+  EXPECT_EQ(resolveFieldMethod(FieldMethod::Auto, kDirectFieldMaxFaces + 1), FieldMethod::Proxy);
+  EXPECT_EQ(resolveFieldMethod(FieldMethod::Proxy, 10), FieldMethod::Proxy);
+  EXPECT_EQ(resolveFieldMethod(FieldMethod::Direct, 1u << 30), FieldMethod::Direct);
+  for (FieldMethod m : {FieldMethod::Auto, FieldMethod::Direct, FieldMethod::Proxy}) {
+    EXPECT_EQ(parseFieldMethod(fieldMethodName(m)), m);
+  }
+  EXPECT_EQ(parseFieldMethod("smooth"), FieldMethod::Direct);
+  EXPECT_THROW(parseFieldMethod("fast"), InputError);
+
+  const Surface s = makeSurface(testing::icosphereMesh(2));
+  SmoothFieldOptions curvature;
+  curvature.curvatureWeight = 1.0;
+  EXPECT_THROW(computeCrossField(s.mesh, s.topology, FieldMethod::Proxy, curvature), InputError);
+  EXPECT_NO_THROW(computeCrossField(s.mesh, s.topology, FieldMethod::Auto, curvature));
+  const CrossField proxy = computeCrossField(s.mesh, s.topology, FieldMethod::Proxy);
+  expectValidField(s, proxy, "computeCrossField proxy");
+  ProxyFieldOptions bad;
+  bad.gridResolution = 2;
+  EXPECT_THROW(computeProxyField(s.mesh, s.topology, bad), InputError);
+  bad.gridResolution = 64;
+  bad.smoothingSweeps = -1;
+  EXPECT_THROW(computeProxyField(s.mesh, s.topology, bad), InputError);
+}
+
+TEST(ProxyField, EmptyMesh) {
+  const Surface s = makeSurface(TriangleMesh{});
+  EXPECT_TRUE(computeProxyField(s.mesh, s.topology).field.direction.empty());
+}
+
+}  // namespace
+}  // namespace seamvox
