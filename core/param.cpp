@@ -1,5 +1,6 @@
 #include "core/param.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "core/basis.h"
@@ -45,6 +46,26 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
   evaluateMap(basis, reduction, solution.unknowns, out.cornerUV);
   out.secondsEvaluate = secondsSince(start);
   return out;
+}
+
+std::vector<GaussVector> seamCycleConstraints(const TriangleMesh& mesh, const Topology& topology,
+                                              const CrossField& field, const CutResult& cut,
+                                              double edgeLength) {
+  HatBasisOptions options;
+  options.edgeLength = edgeLength;
+  for (const SeamCurve& seam : cut.seams) {
+    for (CornerId c : seam.corners) {
+      for (CornerId end : {nextCorner(c), prevCorner(c)}) {
+        topology.forEachCornerAround(topology.vertex(end),
+                                     [&](CornerId around) { options.faces.push_back(around / 3); });
+      }
+    }
+  }
+  if (options.faces.empty()) return {};  // an empty subset would mean the whole mesh
+  std::sort(options.faces.begin(), options.faces.end());
+  options.faces.erase(std::unique(options.faces.begin(), options.faces.end()), options.faces.end());
+  const HatBasis basis(mesh, topology, field, cut, options);
+  return reduceBasis(basis).cycleConstraints;
 }
 
 }  // namespace seamvox

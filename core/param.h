@@ -3,6 +3,8 @@
 /// rounding and evaluation in one call (DESIGN sections 6-9).
 #include <vector>
 
+#include "gaussian_int.h"
+
 #include "cut.h"
 #include "field.h"
 #include "mesh.h"
@@ -32,5 +34,13 @@ struct ParamResult {
 ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,
                              const ParamOptions& options = {});
+
+/// The translation constraints of the hat basis (Reduction::cycleConstraints, DESIGN section 7)
+/// from a hat basis built only on the faces around seam vertices: cycles of seam crossings only
+/// close around those vertices, so the constraints span the same lattice as a whole-mesh
+/// reduction at a cost that follows the seams, not the mesh. Empty when there are no seams.
+std::vector<GaussVector> seamCycleConstraints(const TriangleMesh& mesh, const Topology& topology,
+                                              const CrossField& field, const CutResult& cut,
+                                              double edgeLength);
 
 }  // namespace seamvox

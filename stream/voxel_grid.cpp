@@ -166,13 +166,8 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   ParamResult& param = out.param;
   auto start = std::chrono::steady_clock::now();
   // The translation constraints always come from the hat basis (DESIGN section 7).
-  std::vector<GaussVector> constraints;
-  {
-    HatBasisOptions hatOptions;
-    hatOptions.edgeLength = options.edgeLength;
-    const HatBasis hat(mesh, topology, field, cut, hatOptions);
-    constraints = reduceBasis(hat).cycleConstraints;
-  }
+  const std::vector<GaussVector> constraints =
+      seamCycleConstraints(mesh, topology, field, cut, options.edgeLength);
   VoxelBasisOptions basisOptions;
   basisOptions.gridResolution = gridResolution;
   basisOptions.edgeLength = options.edgeLength;

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include <Eigen/Dense>
+
 #include "core/basis.h"
 #include "core/clean.h"
 #include "core/cut.h"
@@ -337,6 +339,64 @@ TEST(HatCommand, ParamThenCheck) {
   EXPECT_EQ(testing::runSeamvox("check '" + dir.path("bad.obj") + "'", &log), 5) << log;
   EXPECT_NE(log.find("NOT seamless"), std::string::npos) << log;
   EXPECT_EQ(testing::runSeamvox("param '" + bunny + "' -o x.off", &log), 2) << log;
+}
+
+}  // namespace
+}  // namespace seamvox
+
+namespace seamvox {
+namespace {
+
+/// Rank over the reals of constraint rows on numSeams translations (each seam: real, imag).
+Eigen::Index constraintRank(const std::vector<const std::vector<GaussVector>*>& sets,
+                            std::uint32_t numSeams) {
+  std::size_t rows = 0;
+  for (const auto* set : sets) rows += set->size();
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(rows), 2 * numSeams);
+  Eigen::Index row = 0;
+  for (const auto* set : sets) {
+    for (const GaussVector& constraint : *set) {
+      // (x + iy)(s + i t) = (xs - yt) + i(xt + ys): two real rows over (s, t) per seam.
+      for (const auto& [seam, q] : constraint) {
+        a(row, 2 * seam) += double(q.re), a(row, 2 * seam + 1) -= double(q.im);
+        a(row + 1, 2 * seam) += double(q.im), a(row + 1, 2 * seam + 1) += double(q.re);
+      }
+      row += 2;
+    }
+  }
+  return rows == 0 ? 0 : Eigen::FullPivLU<Eigen::MatrixXd>(a).rank();
+}
+
+void expectSameConstraints(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                           const char* what) {
+  const CutResult cut = cutToDisk(mesh, topology, field, computeSingularities(mesh, topology, field));
+  HatBasisOptions options;
+  options.edgeLength = 0.1;
+  const std::vector<GaussVector> whole = reduceBasis(HatBasis(mesh, topology, field, cut, options)).cycleConstraints;
+  const std::vector<GaussVector> local = seamCycleConstraints(mesh, topology, field, cut, 0.1);
+  const auto n = static_cast<std::uint32_t>(cut.seams.size());
+  const Eigen::Index rankWhole = constraintRank({&whole}, n), rankLocal = constraintRank({&local}, n);
+  EXPECT_GT(rankWhole, 0) << what << ": no constraint to compare";
+  EXPECT_EQ(rankLocal, rankWhole) << what;
+  EXPECT_EQ(constraintRank({&whole, &local}, n), rankWhole) << what << ": the spans differ";
+}
+
+TEST(HatReduction, SeamCycleConstraintsSpanTheWholeMeshConstraints) {
+  {
+    const testing::Surface s = testing::makeSurface(testing::torusMesh(40, 20));
+    expectSameConstraints(s.mesh, s.topology, testing::randomField(s.mesh, 3), "torus, random field");
+  }
+  {
+    TriangleMesh bumpy = testing::icosphereMesh(3);
+    for (Vec3f& p : bumpy.positions) p *= 1.0f + 0.2f * std::sin(3.0f * p.x()) * std::cos(2.0f * p.y());
+    const testing::Surface s = testing::makeSurface(std::move(bumpy));
+    expectSameConstraints(s.mesh, s.topology, computeSmoothestField(s.mesh, s.topology), "bumpy sphere");
+  }
+  {
+    const testing::Surface s = testing::makeSurface(
+        testing::concatMeshes({testing::gridMesh(30, 30), testing::torusMesh(30, 16)}));
+    expectSameConstraints(s.mesh, s.topology, testing::randomField(s.mesh, 5), "square and torus");
+  }
 }
 
 }  // namespace
