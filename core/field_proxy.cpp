@@ -27,7 +27,6 @@ using Complex = std::complex<double>;
 /// Geometry of one face: unit normal, first-edge frame, centroid. Zero-area faces get a frame
 /// from their longest edge and are flagged.
 struct FaceGeometry {
-  Vec3d p[3];  ///< corner positions
   Vec3d n, e1, e2, centroid;
   double area = 0.0;
   bool degenerate = false;
@@ -35,9 +34,8 @@ struct FaceGeometry {
 
 FaceGeometry faceGeometry(const TriangleMesh& mesh, FaceId f) {
   const Triangle& t = mesh.triangles[f];
+  const Vec3d p0 = mesh.position(t[0]), p1 = mesh.position(t[1]), p2 = mesh.position(t[2]);
   FaceGeometry g;
-  g.p[0] = mesh.position(t[0]), g.p[1] = mesh.position(t[1]), g.p[2] = mesh.position(t[2]);
-  const Vec3d &p0 = g.p[0], &p1 = g.p[1], &p2 = g.p[2];
   g.centroid = (p0 + p1 + p2) / 3.0;
   const Vec3d cross = (p1 - p0).cross(p2 - p0);
   const double twiceArea = cross.norm();
@@ -453,34 +451,44 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   // race-free parallel loop and the result does not depend on the thread count.
   std::vector<std::uint8_t> colour;
   result.colours = options.smoothingSweeps > 0 ? colourFaces(topology, colour) : 0;
+  // A sweep reads only the corner table, the packed normals and the directions (unit weights):
+  // memory traffic, not geometry. The exact tangent planes are restored once at the end.
   for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
     reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
     for (std::uint32_t k = 0; k < result.colours; ++k) {
       tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
         for (FaceId f = range.begin(); f != range.end(); ++f) {
-          if (colour[f] != k) continue;
-          const FaceGeometry g = faceGeometry(mesh, f);
-          if (g.degenerate) continue;
+          if (colour[f] != k || packedNormal[f] == kNoNormal) continue;
+          const Vec3d n = unpackNormal(packedNormal[f]);
           // Frame with e1 = the current direction: the new one is the representative nearest it.
           const Vec3d& u = field.direction[f];
-          const Vec3d v = g.n.cross(u);
-          // Weights: the shared edge's length (the neighbours' own geometry is not loaded).
+          const Vec3d v = n.cross(u);
           Complex sum = 0.0;
-          for (int k = 0; k < 3; ++k) {
-            const CornerId o = topology.opposite(3 * f + k);
+          for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+            const CornerId o = topology.opposite(c);
             if (o == kInvalidId || packedNormal[cornerFace(o)] == kNoNormal) continue;
-            const double w = (g.p[(k + 2) % 3] - g.p[(k + 1) % 3]).norm();
-            const Vec3d moved = rotateBetween(unpackNormal(packedNormal[cornerFace(o)]), g.n,
-                                              field.direction[cornerFace(o)]);
-            sum += w * fourthPower(moved, u, v);
+            const FaceId g = cornerFace(o);
+            sum += fourthPower(rotateBetween(unpackNormal(packedNormal[g]), n, field.direction[g]), u, v);
           }
           const Vec3d next = directionOf(sum, u, v);
-          const Vec3d tangent = next - next.dot(g.n) * g.n;
+          const Vec3d tangent = next - next.dot(n) * n;
           const double len = tangent.norm();
           if (len > 0.0 && std::isfinite(len)) field.direction[f] = tangent / len;
         }
       });
     }
+  }
+  if (options.smoothingSweeps > 0) {
+    tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+      for (FaceId f = range.begin(); f != range.end(); ++f) {
+        if (packedNormal[f] == kNoNormal) continue;
+        const Vec3d n = faceNormal(mesh, f);
+        const Vec3d& u = field.direction[f];
+        const Vec3d tangent = u - u.dot(n) * n;
+        const double len = tangent.norm();
+        if (len > 0.0 && std::isfinite(len)) field.direction[f] = tangent / len;
+      }
+    });
   }
   reportProgress(options.progress, "proxy field: smooth", 1.0);
   return result;

@@ -19,7 +19,7 @@ struct ProxyFieldOptions {
   std::int32_t gridResolution = 128;
   /// Gauss-Seidel sweeps on the faces after the transfer (each face := normalized transported
   /// average of its neighbours' 4th powers), one colour of the face graph at a time.
-  std::int32_t smoothingSweeps = 6;
+  std::int32_t smoothingSweeps = 4;
   ProgressFn progress;
 };
 
