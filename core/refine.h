@@ -9,10 +9,12 @@
 /// first region. After each solve the region's faces are measured again; a face still collapsed
 /// (below collapseThreshold) or flipped that touches a locked vertex grows the region by rings
 /// around it and the grown region is solved again from the input map, up to maxRounds solves.
-/// Faces whose vertices are all free are not grown around: the local hat solve is then exact for
-/// its border, and what remains there (flips next to cones) is what the hat solver has too. Faces
-/// between two coincident cones (metrics.h collapsesBetweenCones) are not grown around either: the
-/// cones' positions follow from the rounded translations, no free vertex moves them.
+/// Faces whose vertices are all free are not grown around: the local hat solve is exact for its
+/// border, and what remains there is the hat map's own damage (on the shared meshes: flips of
+/// triangles touching a cone, as many as the hat solver's up to how the translations round).
+/// Faces between two coincident cones (metrics.h collapsesBetweenCones) are not grown around
+/// either: the cones' positions follow from the rounded translations, no free vertex moves them.
+/// On the shared meshes these are the only collapsed faces left, in the hat map as well.
 #include <complex>
 #include <cstdint>
 #include <vector>
