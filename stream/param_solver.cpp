@@ -29,6 +29,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   out.solver = solverOptions.solver;
   if (solverOptions.solver == ParamSolver::Hat) {
     out.param = parameterizeMesh(mesh, topology, field, cut, options);
+    if (solverOptions.meter) solverOptions.meter->finish("solve");
     return out;
   }
   VoxelParamResult vox;
@@ -39,8 +40,10 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     out.fallbackReason = e.what();
     out.solver = ParamSolver::Hat;
     out.param = parameterizeMesh(mesh, topology, field, cut, options);
+    if (solverOptions.meter) solverOptions.meter->finish("solve");
     return out;
   }
+  if (solverOptions.meter) solverOptions.meter->finish("solve");
   out.regularization = vox.regularization;
   out.failedAttempts = vox.failedAttempts;
   out.invisibleTranslations = vox.invisibleTranslations;
@@ -59,6 +62,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     applyRefinement(refinement, out.param.cornerUV, &out.param.translations);
     out.refined = true;
     out.refine = refinement.stats;
+    if (solverOptions.meter) solverOptions.meter->finish("refine");
   }
   return out;
 }

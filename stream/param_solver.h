@@ -8,6 +8,7 @@
 #include "../core/param.h"
 #include "../core/refine.h"
 #include "../core/voxel_basis.h"
+#include "memory.h"
 
 namespace seamvox {
 
@@ -26,6 +27,9 @@ struct SolverOptions {
   std::int32_t gridResolution = 128;  ///< voxels per axis (vox, voxloc)
   /// Region and rings of the local refinement (voxloc); markedFaces and edgeLength are filled in.
   RefineOptions refine;
+  /// When set, the solve closes its stages on it: "solve" (the hat or voxel solve, with the
+  /// fallback if any) and, for voxloc, "refine".
+  StageMeter* meter = nullptr;
 };
 
 struct SolverResult {

@@ -320,6 +320,14 @@ TEST(HatCommand, ParamThenCheck) {
                           "\"peakResidentBytes\"", "\"secondSolve\""}) {
     EXPECT_NE(report.find(key), std::string::npos) << key << " missing in " << report;
   }
+  // One record per stage, in pipeline order.
+  std::size_t at = report.find("\"stages\"");
+  ASSERT_NE(at, std::string::npos) << report;
+  for (const char* stage : {"read", "clean", "field", "cut", "solve", "metrics", "write"}) {
+    at = report.find("\"name\": \"" + std::string(stage) + "\"", at);
+    ASSERT_NE(at, std::string::npos) << "stage " << stage << " missing or out of order in " << report;
+  }
+  EXPECT_NE(report.find("\"peakBytes\"", report.find("\"stages\"")), std::string::npos) << report;
   EXPECT_EQ(testing::runSeamvox("check '" + dir.path("uv.obj") + "' --json", &log), 0) << log;
   EXPECT_NE(log.find("\"seamless\": true"), std::string::npos) << log;
   // Shifting every u by 1/2 keeps r = 1 seams but makes t non-integer across r != 1 seams.

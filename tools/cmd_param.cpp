@@ -1,5 +1,4 @@
 // seamvox param: seamless parameterization of a mesh (hat, vox or vox + local hat refinement).
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -24,19 +23,6 @@ namespace {
 
 /// Grid cells along the bounding-box diagonal when neither --edge-length nor --cells is given.
 constexpr double kDefaultCells = 100.0;
-
-class Stopwatch {
- public:
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - last_).count();
-    last_ = now;
-    return s;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
 
 int runParam(Args& args) {
   const std::string input = args.positional(0, "the input mesh (seamvox param MESH -o OUT)");
@@ -79,10 +65,10 @@ int runParam(Args& args) {
   const ProgressFn progress = makeProgress(args.flag("quiet"));
   args.finish(1);
 
-  Stopwatch clock, total;
+  StageMeter meter;
   TriangleMesh raw = readMesh(input);
   const std::uint64_t inputFaces = raw.numFaces();
-  const double secondsRead = clock.lap();
+  const double secondsRead = meter.finish("read").seconds;
   CleanOptions cleanOptions;
   cleanOptions.weldVertices = weld;
   cleanOptions.progress = progress;
@@ -90,7 +76,7 @@ int runParam(Args& args) {
   CleanResult clean = cleanMesh(std::move(raw), cleanOptions);
   TriangleMesh& mesh = clean.mesh;
   const Topology& topology = clean.topology;
-  const double secondsClean = clock.lap();
+  const double secondsClean = meter.finish("clean").seconds;
 
   CrossField field;
   std::string fieldMethod = "file";
@@ -109,12 +95,14 @@ int runParam(Args& args) {
     for (FaceId f = 0; f < mesh.numFaces(); ++f) perFace[f] = vectors[clean.faceOrigin[f]];
     field = projectToTangent(mesh, std::move(perFace));
   }
-  const FieldSingularities singularities = computeSingularities(mesh, topology, field);
-  const double secondsField = clock.lap();
+  std::vector<FaceId>().swap(clean.faceOrigin);  // only the field file needed it
+  const double secondsField = meter.finish("field").seconds;
   CutOptions cutOptions;
   cutOptions.progress = progress;
-  const CutResult cut = cutToDisk(mesh, topology, field, singularities, cutOptions);
-  const double secondsCut = clock.lap();
+  // Matchings and indices are only needed to cut; the cut keeps the combed matchings and cones.
+  const CutResult cut =
+      cutToDisk(mesh, topology, field, computeSingularities(mesh, topology, field), cutOptions);
+  const double secondsCut = meter.finish("cut").seconds;
 
   const double diagonal = computeBoundingBox(mesh.positions).diagonal();
   ParamOptions options;
@@ -123,26 +111,30 @@ int runParam(Args& args) {
   if (!(options.edgeLength > 0.0)) throw InputError(input + ": the mesh has zero extent");
   options.greedyRounding = greedy;
   options.progress = progress;
-  clock.lap();
+  solverOptions.meter = &meter;  // closes the "solve" and "refine" stages
   SolverResult solved = parameterizeMeshWithSolver(mesh, topology, field, cut, options, solverOptions);
   ParamResult& result = solved.param;
   const RefineStats& refine = solved.refine;
-  const double secondsParam = clock.lap();
+  double secondsParam = 0.0;
+  for (const StageFigures& stage : meter.stages()) {
+    if (stage.name == "solve" || stage.name == "refine") secondsParam += stage.seconds;
+  }
 
   const SeamQuality seams = measureSeams(mesh, topology, cut, result.cornerUV);
   const MapQuality map = measureMap(mesh, result.cornerUV, &field, options.edgeLength);
-  const double secondsMetrics = clock.lap();
+  const double secondsMetrics = meter.finish("metrics").seconds;
   mesh.cornerUV = std::move(result.cornerUV);
   writeMesh(*output, mesh);
-  const double secondsWrite = clock.lap();
+  const double secondsWrite = meter.finish("write").seconds;
   if (renderPath) {
     RenderOptions renderOptions;
     renderOptions.drawSeams = renderOptions.drawCones = true;
     renderOptions.progress = progress;
     writePng(*renderPath, renderCheckerboard(mesh, topology, renderOptions).image);
+    meter.finish("render");
   }
-  const double secondsTotal = total.lap();
-  const std::uint64_t peak = peakResidentBytes();
+  const double secondsTotal = meter.totalSeconds();
+  const std::uint64_t peak = meter.peakBytes();
   const bool seamless = seams.isSeamless();
   const SeamlessStats& st = result.stats;
 
@@ -170,6 +162,11 @@ int runParam(Args& args) {
   }
   std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", secondsTotal, secondsField,
               secondsCut, secondsParam);
+  std::printf("stages (s / peak MB):");
+  for (const StageFigures& stage : meter.stages()) {
+    std::printf(" %s %.1f / %.0f;", stage.name.c_str(), stage.seconds, stage.peakBytes / 1048576.0);
+  }
+  std::printf("\n");
 
   if (reportPath) {
     JsonWriter j;
@@ -274,6 +271,13 @@ int runParam(Args& args) {
     j.key("write").value(secondsWrite).key("total").value(secondsTotal);
     j.endObject();
     j.key("peakResidentBytes").value(peak);
+    // Wall time, peak and end resident size of each stage, in order.
+    j.key("stages").beginArray();
+    for (const StageFigures& stage : meter.stages()) {
+      j.beginObject().key("name").value(stage.name).key("seconds").value(stage.seconds);
+      j.key("peakBytes").value(stage.peakBytes).key("endBytes").value(stage.endBytes).endObject();
+    }
+    j.endArray();
     j.endObject();
     writeTextOutput(*reportPath, j.str());
   }
