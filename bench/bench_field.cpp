@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <string>
 
 #include "core/clean.h"
@@ -24,12 +25,18 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+std::clock_t cpuMark = std::clock();  // process CPU time (all threads) at the last report
+
+/// Wall time, process CPU time and peak memory since the last mark.
 void report(const char* stage, Clock::time_point& mark) {
   const Clock::time_point now = Clock::now();
-  std::printf("%-14s %8.2f s   peak %8.1f MB\n", stage, std::chrono::duration<double>(now - mark).count(),
+  const std::clock_t cpu = std::clock();
+  std::printf("%-14s %8.2f s  cpu %8.2f s   peak %8.1f MB\n", stage,
+              std::chrono::duration<double>(now - mark).count(), double(cpu - cpuMark) / CLOCKS_PER_SEC,
               seamvox::peakResidentBytes() / 1048576.0);
   std::fflush(stdout);
   mark = now;
+  cpuMark = cpu;
 }
 
 }  // namespace
