@@ -72,8 +72,8 @@ int runParam(Args& args) {
   CleanOptions cleanOptions;
   cleanOptions.weldVertices = weld;
   cleanOptions.progress = progress;
-  raw.cornerUV.clear();
   CleanResult clean = cleanMesh(std::move(raw), cleanOptions);
+  std::vector<VertexId>().swap(clean.vertexOrigin);  // faceOrigin stays for a field file
   TriangleMesh& mesh = clean.mesh;
   const Topology& topology = clean.topology;
   const double secondsClean = meter.finish("clean").seconds;
