@@ -41,7 +41,8 @@ enum class FieldMethod {
   Direct,  ///< computeSmoothestField: one CHOLMOD solve over all faces
   Proxy,   ///< computeProxyField
 };
-/// Largest mesh Auto solves directly (direct: ~20 s and 1 GB at 1M faces, superlinear beyond).
+/// Largest mesh Auto solves directly. Measured at 1M faces: direct 39 s and 976 MB, proxy 5.6 s and
+/// 181 MB with the same cones; the direct solve grows superlinearly beyond (bench/RESULTS.md).
 constexpr std::uint32_t kDirectFieldMaxFaces = 1000000;
 /// Direct or Proxy: Auto resolved by the face count.
 FieldMethod resolveFieldMethod(FieldMethod method, std::uint32_t numFaces);

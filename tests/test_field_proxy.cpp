@@ -15,6 +15,7 @@
 #include "core/field_proxy.h"
 #include "core/generate.h"
 #include "core/topology.h"
+#include "io/mesh_io.h"
 #include "test_meshes.h"
 #include "testing.h"
 
@@ -245,6 +246,36 @@ TEST(ProxyField, MethodSelection) {
   bad.gridResolution = 64;
   bad.smoothingSweeps = -1;
   EXPECT_THROW(computeProxyField(s.mesh, s.topology, bad), InputError);
+}
+
+TEST(ProxyField, CommandsSelectTheMethodAndReportIt) {
+  testing::TempDir dir;
+  GenerateOptions options;
+  options.kind = MeshKind::Torus;
+  options.faces = 3000;
+  writeMesh(dir.path("t.obj"), generateMesh(options).mesh);
+  std::string out;
+  ASSERT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("t.field") +
+                                    " --field proxy --json --quiet", &out), 0) << out;
+  EXPECT_NE(out.find("\"fieldMethod\": \"proxy\""), std::string::npos) << out;
+  EXPECT_NE(out.find("\"indexSum4\": 0"), std::string::npos) << out;  // torus: chi = 0
+  ASSERT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("t.field") + " --json --quiet",
+                                &out), 0) << out;
+  EXPECT_NE(out.find("\"fieldMethod\": \"direct\""), std::string::npos) << out;  // auto, small mesh
+  EXPECT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("t.field") +
+                                    " --field proxy --curvature 1", &out), 2) << out;
+  EXPECT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("t.field") + " --field fast",
+                                &out), 2) << out;
+  // param: the proxy field gives a seamless map; the report names the method.
+  ASSERT_EQ(testing::runSeamvox("param " + dir.path("t.obj") + " -o " + dir.path("t_uv.obj") +
+                                    " --field proxy --solver hat --quiet --report " + dir.path("r.json"), &out),
+            0) << out;
+  const std::string report = testing::readFile(dir.path("r.json"));
+  EXPECT_NE(report.find("\"fieldMethod\": \"proxy\""), std::string::npos) << report;
+  EXPECT_NE(report.find("\"seamless\": true"), std::string::npos) << report;
+  ASSERT_EQ(testing::runSeamvox("param " + dir.path("t.obj") + " -o " + dir.path("t_uv.obj") +
+                                    " --solver hat --quiet --report " + dir.path("r.json"), &out), 0) << out;
+  EXPECT_NE(testing::readFile(dir.path("r.json")).find("\"fieldMethod\": \"direct\""), std::string::npos);
 }
 
 TEST(ProxyField, EmptyMesh) {
