@@ -250,10 +250,7 @@ TEST(ProxyField, MethodSelection) {
 
 TEST(ProxyField, CommandsSelectTheMethodAndReportIt) {
   testing::TempDir dir;
-  GenerateOptions options;
-  options.kind = MeshKind::Torus;
-  options.faces = 3000;
-  writeMesh(dir.path("t.obj"), generateMesh(options).mesh);
+  writeMesh(dir.path("t.obj"), testing::torusMesh(48, 20));
   std::string out;
   ASSERT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("t.field") +
                                     " --field proxy --json --quiet", &out), 0) << out;
