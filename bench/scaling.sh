@@ -17,8 +17,8 @@
 # Each run is `seamvox param CACHED.ply --solver S --grid G --report R.json` under a memory limit
 # (default 20 GB = 20e9 bytes, every solver: a watchdog kills the run when its resident set
 # exceeds it; an address-space limit 10% higher is the backstop) and a timeout (default 7200 s).
-# Hat stops for a mesh after a failed run, or when its last peak RSS scaled by n^1.5
-# exceeds the limit. Failed and skipped runs are recorded as rows. Resumable: a run whose file
+# Hat stops for a mesh after a failed run, or when its last peak RSS scaled by n log n (the fill
+# of a nested-dissection factor of a surface mesh) exceeds the limit. Failed and skipped runs are recorded as rows. Resumable: a run whose file
 # OUT/runs/<mesh>_L<level>_<solver>.json exists is not run again (delete the file to redo it;
 # use another --out for another --field or --mem-gb).
 # Outputs: OUT/runs/*.json (+ .time, logs/), OUT/scaling.csv, OUT/scaling.md, OUT/scaling.png,
@@ -269,9 +269,9 @@ for ((i = 0; i < ${#plan[@]}; ++i)); do
       continue
     fi
     if [ -n "${hat_peak[$mesh]:-}" ]; then
-      predicted=$(calc "${hat_peak[$mesh]} * ($faces / ${hat_faces[$mesh]}) ^ 1.5")
+      predicted=$(calc "${hat_peak[$mesh]} * ($faces / ${hat_faces[$mesh]}) * log($faces) / log(${hat_faces[$mesh]})")
       if awk "BEGIN { exit !($predicted > $mem_bytes) }"; then
-        hat_stop[$mesh]="predicted peak $(short "$predicted / 1e9") GB (n^1.5 from $(short "${hat_peak[$mesh]} / 1e9") GB at $(commas "${hat_faces[$mesh]}") faces) > $mem_gb GB"
+        hat_stop[$mesh]="predicted peak $(short "$predicted / 1e9") GB (n log n from $(short "${hat_peak[$mesh]} / 1e9") GB at $(commas "${hat_faces[$mesh]}") faces) > $mem_gb GB"
         write_stub "$report" skipped "${hat_stop[$mesh]}" "$faces"
         echo "$tag: skipped (${hat_stop[$mesh]})"
         continue
