@@ -310,7 +310,8 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
     trace += diagonal;
   }
   // A tiny shift keeps the matrix definite for fields without holonomy (flat pieces).
-  const double sigma = 1e-9 * trace / mass.sum();
+  // (No edge at all, e.g. a single element: any positive shift.)
+  const double sigma = trace > 0.0 ? 1e-9 * trace / mass.sum() : 1.0;
   for (std::uint32_t e = 0; e < numElements; ++e) a.valuePtr()[start[e]] += sigma * mass[e];
 
   std::vector<std::uint32_t> comp(numElements);

@@ -275,9 +275,27 @@ TEST(ProxyField, CommandsSelectTheMethodAndReportIt) {
   EXPECT_NE(testing::readFile(dir.path("r.json")).find("\"fieldMethod\": \"direct\""), std::string::npos);
 }
 
-TEST(ProxyField, EmptyMesh) {
-  const Surface s = makeSurface(TriangleMesh{});
-  EXPECT_TRUE(computeProxyField(s.mesh, s.topology).field.direction.empty());
+TEST(ProxyField, EmptyAndTinyMeshes) {
+  const Surface empty = makeSurface(TriangleMesh{});
+  EXPECT_TRUE(computeProxyField(empty.mesh, empty.topology).field.direction.empty());
+  TriangleMesh triangle;
+  triangle.positions = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)};
+  triangle.triangles = {{0, 1, 2}};
+  TriangleMesh needle = triangle;  // zero area: collinear corners
+  needle.positions[2] = Vec3f(2, 0, 0);
+  const std::vector<std::pair<std::string, TriangleMesh>> meshes = {
+      {"triangle", triangle},
+      {"needle", needle},
+      {"two triangles", testing::concatMeshes({triangle, needle})},
+      {"triangle+torus", testing::concatMeshes({triangle, testing::torusMesh(20, 8)})}};
+  for (const auto& [name, mesh] : meshes) {
+    const Surface s = makeSurface(mesh);
+    for (std::int32_t grid : {4, 128}) {
+      const CrossField field = proxyField(s, grid).field;
+      ASSERT_EQ(field.direction.size(), s.mesh.numFaces()) << name;
+      for (const Vec3d& u : field.direction) EXPECT_NEAR(u.norm(), 1.0, 1e-9) << name << " grid " << grid;
+    }
+  }
 }
 
 }  // namespace
