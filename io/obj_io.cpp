@@ -182,20 +182,42 @@ void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
     out.put("v ");
     out.putRow(p.data(), 3);
   }
+  // Texture coordinates: the first corner of each vertex (in corner order) gets a vt line that
+  // every later corner of the vertex with the same (u, v) shares; a corner with another value (the
+  // other side of a seam) gets its own. A seamless map thus writes about one vt per vertex instead
+  // of one per corner. Both passes walk the corners in the same order, so they number alike.
+  const std::size_t numCorners = 3 * mesh.triangles.size();
+  std::vector<CornerId> firstCorner(withUV ? mesh.positions.size() : 0, kInvalidId);
+  std::vector<std::uint32_t> firstTexcoord(firstCorner.size(), 0);
+  auto ownsTexcoord = [&](std::size_t c) {  // does corner c write (and number) a vt line?
+    const CornerId first = firstCorner[mesh.triangles[c / 3][c % 3]];
+    return first == c || mesh.cornerUV[c] != mesh.cornerUV[first];
+  };
   if (withUV) {
-    for (const Vec2d& t : mesh.cornerUV) {
-      out.put("vt ");
-      out.putRow(t.data(), 2);
+    std::uint32_t count = 0;
+    for (std::size_t c = 0; c < numCorners; ++c) {
+      const VertexId v = mesh.triangles[c / 3][c % 3];
+      if (firstCorner[v] == kInvalidId) {
+        firstCorner[v] = static_cast<CornerId>(c);
+        firstTexcoord[v] = count;
+      }
+      if (ownsTexcoord(c)) {
+        out.put("vt ");
+        out.putRow(mesh.cornerUV[c].data(), 2);
+        ++count;
+      }
     }
   }
+  std::uint32_t next = 0;
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
     out.put('f');
     for (int k = 0; k < 3; ++k) {
+      const VertexId v = mesh.triangles[f][k];
       out.put(' ');
-      out.putNumber(std::uint64_t(mesh.triangles[f][k]) + 1);
+      out.putNumber(std::uint64_t(v) + 1);
       if (withUV) {
         out.put('/');
-        out.putNumber(std::uint64_t(3 * f + k) + 1);
+        out.putNumber(std::uint64_t(ownsTexcoord(3 * f + k) ? next++ : firstTexcoord[v]) + 1);
       }
     }
     out.put('\n');

@@ -126,6 +126,40 @@ TEST(MeshIo, WrittenPlyHasTheDocumentedLayout) {
   EXPECT_THAT(obj, HasSubstr("\nf 1/1 2/2 5/3\n"));
 }
 
+TEST(MeshIo, ObjSharesTexcoordsWithinAVertexAndKeepsSeamsApart) {
+  TempDir dir;
+  TriangleMesh mesh = makeGrid(6, 5, false);
+  // A map continuous at every vertex except along column j = 2, where the corners of faces to the
+  // right of it get u + 7 (a seam): those vertices need a second texture coordinate.
+  const int cols = 5;
+  std::size_t seamVertices = 0, seamCorners = 0;
+  for (VertexId v = 0; v < mesh.positions.size(); ++v) seamVertices += (v % (cols + 1) == 2);
+  for (const Triangle& t : mesh.triangles) {
+    for (VertexId v : t) seamCorners += (v % (cols + 1) == 2);
+  }
+  for (std::size_t c = 0; c < 3 * mesh.triangles.size(); ++c) {
+    const Triangle& t = mesh.triangles[c / 3];
+    const VertexId v = t[c % 3];
+    const bool right = std::min({t[0] % (cols + 1), t[1] % (cols + 1), t[2] % (cols + 1)}) >= 2;
+    const Vec3d p = mesh.position(v);
+    mesh.cornerUV.emplace_back(0.37 * p.x() + (right ? 7.0 : 0.0), 1.0 / 3.0 * p.y());
+  }
+  writeMesh(dir.path("shared.obj"), mesh);
+  const std::string text = testing::readFile(dir.path("shared.obj"));
+  std::size_t vtLines = 0;
+  for (std::size_t at = text.find("\nvt "); at != std::string::npos; at = text.find("\nvt ", at + 1)) ++vtLines;
+  // One per vertex, plus at most one per corner at the seam (each vertex's first value is shared).
+  EXPECT_GE(vtLines, mesh.positions.size() + seamVertices);
+  EXPECT_LE(vtLines, mesh.positions.size() + seamCorners - seamVertices);
+  ReadOptions withUV;
+  withUV.readUV = true;
+  const TriangleMesh back = readMesh(dir.path("shared.obj"), withUV);
+  ASSERT_EQ(back.cornerUV.size(), mesh.cornerUV.size());
+  for (std::size_t c = 0; c < mesh.cornerUV.size(); ++c) {
+    ASSERT_EQ(back.cornerUV[c], mesh.cornerUV[c]) << "corner " << c;  // shortest round-trip text
+  }
+}
+
 TEST(MeshIo, StreamsInChunksOfTheRequestedSize) {
   TempDir dir;
   const TriangleMesh mesh = makeGrid(10, 10, true);  // 121 vertices, 200 triangles
