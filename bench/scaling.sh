@@ -6,8 +6,10 @@
 #   bash bench/scaling.sh [--max-faces N] [--out DIR] [--cache DIR] [--build DIR] [--data DIR]
 #                         [--meshes fertility,armadillo] [--solvers hat,vox64,vox128,voxloc64,voxloc128]
 #                         [--field inherit|auto|smooth|proxy] [--mem-gb G] [--timeout S] [--no-build]
-#                         [--no-results]
+#                         [--no-results] [--max-level K]
 #
+# --max-level K keeps subdivision levels 0..K (0: the meshes as they are; see the shared-mesh table
+# in bench/RESULTS.md).
 # Defaults: every size (hours of CPU), out bench/scaling, inputs cached in /tmp/seamvox_scaling,
 # build ./build (the script builds the targets seamvox and bench_scaling_report there first).
 # Field (--field inherit, the default): the smoothest cross field of the base mesh, computed once
@@ -29,6 +31,7 @@ repo=$(pwd)
 
 command_line="bash bench/scaling.sh $*"
 max_faces=100000000
+max_level_opt=99
 out=bench/scaling
 cache=${TMPDIR:-/tmp}/seamvox_scaling
 build=build
@@ -44,6 +47,7 @@ capped=0
 while (($#)); do
   case "$1" in
     --max-faces) max_faces=$2; capped=1; shift 2 ;;
+    --max-level) max_level_opt=$2; capped=1; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --cache) cache=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
@@ -135,7 +139,7 @@ for mesh in "${mesh_list[@]}"; do
       { cat "$tmp/field.log"; echo "scaling.sh: seamvox field failed on $src" >&2; exit 1; }
   fi
   level=0
-  while :; do
+  while ((level <= max_level_opt)); do
     stem=$cache/${mesh}_L$level
     if [ ! -f "$stem.faces" ] || { [ "$field_mode" = inherit ] && [ ! -f "$stem.field" ]; }; then
       # Stop before building a level that would exceed --max-faces (known from the level below).
