@@ -58,6 +58,48 @@ Vec3d combedDirection(const TriangleMesh& mesh, const CrossField& field, const C
   return u;
 }
 
+// Joins every domain (a class of element-function nodes 8 e + k) whose weight (sum of its nodes'
+// nodeWeight) is below minWeight to the heaviest other domain of the element holding most of its
+// weight. Such a domain is a B-spline that barely touches the surface (a sliver where a vertex
+// lies a hair across a grid plane, or a strip along the far edges of its support): there it is
+// almost a combination of the element's other functions, and the system would be singular to
+// working precision. Flags the joined nodes; returns how many domains were joined.
+std::uint32_t joinNegligibleDomains(UnionFind& functions, const std::vector<double>& nodeWeight,
+                                    double minWeight, std::vector<std::uint8_t>& joinedNode) {
+  const std::uint32_t nn = static_cast<std::uint32_t>(functions.parent.size());
+  joinedNode.assign(nn, 0);
+  if (!(minWeight > 0.0)) return 0;
+  std::vector<std::uint32_t> root(nn);
+  std::vector<double> weight(nn, 0.0);  // per root
+  for (std::uint32_t i = 0; i < nn; ++i) {
+    root[i] = functions.find(i);
+    weight[root[i]] += nodeWeight[i];
+  }
+  std::vector<std::uint32_t> heaviest(nn, kInvalidId);  // per light root: its heaviest node
+  for (std::uint32_t i = 0; i < nn; ++i) {
+    const std::uint32_t r = root[i];
+    if (weight[r] >= minWeight) continue;
+    joinedNode[i] = 1;
+    if (heaviest[r] == kInvalidId || nodeWeight[i] > nodeWeight[heaviest[r]]) heaviest[r] = i;
+  }
+  std::uint32_t joined = 0;
+  for (std::uint32_t r = 0; r < nn; ++r) {
+    if (heaviest[r] == kInvalidId) continue;
+    const std::uint32_t e = heaviest[r] / 8;
+    std::uint32_t target = kInvalidId;
+    for (std::uint32_t k = 0; k < 8; ++k) {
+      const std::uint32_t other = root[8 * e + k];
+      if (other != r && (target == kInvalidId || weight[other] > weight[root[target]])) {
+        target = 8 * e + k;
+      }
+    }
+    if (target == kInvalidId) continue;  // the element's functions are all one domain already
+    functions.unite(r, target);
+    ++joined;
+  }
+  return joined;
+}
+
 struct SeamLink {
   std::uint32_t left, right, seam;  // element-function nodes 8 e + k
 };
@@ -154,6 +196,8 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
 
   // Integrals: re-clip each fragment against its voxel (no polygons are stored).
   records_.assign(ne, VoxelIntegrals{});
+  normalStiffness_.assign(ne, std::array<double, 36>{});
+  setRegularization(options.regularization);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, nv, 16), [&](const auto& range) {
     for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
       for (std::uint32_t k = voxelFragmentStart[v]; k < voxelFragmentStart[v + 1]; ++k) {
@@ -163,8 +207,9 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
         const Vec3d u = combedDirection(mesh, field, cut, f, n);
         if (n.squaredNorm() == 0.0) continue;  // zero-area face: nothing to integrate
         const ClipPolygon piece = clipTriangleToVoxel(faceGridCoords(mesh, grid_, f), voxelCoords_[v]);
+        const std::uint32_t e = fragmentElement_[i];
         addFragmentIntegrals(piece, voxelCoords_[v], grid_.voxelSize, n, u, options.edgeLength,
-                             records_[fragmentElement_[i]], options.regularization);
+                             records_[e], 0.0, normalStiffness_[e].data());
       }
     }
   });
@@ -259,6 +304,18 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   }
   reportProgress(options.progress, "voxel basis", 0.8);
 
+  std::vector<std::uint8_t> joinedNode;
+  {
+    // Weight of a node: int |grad phi|^2 over its element in grid units (tangential + normal).
+    std::vector<double> nodeWeight(std::size_t(ne) * 8);
+    for (std::uint32_t e = 0; e < ne; ++e) {
+      for (int k = 0; k < 8; ++k) {
+        const int kk = packedIndex(k, k);
+        nodeWeight[8 * e + k] = records_[e].stiffness[kk] + normalStiffness_[e][kk];
+      }
+    }
+    joinedDomains_ = joinNegligibleDomains(functions, nodeWeight, options.minDomainWeight, joinedNode);
+  }
   const std::uint32_t nd = denseLabels(functions, elementDomain_);
   functions = UnionFind(0);
   // Basis functions: domains of one corner joined across seams (parts of a support that are
@@ -269,11 +326,14 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   }
   numBasisFunctions_ = denseLabels(domains, domainBasis_);
   basisCorner_.resize(numBasisFunctions_);
-  for (std::uint32_t e = 0; e < ne; ++e) {
-    const VoxelCoord& v = voxelCoords_[elementVoxel_[e]];
-    for (int k = 0; k < 8; ++k) {
-      basisCorner_[domainBasis_[elementDomain_[8 * e + k]]] = {v[0] + (k & 1), v[1] + (k >> 1 & 1),
-                                                                v[2] + (k >> 2 & 1)};
+  for (std::uint8_t pass : {1, 0}) {  // a joined function keeps the corner of its larger part
+    for (std::uint32_t e = 0; e < ne; ++e) {
+      const VoxelCoord& v = voxelCoords_[elementVoxel_[e]];
+      for (int k = 0; k < 8; ++k) {
+        if (joinedNode[8 * e + k] != pass) continue;
+        basisCorner_[domainBasis_[elementDomain_[8 * e + k]]] = {
+            v[0] + (k & 1), v[1] + (k >> 1 & 1), v[2] + (k >> 2 & 1)};
+      }
     }
   }
   for (const SeamLink& link : seamLinks) {
@@ -297,13 +357,24 @@ std::uint32_t VoxelBasis::elementDomains(std::uint64_t e, std::uint32_t* out) co
   return 8;
 }
 
+void VoxelBasis::setRegularization(double weight) {
+  if (!(weight >= 0.0) || !std::isfinite(weight)) {
+    throw InputError("voxel basis: regularization must be finite and >= 0");
+  }
+  regularization_ = weight;
+}
+
 void VoxelBasis::elementIntegrals(std::uint64_t e, ElementIntegrals& out) const {
   const VoxelIntegrals& r = records_[e];
+  const std::array<double, 36>& normal = normalStiffness_[e];
   out.count = 8;
   for (int a = 0; a < 8; ++a) {
     out.domain[a] = elementDomain_[8 * e + a];
     out.rhs[a] = r.rhs[a];
-    for (int b = 0; b < 8; ++b) out.stiffness[8 * a + b] = r.stiffness[packedIndex(a, b)];
+    for (int b = 0; b < 8; ++b) {
+      const int k = packedIndex(a, b);
+      out.stiffness[8 * a + b] = r.stiffness[k] + regularization_ * normal[k];
+    }
   }
   out.area = r.area;
 }
@@ -389,9 +460,10 @@ VoxelBasisStats VoxelBasis::stats() const {
   s.voxels = voxelCoords_.size();
   s.fragments = fragmentElement_.size();
   s.elements = elementVoxel_.size();
+  s.joinedDomains = joinedDomains_;
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   s.bytes = bytes(voxelCoords_) + bytes(voxelElementStart_) + bytes(elementVoxel_) +
-            bytes(records_) + bytes(elementDomain_) + bytes(faceFragmentStart_) +
+            bytes(records_) + bytes(normalStiffness_) + bytes(elementDomain_) + bytes(faceFragmentStart_) +
             bytes(fragmentElement_) + bytes(basisCorner_) + bytes(domainBasis_) +
             bytes(adjacencies_) + bytes(seamRotation_);
   return s;

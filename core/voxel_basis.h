@@ -5,6 +5,7 @@
 /// voxels around it) on the cut surface; seam adjacency joins the domains on either side of a
 /// seam inside the support. stream/voxel_grid.h builds it (buildVoxelBasis) from a triangle
 /// stream through the sparse OpenVDB grid; this class holds only flat per-element arrays.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -25,6 +26,12 @@ struct VoxelBasisOptions {
   /// definite. It vanishes on maps whose gradient is tangent (linear maps on planes, maps along a
   /// cylinder's axis stay exact). 0 = off (pure surface integrals). Rows still sum to zero.
   double regularization = 1e-5;
+  /// A domain whose B-spline has less energy int |grad phi|^2 (3D gradient, grid units: about
+  /// the area in squared voxels it covers with a unit gradient) joins the heaviest domain of its
+  /// heaviest element. B-splines that barely touch the surface (a sliver where a vertex lies a
+  /// hair across a grid plane) would make the system singular to working precision; joined, they
+  /// lose their own coefficient only where they are almost zero. 0 = off.
+  double minDomainWeight = 1e-9;
   ProgressFn progress;
 };
 
@@ -39,6 +46,7 @@ struct VoxelFragment {
 /// Sizes of a built voxel basis (for reports and benchmarks).
 struct VoxelBasisStats {
   std::uint64_t voxels = 0, fragments = 0, elements = 0;
+  std::uint64_t joinedDomains = 0;  ///< negligible domains joined to a neighbour (minDomainWeight)
   std::uint64_t bytes = 0;  ///< memory held by the basis
 };
 
@@ -68,13 +76,18 @@ class VoxelBasis final : public Basis {
   const std::vector<VoxelCoord>& voxelCoords() const { return voxelCoords_; }
   /// Elements of voxel id v: [voxelElementStart[v], voxelElementStart[v + 1]).
   const std::vector<std::uint32_t>& voxelElementStart() const { return voxelElementStart_; }
-  /// Integrals of element e in compact form (upper triangle of the stiffness).
+  /// Integrals of element e in compact form (upper triangle of the stiffness), without the
+  /// normal-derivative term.
   const VoxelIntegrals& elementRecord(std::uint64_t e) const { return records_[e]; }
+  /// Weight of the normal-derivative term in elementIntegrals (VoxelBasisOptions::regularization).
+  /// Its integrals are kept per element, so changing the weight costs no re-clipping.
+  double regularization() const { return regularization_; }
+  void setRegularization(double weight);
   /// Elements holding a piece of face f (the face's fragments), and the element that holds the
   /// corner c (used for evaluation: the fragment of c's face whose voxel contains c's vertex).
   std::vector<std::uint32_t> faceElements(FaceId f) const;
   std::uint32_t cornerElement(CornerId c) const;
-  /// Grid corner of each basis function.
+  /// Grid corner of each basis function (of its larger part when negligible domains joined it).
   const std::vector<VoxelCoord>& basisCorner() const { return basisCorner_; }
 
   /// Faces in the support of the basis functions the reduction marked for local refinement
@@ -92,7 +105,10 @@ class VoxelBasis final : public Basis {
   std::vector<VoxelCoord> voxelCoords_;           // per voxel id
   std::vector<std::uint32_t> voxelElementStart_;  // #voxels + 1
   std::vector<std::uint32_t> elementVoxel_;       // #elements
-  std::vector<VoxelIntegrals> records_;           // #elements
+  std::vector<VoxelIntegrals> records_;           // #elements, tangential stiffness
+  std::vector<std::array<double, 36>> normalStiffness_;  // #elements, unweighted
+  double regularization_ = 0.0;
+  std::uint32_t joinedDomains_ = 0;
   std::vector<std::uint32_t> elementDomain_;      // 8 #elements
   std::vector<std::uint32_t> faceFragmentStart_;  // #F + 1
   std::vector<std::uint32_t> fragmentElement_;    // #fragments, ordered by face

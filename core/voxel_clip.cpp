@@ -215,7 +215,7 @@ void trilinearWeights(const Vec3d& t, double weights[8]) {
 
 void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
                           const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc,
-                          double normalWeight) {
+                          double normalWeight, double* normalAcc) {
   if (fragment.size < 3) return;
   const Vec3d base(voxel[0], voxel[1], voxel[2]);
   const Vec3d v = n.cross(u);
@@ -242,8 +242,9 @@ void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, 
       }
       int idx = 0;
       for (int a = 0; a < 8; ++a) {
-        for (int b = a; b < 8; ++b) {
-          acc.stiffness[idx++] += w * (grad[a].dot(grad[b]) + normalWeight * normal[a] * normal[b]);
+        for (int b = a; b < 8; ++b, ++idx) {
+          acc.stiffness[idx] += w * (grad[a].dot(grad[b]) + normalWeight * normal[a] * normal[b]);
+          if (normalAcc) normalAcc[idx] += w * normal[a] * normal[b];
         }
         acc.rhs[a] += w * rhsScale * std::complex<double>(grad[a].dot(u), grad[a].dot(v));
       }

@@ -172,49 +172,52 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   basisOptions.gridResolution = gridResolution;
   basisOptions.edgeLength = options.edgeLength;
   basisOptions.progress = options.progress;
+  start = std::chrono::steady_clock::now();
+  VoxelBuildResult built = buildVoxelBasis(mesh, topology, field, cut, basisOptions);
+  VoxelBasis& basis = *built.basis;
+  param.basisFunctions = basis.numBasisFunctions();
+  param.domains = basis.numDomains();
+  param.seamAdjacencies = static_cast<std::uint32_t>(basis.adjacencies().size());
+  param.secondsBasis = secondsSince(start);
+  out.basisStats = basis.stats();
+
+  start = std::chrono::steady_clock::now();
+  ReduceOptions reduceOptions;
+  reduceOptions.translationConstraints = &constraints;
+  reduceOptions.progress = options.progress;
+  const Reduction reduction = reduceBasis(basis, reduceOptions);
+  param.translationConstraints = static_cast<std::uint32_t>(constraints.size());
+  param.secondsReduce = secondsSince(start);
+  out.determinedBasis = static_cast<std::uint32_t>(reduction.determinedBasis.size());
+  out.inconsistentBasis = static_cast<std::uint32_t>(reduction.inconsistentBasis.size());
+  out.markedFaces = basis.markedFaces(reduction);
+  out.invisibleTranslations = reduction.invisibleTranslations;
+
+  RoundOptions roundOptions;
+  roundOptions.greedy = options.greedyRounding;
+  roundOptions.progress = options.progress;
+  // The reduction depends on domains and adjacency only, and the basis keeps the
+  // normal-derivative integrals apart: a stronger regularization only re-assembles and refactors.
+  SeamlessSolution solution;
   for (;;) {
-    start = std::chrono::steady_clock::now();
-    VoxelBuildResult built = buildVoxelBasis(mesh, topology, field, cut, basisOptions);
-    const VoxelBasis& basis = *built.basis;
-    param.basisFunctions = basis.numBasisFunctions();
-    param.domains = basis.numDomains();
-    param.seamAdjacencies = static_cast<std::uint32_t>(basis.adjacencies().size());
-    param.secondsBasis = secondsSince(start);
-    out.basisStats = basis.stats();
-
-    start = std::chrono::steady_clock::now();
-    ReduceOptions reduceOptions;
-    reduceOptions.translationConstraints = &constraints;
-    reduceOptions.progress = options.progress;
-    const Reduction reduction = reduceBasis(basis, reduceOptions);
-    param.translationConstraints = static_cast<std::uint32_t>(constraints.size());
-    param.secondsReduce = secondsSince(start);
-    out.determinedBasis = static_cast<std::uint32_t>(reduction.determinedBasis.size());
-    out.inconsistentBasis = static_cast<std::uint32_t>(reduction.inconsistentBasis.size());
-    out.markedFaces = basis.markedFaces(reduction);
-    out.invisibleTranslations = reduction.invisibleTranslations;
-
-    RoundOptions roundOptions;
-    roundOptions.greedy = options.greedyRounding;
-    roundOptions.progress = options.progress;
-    SeamlessSolution solution;
     try {
       solution = solveSeamless(basis, reduction, roundOptions);
+      break;
     } catch (const SolverError&) {
-      if (basisOptions.regularization >= 1e-3) throw;
-      basisOptions.regularization *= 100.0;
+      if (basis.regularization() >= kMaxVoxelRegularization) throw;
+      const double stronger = std::max(100.0 * basis.regularization(), 1e-7);
+      basis.setRegularization(std::min(stronger, kMaxVoxelRegularization));
       ++out.failedAttempts;
-      continue;
     }
-    out.regularization = basisOptions.regularization;
-    param.stats = solution.stats;
-    param.translations = std::move(solution.translations);
-
-    start = std::chrono::steady_clock::now();
-    evaluateMap(basis, reduction, solution.unknowns, param.cornerUV);
-    param.secondsEvaluate = secondsSince(start);
-    return out;
   }
+  out.regularization = basis.regularization();
+  param.stats = solution.stats;
+  param.translations = std::move(solution.translations);
+
+  start = std::chrono::steady_clock::now();
+  evaluateMap(basis, reduction, solution.unknowns, param.cornerUV);
+  param.secondsEvaluate = secondsSince(start);
+  return out;
 }
 
 }  // namespace seamvox

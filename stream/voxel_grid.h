@@ -68,8 +68,11 @@ struct VoxelParamResult {
   std::uint32_t failedAttempts = 0;
   std::uint32_t invisibleTranslations = 0;  ///< Reduction::invisibleTranslations
 };
-/// The Vox solver. When CHOLMOD finds the system indefinite, the basis is rebuilt with a 100x
-/// stronger regularization (up to 1e-3) before giving up with the last SolverError.
+/// Strongest normal-derivative regularization the Vox solver retries with.
+constexpr double kMaxVoxelRegularization = 1e-3;
+/// The Vox solver. When CHOLMOD finds the system indefinite, it re-assembles and refactors with a
+/// 100x stronger regularization (up to kMaxVoxelRegularization; the basis is built once) before
+/// giving up with the last SolverError.
 VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology& topology,
                                        const CrossField& field, const CutResult& cut,
                                        const ParamOptions& options,

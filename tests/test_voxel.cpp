@@ -11,6 +11,7 @@
 #include <set>
 
 #include "core/cut.h"
+#include "core/errors.h"
 #include "core/field.h"
 #include "core/metrics.h"
 #include "core/topology.h"
@@ -389,6 +390,102 @@ TEST(VoxelBasis, UncutSurfacesHaveOneDomainPerFunction) {
     EXPECT_EQ(built.grid.find(built.basis->voxelCoords()[v]), v);
   }
   EXPECT_EQ(built.grid.find({-5, 0, 0}), kInvalidId);
+}
+
+// A flat square with one vertex lifted a hair across the grid plane z = 8 (and one lowered as
+// much, so the bounding box stays centred): the lifted tip puts a sliver of ~1e-9 squared voxels
+// into the layer above, whose upper corners' B-splines see nothing else.
+CutMesh sliverSquare(int resolution) {
+  TriangleMesh mesh = testing::gridMesh(8, 8, 1.0 / 8);
+  const double voxelSize = 1.0 / (resolution - 2);  // makeVoxelGrid on a unit square
+  const double planeZ = 0.5 * resolution - 0.1234567;  // grid z of the square's plane
+  const float lift = static_cast<float>((resolution / 2 + 2e-6 - planeZ) * voxelSize);
+  mesh.positions[3 * 9 + 3][2] = lift;    // vertex (3, 3)
+  mesh.positions[6 * 9 + 5][2] = -lift;  // vertex (5, 6)
+  return makeSetup(std::move(mesh), Vec3d(1, 0, 0));
+}
+
+// Weight of every domain: int |grad phi|^2 (3D gradient, grid units) over its support.
+std::vector<double> domainWeights(VoxelBasis& basis) {
+  const double regularization = basis.regularization();
+  basis.setRegularization(1.0);  // tangential + normal = 3D gradient
+  std::vector<double> weight(basis.numDomains(), 0.0);
+  ElementIntegrals el;
+  for (std::uint64_t e = 0; e < basis.numElements(); ++e) {
+    basis.elementIntegrals(e, el);
+    for (std::uint32_t k = 0; k < el.count; ++k) weight[el.domain[k]] += el.stiffness[9 * k];
+  }
+  basis.setRegularization(regularization);
+  return weight;
+}
+
+TEST(VoxelBasis, SliverSupportsJoinAHeavierDomain) {
+  const int resolution = 16;
+  const CutMesh s = sliverSquare(resolution);
+  const VoxelGridGeometry grid = makeVoxelGrid(computeBoundingBox(s.mesh.positions), resolution);
+  const double tip = grid.toGrid(s.mesh.position(3 * 9 + 3))[2] - resolution / 2;
+  ASSERT_GT(tip, 0.0);
+  ASSERT_LT(tip, 1e-5);
+  const double minWeight = VoxelBasisOptions{}.minDomainWeight;
+  VoxelBasisOptions options;
+  options.gridResolution = resolution;
+  options.minDomainWeight = 0.0;
+  {
+    // Without joining, the sliver's upper corners are domains of almost no weight.
+    const VoxelBuildResult raw = buildVoxelBasis(s.mesh, s.topology, s.field, s.cut, options);
+    const std::vector<double> weight = domainWeights(*raw.basis);
+    EXPECT_LT(*std::min_element(weight.begin(), weight.end()), 1e-3 * minWeight);
+    EXPECT_EQ(raw.basis->stats().joinedDomains, 0u);
+  }
+  options.minDomainWeight = minWeight;
+  const VoxelBuildResult built = buildVoxelBasis(s.mesh, s.topology, s.field, s.cut, options);
+  VoxelBasis& basis = *built.basis;
+  EXPECT_GT(basis.stats().joinedDomains, 0u);
+  for (double weight : domainWeights(basis)) EXPECT_GE(weight, minWeight);
+  // Still a partition of unity: equal coefficients give that value at every corner.
+  const Complex value(3.0, -2.0);
+  std::vector<Vec2d> uv;
+  basis.evaluateCorners(std::vector<Complex>(basis.numDomains(), value), uv);
+  for (const Vec2d& q : uv) EXPECT_LT(std::abs(Complex(q[0], q[1]) - value), 1e-12);
+  // And the Vox solver factors its system at the first try.
+  ParamOptions param;
+  param.edgeLength = 0.05;
+  const VoxelParamResult result =
+      parameterizeMeshVoxel(s.mesh, s.topology, s.field, s.cut, param, resolution);
+  EXPECT_EQ(result.failedAttempts, 0u);
+  EXPECT_EQ(result.regularization, VoxelBasisOptions{}.regularization);
+}
+
+TEST(VoxelBasis, RegularizationChangesWithoutRebuilding) {
+  // The normal-derivative integrals are kept apart: a basis built with weight w and one built
+  // without it and then given w have the same element integrals.
+  const CutMesh s = makeSetup(rotated(testing::icosphereMesh(2), tilt(), Vec3d::Zero()),
+                              Vec3d(0.3, 1, 0.2));
+  const double weight = 1e-3;
+  VoxelBuildResult withWeight = build(s, 8, 1.0, weight);
+  VoxelBuildResult without = build(s, 8, 1.0, 0.0);
+  ASSERT_EQ(withWeight.basis->numElements(), without.basis->numElements());
+  EXPECT_EQ(withWeight.basis->regularization(), weight);
+  without.basis->setRegularization(weight);
+  EXPECT_THROW(without.basis->setRegularization(-1.0), InputError);
+  ElementIntegrals a, b, plain;
+  double normalPart = 0.0;
+  for (std::uint64_t e = 0; e < without.basis->numElements(); ++e) {
+    withWeight.basis->elementIntegrals(e, a);
+    without.basis->elementIntegrals(e, b);
+    const VoxelIntegrals& record = without.basis->elementRecord(e);
+    for (int k = 0; k < 64; ++k) {
+      EXPECT_NEAR(a.stiffness[k], b.stiffness[k], 1e-12);
+      normalPart = std::max(normalPart, std::abs(b.stiffness[k] - record.stiffness[packedIndex(k / 8, k % 8)]));
+    }
+    for (int k = 0; k < 8; ++k) EXPECT_EQ(a.rhs[k], b.rhs[k]);
+  }
+  EXPECT_GT(normalPart, 1e-6 * weight);  // the weight does reach the stiffness
+  without.basis->setRegularization(0.0);
+  without.basis->elementIntegrals(0, plain);
+  for (int k = 0; k < 64; ++k) {
+    EXPECT_EQ(plain.stiffness[k], without.basis->elementRecord(0).stiffness[packedIndex(k / 8, k % 8)]);
+  }
 }
 
 // --- the Vox solver ----------------------------------------------------------------------------
