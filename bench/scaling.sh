@@ -341,7 +341,8 @@ png_link=$(realpath -m --relative-to="$repo/bench" "$out/scaling.png")
          [ "$field_mode" = inherit ] && echo "the base mesh's smoothest field, inherited by the subdivided faces (the same for every solver and size)" || echo "--field $field_mode")."\
        "Memory limit $mem_gb GB resident (watchdog; every run), timeout $timeout_s s; peak RSS is VmHWM; MB and GB are 10^6 and 10^9 bytes."\
        "Times: total is the whole \`seamvox param\` process (read to write); solves = first solve + rounding + second solve."
-  ((capped)) && echo "" && echo "**Small run (--max-faces $max_faces): a test of the driver, not the study.**"
+  ((capped)) && ((max_faces < 20000000 || max_level_opt < 4)) && echo "" &&
+    echo "**Small run (--max-faces $max_faces, --max-level $max_level_opt): a test of the driver, not the study.**"
   echo ""
   cat "$tmp/table.md"
 } > "$out/scaling.md"
