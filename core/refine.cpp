@@ -562,7 +562,8 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     // time of a 22M-face run for 32 of 8174 flips.
     if (!collapsedAtBorder && 2 * border.size() > seeds) break;
     seeds = border.size();
-    addRings(topology, std::move(border), std::max(1u, options.rings), flag, faces);
+    // Rings double each round: damage that outlasts a round usually spreads further out.
+    addRings(topology, std::move(border), std::max(1u, options.rings) << std::min(round, 4u), flag, faces);
   }
   if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
 

@@ -8,7 +8,8 @@
 /// Rounds: the locked border keeps the input map, which may itself be damaged just outside the
 /// first region. After each solve the region's faces are measured again; a face still collapsed
 /// (below collapseThreshold) or flipped that touches a locked vertex grows the region by rings
-/// around it and the grown region is solved again from the input map, up to maxRounds solves.
+/// around it (rings double each round) and the grown region is solved again from the input map,
+/// up to maxRounds solves.
 /// A further solve runs only while it pays: while a border face is collapsed but not flipped, or
 /// while the border at least halves from one round to the next (flips that persist at the border
 /// are the map's own near cones; a 22M-face armadillo spent 3 extra solves on 32 of 8174 flips).
@@ -41,7 +42,7 @@ struct RefineOptions {
   /// faces that grow it in later rounds (at least one ring there).
   std::uint32_t rings = 1;
   /// Solves at most (>= 1; 1: no re-detection).
-  std::uint32_t maxRounds = 4;
+  std::uint32_t maxRounds = 6;
   ProgressFn progress;
 };
 
