@@ -51,10 +51,13 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
   std::atomic<std::uint64_t> done{0};
   std::mutex progressMutex;
   reportProgress(options.progress, "assemble", 0.0);
-  tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, ne, 4096), [&](const auto& range) {
+  // One task per range of elements: the basis' own blocks (e.g. OpenVDB leaf nodes) when it has
+  // them, else fixed-size ranges. Each thread accumulates into its own triplets; one merge.
+  const std::vector<std::uint64_t> blocks = basis.elementBlocks();
+  const auto assembleRange = [&](std::uint64_t begin, std::uint64_t end) {
     Accumulator& acc = locals.local();
     ElementIntegrals el;
-    for (std::uint64_t e = range.begin(); e != range.end(); ++e) {
+    for (std::uint64_t e = begin; e != end; ++e) {
       basis.elementIntegrals(e, el);
       const std::uint32_t m = el.count;
       acc.area += el.area;
@@ -87,12 +90,20 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
       }
       if (acc.triplets.size() > kFlushTriplets) acc.flush(n);
     }
-    const std::uint64_t total = done += range.size();
+    const std::uint64_t total = done += end - begin;
     if (options.progress) {
       std::lock_guard<std::mutex> lock(progressMutex);
       reportProgress(options.progress, "assemble", static_cast<double>(total) / ne);
     }
-  });
+  };
+  if (blocks.size() >= 2 && blocks.front() == 0 && blocks.back() == ne) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size() - 1, 8), [&](const auto& range) {
+      assembleRange(blocks[range.begin()], blocks[range.end()]);
+    });
+  } else {
+    tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, ne, 4096),
+                      [&](const auto& range) { assembleRange(range.begin(), range.end()); });
+  }
   LinearSystem out;
   out.lower.resize(n, n);
   out.rhs = ComplexVector::Zero(n);

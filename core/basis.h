@@ -51,6 +51,9 @@ class Basis {
   /// cover are left unchanged) from the coefficient of every domain.
   virtual void evaluateCorners(const std::vector<std::complex<double>>& domainCoefficients,
                                std::vector<Vec2d>& cornerUV) const = 0;
+  /// Element ranges the assembly takes as one task each: starts, then numElements() (e.g. the
+  /// voxel basis' OpenVDB leaf blocks, whose elements are contiguous). Empty: fixed-size ranges.
+  virtual std::vector<std::uint64_t> elementBlocks() const { return {}; }
 
   std::uint32_t numBasisFunctions() const { return numBasisFunctions_; }
   std::uint32_t numDomains() const { return static_cast<std::uint32_t>(domainBasis_.size()); }

@@ -357,6 +357,16 @@ std::uint32_t VoxelBasis::elementDomains(std::uint64_t e, std::uint32_t* out) co
   return 8;
 }
 
+void VoxelBasis::setVoxelBlocks(const std::vector<std::uint32_t>& voxelBlockStart) {
+  const std::size_t numVoxels = voxelCoords_.size();
+  if (voxelBlockStart.empty() || voxelBlockStart.front() != 0 || voxelBlockStart.back() != numVoxels ||
+      !std::is_sorted(voxelBlockStart.begin(), voxelBlockStart.end())) {
+    throw InputError("voxel basis: block starts must rise from 0 to " + std::to_string(numVoxels));
+  }
+  elementBlockStart_.clear();
+  for (std::uint32_t v : voxelBlockStart) elementBlockStart_.push_back(voxelElementStart_[v]);
+}
+
 void VoxelBasis::setRegularization(double weight) {
   if (!(weight >= 0.0) || !std::isfinite(weight)) {
     throw InputError("voxel basis: regularization must be finite and >= 0");

@@ -76,6 +76,10 @@ class VoxelBasis final : public Basis {
   const std::vector<VoxelCoord>& voxelCoords() const { return voxelCoords_; }
   /// Elements of voxel id v: [voxelElementStart[v], voxelElementStart[v + 1]).
   const std::vector<std::uint32_t>& voxelElementStart() const { return voxelElementStart_; }
+  /// Groups voxels into assembly blocks: voxel ids [voxelBlockStart[b], voxelBlockStart[b + 1])
+  /// form block b (ids 0 .. #voxels, increasing). elementBlocks() then lists their elements.
+  void setVoxelBlocks(const std::vector<std::uint32_t>& voxelBlockStart);
+  std::vector<std::uint64_t> elementBlocks() const override { return elementBlockStart_; }
   /// Integrals of element e in compact form (upper triangle of the stiffness), without the
   /// normal-derivative term.
   const VoxelIntegrals& elementRecord(std::uint64_t e) const { return records_[e]; }
@@ -105,6 +109,7 @@ class VoxelBasis final : public Basis {
   std::vector<VoxelCoord> voxelCoords_;           // per voxel id
   std::vector<std::uint32_t> voxelElementStart_;  // #voxels + 1
   std::vector<std::uint32_t> elementVoxel_;       // #elements
+  std::vector<std::uint64_t> elementBlockStart_;  // #blocks + 1, or empty
   std::vector<VoxelIntegrals> records_;           // #elements, tangential stiffness
   std::vector<std::array<double, 36>> normalStiffness_;  // #elements, unweighted
   double regularization_ = 0.0;

@@ -104,6 +104,30 @@ std::uint32_t VoxelGrid::find(const VoxelCoord& voxel) const {
 
 std::uint64_t VoxelGrid::treeBytes() const { return impl_->tree.memUsage(); }
 
+std::vector<std::uint32_t> VoxelGrid::orderByBlocks() {
+  std::vector<std::uint32_t> remap(coords_.size(), kInvalidId);
+  std::vector<VoxelCoord> coords;
+  coords.reserve(coords_.size());
+  blockStarts_.clear();
+  for (auto leaf = impl_->tree.beginLeaf(); leaf; ++leaf) {
+    blockStarts_.push_back(static_cast<std::uint32_t>(coords.size()));
+    for (auto voxel = leaf->beginValueOn(); voxel; ++voxel) {
+      const std::uint32_t old = static_cast<std::uint32_t>(*voxel);
+      remap[old] = static_cast<std::uint32_t>(coords.size());
+      voxel.setValue(static_cast<std::int32_t>(coords.size()));
+      coords.push_back(coords_[old]);
+    }
+  }
+  if (coords.size() != coords_.size()) {
+    throw InputError("voxel grid: " + std::to_string(coords.size()) + " active voxels in the tree, " +
+                     std::to_string(coords_.size()) + " ids");
+  }
+  blockStarts_.push_back(static_cast<std::uint32_t>(coords.size()));
+  coords_ = std::move(coords);
+  impl_->accessor.clear();
+  return remap;
+}
+
 VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topology,
                                  const CrossField& field, const CutResult& cut,
                                  const VoxelBasisOptions& options) {
@@ -150,11 +174,16 @@ VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topol
                 reportProgress(options.progress, "voxel clip", double(chunk->end) / nf);
               }));
   fragments.shrink_to_fit();
+  // Ids in tree order: the elements of one 8^3 leaf block are contiguous, and the assembly takes
+  // them block by block.
+  const std::vector<std::uint32_t> remap = out.grid.orderByBlocks();
+  for (VoxelFragment& fragment : fragments) fragment.voxel = remap[fragment.voxel];
   out.secondsClip = secondsSince(start);
 
   start = std::chrono::steady_clock::now();
   out.basis = std::make_unique<VoxelBasis>(mesh, topology, field, cut, geometry, out.grid.coords(),
                                            std::move(fragments), options);
+  out.basis->setVoxelBlocks(out.grid.blockStarts());
   out.secondsBasis = secondsSince(start);
   return out;
 }

@@ -32,11 +32,17 @@ class VoxelGrid {
   std::vector<VoxelCoord> releaseCoords() { return std::move(coords_); }
   /// Bytes held by the OpenVDB tree.
   std::uint64_t treeBytes() const;
+  /// Renumbers the ids in the order of the tree's leaf nodes (blocks of 8^3 voxels), so every
+  /// block's voxels get consecutive ids; returns old id -> new id. blockStarts() then lists where
+  /// each block begins (and the end).
+  std::vector<std::uint32_t> orderByBlocks();
+  const std::vector<std::uint32_t>& blockStarts() const { return blockStarts_; }
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::vector<VoxelCoord> coords_;
+  std::vector<std::uint32_t> blockStarts_;
 };
 
 struct VoxelBuildResult {

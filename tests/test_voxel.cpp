@@ -10,12 +10,14 @@
 #include <random>
 #include <set>
 
+#include "core/assemble.h"
 #include "core/cut.h"
 #include "core/errors.h"
 #include "core/field.h"
 #include "core/metrics.h"
 #include "core/topology.h"
 #include "core/param.h"
+#include "core/reduce.h"
 #include "core/voxel_basis.h"
 #include "core/voxel_clip.h"
 #include "stream/voxel_grid.h"
@@ -65,6 +67,16 @@ void addSeam(CutMesh& s, F isSeamEdge) {
   }
   ASSERT_FALSE(seam.corners.empty());
   s.cut.seams.push_back(seam);
+}
+
+// A level-4 icosphere with its smoothest field, cut through the cones.
+CutMesh smoothSphere() {
+  CutMesh s;
+  s.mesh = testing::icosphereMesh(4);
+  s.topology = Topology::build(s.mesh.triangles, s.mesh.numVertices());
+  s.field = computeSmoothestField(s.mesh, s.topology);
+  s.cut = cutToDisk(s.mesh, s.topology, s.field, computeSingularities(s.mesh, s.topology, s.field));
+  return s;
 }
 
 // Pure surface integrals (no regularization) unless asked.
@@ -593,11 +605,7 @@ double relativeGradientDifference(const TriangleMesh& mesh, const std::vector<Ve
 }
 
 TEST(VoxelSolver, AgreesWithTheHatSolverOnASmoothMesh) {
-  CutMesh s;
-  s.mesh = testing::icosphereMesh(4);
-  s.topology = Topology::build(s.mesh.triangles, s.mesh.numVertices());
-  s.field = computeSmoothestField(s.mesh, s.topology);
-  s.cut = cutToDisk(s.mesh, s.topology, s.field, computeSingularities(s.mesh, s.topology, s.field));
+  const CutMesh s = smoothSphere();
   ParamOptions options;
   options.edgeLength = 0.08;
   const ParamResult hat = parameterizeMesh(s.mesh, s.topology, s.field, s.cut, options);
@@ -641,6 +649,86 @@ TEST(VoxelSolver, ConesAreMarkedForLocalRefinement) {
     });
   }
   EXPECT_LT(marked.size(), s.mesh.numFaces());
+}
+
+TEST(VoxelGrid, OrderByBlocksGivesEachLeafConsecutiveIds) {
+  VoxelGrid grid;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> coordinate(-40, 40);
+  std::vector<VoxelCoord> inserted;
+  for (int i = 0; i < 3000; ++i) {
+    const VoxelCoord v{coordinate(rng), coordinate(rng), coordinate(rng)};
+    if (grid.insert(v) == inserted.size()) inserted.push_back(v);
+  }
+  const std::vector<std::uint32_t> remap = grid.orderByBlocks();
+  ASSERT_EQ(remap.size(), inserted.size());
+  std::vector<std::uint32_t> sorted = remap;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::uint32_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], i) << "not a permutation";
+  for (std::uint32_t old = 0; old < inserted.size(); ++old) {
+    EXPECT_EQ(grid.coords()[remap[old]], inserted[old]);
+    EXPECT_EQ(grid.find(inserted[old]), remap[old]);
+  }
+  const std::vector<std::uint32_t>& starts = grid.blockStarts();
+  ASSERT_GE(starts.size(), 2u);
+  EXPECT_EQ(starts.front(), 0u);
+  EXPECT_EQ(starts.back(), inserted.size());
+  auto leaf = [](const VoxelCoord& v) { return std::array<int, 3>{v[0] >> 3, v[1] >> 3, v[2] >> 3}; };
+  std::set<std::array<int, 3>> leaves;
+  for (std::size_t b = 0; b + 1 < starts.size(); ++b) {
+    ASSERT_LT(starts[b], starts[b + 1]) << "empty block " << b;
+    const auto key = leaf(grid.coords()[starts[b]]);
+    EXPECT_TRUE(leaves.insert(key).second) << "two blocks in one leaf";
+    for (std::uint32_t id = starts[b]; id < starts[b + 1]; ++id) EXPECT_EQ(leaf(grid.coords()[id]), key);
+  }
+}
+
+/// Forwards a basis' elements without its blocks: the assembly then takes fixed-size ranges.
+class WithoutBlocks final : public Basis {
+ public:
+  explicit WithoutBlocks(const Basis& basis) : basis_(basis) {}
+  std::uint64_t numElements() const override { return basis_.numElements(); }
+  std::uint32_t elementDomains(std::uint64_t e, std::uint32_t* out) const override {
+    return basis_.elementDomains(e, out);
+  }
+  void elementIntegrals(std::uint64_t e, ElementIntegrals& out) const override { basis_.elementIntegrals(e, out); }
+  void evaluateCorners(const std::vector<std::complex<double>>& c, std::vector<Vec2d>& uv) const override {
+    basis_.evaluateCorners(c, uv);
+  }
+
+ private:
+  const Basis& basis_;
+};
+
+TEST(VoxelSolver, BlockByBlockAssemblyEqualsElementRanges) {
+  const CutMesh s = smoothSphere();
+  const VoxelBuildResult built = build(s, 32, 0.1, 1e-5);
+  const std::vector<std::uint64_t> blocks = built.basis->elementBlocks();
+  ASSERT_GE(blocks.size(), 3u) << "the grid should have several leaf blocks";
+  EXPECT_EQ(blocks.back(), built.basis->numElements());
+  for (std::size_t b = 0; b + 1 < blocks.size(); ++b) {
+    const VoxelCoord first = built.basis->elementVoxel(blocks[b]);
+    for (std::uint64_t e = blocks[b]; e < blocks[b + 1]; ++e) {
+      const VoxelCoord v = built.basis->elementVoxel(e);
+      ASSERT_TRUE(v[0] >> 3 == first[0] >> 3 && v[1] >> 3 == first[1] >> 3 && v[2] >> 3 == first[2] >> 3)
+          << "element " << e << " of block " << b << " lies in another leaf";
+    }
+  }
+  const Reduction reduction = reduceBasis(*built.basis);
+  const LinearSystem byBlocks = assembleSystem(*built.basis, reduction);
+  const LinearSystem byRanges = assembleSystem(WithoutBlocks(*built.basis), reduction);
+  auto largest = [](const ComplexSparse& m) {
+    double most = 0.0;
+    for (int j = 0; j < m.outerSize(); ++j) {
+      for (ComplexSparse::InnerIterator it(m, j); it; ++it) most = std::max(most, std::abs(it.value()));
+    }
+    return most;
+  };
+  const double scale = largest(byRanges.lower);
+  ASSERT_GT(scale, 0.0);
+  EXPECT_LT(largest(byBlocks.lower - byRanges.lower), 1e-12 * scale);
+  EXPECT_LT((byBlocks.rhs - byRanges.rhs).cwiseAbs().maxCoeff(), 1e-12 * byRanges.rhs.cwiseAbs().maxCoeff());
+  EXPECT_NEAR(byBlocks.totalArea, byRanges.totalArea, 1e-12 * byRanges.totalArea);
 }
 
 }  // namespace
