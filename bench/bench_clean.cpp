@@ -14,18 +14,16 @@
 
 #include "core/clean.h"
 #include "core/topology.h"
+#include "bench/bench_common.h"
 #include "io/mesh_io.h"
 #include "stream/memory.h"
 
 namespace {
 
 using namespace seamvox;
-using Clock = std::chrono::steady_clock;
-
-double seconds(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
-double mib(std::uint64_t bytes) { return bytes / 1048576.0; }
+using bench::Clock;
+using bench::mib;
+using bench::seconds;
 
 /// Processor time of the whole process (all threads), user + system: unlike wall time it
 /// hardly depends on what else runs on the machine.

@@ -20,6 +20,7 @@
 #include "core/reduce.h"
 #include "core/round.h"
 #include "core/subdivide.h"
+#include "bench/bench_common.h"
 #include "io/mesh_io.h"
 #include "stream/memory.h"
 #include "stream/blas_threads.h"
@@ -137,16 +138,10 @@ int main(int argc, char** argv) {
   try {
     if (wanted("armadillo")) runCase("armadillo", readMesh(dir + "/armadillo.obj"), nullptr, cells);
     if (wanted("fertility")) {
-      CleanResult base = cleanMesh(readMesh(dir + "/fertility.off"));
-      const CrossField baseField = computeSmoothestField(base.mesh, base.topology);
-      for (int level = 1; level <= levels; ++level) {
-        SubdivideOptions options;
-        options.levels = static_cast<std::uint32_t>(level);
-        const SubdivideResult sub = subdivideMesh(base.mesh, base.topology, options);
-        CrossField field;
-        field.direction = inheritFaceVectors(baseField.direction, sub.parentFace);
-        runCase("fertility x4^" + std::to_string(level), sub.mesh, &field, cells);
-      }
+      bench::forEachSubdividedFertility(dir, levels, [&](const std::string& name, const TriangleMesh& mesh,
+                                                         const CrossField& field) {
+        runCase(name, mesh, &field, cells);
+      });
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_hat: %s\n", e.what());

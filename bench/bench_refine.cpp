@@ -17,6 +17,7 @@
 #include "core/param.h"
 #include "core/refine.h"
 #include "core/subdivide.h"
+#include "bench/bench_common.h"
 #include "io/mesh_io.h"
 #include "stream/memory.h"
 #include "stream/voxel_grid.h"
@@ -149,16 +150,10 @@ int main(int argc, char** argv) {
   };
   try {
     if (wanted("fertility")) {
-      CleanResult base = cleanMesh(readMesh(dir + "/fertility.off"));
-      const CrossField baseField = computeSmoothestField(base.mesh, base.topology);
-      for (int level = 1; level <= levels; ++level) {
-        SubdivideOptions sub;
-        sub.levels = static_cast<std::uint32_t>(level);
-        const SubdivideResult result = subdivideMesh(base.mesh, base.topology, sub);
-        CrossField field;
-        field.direction = inheritFaceVectors(baseField.direction, result.parentFace);
-        runCase("fertility x4^" + std::to_string(level), result.mesh, &field, options);
-      }
+      bench::forEachSubdividedFertility(dir, levels, [&](const std::string& name, const TriangleMesh& mesh,
+                                                         const CrossField& field) {
+        runCase(name, mesh, &field, options);
+      });
     }
     if (wanted("armadillo")) runCase("armadillo", readMesh(dir + "/armadillo.obj"), nullptr, options);
   } catch (const std::exception& e) {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "core/cut.h"
 #include "core/field.h"
 #include "core/generate.h"
@@ -22,12 +23,9 @@
 namespace {
 
 using namespace seamvox;
-using Clock = std::chrono::steady_clock;
-
-double seconds(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
-double mib(std::uint64_t bytes) { return bytes / 1048576.0; }
+using bench::Clock;
+using bench::mib;
+using bench::seconds;
 
 }  // namespace
 
