@@ -62,8 +62,21 @@ HatBasis::HatBasis(const TriangleMesh& mesh, const Topology& topology, const Cro
 
   // Wedges: walk each fan counter-clockwise; a cut edge (or the subset's border) starts a new one.
   cornerDomain_.assign(3u * nf, kInvalidId);
+  // With a face subset only its vertices can get a wedge: walk those (in increasing order, as the
+  // whole-mesh walk would), not every fan of a large mesh.
+  std::vector<VertexId> subsetVertices;
+  if (!options.faces.empty()) {
+    subsetVertices.reserve(3 * faces_.size());
+    for (FaceId f : faces_) {
+      for (VertexId v : topology.triangles()[f]) subsetVertices.push_back(v);
+    }
+    std::sort(subsetVertices.begin(), subsetVertices.end());
+    subsetVertices.erase(std::unique(subsetVertices.begin(), subsetVertices.end()), subsetVertices.end());
+  }
+  const std::size_t numWalked = options.faces.empty() ? topology.numVertices() : subsetVertices.size();
   std::vector<CornerId> fan;
-  for (VertexId v = 0; v < topology.numVertices(); ++v) {
+  for (std::size_t i = 0; i < numWalked; ++i) {
+    const VertexId v = options.faces.empty() ? static_cast<VertexId>(i) : subsetVertices[i];
     fan.clear();
     topology.forEachCornerAround(v, [&](CornerId c) { fan.push_back(c); });
     if (fan.empty()) continue;
