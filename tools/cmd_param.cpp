@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "core/clean.h"
+#include "core/cone_merge.h"
 #include "core/cut.h"
 #include "core/errors.h"
 #include "core/field.h"
@@ -23,6 +24,8 @@ namespace {
 
 /// Grid cells along the bounding-box diagonal when neither --edge-length nor --cells is given.
 constexpr double kDefaultCells = 100.0;
+/// Cut-and-solve passes at most when coincident cones are merged after a solve.
+constexpr std::uint32_t kMaxConePasses = 6;
 
 int runParam(Args& args) {
   const std::string input = args.positional(0, "the input mesh (seamvox param MESH -o OUT)");
@@ -47,6 +50,10 @@ int runParam(Args& args) {
   if (rings < 0 || rings > 64) throw UsageError("--rings must be between 0 and 64");
   solverOptions.refine.rings = static_cast<std::uint32_t>(rings);
   const std::string fieldSource = args.value("field", "auto");
+  const double mergeCones = args.number("merge-cones", kConeMergeFraction);
+  if (!(mergeCones >= 0.0 && mergeCones <= 10.0)) {
+    throw UsageError("--merge-cones must be between 0 and 10 (grid spacings)");
+  }
   const double edgeLengthArg = args.number("edge-length", 0.0);
   const double cellsArg = args.number("cells", 0.0);
   if (args.value("edge-length") && args.value("cells")) {
@@ -97,22 +104,49 @@ int runParam(Args& args) {
   }
   std::vector<FaceId>().swap(clean.faceOrigin);  // only the field file needed it
   const double secondsField = meter.finish("field").seconds;
-  CutOptions cutOptions;
-  cutOptions.progress = progress;
-  // Matchings and indices are only needed to cut; the cut keeps the combed matchings and cones.
-  const CutResult cut =
-      cutToDisk(mesh, topology, field, computeSingularities(mesh, topology, field), cutOptions);
-  const double secondsCut = meter.finish("cut").seconds;
-
   const double diagonal = computeBoundingBox(mesh.positions).diagonal();
   ParamOptions options;
   options.edgeLength = edgeLengthArg > 0.0 ? edgeLengthArg
                                            : diagonal / (cellsArg > 0.0 ? cellsArg : kDefaultCells);
   if (!(options.edgeLength > 0.0)) throw InputError(input + ": the mesh has zero extent");
+
   options.greedyRounding = greedy;
   options.progress = progress;
   solverOptions.meter = &meter;  // closes the "solve" and "refine" stages
-  SolverResult solved = parameterizeMeshWithSolver(mesh, topology, field, cut, options, solverOptions);
+
+  // Cones closer than the grid resolves are merged before cutting; adjacent cones the solve still
+  // puts on one point (collapsing the faces between them) are merged too and the cut and solve
+  // redone, at most kMaxConePasses times in all.
+  CutOptions cutOptions;
+  cutOptions.progress = progress;
+  ConeMergeResult merged;
+  std::vector<std::pair<VertexId, VertexId>> coincident;
+  CutResult cut;
+  SolverResult solved;
+  std::uint32_t conePasses = 0;
+  double secondsCut = 0.0;
+  for (;;) {
+    ++conePasses;
+    {
+      // Matchings and indices are only needed to cut; the cut keeps the combed matchings and cones.
+      FieldSingularities singularities = computeSingularities(mesh, topology, field);
+      ConeMergeOptions mergeOptions;
+      mergeOptions.maxDistance = mergeCones * options.edgeLength;
+      merged = mergeCloseCones(mesh, topology, singularities, mergeOptions);
+      const ConeMergeResult adjacent = mergeAdjacentCones(topology, singularities, coincident);
+      merged.cancelledPairs += adjacent.cancelledPairs;
+      merged.mergedPairs += adjacent.mergedPairs;
+      cut = cutToDisk(mesh, topology, field, singularities, cutOptions);
+    }
+    secondsCut += meter.finish("cut").seconds;
+    solved = parameterizeMeshWithSolver(mesh, topology, field, cut, options, solverOptions);
+    if (!(mergeCones > 0.0) || conePasses == kMaxConePasses) break;
+    const auto more = coincidentConeEdges(topology, cut.cones, solved.param.cornerUV);
+    if (more.empty()) break;
+    coincident.insert(coincident.end(), more.begin(), more.end());
+    solved = SolverResult{};  // free the map and the cut before the next pass
+    cut = CutResult{};
+  }
   ParamResult& result = solved.param;
   const RefineStats& refine = solved.refine;
   double secondsParam = 0.0;
@@ -179,6 +213,9 @@ int runParam(Args& args) {
     j.key("vertices").value(static_cast<std::uint64_t>(mesh.numVertices()));
     j.key("components").value(static_cast<std::uint64_t>(st.components));
     j.key("cones").value(static_cast<std::uint64_t>(cut.cones.size()));
+    j.key("conesCancelled").value(static_cast<std::uint64_t>(2 * merged.cancelledPairs));
+    j.key("conesMerged").value(static_cast<std::uint64_t>(merged.mergedPairs));
+    j.key("conePasses").value(static_cast<std::uint64_t>(conePasses));
     j.key("seams").value(static_cast<std::uint64_t>(cut.seams.size()));
     j.key("seamEdges").value(seams.seamEdges).key("seamLength").value(seams.seamLength);
     j.key("edgeLength").value(options.edgeLength);
@@ -289,7 +326,7 @@ int runParam(Args& args) {
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
-                 "                     [--edge-length H | --cells N]\n"
+                 "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
@@ -310,6 +347,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --field FILE        per-face field (.crossfield or plain, one vector per input face)\n"
                  "  --edge-length H     grid spacing in mesh units\n"
                  "  --cells N           H = bounding-box diagonal / N (default N = 100)\n"
+                 "  --merge-cones F     move the index of cones at most F * H apart (along edges) onto\n"
+                 "                      one of them: closer than the grid resolves, they would collapse\n"
+                 "                      the faces between them; default 0.5, 0 keeps every cone\n"
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --weld              weld coincident vertices before cleaning\n"
                  "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"

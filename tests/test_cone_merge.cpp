@@ -1,0 +1,205 @@
+#include <gtest/gtest.h>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "core/cone_merge.h"
+#include "core/cut.h"
+#include "core/field.h"
+#include "core/metrics.h"
+#include "core/param.h"
+#include "tests/test_meshes.h"
+#include "tests/testing.h"
+
+namespace seamvox {
+namespace {
+
+using testing::Surface;
+
+/// A flat n x n grid of unit cells whose field turns by (sa arg(x - a) + sb arg(x - b)) / 4:
+/// cones of index4 sa at a and sb at b.
+struct PairCase {
+  Surface s;
+  CrossField field;
+  VertexId a, b;
+};
+
+PairCase pairCase(int n, int ai, int aj, int bi, int bj, double sa, double sb) {
+  PairCase out{testing::makeSurface(testing::gridMesh(n, n)), {}, VertexId(aj * (n + 1) + ai),
+               VertexId(bj * (n + 1) + bi)};
+  const Vec3d pa = out.s.mesh.position(out.a), pb = out.s.mesh.position(out.b);
+  for (FaceId f = 0; f < out.s.mesh.numFaces(); ++f) {
+    const Triangle& t = out.s.mesh.triangles[f];
+    const Vec3d x = (out.s.mesh.position(t[0]) + out.s.mesh.position(t[1]) + out.s.mesh.position(t[2])) / 3.0;
+    const double theta = (sa * std::atan2(x.y() - pa.y(), x.x() - pa.x()) +
+                          sb * std::atan2(x.y() - pb.y(), x.x() - pb.x())) / 4.0;
+    out.field.direction.push_back(Vec3d(std::cos(theta), std::sin(theta), 0.0));
+  }
+  return out;
+}
+
+std::int64_t indexSum(const FieldSingularities& sing) {
+  return std::accumulate(sing.index4.begin(), sing.index4.end(), std::int64_t(0));
+}
+
+/// The cut goes through exactly the remaining cones, and the hat map on it is seamless with no
+/// collapsed face.
+void expectSeamlessWithoutCollapse(const Surface& s, const CrossField& field,
+                                   const FieldSingularities& sing, double h, const std::string& what) {
+  const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);  // throws on inconsistency
+  EXPECT_EQ(cut.cones, sing.cones) << what;
+  ParamOptions options;
+  options.edgeLength = h;
+  const ParamResult param = parameterizeMesh(s.mesh, s.topology, field, cut, options);
+  EXPECT_TRUE(measureSeams(s.mesh, s.topology, cut, param.cornerUV).isSeamless()) << what;
+  EXPECT_EQ(measureMap(s.mesh, param.cornerUV, &field, h).collapsed, 0u) << what;
+}
+
+TEST(ConeMerge, OppositeConesTwoEdgesApartCancel) {
+  PairCase c = pairCase(20, 9, 10, 11, 10, 1.0, -1.0);
+  FieldSingularities sing = computeSingularities(c.s.mesh, c.s.topology, c.field);
+  ASSERT_EQ(sing.cones.size(), 2u);
+  ASSERT_EQ(sing.index4[c.a], 1);
+  ASSERT_EQ(sing.index4[c.b], -1);
+  const FieldSingularities before = sing;
+
+  // Farther apart than the merge distance: nothing changes.
+  EXPECT_EQ(mergeCloseCones(c.s.mesh, c.s.topology, sing, {1.5}).cancelledPairs, 0u);
+  EXPECT_EQ(sing.matching, before.matching);
+  EXPECT_EQ(sing.cones, before.cones);
+
+  const ConeMergeResult merged = mergeCloseCones(c.s.mesh, c.s.topology, sing, {2.5});
+  EXPECT_EQ(merged.cancelledPairs, 1u);
+  EXPECT_EQ(merged.mergedPairs, 0u);
+  EXPECT_EQ(merged.changedEdges, 2u);  // the straight path of two edges
+  EXPECT_NEAR(merged.longestPath, 2.0, 1e-6);
+  EXPECT_TRUE(sing.cones.empty());
+  EXPECT_EQ(indexSum(sing), indexSum(before));
+  for (CornerId k = 0; k < c.s.topology.numCorners(); ++k) {
+    const CornerId o = c.s.topology.opposite(k);
+    if (o != kInvalidId) EXPECT_EQ((sing.matching[k] + sing.matching[o]) % 4, 0) << k;
+  }
+  expectSeamlessWithoutCollapse(c.s, c.field, sing, 2.0, "cancelled dipole");
+}
+
+TEST(ConeMerge, EqualConesBecomeOneConeOfTwiceTheIndex) {
+  for (const double sign : {1.0, -1.0}) {
+    PairCase c = pairCase(20, 9, 10, 11, 10, sign, sign);
+    FieldSingularities sing = computeSingularities(c.s.mesh, c.s.topology, c.field);
+    ASSERT_EQ(sing.cones.size(), 2u);
+    ASSERT_EQ(sing.index4[c.a], int(sign));
+    ASSERT_EQ(sing.index4[c.b], int(sign));
+    const ConeMergeResult merged = mergeCloseCones(c.s.mesh, c.s.topology, sing, {2.5});
+    EXPECT_EQ(merged.mergedPairs, 1u);
+    EXPECT_EQ(merged.cancelledPairs, 0u);
+    ASSERT_EQ(sing.cones.size(), 1u);
+    EXPECT_EQ(sing.cones[0], std::min(c.a, c.b));  // equal |index|: the smaller id stays
+    EXPECT_EQ(sing.index4[sing.cones[0]], 2 * int(sign));
+    expectSeamlessWithoutCollapse(c.s, c.field, sing, 2.0, sign > 0 ? "+2 cone" : "-2 cone");
+  }
+}
+
+TEST(ConeMerge, KeepsPoincareHopfAndBoundsTheMergedIndex) {
+  const std::vector<std::pair<std::string, Surface>> cases = {
+      {"icosphere", testing::makeSurface(testing::icosphereMesh(3))},
+      {"torus", testing::makeSurface(testing::torusMesh(40, 16))}};
+  for (const auto& [name, s] : cases) {
+    for (const std::uint32_t seed : {1u, 2u}) {
+      const CrossField field = name == "icosphere" && seed == 1
+                                   ? computeSmoothestField(s.mesh, s.topology)
+                                   : testing::randomField(s.mesh, seed);
+      FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+      const std::int64_t sum = indexSum(sing);
+      const std::size_t cones = sing.cones.size();
+      const double diagonal = computeBoundingBox(s.mesh.positions).diagonal();
+      const ConeMergeResult merged = mergeCloseCones(s.mesh, s.topology, sing, {0.3 * diagonal});
+      const std::string what = name + " seed " + std::to_string(seed);
+      EXPECT_GT(merged.cancelledPairs + merged.mergedPairs, 0u) << what;
+      EXPECT_EQ(indexSum(sing), sum) << what;
+      EXPECT_EQ(sing.cones.size(), cones - merged.mergedPairs - 2 * merged.cancelledPairs) << what;
+      for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+        EXPECT_LE(std::abs(sing.index4[v]), std::max(kMaxMergedIndex4, 0)) << what << " vertex " << v;
+        EXPECT_EQ(sing.index4[v] != 0, std::binary_search(sing.cones.begin(), sing.cones.end(), v));
+      }
+      const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);  // matchings agree with cones
+      EXPECT_EQ(cut.cones, sing.cones) << what;
+    }
+  }
+}
+
+TEST(ConeMerge, CoincidentConeEdgesAreFoundAndMerged) {
+  const Surface s = testing::makeSurface(testing::torusMesh(30, 12));
+  const CrossField field = testing::randomField(s.mesh, 7);
+  FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  std::vector<std::uint8_t> isCone(s.topology.numVertices(), 0);
+  for (VertexId v : sing.cones) isCone[v] = 1;
+  // A map putting every corner on one point: every edge between two cones is coincident.
+  const std::vector<Vec2d> flat(s.topology.numCorners(), Vec2d::Zero());
+  std::uint32_t coneEdges = 0;
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    const VertexId x = s.topology.vertex(nextCorner(c)), y = s.topology.vertex(prevCorner(c));
+    if (isCone[x] && isCone[y] && (s.topology.opposite(c) == kInvalidId || c < s.topology.opposite(c))) {
+      ++coneEdges;
+    }
+  }
+  ASSERT_GT(coneEdges, 3u) << "the random field should have adjacent cones";
+  const auto pairs = coincidentConeEdges(s.topology, sing.cones, flat);
+  EXPECT_EQ(pairs.size(), coneEdges);
+  for (const auto& [a, b] : pairs) EXPECT_TRUE(isCone[a] && isCone[b]);
+
+  // A map with distinct corner values has none.
+  std::vector<Vec2d> spread(s.topology.numCorners());
+  for (CornerId c = 0; c < spread.size(); ++c) {
+    spread[c] = s.mesh.position(s.topology.vertex(c)).head<2>();
+  }
+  EXPECT_TRUE(coincidentConeEdges(s.topology, sing.cones, spread).empty());
+
+  const std::int64_t sum = indexSum(sing);
+  const ConeMergeResult merged = mergeAdjacentCones(s.topology, sing, pairs);
+  EXPECT_GT(merged.mergedPairs + merged.cancelledPairs, 0u);
+  EXPECT_EQ(indexSum(sing), sum);
+  for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+    EXPECT_LE(std::abs(sing.index4[v]), kMaxCoincidentIndex4) << v;
+  }
+  const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);
+  EXPECT_EQ(cut.cones, sing.cones);
+
+  // Pairs that are not adjacent are left alone.
+  FieldSingularities again = computeSingularities(s.mesh, s.topology, field);
+  ASSERT_GE(again.cones.size(), 2u);
+  const VertexId far = again.cones.back();
+  VertexId other = kInvalidId;
+  for (VertexId v : again.cones) {
+    bool adjacent = false;
+    s.topology.forEachCornerAround(far, [&](CornerId c) { adjacent |= s.topology.vertex(nextCorner(c)) == v; });
+    if (v != far && !adjacent) other = v;
+  }
+  ASSERT_NE(other, kInvalidId);
+  const ConeMergeResult none = mergeAdjacentCones(s.topology, again, {{far, other}});
+  EXPECT_EQ(none.mergedPairs + none.cancelledPairs, 0u);
+}
+
+TEST(ConeMerge, ParamLeavesNoCollapsedFacesOnSharedMeshes) {
+  // #6: without merging, the hat map of cheburashka collapses faces between coincident cones.
+  const std::string path = testing::sharedMesh("cheburashka.off");
+  if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage("cheburashka.off");
+  testing::TempDir dir;
+  const auto collapsed = [&](const std::string& extra) {
+    std::string output;
+    const int code = testing::runSeamvox("param " + path + " -o " + dir.path("o.ply") +
+                                             " --solver hat --quiet --report " + dir.path("r.json") +
+                                             " " + extra,
+                                         &output);
+    EXPECT_EQ(code, 0) << output;
+    const std::string report = testing::readFile(dir.path("r.json"));
+    EXPECT_NE(report.find("\"seamless\": true"), std::string::npos) << extra << report;
+    const std::size_t at = report.find("\"collapsed\": ");
+    EXPECT_NE(at, std::string::npos) << report;
+    return at == std::string::npos ? -1 : std::stol(report.substr(at + 13));
+  };
+  EXPECT_GT(collapsed("--merge-cones 0"), 0) << "the case no longer exercises coincident cones";
+  EXPECT_EQ(collapsed(""), 0);
+}
+
+}  // namespace
+}  // namespace seamvox
