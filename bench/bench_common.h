@@ -30,7 +30,8 @@ void forEachSubdividedFertility(const std::string& dataDir, int levels, Run&& ru
     options.levels = static_cast<std::uint32_t>(level);
     const SubdivideResult sub = subdivideMesh(base.mesh, base.topology, options);
     CrossField field;
-    field.direction = inheritFaceVectors(baseField.direction, sub.parentFace);
+    field.direction.resize(sub.parentFace.size());
+    for (std::size_t f = 0; f < sub.parentFace.size(); ++f) field.direction[f] = baseField.direction[sub.parentFace[f]];
     run("fertility x4^" + std::to_string(level), sub.mesh, field);
   }
 }

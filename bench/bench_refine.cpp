@@ -57,7 +57,7 @@ void runCase(const std::string& label, const TriangleMesh& input, const CrossFie
   CrossField field;
   if (inherited) {
     std::vector<Vec3d> v(mesh.numFaces());
-    for (FaceId f = 0; f < mesh.numFaces(); ++f) v[f] = inherited->direction[clean.faceOrigin[f]];
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) v[f] = inherited->at(clean.faceOrigin[f]);
     field = projectToTangent(mesh, std::move(v));
   } else {
     field = computeSmoothestField(mesh, topology);

@@ -43,8 +43,7 @@ HatBasis::HatBasis(const TriangleMesh& mesh, const Topology& topology, const Cro
   if (!(edgeLength_ > 0.0) || !std::isfinite(edgeLength_)) {
     throw InputError("hat basis: edge length must be positive and finite");
   }
-  if (field.direction.size() != nf || cut.isCut.size() != 3u * nf ||
-      cut.faceRotation.size() != nf || cut.cornerSeam.size() != 3u * nf) {
+  if (field.direction.size() != nf || cut.isCut.size() != 3u * nf || cut.faceRotation.size() != nf) {
     throw InputError("hat basis: field or cut sizes do not match the mesh (" +
                      std::to_string(nf) + " faces)");
   }
@@ -153,7 +152,7 @@ void HatBasis::elementIntegrals(std::uint64_t e, ElementIntegrals& out) const {
   const Vec3d p0 = mesh_.position(t[0]), p1 = mesh_.position(t[1]), p2 = mesh_.position(t[2]);
   // Combed direction: rot^faceRotation[f](direction[f]), rot = n x (cut.h).
   const Vec3d n = faceNormal(mesh_, f);
-  Vec3d u = field_.direction[f];
+  Vec3d u = field_.at(f);
   for (int k = 0; k < cut_.faceRotation[f] % 4; ++k) u = n.cross(u);
   double stiffness[9];
   std::complex<double> rhs[3];

@@ -1,6 +1,7 @@
 // Cut graph, combing and seam curves (DESIGN section 5). Conventions: core/cut.h.
 #include "core/cut.h"
 
+#include <algorithm>
 #include <string>
 
 #include "core/errors.h"
@@ -97,8 +98,9 @@ std::vector<std::uint32_t> pruneCut(const Topology& topology, const std::vector<
 
 /// Traces one seam curve starting with the edge of corner first (its face on the left), along
 /// cut interior edges through non-node vertices, until a node or the start vertex again.
+/// Marks the corners of the traced edge (both sides) in traced.
 void traceSeam(const Topology& topology, CornerId first, const std::vector<std::uint8_t>& isNode,
-               CutResult& cut) {
+               std::vector<bool>& traced, CutResult& cut) {
   const std::uint32_t id = static_cast<std::uint32_t>(cut.seams.size());
   SeamCurve seam;
   seam.start = topology.vertex(nextCorner(first));
@@ -111,7 +113,7 @@ void traceSeam(const Topology& topology, CornerId first, const std::vector<std::
                           " (a cone missing from the singularities?)");
     }
     seam.corners.push_back(c);
-    cut.cornerSeam[c] = cut.cornerSeam[topology.opposite(c)] = id;
+    traced[c] = traced[topology.opposite(c)] = true;
     const VertexId w = topology.vertex(prevCorner(c));
     if (isNode[w] || w == seam.start) {
       seam.end = w;
@@ -121,7 +123,7 @@ void traceSeam(const Topology& topology, CornerId first, const std::vector<std::
     CornerId next = kInvalidId;
     topology.forEachCornerAround(w, [&](CornerId k) {
       const CornerId out = prevCorner(k);
-      if (next == kInvalidId && cut.isCut[out] && cut.cornerSeam[out] == kInvalidId) next = out;
+      if (next == kInvalidId && cut.isCut[out] && !traced[out]) next = out;
     });
     if (next == kInvalidId || topology.opposite(next) == kInvalidId) {
       throw TopologyError("cutToDisk: seam " + std::to_string(id) + " breaks off at vertex " +
@@ -182,23 +184,48 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
   for (VertexId v = 0; v < numVertices; ++v) {
     isNode[v] = degree[v] != 2 || isCone[v] || topology.isBoundaryVertex(v);
   }
-  cut.cornerSeam.assign(3 * std::size_t(numFaces), kInvalidId);
+  std::vector<bool> traced(topology.numCorners(), false);
+  auto startsSeam = [&](CornerId c) {
+    return cut.isCut[c] && topology.opposite(c) != kInvalidId && !traced[c];
+  };
   for (VertexId v = 0; v < numVertices; ++v) {
     if (!isNode[v] || degree[v] == 0) continue;
     topology.forEachCornerAround(v, [&](CornerId k) {
       const CornerId out = prevCorner(k);  // edge v -> vertex(next k), face(k) on its left
-      if (cut.isCut[out] && topology.opposite(out) != kInvalidId && cut.cornerSeam[out] == kInvalidId) {
-        traceSeam(topology, out, isNode, cut);
-      }
+      if (startsSeam(out)) traceSeam(topology, out, isNode, traced, cut);
     });
   }
   for (CornerId c = 0; c < topology.numCorners(); ++c) {
-    if (cut.isCut[c] && topology.opposite(c) != kInvalidId && cut.cornerSeam[c] == kInvalidId) {
-      traceSeam(topology, c, isNode, cut);
-    }
+    if (startsSeam(c)) traceSeam(topology, c, isNode, traced, cut);
   }
   reportProgress(options.progress, "cut: seams", 1.0);
   return cut;
+}
+
+SeamIndex::SeamIndex(const Topology& topology, const std::vector<SeamCurve>& seams) {
+  std::size_t n = 0;
+  for (const SeamCurve& seam : seams) n += 2 * seam.corners.size();
+  entries_.reserve(n);
+  for (std::uint32_t id = 0; id < seams.size(); ++id) {
+    for (CornerId c : seams[id].corners) {
+      const CornerId o = c < topology.numCorners() ? topology.opposite(c) : kInvalidId;
+      if (o == kInvalidId) {
+        throw InputError("seam " + std::to_string(id) + ": corner " + std::to_string(c) +
+                         " is not on an interior edge");
+      }
+      entries_.push_back({c, id, true});
+      entries_.push_back({o, id, false});
+    }
+  }
+  std::sort(entries_.begin(), entries_.end(),
+            [](const Entry& a, const Entry& b) { return a.corner < b.corner; });
+}
+
+SeamIndex::Side SeamIndex::find(CornerId c) const {
+  const auto it = std::lower_bound(entries_.begin(), entries_.end(), c,
+                                   [](const Entry& e, CornerId corner) { return e.corner < corner; });
+  if (it == entries_.end() || it->corner != c) return {};
+  return {it->seam, it->left};
 }
 
 }  // namespace seamvox

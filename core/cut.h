@@ -37,10 +37,29 @@ struct CutResult {
   std::vector<std::uint8_t> faceRotation;    ///< #F, quarter turns applied by combing
   std::vector<std::uint8_t> combedMatching;  ///< 3 #F, matching after combing
   std::vector<SeamCurve> seams;
-  /// 3 #F: seam id of the edge of corner c, for corners on both sides; kInvalidId when the edge
-  /// is not on a seam (boundary edges are cut but are not seams).
-  std::vector<std::uint32_t> cornerSeam;
   std::vector<VertexId> cones;  ///< copy of the field's cones; every one lies on the cut
+};
+
+/// The seam of a corner's edge, looked up among the seam corners only (both sides, sorted):
+/// 12 bytes per seam edge instead of a 3 #F array. Build it for the stage that needs it.
+class SeamIndex {
+ public:
+  struct Side {
+    std::uint32_t seam = kInvalidId;  ///< seam id, or kInvalidId: the edge is on no seam
+    bool left = false;                ///< the corner is one of the seam's (left) corners
+  };
+  SeamIndex(const Topology& topology, const std::vector<SeamCurve>& seams);
+  /// Seam and side of the edge of corner c; boundary edges are cut but are on no seam.
+  Side find(CornerId c) const;
+  std::uint32_t seamOf(CornerId c) const { return find(c).seam; }
+
+ private:
+  struct Entry {
+    CornerId corner;
+    std::uint32_t seam;
+    bool left;
+  };
+  std::vector<Entry> entries_;  // sorted by corner
 };
 
 /// Dual spanning tree per component, pruning to a cut through every cone (boundary edges kept),

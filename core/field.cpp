@@ -134,7 +134,7 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
   tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceAngles a = faceAngles(mesh, f);
-      faceData[f] = {float(frameAngle(a.frame, field.direction[f])), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
+      faceData[f] = {float(frameAngle(a.frame, field.at(f))), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
     }
   });
 
@@ -460,31 +460,31 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceFrame frame = faceFrame(mesh, f);
       const double theta = std::abs(x[f]) > 0.0 ? 0.25 * std::arg(x[f]) : 0.0;
-      field.direction[f] = std::cos(theta) * frame.e1 + std::sin(theta) * frame.e2;
+      field.set(f, std::cos(theta) * frame.e1 + std::sin(theta) * frame.e2);
     }
   });
   reportProgress(options.progress, "field: directions", 1.0);
   return field;
 }
 
-CrossField projectToTangent(const TriangleMesh& mesh, std::vector<Vec3d> vectors) {
+CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors) {
   const std::uint32_t numFaces = mesh.numFaces();
   if (vectors.size() != numFaces) {
     throw InputError("projectToTangent: " + std::to_string(vectors.size()) + " vectors for " +
                      std::to_string(numFaces) + " faces");
   }
+  CrossField field;
+  field.direction.resize(numFaces);
   tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceFrame frame = faceFrame(mesh, f);
-      Vec3d& v = vectors[f];
+      const Vec3d& v = vectors[f];
       const Vec3d t = v.allFinite() ? Vec3d(v - v.dot(frame.n) * frame.n) : Vec3d::Zero();
       const double len = t.norm();
       // Parallel to the normal, zero or not finite: the frame's first direction.
-      v = len > 1e-12 * std::max(1.0, v.norm()) ? Vec3d(t / len) : frame.e1;
+      field.set(f, len > 1e-12 * std::max(1.0, v.norm()) ? Vec3d(t / len) : frame.e1);
     }
   });
-  CrossField field;
-  field.direction = std::move(vectors);
   return field;
 }
 

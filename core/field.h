@@ -22,7 +22,11 @@
 namespace seamvox {
 
 struct CrossField {
-  std::vector<Vec3d> direction;  ///< #F unit tangent vectors u_T (world coordinates)
+  /// #F unit tangent vectors u_T (world coordinates), stored in float to halve their memory
+  /// (12 bytes per face); computations read them in double through at().
+  std::vector<Vec3f> direction;
+  Vec3d at(FaceId f) const { return direction[f].cast<double>(); }
+  void set(FaceId f, const Vec3d& u) { direction[f] = u.cast<float>(); }
 };
 
 struct FieldSingularities {
@@ -51,6 +55,6 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
 
 /// Projects arbitrary per-face 3D vectors onto each face's tangent plane and normalizes them.
 /// Vectors parallel to the normal (or zero) get the face's first edge direction.
-CrossField projectToTangent(const TriangleMesh& mesh, std::vector<Vec3d> vectors);
+CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors);
 
 }  // namespace seamvox

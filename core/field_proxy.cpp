@@ -442,7 +442,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
       for (std::uint32_t i = proxy.neighbourStart[own]; i < proxy.neighbourStart[own + 1]; ++i) {
         add(proxy.neighbours[i].first);
       }
-      field.direction[f] = directionOf(sum, g.e1, g.e2);
+      field.set(f, directionOf(sum, g.e1, g.e2));
       if (!packedNormal.empty()) packedNormal[f] = packNormal(g.n, g.degenerate);
     }
   });
@@ -462,19 +462,19 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
           if (colour[f] != k || packedNormal[f] == kNoNormal) continue;
           const Vec3d n = unpackNormal(packedNormal[f]);
           // Frame with e1 = the current direction: the new one is the representative nearest it.
-          const Vec3d& u = field.direction[f];
+          const Vec3d u = field.at(f);
           const Vec3d v = n.cross(u);
           Complex sum = 0.0;
           for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
             const CornerId o = topology.opposite(c);
             if (o == kInvalidId || packedNormal[cornerFace(o)] == kNoNormal) continue;
             const FaceId g = cornerFace(o);
-            sum += fourthPower(rotateBetween(unpackNormal(packedNormal[g]), n, field.direction[g]), u, v);
+            sum += fourthPower(rotateBetween(unpackNormal(packedNormal[g]), n, field.at(g)), u, v);
           }
           const Vec3d next = directionOf(sum, u, v);
           const Vec3d tangent = next - next.dot(n) * n;
           const double len = tangent.norm();
-          if (len > 0.0 && std::isfinite(len)) field.direction[f] = tangent / len;
+          if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
         }
       });
     }
@@ -484,10 +484,10 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
       for (FaceId f = range.begin(); f != range.end(); ++f) {
         if (packedNormal[f] == kNoNormal) continue;
         const Vec3d n = faceNormal(mesh, f);
-        const Vec3d& u = field.direction[f];
+        const Vec3d u = field.at(f);
         const Vec3d tangent = u - u.dot(n) * n;
         const double len = tangent.norm();
-        if (len > 0.0 && std::isfinite(len)) field.direction[f] = tangent / len;
+        if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
       }
     });
   }
@@ -538,12 +538,12 @@ double measureFieldEnergy(const TriangleMesh& mesh, const Topology& topology, co
   tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceGeometry g = faceGeometry(mesh, f);
-      const Complex zf = fourthPower(field.direction[f], g.e1, g.e2);
+      const Complex zf = fourthPower(field.at(f), g.e1, g.e2);
       for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
         const CornerId o = topology.opposite(c);
         if (o == kInvalidId || o < c) continue;
         const FaceGeometry h = faceGeometry(mesh, cornerFace(o));
-        const Complex zg = fourthPower(rotateBetween(h.n, g.n, field.direction[cornerFace(o)]), g.e1, g.e2);
+        const Complex zg = fourthPower(rotateBetween(h.n, g.n, field.at(cornerFace(o))), g.e1, g.e2);
         perFace[f] += dualWeight(edgeLength(mesh, topology, c), g.centroid, h.centroid) * std::norm(zf - zg);
       }
     }

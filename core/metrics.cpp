@@ -151,7 +151,8 @@ MapQuality measureMap(const TriangleMesh& mesh, const std::vector<Vec2d>& corner
       out.gv += q[k].imag() * g;
     }
     if (field) {
-      Vec3d u = field->direction[f] - n * n.dot(field->direction[f]);
+      Vec3d u = field->at(f);
+      u -= n * n.dot(u);
       const double len = u.norm();
       if (len > 0.0) {
         u /= len;

@@ -148,8 +148,8 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
                          const std::vector<FaceId>& regionFaces) {
   const FaceId nf = topology.numFaces();
   if (field.direction.size() != nf || cut.isCut.size() != 3u * nf ||
-      cut.faceRotation.size() != nf || cut.cornerSeam.size() != 3u * nf ||
-      cut.combedMatching.size() != 3u * nf || mesh.numFaces() != nf) {
+      cut.faceRotation.size() != nf || cut.combedMatching.size() != 3u * nf ||
+      mesh.numFaces() != nf) {
     throw InputError("refine: field or cut sizes do not match the mesh (" + std::to_string(nf) +
                      " faces)");
   }
@@ -220,7 +220,6 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
   subCut.isCut.resize(3u * rf);
   subCut.faceRotation.resize(rf);
   subCut.combedMatching.resize(3u * rf);
-  subCut.cornerSeam.assign(3u * rf, kInvalidId);
   for (std::uint32_t i = 0; i < rf; ++i) {
     const FaceId f = regionFaces[i];
     out.field.direction[i] = field.direction[f];
@@ -243,8 +242,6 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
       local.corners.push_back(sc);
     }
     if (local.corners.empty()) continue;
-    const std::uint32_t id = static_cast<std::uint32_t>(subCut.seams.size());
-    for (CornerId sc : local.corners) subCut.cornerSeam[sc] = subCut.cornerSeam[opposite[sc]] = id;
     local.start = sub.triangles[local.corners.front() / 3][nextCorner(local.corners.front()) % 3];
     local.end = sub.triangles[local.corners.back() / 3][prevCorner(local.corners.back()) % 3];
     subCut.seams.push_back(std::move(local));

@@ -53,7 +53,7 @@ void forSharedCorners(const VoxelCoord& d, F&& f) {
 Vec3d combedDirection(const TriangleMesh& mesh, const CrossField& field, const CutResult& cut,
                       FaceId f, Vec3d& normal) {
   normal = faceNormal(mesh, f);
-  Vec3d u = field.direction[f];
+  Vec3d u = field.at(f);
   for (int k = 0; k < cut.faceRotation[f] % 4; ++k) u = normal.cross(u);
   return u;
 }
@@ -117,7 +117,7 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
     throw InputError("voxel basis: edge length must be positive and finite");
   }
   if (mesh.numFaces() != nf || field.direction.size() != nf || cut.isCut.size() != 3u * nf ||
-      cut.faceRotation.size() != nf || cut.cornerSeam.size() != 3u * nf) {
+      cut.faceRotation.size() != nf) {
     throw InputError("voxel basis: mesh, field or cut sizes do not match the topology (" +
                      std::to_string(nf) + " faces)");
   }
@@ -218,14 +218,7 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   reportProgress(options.progress, "voxel basis", 0.5);
 
   // Domains: element functions (nodes 8 e + k) of one grid corner joined inside its support.
-  std::vector<CornerId> leftCorners;
-  for (const SeamCurve& seam : cut.seams) {
-    leftCorners.insert(leftCorners.end(), seam.corners.begin(), seam.corners.end());
-  }
-  std::sort(leftCorners.begin(), leftCorners.end());
-  auto isLeft = [&](CornerId c) {
-    return std::binary_search(leftCorners.begin(), leftCorners.end(), c);
-  };
+  const SeamIndex seamIndex(topology, cut.seams);
   UnionFind functions(std::size_t(ne) * 8);
   std::vector<SeamLink> seamLinks;
   std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, element) of one face
@@ -265,8 +258,8 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
         const CornerId o = topology.opposite(c);
         if (!(fr.edgeMask >> j & 1) || o == kInvalidId || cornerFace(o) < f) continue;
         const bool isCut = cut.isCut[c] != 0;
-        const std::uint32_t seam = cut.cornerSeam[c];
-        if (isCut && seam == kInvalidId) continue;
+        const SeamIndex::Side side = isCut ? seamIndex.find(c) : SeamIndex::Side{};
+        if (isCut && side.seam == kInvalidId) continue;
         const FaceId h = cornerFace(o);
         const Vec3d& p = g[(j + 1) % 3];
         const Vec3d& q = g[(j + 2) % 3];
@@ -288,14 +281,13 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
             continue;  // same voxel, joined into one element already
           }
           const std::uint32_t ea = fragmentElement_[i], eb = fragmentElement_[i2];
-          const bool left = isLeft(c);
           forSharedCorners(d, [&](int k, int k2) {
             if (!isCut) {
               functions.unite(8 * ea + k, 8 * eb + k2);
-            } else if (left) {
-              seamLinks.push_back({8 * ea + k, 8 * eb + k2, seam});
+            } else if (side.left) {
+              seamLinks.push_back({8 * ea + k, 8 * eb + k2, side.seam});
             } else {
-              seamLinks.push_back({8 * eb + k2, 8 * ea + k, seam});
+              seamLinks.push_back({8 * eb + k2, 8 * ea + k, side.seam});
             }
           });
         }

@@ -33,7 +33,7 @@ PairCase pairCase(int n, int ai, int aj, int bi, int bj, double sa, double sb) {
     const Vec3d x = (out.s.mesh.position(t[0]) + out.s.mesh.position(t[1]) + out.s.mesh.position(t[2])) / 3.0;
     const double theta = (sa * std::atan2(x.y() - pa.y(), x.x() - pa.x()) +
                           sb * std::atan2(x.y() - pb.y(), x.x() - pb.x())) / 4.0;
-    out.field.direction.push_back(Vec3d(std::cos(theta), std::sin(theta), 0.0));
+    out.field.direction.push_back(Vec3f(float(std::cos(theta)), float(std::sin(theta)), 0.f));
   }
   return out;
 }

@@ -105,26 +105,31 @@ void expectCombedSeams(const Surface& s, const CrossField& field, const FieldSin
   for (VertexId v : sing.cones) EXPECT_GT(cutDegree[v], 0u) << what << ": cone " << v << " off the cut";
   EXPECT_EQ(cut.cones, sing.cones);
 
-  std::vector<Vec3d> combed(field.direction);
+  CrossField combed = field;
   for (FaceId f = 0; f < t.numFaces(); ++f) {
     ASSERT_LT(cut.faceRotation[f], 4);
-    for (int k = 0; k < cut.faceRotation[f]; ++k) combed[f] = faceNormal(s.mesh, f).cross(combed[f]);
+    Vec3d u = field.at(f);
+    for (int k = 0; k < cut.faceRotation[f]; ++k) u = faceNormal(s.mesh, f).cross(u);
+    combed.set(f, u);
   }
-  const FieldSingularities recomputed = computeSingularities(s.mesh, t, CrossField{combed});
+  const FieldSingularities recomputed = computeSingularities(s.mesh, t, combed);
+  const SeamIndex seamIndex(t, cut.seams);
   for (CornerId c = 0; c < t.numCorners(); ++c) {
     const CornerId o = t.opposite(c);
     if (o == kInvalidId) {
       EXPECT_TRUE(cut.isCut[c]) << what;
-      EXPECT_EQ(cut.cornerSeam[c], kInvalidId) << what;
+      EXPECT_EQ(seamIndex.seamOf(c), kInvalidId) << what;
       continue;
     }
     ASSERT_EQ(cut.combedMatching[c], recomputed.matching[c]) << what << ": corner " << c;
     if (!cut.isCut[c]) {
       ASSERT_EQ(cut.combedMatching[c], 0) << what << ": corner " << c;
-      EXPECT_EQ(cut.cornerSeam[c], kInvalidId) << what;
+      EXPECT_EQ(seamIndex.seamOf(c), kInvalidId) << what;
     } else {
-      ASSERT_NE(cut.cornerSeam[c], kInvalidId) << what << ": cut edge of corner " << c << " in no seam";
-      EXPECT_EQ(cut.cornerSeam[c], cut.cornerSeam[o]);
+      const SeamIndex::Side side = seamIndex.find(c), other = seamIndex.find(o);
+      ASSERT_NE(side.seam, kInvalidId) << what << ": cut edge of corner " << c << " in no seam";
+      EXPECT_EQ(side.seam, other.seam);
+      EXPECT_NE(side.left, other.left) << what << ": corner " << c;
     }
   }
   std::size_t seamCorners = 0;
@@ -135,7 +140,8 @@ void expectCombedSeams(const Surface& s, const CrossField& field, const FieldSin
     EXPECT_EQ(t.vertex(prevCorner(seam.corners.back())), seam.end);
     for (std::size_t j = 0; j < seam.corners.size(); ++j) {
       const CornerId c = seam.corners[j];
-      EXPECT_EQ(cut.cornerSeam[c], id);
+      EXPECT_EQ(seamIndex.seamOf(c), id);
+      EXPECT_TRUE(seamIndex.find(c).left);
       EXPECT_EQ(cut.combedMatching[c], seam.matching) << what << ": seam " << id;
       if (j > 0) EXPECT_EQ(t.vertex(nextCorner(c)), t.vertex(prevCorner(seam.corners[j - 1])));
       if (j + 1 < seam.corners.size()) {  // inner vertices: plain path points
@@ -193,7 +199,7 @@ TEST(Cut, ClosedSphereWithAtMostOneConeKeepsOneEdge) {
   // leave a disk: the pruned cut would vanish, so one edge (at the cone, if any) stays.
   const Surface s = makeSurface(testing::icosphereMesh(2));
   CrossField field;
-  field.direction.assign(s.mesh.numFaces(), Vec3d::Zero());
+  field.direction.assign(s.mesh.numFaces(), Vec3f::Zero());
   FieldSingularities sing;
   sing.matching.assign(s.topology.numCorners(), 0);
   sing.index4.assign(s.topology.numVertices(), 0);
@@ -211,12 +217,23 @@ TEST(Cut, ClosedSphereWithAtMostOneConeKeepsOneEdge) {
   }
 }
 
+TEST(Cut, SeamIndexRejectsCornersOffInteriorEdges) {
+  const Surface s = makeSurface(testing::gridMesh(3, 3));
+  CornerId boundary = 0;
+  while (!s.topology.isBoundaryEdge(boundary)) ++boundary;
+  SeamCurve seam;
+  seam.corners = {boundary};
+  EXPECT_THROW(SeamIndex(s.topology, {seam}), InputError);
+  seam.corners = {s.topology.numCorners()};
+  EXPECT_THROW(SeamIndex(s.topology, {seam}), InputError);
+}
+
 TEST(Cut, InconsistentMatchingsThrow) {
   // Matchings that turn around vertices not marked as cones cannot be combed to 0 off the cut
   // and constant along seams: cutToDisk must say so rather than return wrong seams.
   const Surface s = makeSurface(testing::torusMesh(12, 8));
   CrossField field;
-  field.direction.assign(s.mesh.numFaces(), Vec3d::Zero());
+  field.direction.assign(s.mesh.numFaces(), Vec3f::Zero());
   FieldSingularities sing;
   sing.matching.assign(s.topology.numCorners(), 0);
   sing.index4.assign(s.topology.numVertices(), 0);

@@ -36,14 +36,13 @@ CutResult boundaryCut(const Topology& topology) {
   cut.isCut.assign(nc, 0);
   cut.faceRotation.assign(topology.numFaces(), 0);
   cut.combedMatching.assign(nc, 0);
-  cut.cornerSeam.assign(nc, kInvalidId);
   for (CornerId c = 0; c < nc; ++c) cut.isCut[c] = topology.isBoundaryEdge(c) ? 1 : 0;
   return cut;
 }
 
 CrossField constantField(const TriangleMesh& mesh, const Vec3d& direction) {
   CrossField field;
-  field.direction.assign(mesh.numFaces(), direction.normalized());
+  field.direction.assign(mesh.numFaces(), direction.normalized().cast<float>());
   return field;
 }
 
@@ -62,10 +61,7 @@ CutResult cylinderCut(const Topology& topology, int n, int m) {
   EXPECT_EQ(upward.size(), static_cast<std::size_t>(m));
   for (const auto& [v, c] : upward) {
     seam.corners.push_back(c);
-    for (CornerId side : {c, topology.opposite(c)}) {
-      cut.isCut[side] = 1;
-      cut.cornerSeam[side] = 0;
-    }
+    for (CornerId side : {c, topology.opposite(c)}) cut.isCut[side] = 1;
   }
   seam.start = upward.front().first;
   seam.end = static_cast<VertexId>(m * n);
@@ -131,8 +127,9 @@ TEST(HatSolver, FlatSquareWithConstantFieldIsExactlyLinear) {
   const TriangleMesh mesh = testing::gridMesh(8, 8, 1.0);
   const Topology topology = Topology::build(mesh.triangles, mesh.numVertices());
   const double angle = 0.3, h = 0.5;
-  const Vec3d u(std::cos(angle), std::sin(angle), 0.0), v(-std::sin(angle), std::cos(angle), 0.0);
-  const CrossField field = constantField(mesh, u);
+  const CrossField field = constantField(mesh, Vec3d(std::cos(angle), std::sin(angle), 0.0));
+  // The map follows the stored (float) direction exactly.
+  const Vec3d u = field.at(0), v = Vec3d::UnitZ().cross(u);
   const CutResult cut = boundaryCut(topology);
   ParamOptions options;
   options.edgeLength = h;
@@ -144,7 +141,7 @@ TEST(HatSolver, FlatSquareWithConstantFieldIsExactlyLinear) {
     EXPECT_LT(std::abs(uvAt(result, c) - q0 - Complex(d.dot(u), d.dot(v)) / h), 1e-9);
   }
   const MapQuality quality = measureMap(mesh, result.cornerUV, &field, h);
-  EXPECT_LT(quality.relativeGradientError, 1e-9);
+  EXPECT_LT(quality.relativeGradientError, 1e-7);  // measureMap normalizes u; |u| is 1 to float precision
   EXPECT_EQ(quality.flipped, 0u);
   EXPECT_EQ(result.stats.pinnedFirst, 1u);
   EXPECT_EQ(result.stats.translational, 0u);
@@ -206,17 +203,14 @@ TEST(HatSolver, SeveralComponentsEachPinned) {
     const CornerId offset = 3 * a.numFaces();
     for (CornerId& c : seam.corners) {
       c += offset;
-      for (CornerId side : {c, topology.opposite(c)}) {
-        cut.isCut[side] = 1;
-        cut.cornerSeam[side] = 0;
-      }
+      for (CornerId side : {c, topology.opposite(c)}) cut.isCut[side] = 1;
     }
     cut.seams.push_back(seam);
   }
   const double circumference = ringPerimeter(b, 12);
   const CrossField field = constantField(mesh, Vec3d(0, 0, 1));  // tangent on the cylinder only
   CrossField mixed = field;
-  for (FaceId f = 0; f < a.numFaces(); ++f) mixed.direction[f] = Vec3d(1, 0, 0);
+  for (FaceId f = 0; f < a.numFaces(); ++f) mixed.direction[f] = Vec3f(1, 0, 0);
   ParamOptions options;
   options.edgeLength = circumference / 6;
   const ParamResult result = parameterizeMesh(mesh, topology, mixed, cut, options);

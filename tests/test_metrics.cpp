@@ -37,7 +37,6 @@ SplitGrid splitGrid(int n, Complex r, Complex t, std::uint8_t matching) {
   g.cut.isCut.assign(g.topology.numCorners(), 0);
   g.cut.faceRotation.assign(g.topology.numFaces(), 0);
   g.cut.combedMatching.assign(g.topology.numCorners(), 0);
-  g.cut.cornerSeam.assign(g.topology.numCorners(), kInvalidId);
   SeamCurve seam;
   seam.matching = matching;
   for (CornerId c = 0; c < g.topology.numCorners(); ++c) {
@@ -48,7 +47,7 @@ SplitGrid splitGrid(int n, Complex r, Complex t, std::uint8_t matching) {
     }
     const bool leftHere = faceCenterX(c / 3) < middle, leftThere = faceCenterX(o / 3) < middle;
     if (leftHere && !leftThere) seam.corners.push_back(c);
-    if (leftHere != leftThere) g.cut.isCut[c] = 1, g.cut.cornerSeam[c] = 0;
+    if (leftHere != leftThere) g.cut.isCut[c] = 1;
   }
   g.cut.seams.push_back(seam);
   g.mesh.cornerUV.resize(g.topology.numCorners());
@@ -120,7 +119,7 @@ std::vector<Vec2d> linearUV(const TriangleMesh& mesh, Complex scale) {
 TEST(MapMetrics, GradientErrorFlipsAndCollapses) {
   const TriangleMesh mesh = testing::gridMesh(5, 5, 0.5);
   CrossField field;
-  field.direction.assign(mesh.numFaces(), Vec3d(1, 0, 0));
+  field.direction.assign(mesh.numFaces(), Vec3f(1, 0, 0));
   const double h = 0.25;
   // q = (x + i y) / h follows w = u + i n x u exactly; so does i q (the cross is symmetric).
   for (Complex rotation : {Complex(1, 0), Complex(0, 1), Complex(-1, 0)}) {

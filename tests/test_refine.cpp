@@ -375,13 +375,15 @@ TEST_F(RefineSphere, ExtractedRegionIsAManifoldSubMeshWithIndexMaps) {
     }
   }
   // Seam edges inside the region keep their curve's matching and face the same way.
+  const SeamIndex wholeSeams(topology, s.cut.seams), regionSeams(region.topology, region.cut.seams);
   for (std::uint32_t j = 0; j < region.cut.seams.size(); ++j) {
     const SeamCurve& local = region.cut.seams[j];
     EXPECT_EQ(local.matching, s.cut.seams[region.seamOrigin[j]].matching);
     for (CornerId sc : local.corners) {
       const CornerId c = 3 * region.faceOrigin[sc / 3] + sc % 3;
-      EXPECT_EQ(s.cut.cornerSeam[c], region.seamOrigin[j]);
-      EXPECT_EQ(region.cut.cornerSeam[region.topology.opposite(sc)], j);
+      EXPECT_EQ(wholeSeams.find(c).seam, region.seamOrigin[j]);
+      EXPECT_TRUE(wholeSeams.find(c).left);
+      EXPECT_EQ(regionSeams.find(region.topology.opposite(sc)).seam, j);
     }
   }
   // Every cone's neighbourhood was damaged, so every cone is a free vertex of the region.
@@ -397,12 +399,11 @@ CutResult boundaryCut(const Topology& topology) {
   for (CornerId c = 0; c < topology.numCorners(); ++c) cut.isCut[c] = topology.isBoundaryEdge(c);
   cut.faceRotation.assign(topology.numFaces(), 0);
   cut.combedMatching.assign(topology.numCorners(), 0);
-  cut.cornerSeam.assign(topology.numCorners(), kInvalidId);
   return cut;
 }
 CrossField constantField(const TriangleMesh& mesh) {
   CrossField field;
-  field.direction.assign(mesh.numFaces(), Vec3d::UnitX());
+  field.direction.assign(mesh.numFaces(), Vec3f::UnitX());
   return field;
 }
 

@@ -132,7 +132,7 @@ int runField(Args& args) {
 
   // Written per input face (faces cleaning dropped get a zero vector: "no preference").
   std::vector<Vec3d> perInputFace(inputFaces, Vec3d::Zero());
-  for (FaceId f = 0; f < mesh.numFaces(); ++f) perInputFace[clean.faceOrigin[f]] = field.direction[f];
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) perInputFace[clean.faceOrigin[f]] = field.at(f);
   writeField(*output, perInputFace);
   if (conesPath) writeConesObj(*conesPath, mesh, sing);
   if (seamsPath) writeSeamsObj(*seamsPath, mesh, topology, cut);

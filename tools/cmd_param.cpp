@@ -157,6 +157,12 @@ int runParam(Args& args) {
   const SeamQuality seams = measureSeams(mesh, topology, cut, result.cornerUV);
   const MapQuality map = measureMap(mesh, result.cornerUV, &field, options.edgeLength);
   const double secondsMetrics = meter.finish("metrics").seconds;
+  // The writer needs the mesh and its map only (the render also the corner table): release the
+  // field and the cut before the output is written.
+  const std::size_t numCones = cut.cones.size(), numSeams = cut.seams.size();
+  field = CrossField();
+  cut = CutResult();
+  if (!renderPath) clean.topology = Topology();
   mesh.cornerUV = std::move(result.cornerUV);
   writeMesh(*output, mesh);
   const double secondsWrite = meter.finish("write").seconds;
@@ -173,7 +179,7 @@ int runParam(Args& args) {
   const SeamlessStats& st = result.stats;
 
   std::printf("%s -> %s: %u faces, %zu cones, %zu seams, h = %.6g (%.1f cells on the diagonal)\n",
-              input.c_str(), output->c_str(), mesh.numFaces(), cut.cones.size(), cut.seams.size(),
+              input.c_str(), output->c_str(), mesh.numFaces(), numCones, numSeams,
               options.edgeLength, diagonal / options.edgeLength);
   std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
               st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
@@ -212,11 +218,11 @@ int runParam(Args& args) {
     j.key("faces").value(static_cast<std::uint64_t>(mesh.numFaces()));
     j.key("vertices").value(static_cast<std::uint64_t>(mesh.numVertices()));
     j.key("components").value(static_cast<std::uint64_t>(st.components));
-    j.key("cones").value(static_cast<std::uint64_t>(cut.cones.size()));
+    j.key("cones").value(static_cast<std::uint64_t>(numCones));
     j.key("conesCancelled").value(static_cast<std::uint64_t>(2 * merged.cancelledPairs));
     j.key("conesMerged").value(static_cast<std::uint64_t>(merged.mergedPairs));
     j.key("conePasses").value(static_cast<std::uint64_t>(conePasses));
-    j.key("seams").value(static_cast<std::uint64_t>(cut.seams.size()));
+    j.key("seams").value(static_cast<std::uint64_t>(numSeams));
     j.key("seamEdges").value(seams.seamEdges).key("seamLength").value(seams.seamLength);
     j.key("edgeLength").value(options.edgeLength);
     j.key("cellsOnDiagonal").value(diagonal / options.edgeLength);
