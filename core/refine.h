@@ -151,8 +151,9 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const std::vector<std::complex<double>>& seamT,
                              const RefineOptions& options = {});
 
-/// Writes a refinement's corner values into a whole-mesh map (3 #F) and, when given, its
-/// re-solved translations into the per-seam translations.
+/// Writes a refinement's corner values into a whole-mesh map (3 #F; a free vertex's wedges
+/// change whole, in place: WedgeMap::assign) and, when given, its re-solved translations into
+/// the per-seam translations.
 void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
                      std::vector<std::complex<double>>* translations = nullptr);
 

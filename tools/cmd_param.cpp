@@ -123,6 +123,7 @@ int runParam(Args& args) {
   const SeamQuality seams = measureSeams(mesh, topology, cut, result.cornerUV);
   const MapQuality map = measureMap(mesh, result.cornerUV, &field, options.edgeLength);
   const double secondsMetrics = meter.finish("metrics").seconds;
+  const std::uint64_t wedges = result.cornerUV.numWedges(), mapBytes = result.cornerUV.memoryBytes();
   mesh.cornerUV = std::move(result.cornerUV);
   writeMesh(*output, mesh);
   const double secondsWrite = meter.finish("write").seconds;
@@ -144,6 +145,8 @@ int runParam(Args& args) {
   std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
               st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
               peak / 1048576.0);
+  std::printf("map: %llu wedges (%.3f per vertex), %.1f MB\n", static_cast<unsigned long long>(wedges),
+              mesh.numVertices() ? double(wedges) / mesh.numVertices() : 0.0, mapBytes / 1048576.0);
   std::printf("seam residual %.3g, integer distance %.3g, gradient error %.4f, flipped %llu, "
               "collapsed %llu: %s\n",
               seams.maxResidual, seams.maxIntegerDistance, map.relativeGradientError,
@@ -181,6 +184,7 @@ int runParam(Args& args) {
     j.key("cones").value(static_cast<std::uint64_t>(cut.cones.size()));
     j.key("seams").value(static_cast<std::uint64_t>(cut.seams.size()));
     j.key("seamEdges").value(seams.seamEdges).key("seamLength").value(seams.seamLength);
+    j.key("wedges").value(wedges).key("mapBytes").value(mapBytes);
     j.key("edgeLength").value(options.edgeLength);
     j.key("cellsOnDiagonal").value(diagonal / options.edgeLength);
     j.key("system").beginObject();
