@@ -80,8 +80,11 @@ void runCase(const std::string& label, const TriangleMesh& inputMesh, const Cros
   timeStage(stages, "reduce", [&] { reduction = reduceBasis(*basis); });
   SeamlessSolution solution;
   timeStage(stages, "assemble+solve+round+solve", [&] { solution = solveSeamless(*basis, reduction); });
-  std::vector<Vec2d> uv;
-  timeStage(stages, "evaluate", [&] { evaluateMap(*basis, reduction, solution.unknowns, uv); });
+  WedgeMap uv;
+  timeStage(stages, "evaluate", [&] {
+    uv = buildCutWedges(topology, cut);
+    evaluateMap(*basis, reduction, solution.unknowns, uv);
+  });
   SeamQuality seams;
   MapQuality quality;
   timeStage(stages, "metrics", [&] {

@@ -67,10 +67,12 @@ TriangleMesh makeGrid(std::uint64_t n, bool withUV) {
     }
   }
   if (withUV) {
-    mesh.cornerUV.reserve(3 * n);
+    WedgeMapBuilder uv;
+    uv.reserve(3 * n);
     for (const Triangle& t : mesh.triangles) {
-      for (const VertexId v : t) mesh.cornerUV.emplace_back(mesh.positions[v][0] * 3.1, mesh.positions[v][1] / 7.0);
+      for (const VertexId v : t) uv.add(v, Vec2d(mesh.positions[v][0] * 3.1, mesh.positions[v][1] / 7.0));
     }
+    mesh.cornerUV = uv.finish();
   }
   return mesh;
 }

@@ -38,7 +38,7 @@ struct Options {
 };
 
 void printMap(const char* name, double seconds, const TriangleMesh& mesh, const Topology& topology,
-              const CutResult& cut, const CrossField& field, const std::vector<Vec2d>& uv,
+              const CutResult& cut, const CrossField& field, const WedgeMap& uv,
               double h, double hatError) {
   const SeamQuality seams = measureSeams(mesh, topology, cut, uv);
   const MapQuality q = measureMap(mesh, uv, &field, h);
@@ -95,7 +95,7 @@ void runCase(const std::string& label, const TriangleMesh& input, const CrossFie
     refine.rings = rings;
     const RefineResult r = refineNearCones(mesh, topology, field, cut, vox.param.cornerUV,
                                            vox.param.translations, refine);
-    std::vector<Vec2d> uv = vox.param.cornerUV;
+    WedgeMap uv = vox.param.cornerUV;
     std::vector<std::complex<double>> translations = vox.param.translations;
     applyRefinement(r, uv, &translations);
     const std::string name = "voxloc rings " + std::to_string(rings);

@@ -171,12 +171,14 @@ void HatBasis::elementIntegrals(std::uint64_t e, ElementIntegrals& out) const {
 namespace seamvox {
 
 void HatBasis::evaluateCorners(const std::vector<std::complex<double>>& coefficients,
-                               std::vector<Vec2d>& cornerUV) const {
-  cornerUV.resize(cornerDomain_.size(), Vec2d::Zero());
+                               WedgeMap& cornerUV) const {
+  checkCorners(cornerUV, cornerDomain_.size(), "hat basis evaluation");
+  // Domains are the cut's wedges (restricted to the face subset): each wedge gets its domain's
+  // coefficient, written once per corner of the subset.
   for (FaceId f : faces_) {
     for (int k = 0; k < 3; ++k) {
       const std::complex<double> q = coefficients[cornerDomain_[3 * f + k]];
-      cornerUV[3 * f + k] = Vec2d(q.real(), q.imag());
+      cornerUV.setWedgeValue(cornerUV.wedge(3 * f + k), Vec2d(q.real(), q.imag()));
     }
   }
 }

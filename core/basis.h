@@ -47,10 +47,11 @@ class Basis {
   virtual std::uint32_t elementDomains(std::uint64_t e, std::uint32_t* out) const = 0;
   /// Integrals of element e. Thread-safe.
   virtual void elementIntegrals(std::uint64_t e, ElementIntegrals& out) const = 0;
-  /// Writes q = u + i v at every corner the basis covers (3 #F entries; corners it does not
-  /// cover are left unchanged) from the coefficient of every domain.
+  /// Writes q = u + i v once per wedge of cornerUV that the basis covers (wedges it does not
+  /// cover are left unchanged) from the coefficient of every domain. cornerUV must hold the
+  /// cut's wedges on 3 #F corners (buildCutWedges, evaluate.h); InputError otherwise.
   virtual void evaluateCorners(const std::vector<std::complex<double>>& domainCoefficients,
-                               std::vector<Vec2d>& cornerUV) const = 0;
+                               WedgeMap& cornerUV) const = 0;
   /// Element ranges the assembly takes as one task each: starts, then numElements() (e.g. the
   /// voxel basis' OpenVDB leaf blocks, whose elements are contiguous). Empty: fixed-size ranges.
   virtual std::vector<std::uint64_t> elementBlocks() const { return {}; }
@@ -92,7 +93,7 @@ class HatBasis final : public Basis {
   std::uint32_t elementDomains(std::uint64_t e, std::uint32_t* out) const override;
   void elementIntegrals(std::uint64_t e, ElementIntegrals& out) const override;
   void evaluateCorners(const std::vector<std::complex<double>>& domainCoefficients,
-                       std::vector<Vec2d>& cornerUV) const override;
+                       WedgeMap& cornerUV) const override;
 
   /// Wedge (domain) of each corner; kInvalidId for corners outside the face subset.
   const std::vector<std::uint32_t>& cornerDomain() const { return cornerDomain_; }

@@ -106,14 +106,14 @@ void compactFaces(TriangleMesh& mesh, std::vector<FaceId>& faceOrigin, const std
     mesh.triangles[out] = mesh.triangles[f];
     faceOrigin[out] = faceOrigin[f];
     if (uv) {
-      for (int k = 0; k < 3; ++k) mesh.cornerUV[3 * out + k] = mesh.cornerUV[3 * f + k];
+      for (int k = 0; k < 3; ++k) mesh.cornerUV.copyCorner(3 * out + k, 3 * f + k);
     }
     ++out;
   }
   mesh.triangles.resize(out);
   mesh.triangles.shrink_to_fit();
   faceOrigin.resize(out);
-  if (uv) mesh.cornerUV.resize(3 * out);
+  if (uv) mesh.cornerUV.resizeCorners(3 * out);
 }
 
 /// Marks faces with the same vertex set as an earlier face (either orientation).
@@ -191,7 +191,7 @@ std::uint64_t orientFaces(TriangleMesh& mesh, const detail::VertexCorners& vc) {
     if (!flip[f]) continue;
     ++flips;
     std::swap(mesh.triangles[f][1], mesh.triangles[f][2]);
-    if (mesh.hasUV()) std::swap(mesh.cornerUV[3 * f + 1], mesh.cornerUV[3 * f + 2]);
+    if (mesh.hasUV()) mesh.cornerUV.swapCorners(3 * f + 1, 3 * f + 2);
   }
   return flips;
 }

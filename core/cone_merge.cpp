@@ -134,7 +134,7 @@ ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topolo
 
 std::vector<std::pair<VertexId, VertexId>> coincidentConeEdges(const Topology& topology,
                                                                const std::vector<VertexId>& cones,
-                                                               const std::vector<Vec2d>& cornerUV) {
+                                                               const WedgeMap& cornerUV) {
   std::vector<std::pair<VertexId, VertexId>> out;
   if (cornerUV.size() != std::size_t(topology.numCorners())) {
     throw InputError("coincidentConeEdges: the map has " + std::to_string(cornerUV.size()) +

@@ -19,6 +19,7 @@
 #include "field.h"
 #include "mesh.h"
 #include "topology.h"
+#include "wedge_map.h"
 
 namespace seamvox {
 
@@ -59,7 +60,7 @@ namespace seamvox {
 /// the faces on them collapse), as (vertex, vertex) pairs, each edge once.
 std::vector<std::pair<VertexId, VertexId>> coincidentConeEdges(const Topology& topology,
                                                                const std::vector<VertexId>& cones,
-                                                               const std::vector<Vec2d>& cornerUV);
+                                                               const WedgeMap& cornerUV);
 
 /// Merges the given pairs of adjacent cones like mergeCloseCones (skipping pairs that are not
 /// adjacent, no longer both cones, or whose sum would exceed kMaxCoincidentIndex4).

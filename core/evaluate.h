@@ -5,13 +5,19 @@
 
 #include "basis.h"
 #include "reduce.h"
+#include "wedge_map.h"
 
 namespace seamvox {
 
-/// (u, v) in grid units at every corner (3 #F) for the reduced unknowns x: coefficients
-/// P x + offset, then the basis evaluated at each corner. Corners outside the basis keep the
-/// values already in cornerUV (pass an empty vector to start from zeros).
+/// The wedges of the cut mesh, values zero: the corners of a vertex between consecutive cut
+/// edges (cut.h isCut, boundary included) form one wedge; a vertex without cut edges has one.
+/// Wedges are numbered vertex by vertex. Linear time, parallel; 4 bytes per vertex besides the map.
+WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut);
+
+/// (u, v) in grid units for the reduced unknowns x: coefficients P x + offset, then the basis
+/// evaluated once per wedge of cornerUV, which must hold the cut's wedges (buildCutWedges) on all
+/// 3 #F corners; wedges the basis does not cover keep their values.
 void evaluateMap(const Basis& basis, const Reduction& reduction,
-                 const std::vector<std::complex<double>>& unknowns, std::vector<Vec2d>& cornerUV);
+                 const std::vector<std::complex<double>>& unknowns, WedgeMap& cornerUV);
 
 }  // namespace seamvox

@@ -6,27 +6,20 @@
 #include <cstdint>
 #include <vector>
 
+#include "mesh_types.h"
+#include "wedge_map.h"
+
 namespace seamvox {
-
-using VertexId = std::uint32_t;  ///< index into positions
-using FaceId = std::uint32_t;    ///< index into triangles
-using CornerId = std::uint32_t;  ///< 3 * face + k, k in {0, 1, 2}
-/// Marks "no such element" (e.g. the opposite of a boundary corner).
-constexpr std::uint32_t kInvalidId = 0xffffffffu;
-
-using Triangle = std::array<VertexId, 3>;
-using Vec3f = Eigen::Vector3f;
-using Vec3d = Eigen::Vector3d;
-using Vec2d = Eigen::Vector2d;
 
 /// A triangle soup or indexed mesh. Positions are float (scans; 12 bytes per vertex), all
 /// geometric computation is done in double. Triangles are counter-clockwise seen from outside.
 struct TriangleMesh {
   std::vector<Vec3f> positions;     ///< #V
   std::vector<Triangle> triangles;  ///< #F
-  /// Optional per-corner texture coordinates (u, v) in grid units, 3 * #F entries or empty.
-  /// Double: seam checks need 1e-6 absolute accuracy on coordinates of several thousand.
-  std::vector<Vec2d> cornerUV;
+  /// Optional texture coordinates (u, v) in grid units per corner (3 * #F corners) or empty,
+  /// stored per wedge. Double: seam checks need 1e-6 absolute accuracy on coordinates of
+  /// several thousand.
+  WedgeMap cornerUV;
 
   std::uint32_t numVertices() const { return static_cast<std::uint32_t>(positions.size()); }
   std::uint32_t numFaces() const { return static_cast<std::uint32_t>(triangles.size()); }

@@ -18,11 +18,8 @@ namespace {
 using Complex = std::complex<double>;
 Complex toComplex(const Vec2d& q) { return {q.x(), q.y()}; }
 
-void checkSizes(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV) {
-  if (cornerUV.size() != 3 * static_cast<std::size_t>(mesh.numFaces())) {
-    throw InputError("metrics: " + std::to_string(cornerUV.size()) + " corner UVs for " +
-                     std::to_string(mesh.numFaces()) + " faces (need 3 per face)");
-  }
+void checkSizes(const TriangleMesh& mesh, const WedgeMap& cornerUV) {
+  checkCorners(cornerUV, 3 * static_cast<std::size_t>(mesh.numFaces()), "metrics");
 }
 
 double edgeLength3d(const TriangleMesh& mesh, const Topology& topology, CornerId c) {
@@ -34,14 +31,14 @@ double edgeLength3d(const TriangleMesh& mesh, const Topology& topology, CornerId
 struct EdgeSides {
   Complex leftA, rightA, leftB, rightB;
 };
-EdgeSides edgeSides(const std::vector<Vec2d>& uv, CornerId c, CornerId o) {
+EdgeSides edgeSides(const WedgeMap& uv, CornerId c, CornerId o) {
   return {toComplex(uv[nextCorner(c)]), toComplex(uv[prevCorner(o)]), toComplex(uv[prevCorner(c)]),
           toComplex(uv[nextCorner(o)])};
 }
 
 }  // namespace
 
-double parameterAreaRatio(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV, FaceId f,
+double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
                           double edgeLength) {
   const Triangle& t = mesh.triangles[f];
   const Vec3d p0 = mesh.position(t[0]);
@@ -51,7 +48,7 @@ double parameterAreaRatio(const TriangleMesh& mesh, const std::vector<Vec2d>& co
   return uvArea * (edgeLength * edgeLength) / area;
 }
 
-bool collapsesBetweenCones(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV, FaceId f,
+bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
                            const std::vector<std::uint8_t>& isCone) {
   const Triangle& t = mesh.triangles[f];
   for (int k = 0; k < 3; ++k) {
@@ -64,7 +61,7 @@ bool collapsesBetweenCones(const TriangleMesh& mesh, const std::vector<Vec2d>& c
 }
 
 SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
-                         const std::vector<Vec2d>& cornerUV) {
+                         const WedgeMap& cornerUV) {
   checkSizes(mesh, cornerUV);
   SeamQuality out;
   out.seams = static_cast<std::uint32_t>(cut.seams.size());
@@ -91,7 +88,7 @@ SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, con
 }
 
 SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topology,
-                               const std::vector<Vec2d>& cornerUV) {
+                               const WedgeMap& cornerUV) {
   checkSizes(mesh, cornerUV);
   SeamQuality out;
   for (CornerId c = 0; c < topology.numCorners(); ++c) {
@@ -119,7 +116,7 @@ SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topolog
   return out;
 }
 
-MapQuality measureMap(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV,
+MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
                       const std::vector<VertexId>* cones) {
   checkSizes(mesh, cornerUV);

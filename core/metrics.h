@@ -26,13 +26,13 @@ struct SeamQuality {
 /// Seams of a known cut: per seam, t is read at its first corner with r = i^(-matching) (cut.h)
 /// and q_right = r q_left + t is checked at both ends of every edge.
 SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
-                         const std::vector<Vec2d>& cornerUV);
+                         const WedgeMap& cornerUV);
 
 /// Seams reconstructed from per-corner UVs alone: every interior edge whose two sides differ is a
 /// seam edge; r in {1, i, -1, -i} and t come from one endpoint (the r fitting best at the other),
 /// the residual from the other endpoint.
 SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topology,
-                               const std::vector<Vec2d>& cornerUV);
+                               const WedgeMap& cornerUV);
 
 /// A face whose |parameter area| is below this fraction of its expected area A_T / h^2 is collapsed.
 constexpr double kCollapsedAreaFraction = 1e-6;
@@ -40,7 +40,7 @@ constexpr double kCollapsedAreaFraction = 1e-6;
 /// Signed parameter-space area of face f (corners 3 f .. 3 f + 2 of cornerUV) over its expected
 /// area A_T / h^2: 1 for a map with |grad q| = 1/h and no shear, negative when flipped, +-inf or
 /// NaN for a face of zero 3D area.
-double parameterAreaRatio(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV, FaceId f,
+double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
                           double edgeLength);
 
 /// True when face f has an edge between two cones (isCone per vertex) whose corners have the same
@@ -51,7 +51,7 @@ double parameterAreaRatio(const TriangleMesh& mesh, const std::vector<Vec2d>& co
 /// collapse in every solver (hat included): only other translations could separate them, at the
 /// price of a large distortion. This collapse belongs to the field and the rounding, not to the
 /// basis, so it is counted apart (MapQuality::collapsedAtCones).
-bool collapsesBetweenCones(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV, FaceId f,
+bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
                            const std::vector<std::uint8_t>& isCone);
 
 struct MapQuality {
@@ -72,7 +72,7 @@ struct MapQuality {
 /// Flips, collapses and the gradient error against a field (may be null) for target spacing h
 /// (<= 0: fitted); with the cones (vertex ids, e.g. CutResult::cones) also collapsedAtCones.
 /// Linear, parallel.
-MapQuality measureMap(const TriangleMesh& mesh, const std::vector<Vec2d>& cornerUV,
+MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
                       const std::vector<VertexId>* cones = nullptr);
 

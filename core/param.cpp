@@ -43,6 +43,7 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
   out.translations = std::move(solution.translations);
 
   start = std::chrono::steady_clock::now();
+  out.cornerUV = buildCutWedges(topology, cut);
   evaluateMap(basis, reduction, solution.unknowns, out.cornerUV);
   out.secondsEvaluate = secondsSince(start);
   return out;

@@ -21,7 +21,7 @@ struct ParamOptions {
 };
 
 struct ParamResult {
-  std::vector<Vec2d> cornerUV;               ///< 3 #F, (u, v) in grid units
+  WedgeMap cornerUV;  ///< 3 #F corners on the cut's wedges, (u, v) in grid units
   std::vector<std::complex<double>> translations;  ///< t per seam
   SeamlessStats stats;
   std::uint32_t basisFunctions = 0, domains = 0, seamAdjacencies = 0;

@@ -32,7 +32,7 @@ enum FaceFlag : std::uint8_t { kOutside = 0, kMarked = 1, kCollapsed = 2, kFlipp
 
 // kCollapsed when the parameter area of face f is below threshold times its expected area
 // (non-finite values included), kFlipped when negative.
-FaceFlag classifyFace(const TriangleMesh& mesh, const std::vector<Vec2d>& uv, FaceId f,
+FaceFlag classifyFace(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f,
                       double threshold, double edgeLength) {
   const double ratio = parameterAreaRatio(mesh, uv, f, edgeLength);
   if (std::isnan(ratio) || ratio >= threshold) return kOutside;  // NaN: zero-area face, no energy
@@ -74,7 +74,7 @@ void addRings(const Topology& topology, std::vector<FaceId> frontier, std::uint3
 
 // selectRefineRegion with the per-face flags kept for later rounds.
 std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topology,
-                                  const std::vector<Vec2d>& cornerUV, const RefineOptions& options,
+                                  const WedgeMap& cornerUV, const RefineOptions& options,
                                   std::vector<std::uint8_t>& flag, RefineStats* stats) {
   const FaceId nf = topology.numFaces();
   if (cornerUV.size() != 3u * static_cast<std::size_t>(nf) || mesh.numFaces() != nf) {
@@ -123,7 +123,7 @@ std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topo
 // Collapsed and flipped faces by MapQuality's criteria.
 struct FaceCounts {
   std::uint64_t collapsed = 0, collapsedAtCones = 0, flipped = 0;
-  void add(const TriangleMesh& mesh, const std::vector<Vec2d>& uv, FaceId f, double ratio,
+  void add(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f, double ratio,
            const std::vector<std::uint8_t>& isCone) {
     if (std::abs(ratio) < kCollapsedAreaFraction) {
       ++collapsed;
@@ -137,7 +137,7 @@ struct FaceCounts {
 }  // namespace
 
 std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
-                                       const std::vector<Vec2d>& cornerUV,
+                                       const WedgeMap& cornerUV,
                                        const RefineOptions& options, RefineStats* stats) {
   std::vector<std::uint8_t> flag;
   return selectFlagged(mesh, topology, cornerUV, options, flag, stats);
@@ -256,7 +256,7 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
   return out;
 }
 
-RegionSolution solveRegion(const RegionMesh& region, const std::vector<Vec2d>& cornerUV,
+RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<Complex>& seamT, double edgeLength,
                            RefineStats* stats) {
   const std::uint32_t rf = region.topology.numFaces();
@@ -287,7 +287,7 @@ RegionSolution solveRegion(const RegionMesh& region, const std::vector<Vec2d>& c
     if (domainCorner[cornerDomain[c]] == kInvalidId) domainCorner[cornerDomain[c]] = c;
   }
   auto input = [&](std::uint32_t d) {
-    const Vec2d& q = cornerUV[domainCorner[d]];
+    const Vec2d q = cornerUV[domainCorner[d]];
     return Complex(q.x(), q.y());
   };
 
@@ -448,11 +448,16 @@ RegionSolution solveRegion(const RegionMesh& region, const std::vector<Vec2d>& c
     const std::vector<Complex> t = seamTranslations(system, s);
     for (std::uint32_t j = 0; j < ns; ++j) out.seamT[j] += t[j];
   }
-  out.cornerUV.assign(3u * rf, Vec2d::Zero());
+  out.cornerUV = buildCutWedges(region.topology, region.cut);
   evaluateMap(basis, system, x, out.cornerUV);
+  std::vector<CornerId> locked;
+  std::vector<Vec2d> lockedUV;
   for (CornerId c = 0; c < 3u * rf; ++c) {
-    if (isLocked(cornerDomain[c])) out.cornerUV[c] = cornerUV[c];  // exactly the input
+    if (!isLocked(cornerDomain[c])) continue;
+    locked.push_back(c);
+    lockedUV.push_back(cornerUV[c]);  // exactly the input
   }
+  out.cornerUV.assign(locked, lockedUV);
   if (stats) {
     stats->unknowns = local.unknowns;
     stats->freeTranslations = local.freeTranslations;
@@ -467,7 +472,7 @@ RegionSolution solveRegion(const RegionMesh& region, const std::vector<Vec2d>& c
 
 RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,
-                             const std::vector<Vec2d>& cornerUV, const std::vector<Complex>& seamT,
+                             const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
                              const RefineOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   if (seamT.size() != cut.seams.size()) {
@@ -504,10 +509,11 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     lap = roundStart;
     region = extractRegion(mesh, topology, field, cut, faces);
     const std::uint32_t rf = region.topology.numFaces();
-    std::vector<Vec2d> regionUV(3u * rf);
+    std::vector<Vec2d> inputUV(3u * rf);
     for (std::uint32_t i = 0; i < rf; ++i) {
-      for (int k = 0; k < 3; ++k) regionUV[3 * i + k] = cornerUV[3 * region.faceOrigin[i] + k];
+      for (int k = 0; k < 3; ++k) inputUV[3 * i + k] = cornerUV[3 * region.faceOrigin[i] + k];
     }
+    WedgeMap regionUV = WedgeMap::fromCorners(region.mesh.triangles, inputUV);
     std::vector<Complex> regionT(region.seamOrigin.size());
     for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
     const std::uint32_t numFree = static_cast<std::uint32_t>(
@@ -601,7 +607,7 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
   return out;
 }
 
-void applyRefinement(const RefineResult& refinement, std::vector<Vec2d>& cornerUV,
+void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
                      std::vector<Complex>* translations) {
   if (translations) {
     for (std::size_t k = 0; k < refinement.seams.size(); ++k) {
@@ -612,13 +618,8 @@ void applyRefinement(const RefineResult& refinement, std::vector<Vec2d>& cornerU
       (*translations)[refinement.seams[k]] = refinement.seamT[k];
     }
   }
-  for (std::size_t k = 0; k < refinement.corners.size(); ++k) {
-    if (refinement.corners[k] >= cornerUV.size()) {
-      throw InputError("refine: corner " + std::to_string(refinement.corners[k]) +
-                       " out of range (" + std::to_string(cornerUV.size()) + " corners)");
-    }
-    cornerUV[refinement.corners[k]] = refinement.cornerUV[k];
-  }
+  // The corners of each free vertex's wedge all change together: the wedges keep their ids.
+  cornerUV.assign(refinement.corners, refinement.cornerUV);
 }
 
 }  // namespace seamvox

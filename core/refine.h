@@ -117,7 +117,7 @@ struct RegionMesh {
 /// threshold or negative, then options.rings rings of neighbours. Sorted, unique. Linear in #F
 /// (one pass over the map) plus the region's size times the valence.
 std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
-                                       const std::vector<Vec2d>& cornerUV,
+                                       const WedgeMap& cornerUV,
                                        const RefineOptions& options, RefineStats* stats = nullptr);
 
 /// Cuts the given faces (sorted, unique) out of the mesh. Cost: the region's size times the
@@ -128,7 +128,7 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
 
 /// The region's corner values (3 #sub faces) and translations (per local seam) after the solve.
 struct RegionSolution {
-  std::vector<Vec2d> cornerUV;
+  WedgeMap cornerUV;  ///< on the region's cut wedges
   std::vector<std::complex<double>> seamT;
 };
 
@@ -137,7 +137,7 @@ struct RegionSolution {
 /// right-hand side; translations fixed to seamT (per local seam) except on seams among free
 /// vertices only, which are solved, rounded to Gaussian integers and solved again (solveSeamless).
 /// Locked corners keep their input values exactly. Throws SolverError when a factorization fails.
-RegionSolution solveRegion(const RegionMesh& region, const std::vector<Vec2d>& cornerUV,
+RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<std::complex<double>>& seamT, double edgeLength,
                            RefineStats* stats = nullptr);
 
@@ -147,13 +147,14 @@ RegionSolution solveRegion(const RegionMesh& region, const std::vector<Vec2d>& c
 /// sizes.
 RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,
-                             const std::vector<Vec2d>& cornerUV,
+                             const WedgeMap& cornerUV,
                              const std::vector<std::complex<double>>& seamT,
                              const RefineOptions& options = {});
 
-/// Writes a refinement's corner values into a whole-mesh map (3 #F) and, when given, its
-/// re-solved translations into the per-seam translations.
-void applyRefinement(const RefineResult& refinement, std::vector<Vec2d>& cornerUV,
+/// Writes a refinement's corner values into a whole-mesh map (3 #F; a free vertex's wedges
+/// change whole, in place: WedgeMap::assign) and, when given, its re-solved translations into
+/// the per-seam translations.
+void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
                      std::vector<std::complex<double>>* translations = nullptr);
 
 }  // namespace seamvox

@@ -324,8 +324,8 @@ std::vector<CornerId> findSeamEdges(const TriangleMesh& mesh, const Topology& to
   const std::uint64_t numCorners = topology.numCorners();
   std::vector<std::uint8_t> isSeam(numCorners, 0);
   auto differ = [&](CornerId p, CornerId q) {
-    const Vec2d& a = mesh.cornerUV[p];
-    const Vec2d& b = mesh.cornerUV[q];
+    const Vec2d a = mesh.cornerUV[p];
+    const Vec2d b = mesh.cornerUV[q];
     const double scale = std::max({1.0, a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff()});
     return !((a - b).cwiseAbs().maxCoeff() <= tolerance * scale);
   };

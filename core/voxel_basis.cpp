@@ -410,11 +410,16 @@ std::uint32_t VoxelBasis::cornerElement(CornerId c) const {
 }
 
 void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coefficients,
-                                 std::vector<Vec2d>& cornerUV) const {
+                                 WedgeMap& cornerUV) const {
   const std::uint32_t nf = static_cast<std::uint32_t>(faceFragmentStart_.size() - 1);
-  if (cornerUV.size() != 3u * nf) cornerUV.resize(3u * nf, Vec2d::Zero());
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, 3 * nf, 4096), [&](const auto& range) {
-    for (CornerId c = range.begin(); c != range.end(); ++c) {
+  checkCorners(cornerUV, 3u * std::size_t(nf), "voxel basis evaluation");
+  // One evaluation per wedge, at its smallest corner: the basis is continuous across the
+  // non-cut edges inside a wedge.
+  const std::vector<CornerId> wedgeCorner = cornerUV.wedgeCorners();
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, cornerUV.numWedges(), 4096), [&](const auto& range) {
+    for (std::uint32_t wedge = range.begin(); wedge != range.end(); ++wedge) {
+      const CornerId c = wedgeCorner[wedge];
+      if (c == kInvalidId) continue;
       const std::uint32_t e = cornerElement(c);
       if (e == kInvalidId) continue;
       const VoxelCoord& v = voxelCoords_[elementVoxel_[e]];
@@ -424,7 +429,7 @@ void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coeffi
       trilinearWeights(t, w);
       std::complex<double> q = 0.0;
       for (int k = 0; k < 8; ++k) q += w[k] * coefficients[elementDomain_[8 * e + k]];
-      cornerUV[c] = Vec2d(q.real(), q.imag());
+      cornerUV.setWedgeValue(wedge, Vec2d(q.real(), q.imag()));
     }
   });
 }

@@ -67,7 +67,7 @@ class VoxelBasis final : public Basis {
   std::uint32_t elementDomains(std::uint64_t e, std::uint32_t* out) const override;
   void elementIntegrals(std::uint64_t e, ElementIntegrals& out) const override;
   void evaluateCorners(const std::vector<std::complex<double>>& domainCoefficients,
-                       std::vector<Vec2d>& cornerUV) const override;
+                       WedgeMap& cornerUV) const override;
 
   const VoxelGridGeometry& grid() const { return grid_; }
   /// Voxel of element e (grid coordinates of its lowest corner).

@@ -36,7 +36,8 @@ UVLattice chooseUVLattice(const TriangleMesh& mesh, const WriteOptions& options)
   UVLattice lattice;
   if (!mesh.hasUV() || options.dracoUVBits <= 0) return lattice;
   double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
-  for (const Vec2d& uv : mesh.cornerUV) {
+  for (CornerId c = 0; c < mesh.cornerUV.size(); ++c) {
+    const Vec2d uv = mesh.cornerUV[c];
     if (!std::isfinite(uv[0]) || !std::isfinite(uv[1])) return lattice;
     for (int c = 0; c < 2; ++c) {
       lo[c] = std::min(lo[c], uv[c]);
@@ -108,7 +109,8 @@ TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
     mesh.positions[v] = Vec3f(p[0], p[1], p[2]);
   }
   mesh.triangles.resize(source->num_faces());
-  if (texcoord) mesh.cornerUV.resize(3 * mesh.triangles.size());
+  WedgeMapBuilder uv;
+  if (texcoord) uv.reserve(3 * mesh.triangles.size());
   for (std::uint32_t f = 0; f < source->num_faces(); ++f) {
     const draco::Mesh::Face& face = source->face(draco::FaceIndex(f));
     for (int k = 0; k < 3; ++k) {
@@ -122,9 +124,10 @@ TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
       if (!texcoord->ConvertValue<double>(texcoord->mapped_index(face[k]), 2, t)) {
         throw InputError(path + ": face " + std::to_string(f) + ": unreadable texture coordinate");
       }
-      mesh.cornerUV[3 * f + k] = Vec2d(t[0], t[1]);
+      uv.add(v, Vec2d(t[0], t[1]));
     }
   }
+  if (texcoord) mesh.cornerUV = uv.finish();
   return mesh;
 }
 
@@ -150,7 +153,7 @@ void writeDraco(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& 
     builder.SetAttributeValuesForFace(position, face, mesh.positions[t[0]].data(),
                                       mesh.positions[t[1]].data(), mesh.positions[t[2]].data());
     if (!withUV) continue;
-    const Vec2d* uv = &mesh.cornerUV[3 * f];
+    const Vec2d uv[3] = {mesh.cornerUV[3 * f], mesh.cornerUV[3 * f + 1], mesh.cornerUV[3 * f + 2]};
     if (lattice.bits) {
       // Lattice values: exact in float32 by the choice of the lattice.
       float rounded[3][2];

@@ -203,7 +203,8 @@ void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
       }
       if (ownsTexcoord(c)) {
         out.put("vt ");
-        out.putRow(mesh.cornerUV[c].data(), 2);
+        const Vec2d uv = mesh.cornerUV[c];
+        out.putRow(uv.data(), 2);
         ++count;
       }
     }

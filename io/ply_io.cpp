@@ -583,8 +583,9 @@ void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
       if (!withUV) continue;
       out.putLittle(std::uint8_t(6));
       for (int k = 0; k < 3; ++k) {
-        out.putLittle(mesh.cornerUV[3 * f + k][0]);
-        out.putLittle(mesh.cornerUV[3 * f + k][1]);
+        const Vec2d uv = mesh.cornerUV[3 * f + k];
+        out.putLittle(uv[0]);
+        out.putLittle(uv[1]);
       }
     }
   } else {
@@ -594,7 +595,10 @@ void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
       out.putRow(mesh.triangles[f].data(), 3, withUV ? ' ' : '\n');
       if (!withUV) continue;
       out.put("6 ");
-      for (int k = 0; k < 3; ++k) out.putRow(mesh.cornerUV[3 * f + k].data(), 2, k < 2 ? ' ' : '\n');
+      for (int k = 0; k < 3; ++k) {
+        const Vec2d uv = mesh.cornerUV[3 * f + k];
+        out.putRow(uv.data(), 2, k < 2 ? ' ' : '\n');
+      }
     }
   }
   out.flush();

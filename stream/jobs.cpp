@@ -284,7 +284,8 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
   for (std::size_t t = 0; t < tiles.size(); ++t) {
     TriangleMesh& out = result.tiles[t];
     out.triangles.reserve(first[t + 1] - first[t]);
-    if (mesh.hasUV()) out.cornerUV.reserve(3 * (first[t + 1] - first[t]));
+    WedgeMapBuilder uv;
+    if (mesh.hasUV()) uv.reserve(3 * (first[t + 1] - first[t]));
     for (std::uint64_t i = first[t]; i < first[t + 1]; ++i) {
       const FaceId f = order[i];
       Triangle tri;
@@ -295,10 +296,11 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
           out.positions.push_back(mesh.positions[v]);
         }
         tri[k] = map[v];
-        if (mesh.hasUV()) out.cornerUV.push_back(mesh.cornerUV[3 * f + k]);
+        if (mesh.hasUV()) uv.add(tri[k], mesh.cornerUV[3 * f + k]);
       }
       out.triangles.push_back(tri);
     }
+    if (mesh.hasUV()) out.cornerUV = uv.finish();
     for (std::uint64_t i = first[t]; i < first[t + 1]; ++i) {
       for (const VertexId v : mesh.triangles[order[i]]) map[v] = kInvalidId;
     }

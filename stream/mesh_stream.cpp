@@ -16,6 +16,7 @@ TriangleMesh collectMesh(MeshStream& stream) {
   mesh.triangles.reserve(static_cast<std::size_t>(std::min(stream.expectedTriangles(), kMaxIds)));
 
   MeshChunk chunk;
+  WedgeMapBuilder uv;
   bool uvDecided = false, withUV = false;
   while (stream.next(chunk)) {
     if (chunk.firstVertex != mesh.positions.size()) {
@@ -36,13 +37,18 @@ TriangleMesh collectMesh(MeshStream& stream) {
     if (!uvDecided) {
       withUV = chunkUV;
       uvDecided = true;
-      if (withUV) mesh.cornerUV.reserve(3 * std::max<std::size_t>(mesh.triangles.capacity(), 1));
+      if (withUV) uv.reserve(3 * std::max<std::size_t>(mesh.triangles.capacity(), 1));
     } else if (withUV != chunkUV) {
       throw InputError(name + ": some triangles have texture coordinates and others do not");
     }
     mesh.triangles.insert(mesh.triangles.end(), chunk.triangles.begin(), chunk.triangles.end());
-    mesh.cornerUV.insert(mesh.cornerUV.end(), chunk.cornerUV.begin(), chunk.cornerUV.end());
+    // Corners at a vertex not read yet (validated below) get wedges of their own.
+    for (std::size_t c = 0; c < chunk.cornerUV.size(); ++c) {
+      const VertexId v = chunk.triangles[c / 3][c % 3];
+      uv.add(v < mesh.positions.size() ? v : kInvalidId, chunk.cornerUV[c]);
+    }
   }
+  if (withUV) mesh.cornerUV = uv.finish();
 
   const std::uint32_t numVertices = mesh.numVertices();
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
@@ -78,7 +84,8 @@ class MemoryStream final : public MeshStream {
     const std::size_t end = std::min(m.triangles.size(), face_ + chunk_);
     chunk.triangles.assign(m.triangles.begin() + face_, m.triangles.begin() + end);
     if (m.hasUV()) {
-      chunk.cornerUV.assign(m.cornerUV.begin() + 3 * face_, m.cornerUV.begin() + 3 * end);
+      chunk.cornerUV.reserve(3 * (end - face_));
+      for (std::size_t c = 3 * face_; c < 3 * end; ++c) chunk.cornerUV.push_back(m.cornerUV[c]);
     }
     face_ = end;
     return true;

@@ -244,6 +244,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   param.translations = std::move(solution.translations);
 
   start = std::chrono::steady_clock::now();
+  param.cornerUV = buildCutWedges(topology, cut);
   evaluateMap(basis, reduction, solution.unknowns, param.cornerUV);
   param.secondsEvaluate = secondsSince(start);
   return out;

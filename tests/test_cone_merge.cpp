@@ -143,7 +143,7 @@ TEST(ConeMerge, CoincidentConeEdgesAreFoundAndMerged) {
     }
   }
   ASSERT_GT(coneEdges, 3u) << "the random field should have adjacent cones";
-  const auto pairs = coincidentConeEdges(s.topology, sing.cones, flat);
+  const auto pairs = coincidentConeEdges(s.topology, sing.cones, WedgeMap::fromCorners(s.mesh.triangles, flat));
   EXPECT_EQ(pairs.size(), coneEdges);
   for (const auto& [a, b] : pairs) EXPECT_TRUE(isCone[a] && isCone[b]);
 
@@ -152,7 +152,7 @@ TEST(ConeMerge, CoincidentConeEdgesAreFoundAndMerged) {
   for (CornerId c = 0; c < spread.size(); ++c) {
     spread[c] = s.mesh.position(s.topology.vertex(c)).head<2>();
   }
-  EXPECT_TRUE(coincidentConeEdges(s.topology, sing.cones, spread).empty());
+  EXPECT_TRUE(coincidentConeEdges(s.topology, sing.cones, WedgeMap::fromCorners(s.mesh.triangles, spread)).empty());
 
   const std::int64_t sum = indexSum(sing);
   const ConeMergeResult merged = mergeAdjacentCones(s.topology, sing, pairs);

@@ -20,6 +20,7 @@ namespace {
 
 using testing::runSeamvox;
 using testing::TempDir;
+using testing::cornerValues;
 
 /// A seamless map of a generated 3000-face sphere, made by the command line (hat solver).
 TriangleMesh parameterizedSphere(const TempDir& dir, double cells = 40.0) {
@@ -93,7 +94,7 @@ TEST(DracoArchive, DefaultLatticeKeepsFacesPositionsAndSeamlessness) {
   // Every decoded UV is a lattice point of step 2^-14, within half a step of the original
   // (positions are lossless by default, so faces match exactly by position).
   const double step = std::ldexp(1.0, -14);
-  for (const Vec2d& uv : back.cornerUV) {
+  for (const Vec2d& uv : cornerValues(back.cornerUV)) {
     for (int c = 0; c < 2; ++c) EXPECT_EQ(uv[c] / step, std::nearbyint(uv[c] / step));
   }
   const double change = maxUVChange(mesh, back);
@@ -116,7 +117,9 @@ TEST(DracoArchive, LargeUVsFallBackToLosslessOrACoarserLattice) {
   TempDir dir;
   TriangleMesh mesh = parameterizedSphere(dir);
   // q -> 64 q + (1000 - 3000 i) keeps the map seamless (integer translations stay integers).
-  for (Vec2d& uv : mesh.cornerUV) uv = 64.0 * uv + Vec2d(1000.0, -3000.0);
+  for (std::uint32_t w = 0; w < mesh.cornerUV.numWedges(); ++w) {
+    mesh.cornerUV.setWedgeValue(w, 64.0 * mesh.cornerUV.wedgeValue(w) + Vec2d(1000.0, -3000.0));
+  }
   ASSERT_TRUE(seamsOf(mesh).isSeamless(1e-6));
   WriteOptions options;
   EXPECT_EQ(dracoUVBitsFor(mesh, options), 0) << "2^14 steps of thousands of cells overflow float32";

@@ -79,7 +79,8 @@ double ringPerimeter(const TriangleMesh& mesh, int n) {
 }
 
 Complex uvAt(const ParamResult& result, CornerId c) {
-  return {result.cornerUV[c].x(), result.cornerUV[c].y()};
+  const Vec2d q = result.cornerUV[c];
+  return {q.x(), q.y()};
 }
 
 TEST(HatBasis, WedgesAndIntegrals) {

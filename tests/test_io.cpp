@@ -46,7 +46,9 @@ TriangleMesh makeGrid(int rows, int cols, bool withUV) {
   }
   if (withUV) {
     std::uniform_real_distribution<double> uv(-3000.0, 3000.0);
-    for (std::size_t c = 0; c < 3 * mesh.triangles.size(); ++c) mesh.cornerUV.emplace_back(uv(rng), uv(rng) / 3.0);
+    std::vector<Vec2d> values;
+    for (std::size_t c = 0; c < 3 * mesh.triangles.size(); ++c) values.emplace_back(uv(rng), uv(rng) / 3.0);
+    mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, values);
   }
   return mesh;
 }
@@ -137,13 +139,17 @@ TEST(MeshIo, ObjSharesTexcoordsWithinAVertexAndKeepsSeamsApart) {
   for (const Triangle& t : mesh.triangles) {
     for (VertexId v : t) seamCorners += (v % (cols + 1) == 2);
   }
+  std::vector<Vec2d> values;
   for (std::size_t c = 0; c < 3 * mesh.triangles.size(); ++c) {
     const Triangle& t = mesh.triangles[c / 3];
     const VertexId v = t[c % 3];
     const bool right = std::min({t[0] % (cols + 1), t[1] % (cols + 1), t[2] % (cols + 1)}) >= 2;
     const Vec3d p = mesh.position(v);
-    mesh.cornerUV.emplace_back(0.37 * p.x() + (right ? 7.0 : 0.0), 1.0 / 3.0 * p.y());
+    values.emplace_back(0.37 * p.x() + (right ? 7.0 : 0.0), 1.0 / 3.0 * p.y());
   }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, values);
+  // Two wedges at each seam vertex, one at every other vertex.
+  EXPECT_EQ(mesh.cornerUV.numWedges(), mesh.positions.size() + seamVertices);
   writeMesh(dir.path("shared.obj"), mesh);
   const std::string text = testing::readFile(dir.path("shared.obj"));
   std::size_t vtLines = 0;
@@ -687,7 +693,7 @@ TEST(MeshIo, FailedWritesLeaveNoFile) {
   broken.triangles[1][2] = 99;
   EXPECT_THAT(messageOf<InputError>([&] { writeMesh(dir.path("broken.obj"), broken); }), HasSubstr("face 1"));
   TriangleMesh badUV = mesh;
-  badUV.cornerUV.resize(5);
+  badUV.cornerUV.resizeCorners(5);
   EXPECT_THAT(messageOf<InputError>([&] { writeMesh(dir.path("baduv.ply"), badUV); }), HasSubstr("corner UVs"));
   EXPECT_THAT(messageOf<IoError>([&] { writeMesh(dir.path("x.unknown"), mesh); }), HasSubstr("unknown mesh format"));
   EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));

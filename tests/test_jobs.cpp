@@ -135,11 +135,13 @@ TEST(JobTiles, WeldThenSplitRestoresEveryTile) {
   EXPECT_EQ(clean.report.outputFaces, mesh.numFaces());
 
   TriangleMesh withUV = welded.mesh;
+  std::vector<Vec2d> values;
   for (FaceId f = 0; f < withUV.numFaces(); ++f) {
-    for (int k = 0; k < 3; ++k) withUV.cornerUV.emplace_back(f, k);
+    for (int k = 0; k < 3; ++k) values.emplace_back(f, k);
   }
+  withUV.cornerUV = WedgeMap::fromCorners(withUV.triangles, values);
   std::swap(withUV.triangles.front(), withUV.triangles.back());  // order and rotation do not matter
-  std::swap(withUV.cornerUV[0], withUV.cornerUV[3 * (withUV.numFaces() - 1)]);
+  withUV.cornerUV.swapCorners(0, 3 * (withUV.numFaces() - 1));
   const SplitTiles split = splitTiles(withUV, tiles);
   EXPECT_EQ(split.missingFaces, 0u);
   for (std::size_t t = 0; t < tiles.size(); ++t) {
@@ -235,6 +237,7 @@ TEST(JobsCommand, TilesAreParameterizedAsOneSeamlessSurface) {
   ReadOptions options;
   options.readUV = true;
   TriangleMesh whole;
+  std::vector<Vec2d> wholeUV;
   for (std::size_t t = 0; t < tiles.size(); ++t) {
     const TriangleMesh part = readMesh(dir.path("out/site/tile" + std::to_string(t) + ".drc"), options);
     EXPECT_EQ(part.numFaces(), tiles[t].numFaces());
@@ -244,8 +247,10 @@ TEST(JobsCommand, TilesAreParameterizedAsOneSeamlessSurface) {
       for (VertexId& v : tri) v += offset;
       whole.triangles.push_back(tri);
     }
-    whole.cornerUV.insert(whole.cornerUV.end(), part.cornerUV.begin(), part.cornerUV.end());
+    const std::vector<Vec2d> partUV = testing::cornerValues(part.cornerUV);
+    wholeUV.insert(wholeUV.end(), partUV.begin(), partUV.end());
   }
+  whole.cornerUV = WedgeMap::fromCorners(whole.triangles, wholeUV);
   CleanOptions weld;
   weld.weldVertices = true;
   const CleanResult clean = cleanMesh(std::move(whole), weld);

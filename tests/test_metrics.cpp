@@ -50,13 +50,14 @@ SplitGrid splitGrid(int n, Complex r, Complex t, std::uint8_t matching) {
     if (leftHere != leftThere) g.cut.isCut[c] = 1;
   }
   g.cut.seams.push_back(seam);
-  g.mesh.cornerUV.resize(g.topology.numCorners());
+  std::vector<Vec2d> values(g.topology.numCorners());
   for (CornerId c = 0; c < g.topology.numCorners(); ++c) {
     const Vec3f& p = g.mesh.positions[g.topology.vertex(c)];
     Complex q(p.x(), p.y());
     if (faceCenterX(c / 3) > middle) q = r * q + t;
-    g.mesh.cornerUV[c] = Vec2d(q.real(), q.imag());
+    values[c] = Vec2d(q.real(), q.imag());
   }
+  g.mesh.cornerUV = WedgeMap::fromCorners(g.mesh.triangles, values);
   return g;
 }
 
@@ -90,7 +91,7 @@ TEST(SeamMetrics, PerturbedCornerShowsAsResidual) {
   const CornerId c = g.cut.seams[0].corners[2];
   const CornerId moved = g.topology.opposite(c);  // a right-side corner on the seam
   const CornerId corner = nextCorner(moved);
-  g.mesh.cornerUV[corner] += Vec2d(0.0, 1e-3);
+  g.mesh.cornerUV.set(corner, g.mesh.cornerUV[corner] + Vec2d(0.0, 1e-3));
   const SeamQuality fromCut = measureSeams(g.mesh, g.topology, g.cut, g.mesh.cornerUV);
   EXPECT_NEAR(fromCut.maxResidual, 1e-3, 1e-9);
   EXPECT_FALSE(fromCut.isSeamless());
@@ -102,8 +103,13 @@ TEST(SeamMetrics, PerturbedCornerShowsAsResidual) {
 TEST(SeamMetrics, ContinuousMapHasNoSeamEdges) {
   SplitGrid g = splitGrid(4, Complex(1, 0), Complex(0, 0), 0);
   EXPECT_EQ(measureSeamsFromUV(g.mesh, g.topology, g.mesh.cornerUV).seamEdges, 0u);
-  std::vector<Vec2d> wrongSize(3);
+  const WedgeMap wrongSize({0, 0, 0}, {Vec2d::Zero()});
   EXPECT_THROW(measureSeamsFromUV(g.mesh, g.topology, wrongSize), InputError);
+}
+
+/// Per-corner values of mesh as a map.
+WedgeMap wedges(const TriangleMesh& mesh, const std::vector<Vec2d>& uv) {
+  return WedgeMap::fromCorners(mesh.triangles, uv);
 }
 
 std::vector<Vec2d> linearUV(const TriangleMesh& mesh, Complex scale) {
@@ -123,28 +129,28 @@ TEST(MapMetrics, GradientErrorFlipsAndCollapses) {
   const double h = 0.25;
   // q = (x + i y) / h follows w = u + i n x u exactly; so does i q (the cross is symmetric).
   for (Complex rotation : {Complex(1, 0), Complex(0, 1), Complex(-1, 0)}) {
-    const MapQuality exact = measureMap(mesh, linearUV(mesh, rotation / h), &field, h);
+    const MapQuality exact = measureMap(mesh, wedges(mesh, linearUV(mesh, rotation / h)), &field, h);
     EXPECT_LT(exact.relativeGradientError, 1e-12);
     EXPECT_EQ(exact.flipped, 0u);
     EXPECT_EQ(exact.collapsed, 0u);
   }
   // Twice the target gradient: error |2w - w| / |w| = 1; a fitted h finds the scale.
-  const MapQuality doubled = measureMap(mesh, linearUV(mesh, 2.0 / h), &field, h);
+  const MapQuality doubled = measureMap(mesh, wedges(mesh, linearUV(mesh, 2.0 / h)), &field, h);
   EXPECT_NEAR(doubled.relativeGradientError, 1.0, 1e-12);
-  const MapQuality fitted = measureMap(mesh, linearUV(mesh, 2.0 / h), &field, 0.0);
+  const MapQuality fitted = measureMap(mesh, wedges(mesh, linearUV(mesh, 2.0 / h)), &field, 0.0);
   EXPECT_NEAR(fitted.edgeLength, h / 2, 1e-12);
   EXPECT_LT(fitted.relativeGradientError, 1e-12);
   // Mirrored: every triangle flipped. Without a field the error is NaN.
   std::vector<Vec2d> mirrored = linearUV(mesh, 1.0 / h);
   for (Vec2d& q : mirrored) q.y() = -q.y();
-  const MapQuality flipped = measureMap(mesh, mirrored, nullptr, h);
+  const MapQuality flipped = measureMap(mesh, wedges(mesh, mirrored), nullptr, h);
   EXPECT_EQ(flipped.flipped, mesh.numFaces());
   EXPECT_DOUBLE_EQ(flipped.flippedFraction, 1.0);
   EXPECT_TRUE(std::isnan(flipped.relativeGradientError));
   // One triangle squashed to a point.
   std::vector<Vec2d> squashed = linearUV(mesh, 1.0 / h);
   squashed[4] = squashed[3], squashed[5] = squashed[3];
-  EXPECT_EQ(measureMap(mesh, squashed, &field, h).collapsed, 1u);
+  EXPECT_EQ(measureMap(mesh, wedges(mesh, squashed), &field, h).collapsed, 1u);
 }
 
 // Two unit right triangles sharing the edge 1-2: (0, 1, 2) and (2, 1, 3).
@@ -158,36 +164,36 @@ TEST(MapMetrics, CollapsesBetweenCoincidentConesAreCountedApart) {
     const Vec3d p = mesh.position(mesh.triangles[c / 3][c % 3]);
     uv[c] = Vec2d(p.x(), p.y()) / h;
   }
-  EXPECT_NEAR(parameterAreaRatio(mesh, uv, 0, h), 1.0, 1e-12);
-  EXPECT_NEAR(parameterAreaRatio(mesh, uv, 1, h), 1.0, 1e-12);
+  EXPECT_NEAR(parameterAreaRatio(mesh, wedges(mesh, uv), 0, h), 1.0, 1e-12);
+  EXPECT_NEAR(parameterAreaRatio(mesh, wedges(mesh, uv), 1, h), 1.0, 1e-12);
   const std::vector<VertexId> edgeCones = {1, 2}, oneCone = {1}, farCones = {0, 3};
-  EXPECT_EQ(measureMap(mesh, uv, nullptr, h, &edgeCones).collapsed, 0u);
+  EXPECT_EQ(measureMap(mesh, wedges(mesh, uv), nullptr, h, &edgeCones).collapsed, 0u);
   // Vertex 2 moved onto vertex 1: both triangles collapse along the edge between the two cones.
   std::vector<Vec2d> merged = uv;
   merged[2] = merged[1], merged[3] = merged[4];
-  EXPECT_NEAR(parameterAreaRatio(mesh, merged, 0, h), 0.0, 1e-12);
-  const MapQuality atCones = measureMap(mesh, merged, nullptr, h, &edgeCones);
+  EXPECT_NEAR(parameterAreaRatio(mesh, wedges(mesh, merged), 0, h), 0.0, 1e-12);
+  const MapQuality atCones = measureMap(mesh, wedges(mesh, merged), nullptr, h, &edgeCones);
   EXPECT_EQ(atCones.collapsed, 2u);
   EXPECT_EQ(atCones.collapsedAtCones, 2u);
-  EXPECT_EQ(measureMap(mesh, merged, nullptr, h, &oneCone).collapsedAtCones, 0u);
-  EXPECT_EQ(measureMap(mesh, merged, nullptr, h, &farCones).collapsedAtCones, 0u);
-  EXPECT_EQ(measureMap(mesh, merged, nullptr, h).collapsedAtCones, 0u);
-  EXPECT_EQ(measureMap(mesh, merged, nullptr, h).collapsed, 2u);
+  EXPECT_EQ(measureMap(mesh, wedges(mesh, merged), nullptr, h, &oneCone).collapsedAtCones, 0u);
+  EXPECT_EQ(measureMap(mesh, wedges(mesh, merged), nullptr, h, &farCones).collapsedAtCones, 0u);
+  EXPECT_EQ(measureMap(mesh, wedges(mesh, merged), nullptr, h).collapsedAtCones, 0u);
+  EXPECT_EQ(measureMap(mesh, wedges(mesh, merged), nullptr, h).collapsed, 2u);
   // Vertex 0 on the segment between the cones, which stay apart: collapsed, not at cones.
   std::vector<Vec2d> collinear = uv;
   collinear[0] = 0.5 * (uv[1] + uv[2]);
-  const MapQuality line = measureMap(mesh, collinear, nullptr, h, &edgeCones);
+  const MapQuality line = measureMap(mesh, wedges(mesh, collinear), nullptr, h, &edgeCones);
   EXPECT_EQ(line.collapsed, 1u);
   EXPECT_EQ(line.collapsedAtCones, 0u);
   // Mirrored: ratio -1; a zero-area triangle has no ratio.
   std::vector<Vec2d> mirrored = uv;
   for (Vec2d& q : mirrored) q.y() = -q.y();
-  EXPECT_NEAR(parameterAreaRatio(mesh, mirrored, 1, h), -1.0, 1e-12);
+  EXPECT_NEAR(parameterAreaRatio(mesh, wedges(mesh, mirrored), 1, h), -1.0, 1e-12);
   TriangleMesh flat = mesh;
   flat.positions[2] = Vec3f(0.5f, 0, 0);
-  EXPECT_TRUE(std::isnan(parameterAreaRatio(flat, std::vector<Vec2d>(6, Vec2d::Zero()), 0, h)));
+  EXPECT_TRUE(std::isnan(parameterAreaRatio(flat, wedges(flat, std::vector<Vec2d>(6, Vec2d::Zero())), 0, h)));
   const std::vector<VertexId> badCones = {7};
-  EXPECT_THROW(measureMap(mesh, uv, nullptr, h, &badCones), InputError);
+  EXPECT_THROW(measureMap(mesh, wedges(mesh, uv), nullptr, h, &badCones), InputError);
 }
 
 }  // namespace

@@ -28,7 +28,7 @@ class GraphBasis final : public Basis {
   std::uint64_t numElements() const override { return 0; }
   std::uint32_t elementDomains(std::uint64_t, std::uint32_t*) const override { return 0; }
   void elementIntegrals(std::uint64_t, ElementIntegrals& out) const override { out.count = 0; }
-  void evaluateCorners(const std::vector<Complex>&, std::vector<Vec2d>&) const override {}
+  void evaluateCorners(const std::vector<Complex>&, WedgeMap&) const override {}
 };
 
 std::vector<Complex> randomIntegerUnknowns(const Reduction& red, std::mt19937& rng) {

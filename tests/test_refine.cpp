@@ -86,25 +86,29 @@ std::vector<VertexId> coneNeighbourhood(const Topology& topology, const std::vec
 
 // The hat map with every corner of the damaged vertices moved onto its cone's first corner: the
 // triangles there collapse to points. Returns the faces touching a damaged vertex.
-std::vector<FaceId> damageAroundCones(const Scene& s, int rings, std::vector<Vec2d>& uv,
+std::vector<FaceId> damageAroundCones(const Scene& s, int rings, WedgeMap& uv,
                                       std::vector<VertexId>* damaged = nullptr) {
   const Topology& topology = s.topology();
   std::vector<VertexId> source;
   const std::vector<VertexId> near = coneNeighbourhood(topology, s.cut.cones, rings, &source);
   uv = s.hat.cornerUV;
   std::set<FaceId> faces;
+  std::vector<CornerId> corners;
+  std::vector<Vec2d> values;
   for (VertexId v : near) {
     const Vec2d target = s.hat.cornerUV[topology.vertexCorner(source[v])];
     topology.forEachCornerAround(v, [&](CornerId c) {
-      uv[c] = target;
+      corners.push_back(c);
+      values.push_back(target);
       faces.insert(cornerFace(c));
     });
   }
+  uv.assign(corners, values);
   if (damaged) *damaged = near;
   return {faces.begin(), faces.end()};
 }
 
-double maxCornerDistance(const std::vector<Vec2d>& a, const std::vector<Vec2d>& b) {
+double maxCornerDistance(const WedgeMap& a, const WedgeMap& b) {
   double out = 0.0;
   for (std::size_t c = 0; c < a.size(); ++c) out = std::max(out, (a[c] - b[c]).norm());
   return out;
@@ -126,12 +130,12 @@ class RefineSphere : public ::testing::Test {
 
   // Refines uv and checks: seamless with the hat's integer translations, no collapsed or flipped
   // triangle beyond the hat's, gradient error within 1% of the hat's; returns the map.
-  std::vector<Vec2d> refineAndCheck(const std::vector<Vec2d>& uv, const RefineOptions& options,
+  WedgeMap refineAndCheck(const WedgeMap& uv, const RefineOptions& options,
                                     RefineStats* stats = nullptr) {
     const Scene& s = *scene_;
     const RefineResult result = refineNearCones(s.mesh(), s.topology(), s.field, s.cut, uv,
                                                 s.hat.translations, options);
-    std::vector<Vec2d> refined = uv;
+    WedgeMap refined = uv;
     applyRefinement(result, refined);
     const SeamQuality seams = measureSeams(s.mesh(), s.topology(), s.cut, refined);
     EXPECT_LT(seams.maxResidual, 1e-6);
@@ -159,7 +163,7 @@ TEST_F(RefineSphere, HatMapHasConesAndIsClean) {
 
 TEST_F(RefineSphere, MarkedDamageAroundConesIsRepairedToTheHatMap) {
   const Scene& s = *scene_;
-  std::vector<Vec2d> damaged;
+  WedgeMap damaged;
   std::vector<VertexId> damagedVertices;
   RefineOptions options;
   options.edgeLength = s.options.edgeLength;
@@ -168,7 +172,7 @@ TEST_F(RefineSphere, MarkedDamageAroundConesIsRepairedToTheHatMap) {
   const MapQuality before = measureMap(s.mesh(), damaged, &s.field, s.options.edgeLength);
   ASSERT_GT(before.collapsed, 0u);
   RefineStats stats;
-  const std::vector<Vec2d> refined = refineAndCheck(damaged, options, &stats);
+  const WedgeMap refined = refineAndCheck(damaged, options, &stats);
   // With the exact values on the locked border, the local optimum is the global one.
   EXPECT_LT(maxCornerDistance(refined, s.hat.cornerUV), 1e-6);
   EXPECT_EQ(stats.regionFaces, options.markedFaces.size());
@@ -182,13 +186,13 @@ TEST_F(RefineSphere, MarkedDamageAroundConesIsRepairedToTheHatMap) {
 
 TEST_F(RefineSphere, CollapsedTrianglesAreFoundWithoutMarksAndRoundsGrowTheRegion) {
   const Scene& s = *scene_;
-  std::vector<Vec2d> damaged;
+  WedgeMap damaged;
   damageAroundCones(s, 2, damaged);
   RefineOptions options;
   options.edgeLength = s.options.edgeLength;
   options.rings = 1;  // the outer damaged vertices touch collapsed faces only on one side
   RefineStats stats;
-  std::vector<Vec2d> refined = refineAndCheck(damaged, options, &stats);
+  WedgeMap refined = refineAndCheck(damaged, options, &stats);
   EXPECT_LT(maxCornerDistance(refined, s.hat.cornerUV), 1e-6);
   EXPECT_EQ(stats.markedFaces, 0u);
   EXPECT_GT(stats.collapsedFaces + stats.flippedFaces, 0u);
@@ -203,7 +207,7 @@ TEST_F(RefineSphere, CollapsedTrianglesAreFoundWithoutMarksAndRoundsGrowTheRegio
   ASSERT_EQ(once.stats.rounds.size(), 1u);
   EXPECT_GT(once.stats.unresolvedFaces, 0u);
   EXPECT_EQ(once.stats.unresolvedFaces, once.stats.rounds[0].borderFaces);
-  std::vector<Vec2d> onceMap = damaged;
+  WedgeMap onceMap = damaged;
   applyRefinement(once, onceMap);
   EXPECT_GT(maxCornerDistance(onceMap, s.hat.cornerUV), 1e-3);
 
@@ -234,13 +238,15 @@ TEST_F(RefineSphere, CollapsedTrianglesAreFoundWithoutMarksAndRoundsGrowTheRegio
 TEST_F(RefineSphere, LockedVerticesKeepTheirValuesExactly) {
   const Scene& s = *scene_;
   const Topology& topology = s.topology();
-  std::vector<Vec2d> damaged;
+  WedgeMap damaged;
   RefineOptions options;
   options.edgeLength = s.options.edgeLength;
   options.markedFaces = damageAroundCones(s, 2, damaged);
   options.maxRounds = 1;  // the free vertices are then those of selectRefineRegion's region
   // Disturb the whole map a little: locked values are then not the hat's, yet must be kept.
-  for (std::size_t c = 0; c < damaged.size(); ++c) damaged[c] += Vec2d(1e-3 * (c % 7), 0.0);
+  std::vector<Vec2d> disturbed = testing::cornerValues(damaged);
+  for (std::size_t c = 0; c < disturbed.size(); ++c) disturbed[c] += Vec2d(1e-3 * (c % 7), 0.0);
+  damaged = WedgeMap::fromCorners(s.mesh().triangles, disturbed);
   const RefineResult result = refineNearCones(s.mesh(), topology, s.field, s.cut, damaged,
                                               s.hat.translations, options);
   const std::vector<FaceId> region = selectRefineRegion(s.mesh(), topology, damaged, options);
@@ -262,7 +268,7 @@ TEST_F(RefineSphere, LockedVerticesKeepTheirValuesExactly) {
   }
   EXPECT_EQ(result.stats.lockedVertices >= locked, true);
   EXPECT_GT(locked, 0u);
-  std::vector<Vec2d> refined = damaged;
+  WedgeMap refined = damaged;
   applyRefinement(result, refined);
   for (CornerId c = 0; c < refined.size(); ++c) {
     if (!changed.count(c)) ASSERT_EQ(refined[c], damaged[c]) << "corner " << c;
@@ -335,7 +341,7 @@ TEST_F(RefineSphere, TranslationsAmongFreeVerticesAreSolvedAgain) {
                                               wrong, options);
   EXPECT_EQ(result.stats.freeTranslations, reduction.numTranslational);
   EXPECT_EQ(result.stats.pinned, 0u);  // the locked ring anchors the shift
-  std::vector<Vec2d> refined = s.hat.cornerUV;
+  WedgeMap refined = s.hat.cornerUV;
   applyRefinement(result, refined, &wrong);
   // Rounding from a different first solve may land one unit off the hat's t, never 5 - 3i off.
   for (std::uint32_t j = 0; j < wrong.size(); ++j) {
@@ -352,7 +358,7 @@ TEST_F(RefineSphere, TranslationsAmongFreeVerticesAreSolvedAgain) {
 TEST_F(RefineSphere, ExtractedRegionIsAManifoldSubMeshWithIndexMaps) {
   const Scene& s = *scene_;
   const Topology& topology = s.topology();
-  std::vector<Vec2d> damaged;
+  WedgeMap damaged;
   std::vector<FaceId> faces = damageAroundCones(s, 2, damaged);
   const RegionMesh region = extractRegion(s.mesh(), topology, s.field, s.cut, faces);
   ASSERT_EQ(region.topology.numFaces(), faces.size());
@@ -436,7 +442,7 @@ TEST(RefineRegion, WholeFlatSquareIsSolvedExactly) {
   const Topology topology = Topology::build(mesh.triangles, mesh.numVertices());
   const CrossField field = constantField(mesh);
   const CutResult cut = boundaryCut(topology);
-  std::vector<Vec2d> uv(topology.numCorners(), Vec2d(3.0, -1.0));  // collapsed everywhere
+  WedgeMap uv = WedgeMap::fromCorners(mesh.triangles, std::vector<Vec2d>(topology.numCorners(), Vec2d(3.0, -1.0)));  // collapsed everywhere
   RefineOptions options;
   options.edgeLength = 0.1;
   const RefineResult result = refineNearCones(mesh, topology, field, cut, uv, {}, options);
@@ -446,7 +452,7 @@ TEST(RefineRegion, WholeFlatSquareIsSolvedExactly) {
   applyRefinement(result, uv);
   for (CornerId c = 0; c < uv.size(); ++c) {
     const Vec3d p = mesh.position(mesh.triangles[c / 3][c % 3]);
-    const Vec2d& q0 = uv[0];
+    const Vec2d q0 = uv[0];
     const Vec3d p0 = mesh.position(mesh.triangles[0][0]);
     EXPECT_NEAR(uv[c].x() - q0.x(), (p.x() - p0.x()) / 0.1, 1e-9);
     EXPECT_NEAR(uv[c].y() - q0.y(), (p.y() - p0.y()) / 0.1, 1e-9);
@@ -458,7 +464,7 @@ TEST(RefineRegion, BadInputIsRejected) {
   const Topology topology = Topology::build(mesh.triangles, mesh.numVertices());
   const CrossField field = constantField(mesh);
   const CutResult cut = boundaryCut(topology);
-  std::vector<Vec2d> uv(topology.numCorners(), Vec2d::Zero());
+  const WedgeMap uv = WedgeMap::fromCorners(mesh.triangles, std::vector<Vec2d>(topology.numCorners(), Vec2d::Zero()));
   RefineOptions options;
   EXPECT_THROW(refineNearCones(mesh, topology, field, cut, {}, {}, options), InputError);
   EXPECT_THROW(refineNearCones(mesh, topology, field, cut, uv, {Complex(1, 0)}, options),

@@ -114,10 +114,11 @@ RgbImage decodePng(const std::string& file) {
 
 /// Per-corner (u, v) = (x, y) * scale of the corner's position.
 void setPlanarUV(TriangleMesh& mesh, double scale = 1.0) {
-  mesh.cornerUV.clear();
+  std::vector<Vec2d> values;
   for (const Triangle& t : mesh.triangles) {
-    for (const VertexId v : t) mesh.cornerUV.emplace_back(scale * mesh.positions[v].x(), scale * mesh.positions[v].y());
+    for (const VertexId v : t) values.emplace_back(scale * mesh.positions[v].x(), scale * mesh.positions[v].y());
   }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, values);
 }
 
 Topology topologyOf(const TriangleMesh& mesh) { return Topology::build(mesh.triangles, mesh.numVertices()); }
@@ -155,30 +156,39 @@ TriangleMesh quarterFan(int n) {
     const double a = 2 * kPi * k / n;
     mesh.positions.emplace_back(float(std::cos(a)), float(std::sin(a)), 0.f);
   }
+  std::vector<Vec2d> values;
   for (int k = 0; k < n; ++k) {
     mesh.triangles.push_back({0, VertexId(1 + k), VertexId(1 + (k + 1) % n)});
-    mesh.cornerUV.insert(mesh.cornerUV.end(), {Vec2d(0, 0), Vec2d(1, 0), Vec2d(0, 1)});
+    values.insert(values.end(), {Vec2d(0, 0), Vec2d(1, 0), Vec2d(0, 1)});
   }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, values);
   return mesh;
 }
 
 /// concatMeshes, carrying the per-corner (u, v) along.
 TriangleMesh concatWithUV(const std::vector<TriangleMesh>& parts) {
   TriangleMesh out = testing::concatMeshes(parts);
-  for (const TriangleMesh& p : parts) out.cornerUV.insert(out.cornerUV.end(), p.cornerUV.begin(), p.cornerUV.end());
+  std::vector<Vec2d> values;
+  for (const TriangleMesh& p : parts) {
+    const std::vector<Vec2d> part = testing::cornerValues(p.cornerUV);
+    values.insert(values.end(), part.begin(), part.end());
+  }
+  out.cornerUV = WedgeMap::fromCorners(out.triangles, values);
   return out;
 }
 
 /// Torus with the periodic map u = 8 i / n, v = 4 j / m: two translation seams, no cones.
 TriangleMesh torusWithUV(int n, int m) {
   TriangleMesh mesh = testing::torusMesh(n, m);
+  std::vector<Vec2d> values;
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < m; ++j) {
       auto uv = [&](int ii, int jj) { return Vec2d(8.0 * ii / n, 4.0 * jj / m); };
-      mesh.cornerUV.insert(mesh.cornerUV.end(), {uv(i, j), uv(i + 1, j), uv(i + 1, j + 1)});
-      mesh.cornerUV.insert(mesh.cornerUV.end(), {uv(i, j), uv(i + 1, j + 1), uv(i, j + 1)});
+      values.insert(values.end(), {uv(i, j), uv(i + 1, j), uv(i + 1, j + 1)});
+      values.insert(values.end(), {uv(i, j), uv(i + 1, j + 1), uv(i, j + 1)});
     }
   }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, values);
   return mesh;
 }
 
@@ -260,7 +270,7 @@ TEST(Render, NearerSurfaceHidesFartherOne) {
   TriangleMesh lower = gridMesh(2, 2), upper = gridMesh(2, 2);
   for (Vec3f& p : upper.positions) p.z() = 1.0f;
   setPlanarUV(lower);
-  upper.cornerUV.assign(3 * upper.numFaces(), Vec2d(0.5, 1.5));
+  upper.cornerUV = WedgeMap::fromCorners(upper.triangles, std::vector<Vec2d>(3 * upper.numFaces(), Vec2d(0.5, 1.5)));
   for (const TriangleMesh& mesh : {concatWithUV({lower, upper}), concatWithUV({upper, lower})}) {
     RenderOptions options = topView(60, 60);
     options.dark = {200, 0, 0};
@@ -280,7 +290,7 @@ TriangleMesh gridWithSeam() {
     double cx = 0;
     for (const VertexId v : mesh.triangles[f]) cx += mesh.positions[v].x() / 3.0;
     if (cx > 2.0) {
-      for (int k = 0; k < 3; ++k) mesh.cornerUV[3 * f + k].x() += 0.5;
+      for (int k = 0; k < 3; ++k) mesh.cornerUV.set(3 * f + k, mesh.cornerUV[3 * f + k] + Vec2d(0.5, 0.0));
     }
   }
   return mesh;
@@ -385,7 +395,7 @@ TEST(Render, ConesAreSingularAngleSumsColouredBySign) {
   // A fan whose centre angles sum to 2 pi - 0.3: not seamless, so no cone but irregular.
   TriangleMesh bent = quarterFan(4);
   const double a = 0.5 * kPi - 0.3;
-  bent.cornerUV[3 * 3 + 2] = Vec2d(std::cos(a), std::sin(a));
+  bent.cornerUV.set(3 * 3 + 2, Vec2d(std::cos(a), std::sin(a)));
   const MapCones odd = findMapCones(bent, topologyOf(bent));
   EXPECT_TRUE(odd.cones.empty());
   EXPECT_EQ(odd.irregularVertices, 1u);
@@ -424,7 +434,7 @@ TEST(Render, BadOptionsAreRejected) {
   huge.width = 9000;
   EXPECT_THROW(renderCheckerboard(mesh, topology, huge), InputError);
   TriangleMesh shortUV = mesh;
-  shortUV.cornerUV.pop_back();
+  shortUV.cornerUV.resizeCorners(shortUV.cornerUV.size() - 1);
   EXPECT_THROW(renderCheckerboard(shortUV, topology), InputError);
 }
 

@@ -189,11 +189,13 @@ TEST(Clean, SplitsNonManifoldEdgesAndVertices) {
 
 TEST(Clean, OrientsFacesConsistently) {
   TriangleMesh torus = torusMesh(12, 8);
-  torus.cornerUV.resize(3 * torus.numFaces());
-  for (CornerId c = 0; c < torus.cornerUV.size(); ++c) torus.cornerUV[c] = Vec2d(torus.triangles[c / 3][c % 3], 0.5);
+  std::vector<Vec2d> values(3 * torus.numFaces());
+  for (CornerId c = 0; c < values.size(); ++c) values[c] = Vec2d(torus.triangles[c / 3][c % 3], 0.5);
+  torus.cornerUV = WedgeMap::fromCorners(torus.triangles, values);
+  EXPECT_EQ(torus.cornerUV.numWedges(), torus.numVertices());
   for (FaceId f : {3u, 40u, 41u, 100u}) {
     std::swap(torus.triangles[f][1], torus.triangles[f][2]);
-    std::swap(torus.cornerUV[3 * f + 1], torus.cornerUV[3 * f + 2]);
+    torus.cornerUV.swapCorners(3 * f + 1, 3 * f + 2);
   }
   const CleanResult r = cleanMesh(torus);
   EXPECT_EQ(r.report.flippedFaces, 4u);

@@ -13,15 +13,18 @@
 #include "core/assemble.h"
 #include "core/cut.h"
 #include "core/errors.h"
+#include "core/evaluate.h"
 #include "core/field.h"
 #include "core/metrics.h"
 #include "core/topology.h"
 #include "core/param.h"
 #include "core/reduce.h"
+#include "core/round.h"
 #include "core/voxel_basis.h"
 #include "core/voxel_clip.h"
 #include "stream/voxel_grid.h"
 #include "tests/test_meshes.h"
+#include "tests/testing.h"
 
 namespace seamvox {
 namespace {
@@ -452,9 +455,9 @@ TEST(VoxelBasis, SliverSupportsJoinAHeavierDomain) {
   for (double weight : domainWeights(basis)) EXPECT_GE(weight, minWeight);
   // Still a partition of unity: equal coefficients give that value at every corner.
   const Complex value(3.0, -2.0);
-  std::vector<Vec2d> uv;
+  WedgeMap uv = buildCutWedges(s.topology, s.cut);
   basis.evaluateCorners(std::vector<Complex>(basis.numDomains(), value), uv);
-  for (const Vec2d& q : uv) EXPECT_LT(std::abs(Complex(q[0], q[1]) - value), 1e-12);
+  for (const Vec2d& q : testing::cornerValues(uv)) EXPECT_LT(std::abs(Complex(q[0], q[1]) - value), 1e-12);
   // And the Vox solver factors its system at the first try.
   ParamOptions param;
   param.edgeLength = 0.05;
@@ -550,7 +553,7 @@ TEST(VoxelSolver, SeamlessAwayFromMarkedFunctions) {
   ParamOptions options;
   options.edgeLength = 0.08;
   const VoxelParamResult result = parameterizeMeshVoxel(s.mesh, s.topology, s.field, s.cut, options, 32);
-  const std::vector<Vec2d>& uv = result.param.cornerUV;
+  const WedgeMap& uv = result.param.cornerUV;
   std::set<FaceId> marked(result.markedFaces.begin(), result.markedFaces.end());
   ASSERT_EQ(result.param.translations.size(), s.cut.seams.size());
   std::size_t checked = 0;
@@ -577,8 +580,8 @@ TEST(VoxelSolver, SeamlessAwayFromMarkedFunctions) {
 }
 
 // Relative L2 difference of the gradients of two per-corner maps.
-double relativeGradientDifference(const TriangleMesh& mesh, const std::vector<Vec2d>& a,
-                                  const std::vector<Vec2d>& b, const std::set<FaceId>& skip = {}) {
+double relativeGradientDifference(const TriangleMesh& mesh, const WedgeMap& a, const WedgeMap& b,
+                                  const std::set<FaceId>& skip = {}) {
   double diff = 0.0, norm = 0.0;
   for (FaceId f = 0; f < mesh.numFaces(); ++f) {
     if (skip.count(f)) continue;
@@ -620,8 +623,8 @@ TEST(VoxelSolver, AgreesWithTheHatSolverOnASmoothMesh) {
   }
   // Sanity of the measure: a map and itself differ by 0, a map and its double by 1.
   EXPECT_EQ(relativeGradientDifference(s.mesh, hat.cornerUV, hat.cornerUV), 0.0);
-  std::vector<Vec2d> doubled = hat.cornerUV;
-  for (Vec2d& q : doubled) q *= 2.0;
+  WedgeMap doubled = hat.cornerUV;
+  for (std::uint32_t w = 0; w < doubled.numWedges(); ++w) doubled.setWedgeValue(w, 2.0 * doubled.wedgeValue(w));
   EXPECT_NEAR(relativeGradientDifference(s.mesh, doubled, hat.cornerUV), 1.0, 1e-12);
 }
 
@@ -688,7 +691,7 @@ class WithoutBlocks final : public Basis {
     return basis_.elementDomains(e, out);
   }
   void elementIntegrals(std::uint64_t e, ElementIntegrals& out) const override { basis_.elementIntegrals(e, out); }
-  void evaluateCorners(const std::vector<std::complex<double>>& c, std::vector<Vec2d>& uv) const override {
+  void evaluateCorners(const std::vector<std::complex<double>>& c, WedgeMap& uv) const override {
     basis_.evaluateCorners(c, uv);
   }
 
@@ -725,6 +728,29 @@ TEST(VoxelSolver, BlockByBlockAssemblyEqualsElementRanges) {
   EXPECT_LT(largest(byBlocks.lower - byRanges.lower), 1e-12 * scale);
   EXPECT_LT((byBlocks.rhs - byRanges.rhs).cwiseAbs().maxCoeff(), 1e-12 * byRanges.rhs.cwiseAbs().maxCoeff());
   EXPECT_NEAR(byBlocks.totalArea, byRanges.totalArea, 1e-12 * byRanges.totalArea);
+}
+
+TEST(VoxelSolver, OneEvaluationPerWedgeEqualsOnePerCorner) {
+  // The solved coefficients evaluated once per wedge of the cut, and at every corner on its own
+  // (a map with one wedge per corner): the same map to rounding, with far fewer wedges.
+  const CutMesh s = smoothSphere();
+  const VoxelBuildResult built = build(s, 32, 0.1, 1e-5);
+  const Reduction reduction = reduceBasis(*built.basis);
+  const SeamlessSolution solution = solveSeamless(*built.basis, reduction);
+  WedgeMap perWedge = buildCutWedges(s.topology, s.cut);
+  evaluateMap(*built.basis, reduction, solution.unknowns, perWedge);
+  std::vector<std::uint32_t> own(s.topology.numCorners());
+  for (CornerId c = 0; c < own.size(); ++c) own[c] = c;
+  WedgeMap perCorner(std::move(own), std::vector<Vec2d>(s.topology.numCorners(), Vec2d::Zero()));
+  evaluateMap(*built.basis, reduction, solution.unknowns, perCorner);
+  EXPECT_LT(perWedge.numWedges(), perCorner.numWedges() / 5);
+  double largest = 0.0, difference = 0.0;
+  for (CornerId c = 0; c < perCorner.size(); ++c) {
+    largest = std::max(largest, perCorner[c].norm());
+    difference = std::max(difference, (perWedge[c] - perCorner[c]).norm());
+  }
+  EXPECT_GT(largest, 1.0);
+  EXPECT_LT(difference, 1e-9 * largest);
 }
 
 }  // namespace

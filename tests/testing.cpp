@@ -63,4 +63,10 @@ std::string readFile(const std::string& path) {
   return ss.str();
 }
 
+std::vector<Vec2d> cornerValues(const WedgeMap& map) {
+  std::vector<Vec2d> values(map.size());
+  for (CornerId c = 0; c < map.size(); ++c) values[c] = map[c];
+  return values;
+}
+
 }  // namespace seamvox::testing

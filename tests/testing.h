@@ -1,8 +1,15 @@
 #pragma once
 /// Helpers shared by the test suites: shared-data lookup, temporary folders, running the CLI.
 #include <string>
+#include <vector>
+
+#include "../core/wedge_map.h"
 
 namespace seamvox::testing {
+
+/// The value of every corner of a map (tests compare and edit maps corner by corner; rebuild
+/// with WedgeMap::fromCorners).
+std::vector<Vec2d> cornerValues(const WedgeMap& map);
 
 /// Path of a file in ../shared/data (or $SEAMVOX_DATA), or "" when it is absent. Use
 ///   auto path = sharedMesh("bunny.off"); if (path.empty()) GTEST_SKIP() << ...;

@@ -157,6 +157,7 @@ int runParam(Args& args) {
   const SeamQuality seams = measureSeams(mesh, topology, cut, result.cornerUV);
   const MapQuality map = measureMap(mesh, result.cornerUV, &field, options.edgeLength);
   const double secondsMetrics = meter.finish("metrics").seconds;
+  const std::uint64_t wedges = result.cornerUV.numWedges(), mapBytes = result.cornerUV.memoryBytes();
   // The writer needs the mesh and its map only (the render also the corner table): release the
   // field and the cut before the output is written.
   const std::size_t numCones = cut.cones.size(), numSeams = cut.seams.size();
@@ -184,6 +185,8 @@ int runParam(Args& args) {
   std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
               st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
               peak / 1048576.0);
+  std::printf("map: %llu wedges (%.3f per vertex), %.1f MB\n", static_cast<unsigned long long>(wedges),
+              mesh.numVertices() ? double(wedges) / mesh.numVertices() : 0.0, mapBytes / 1048576.0);
   std::printf("seam residual %.3g, integer distance %.3g, gradient error %.4f, flipped %llu, "
               "collapsed %llu: %s\n",
               seams.maxResidual, seams.maxIntegerDistance, map.relativeGradientError,
@@ -224,6 +227,7 @@ int runParam(Args& args) {
     j.key("conePasses").value(static_cast<std::uint64_t>(conePasses));
     j.key("seams").value(static_cast<std::uint64_t>(numSeams));
     j.key("seamEdges").value(seams.seamEdges).key("seamLength").value(seams.seamLength);
+    j.key("wedges").value(wedges).key("mapBytes").value(mapBytes);
     j.key("edgeLength").value(options.edgeLength);
     j.key("cellsOnDiagonal").value(diagonal / options.edgeLength);
     j.key("system").beginObject();

@@ -1,0 +1,188 @@
+// The per-wedge map: compression of per-corner values, corner edits against a plain per-corner
+// model, and the cut's wedges against the hat basis' domains.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <complex>
+#include <random>
+#include <vector>
+
+#include "core/basis.h"
+#include "core/cut.h"
+#include "core/errors.h"
+#include "core/evaluate.h"
+#include "core/field.h"
+#include "core/wedge_map.h"
+#include "test_meshes.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+using testing::cornerValues;
+
+/// (x, y) of each corner's vertex, plus `shift` in u on the faces right of x = seamX.
+std::vector<Vec2d> planarValues(const TriangleMesh& mesh, double seamX, double shift) {
+  std::vector<Vec2d> values(3 * mesh.triangles.size());
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    const Triangle& t = mesh.triangles[c / 3];
+    double cx = 0.0;
+    for (VertexId v : t) cx += mesh.positions[v].x() / 3.0;
+    const Vec3d p = mesh.position(t[c % 3]);
+    values[c] = Vec2d(p.x() + (cx > seamX ? shift : 0.0), p.y());
+  }
+  return values;
+}
+
+TEST(WedgeMap, PerCornerValuesShareOneWedgePerVertexAndValue) {
+  const TriangleMesh mesh = testing::gridMesh(6, 4);
+  const std::vector<Vec2d> continuous = planarValues(mesh, 1e9, 0.0);
+  const WedgeMap one = WedgeMap::fromCorners(mesh.triangles, continuous);
+  EXPECT_EQ(one.size(), continuous.size());
+  EXPECT_EQ(one.numWedges(), mesh.numVertices());
+  EXPECT_EQ(cornerValues(one), continuous);
+  // A seam along x = 3: the 5 vertices on it get a second wedge.
+  const std::vector<Vec2d> seam = planarValues(mesh, 3.0, 7.0);
+  const WedgeMap two = WedgeMap::fromCorners(mesh.triangles, seam);
+  EXPECT_EQ(two.numWedges(), mesh.numVertices() + 5);
+  EXPECT_EQ(cornerValues(two), seam);
+  for (CornerId c = 0; c < two.size(); ++c) {
+    EXPECT_EQ(two[c], two.wedgeValue(two.wedge(c)));
+  }
+  EXPECT_LT(two.memoryBytes(), seam.size() * sizeof(Vec2d));
+  EXPECT_THROW(WedgeMap::fromCorners(mesh.triangles, std::vector<Vec2d>(5)), InputError);
+  EXPECT_THROW(WedgeMap({0, 2}, {Vec2d::Zero()}), InputError);
+}
+
+TEST(WedgeMap, BuilderKeepsCornersOfUnknownVerticesApart) {
+  WedgeMapBuilder builder;
+  builder.add(3, Vec2d(1, 2));
+  builder.add(kInvalidId, Vec2d(1, 2));
+  builder.add(3, Vec2d(1, 2));
+  builder.add(0, Vec2d(1, 2));  // another vertex: another wedge, whatever the value
+  const WedgeMap map = builder.finish();
+  EXPECT_EQ(map.size(), 4u);
+  EXPECT_EQ(map.numWedges(), 3u);
+  EXPECT_EQ(map.wedge(0), map.wedge(2));
+  EXPECT_NE(map.wedge(0), map.wedge(1));
+  EXPECT_NE(map.wedge(0), map.wedge(3));
+  EXPECT_EQ(builder.size(), 0u);
+}
+
+TEST(WedgeMap, WholeWedgesChangeInPlaceAndPartlyChangedWedgesSplit) {
+  const TriangleMesh mesh = testing::gridMesh(4, 4);
+  const Topology topology = Topology::build(mesh.triangles, mesh.numVertices());
+  WedgeMap map = WedgeMap::fromCorners(mesh.triangles, planarValues(mesh, 1e9, 0.0));
+  const std::uint32_t wedges = map.numWedges();
+  // Every corner of the interior vertex 6 gets one new value: the wedge keeps its id.
+  std::vector<CornerId> corners;
+  topology.forEachCornerAround(6, [&](CornerId c) { corners.push_back(c); });
+  ASSERT_GT(corners.size(), 2u);
+  const std::uint32_t w = map.wedge(corners[0]);
+  map.assign(corners, std::vector<Vec2d>(corners.size(), Vec2d(-5, 5)));
+  EXPECT_EQ(map.numWedges(), wedges);
+  for (CornerId c : corners) {
+    EXPECT_EQ(map.wedge(c), w);
+    EXPECT_EQ(map[c], Vec2d(-5, 5));
+  }
+  // Two of its corners get another value: one new wedge for both, the rest keep theirs.
+  map.assign({corners[0], corners[1]}, {Vec2d(8, 8), Vec2d(8, 8)});
+  EXPECT_EQ(map.numWedges(), wedges + 1);
+  EXPECT_EQ(map.wedge(corners[0]), map.wedge(corners[1]));
+  EXPECT_EQ(map[corners[0]], Vec2d(8, 8));
+  EXPECT_EQ(map[corners[2]], Vec2d(-5, 5));
+  EXPECT_EQ(map.wedge(corners[2]), w);
+  // set: unchanged value keeps the wedge; a new one moves the corner alone.
+  map.set(corners[2], Vec2d(-5, 5));
+  EXPECT_EQ(map.wedge(corners[2]), w);
+  map.set(corners[2], Vec2d(1, 1));
+  EXPECT_NE(map.wedge(corners[2]), w);
+  EXPECT_EQ(map[corners[2]], Vec2d(1, 1));
+  EXPECT_EQ(map[corners.back()], Vec2d(-5, 5));
+  EXPECT_THROW(map.assign({CornerId(map.size())}, {Vec2d::Zero()}), InputError);
+  EXPECT_THROW(map.assign({0, 1}, {Vec2d::Zero()}), InputError);
+}
+
+TEST(WedgeMap, RandomEditsMatchAPerCornerModel) {
+  const TriangleMesh mesh = testing::torusMesh(10, 6);
+  std::vector<Vec2d> model = planarValues(mesh, 0.0, 3.0);
+  WedgeMap map = WedgeMap::fromCorners(mesh.triangles, model);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<CornerId> corner(0, CornerId(model.size() - 1));
+  std::uniform_int_distribution<int> value(0, 3), count(1, 40);
+  for (int round = 0; round < 200; ++round) {
+    std::vector<CornerId> corners;
+    std::vector<Vec2d> values;
+    const int n = count(rng);
+    for (int k = 0; k < n; ++k) {
+      // Whole fans of one vertex now and then (the refinement's case), single corners otherwise.
+      const CornerId c = corner(rng);
+      const Vec2d q(value(rng), 0.5);
+      const VertexId v = mesh.triangles[c / 3][c % 3];
+      for (CornerId d = 0; d < model.size(); ++d) {
+        if (d == c || (round % 3 == 0 && mesh.triangles[d / 3][d % 3] == v)) {
+          corners.push_back(d);
+          values.push_back(q);
+        }
+      }
+    }
+    if (round % 5 == 4) {
+      map.set(corners[0], values[0]);
+      model[corners[0]] = values[0];
+      continue;
+    }
+    map.assign(corners, values);
+    for (std::size_t k = 0; k < corners.size(); ++k) model[corners[k]] = values[k];  // last wins
+    ASSERT_EQ(cornerValues(map), model) << "round " << round;
+  }
+  EXPECT_EQ(cornerValues(map), model);
+}
+
+TEST(WedgeMap, CutWedgesAreTheHatDomains) {
+  const testing::Surface s = testing::makeSurface(testing::icosphereMesh(2));
+  const CrossField field = testing::randomField(s.mesh, 3);
+  const CutResult cut = cutToDisk(s.mesh, s.topology, field, computeSingularities(s.mesh, s.topology, field));
+  ASSERT_FALSE(cut.seams.empty());
+  const WedgeMap wedges = buildCutWedges(s.topology, cut);
+  ASSERT_EQ(wedges.size(), s.topology.numCorners());
+  EXPECT_GT(wedges.numWedges(), s.topology.numVertices());
+  // Around each vertex: the same wedge across a non-cut edge, another one across a cut edge
+  // unless the vertex has a single cut edge; wedges are numbered vertex by vertex.
+  for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+    std::uint32_t cuts = 0;
+    s.topology.forEachCornerAround(v, [&](CornerId c) {
+      const CornerId next = s.topology.ccw(c);
+      cuts += cut.isCut[nextCorner(c)];
+      if (next == kInvalidId) return;
+      if (!cut.isCut[nextCorner(c)]) EXPECT_EQ(wedges.wedge(c), wedges.wedge(next)) << "vertex " << v;
+    });
+    std::vector<std::uint32_t> seen;
+    s.topology.forEachCornerAround(v, [&](CornerId c) {
+      if (std::find(seen.begin(), seen.end(), wedges.wedge(c)) == seen.end()) seen.push_back(wedges.wedge(c));
+    });
+    EXPECT_EQ(seen.size(), std::max(1u, cuts)) << "vertex " << v;
+  }
+  // One to one with the hat basis' domains, and its evaluation gives each corner its domain's
+  // coefficient.
+  const HatBasis basis(s.mesh, s.topology, field, cut);
+  ASSERT_EQ(basis.numDomains(), wedges.numWedges());
+  std::vector<std::uint32_t> domainOf(wedges.numWedges(), kInvalidId);
+  for (CornerId c = 0; c < wedges.size(); ++c) {
+    std::uint32_t& d = domainOf[wedges.wedge(c)];
+    if (d == kInvalidId) d = basis.cornerDomain()[c];
+    ASSERT_EQ(d, basis.cornerDomain()[c]) << "corner " << c;
+  }
+  std::vector<std::complex<double>> coefficients(basis.numDomains());
+  for (std::uint32_t d = 0; d < coefficients.size(); ++d) coefficients[d] = {double(d), -0.5 * d};
+  WedgeMap map = wedges;
+  basis.evaluateCorners(coefficients, map);
+  for (CornerId c = 0; c < map.size(); ++c) {
+    const std::complex<double> q = coefficients[basis.cornerDomain()[c]];
+    ASSERT_EQ(map[c], Vec2d(q.real(), q.imag())) << "corner " << c;
+  }
+  WedgeMap wrong;
+  EXPECT_THROW(basis.evaluateCorners(coefficients, wrong), InputError);
+}
+
+}  // namespace
+}  // namespace seamvox
