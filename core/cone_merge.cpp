@@ -164,9 +164,7 @@ ConeMergeResult mergeAdjacentCones(const Topology& topology, FieldSingularities&
     if (a >= index4.size() || b >= index4.size()) {
       throw InputError("mergeAdjacentCones: vertex out of range");
     }
-    if (index4[a] == 0 || index4[b] == 0 || std::abs(index4[a] + index4[b]) > kMaxCoincidentIndex4) {
-      continue;
-    }
+    if (!canMergeCoincident(index4[a], index4[b])) continue;
     const bool keepA = std::abs(index4[a]) >= std::abs(index4[b]);
     const VertexId keep = keepA ? a : b, gone = keepA ? b : a;
     CornerId edge = kInvalidId;  // keep -> gone, interior

@@ -31,6 +31,11 @@ constexpr std::int32_t kMaxMergedIndex4 = 2;
 /// Cones the map already put on one point may merge up to |index4| 3 (what the map has there
 /// anyway); 4 would be a cone of angle 0.
 constexpr std::int32_t kMaxCoincidentIndex4 = 3;
+/// Whether two adjacent cones of these indices may be merged (mergeAdjacentCones). Two +2 cones
+/// on one point (e.g. a closed component smaller than the grid) cannot: the map must collapse there.
+inline bool canMergeCoincident(std::int32_t a, std::int32_t b) {
+  return a != 0 && b != 0 && (a + b <= kMaxCoincidentIndex4 && a + b >= -kMaxCoincidentIndex4);
+}
 
 struct ConeMergeOptions {
   /// Cones whose shortest path of interior edges is at most this long (mesh units) are merged;

@@ -1,6 +1,7 @@
 // seamvox param: seamless parameterization of a mesh (hat, vox or vox + local hat refinement).
 #include <cmath>
 #include <cstdio>
+#include <unordered_map>
 
 #include "core/clean.h"
 #include "core/cone_merge.h"
@@ -25,7 +26,7 @@ namespace {
 /// Grid cells along the bounding-box diagonal when neither --edge-length nor --cells is given.
 constexpr double kDefaultCells = 100.0;
 /// Cut-and-solve passes at most when coincident cones are merged after a solve.
-constexpr std::uint32_t kMaxConePasses = 6;
+constexpr std::uint32_t kMaxConePasses = 3;
 
 int runParam(Args& args) {
   const std::string input = args.positional(0, "the input mesh (seamvox param MESH -o OUT)");
@@ -121,6 +122,7 @@ int runParam(Args& args) {
   cutOptions.progress = progress;
   ConeMergeResult merged;
   std::vector<std::pair<VertexId, VertexId>> coincident;
+  std::unordered_map<VertexId, std::int32_t> coneIndex;  // of the last cut's cones
   CutResult cut;
   SolverResult solved;
   std::uint32_t conePasses = 0;
@@ -137,13 +139,20 @@ int runParam(Args& args) {
       merged.cancelledPairs += adjacent.cancelledPairs;
       merged.mergedPairs += adjacent.mergedPairs;
       cut = cutToDisk(mesh, topology, field, singularities, cutOptions);
+      coneIndex.clear();
+      for (VertexId v : singularities.cones) coneIndex[v] = singularities.index4[v];
     }
     secondsCut += meter.finish("cut").seconds;
     solved = parameterizeMeshWithSolver(mesh, topology, field, cut, options, solverOptions);
     if (!(mergeCones > 0.0) || conePasses == kMaxConePasses) break;
-    const auto more = coincidentConeEdges(topology, cut.cones, solved.param.cornerUV);
-    if (more.empty()) break;
-    coincident.insert(coincident.end(), more.begin(), more.end());
+    std::size_t mergeable = 0;
+    for (const auto& [a, b] : coincidentConeEdges(topology, cut.cones, solved.param.cornerUV)) {
+      if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b))) {
+        coincident.push_back({a, b});
+        ++mergeable;
+      }
+    }
+    if (mergeable == 0) break;
     solved = SolverResult{};  // free the map and the cut before the next pass
     cut = CutResult{};
   }
