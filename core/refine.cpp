@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <string>
 
 #include "core/basis.h"
@@ -133,6 +134,95 @@ struct FaceCounts {
     }
   }
 };
+
+/// A whole-mesh corner solved by some refinement round; free: its vertex was free in a solve.
+struct SolvedCorner {
+  CornerId corner;
+  Vec2d uv;
+  bool free;
+};
+
+/// The input of a region solve: the corners solved so far where there are any, else the map.
+WedgeMap regionInput(const RegionMesh& region, const WedgeMap& cornerUV,
+                     const std::vector<SolvedCorner>& current) {
+  const std::uint32_t rf = region.topology.numFaces();
+  std::vector<Vec2d> values(3u * rf);
+  for (std::uint32_t i = 0; i < rf; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const CornerId c = 3 * region.faceOrigin[i] + k;
+      const auto it = std::lower_bound(current.begin(), current.end(), c,
+                                       [](const SolvedCorner& s, CornerId x) { return s.corner < x; });
+      values[3 * i + k] = it != current.end() && it->corner == c ? it->uv : cornerUV[c];
+    }
+  }
+  return WedgeMap::fromCorners(region.mesh.triangles, values);
+}
+
+/// Records a region's solution in `current` (sorted by corner; these values replace older ones,
+/// a corner stays free once freed).
+void mergeSolved(const RegionMesh& region, const RegionSolution& solved,
+                 std::vector<SolvedCorner>& current) {
+  std::vector<SolvedCorner> fresh;
+  fresh.reserve(solved.cornerUV.size());
+  for (CornerId c = 0; c < solved.cornerUV.size(); ++c) {
+    fresh.push_back({3 * region.faceOrigin[c / 3] + c % 3, solved.cornerUV[c],
+                     region.vertexFree[region.mesh.triangles[c / 3][c % 3]] != 0});
+  }
+  const auto byCorner = [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; };
+  std::sort(fresh.begin(), fresh.end(), byCorner);
+  std::vector<SolvedCorner> merged;
+  merged.reserve(current.size() + fresh.size());
+  auto i = current.begin(), j = fresh.begin();
+  while (i != current.end() || j != fresh.end()) {
+    if (j == fresh.end() || (i != current.end() && i->corner < j->corner)) {
+      merged.push_back(*i++);
+    } else if (i == current.end() || j->corner < i->corner) {
+      merged.push_back(*j++);
+    } else {
+      merged.push_back({j->corner, j->uv, j->free || i->free});
+      ++i, ++j;
+    }
+  }
+  current = std::move(merged);
+}
+
+/// Faces within `rings` vertex rings of the seeds (the seeds included), whatever their flag;
+/// faces outside the region so far are flagged kRing.
+std::vector<FaceId> growPatch(const Topology& topology, std::vector<FaceId> frontier,
+                              std::uint32_t rings, std::vector<std::uint8_t>& flag) {
+  std::vector<FaceId> patch = frontier;
+  std::sort(patch.begin(), patch.end());
+  patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
+  std::vector<VertexId> seen;  // vertices expanded (sorted per ring)
+  for (std::uint32_t ring = 0; ring < rings && !frontier.empty(); ++ring) {
+    std::vector<FaceId> added;
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) {
+        const VertexId v = topology.vertex(3 * f + k);
+        if (std::binary_search(seen.begin(), seen.end(), v)) continue;
+        topology.forEachCornerAround(v, [&](CornerId c) {
+          const FaceId g = cornerFace(c);
+          if (!std::binary_search(patch.begin(), patch.end(), g)) added.push_back(g);
+        });
+      }
+    }
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) seen.push_back(topology.vertex(3 * f + k));
+    }
+    std::sort(seen.begin(), seen.end());
+    seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+    std::sort(added.begin(), added.end());
+    added.erase(std::unique(added.begin(), added.end()), added.end());
+    std::vector<FaceId> grown;
+    std::merge(patch.begin(), patch.end(), added.begin(), added.end(), std::back_inserter(grown));
+    patch = std::move(grown);
+    frontier = std::move(added);
+  }
+  for (FaceId f : patch) {
+    if (flag[f] == kOutside) flag[f] = kRing;
+  }
+  return patch;
+}
 
 }  // namespace
 
@@ -495,51 +585,50 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     isCone[v] = 1;
   }
 
-  // Rounds: solve the region from the input map, grow it around faces still bad at its border.
+  // Rounds: solve the region from the input map; then, while faces stay bad at the locked border,
+  // solve a patch around them (rings doubling) from the map as refined so far. `current` holds
+  // every corner solved so far (sorted by corner; the latest solve wins), currentT the seams.
   const std::uint32_t maxRounds = std::max(1u, options.maxRounds);
   std::uint64_t seeds = stats.markedFaces + stats.collapsedFaces + stats.flippedFaces;
-  RegionMesh region;
-  RegionSolution solved;
-  FaceCounts inRegion;
+  std::vector<SolvedCorner> current;
+  std::vector<Complex> currentT = seamT;
+  RefineStats largest;  // system figures of the largest solve
   for (std::uint32_t round = 0; !faces.empty(); ++round) {
     const auto roundStart = std::chrono::steady_clock::now();
     RefineRound figures;
     figures.seedFaces = seeds;
     figures.regionFaces = faces.size();
     lap = roundStart;
-    region = extractRegion(mesh, topology, field, cut, faces);
-    const std::uint32_t rf = region.topology.numFaces();
-    std::vector<Vec2d> inputUV(3u * rf);
-    for (std::uint32_t i = 0; i < rf; ++i) {
-      for (int k = 0; k < 3; ++k) inputUV[3 * i + k] = cornerUV[3 * region.faceOrigin[i] + k];
-    }
-    WedgeMap regionUV = WedgeMap::fromCorners(region.mesh.triangles, inputUV);
+    const RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
+    WedgeMap regionUV = regionInput(region, cornerUV, current);
     std::vector<Complex> regionT(region.seamOrigin.size());
-    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
+    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
     const std::uint32_t numFree = static_cast<std::uint32_t>(
         std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
-    stats.regionFaces = rf;
-    stats.freeVertices = figures.freeVertices = numFree;
-    stats.lockedVertices = static_cast<std::uint32_t>(region.vertexFree.size()) - numFree;
-    stats.refinedVertexFraction = mesh.numVertices() ? double(numFree) / mesh.numVertices() : 0.0;
+    figures.freeVertices = numFree;
     stats.secondsExtract += secondsSince(lap);
 
     lap = std::chrono::steady_clock::now();
+    RegionSolution solved;
     if (numFree > 0) {
       solved = solveRegion(region, regionUV, regionT, h, &stats);
       figures.unknowns = stats.unknowns;
+      if (stats.unknowns >= largest.unknowns) largest = stats;
     } else {
       solved.cornerUV = std::move(regionUV);
       solved.seamT = std::move(regionT);
     }
     stats.secondsSolve += secondsSince(lap);
+    mergeSolved(region, solved, current);
+    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) currentT[region.seamOrigin[j]] = solved.seamT[j];
 
     // Measure the region again; bad faces touching a locked vertex seed the next round.
     std::vector<std::uint8_t> subCone(region.mesh.numVertices(), 0);
     for (VertexId v : region.cut.cones) subCone[v] = 1;
-    inRegion = FaceCounts();
+    FaceCounts inRegion;
     std::vector<FaceId> border;
     bool collapsedAtBorder = false;  // a border face below the threshold but not flipped
+    const std::uint32_t rf = region.topology.numFaces();
     for (std::uint32_t i = 0; i < rf; ++i) {
       const double ratio = parameterAreaRatio(region.mesh, solved.cornerUV, i, h);
       inRegion.add(region.mesh, solved.cornerUV, i, ratio, subCone);
@@ -559,18 +648,44 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     stats.rounds.push_back(figures);
     reportProgress(options.progress, "refine", double(round + 1) / maxRounds);
     if (border.empty() || round + 1 >= maxRounds) break;
-    // Another solve of the whole grown region pays while it removes collapses, or while the
-    // border shrinks fast. Flipped faces that stay at the border round after round are the map's
-    // own flips near cones (hat has them too); chasing them cost 3 extra solves and 27% of the
-    // time of a 22M-face run for 32 of 8174 flips.
+    // Another solve pays while it removes collapses, or while the border shrinks fast. Flipped
+    // faces that stay at the border round after round are the map's own flips near cones (hat has
+    // them too); chasing them cost 3 extra solves and 27% of the time of a 22M-face run for 32 of
+    // 8174 flips.
     if (!collapsedAtBorder && 2 * border.size() > seeds) break;
     seeds = border.size();
-    // Rings double each round: damage that outlasts a round usually spreads further out.
-    addRings(topology, std::move(border), std::max(1u, options.rings) << std::min(round, 4u), flag, faces);
+    // Rings double each round: damage that outlasts a round usually spreads further out. The
+    // patch is solved on its own, the rest of the map (refined or not) locked around it.
+    faces = growPatch(topology, std::move(border), std::max(1u, options.rings) << std::min(round, 4u), flag);
   }
   if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
+  if (largest.unknowns > 0) {
+    stats.unknowns = largest.unknowns;
+    stats.freeTranslations = largest.freeTranslations;
+    stats.pinned = largest.pinned;
+    stats.systemNonzeros = largest.systemNonzeros;
+    stats.factorNonzeros = largest.factorNonzeros;
+    stats.factorBytes = largest.factorBytes;
+    stats.factorPeakBytes = largest.factorPeakBytes;
+  }
 
-  // Whole-map counts: the last region's faces as solved, every other face as in the input.
+  // Whole-map counts: every face ever solved (flag set) with the refined values, every other face
+  // as in the input. The refined faces are measured as one region of their own.
+  std::vector<FaceId> touched;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    if (flag[f] != kOutside) touched.push_back(f);
+  }
+  FaceCounts inside;
+  if (!touched.empty()) {
+    const RegionMesh all = extractRegion(mesh, topology, field, cut, touched);
+    const WedgeMap allUV = regionInput(all, cornerUV, current);
+    std::vector<std::uint8_t> subCone(all.mesh.numVertices(), 0);
+    for (VertexId v : all.cut.cones) subCone[v] = 1;
+    for (std::uint32_t i = 0; i < all.topology.numFaces(); ++i) {
+      inside.add(all.mesh, allUV, i, parameterAreaRatio(all.mesh, allUV, i, h), subCone);
+    }
+    stats.regionFaces = touched.size();
+  }
   const FaceCounts outside = tbb::parallel_reduce(
       tbb::blocked_range<FaceId>(0, mesh.numFaces(), 1u << 14), FaceCounts(),
       [&](const tbb::blocked_range<FaceId>& range, FaceCounts counts) {
@@ -584,23 +699,34 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
         a.collapsed += b.collapsed, a.collapsedAtCones += b.collapsedAtCones, a.flipped += b.flipped;
         return a;
       });
-  stats.collapsedAfter = outside.collapsed + inRegion.collapsed;
-  stats.collapsedAtConesAfter = outside.collapsedAtCones + inRegion.collapsedAtCones;
-  stats.flippedAfter = outside.flipped + inRegion.flipped;
+  stats.collapsedAfter = outside.collapsed + inside.collapsed;
+  stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
+  stats.flippedAfter = outside.flipped + inside.flipped;
 
-  if (stats.freeVertices > 0) {
-    const std::uint32_t rf = region.topology.numFaces();
-    for (CornerId c = 0; c < 3u * rf; ++c) {
-      if (!region.vertexFree[region.mesh.triangles[c / 3][c % 3]]) continue;
-      out.corners.push_back(3 * region.faceOrigin[c / 3] + c % 3);
-      out.cornerUV.push_back(solved.cornerUV[c]);
-    }
-    for (std::uint32_t j = 0; j < region.seamOrigin.size(); ++j) {
-      const Complex input = seamT[region.seamOrigin[j]];
-      if (solved.seamT[j] == input) continue;
-      out.seams.push_back(region.seamOrigin[j]);
-      out.seamT.push_back(solved.seamT[j]);
-    }
+  // The corners of every vertex freed in some solve, with their latest values.
+  std::vector<VertexId> freed;
+  for (const SolvedCorner& s : current) {
+    if (!s.free) continue;
+    out.corners.push_back(s.corner);
+    out.cornerUV.push_back(s.uv);
+    freed.push_back(topology.vertex(s.corner));
+  }
+  std::sort(freed.begin(), freed.end());
+  freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
+  stats.freeVertices = static_cast<std::uint32_t>(freed.size());
+  std::vector<VertexId> around;  // vertices of every refined face
+  around.reserve(3 * touched.size());
+  for (FaceId f : touched) {
+    for (int k = 0; k < 3; ++k) around.push_back(topology.vertex(3 * f + k));
+  }
+  std::sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
+  stats.lockedVertices = static_cast<std::uint32_t>(around.size() - freed.size());
+  stats.refinedVertexFraction = mesh.numVertices() ? double(freed.size()) / mesh.numVertices() : 0.0;
+  for (std::uint32_t j = 0; j < currentT.size(); ++j) {
+    if (currentT[j] == seamT[j]) continue;
+    out.seams.push_back(j);
+    out.seamT.push_back(currentT[j]);
   }
   reportProgress(options.progress, "refine", 1.0);
   stats.secondsTotal = secondsSince(start);
