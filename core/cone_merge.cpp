@@ -7,12 +7,10 @@
 #include <unordered_map>
 
 #include "errors.h"
+#include "metrics.h"
 
 namespace seamvox {
 namespace {
-
-/// Cones whose corners are this close (grid units) coincide (as in metrics.h collapsesBetweenCones).
-constexpr double kCoincidentTolerance = 1e-9;
 
 /// Shortest-path tree of interior edges from one vertex, cut off at a radius. pred holds the
 /// corner naming the directed edge X -> Y that reached Y (topology.h: the edge of corner d runs
@@ -91,7 +89,6 @@ ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topolo
   }
   if (!(options.maxDistance > 0.0) || singularities.cones.size() < 2) return out;
   std::vector<std::int32_t>& index4 = singularities.index4;
-  std::vector<std::uint8_t>& matching = singularities.matching;
   const auto mergeable = [&](VertexId a, VertexId b) {
     return index4[a] != 0 && index4[b] != 0 && std::abs(index4[a] + index4[b]) <= kMaxMergedIndex4;
   };
@@ -150,7 +147,7 @@ std::vector<std::pair<VertexId, VertexId>> coincidentConeEdges(const Topology& t
       const CornerId n = nextCorner(c);
       const VertexId w = topology.vertex(n);
       if (!isCone[w] || (w < v && !topology.isBoundaryEdge(edge))) return;
-      if ((cornerUV[c] - cornerUV[n]).norm() <= kCoincidentTolerance) out.push_back({v, w});
+      if ((cornerUV[c] - cornerUV[n]).norm() <= kCoincidentConeDistance) out.push_back({v, w});
     });
   }
   return out;

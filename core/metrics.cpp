@@ -53,7 +53,8 @@ bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, F
   const Triangle& t = mesh.triangles[f];
   for (int k = 0; k < 3; ++k) {
     const int l = (k + 1) % 3;
-    if (isCone[t[k]] && isCone[t[l]] && (cornerUV[3 * f + k] - cornerUV[3 * f + l]).norm() <= 1e-9) {
+    if (isCone[t[k]] && isCone[t[l]] &&
+        (cornerUV[3 * f + k] - cornerUV[3 * f + l]).norm() <= kCoincidentConeDistance) {
       return true;
     }
   }

@@ -43,10 +43,13 @@ constexpr double kCollapsedAreaFraction = 1e-6;
 double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
                           double edgeLength);
 
+/// Two cones whose corners are this close in (u, v) (grid units) coincide.
+constexpr double kCoincidentConeDistance = 1e-9;
+
 /// True when face f has an edge between two cones (isCone per vertex) whose corners have the same
-/// (u, v) within 1e-9. In a seamless map a cone sits where the rotations of its seams fix it
-/// (DESIGN section 7: c_0 = beta . t / alpha), on the half-integer lattice once the translations
-/// are rounded, whatever the other vertices do. Two cones closer than about h/2 (cone pairs of a
+/// (u, v) within kCoincidentConeDistance. In a seamless map a cone sits where the rotations of
+/// its seams fix it (DESIGN section 7: c_0 = beta . t / alpha), on the half-integer lattice once
+/// the translations are rounded, whatever the other vertices do. Two cones closer than about h/2 (cone pairs of a
 /// noisy field, often one edge apart) then land on the same point and their shared triangles
 /// collapse in every solver (hat included): only other translations could separate them, at the
 /// price of a large distortion. This collapse belongs to the field and the rounding, not to the
