@@ -372,5 +372,39 @@ TEST(FieldCommand, WritesFieldConesSeamsAndReimportsTheSameField) {
   EXPECT_EQ(testing::runSeamvox("field " + dir.path("t.obj"), &out), 2) << out;  // no -o
 }
 
+TEST(FieldCommand, ShowsTheConesParamCutsThrough) {
+  // Cones closer than --merge-cones F * h are merged by field as by param, so the cones shown are
+  // the ones the map has (on a generated scan with a coarse grid: equal cones a few edges apart).
+  testing::TempDir dir;
+  GenerateOptions options;
+  options.kind = MeshKind::Scan;
+  options.faces = 20000;
+  writeMesh(dir.path("s.ply"), generateMesh(options).mesh);
+  const std::string common = "field " + dir.path("s.ply") + " -o " + dir.path("s.field") + " --json --quiet --cells 20";
+  std::string all, merged;
+  ASSERT_EQ(testing::runSeamvox(common + " --merge-cones 0", &all), 0) << all;
+  ASSERT_EQ(testing::runSeamvox(common + " --cones " + dir.path("cones.obj"), &merged), 0) << merged;
+  const long before = jsonInteger(all, "cones");
+  EXPECT_EQ(jsonInteger(all, "conesBeforeMerge"), before);
+  EXPECT_EQ(jsonInteger(merged, "conesBeforeMerge"), before);
+  const long cancelled = jsonInteger(merged, "conesCancelled"), moved = jsonInteger(merged, "conesMerged");
+  ASSERT_GT(cancelled + moved, 0) << "the case no longer exercises close cones\n" << merged;
+  const long cones = jsonInteger(merged, "cones");
+  EXPECT_EQ(cones, before - cancelled - moved);
+  EXPECT_EQ(jsonInteger(merged, "indexSum4"), jsonInteger(all, "indexSum4"));  // Poincare-Hopf kept
+  EXPECT_EQ(long(countLines(testing::readFile(dir.path("cones.obj")), "p ")), cones);
+  // param with the same spacing cuts through the same cones (one pass: no coincident pair left).
+  std::string out;
+  ASSERT_EQ(testing::runSeamvox("param " + dir.path("s.ply") + " -o " + dir.path("o.ply") +
+                                    " --quiet --solver hat --cells 20 --report " + dir.path("r.json"),
+                                &out),
+            0)
+      << out;
+  const std::string report = testing::readFile(dir.path("r.json"));
+  if (jsonInteger(report, "conePasses") == 1) EXPECT_EQ(jsonInteger(report, "cones"), cones) << report;
+  EXPECT_EQ(testing::runSeamvox(common + " --merge-cones -1", &out), 2) << out;
+  EXPECT_EQ(testing::runSeamvox(common + " --edge-length 1", &out), 2) << out;  // with --cells
+}
+
 }  // namespace
 }  // namespace seamvox

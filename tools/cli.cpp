@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <mutex>
 
+#include "core/cone_merge.h"
 #include "io/atomic_file.h"
 
 namespace seamvox::cli {
@@ -107,6 +109,28 @@ bool registerCommand(Command command) {
 }
 
 const std::vector<Command>& commands() { return registry(); }
+
+GridSpacing parseGridSpacing(Args& args) {
+  GridSpacing g;
+  g.edgeLength = args.number("edge-length", 0.0);
+  g.cells = args.number("cells", 0.0);
+  if (args.value("edge-length") && args.value("cells")) {
+    throw UsageError("give either --edge-length or --cells, not both");
+  }
+  if (args.value("edge-length") && !(g.edgeLength > 0.0 && std::isfinite(g.edgeLength))) {
+    throw UsageError("--edge-length must be a positive number");
+  }
+  if (args.value("cells") && !(g.cells > 0.0 && std::isfinite(g.cells))) {
+    throw UsageError("--cells must be a positive number");
+  }
+  return g;
+}
+
+double parseMergeCones(Args& args) {
+  const double f = args.number("merge-cones", kConeMergeFraction);
+  if (!(f >= 0.0 && f <= 10.0)) throw UsageError("--merge-cones must be between 0 and 10 (grid spacings)");
+  return f;
+}
 
 ProgressFn makeProgress(bool quiet) {
   if (quiet || !isatty(STDERR_FILENO)) return {};

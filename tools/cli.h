@@ -52,6 +52,18 @@ struct Command {
 bool registerCommand(Command command);
 const std::vector<Command>& commands();
 
+/// The grid spacing h of param and field: --edge-length H, or --cells N for H = bounding-box
+/// diagonal / N (default kDefaultCells); validated when parsed (UsageError).
+struct GridSpacing {
+  static constexpr double kDefaultCells = 100.0;
+  double edgeLength = 0.0;  ///< given H, or 0
+  double cells = 0.0;       ///< given N, or 0
+  double spacing(double diagonal) const { return edgeLength > 0.0 ? edgeLength : diagonal / (cells > 0.0 ? cells : kDefaultCells); }
+};
+GridSpacing parseGridSpacing(Args& args);
+/// --merge-cones F (param, field): cones closer than F * h are merged; default kConeMergeFraction.
+double parseMergeCones(Args& args);
+
 /// Progress reporting on stderr: a one-line percentage per stage when stderr is a terminal and
 /// quiet is false; nothing otherwise.
 ProgressFn makeProgress(bool quiet);

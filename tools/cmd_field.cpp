@@ -5,6 +5,7 @@
 #include <map>
 
 #include "core/clean.h"
+#include "core/cone_merge.h"
 #include "core/cut.h"
 #include "core/errors.h"
 #include "core/field.h"
@@ -86,6 +87,8 @@ int runField(Args& args) {
     throw UsageError(std::string("--field: ") + e.what());
   }
   if (curvature > 0.0 && method == FieldMethod::Proxy) throw UsageError("--curvature needs --field smooth or auto");
+  const double mergeCones = parseMergeCones(args);
+  const GridSpacing spacing = parseGridSpacing(args);
   const auto conesPath = args.value("cones");
   const auto seamsPath = args.value("seams");
   const bool json = args.flag("json");
@@ -123,7 +126,14 @@ int runField(Args& args) {
     field = computeCrossField(mesh, topology, method, options, proxyOptions);
   }
   seconds["field"] = secondsSince(mark);
-  const FieldSingularities sing = computeSingularities(mesh, topology, field);
+  // The cones param cuts through: those closer than the merge distance are merged, as param does
+  // before its first cut (param may merge a few more pairs that a solve puts on one point).
+  FieldSingularities sing = computeSingularities(mesh, topology, field);
+  const std::size_t conesBeforeMerge = sing.cones.size();
+  const double edgeLength = spacing.spacing(computeBoundingBox(mesh.positions).diagonal());
+  ConeMergeOptions mergeOptions;
+  mergeOptions.maxDistance = mergeCones * edgeLength;
+  const ConeMergeResult merged = mergeCloseCones(mesh, topology, sing, mergeOptions);
   seconds["singularities"] = secondsSince(mark);
   CutOptions cutOptions;
   cutOptions.progress = progress;
@@ -165,6 +175,10 @@ int runField(Args& args) {
     j.key("faces").value(std::uint64_t{mesh.numFaces()}).key("vertices").value(std::uint64_t{mesh.numVertices()});
     j.key("eulerCharacteristic").value(chi);
     j.key("cones").value(std::uint64_t{sing.cones.size()});
+    j.key("conesBeforeMerge").value(std::uint64_t{conesBeforeMerge});
+    j.key("conesCancelled").value(std::uint64_t{2 * merged.cancelledPairs});
+    j.key("conesMerged").value(std::uint64_t{merged.mergedPairs});
+    j.key("edgeLength").value(edgeLength).key("mergeCones").value(mergeCones);
     j.key("conesByIndex4").beginObject();
     for (const auto& [k, n] : conesByIndex) j.key(std::to_string(k)).value(n);
     j.endObject();
@@ -190,6 +204,10 @@ int runField(Args& args) {
   }
   std::printf("), index sum %+g%s\n", sing.indexSum4() / 4.0,
               closedComponents ? " (Poincare-Hopf: chi on closed components)" : "");
+  if (conesBeforeMerge != sing.cones.size()) {
+    std::printf("merged cones closer than %g h (h = %.6g): %zu before, %u pairs cancelled, %u merged\n",
+                mergeCones, edgeLength, conesBeforeMerge, merged.cancelledPairs, merged.mergedPairs);
+  }
   std::printf("cut: %llu edges, %zu seams with %llu edges\n", static_cast<unsigned long long>(cutEdges),
               cut.seams.size(), static_cast<unsigned long long>(seamEdges));
   std::printf("time: read %.2fs, clean %.2fs, field %.2fs, singularities %.2fs, cut %.2fs, write %.2fs\n",
@@ -204,6 +222,7 @@ int runField(Args& args) {
 SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "usage: seamvox field MESH -o FIELD [--field auto|smooth|proxy] [--import FILE]\n"
                  "                     [--curvature W] [--cones OUT.obj]\n"
+                 "                     [--merge-cones F] [--edge-length H | --cells N]\n"
                  "                     [--seams OUT.obj] [--json] [--weld]\n"
                  "\n"
                  "Cleans MESH, computes the smoothest cross field (or imports one), its cones and the\n"
@@ -217,6 +236,10 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "                    (linear time and memory; massive meshes; no --curvature)\n"
                  "  --import FILE     use the field in FILE (.crossfield `2 F` or plain) instead\n"
                  "  --curvature W     align with principal curvature, weight W > 0 (0: smoothest)\n"
+                 "  --merge-cones F   merge cones at most F * H apart along edges, as param does\n"
+                 "                    (default 0.5; 0 shows every cone of the field)\n"
+                 "  --edge-length H   grid spacing for --merge-cones (as in param)\n"
+                 "  --cells N         H = bounding-box diagonal / N (default N = 100)\n"
                  "  --cones OUT.obj   cones as OBJ points (red: positive index, blue: negative)\n"
                  "  --seams OUT.obj   seam curves as OBJ polylines\n"
                  "  --json            print a JSON report (cones, index sum, seams, times, memory)\n"

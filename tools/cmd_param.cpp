@@ -23,8 +23,6 @@
 namespace seamvox::cli {
 namespace {
 
-/// Grid cells along the bounding-box diagonal when neither --edge-length nor --cells is given.
-constexpr double kDefaultCells = 100.0;
 /// Cut-and-solve passes at most when coincident cones are merged after a solve.
 constexpr std::uint32_t kMaxConePasses = 3;
 
@@ -51,21 +49,8 @@ int runParam(Args& args) {
   if (rings < 0 || rings > 64) throw UsageError("--rings must be between 0 and 64");
   solverOptions.refine.rings = static_cast<std::uint32_t>(rings);
   const std::string fieldSource = args.value("field", "auto");
-  const double mergeCones = args.number("merge-cones", kConeMergeFraction);
-  if (!(mergeCones >= 0.0 && mergeCones <= 10.0)) {
-    throw UsageError("--merge-cones must be between 0 and 10 (grid spacings)");
-  }
-  const double edgeLengthArg = args.number("edge-length", 0.0);
-  const double cellsArg = args.number("cells", 0.0);
-  if (args.value("edge-length") && args.value("cells")) {
-    throw UsageError("give either --edge-length or --cells, not both");
-  }
-  if (args.value("edge-length") && !(edgeLengthArg > 0.0 && std::isfinite(edgeLengthArg))) {
-    throw UsageError("--edge-length must be a positive number");
-  }
-  if (args.value("cells") && !(cellsArg > 0.0 && std::isfinite(cellsArg))) {
-    throw UsageError("--cells must be a positive number");
-  }
+  const double mergeCones = parseMergeCones(args);
+  const GridSpacing spacing = parseGridSpacing(args);
   const bool greedy = args.flag("greedy");
   const bool weld = args.flag("weld");
   const auto reportPath = args.value("report");
@@ -107,8 +92,7 @@ int runParam(Args& args) {
   const double secondsField = meter.finish("field").seconds;
   const double diagonal = computeBoundingBox(mesh.positions).diagonal();
   ParamOptions options;
-  options.edgeLength = edgeLengthArg > 0.0 ? edgeLengthArg
-                                           : diagonal / (cellsArg > 0.0 ? cellsArg : kDefaultCells);
+  options.edgeLength = spacing.spacing(diagonal);
   if (!(options.edgeLength > 0.0)) throw InputError(input + ": the mesh has zero extent");
 
   options.greedyRounding = greedy;
