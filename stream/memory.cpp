@@ -7,8 +7,8 @@ namespace seamvox {
 namespace {
 
 /// Value of a "Name:   123 kB" line of /proc/self/status, in bytes (0 when unavailable).
-std::uint64_t statusBytes(const char* field) {
-  std::FILE* file = std::fopen("/proc/self/status", "r");
+std::uint64_t statusBytes(const char* field, const char* path = "/proc/self/status") {
+  std::FILE* file = std::fopen(path, "r");
   if (!file) return 0;
   char line[256];
   std::uint64_t bytes = 0;
@@ -28,6 +28,7 @@ std::uint64_t statusBytes(const char* field) {
 
 std::uint64_t peakResidentBytes() { return statusBytes("VmHWM"); }
 std::uint64_t currentResidentBytes() { return statusBytes("VmRSS"); }
+std::uint64_t availableMemoryBytes() { return statusBytes("MemAvailable", "/proc/meminfo"); }
 
 bool resetPeakResidentBytes() {
   // Linux >= 4.0: writing 5 to clear_refs resets VmHWM to the current RSS.

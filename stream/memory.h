@@ -12,6 +12,9 @@ namespace seamvox {
 std::uint64_t peakResidentBytes();
 /// Current resident set size (VmRSS), in bytes.
 std::uint64_t currentResidentBytes();
+/// Memory the system can give without swapping (MemAvailable of /proc/meminfo), in bytes; 0 when
+/// unknown.
+std::uint64_t availableMemoryBytes();
 /// Resets the kernel's peak (VmHWM) to the current resident size, so the next peakResidentBytes
 /// is the peak since now. Returns false where unsupported (the peak then keeps growing).
 bool resetPeakResidentBytes();

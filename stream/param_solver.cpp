@@ -1,5 +1,7 @@
 #include "stream/param_solver.h"
 
+#include <cstdio>
+
 #include "core/errors.h"
 #include "stream/voxel_grid.h"
 
@@ -21,6 +23,17 @@ ParamSolver parseParamSolver(const std::string& name) {
   throw InputError("unknown solver '" + name + "' (available: hat, vox, voxloc)");
 }
 
+void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason) {
+  const std::uint64_t needed = faces * kHatBytesPerFace;
+  if (availableBytes == 0 || needed <= availableBytes) return;
+  char figures[160];
+  std::snprintf(figures, sizeof figures, "about %.1f GB for %llu faces, %.1f GB available",
+                needed / 1e9, static_cast<unsigned long long>(faces), availableBytes / 1e9);
+  throw SolverError("the voxel system could not be factored (" + reason +
+                    ") and the hat solver it falls back to would need " + figures +
+                    "; try another --grid (e.g. 256) or more memory");
+}
+
 SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology& topology,
                                         const CrossField& field, const CutResult& cut,
                                         const ParamOptions& options,
@@ -36,7 +49,13 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   try {
     vox = parameterizeMeshVoxel(mesh, topology, field, cut, options, solverOptions.gridResolution);
   } catch (const SolverError& e) {
-    // The voxel system could not be factored: the hat solver gives the same kind of map.
+    // The voxel system could not be factored: the hat solver gives the same kind of map, if it
+    // fits in memory (on a massive mesh it would not, and swapping or being killed is worse
+    // than an error).
+    checkHatFallbackFits(mesh.numFaces(),
+                         solverOptions.fallbackMemoryBytes ? solverOptions.fallbackMemoryBytes
+                                                           : availableMemoryBytes(),
+                         e.what());
     out.fallbackReason = e.what();
     out.solver = ParamSolver::Hat;
     out.param = parameterizeMesh(mesh, topology, field, cut, options);

@@ -22,6 +22,13 @@ const char* paramSolverName(ParamSolver solver);
 /// Parses a solver name; throws InputError listing the known names.
 ParamSolver parseParamSolver(const std::string& name);
 
+/// Memory the hat solve needs per face beyond the mesh, field and cut, rounded up from the scaling
+/// study (bench/RESULTS.md: 0.99-1.15 KB per face of whole-process peak from 1.4M to 9.2M faces).
+constexpr std::uint64_t kHatBytesPerFace = 1200;
+/// The hat fallback is refused (SolverError naming both figures and `reason`) when it would need
+/// more than availableBytes (kHatBytesPerFace per face); availableBytes 0 means unknown: allowed.
+void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason);
+
 struct SolverOptions {
   ParamSolver solver = ParamSolver::VoxLoc;
   std::int32_t gridResolution = 128;  ///< voxels per axis (vox, voxloc)
@@ -30,6 +37,8 @@ struct SolverOptions {
   /// When set, the solve closes its stages on it: "solve" (the hat or voxel solve, with the
   /// fallback if any) and, for voxloc, "refine".
   StageMeter* meter = nullptr;
+  /// Memory the hat fallback may use (bytes); 0: what the system has available when it is needed.
+  std::uint64_t fallbackMemoryBytes = 0;
 };
 
 struct SolverResult {
@@ -51,7 +60,8 @@ struct SolverResult {
 
 /// Runs the chosen solver on a mesh cut to a disk per component (cutToDisk). Throws like
 /// parameterizeMesh and refineNearCones. vox and voxloc fall back to the hat solver when the
-/// voxel system cannot be factored (see SolverResult::fallbackReason).
+/// voxel system cannot be factored (see SolverResult::fallbackReason) and the hat solve fits in
+/// memory (checkHatFallbackFits); otherwise they throw SolverError.
 SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology& topology,
                                         const CrossField& field, const CutResult& cut,
                                         const ParamOptions& options,

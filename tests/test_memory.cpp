@@ -4,7 +4,9 @@
 #include <cstring>
 #include <memory>
 
+#include "core/errors.h"
 #include "stream/memory.h"
+#include "stream/param_solver.h"
 
 namespace seamvox {
 namespace {
@@ -47,6 +49,34 @@ TEST(Memory, StageMeterSeparatesThePeaksOfConsecutiveStages) {
   if (resetPeakResidentBytes()) {
     EXPECT_LT(small.peakBytes + kBytes / 2, big.peakBytes) << "the next stage starts a new peak";
   }
+}
+
+TEST(Memory, AvailableMemoryIsKnownOnLinux) {
+#ifdef __linux__
+  const std::uint64_t available = availableMemoryBytes();
+  EXPECT_GT(available, 0u);
+  EXPECT_LT(available, std::uint64_t(1) << 50);
+#else
+  GTEST_SKIP() << "MemAvailable is Linux only";
+#endif
+}
+
+TEST(Memory, HatFallbackIsRefusedWhenItCannotFit) {
+  const std::uint64_t gb = 1000000000ull;
+  // A small mesh fits; an unknown amount of memory allows the fallback.
+  EXPECT_NO_THROW(checkHatFallbackFits(100000, 8 * gb, "x"));
+  EXPECT_NO_THROW(checkHatFallbackFits(20000000, 0, "x"));
+  // 20M faces need about 24 GB: refused on an 8 GB machine, with both figures and the reason.
+  try {
+    checkHatFallbackFits(20000000, 8 * gb, "CHOLMOD: not positive definite");
+    FAIL() << "a 24 GB fallback was allowed with 8 GB available";
+  } catch (const SolverError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("24.0 GB for 20000000 faces"), std::string::npos) << message;
+    EXPECT_NE(message.find("8.0 GB available"), std::string::npos) << message;
+    EXPECT_NE(message.find("not positive definite"), std::string::npos) << message;
+  }
+  EXPECT_NO_THROW(checkHatFallbackFits(20000000, 25 * gb, "x"));
 }
 
 }  // namespace
