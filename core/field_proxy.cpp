@@ -97,33 +97,7 @@ Vec3d directionOf(Complex z, const Vec3d& e1, const Vec3d& e2) {
   return r.real() * e1 + r.imag() * e2;
 }
 
-/// Unit normals in 4 bytes: octahedral projection, 16 bits per coordinate (error ~1e-4 rad,
-/// ample for transporting a neighbour's direction). kNoNormal marks a zero-area face.
-constexpr std::uint32_t kNoNormal = 0x80008000u;
-std::uint32_t packNormal(const Vec3d& n, bool degenerate) {
-  if (degenerate) return kNoNormal;
-  const double l1 = std::abs(n.x()) + std::abs(n.y()) + std::abs(n.z());
-  double x = n.x() / l1, y = n.y() / l1;
-  if (n.z() < 0.0) {
-    const double fx = (1.0 - std::abs(y)) * (x < 0.0 ? -1.0 : 1.0);
-    y = (1.0 - std::abs(x)) * (y < 0.0 ? -1.0 : 1.0);
-    x = fx;
-  }
-  auto quantize = [](double v) {
-    return static_cast<std::uint32_t>(static_cast<std::uint16_t>(static_cast<std::int16_t>(std::lround(v * 32767.0))));
-  };
-  return quantize(x) | quantize(y) << 16;
-}
-Vec3d unpackNormal(std::uint32_t packed) {
-  Vec3d v(static_cast<std::int16_t>(packed & 0xffffu) / 32767.0, static_cast<std::int16_t>(packed >> 16) / 32767.0, 0.0);
-  v.z() = 1.0 - std::abs(v.x()) - std::abs(v.y());
-  if (v.z() < 0.0) {
-    const double fx = (1.0 - std::abs(v.y())) * (v.x() < 0.0 ? -1.0 : 1.0);
-    v.y() = (1.0 - std::abs(v.x())) * (v.y() < 0.0 ? -1.0 : 1.0);
-    v.x() = fx;
-  }
-  return v.normalized();
-}
+bool isZero(const Vec3f& n) { return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f; }
 
 /// Dual-edge weight |e| / |b_f - b_g|, bounded for needles and zero-length edges.
 double dualWeight(double edgeLength, const Vec3d& bf, const Vec3d& bg) {
@@ -424,7 +398,9 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   reportProgress(options.progress, "proxy field: transfer", 0.5);
   CrossField& field = result.field;
   field.direction.resize(numFaces);
-  std::vector<std::uint32_t> packedNormal(options.smoothingSweeps > 0 ? numFaces : 0);
+  // Unit normals as floats for the sweeps (zero for a zero-area face): 12 bytes per face, read
+  // 4 times per face and sweep without decoding.
+  std::vector<Vec3f> sweepNormal(options.smoothingSweeps > 0 ? numFaces : 0);
   const double radius = 2.0 * proxy.cellSize;
   tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 2048), [&](const auto& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
@@ -443,7 +419,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
         add(proxy.neighbours[i].first);
       }
       field.set(f, directionOf(sum, g.e1, g.e2));
-      if (!packedNormal.empty()) packedNormal[f] = packNormal(g.n, g.degenerate);
+      if (!sweepNormal.empty()) sweepNormal[f] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
     }
   });
   std::vector<std::uint32_t>().swap(proxy.faceElement);  // freed before the sweeps
@@ -452,24 +428,24 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   // race-free parallel loop and the result does not depend on the thread count.
   std::vector<std::uint8_t> colour;
   result.colours = options.smoothingSweeps > 0 ? colourFaces(topology, colour) : 0;
-  // A sweep reads only the corner table, the packed normals and the directions (unit weights):
+  // A sweep reads only the corner table, the float normals and the directions (unit weights):
   // memory traffic, not geometry. The exact tangent planes are restored once at the end.
   for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
     reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
     for (std::uint32_t k = 0; k < result.colours; ++k) {
       tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
         for (FaceId f = range.begin(); f != range.end(); ++f) {
-          if (colour[f] != k || packedNormal[f] == kNoNormal) continue;
-          const Vec3d n = unpackNormal(packedNormal[f]);
+          if (colour[f] != k || isZero(sweepNormal[f])) continue;
+          const Vec3d n = sweepNormal[f].cast<double>();
           // Frame with e1 = the current direction: the new one is the representative nearest it.
           const Vec3d u = field.at(f);
           const Vec3d v = n.cross(u);
           Complex sum = 0.0;
           for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
             const CornerId o = topology.opposite(c);
-            if (o == kInvalidId || packedNormal[cornerFace(o)] == kNoNormal) continue;
+            if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
             const FaceId g = cornerFace(o);
-            sum += fourthPower(rotateBetween(unpackNormal(packedNormal[g]), n, field.at(g)), u, v);
+            sum += fourthPower(rotateBetween(sweepNormal[g].cast<double>(), n, field.at(g)), u, v);
           }
           const Vec3d next = directionOf(sum, u, v);
           const Vec3d tangent = next - next.dot(n) * n;
@@ -482,7 +458,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   if (options.smoothingSweeps > 0) {
     tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
       for (FaceId f = range.begin(); f != range.end(); ++f) {
-        if (packedNormal[f] == kNoNormal) continue;
+        if (isZero(sweepNormal[f])) continue;
         const Vec3d n = faceNormal(mesh, f);
         const Vec3d u = field.at(f);
         const Vec3d tangent = u - u.dot(n) * n;
