@@ -3,12 +3,45 @@
 #include <cholmod.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "core/errors.h"
+#include "core/huge_pages.h"
 
 namespace seamvox {
+namespace {
+
+// CHOLMOD allocates through SuiteSparse_config: its large blocks (the factor, the workspace) get
+// the same huge-page advice as the command's own arrays (core/huge_pages.h).
+void* adviseMalloc(std::size_t size) {
+  void* p = std::malloc(size);
+  adviseHugePages(p, size);
+  return p;
+}
+void* adviseCalloc(std::size_t count, std::size_t size) {
+  void* p = std::calloc(count, size);
+  if (p && size != 0 && count <= ~std::size_t(0) / size) adviseHugePages(p, count * size);
+  return p;
+}
+void* adviseRealloc(void* old, std::size_t size) {
+  void* p = std::realloc(old, size);
+  adviseHugePages(p, size);
+  return p;
+}
+void useAdvisedAllocation() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    SuiteSparse_config.malloc_func = adviseMalloc;
+    SuiteSparse_config.calloc_func = adviseCalloc;
+    SuiteSparse_config.realloc_func = adviseRealloc;
+    SuiteSparse_config.free_func = std::free;
+  });
+}
+
+}  // namespace
 
 struct CholmodFactor::Impl {
   cholmod_common common;
@@ -17,6 +50,7 @@ struct CholmodFactor::Impl {
   std::int64_t n = 0;
   std::uint64_t factorBytes = 0, peakBytes = 0, nonzeros = 0;
   Impl() {
+    useAdvisedAllocation();
     cholmod_l_start(&common);
     common.print = 0;  // core never prints; failures become exceptions
     common.supernodal = CHOLMOD_SUPERNODAL;

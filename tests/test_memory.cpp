@@ -1,10 +1,15 @@
 // Resident memory figures (stream/memory) used in reports.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <memory>
 
 #include "core/errors.h"
+#include "core/huge_pages.h"
 #include "stream/memory.h"
 #include "stream/param_solver.h"
 
@@ -77,6 +82,40 @@ TEST(Memory, HatFallbackIsRefusedWhenItCannotFit) {
     EXPECT_NE(message.find("not positive definite"), std::string::npos) << message;
   }
   EXPECT_NO_THROW(checkHatFallbackFits(20000000, 25 * gb, "x"));
+}
+
+/// AnonHugePages of /proc/self/smaps_rollup in bytes, or -1 when unavailable.
+long long anonHugePageBytes() {
+  std::ifstream in("/proc/self/smaps_rollup");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("AnonHugePages:", 0) == 0) return std::stoll(line.substr(14)) * 1024;
+  }
+  return -1;
+}
+
+TEST(Memory, AdvisedBlocksGetHugePages) {
+  std::ifstream mode("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::stringstream text;
+  text << mode.rdbuf();
+  if (text.str().find("[never]") != std::string::npos || text.str().empty() || anonHugePageBytes() < 0) {
+    GTEST_SKIP() << "transparent huge pages are not available here";
+  }
+  const std::size_t bytes = std::size_t(16) << 20;
+  char* block = static_cast<char*>(std::malloc(bytes));
+  ASSERT_NE(block, nullptr);
+  const long long before = anonHugePageBytes();
+  adviseHugePages(block, bytes);
+  std::memset(block, 7, bytes);
+  const long long after = anonHugePageBytes();
+  EXPECT_EQ(block[bytes / 2], 7);
+  // At least one 2 MB page of the block's 2 MB-aligned interior (12 MB or more) is huge.
+  EXPECT_GE(after - before, 2ll << 20) << "before " << before << " after " << after;
+  std::free(block);
+  // Small blocks and null are left alone.
+  adviseHugePages(nullptr, bytes);
+  char small[64] = {};
+  adviseHugePages(small, sizeof small);
 }
 
 }  // namespace
