@@ -43,7 +43,7 @@ HatBasis::HatBasis(const TriangleMesh& mesh, const Topology& topology, const Cro
   if (!(edgeLength_ > 0.0) || !std::isfinite(edgeLength_)) {
     throw InputError("hat basis: edge length must be positive and finite");
   }
-  if (field.direction.size() != nf || cut.isCut.size() != 3u * nf || cut.faceRotation.size() != nf) {
+  if (field.direction.size() != nf || cut.corners.size() != 3u * nf || cut.faceRotation.size() != nf) {
     throw InputError("hat basis: field or cut sizes do not match the mesh (" +
                      std::to_string(nf) + " faces)");
   }
@@ -84,7 +84,7 @@ HatBasis::HatBasis(const TriangleMesh& mesh, const Topology& topology, const Cro
     auto separated = [&](std::size_t j) {  // is there a wedge border just before fan[j]?
       const CornerId before = j > 0 ? fan[j - 1] : fan[m - 1];
       if (j == 0 && !closed) return true;
-      return cut.isCut[nextCorner(before)] != 0 || !inSubset[cornerFace(before)] ||
+      return cut.corners.isCut(nextCorner(before)) || !inSubset[cornerFace(before)] ||
              !inSubset[cornerFace(fan[j])];
     };
     std::size_t start = 0;

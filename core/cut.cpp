@@ -11,12 +11,12 @@ namespace seamvox {
 namespace {
 
 /// The cut edge at v (a corner of a face around v whose edge is cut and touches v), or kInvalidId.
-CornerId findCutEdgeAt(const Topology& topology, const std::vector<std::uint8_t>& isCut, VertexId v) {
+CornerId findCutEdgeAt(const Topology& topology, const CutCorners& corners, VertexId v) {
   CornerId found = kInvalidId;
   topology.forEachCornerAround(v, [&](CornerId c) {
     if (found != kInvalidId) return;
-    if (isCut[prevCorner(c)]) found = prevCorner(c);       // edge v -> vertex(next c)
-    else if (isCut[nextCorner(c)]) found = nextCorner(c);  // edge vertex(prev c) -> v
+    if (corners.isCut(prevCorner(c))) found = prevCorner(c);       // edge v -> vertex(next c)
+    else if (corners.isCut(nextCorner(c))) found = nextCorner(c);  // edge vertex(prev c) -> v
   });
   return found;
 }
@@ -28,7 +28,7 @@ std::uint32_t buildDualTree(const Topology& topology, const FieldSingularities& 
                             CutResult& cut, std::vector<std::uint32_t>& faceComponent) {
   const std::uint32_t numFaces = topology.numFaces();
   constexpr std::uint8_t kUnvisited = 0xff;
-  cut.isCut.assign(3 * std::size_t(numFaces), 1);
+  cut.corners = CutCorners(3 * std::size_t(numFaces), true);
   cut.faceRotation.assign(numFaces, kUnvisited);
   faceComponent.assign(numFaces, kInvalidId);
   std::vector<FaceId> queue;
@@ -48,7 +48,8 @@ std::uint32_t buildDualTree(const Topology& topology, const FieldSingularities& 
         if (cut.faceRotation[g] != kUnvisited) continue;
         cut.faceRotation[g] = static_cast<std::uint8_t>((cut.faceRotation[f] + 4 - singularities.matching[c]) % 4);
         faceComponent[g] = numComponents;
-        cut.isCut[c] = cut.isCut[o] = 0;
+        cut.corners.setCut(c, false);
+        cut.corners.setCut(o, false);
         queue.push_back(g);
       }
     }
@@ -62,13 +63,13 @@ std::uint32_t buildDualTree(const Topology& topology, const FieldSingularities& 
 /// its cut surface is a disk (the sphere slit along that edge). Returns the cut-degree per vertex.
 std::vector<std::uint32_t> pruneCut(const Topology& topology, const std::vector<std::uint8_t>& isCone,
                                     const std::vector<std::uint32_t>& faceComponent,
-                                    std::uint32_t numComponents, std::vector<std::uint8_t>& isCut) {
+                                    std::uint32_t numComponents, CutCorners& corners) {
   const std::uint32_t numVertices = topology.numVertices();
   std::vector<std::uint32_t> degree(numVertices, 0);
   std::vector<std::uint64_t> remaining(numComponents, 0);
   for (CornerId c = 0; c < topology.numCorners(); ++c) {
     const CornerId o = topology.opposite(c);
-    if (!isCut[c] || (o != kInvalidId && o < c)) continue;
+    if (!corners.isCut(c) || (o != kInvalidId && o < c)) continue;
     ++degree[topology.vertex(nextCorner(c))];
     ++degree[topology.vertex(prevCorner(c))];
     ++remaining[faceComponent[cornerFace(c)]];
@@ -81,13 +82,14 @@ std::vector<std::uint32_t> pruneCut(const Topology& topology, const std::vector<
     const VertexId v = stack.back();
     stack.pop_back();
     if (degree[v] != 1) continue;
-    const CornerId e = findCutEdgeAt(topology, isCut, v);
+    const CornerId e = findCutEdgeAt(topology, corners, v);
     const CornerId o = topology.opposite(e);
     if (e == kInvalidId || o == kInvalidId) continue;  // boundary edges are never pruned
     std::uint64_t& left = remaining[faceComponent[cornerFace(e)]];
     if (left == 1) continue;
     --left;
-    isCut[e] = isCut[o] = 0;
+    corners.setCut(e, false);
+    corners.setCut(o, false);
     const VertexId a = topology.vertex(nextCorner(e)), b = topology.vertex(prevCorner(e));
     const VertexId w = a == v ? b : a;
     --degree[v];
@@ -104,10 +106,10 @@ void traceSeam(const Topology& topology, CornerId first, const std::vector<std::
   const std::uint32_t id = static_cast<std::uint32_t>(cut.seams.size());
   SeamCurve seam;
   seam.start = topology.vertex(nextCorner(first));
-  seam.matching = cut.combedMatching[first];
+  seam.matching = cut.corners.matching(first);
   CornerId c = first;
   while (true) {
-    if (cut.combedMatching[c] != seam.matching) {
+    if (cut.corners.matching(c) != seam.matching) {
       throw TopologyError("cutToDisk: seam " + std::to_string(id) + " changes rotation at vertex " +
                           std::to_string(topology.vertex(nextCorner(c))) +
                           " (a cone missing from the singularities?)");
@@ -123,7 +125,7 @@ void traceSeam(const Topology& topology, CornerId first, const std::vector<std::
     CornerId next = kInvalidId;
     topology.forEachCornerAround(w, [&](CornerId k) {
       const CornerId out = prevCorner(k);
-      if (next == kInvalidId && cut.isCut[out] && !traced[out]) next = out;
+      if (next == kInvalidId && cut.corners.isCut(out) && !traced[out]) next = out;
     });
     if (next == kInvalidId || topology.opposite(next) == kInvalidId) {
       throw TopologyError("cutToDisk: seam " + std::to_string(id) + " breaks off at vertex " +
@@ -158,18 +160,17 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
   const std::uint32_t numComponents = buildDualTree(topology, singularities, cut, faceComponent);
   reportProgress(options.progress, "cut: prune", 0.3);
   const std::vector<std::uint32_t> degree =
-      pruneCut(topology, isCone, faceComponent, numComponents, cut.isCut);
+      pruneCut(topology, isCone, faceComponent, numComponents, cut.corners);
 
   // Combed matching k + r_g - r_f (field.h, cut.h): zero across every tree edge.
   reportProgress(options.progress, "cut: comb", 0.6);
-  cut.combedMatching.assign(3 * std::size_t(numFaces), 0);
   for (CornerId c = 0; c < topology.numCorners(); ++c) {
     const CornerId o = topology.opposite(c);
     if (o == kInvalidId) continue;
     const std::uint8_t k = static_cast<std::uint8_t>(
         (singularities.matching[c] + cut.faceRotation[cornerFace(o)] + 4 - cut.faceRotation[cornerFace(c)]) % 4);
-    cut.combedMatching[c] = k;
-    if (k != 0 && !cut.isCut[c]) {
+    cut.corners.setMatching(c, k);
+    if (k != 0 && !cut.corners.isCut(c)) {
       // Only a vertex of nonzero index can leave a rotation on a pruned edge.
       throw TopologyError("cutToDisk: the matchings around vertex " +
                           std::to_string(topology.vertex(nextCorner(c))) + " or " +
@@ -186,7 +187,7 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
   }
   std::vector<bool> traced(topology.numCorners(), false);
   auto startsSeam = [&](CornerId c) {
-    return cut.isCut[c] && topology.opposite(c) != kInvalidId && !traced[c];
+    return cut.corners.isCut(c) && topology.opposite(c) != kInvalidId && !traced[c];
   };
   for (VertexId v = 0; v < numVertices; ++v) {
     if (!isNode[v] || degree[v] == 0) continue;

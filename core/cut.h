@@ -7,7 +7,7 @@
 ///   vertex(prev c_j)) is traversed in the curve's direction. The RIGHT face of that edge is
 ///   face(opposite(c_j)).
 /// * After combing, the combed direction of face f is rot^faceRotation[f](field.direction[f]) and
-///   combedMatching[c] is the matching (field.h) between combed directions: 0 across every
+///   corners.matching(c) is the matching (field.h) between combed directions: 0 across every
 ///   non-cut edge, and the same value k on every edge of one seam curve (asserted).
 /// * Map across a seam (the solver's convention): crossing from the left face to the right face,
 ///   q_right = r q_left + t with r = i^(-k) = conj(i^k), k = seam.matching, t in Z + iZ.
@@ -32,10 +32,33 @@ struct CutOptions {
   ProgressFn progress;
 };
 
+/// Per corner, one byte: whether the edge of corner c is cut (boundary edges included) and the
+/// combed matching across it (0 on every non-cut edge). 3 #F bytes.
+class CutCorners {
+ public:
+  CutCorners() = default;
+  /// n corners, every edge cut or none, matchings 0.
+  CutCorners(std::size_t n, bool cut) : bits_(n, cut ? kCutBit : 0) {}
+  std::size_t size() const { return bits_.size(); }
+  bool isCut(CornerId c) const { return (bits_[c] & kCutBit) != 0; }
+  std::uint8_t matching(CornerId c) const { return bits_[c] & kMatchingBits; }
+  void setCut(CornerId c, bool cut) {
+    bits_[c] = static_cast<std::uint8_t>(cut ? bits_[c] | kCutBit : bits_[c] & ~kCutBit);
+  }
+  /// k in 0..3 (taken mod 4).
+  void setMatching(CornerId c, std::uint8_t k) {
+    bits_[c] = static_cast<std::uint8_t>((bits_[c] & ~kMatchingBits) | (k & kMatchingBits));
+  }
+  std::size_t memoryBytes() const { return bits_.capacity(); }
+
+ private:
+  static constexpr std::uint8_t kMatchingBits = 3, kCutBit = 4;
+  std::vector<std::uint8_t> bits_;
+};
+
 struct CutResult {
-  std::vector<std::uint8_t> isCut;           ///< 3 #F: edge of corner c is cut (boundary incl.)
+  CutCorners corners;                        ///< 3 #F: cut flag and combed matching per corner
   std::vector<std::uint8_t> faceRotation;    ///< #F, quarter turns applied by combing
-  std::vector<std::uint8_t> combedMatching;  ///< 3 #F, matching after combing
   std::vector<SeamCurve> seams;
   std::vector<VertexId> cones;  ///< copy of the field's cones; every one lies on the cut
 };

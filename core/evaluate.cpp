@@ -11,7 +11,7 @@ namespace {
 /// has one (at the fan's start on the boundary), and f(kInvalidId) after every cut edge crossed:
 /// the wedge boundaries.
 template <class F>
-void walkWedges(const Topology& topology, const std::vector<std::uint8_t>& isCut, VertexId v, F&& f) {
+void walkWedges(const Topology& topology, const CutCorners& corners, VertexId v, F&& f) {
   CornerId start = topology.vertexCorner(v);
   if (start == kInvalidId) return;
   // The edge between corner c and ccw(c) is the edge of next(c) (topology.h).
@@ -19,7 +19,7 @@ void walkWedges(const Topology& topology, const std::vector<std::uint8_t>& isCut
     const CornerId fanStart = start;
     CornerId c = fanStart;
     do {
-      if (isCut[nextCorner(c)]) {
+      if (corners.isCut(nextCorner(c))) {
         start = topology.ccw(c);
         break;
       }
@@ -29,7 +29,7 @@ void walkWedges(const Topology& topology, const std::vector<std::uint8_t>& isCut
   CornerId c = start;
   do {
     f(c);
-    if (isCut[nextCorner(c)]) f(kInvalidId);
+    if (corners.isCut(nextCorner(c))) f(kInvalidId);
     c = topology.ccw(c);
   } while (c != kInvalidId && c != start);
 }
@@ -38,7 +38,7 @@ void walkWedges(const Topology& topology, const std::vector<std::uint8_t>& isCut
 
 WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
   const std::uint32_t nv = topology.numVertices();
-  const std::vector<std::uint8_t>& isCut = cut.isCut;
+  const CutCorners& corners = cut.corners;
   // Wedges per vertex (a fan with k > 0 cut edges has k wedges, unless it is a boundary fan,
   // whose last edge is a boundary edge), then one prefix sum, then the numbering.
   std::vector<std::uint32_t> first(nv + std::size_t(1), 0);
@@ -46,7 +46,7 @@ WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       std::uint32_t wedges = 0;
       bool open = false;
-      walkWedges(topology, isCut, v, [&](CornerId c) {
+      walkWedges(topology, corners, v, [&](CornerId c) {
         if (c == kInvalidId) {
           open = false;
         } else if (!open) {
@@ -63,7 +63,7 @@ WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       std::uint32_t w = first[v];
       bool open = false;
-      walkWedges(topology, isCut, v, [&](CornerId c) {
+      walkWedges(topology, corners, v, [&](CornerId c) {
         if (c == kInvalidId) {
           if (open) ++w;
           open = false;

@@ -237,9 +237,8 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
                          const CrossField& field, const CutResult& cut,
                          const std::vector<FaceId>& regionFaces) {
   const FaceId nf = topology.numFaces();
-  if (field.direction.size() != nf || cut.isCut.size() != 3u * nf ||
-      cut.faceRotation.size() != nf || cut.combedMatching.size() != 3u * nf ||
-      mesh.numFaces() != nf) {
+  if (field.direction.size() != nf || cut.corners.size() != 3u * nf ||
+      cut.faceRotation.size() != nf || mesh.numFaces() != nf) {
     throw InputError("refine: field or cut sizes do not match the mesh (" + std::to_string(nf) +
                      " faces)");
   }
@@ -307,9 +306,8 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
   std::vector<CornerId> opposite(3u * rf);
   out.field.direction.resize(rf);
   CutResult& subCut = out.cut;
-  subCut.isCut.resize(3u * rf);
+  subCut.corners = CutCorners(3u * rf, false);
   subCut.faceRotation.resize(rf);
-  subCut.combedMatching.resize(3u * rf);
   for (std::uint32_t i = 0; i < rf; ++i) {
     const FaceId f = regionFaces[i];
     out.field.direction[i] = field.direction[f];
@@ -318,8 +316,8 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
       const CornerId c = 3 * f + k, sc = 3 * i + k;
       sub.triangles[i][k] = cornerVertex[sc];
       opposite[sc] = subCorner(topology.opposite(c));
-      subCut.isCut[sc] = cut.isCut[c] || opposite[sc] == kInvalidId ? 1 : 0;
-      subCut.combedMatching[sc] = cut.combedMatching[c];
+      subCut.corners.setCut(sc, cut.corners.isCut(c) || opposite[sc] == kInvalidId);
+      subCut.corners.setMatching(sc, cut.corners.matching(c));
     }
   }
   // Seams: the edges with both faces in the region, in curve order, under local ids.

@@ -116,7 +116,7 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   if (!(options.edgeLength > 0.0) || !std::isfinite(options.edgeLength)) {
     throw InputError("voxel basis: edge length must be positive and finite");
   }
-  if (mesh.numFaces() != nf || field.direction.size() != nf || cut.isCut.size() != 3u * nf ||
+  if (mesh.numFaces() != nf || field.direction.size() != nf || cut.corners.size() != 3u * nf ||
       cut.faceRotation.size() != nf) {
     throw InputError("voxel basis: mesh, field or cut sizes do not match the topology (" +
                      std::to_string(nf) + " faces)");
@@ -162,7 +162,7 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
         const VoxelFragment& fr = fragments[voxelFragments[begin + i]];
         for (int j = 0; j < 3; ++j) {
           const CornerId c = 3 * fr.face + j;
-          if (!(fr.edgeMask >> j & 1) || cut.isCut[c]) continue;
+          if (!(fr.edgeMask >> j & 1) || cut.corners.isCut(c)) continue;
           const CornerId o = topology.opposite(c);
           if (o == kInvalidId) continue;
           const auto it = std::lower_bound(faces.begin(), faces.end(), cornerFace(o));
@@ -257,7 +257,7 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
         const CornerId c = 3 * f + j;
         const CornerId o = topology.opposite(c);
         if (!(fr.edgeMask >> j & 1) || o == kInvalidId || cornerFace(o) < f) continue;
-        const bool isCut = cut.isCut[c] != 0;
+        const bool isCut = cut.corners.isCut(c);
         const SeamIndex::Side side = isCut ? seamIndex.find(c) : SeamIndex::Side{};
         if (isCut && side.seam == kInvalidId) continue;
         const FaceId h = cornerFace(o);

@@ -45,9 +45,9 @@ void expectCutIsDiskPerComponent(const Surface& s, const CutResult& cut, const s
   for (CornerId c = 0; c < numCorners; ++c) {
     const CornerId o = t.opposite(c);
     if (o == kInvalidId) continue;
-    ASSERT_EQ(cut.isCut[c], cut.isCut[o]) << what;
+    ASSERT_EQ(cut.corners.isCut(c), cut.corners.isCut(o)) << what;
     faces.unite(cornerFace(c), cornerFace(o));
-    if (cut.isCut[c]) continue;
+    if (cut.corners.isCut(c)) continue;
     // The edge of c joins vertex(next c) and vertex(prev c) in both faces.
     wedges.unite(nextCorner(c), prevCorner(o));
     wedges.unite(prevCorner(c), nextCorner(o));
@@ -65,7 +65,7 @@ void expectCutIsDiskPerComponent(const Surface& s, const CutResult& cut, const s
     }
     if (c % 3 == 0) chi[comp] += 1;
     const CornerId o = t.opposite(c);
-    if (o == kInvalidId || cut.isCut[c]) {
+    if (o == kInvalidId || cut.corners.isCut(c)) {
       chi[comp] -= 1;  // each side of a cut edge is an edge of the cut mesh
       const std::uint32_t from = wedges.find(nextCorner(c)), to = wedges.find(prevCorner(c));
       ASSERT_EQ(boundaryNext.count(from), 0u) << what << ": cut mesh not a manifold at a wedge";
@@ -100,7 +100,7 @@ void expectCombedSeams(const Surface& s, const CrossField& field, const FieldSin
   const Topology& t = s.topology;
   std::vector<std::uint32_t> cutDegree(t.numVertices(), 0);
   for (CornerId c = 0; c < t.numCorners(); ++c) {
-    if (cut.isCut[c]) ++cutDegree[t.vertex(nextCorner(c))];
+    if (cut.corners.isCut(c)) ++cutDegree[t.vertex(nextCorner(c))];
   }
   for (VertexId v : sing.cones) EXPECT_GT(cutDegree[v], 0u) << what << ": cone " << v << " off the cut";
   EXPECT_EQ(cut.cones, sing.cones);
@@ -117,13 +117,13 @@ void expectCombedSeams(const Surface& s, const CrossField& field, const FieldSin
   for (CornerId c = 0; c < t.numCorners(); ++c) {
     const CornerId o = t.opposite(c);
     if (o == kInvalidId) {
-      EXPECT_TRUE(cut.isCut[c]) << what;
+      EXPECT_TRUE(cut.corners.isCut(c)) << what;
       EXPECT_EQ(seamIndex.seamOf(c), kInvalidId) << what;
       continue;
     }
-    ASSERT_EQ(cut.combedMatching[c], recomputed.matching[c]) << what << ": corner " << c;
-    if (!cut.isCut[c]) {
-      ASSERT_EQ(cut.combedMatching[c], 0) << what << ": corner " << c;
+    ASSERT_EQ(cut.corners.matching(c), recomputed.matching[c]) << what << ": corner " << c;
+    if (!cut.corners.isCut(c)) {
+      ASSERT_EQ(cut.corners.matching(c), 0) << what << ": corner " << c;
       EXPECT_EQ(seamIndex.seamOf(c), kInvalidId) << what;
     } else {
       const SeamIndex::Side side = seamIndex.find(c), other = seamIndex.find(o);
@@ -142,7 +142,7 @@ void expectCombedSeams(const Surface& s, const CrossField& field, const FieldSin
       const CornerId c = seam.corners[j];
       EXPECT_EQ(seamIndex.seamOf(c), id);
       EXPECT_TRUE(seamIndex.find(c).left);
-      EXPECT_EQ(cut.combedMatching[c], seam.matching) << what << ": seam " << id;
+      EXPECT_EQ(cut.corners.matching(c), seam.matching) << what << ": seam " << id;
       if (j > 0) EXPECT_EQ(t.vertex(nextCorner(c)), t.vertex(prevCorner(seam.corners[j - 1])));
       if (j + 1 < seam.corners.size()) {  // inner vertices: plain path points
         const VertexId v = t.vertex(prevCorner(c));
@@ -154,7 +154,7 @@ void expectCombedSeams(const Surface& s, const CrossField& field, const FieldSin
     seamCorners += seam.corners.size();
   }
   std::size_t cutInterior = 0;
-  for (CornerId c = 0; c < t.numCorners(); ++c) cutInterior += cut.isCut[c] && t.opposite(c) != kInvalidId;
+  for (CornerId c = 0; c < t.numCorners(); ++c) cutInterior += cut.corners.isCut(c) && t.opposite(c) != kInvalidId;
   EXPECT_EQ(2 * seamCorners, cutInterior) << what << ": seams must cover each cut edge once";
 }
 
@@ -213,8 +213,32 @@ TEST(Cut, ClosedSphereWithAtMostOneConeKeepsOneEdge) {
     ASSERT_EQ(cut.seams.size(), 1u);
     ASSERT_EQ(cut.seams[0].corners.size(), 1u);
     if (cones) EXPECT_TRUE(cut.seams[0].start == 7 || cut.seams[0].end == 7);
-    for (std::uint8_t k : cut.combedMatching) EXPECT_EQ(k, 0);
+    for (CornerId c = 0; c < cut.corners.size(); ++c) EXPECT_EQ(cut.corners.matching(c), 0);
   }
+}
+
+TEST(Cut, PackedCornerFlagsKeepCutAndMatchingApart) {
+  // One byte per corner holds both: every sequence of edits reads back like two separate arrays.
+  CutCorners packed(64, true);
+  std::vector<bool> cut(64, true);
+  std::vector<std::uint8_t> matching(64, 0);
+  std::uint32_t state = 12345;
+  for (int step = 0; step < 2000; ++step) {
+    state = state * 1664525u + 1013904223u;
+    const CornerId c = (state >> 8) % 64;
+    if ((state >> 20) & 1) {
+      cut[c] = (state >> 21) & 1;
+      packed.setCut(c, cut[c]);
+    } else {
+      matching[c] = (state >> 21) & 3;
+      packed.setMatching(c, static_cast<std::uint8_t>((state >> 21) & 7));  // taken mod 4
+    }
+    for (CornerId k = 0; k < 64; ++k) {
+      ASSERT_EQ(packed.isCut(k), cut[k]) << "step " << step;
+      ASSERT_EQ(packed.matching(k), matching[k]) << "step " << step;
+    }
+  }
+  EXPECT_EQ(packed.memoryBytes(), 64u);  // one byte per corner
 }
 
 TEST(Cut, SeamIndexRejectsCornersOffInteriorEdges) {

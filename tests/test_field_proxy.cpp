@@ -47,7 +47,7 @@ void expectCutIsDisk(const Surface& s, const CutResult& cut, const std::string& 
     const std::uint32_t k = comps.faceComponent[cornerFace(c)];
     if (c % 3 == 0) chi[k] += 1;
     const CornerId o = t.opposite(c);
-    if (o == kInvalidId || cut.isCut[c]) {
+    if (o == kInvalidId || cut.corners.isCut(c)) {
       chi[k] -= 1;  // each side of a cut edge, and a boundary edge, once
     } else if (c < o) {
       chi[k] -= 1;
@@ -59,7 +59,7 @@ void expectCutIsDisk(const Surface& s, const CutResult& cut, const std::string& 
     std::int64_t cutEdges = 0;
     t.forEachCornerAround(v, [&](CornerId c) {
       const CornerId e = nextCorner(c);  // edge from v to the next vertex of the fan
-      if (t.opposite(e) != kInvalidId && cut.isCut[e]) ++cutEdges;
+      if (t.opposite(e) != kInvalidId && cut.corners.isCut(e)) ++cutEdges;
     });
     const bool boundary = t.isBoundaryVertex(v);
     chi[comps.faceComponent[cornerFace(t.vertexCorner(v))]] +=

@@ -33,10 +33,9 @@ using Complex = std::complex<double>;
 CutResult boundaryCut(const Topology& topology) {
   CutResult cut;
   const std::uint32_t nc = topology.numCorners();
-  cut.isCut.assign(nc, 0);
+  cut.corners = CutCorners(nc, false);
   cut.faceRotation.assign(topology.numFaces(), 0);
-  cut.combedMatching.assign(nc, 0);
-  for (CornerId c = 0; c < nc; ++c) cut.isCut[c] = topology.isBoundaryEdge(c) ? 1 : 0;
+  for (CornerId c = 0; c < nc; ++c) cut.corners.setCut(c, topology.isBoundaryEdge(c));
   return cut;
 }
 
@@ -61,7 +60,7 @@ CutResult cylinderCut(const Topology& topology, int n, int m) {
   EXPECT_EQ(upward.size(), static_cast<std::size_t>(m));
   for (const auto& [v, c] : upward) {
     seam.corners.push_back(c);
-    for (CornerId side : {c, topology.opposite(c)}) cut.isCut[side] = 1;
+    for (CornerId side : {c, topology.opposite(c)}) cut.corners.setCut(side, true);
   }
   seam.start = upward.front().first;
   seam.end = static_cast<VertexId>(m * n);
@@ -204,7 +203,7 @@ TEST(HatSolver, SeveralComponentsEachPinned) {
     const CornerId offset = 3 * a.numFaces();
     for (CornerId& c : seam.corners) {
       c += offset;
-      for (CornerId side : {c, topology.opposite(c)}) cut.isCut[side] = 1;
+      for (CornerId side : {c, topology.opposite(c)}) cut.corners.setCut(side, true);
     }
     cut.seams.push_back(seam);
   }

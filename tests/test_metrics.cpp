@@ -34,20 +34,19 @@ SplitGrid splitGrid(int n, Complex r, Complex t, std::uint8_t matching) {
     for (VertexId v : g.mesh.triangles[f]) x += g.mesh.positions[v].x();
     return x / 3;
   };
-  g.cut.isCut.assign(g.topology.numCorners(), 0);
+  g.cut.corners = CutCorners(g.topology.numCorners(), false);
   g.cut.faceRotation.assign(g.topology.numFaces(), 0);
-  g.cut.combedMatching.assign(g.topology.numCorners(), 0);
   SeamCurve seam;
   seam.matching = matching;
   for (CornerId c = 0; c < g.topology.numCorners(); ++c) {
     const CornerId o = g.topology.opposite(c);
     if (o == kInvalidId) {
-      g.cut.isCut[c] = 1;
+      g.cut.corners.setCut(c, true);
       continue;
     }
     const bool leftHere = faceCenterX(c / 3) < middle, leftThere = faceCenterX(o / 3) < middle;
     if (leftHere && !leftThere) seam.corners.push_back(c);
-    if (leftHere != leftThere) g.cut.isCut[c] = 1;
+    if (leftHere != leftThere) g.cut.corners.setCut(c, true);
   }
   g.cut.seams.push_back(seam);
   std::vector<Vec2d> values(g.topology.numCorners());

@@ -318,7 +318,7 @@ TEST_F(RefineSphere, TranslationsAmongFreeVerticesAreSolvedAgain) {
   ASSERT_GT(moved, 0u);
   std::vector<std::uint8_t> onCut(topology.numVertices(), 0);
   for (CornerId c = 0; c < topology.numCorners(); ++c) {
-    if (s.cut.isCut[c]) onCut[topology.vertex(nextCorner(c))] = onCut[topology.vertex(prevCorner(c))] = 1;
+    if (s.cut.corners.isCut(c)) onCut[topology.vertex(nextCorner(c))] = onCut[topology.vertex(prevCorner(c))] = 1;
   }
   std::vector<VertexId> cutVertices;
   for (VertexId v = 0; v < topology.numVertices(); ++v) {
@@ -401,10 +401,9 @@ TEST_F(RefineSphere, ExtractedRegionIsAManifoldSubMeshWithIndexMaps) {
 // A flat mesh's cut: its boundary only (no seams, no combing), and a field along x.
 CutResult boundaryCut(const Topology& topology) {
   CutResult cut;
-  cut.isCut.assign(topology.numCorners(), 0);
-  for (CornerId c = 0; c < topology.numCorners(); ++c) cut.isCut[c] = topology.isBoundaryEdge(c);
+  cut.corners = CutCorners(topology.numCorners(), false);
+  for (CornerId c = 0; c < topology.numCorners(); ++c) cut.corners.setCut(c, topology.isBoundaryEdge(c));
   cut.faceRotation.assign(topology.numFaces(), 0);
-  cut.combedMatching.assign(topology.numCorners(), 0);
   return cut;
 }
 CrossField constantField(const TriangleMesh& mesh) {

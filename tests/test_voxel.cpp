@@ -46,10 +46,9 @@ CutMesh makeSetup(TriangleMesh mesh, const Vec3d& direction) {
   std::vector<Vec3d> vectors(s.mesh.numFaces(), direction);
   s.field = projectToTangent(s.mesh, vectors);
   const std::uint32_t nc = s.topology.numCorners();
-  s.cut.isCut.assign(nc, 0);
+  s.cut.corners = CutCorners(nc, false);
   s.cut.faceRotation.assign(s.mesh.numFaces(), 0);
-  s.cut.combedMatching.assign(nc, 0);
-  for (CornerId c = 0; c < nc; ++c) s.cut.isCut[c] = s.topology.isBoundaryEdge(c);
+  for (CornerId c = 0; c < nc; ++c) s.cut.corners.setCut(c, s.topology.isBoundaryEdge(c));
   return s;
 }
 
@@ -62,7 +61,7 @@ void addSeam(CutMesh& s, F isSeamEdge) {
     const VertexId a = s.topology.vertex(nextCorner(c)), b = s.topology.vertex(prevCorner(c));
     if (s.topology.isBoundaryEdge(c) || !isSeamEdge(a, b)) continue;
     seam.corners.push_back(c);
-    for (CornerId side : {c, s.topology.opposite(c)}) s.cut.isCut[side] = 1;
+    for (CornerId side : {c, s.topology.opposite(c)}) s.cut.corners.setCut(side, true);
   }
   ASSERT_FALSE(seam.corners.empty());
   s.cut.seams.push_back(seam);

@@ -152,9 +152,9 @@ TEST(WedgeMap, CutWedgesAreTheHatDomains) {
     std::uint32_t cuts = 0;
     s.topology.forEachCornerAround(v, [&](CornerId c) {
       const CornerId next = s.topology.ccw(c);
-      cuts += cut.isCut[nextCorner(c)];
+      cuts += cut.corners.isCut(nextCorner(c));
       if (next == kInvalidId) return;
-      if (!cut.isCut[nextCorner(c)]) EXPECT_EQ(wedges.wedge(c), wedges.wedge(next)) << "vertex " << v;
+      if (!cut.corners.isCut(nextCorner(c))) EXPECT_EQ(wedges.wedge(c), wedges.wedge(next)) << "vertex " << v;
     });
     std::vector<std::uint32_t> seen;
     s.topology.forEachCornerAround(v, [&](CornerId c) {

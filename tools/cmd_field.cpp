@@ -159,7 +159,7 @@ int runField(Args& args) {
   std::uint64_t cutEdges = 0, seamEdges = 0;
   for (CornerId c = 0; c < topology.numCorners(); ++c) {
     const CornerId o = topology.opposite(c);
-    if (cut.isCut[c] && (o == kInvalidId || c < o)) ++cutEdges;
+    if (cut.corners.isCut(c) && (o == kInvalidId || c < o)) ++cutEdges;
   }
   for (const SeamCurve& s : cut.seams) seamEdges += s.corners.size();
   double total = 0.0;
