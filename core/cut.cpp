@@ -21,9 +21,9 @@ CornerId findCutEdgeAt(const Topology& topology, const CutCorners& corners, Vert
   return found;
 }
 
-/// Dual spanning tree by BFS per component. Fills isCut (every edge not crossed by the tree,
-/// boundary included), faceRotation (combing: r_g = r_f - matching) and the component of each
-/// face; returns the number of components.
+/// Dual spanning tree by BFS per component. Fills the cut flags (every edge not crossed by the
+/// tree, boundary included), faceRotation (combing: r_g = r_f - matching) and the component of
+/// each face; returns the number of components.
 std::uint32_t buildDualTree(const Topology& topology, const FieldSingularities& singularities,
                             CutResult& cut, std::vector<std::uint32_t>& faceComponent) {
   const std::uint32_t numFaces = topology.numFaces();

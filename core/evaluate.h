@@ -10,7 +10,8 @@
 namespace seamvox {
 
 /// The wedges of the cut mesh, values zero: the corners of a vertex between consecutive cut
-/// edges (cut.h CutCorners::isCut, boundary included) form one wedge; a vertex without cut edges has one.
+/// edges (cut.h CutCorners::isCut, boundary included) form one wedge; a vertex without cut
+/// edges has one.
 /// Wedges are numbered vertex by vertex. Linear time, parallel; 4 bytes per vertex besides the map.
 WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut);
 
