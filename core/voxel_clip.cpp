@@ -217,38 +217,81 @@ void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, 
                           const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc,
                           double normalWeight, double* normalAcc) {
   if (fragment.size < 3) return;
+  // B-spline k = (i, j, l) (bits 0, 1, 2 of k) has the 3D gradient
+  //   g_k = (s_i Y_j Z_l, X_i s_j Z_l, X_i Y_j s_l),  X_0 = 1 - x, X_1 = x, s_0 = -1, s_1 = +1,
+  // so <g_a, g_b> = s s' (YZ)(YZ)' + s s' (XZ)(XZ)' + s s' (XY)(XY)': over the fragment only the
+  // integrals of the 10 distinct products of each pair of bilinear weights are needed (30 in
+  // all), and the 36 pairs are assembled once per fragment. The normal part (n . g_a)(n . g_b)
+  // has no such structure and is integrated pair by pair.
+  double yz[10] = {}, xz[10] = {}, xy[10] = {}, normal[36] = {};
+  Vec3d gradientSum[8];  // integrals of g_k (dotted with u and v at the end)
+  for (Vec3d& g : gradientSum) g = Vec3d::Zero();
   const Vec3d base(voxel[0], voxel[1], voxel[2]);
-  const Vec3d v = n.cross(u);
-  const double rhsScale = voxelSize / edgeLength;
   const Vec3d p0 = fragment.point[0] - base;
+  bool any = false;
   for (int i = 1; i + 1 < fragment.size; ++i) {
     const Vec3d p1 = fragment.point[i] - base, p2 = fragment.point[i + 1] - base;
     const double area = 0.5 * (p1 - p0).cross(p2 - p0).norm();
     if (!(area > 0.0)) continue;
+    any = true;
     acc.area += area * voxelSize * voxelSize;
     for (const TrianglePoint& q : kRule) {
       const Vec3d t = q.a * p0 + q.b * p1 + q.c * p2;
       const double w = q.w * area;
-      // Tangential gradients of the 8 B-splines.
-      Vec3d grad[8];
-      double normal[8];
-      for (int k = 0; k < 8; ++k) {
-        const double fx = (k & 1) ? t[0] : 1.0 - t[0], dx = (k & 1) ? 1.0 : -1.0;
-        const double fy = (k & 2) ? t[1] : 1.0 - t[1], dy = (k & 2) ? 1.0 : -1.0;
-        const double fz = (k & 4) ? t[2] : 1.0 - t[2], dz = (k & 4) ? 1.0 : -1.0;
-        const Vec3d g(dx * fy * fz, fx * dy * fz, fx * fy * dz);
-        normal[k] = n.dot(g);
-        grad[k] = g - n * normal[k];
-      }
+      const double X[2] = {1.0 - t[0], t[0]}, Y[2] = {1.0 - t[1], t[1]}, Z[2] = {1.0 - t[2], t[2]};
+      // Bilinear weights indexed by (bit of the first axis) + 2 (bit of the second).
+      const double byz[4] = {Y[0] * Z[0], Y[1] * Z[0], Y[0] * Z[1], Y[1] * Z[1]};
+      const double bxz[4] = {X[0] * Z[0], X[1] * Z[0], X[0] * Z[1], X[1] * Z[1]};
+      const double bxy[4] = {X[0] * Y[0], X[1] * Y[0], X[0] * Y[1], X[1] * Y[1]};
       int idx = 0;
-      for (int a = 0; a < 8; ++a) {
-        for (int b = a; b < 8; ++b, ++idx) {
-          acc.stiffness[idx] += w * (grad[a].dot(grad[b]) + normalWeight * normal[a] * normal[b]);
-          if (normalAcc) normalAcc[idx] += w * normal[a] * normal[b];
+      for (int a = 0; a < 4; ++a) {
+        const double wyz = w * byz[a], wxz = w * bxz[a], wxy = w * bxy[a];
+        for (int b = a; b < 4; ++b, ++idx) {
+          yz[idx] += wyz * byz[b];
+          xz[idx] += wxz * bxz[b];
+          xy[idx] += wxy * bxy[b];
         }
-        acc.rhs[a] += w * rhsScale * std::complex<double>(grad[a].dot(u), grad[a].dot(v));
+      }
+      double nk[8];
+      for (int k = 0; k < 8; ++k) {
+        const int i = k & 1, j = k >> 1 & 1, l = k >> 2 & 1;
+        const double sx = i ? 1.0 : -1.0, sy = j ? 1.0 : -1.0, sz = l ? 1.0 : -1.0;
+        const Vec3d g(sx * byz[j + 2 * l], sy * bxz[i + 2 * l], sz * bxy[i + 2 * j]);
+        nk[k] = n.dot(g);
+        gradientSum[k] += w * g;
+      }
+      idx = 0;
+      for (int a = 0; a < 8; ++a) {
+        const double wa = w * nk[a];
+        for (int b = a; b < 8; ++b, ++idx) normal[idx] += wa * nk[b];
       }
     }
+  }
+  if (!any) return;
+  // Pair (a, b): the bilinear-weight pair of each axis and the sign s_a s_b of that axis.
+  auto packed4 = [](int a, int b) {
+    if (a > b) std::swap(a, b);
+    return a * 4 - a * (a - 1) / 2 + (b - a);
+  };
+  int idx = 0;
+  for (int a = 0; a < 8; ++a) {
+    const int ia = a & 1, ja = a >> 1 & 1, la = a >> 2 & 1;
+    for (int b = a; b < 8; ++b, ++idx) {
+      const int ib = b & 1, jb = b >> 1 & 1, lb = b >> 2 & 1;
+      const double full = (ia == ib ? 1.0 : -1.0) * yz[packed4(ja + 2 * la, jb + 2 * lb)] +
+                          (ja == jb ? 1.0 : -1.0) * xz[packed4(ia + 2 * la, ib + 2 * lb)] +
+                          (la == lb ? 1.0 : -1.0) * xy[packed4(ia + 2 * ja, ib + 2 * jb)];
+      // Tangential gradients: <g_a, g_b> - (n . g_a)(n . g_b).
+      acc.stiffness[idx] += full + (normalWeight - 1.0) * normal[idx];
+      if (normalAcc) normalAcc[idx] += normal[idx];
+    }
+  }
+  // <grad_M g_k, u> = <g_k, u - (n . u) n>, the same with v = n x u; the integrals are linear in g.
+  const Vec3d v = n.cross(u);
+  const Vec3d ut = u - n.dot(u) * n, vt = v - n.dot(v) * n;
+  const double rhsScale = voxelSize / edgeLength;
+  for (int k = 0; k < 8; ++k) {
+    acc.rhs[k] += rhsScale * std::complex<double>(gradientSum[k].dot(ut), gradientSum[k].dot(vt));
   }
 }
 

@@ -146,6 +146,70 @@ TEST(VoxelClip, PiecesPartitionTheTriangleAndStayInTheirVoxels) {
   }
 }
 
+TEST(VoxelClip, FragmentIntegralsMatchTheTangentialGradientsPairByPair) {
+  // The kernel integrates products of bilinear weights per axis; compare with the definition:
+  // projected gradients of the 8 B-splines at the points of a degree-4 rule, pair by pair.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double w1 = 0.223381589678011, a1 = 0.445948490915965, b1 = 0.108103018168070;
+  const double w2 = 0.109951743655322, a2 = 0.091576213509771, b2 = 0.816847572980459;
+  const double rule[6][4] = {{a1, a1, b1, w1}, {a1, b1, a1, w1}, {b1, a1, a1, w1},
+                             {a2, a2, b2, w2}, {a2, b2, a2, w2}, {b2, a2, a2, w2}};
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec3d n = Vec3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
+    const Vec3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+    const double angle = 6.2831853 * unit(rng);
+    const Vec3d u = std::cos(angle) * e1 + std::sin(angle) * e2, v = n.cross(u);
+    const VoxelCoord voxel{5, 6, 7};
+    const Vec3d centre = Vec3d(5.2, 6.2, 7.2) + 0.6 * Vec3d(unit(rng), unit(rng), unit(rng));
+    ClipPolygon poly;
+    poly.size = 3 + trial % 6;
+    for (int i = 0; i < poly.size; ++i) {
+      const double a = 6.2831853 * i / poly.size;
+      poly.point[i] = centre + 0.2 * (std::cos(a) * e1 + std::sin(a) * e2);
+    }
+    const double normalWeight = trial % 2 ? 0.0 : unit(rng), voxelSize = 0.25, h = 0.8;
+    VoxelIntegrals acc;
+    double normalAcc[36] = {};
+    addFragmentIntegrals(poly, voxel, voxelSize, n, u, h, acc, normalWeight, normalAcc);
+
+    std::array<double, 36> stiffness{}, normal{};
+    std::array<std::complex<double>, 8> rhs{};
+    const Vec3d base(voxel[0], voxel[1], voxel[2]);
+    for (int i = 1; i + 1 < poly.size; ++i) {
+      const Vec3d p0 = poly.point[0] - base, p1 = poly.point[i] - base, p2 = poly.point[i + 1] - base;
+      const double area = 0.5 * (p1 - p0).cross(p2 - p0).norm();
+      for (const auto& q : rule) {
+        const Vec3d t = q[0] * p0 + q[1] * p1 + q[2] * p2;
+        Vec3d grad[8];
+        double dn[8];
+        for (int k = 0; k < 8; ++k) {
+          const double f[3] = {k & 1 ? t[0] : 1 - t[0], k & 2 ? t[1] : 1 - t[1], k & 4 ? t[2] : 1 - t[2]};
+          const double d[3] = {k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0};
+          const Vec3d g(d[0] * f[1] * f[2], f[0] * d[1] * f[2], f[0] * f[1] * d[2]);
+          dn[k] = n.dot(g);
+          grad[k] = g - dn[k] * n;
+        }
+        for (int a = 0; a < 8; ++a) {
+          for (int b = a; b < 8; ++b) {
+            const int idx = packedIndex(a, b);
+            stiffness[idx] += q[3] * area * (grad[a].dot(grad[b]) + normalWeight * dn[a] * dn[b]);
+            normal[idx] += q[3] * area * dn[a] * dn[b];
+          }
+          rhs[a] += q[3] * area * voxelSize / h * std::complex<double>(grad[a].dot(u), grad[a].dot(v));
+        }
+      }
+    }
+    double scale = 0.0;
+    for (double x : stiffness) scale = std::max(scale, std::abs(x));
+    for (int i = 0; i < 36; ++i) {
+      ASSERT_NEAR(acc.stiffness[i], stiffness[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
+      ASSERT_NEAR(normalAcc[i], normal[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
+    }
+    for (int a = 0; a < 8; ++a) ASSERT_NEAR(std::abs(acc.rhs[a] - rhs[a]), 0.0, 1e-12 * (1.0 + scale));
+  }
+}
+
 TEST(VoxelClip, FragmentIntegralsAreExactUnderSubdivision) {
   // A degree-4 exact rule gives the same integrals on a triangle and on its 16 sub-triangles.
   std::mt19937 rng(3);
