@@ -335,12 +335,17 @@ long jsonInteger(const std::string& json, const std::string& key) {
   return pos == std::string::npos ? -1 : std::stol(json.substr(pos + key.size() + 4));
 }
 
+/// Writes a generated mesh of the given kind and size to path.
+void writeGenerated(const std::string& path, MeshKind kind, std::uint64_t faces) {
+  GenerateOptions options;
+  options.kind = kind;
+  options.faces = faces;
+  writeMesh(path, generateMesh(options).mesh);
+}
+
 TEST(FieldCommand, WritesFieldConesSeamsAndReimportsTheSameField) {
   testing::TempDir dir;
-  GenerateOptions options;
-  options.kind = MeshKind::Torus;
-  options.faces = 3000;
-  writeMesh(dir.path("t.obj"), generateMesh(options).mesh);
+  writeGenerated(dir.path("t.obj"), MeshKind::Torus, 3000);
   std::string out;
   ASSERT_EQ(testing::runSeamvox("field " + dir.path("t.obj") + " -o " + dir.path("t.field") + " --cones " +
                                     dir.path("cones.obj") + " --seams " + dir.path("seams.obj") + " --json",
@@ -376,10 +381,7 @@ TEST(FieldCommand, ShowsTheConesParamCutsThrough) {
   // Cones closer than --merge-cones F * h are merged by field as by param, so the cones shown are
   // the ones the map has (on a generated scan with a coarse grid: equal cones a few edges apart).
   testing::TempDir dir;
-  GenerateOptions options;
-  options.kind = MeshKind::Scan;
-  options.faces = 20000;
-  writeMesh(dir.path("s.ply"), generateMesh(options).mesh);
+  writeGenerated(dir.path("s.ply"), MeshKind::Scan, 20000);
   const std::string common = "field " + dir.path("s.ply") + " -o " + dir.path("s.field") + " --json --quiet --cells 20";
   std::string all, merged;
   ASSERT_EQ(testing::runSeamvox(common + " --merge-cones 0", &all), 0) << all;
