@@ -2,6 +2,7 @@
 #include "io/field_io.h"
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -47,12 +48,16 @@ class LineError {
 };
 
 double parseNumber(const char* begin, const char* end, const LineError& where) {
-  const std::string token(begin, end);
-  char* stop = nullptr;
-  errno = 0;
-  const double x = std::strtod(token.c_str(), &stop);
-  if (stop != token.c_str() + token.size() || token.empty()) where.fail("'" + token + "' is not a number");
-  if (!std::isfinite(x) || errno == ERANGE) where.fail("non-finite value '" + token + "'");
+  // from_chars: no locale, no allocation (several times faster than strtod on 10M-line files).
+  const char* first = begin != end && *begin == '+' ? begin + 1 : begin;
+  double x = 0.0;
+  const std::from_chars_result r = std::from_chars(first, end, x);
+  if (begin == end || r.ptr != end || (first != begin && first != end && *first == '-') || (r.ec != std::errc() && r.ec != std::errc::result_out_of_range)) {
+    where.fail("'" + std::string(begin, end) + "' is not a number");
+  }
+  if (!std::isfinite(x) || r.ec == std::errc::result_out_of_range) {
+    where.fail("non-finite value '" + std::string(begin, end) + "'");
+  }
   return x;
 }
 

@@ -257,6 +257,11 @@ TEST(FieldIo, PlainRoundTripAndHeaderlessFiles) {
   for (int i = 0; i < 3; ++i) EXPECT_NEAR((back[i] - v[i]).norm(), 0.0, 1e-9 * (1 + v[i].norm()));
   testing::writeFile(dir.path("b.field"), "# comment\n\n1 0 0\n0 1 0\r\n");
   EXPECT_EQ(readFieldVectors(dir.path("b.field"), 2)[1], Vec3d(0, 1, 0));
+  // Signs, exponents and leading/trailing zeros as other tools write them.
+  testing::writeFile(dir.path("c.field"), "+1.5 -0 2.5e-3\n-1E+2 .5 007\n");
+  const std::vector<Vec3d> c = readFieldVectors(dir.path("c.field"), 2);
+  EXPECT_EQ(c[0], Vec3d(1.5, 0.0, 2.5e-3));
+  EXPECT_EQ(c[1], Vec3d(-100.0, 0.5, 7.0));
 }
 
 TEST(FieldIo, BadFilesNameFileAndLine) {
@@ -266,6 +271,9 @@ TEST(FieldIo, BadFilesNameFileAndLine) {
       {"1 2\n1 0 0\n0 1 0\n", ":1: header declares 2 faces"},
       {"1 0 0\n0 1 x\n0 0 1\n", ":2: 'x' is not a number"},
       {"1 0 0\n0 1 nan\n0 0 1\n", ":2: "},
+      {"1 0 0\n0 1 1e999\n0 0 1\n", ":2: non-finite value '1e999'"},
+      {"1 0 0\n0 +-1 0\n0 0 1\n", ":2: '+-1' is not a number"},
+      {"1 0 0\n0 1.0.0 0\n0 0 1\n", ":2: '1.0.0' is not a number"},
       {"1 0 0\n0 1\n0 0 1\n", ":2: expected 3 numbers"},
       {"1 0 0\n0 1 0\n0 0 1\n1 1 1\n", ":4: more field lines"},
       {"2 3\n0 1 0 0 0 1 0\n0 1 0 0 0 1 0\n0 1 0 0 0 1\n", ":4: expected 7 values"},
