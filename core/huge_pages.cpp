@@ -1,6 +1,7 @@
 #include "core/huge_pages.h"
 
 #include <cstdint>
+#include <cstdlib>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -20,6 +21,12 @@ void adviseHugePages(void* p, std::size_t bytes) noexcept {
   (void)p;
   (void)bytes;
 #endif
+}
+
+void* mallocAdvised(std::size_t bytes) noexcept {
+  void* p = std::malloc(bytes ? bytes : 1);
+  adviseHugePages(p, bytes);
+  return p;
 }
 
 }  // namespace seamvox

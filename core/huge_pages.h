@@ -14,4 +14,7 @@ constexpr std::size_t kHugePageAdviceBytes = std::size_t(4) << 20;
 /// >= kHugePageAdviceBytes; a no-op elsewhere and where unsupported. Call before first touch.
 void adviseHugePages(void* p, std::size_t bytes) noexcept;
 
+/// std::malloc (at least 1 byte) with the advice above; null when out of memory.
+void* mallocAdvised(std::size_t bytes) noexcept;
+
 }  // namespace seamvox

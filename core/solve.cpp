@@ -16,11 +16,6 @@ namespace {
 
 // CHOLMOD allocates through SuiteSparse_config: its large blocks (the factor, the workspace) get
 // the same huge-page advice as the command's own arrays (core/huge_pages.h).
-void* adviseMalloc(std::size_t size) {
-  void* p = std::malloc(size);
-  adviseHugePages(p, size);
-  return p;
-}
 void* adviseCalloc(std::size_t count, std::size_t size) {
   void* p = std::calloc(count, size);
   if (p && size != 0 && count <= ~std::size_t(0) / size) adviseHugePages(p, count * size);
@@ -34,7 +29,7 @@ void* adviseRealloc(void* old, std::size_t size) {
 void useAdvisedAllocation() {
   static std::once_flag once;
   std::call_once(once, [] {
-    SuiteSparse_config.malloc_func = adviseMalloc;
+    SuiteSparse_config.malloc_func = [](std::size_t size) { return mallocAdvised(size); };
     SuiteSparse_config.calloc_func = adviseCalloc;
     SuiteSparse_config.realloc_func = adviseRealloc;
     SuiteSparse_config.free_func = std::free;

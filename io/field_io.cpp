@@ -52,7 +52,9 @@ double parseNumber(const char* begin, const char* end, const LineError& where) {
   const char* first = begin != end && *begin == '+' ? begin + 1 : begin;
   double x = 0.0;
   const std::from_chars_result r = std::from_chars(first, end, x);
-  if (begin == end || r.ptr != end || (first != begin && first != end && *first == '-') || (r.ec != std::errc() && r.ec != std::errc::result_out_of_range)) {
+  const bool signTwice = first != begin && first != end && *first == '-';  // "+-1"
+  if (begin == end || r.ptr != end || signTwice ||
+      (r.ec != std::errc() && r.ec != std::errc::result_out_of_range)) {
     where.fail("'" + std::string(begin, end) + "' is not a number");
   }
   if (!std::isfinite(x) || r.ec == std::errc::result_out_of_range) {

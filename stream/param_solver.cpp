@@ -52,10 +52,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     // The voxel system could not be factored: the hat solver gives the same kind of map, if it
     // fits in memory (on a massive mesh it would not, and swapping or being killed is worse
     // than an error).
-    checkHatFallbackFits(mesh.numFaces(),
-                         solverOptions.fallbackMemoryBytes ? solverOptions.fallbackMemoryBytes
-                                                           : availableMemoryBytes(),
-                         e.what());
+    checkHatFallbackFits(mesh.numFaces(), availableMemoryBytes(), e.what());
     out.fallbackReason = e.what();
     out.solver = ParamSolver::Hat;
     out.param = parameterizeMesh(mesh, topology, field, cut, options);

@@ -37,8 +37,6 @@ struct SolverOptions {
   /// When set, the solve closes its stages on it: "solve" (the hat or voxel solve, with the
   /// fallback if any) and, for voxloc, "refine".
   StageMeter* meter = nullptr;
-  /// Memory the hat fallback may use (bytes); 0: what the system has available when it is needed.
-  std::uint64_t fallbackMemoryBytes = 0;
 };
 
 struct SolverResult {

@@ -8,19 +8,14 @@
 #include "core/huge_pages.h"
 
 void* operator new(std::size_t size) {
-  void* p = std::malloc(size ? size : 1);
+  void* p = seamvox::mallocAdvised(size);
   if (!p) throw std::bad_alloc();
-  seamvox::adviseHugePages(p, size);
   return p;
 }
 
 void* operator new[](std::size_t size) { return ::operator new(size); }
 
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  void* p = std::malloc(size ? size : 1);
-  if (p) seamvox::adviseHugePages(p, size);
-  return p;
-}
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept { return seamvox::mallocAdvised(size); }
 
 void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { return ::operator new(size, tag); }
 
