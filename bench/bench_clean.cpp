@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "core/clean.h"
-#include "core/topology.h"
+#include "core/mesh/clean.h"
+#include "core/mesh/topology.h"
 #include "bench/bench_common.h"
 #include "io/mesh_io.h"
-#include "stream/memory.h"
+#include "core/system/memory.h"
 
 namespace {
 

@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <string>
 
-#include "core/clean.h"
-#include "core/field.h"
-#include "core/subdivide.h"
+#include "core/mesh/clean.h"
+#include "core/field/field.h"
+#include "core/mesh/subdivide.h"
 #include "io/mesh_io.h"
 
 namespace seamvox::bench {

@@ -9,12 +9,12 @@
 #include <filesystem>
 #include <string>
 
-#include "core/clean.h"
-#include "core/cut.h"
-#include "core/field.h"
-#include "core/generate.h"
-#include "core/metrics.h"
-#include "core/param.h"
+#include "core/mesh/clean.h"
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/synth/generate.h"
+#include "core/quality/metrics.h"
+#include "core/solve/hat_solver.h"
 #include "io/mesh_io.h"
 
 namespace {

@@ -11,15 +11,15 @@
 #include <ctime>
 #include <string>
 
-#include "core/clean.h"
-#include "core/cut.h"
-#include "core/errors.h"
-#include "core/field.h"
-#include "core/field_proxy.h"
-#include "core/generate.h"
+#include "core/mesh/clean.h"
+#include "core/cut/cut.h"
+#include "core/system/errors.h"
+#include "core/field/field.h"
+#include "core/field/field_proxy.h"
+#include "core/synth/generate.h"
 #include "io/mesh_io.h"
-#include "stream/memory.h"
-#include "stream/blas_threads.h"
+#include "core/system/memory.h"
+#include "core/system/blas_threads.h"
 
 namespace {
 

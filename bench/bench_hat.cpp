@@ -11,19 +11,19 @@
 #include <string>
 #include <vector>
 
-#include "core/basis.h"
-#include "core/clean.h"
-#include "core/cut.h"
-#include "core/evaluate.h"
-#include "core/field.h"
-#include "core/metrics.h"
-#include "core/reduce.h"
-#include "core/round.h"
-#include "core/subdivide.h"
+#include "core/basis/basis.h"
+#include "core/mesh/clean.h"
+#include "core/cut/cut.h"
+#include "core/solve/evaluate.h"
+#include "core/field/field.h"
+#include "core/quality/metrics.h"
+#include "core/basis/reduce.h"
+#include "core/solve/seamless_solve.h"
+#include "core/mesh/subdivide.h"
 #include "bench/bench_common.h"
 #include "io/mesh_io.h"
-#include "stream/memory.h"
-#include "stream/blas_threads.h"
+#include "core/system/memory.h"
+#include "core/system/blas_threads.h"
 
 using namespace seamvox;
 

@@ -10,18 +10,18 @@
 #include <string>
 #include <vector>
 
-#include "core/clean.h"
-#include "core/cut.h"
-#include "core/field.h"
-#include "core/metrics.h"
-#include "core/param.h"
-#include "core/refine.h"
-#include "core/subdivide.h"
+#include "core/mesh/clean.h"
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/quality/metrics.h"
+#include "core/solve/hat_solver.h"
+#include "core/refine/refine.h"
+#include "core/mesh/subdivide.h"
 #include "bench/bench_common.h"
 #include "io/mesh_io.h"
-#include "stream/memory.h"
-#include "stream/voxel_grid.h"
-#include "stream/blas_threads.h"
+#include "core/system/memory.h"
+#include "core/basis/voxel_grid.h"
+#include "core/system/blas_threads.h"
 
 using namespace seamvox;
 

@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/render.h"
+#include "core/system/errors.h"
+#include "core/synth/render.h"
 #include "io/atomic_file.h"
 #include "io/json.h"
 #include "io/png_io.h"

@@ -12,13 +12,13 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/cut.h"
-#include "core/field.h"
-#include "core/generate.h"
-#include "core/topology.h"
-#include "stream/memory.h"
-#include "stream/voxel_grid.h"
-#include "stream/blas_threads.h"
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/synth/generate.h"
+#include "core/mesh/topology.h"
+#include "core/system/memory.h"
+#include "core/basis/voxel_grid.h"
+#include "core/system/blas_threads.h"
 
 namespace {
 

@@ -5,7 +5,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 
 namespace seamvox {
 

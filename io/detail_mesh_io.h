@@ -11,7 +11,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/mesh.h"
+#include "core/mesh/mesh.h"
 #include "io/atomic_file.h"
 #include "io/mesh_io.h"
 #include "stream/mesh_stream.h"

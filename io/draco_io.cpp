@@ -14,7 +14,7 @@
 #include <cmath>
 #include <limits>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "io/detail_mesh_io.h"
 
 namespace seamvox {

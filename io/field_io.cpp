@@ -9,7 +9,7 @@
 #include <cstring>
 #include <fstream>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "io/atomic_file.h"
 
 namespace seamvox {

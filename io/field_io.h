@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "../core/field.h"
-#include "../core/mesh.h"
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
 
 namespace seamvox {
 

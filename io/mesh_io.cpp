@@ -7,7 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "io/atomic_file.h"
 #include "io/detail_mesh_io.h"
 

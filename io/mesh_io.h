@@ -4,8 +4,8 @@
 #include <memory>
 #include <string>
 
-#include "../core/mesh.h"
-#include "../stream/mesh_stream.h"
+#include "core/mesh/mesh.h"
+#include "stream/mesh_stream.h"
 
 namespace seamvox {
 

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "io/atomic_file.h"
 
 namespace seamvox {

@@ -2,7 +2,7 @@
 /// PNG output of rendered pictures: 8-bit RGB, no interlacing, zlib-compressed rows.
 #include <string>
 
-#include "../core/render.h"
+#include "core/synth/render.h"
 
 namespace seamvox {
 

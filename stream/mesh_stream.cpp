@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <limits>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 
 namespace seamvox {
 

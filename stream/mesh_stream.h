@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "../core/mesh.h"
+#include "core/mesh/mesh.h"
 
 namespace seamvox {
 

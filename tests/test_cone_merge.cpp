@@ -3,11 +3,11 @@
 #include <numeric>
 #include <string>
 
-#include "core/cone_merge.h"
-#include "core/cut.h"
-#include "core/field.h"
-#include "core/metrics.h"
-#include "core/param.h"
+#include "core/field/cone_merge.h"
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/quality/metrics.h"
+#include "core/solve/hat_solver.h"
 #include "tests/test_meshes.h"
 #include "tests/testing.h"
 

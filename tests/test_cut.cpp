@@ -7,12 +7,12 @@
 #include <numeric>
 #include <string>
 
-#include "core/clean.h"
-#include "core/cut.h"
-#include "core/errors.h"
-#include "core/field.h"
-#include "core/generate.h"
-#include "core/topology.h"
+#include "core/mesh/clean.h"
+#include "core/cut/cut.h"
+#include "core/system/errors.h"
+#include "core/field/field.h"
+#include "core/synth/generate.h"
+#include "core/mesh/topology.h"
 #include "io/field_io.h"
 #include "io/mesh_io.h"
 #include "test_meshes.h"

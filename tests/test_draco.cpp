@@ -9,9 +9,9 @@
 #include <filesystem>
 #include <map>
 
-#include "core/clean.h"
-#include "core/errors.h"
-#include "core/metrics.h"
+#include "core/mesh/clean.h"
+#include "core/system/errors.h"
+#include "core/quality/metrics.h"
 #include "io/mesh_io.h"
 #include "testing.h"
 

@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "core/cut.h"
-#include "core/detail_union_find.h"
-#include "core/errors.h"
-#include "core/field.h"
-#include "core/field_proxy.h"
-#include "core/generate.h"
-#include "core/topology.h"
+#include "core/cut/cut.h"
+#include "core/mesh/detail_union_find.h"
+#include "core/system/errors.h"
+#include "core/field/field.h"
+#include "core/field/field_proxy.h"
+#include "core/synth/generate.h"
+#include "core/mesh/topology.h"
 #include "io/mesh_io.h"
 #include "test_meshes.h"
 #include "testing.h"

@@ -6,11 +6,11 @@
 #include <map>
 #include <set>
 
-#include "core/clean.h"
-#include "core/errors.h"
-#include "core/generate.h"
-#include "core/subdivide.h"
-#include "core/topology.h"
+#include "core/mesh/clean.h"
+#include "core/system/errors.h"
+#include "core/synth/generate.h"
+#include "core/mesh/subdivide.h"
+#include "core/mesh/topology.h"
 #include "io/mesh_io.h"
 #include "testing.h"
 

@@ -14,7 +14,7 @@
 #include <random>
 #include <set>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "io/mesh_io.h"
 #include "stream/mesh_stream.h"
 #include "testing.h"

@@ -7,12 +7,12 @@
 #include <filesystem>
 #include <fstream>
 
-#include "core/clean.h"
-#include "core/errors.h"
-#include "core/generate.h"
-#include "core/metrics.h"
+#include "core/mesh/clean.h"
+#include "core/system/errors.h"
+#include "core/synth/generate.h"
+#include "core/quality/metrics.h"
 #include "io/mesh_io.h"
-#include "stream/jobs.h"
+#include "core/batch/jobs.h"
 #include "testing.h"
 
 namespace seamvox {

@@ -8,10 +8,10 @@
 #include <string>
 #include <memory>
 
-#include "core/errors.h"
-#include "core/huge_pages.h"
-#include "stream/memory.h"
-#include "stream/param_solver.h"
+#include "core/system/errors.h"
+#include "core/system/huge_pages.h"
+#include "core/system/memory.h"
+#include "core/solve/param_solver.h"
 
 namespace seamvox {
 namespace {

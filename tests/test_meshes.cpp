@@ -4,7 +4,7 @@
 #include <map>
 #include <utility>
 
-#include "core/clean.h"
+#include "core/mesh/clean.h"
 #include "io/mesh_io.h"
 
 namespace seamvox::testing {

@@ -2,9 +2,9 @@
 /// Small meshes built in code for the test suites (closed, boundary, several components).
 #include <string>
 
-#include "core/field.h"
-#include "core/mesh.h"
-#include "core/topology.h"
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
 
 namespace seamvox::testing {
 

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <complex>
 
-#include "core/errors.h"
-#include "core/gaussian_int.h"
-#include "core/metrics.h"
-#include "core/topology.h"
+#include "core/system/errors.h"
+#include "core/basis/gaussian_int.h"
+#include "core/quality/metrics.h"
+#include "core/mesh/topology.h"
 #include "tests/test_meshes.h"
 
 namespace seamvox {

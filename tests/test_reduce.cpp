@@ -5,9 +5,9 @@
 #include <complex>
 #include <random>
 
-#include "core/errors.h"
-#include "core/gaussian_int.h"
-#include "core/reduce.h"
+#include "core/system/errors.h"
+#include "core/basis/gaussian_int.h"
+#include "core/basis/reduce.h"
 
 namespace seamvox {
 namespace {

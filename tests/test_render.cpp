@@ -8,9 +8,9 @@
 #include <random>
 #include <stdexcept>
 
-#include "core/errors.h"
-#include "core/render.h"
-#include "core/topology.h"
+#include "core/system/errors.h"
+#include "core/synth/render.h"
+#include "core/mesh/topology.h"
 #include "io/mesh_io.h"
 #include "io/png_io.h"
 #include "test_meshes.h"

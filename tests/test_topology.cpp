@@ -1,9 +1,9 @@
 // Corner table, components and cleaning: invariants on meshes built in code.
 #include <gtest/gtest.h>
 
-#include "core/clean.h"
-#include "core/errors.h"
-#include "core/topology.h"
+#include "core/mesh/clean.h"
+#include "core/system/errors.h"
+#include "core/mesh/topology.h"
 #include "io/mesh_io.h"
 #include "test_meshes.h"
 #include "testing.h"

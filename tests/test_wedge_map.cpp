@@ -7,12 +7,12 @@
 #include <random>
 #include <vector>
 
-#include "core/basis.h"
-#include "core/cut.h"
-#include "core/errors.h"
-#include "core/evaluate.h"
-#include "core/field.h"
-#include "core/wedge_map.h"
+#include "core/basis/basis.h"
+#include "core/cut/cut.h"
+#include "core/system/errors.h"
+#include "core/solve/evaluate.h"
+#include "core/field/field.h"
+#include "core/mesh/wedge_map.h"
 #include "test_meshes.h"
 #include "testing.h"
 

@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "../core/wedge_map.h"
+#include "core/mesh/wedge_map.h"
 
 namespace seamvox::testing {
 

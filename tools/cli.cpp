@@ -9,7 +9,7 @@
 #include <iostream>
 #include <mutex>
 
-#include "core/cone_merge.h"
+#include "core/field/cone_merge.h"
 #include "io/atomic_file.h"
 
 namespace seamvox::cli {

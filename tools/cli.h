@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "core/progress.h"
+#include "core/system/progress.h"
 
 namespace seamvox::cli {
 

@@ -2,10 +2,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include "core/clean.h"
-#include "core/errors.h"
-#include "core/field.h"
-#include "core/metrics.h"
+#include "core/mesh/clean.h"
+#include "core/system/errors.h"
+#include "core/field/field.h"
+#include "core/quality/metrics.h"
 #include "io/field_io.h"
 #include "io/json.h"
 #include "io/mesh_io.h"

@@ -6,7 +6,7 @@
 #include <system_error>
 #include <unistd.h>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "io/mesh_io.h"
 #include "tools/cli.h"
 

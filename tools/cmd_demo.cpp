@@ -9,8 +9,8 @@
 #include <system_error>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/generate.h"
+#include "core/system/errors.h"
+#include "core/synth/generate.h"
 #include "io/mesh_io.h"
 #include "tools/cli.h"
 #include "tools/mesh_report.h"

@@ -4,16 +4,16 @@
 #include <cstdio>
 #include <map>
 
-#include "core/clean.h"
-#include "core/cone_merge.h"
-#include "core/cut.h"
-#include "core/errors.h"
-#include "core/field.h"
-#include "core/field_proxy.h"
+#include "core/mesh/clean.h"
+#include "core/field/cone_merge.h"
+#include "core/cut/cut.h"
+#include "core/system/errors.h"
+#include "core/field/field.h"
+#include "core/field/field_proxy.h"
 #include "io/field_io.h"
 #include "io/json.h"
 #include "io/mesh_io.h"
-#include "stream/memory.h"
+#include "core/system/memory.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {

@@ -2,8 +2,8 @@
 #include <chrono>
 #include <cstdio>
 
-#include "core/errors.h"
-#include "core/generate.h"
+#include "core/system/errors.h"
+#include "core/synth/generate.h"
 #include "io/mesh_io.h"
 #include "tools/cli.h"
 

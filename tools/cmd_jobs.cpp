@@ -10,9 +10,9 @@
 #include <sstream>
 #include <thread>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "io/mesh_io.h"
-#include "stream/jobs.h"
+#include "core/batch/jobs.h"
 #include "tools/cli.h"
 #include "tools/jobs.h"
 

@@ -3,21 +3,21 @@
 #include <cstdio>
 #include <unordered_map>
 
-#include "core/clean.h"
-#include "core/cone_merge.h"
-#include "core/cut.h"
-#include "core/errors.h"
-#include "core/field.h"
-#include "core/field_proxy.h"
-#include "core/metrics.h"
-#include "core/param.h"
-#include "core/render.h"
+#include "core/mesh/clean.h"
+#include "core/field/cone_merge.h"
+#include "core/cut/cut.h"
+#include "core/system/errors.h"
+#include "core/field/field.h"
+#include "core/field/field_proxy.h"
+#include "core/quality/metrics.h"
+#include "core/solve/hat_solver.h"
+#include "core/synth/render.h"
 #include "io/field_io.h"
 #include "io/json.h"
 #include "io/mesh_io.h"
 #include "io/png_io.h"
-#include "stream/memory.h"
-#include "stream/param_solver.h"
+#include "core/system/memory.h"
+#include "core/solve/param_solver.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {

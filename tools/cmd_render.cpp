@@ -5,9 +5,9 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "core/clean.h"
-#include "core/errors.h"
-#include "core/render.h"
+#include "core/mesh/clean.h"
+#include "core/system/errors.h"
+#include "core/synth/render.h"
 #include "io/mesh_io.h"
 #include "io/png_io.h"
 #include "tools/cli.h"

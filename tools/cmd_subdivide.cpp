@@ -2,8 +2,8 @@
 #include <chrono>
 #include <cstdio>
 
-#include "core/clean.h"
-#include "core/subdivide.h"
+#include "core/mesh/clean.h"
+#include "core/mesh/subdivide.h"
 #include "io/field_io.h"
 #include "io/mesh_io.h"
 #include "tools/cli.h"

@@ -1,11 +1,11 @@
 // The seamvox command's global operator new: large blocks (the per-face and per-corner arrays of
-// massive meshes) are advised as transparent huge pages before first touch (core/huge_pages.h).
+// massive meshes) are advised as transparent huge pages before first touch (core/system/huge_pages.h).
 // Measured on a 9.2M-face mesh: 29.4 -> 22 s wall, peak memory unchanged (bench/RESULTS.md).
 // Only the executable replaces operator new; the library and its tests allocate as usual.
 #include <cstdlib>
 #include <new>
 
-#include "core/huge_pages.h"
+#include "core/system/huge_pages.h"
 
 void* operator new(std::size_t size) {
   void* p = seamvox::mallocAdvised(size);

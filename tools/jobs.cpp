@@ -18,7 +18,7 @@
 #include <sstream>
 #include <thread>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "io/json.h"
 #include "io/mesh_io.h"
 #include "tools/cli.h"

@@ -1,12 +1,12 @@
 #pragma once
-/// The job runner behind `seamvox jobs` (manifest format: stream/jobs.h). Every job runs as child
+/// The job runner behind `seamvox jobs` (manifest format: core/batch/jobs.h). Every job runs as child
 /// processes of the seamvox binary (`seamvox param`, and for tiles the weld and split steps), so
 /// a crashing or out-of-memory job cannot take the runner down; peak memory comes from wait4.
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "stream/jobs.h"
+#include "core/batch/jobs.h"
 
 namespace seamvox::cli {
 

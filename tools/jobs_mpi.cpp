@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
+#include "core/system/errors.h"
 #include "tools/jobs.h"
 
 #ifdef SEAMVOX_WITH_MPI

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "stream/blas_threads.h"
+#include "core/system/errors.h"
+#include "core/system/blas_threads.h"
 #include "tools/cli.h"
 
 namespace {

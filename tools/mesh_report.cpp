@@ -7,7 +7,7 @@
 
 #include "io/json.h"
 #include "io/mesh_io.h"
-#include "stream/memory.h"
+#include "core/system/memory.h"
 
 namespace seamvox::cli {
 namespace {

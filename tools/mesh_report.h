@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "core/clean.h"
-#include "core/mesh.h"
-#include "core/progress.h"
-#include "core/topology.h"
+#include "core/mesh/clean.h"
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+#include "core/mesh/topology.h"
 
 namespace seamvox::cli {
 

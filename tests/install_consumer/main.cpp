@@ -1,6 +1,6 @@
 // Builds a tetrahedron, cleans it and checks its topology through the installed headers.
-#include <seamvox/core/clean.h>
-#include <seamvox/core/topology.h>
+#include <seamvox/core/mesh/clean.h>
+#include <seamvox/core/mesh/topology.h>
 
 #include <cstdio>
 

@@ -1,0 +1,253 @@
+#include "core/basis/voxel_grid.h"
+
+#include <openvdb/openvdb.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cmath>
+#include <mutex>
+
+#include "core/system/errors.h"
+#include "core/solve/evaluate.h"
+#include "core/basis/reduce.h"
+#include "core/solve/seamless_solve.h"
+
+namespace seamvox {
+
+namespace {
+
+void initializeOpenVdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+openvdb::Coord toCoord(const VoxelCoord& v) { return openvdb::Coord(v[0], v[1], v[2]); }
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Fragments of one chunk of faces, before their voxels have ids.
+struct ClippedChunk {
+  FaceId begin = 0, end = 0;
+  std::vector<VoxelCoord> voxel;
+  std::vector<FaceId> face;
+  std::vector<std::uint8_t> edgeMask;
+};
+
+void clipChunk(const TriangleMesh& mesh, const VoxelGridGeometry& grid, ClippedChunk& chunk) {
+  std::vector<VoxelPiece> pieces;
+  for (FaceId f = chunk.begin; f < chunk.end; ++f) {
+    const std::array<Vec3d, 3> g = faceGridCoords(mesh, grid, f);
+    clipTriangleToVoxels(g, grid.resolution, pieces);
+    const std::size_t before = chunk.face.size();
+    for (const VoxelPiece& piece : pieces) {
+      chunk.voxel.push_back(piece.voxel);
+      chunk.face.push_back(f);
+      chunk.edgeMask.push_back(voxelEdgeMask(g, piece.voxel));
+    }
+    if (!pieces.empty()) continue;
+    // Zero-area face: no integrals, but its edges still connect its neighbours. It gets a
+    // fragment in every voxel its edges run through (a few at most), else one at its centroid.
+    const VoxelCoord lo = grid.voxelOf(g[0].cwiseMin(g[1]).cwiseMin(g[2]));
+    const VoxelCoord hi = grid.voxelOf(g[0].cwiseMax(g[1]).cwiseMax(g[2]));
+    const std::int64_t count = std::int64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) *
+                               (hi[2] - lo[2] + 1);
+    if (count <= 64) {
+      for (std::int32_t z = lo[2]; z <= hi[2]; ++z)
+        for (std::int32_t y = lo[1]; y <= hi[1]; ++y)
+          for (std::int32_t x = lo[0]; x <= hi[0]; ++x) {
+            const std::uint8_t mask = voxelEdgeMask(g, {x, y, z});
+            if (mask == 0) continue;
+            chunk.voxel.push_back({x, y, z});
+            chunk.face.push_back(f);
+            chunk.edgeMask.push_back(mask);
+          }
+    }
+    if (chunk.face.size() == before) {
+      const VoxelCoord v = grid.voxelOf((g[0] + g[1] + g[2]) / 3.0);
+      chunk.voxel.push_back(v);
+      chunk.face.push_back(f);
+      chunk.edgeMask.push_back(voxelEdgeMask(g, v));
+    }
+  }
+}
+
+}  // namespace
+
+struct VoxelGrid::Impl {
+  openvdb::Int32Tree tree{-1};
+  openvdb::tree::ValueAccessor<openvdb::Int32Tree> accessor{tree};
+};
+
+VoxelGrid::VoxelGrid() : impl_(std::make_unique<Impl>()) { initializeOpenVdb(); }
+VoxelGrid::~VoxelGrid() = default;
+VoxelGrid::VoxelGrid(VoxelGrid&&) noexcept = default;
+VoxelGrid& VoxelGrid::operator=(VoxelGrid&&) noexcept = default;
+
+std::uint32_t VoxelGrid::insert(const VoxelCoord& voxel) {
+  const openvdb::Coord xyz = toCoord(voxel);
+  std::int32_t id = -1;
+  if (impl_->accessor.probeValue(xyz, id)) return static_cast<std::uint32_t>(id);
+  if (coords_.size() >= 0x7fffffffu) throw InputError("voxel grid: more than 2^31 voxels");
+  id = static_cast<std::int32_t>(coords_.size());
+  impl_->accessor.setValue(xyz, id);
+  coords_.push_back(voxel);
+  return static_cast<std::uint32_t>(id);
+}
+
+std::uint32_t VoxelGrid::find(const VoxelCoord& voxel) const {
+  const std::int32_t id = impl_->tree.getValue(toCoord(voxel));
+  return id < 0 ? kInvalidId : static_cast<std::uint32_t>(id);
+}
+
+std::uint64_t VoxelGrid::treeBytes() const { return impl_->tree.memUsage(); }
+
+std::vector<std::uint32_t> VoxelGrid::orderByBlocks() {
+  std::vector<std::uint32_t> remap(coords_.size(), kInvalidId);
+  std::vector<VoxelCoord> coords;
+  coords.reserve(coords_.size());
+  blockStarts_.clear();
+  for (auto leaf = impl_->tree.beginLeaf(); leaf; ++leaf) {
+    blockStarts_.push_back(static_cast<std::uint32_t>(coords.size()));
+    for (auto voxel = leaf->beginValueOn(); voxel; ++voxel) {
+      const std::uint32_t old = static_cast<std::uint32_t>(*voxel);
+      remap[old] = static_cast<std::uint32_t>(coords.size());
+      voxel.setValue(static_cast<std::int32_t>(coords.size()));
+      coords.push_back(coords_[old]);
+    }
+  }
+  if (coords.size() != coords_.size()) {
+    throw InputError("voxel grid: " + std::to_string(coords.size()) + " active voxels in the tree, " +
+                     std::to_string(coords_.size()) + " ids");
+  }
+  blockStarts_.push_back(static_cast<std::uint32_t>(coords.size()));
+  coords_ = std::move(coords);
+  impl_->accessor.clear();
+  return remap;
+}
+
+VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topology,
+                                 const CrossField& field, const CutResult& cut,
+                                 const VoxelBasisOptions& options) {
+  if (mesh.numFaces() != topology.numFaces()) {
+    throw InputError("voxel basis: mesh has " + std::to_string(mesh.numFaces()) +
+                     " faces but its topology " + std::to_string(topology.numFaces()));
+  }
+  VoxelBuildResult out;
+  auto start = std::chrono::steady_clock::now();
+  const VoxelGridGeometry geometry =
+      makeVoxelGrid(computeBoundingBox(mesh.positions), options.gridResolution);
+  const FaceId nf = mesh.numFaces();
+  const FaceId chunkFaces = std::max<std::uint32_t>(options.chunkFaces, 1);
+  std::vector<VoxelFragment> fragments;
+  fragments.reserve(nf + nf / 2);
+  FaceId nextFace = 0;
+  const std::size_t tokens = 2 * std::size_t(tbb::this_task_arena::max_concurrency());
+  tbb::parallel_pipeline(
+      tokens,
+      tbb::make_filter<void, std::shared_ptr<ClippedChunk>>(
+          tbb::filter_mode::serial_in_order,
+          [&](tbb::flow_control& control) -> std::shared_ptr<ClippedChunk> {
+            if (nextFace >= nf) {
+              control.stop();
+              return nullptr;
+            }
+            auto chunk = std::make_shared<ClippedChunk>();
+            chunk->begin = nextFace;
+            chunk->end = nextFace = nf - nextFace > chunkFaces ? nextFace + chunkFaces : nf;
+            return chunk;
+          }) &
+          tbb::make_filter<std::shared_ptr<ClippedChunk>, std::shared_ptr<ClippedChunk>>(
+              tbb::filter_mode::parallel,
+              [&](std::shared_ptr<ClippedChunk> chunk) {
+                clipChunk(mesh, geometry, *chunk);
+                return chunk;
+              }) &
+          tbb::make_filter<std::shared_ptr<ClippedChunk>, void>(
+              tbb::filter_mode::serial_in_order, [&](std::shared_ptr<ClippedChunk> chunk) {
+                for (std::size_t i = 0; i < chunk->face.size(); ++i) {
+                  fragments.push_back(
+                      {chunk->face[i], out.grid.insert(chunk->voxel[i]), chunk->edgeMask[i]});
+                }
+                reportProgress(options.progress, "voxel clip", double(chunk->end) / nf);
+              }));
+  fragments.shrink_to_fit();
+  // Ids in tree order: the elements of one 8^3 leaf block are contiguous, and the assembly takes
+  // them block by block.
+  const std::vector<std::uint32_t> remap = out.grid.orderByBlocks();
+  for (VoxelFragment& fragment : fragments) fragment.voxel = remap[fragment.voxel];
+  out.secondsClip = secondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  out.basis = std::make_unique<VoxelBasis>(mesh, topology, field, cut, geometry, out.grid.coords(),
+                                           std::move(fragments), options);
+  out.basis->setVoxelBlocks(out.grid.blockStarts());
+  out.secondsBasis = secondsSince(start);
+  return out;
+}
+
+VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology& topology,
+                                       const CrossField& field, const CutResult& cut,
+                                       const ParamOptions& options, std::int32_t gridResolution) {
+  VoxelParamResult out;
+  ParamResult& param = out.param;
+  auto start = std::chrono::steady_clock::now();
+  // The translation constraints always come from the hat basis (DESIGN section 7).
+  const std::vector<GaussVector> constraints =
+      seamCycleConstraints(mesh, topology, field, cut, options.edgeLength);
+  VoxelBasisOptions basisOptions;
+  basisOptions.gridResolution = gridResolution;
+  basisOptions.edgeLength = options.edgeLength;
+  basisOptions.progress = options.progress;
+  start = std::chrono::steady_clock::now();
+  VoxelBuildResult built = buildVoxelBasis(mesh, topology, field, cut, basisOptions);
+  VoxelBasis& basis = *built.basis;
+  param.basisFunctions = basis.numBasisFunctions();
+  param.domains = basis.numDomains();
+  param.seamAdjacencies = static_cast<std::uint32_t>(basis.adjacencies().size());
+  param.secondsBasis = secondsSince(start);
+  out.basisStats = basis.stats();
+
+  start = std::chrono::steady_clock::now();
+  ReduceOptions reduceOptions;
+  reduceOptions.translationConstraints = &constraints;
+  reduceOptions.progress = options.progress;
+  const Reduction reduction = reduceBasis(basis, reduceOptions);
+  param.translationConstraints = static_cast<std::uint32_t>(constraints.size());
+  param.secondsReduce = secondsSince(start);
+  out.determinedBasis = static_cast<std::uint32_t>(reduction.determinedBasis.size());
+  out.inconsistentBasis = static_cast<std::uint32_t>(reduction.inconsistentBasis.size());
+  out.markedFaces = basis.markedFaces(reduction);
+  out.invisibleTranslations = reduction.invisibleTranslations;
+
+  RoundOptions roundOptions;
+  roundOptions.greedy = options.greedyRounding;
+  roundOptions.progress = options.progress;
+  // The reduction depends on domains and adjacency only, and the basis keeps the
+  // normal-derivative integrals apart: a stronger regularization only re-assembles and refactors.
+  SeamlessSolution solution;
+  for (;;) {
+    try {
+      solution = solveSeamless(basis, reduction, roundOptions);
+      break;
+    } catch (const SolverError&) {
+      if (basis.regularization() >= kMaxVoxelRegularization) throw;
+      const double stronger = std::max(100.0 * basis.regularization(), 1e-7);
+      basis.setRegularization(std::min(stronger, kMaxVoxelRegularization));
+      ++out.failedAttempts;
+    }
+  }
+  out.regularization = basis.regularization();
+  param.stats = solution.stats;
+  param.translations = std::move(solution.translations);
+
+  start = std::chrono::steady_clock::now();
+  param.cornerUV = buildCutWedges(topology, cut);
+  evaluateMap(basis, reduction, solution.unknowns, param.cornerUV);
+  param.secondsEvaluate = secondsSince(start);
+  return out;
+}
+
+}  // namespace seamvox

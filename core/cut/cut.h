@@ -1,0 +1,96 @@
+#pragma once
+/// Cut graph, combing and seam curves. DESIGN section 5.
+///
+/// CONVENTIONS (written once; see also topology.h and field.h):
+/// * A seam curve is a chain of cut interior edges between seam nodes. It is stored as corners
+///   c_0, c_1, ... whose faces lie on its LEFT: the edge of c_j (vertex(next c_j) ->
+///   vertex(prev c_j)) is traversed in the curve's direction. The RIGHT face of that edge is
+///   face(opposite(c_j)).
+/// * After combing, the combed direction of face f is rot^faceRotation[f](field.direction[f]) and
+///   corners.matching(c) is the matching (field.h) between combed directions: 0 across every
+///   non-cut edge, and the same value k on every edge of one seam curve (asserted).
+/// * Map across a seam (the solver's convention): crossing from the left face to the right face,
+///   q_right = r q_left + t with r = i^(-k) = conj(i^k), k = seam.matching, t in Z + iZ.
+#include <cstdint>
+#include <vector>
+
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+struct SeamCurve {
+  std::vector<CornerId> corners;  ///< left-side corners in curve order
+  VertexId start = kInvalidId;    ///< first vertex of the curve (a seam node)
+  VertexId end = kInvalidId;      ///< last vertex (== start for a closed loop)
+  std::uint8_t matching = 0;      ///< combed matching k of every edge of the curve, left -> right
+};
+
+struct CutOptions {
+  ProgressFn progress;
+};
+
+/// Per corner, one byte: whether the edge of corner c is cut (boundary edges included) and the
+/// combed matching across it (0 on every non-cut edge). 3 #F bytes.
+class CutCorners {
+ public:
+  CutCorners() = default;
+  /// n corners, every edge cut or none, matchings 0.
+  CutCorners(std::size_t n, bool cut) : bits_(n, cut ? kCutBit : 0) {}
+  std::size_t size() const { return bits_.size(); }
+  bool isCut(CornerId c) const { return (bits_[c] & kCutBit) != 0; }
+  std::uint8_t matching(CornerId c) const { return bits_[c] & kMatchingBits; }
+  void setCut(CornerId c, bool cut) {
+    bits_[c] = static_cast<std::uint8_t>(cut ? bits_[c] | kCutBit : bits_[c] & ~kCutBit);
+  }
+  /// k in 0..3 (taken mod 4).
+  void setMatching(CornerId c, std::uint8_t k) {
+    bits_[c] = static_cast<std::uint8_t>((bits_[c] & ~kMatchingBits) | (k & kMatchingBits));
+  }
+  std::size_t memoryBytes() const { return bits_.capacity(); }
+
+ private:
+  static constexpr std::uint8_t kMatchingBits = 3, kCutBit = 4;
+  std::vector<std::uint8_t> bits_;
+};
+
+struct CutResult {
+  CutCorners corners;                        ///< 3 #F: cut flag and combed matching per corner
+  std::vector<std::uint8_t> faceRotation;    ///< #F, quarter turns applied by combing
+  std::vector<SeamCurve> seams;
+  std::vector<VertexId> cones;  ///< copy of the field's cones; every one lies on the cut
+};
+
+/// The seam of a corner's edge, looked up among the seam corners only (both sides, sorted):
+/// 12 bytes per seam edge instead of a 3 #F array. Build it for the stage that needs it.
+class SeamIndex {
+ public:
+  struct Side {
+    std::uint32_t seam = kInvalidId;  ///< seam id, or kInvalidId: the edge is on no seam
+    bool left = false;                ///< the corner is one of the seam's (left) corners
+  };
+  SeamIndex(const Topology& topology, const std::vector<SeamCurve>& seams);
+  /// Seam and side of the edge of corner c; boundary edges are cut but are on no seam.
+  Side find(CornerId c) const;
+  std::uint32_t seamOf(CornerId c) const { return find(c).seam; }
+
+ private:
+  struct Entry {
+    CornerId corner;
+    std::uint32_t seam;
+    bool left;
+  };
+  std::vector<Entry> entries_;  // sorted by corner
+};
+
+/// Dual spanning tree per component, pruning to a cut through every cone (boundary edges kept),
+/// combing and seam curves. Each component's cut surface is a topological disk. Linear time.
+/// A closed genus-0 component with at most one cone would prune to nothing: it keeps one edge
+/// (at the cone if any), one seam of one edge, and is cut open along it. Throws TopologyError
+/// when the matchings disagree with the cones (a rotation left off the cut or along a seam).
+CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                    const FieldSingularities& singularities, const CutOptions& options = {});
+
+}  // namespace seamvox

@@ -1,0 +1,75 @@
+#pragma once
+/// Merging cones closer than the grid can resolve (DESIGN sections 4 and 8).
+///
+/// Once the seam translations are integers, a cone of index +-1 lies on the lattice (1 + i)/2 Z[i]
+/// and one of index +-2 on Z[i]/2 (grid units): distinct cones are at least 1/2 apart. Two cones
+/// much closer than that on the surface are rounded onto the same point, and the faces between
+/// them collapse, with any solver. Moving the index of one onto the other removes the collapse:
+/// changing the matching on every edge of a short path between them by the same quarter turns
+/// moves index from one end to the other (each inner path vertex gains and loses the same amount).
+/// Opposite cones cancel; two +1 (or -1) cones become one +2 (-2) cone, what the coincident pair
+/// was in the map anyway. The field's directions stay as they are: across the path's few edges it
+/// turns by a quarter more than its nearest rotation, a distortion confined to the path's length.
+///
+/// Conventions: field.h (matching, index4), topology.h (corners).
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
+#include "core/mesh/wedge_map.h"
+
+namespace seamvox {
+
+/// Default merge distance in units of the grid spacing h: the closest two distinct cones can be
+/// in an integer-grid map.
+constexpr double kConeMergeFraction = 0.5;
+/// Cones merged by distance keep |index4| <= this (a cone of angle pi at most).
+constexpr std::int32_t kMaxMergedIndex4 = 2;
+/// Cones the map already put on one point may merge up to |index4| 3 (what the map has there
+/// anyway); 4 would be a cone of angle 0.
+constexpr std::int32_t kMaxCoincidentIndex4 = 3;
+/// Whether two adjacent cones of these indices may be merged (mergeAdjacentCones). Two +2 cones
+/// on one point (e.g. a closed component smaller than the grid) cannot: the map must collapse there.
+inline bool canMergeCoincident(std::int32_t a, std::int32_t b) {
+  return a != 0 && b != 0 && (a + b <= kMaxCoincidentIndex4 && a + b >= -kMaxCoincidentIndex4);
+}
+
+struct ConeMergeOptions {
+  /// Cones whose shortest path of interior edges is at most this long (mesh units) are merged;
+  /// <= 0 merges nothing. param uses kConeMergeFraction * h.
+  double maxDistance = 0.0;
+};
+
+struct ConeMergeResult {
+  std::uint32_t cancelledPairs = 0;  ///< opposite cones that both vanished
+  std::uint32_t mergedPairs = 0;     ///< cones moved onto another one that stays a cone
+  double longestPath = 0.0;          ///< longest path used (mesh units)
+  std::uint32_t changedEdges = 0;
+};
+
+/// Greedily, closest pair first, moves the whole index of one cone onto another no farther than
+/// options.maxDistance along interior edges, when the sum keeps |index4| <= kMaxMergedIndex4 (the
+/// cone with the larger |index4|, or the smaller id, stays). Changes matchings, index4 and cones
+/// in place; the index sum (Poincare-Hopf) is unchanged. Cost: one bounded search per cone.
+ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topology,
+                                FieldSingularities& singularities, const ConeMergeOptions& options);
+
+}  // namespace seamvox
+
+namespace seamvox {
+
+/// Edges between two cones that the map put on the same point (metrics.h collapsesBetweenCones:
+/// the faces on them collapse), as (vertex, vertex) pairs, each edge once.
+std::vector<std::pair<VertexId, VertexId>> coincidentConeEdges(const Topology& topology,
+                                                               const std::vector<VertexId>& cones,
+                                                               const WedgeMap& cornerUV);
+
+/// Merges the given pairs of adjacent cones like mergeCloseCones (skipping pairs that are not
+/// adjacent, no longer both cones, or whose sum would exceed kMaxCoincidentIndex4).
+ConeMergeResult mergeAdjacentCones(const Topology& topology, FieldSingularities& singularities,
+                                   const std::vector<std::pair<VertexId, VertexId>>& pairs);
+
+}  // namespace seamvox

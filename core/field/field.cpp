@@ -1,0 +1,491 @@
+// Cross fields: face frames, discrete transport, matchings, singularity indices, the smoothest
+// field (connection Laplacian solved with CHOLMOD) and tangent projection. Conventions:
+// core/field/field.h.
+#include "core/field/field.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdint>
+
+#include "core/system/errors.h"
+
+namespace seamvox {
+
+namespace {
+
+/// Orthonormal frame of a face: e1 along its first edge, e2 = n x e1.
+struct FaceFrame {
+  Vec3d e1, e2, n;
+  bool degenerate = false;  ///< zero-area face: fallback frame
+};
+
+/// A frame, the angles of the three corner edges in it and the three corner angles.
+struct FaceAngles {
+  FaceFrame frame;
+  double edge[3];    ///< angle of the directed edge of corner k
+  double corner[3];  ///< interior angle at corner k (they sum to pi)
+};
+
+/// a wrapped into (-pi, pi].
+double wrapAngle(double a) {
+  constexpr double kTwoPi = 2.0 * M_PI;
+  if (!(a > -3.0 * M_PI && a <= 3.0 * M_PI)) a = std::fmod(a, kTwoPi);  // rare: far out
+  if (a > M_PI) a -= kTwoPi;
+  if (a <= -M_PI) a += kTwoPi;
+  return a;
+}
+
+FaceFrame faceFrame(const TriangleMesh& mesh, FaceId f) {
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+  FaceFrame frame;
+  const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+  const double area2 = n.norm();
+  const double len01 = (p[1] - p[0]).norm();
+  if (area2 > 0.0 && len01 > 0.0 && std::isfinite(area2)) {
+    frame.n = n / area2;
+    frame.e1 = (p[1] - p[0]) / len01;
+    frame.e2 = frame.n.cross(frame.e1);
+    frame.degenerate = false;
+    return frame;
+  }
+  // Zero-area face: its longest edge (if any) as e1, any perpendicular as e2.
+  Vec3d longest = Vec3d::Zero();
+  for (int k = 0; k < 3; ++k) {
+    const Vec3d e = p[(k + 1) % 3] - p[k];
+    if (e.squaredNorm() > longest.squaredNorm()) longest = e;
+  }
+  const double len = longest.norm();
+  frame.e1 = len > 0.0 && std::isfinite(len) ? Vec3d(longest / len) : Vec3d::UnitX();
+  frame.e2 = frame.e1.unitOrthogonal();
+  frame.n = frame.e1.cross(frame.e2);
+  frame.degenerate = true;
+  return frame;
+}
+
+double frameAngle(const FaceFrame& frame, const Vec3d& v) {
+  const double x = v.dot(frame.e1), y = v.dot(frame.e2);
+  return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : std::atan2(y, x);
+}
+
+/// Interior angles at the three corners from the frame angles of their edges. Turning angle at
+/// corner k: from the incoming edge (corner k+1) to the outgoing one (corner k+2). The third is
+/// set so the turns sum to exactly 2 pi, hence the corner angles to pi, also for degenerate
+/// faces; every value agrees with the frame angles modulo 2 pi.
+template <class T>
+void cornerAngles(const T edge[3], double corner[3]) {
+  const double turn0 = wrapAngle(double(edge[2]) - double(edge[1]));
+  const double turn1 = wrapAngle(double(edge[0]) - double(edge[2]));
+  const double turn2 = 2.0 * M_PI - turn0 - turn1;
+  corner[0] = M_PI - turn0;
+  corner[1] = M_PI - turn1;
+  corner[2] = M_PI - turn2;
+}
+
+FaceAngles faceAngles(const TriangleMesh& mesh, FaceId f) {
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+  FaceAngles a;
+  a.frame = faceFrame(mesh, f);
+  // Corner k names the edge from vertex k+1 to vertex k+2 (topology.h).
+  for (int k = 0; k < 3; ++k) a.edge[k] = frameAngle(a.frame, p[(k + 2) % 3] - p[(k + 1) % 3]);
+  cornerAngles(a.edge, a.corner);
+  return a;
+}
+
+/// kappa: the angle of the edge of c in the frame of face(opposite c) minus its angle in face(c).
+/// The edge as face(c) traverses it is traversed reversed by the other face: add pi.
+double transportAngle(CornerId c, CornerId o, const FaceAngles& from, const FaceAngles& to) {
+  return wrapAngle(to.edge[o % 3] + M_PI - from.edge[c % 3]);
+}
+
+}  // namespace
+
+std::int64_t FieldSingularities::indexSum4() const {
+  std::int64_t sum = 0;
+  for (std::int32_t i : index4) sum += i;
+  return sum;
+}
+
+FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology& topology,
+                                        const CrossField& field) {
+  const std::uint32_t numFaces = topology.numFaces();
+  const std::uint32_t numVertices = topology.numVertices();
+  if (field.direction.size() != numFaces || mesh.triangles.size() != numFaces) {
+    throw InputError("computeSingularities: field has " + std::to_string(field.direction.size()) +
+                     " directions, mesh " + std::to_string(mesh.triangles.size()) +
+                     " faces, topology " + std::to_string(numFaces) + " faces");
+  }
+  FieldSingularities out;
+  out.matching.assign(3 * std::size_t(numFaces), 0);
+  out.index4.assign(numVertices, 0);
+  // Per face, once: the field angle and the edge angles in the face frame (16 bytes per face;
+  // float is ample for rounding to quarter turns).
+  struct FaceData {
+    float theta, edge[3];
+  };
+  std::vector<FaceData> faceData(numFaces);
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const FaceAngles a = faceAngles(mesh, f);
+      faceData[f] = {float(frameAngle(a.frame, field.at(f))), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
+    }
+  });
+
+  // Matchings and residuals: once per interior edge (from its smaller corner), so that the two
+  // sides are exactly opposite. kappa as in transportAngle.
+  std::vector<float> eps(3 * std::size_t(numFaces), 0.0f);  // residual rotation per corner
+  tbb::parallel_for(tbb::blocked_range<CornerId>(0, 3 * numFaces, 8192), [&](const auto& range) {
+    for (CornerId c = range.begin(); c != range.end(); ++c) {
+      const CornerId o = topology.opposite(c);
+      if (o == kInvalidId || o < c) continue;
+      const FaceData& f = faceData[cornerFace(c)];
+      const FaceData& g = faceData[cornerFace(o)];
+      const double kappa = wrapAngle(double(g.edge[o % 3]) + M_PI - double(f.edge[c % 3]));
+      const double d = wrapAngle(double(g.theta) - double(f.theta) - kappa);
+      const long k = std::lround(d / (0.5 * M_PI));  // in [-2, 2]
+      const double e = d - k * (0.5 * M_PI);
+      out.matching[c] = static_cast<std::uint8_t>(((k % 4) + 4) % 4);
+      out.matching[o] = static_cast<std::uint8_t>((4 - out.matching[c]) % 4);
+      eps[c] = static_cast<float>(e);
+      eps[o] = static_cast<float>(-e);
+    }
+  });
+
+  // Index: walk counter-clockwise around each interior vertex; crossing from face(c) to the next
+  // face ccw goes through the edge of next(c).
+  tbb::parallel_for(tbb::blocked_range<VertexId>(0, numVertices, 4096), [&](const auto& range) {
+    for (VertexId v = range.begin(); v != range.end(); ++v) {
+      if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) continue;
+      double sum = 2.0 * M_PI;
+      topology.forEachCornerAround(v, [&](CornerId c) {
+        double corner[3];
+        cornerAngles(faceData[cornerFace(c)].edge, corner);
+        sum += eps[nextCorner(c)] - corner[c % 3];
+      });
+      out.index4[v] = static_cast<std::int32_t>(std::lround(4.0 * sum / (2.0 * M_PI)));
+    }
+  });
+  for (VertexId v = 0; v < numVertices; ++v) {
+    if (out.index4[v] != 0) out.cones.push_back(v);
+  }
+  return out;
+}
+
+namespace {
+
+using Complex = std::complex<double>;
+using SparseMatrixC = Eigen::SparseMatrix<Complex, Eigen::ColMajor, int>;
+using VectorC = Eigen::VectorXcd;
+
+/// The connection Laplacian of the 4-direction field (lower triangle, diagonal first in each
+/// column) and the face areas: energy sum_e w_e |z_g - exp(4 i kappa_fg) z_f|^2.
+struct ConnectionSystem {
+  SparseMatrixC laplacian;
+  Eigen::VectorXd mass;  ///< #F face areas, floored to stay positive
+};
+
+/// Dual-edge weight |e| / |b_f - b_g| (barycentres), bounded for needles and zero-length edges.
+double dualWeight(const TriangleMesh& mesh, const Topology& topology, CornerId c, FaceId f,
+                  FaceId g) {
+  const Triangle& tf = mesh.triangles[f];
+  const Triangle& tg = mesh.triangles[g];
+  const Vec3d bf = (mesh.position(tf[0]) + mesh.position(tf[1]) + mesh.position(tf[2])) / 3.0;
+  const Vec3d bg = (mesh.position(tg[0]) + mesh.position(tg[1]) + mesh.position(tg[2])) / 3.0;
+  const double len =
+      (mesh.position(topology.vertex(nextCorner(c))) - mesh.position(topology.vertex(prevCorner(c))))
+          .norm();
+  constexpr double kMaxWeight = 1e3, kMinWeight = 1e-3;
+  if (!(len > 0.0) || !std::isfinite(len)) return kMinWeight;
+  return std::clamp(len / std::max((bf - bg).norm(), len / kMaxWeight), kMinWeight, kMaxWeight);
+}
+
+ConnectionSystem buildConnectionSystem(const TriangleMesh& mesh, const Topology& topology) {
+  const std::uint32_t numFaces = topology.numFaces();
+  ConnectionSystem sys;
+  sys.mass.resize(numFaces);
+  // Column f holds the diagonal and the rows g > f of its neighbours (merged when two edges are
+  // shared with the same face).
+  std::vector<int> count(numFaces + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      sys.mass[f] = faceArea(mesh, f);
+      FaceId seen[3];
+      int n = 0;
+      for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+        const CornerId o = topology.opposite(c);
+        if (o == kInvalidId || cornerFace(o) <= f) continue;
+        if (std::find(seen, seen + n, cornerFace(o)) == seen + n) seen[n++] = cornerFace(o);
+      }
+      count[f + 1] = 1 + n;
+    }
+  });
+  for (std::uint32_t f = 0; f < numFaces; ++f) count[f + 1] += count[f];
+  double totalArea = 0.0;
+  for (std::uint32_t f = 0; f < numFaces; ++f) totalArea += std::isfinite(sys.mass[f]) ? sys.mass[f] : 0.0;
+  const double minMass = numFaces ? std::max(1e-6 * totalArea / numFaces, 1e-300) : 1.0;
+  for (std::uint32_t f = 0; f < numFaces; ++f) {
+    if (!(sys.mass[f] >= minMass)) sys.mass[f] = minMass;  // also catches NaN
+  }
+
+  SparseMatrixC& a = sys.laplacian;
+  a.resize(numFaces, numFaces);
+  a.resizeNonZeros(count[numFaces]);
+  std::copy(count.begin(), count.end(), a.outerIndexPtr());
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 2048), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const FaceAngles af = faceAngles(mesh, f);
+      std::pair<FaceId, Complex> entries[3];
+      int n = 0;
+      double diagonal = 0.0;
+      for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+        const CornerId o = topology.opposite(c);
+        if (o == kInvalidId) continue;
+        const FaceId g = cornerFace(o);
+        const double w = dualWeight(mesh, topology, c, f, g);
+        diagonal += w;
+        if (g <= f) continue;
+        const double kappa = transportAngle(c, o, af, faceAngles(mesh, g));
+        // Entry (g, f): coefficient of conj(z_g) z_f, i.e. -w exp(4 i kappa_fg).
+        const Complex value = -w * std::polar(1.0, 4.0 * kappa);
+        auto it = std::find_if(entries, entries + n, [&](const auto& e) { return e.first == g; });
+        if (it != entries + n) {
+          it->second += value;
+        } else {
+          entries[n++] = {g, value};
+        }
+      }
+      for (int j = 1; j < n; ++j) {  // insertion sort of at most three rows
+        for (int i = j; i > 0 && entries[i].first < entries[i - 1].first; --i) {
+          std::swap(entries[i], entries[i - 1]);
+        }
+      }
+      int p = a.outerIndexPtr()[f];
+      a.innerIndexPtr()[p] = static_cast<int>(f);
+      a.valuePtr()[p] = diagonal;
+      for (int j = 0; j < n; ++j) {
+        a.innerIndexPtr()[p + 1 + j] = static_cast<int>(entries[j].first);
+        a.valuePtr()[p + 1 + j] = entries[j].second;
+      }
+    }
+  });
+  return sys;
+}
+
+/// Principal-curvature target per face: |k1 - k2| exp(4 i theta) with theta the angle of a
+/// principal direction in the face frame, from a least-squares shape operator fitted to the
+/// change of the area-weighted vertex normals along the three edges.
+VectorC curvatureTarget(const TriangleMesh& mesh, const Topology& topology) {
+  const std::uint32_t numFaces = topology.numFaces(), numVertices = topology.numVertices();
+  std::vector<Vec3d> normal(numVertices, Vec3d::Zero());
+  tbb::parallel_for(tbb::blocked_range<VertexId>(0, numVertices, 4096), [&](const auto& range) {
+    for (VertexId v = range.begin(); v != range.end(); ++v) {
+      Vec3d sum = Vec3d::Zero();
+      topology.forEachCornerAround(v, [&](CornerId c) {
+        const FaceId f = cornerFace(c);
+        sum += faceNormal(mesh, f) * faceArea(mesh, f);
+      });
+      const double len = sum.norm();
+      normal[v] = len > 0.0 && std::isfinite(len) ? Vec3d(sum / len) : Vec3d::Zero();
+    }
+  });
+  VectorC q(numFaces);
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      q[f] = 0.0;
+      const FaceFrame frame = faceFrame(mesh, f);
+      if (frame.degenerate) continue;
+      const Triangle& t = mesh.triangles[f];
+      // Unknowns (a, b, c) of S = [a b; b c]; rows S e = dn for the three edges.
+      Eigen::Matrix3d normalMatrix = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const VertexId i = t[k], j = t[(k + 1) % 3];
+        const Vec3d e = mesh.position(j) - mesh.position(i), dn = normal[j] - normal[i];
+        const double ex = e.dot(frame.e1), ey = e.dot(frame.e2);
+        const double nx = dn.dot(frame.e1), ny = dn.dot(frame.e2);
+        const Eigen::Vector3d r1(ex, ey, 0.0), r2(0.0, ex, ey);
+        normalMatrix += r1 * r1.transpose() + r2 * r2.transpose();
+        rhs += r1 * nx + r2 * ny;
+      }
+      const Eigen::Vector3d s = normalMatrix.ldlt().solve(rhs);
+      if (!s.allFinite()) continue;
+      const Complex z2(s[0] - s[2], 2.0 * s[1]);
+      const double mag = std::abs(z2);
+      if (mag > 0.0 && std::isfinite(mag)) q[f] = z2 * z2 / mag;
+    }
+  });
+  return q;
+}
+
+/// Per-component M-norms of x (component of face f: comp[f]).
+std::vector<double> componentNorms(const VectorC& x, const Eigen::VectorXd& mass,
+                                   const std::vector<std::uint32_t>& comp, std::size_t numComp) {
+  std::vector<double> sum(numComp, 0.0);
+  for (Eigen::Index f = 0; f < x.size(); ++f) sum[comp[f]] += mass[f] * std::norm(x[f]);
+  for (double& s : sum) s = std::sqrt(s);
+  return sum;
+}
+
+/// Deterministic pseudo-random start vector (a fixed hash per face).
+VectorC startVector(std::uint32_t n) {
+  VectorC x(n);
+  for (std::uint32_t f = 0; f < n; ++f) {
+    std::uint64_t h = (f + 1) * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 31;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 29;
+    const double angle = (h >> 11) * (2.0 * M_PI / 9007199254740992.0);
+    x[f] = std::polar(1.0, angle);
+  }
+  return x;
+}
+
+using Factor = Eigen::CholmodSupernodalLLT<SparseMatrixC, Eigen::Lower>;
+
+/// Sets the diagonal of the lower-triangle matrix a to base diagonal + shift[f] * mass[f].
+void shiftDiagonal(SparseMatrixC& a, const std::vector<double>& baseDiagonal,
+                   const Eigen::VectorXd& mass, const std::vector<double>& shift) {
+  for (Eigen::Index f = 0; f < a.cols(); ++f) {
+    a.valuePtr()[a.outerIndexPtr()[f]] = baseDiagonal[f] + shift[f] * mass[f];
+  }
+}
+
+void checkFactor(const Factor& factor, const char* what) {
+  if (factor.info() != Eigen::Success) {
+    throw SolverError(std::string("smoothest field: CHOLMOD factorization failed (") + what +
+                      "); the connection Laplacian is not positive definite or memory ran out");
+  }
+}
+
+}  // namespace
+
+CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topology,
+                                 const SmoothFieldOptions& options) {
+  const std::uint32_t numFaces = topology.numFaces();
+  CrossField field;
+  if (numFaces == 0) return field;
+  if (mesh.triangles.size() != numFaces) {
+    throw InputError("computeSmoothestField: mesh has " + std::to_string(mesh.triangles.size()) +
+                     " faces, topology " + std::to_string(numFaces));
+  }
+  reportProgress(options.progress, "field: assemble", 0.0);
+  const ComponentsResult components = computeComponents(topology);
+  const std::vector<std::uint32_t>& comp = components.faceComponent;
+  const std::size_t numComp = components.components.size();
+  ConnectionSystem sys = buildConnectionSystem(mesh, topology);
+  SparseMatrixC& a = sys.laplacian;
+  std::vector<double> baseDiagonal(numFaces);
+  double diagonalTrace = 0.0;
+  for (std::uint32_t f = 0; f < numFaces; ++f) {
+    baseDiagonal[f] = a.valuePtr()[a.outerIndexPtr()[f]].real();
+    diagonalTrace += baseDiagonal[f];
+  }
+  // A tiny shift keeps A + sigma M definite when the field has a flat mode (trivial holonomy,
+  // e.g. a flat torus) without changing the smallest eigenvector.
+  const double sigma = 1e-9 * diagonalTrace / sys.mass.sum();
+  std::vector<double> shift(numFaces, sigma);
+  shiftDiagonal(a, baseDiagonal, sys.mass, shift);
+
+  // Smallest eigenvector of A x = lambda M x by inverse power iteration, normalized per
+  // component (the matrix is block diagonal, so every component converges on its own).
+  reportProgress(options.progress, "field: factor", 0.1);
+  Factor factor;
+  factor.cholmod().print = 0;
+  factor.compute(a);
+  checkFactor(factor, "smoothest field");
+  VectorC x = startVector(numFaces);
+  {
+    const std::vector<double> norms = componentNorms(x, sys.mass, comp, numComp);
+    for (std::uint32_t f = 0; f < numFaces; ++f) x[f] /= norms[comp[f]];
+  }
+  constexpr int kMaxIterations = 30;
+  for (int it = 0; it < kMaxIterations; ++it) {
+    reportProgress(options.progress, "field: eigenvector", 0.5 + 0.4 * it / kMaxIterations);
+    VectorC y = factor.solve(VectorC(sys.mass.cast<Complex>().cwiseProduct(x)));
+    if (!y.allFinite()) throw SolverError("smoothest field: inverse iteration produced NaN");
+    const std::vector<double> norms = componentNorms(y, sys.mass, comp, numComp);
+    std::vector<Complex> overlap(numComp, 0.0);
+    for (std::uint32_t f = 0; f < numFaces; ++f) {
+      y[f] /= norms[comp[f]] > 0.0 ? norms[comp[f]] : 1.0;
+      overlap[comp[f]] += sys.mass[f] * std::conj(x[f]) * y[f];
+    }
+    x.swap(y);
+    double change = 0.0;
+    for (const Complex& o : overlap) change = std::max(change, 1.0 - std::abs(o));
+    if (change < 1e-10) break;
+  }
+
+  if (options.curvatureWeight > 0.0) {
+    // Curvature alignment: (A - lambda M) z = M q per component with
+    // lambda = lambda_1 / 2 - curvatureWeight * 4 pi^2 / area (below lambda_1: definite).
+    reportProgress(options.progress, "field: curvature", 0.9);
+    const VectorC ax = a.selfadjointView<Eigen::Lower>() * x;
+    std::vector<double> lambda1(numComp, 0.0), area(numComp, 0.0);
+    for (std::uint32_t f = 0; f < numFaces; ++f) {
+      lambda1[comp[f]] += (std::conj(x[f]) * ax[f]).real();  // x has unit M-norm per component
+      area[comp[f]] += sys.mass[f];
+    }
+    for (std::uint32_t f = 0; f < numFaces; ++f) {
+      const std::uint32_t k = comp[f];
+      const double lambda = 0.5 * std::max(lambda1[k] - sigma, 0.0) -
+                            options.curvatureWeight * 4.0 * M_PI * M_PI / area[k];
+      shift[f] = sigma - lambda;
+    }
+    shiftDiagonal(a, baseDiagonal, sys.mass, shift);
+    factor.factorize(a);
+    checkFactor(factor, "curvature-aligned field");
+    const VectorC q = curvatureTarget(mesh, topology);
+    VectorC z = factor.solve(VectorC(sys.mass.cast<Complex>().cwiseProduct(q)));
+    const std::vector<double> qNorms = componentNorms(q, sys.mass, comp, numComp);
+    const std::vector<double> zNorms = componentNorms(z, sys.mass, comp, numComp);
+    for (std::uint32_t f = 0; f < numFaces; ++f) {
+      const std::uint32_t k = comp[f];
+      // A flat component has no curvature target: keep its smoothest field.
+      if (qNorms[k] > 1e-12 * std::sqrt(area[k]) && zNorms[k] > 0.0 && std::isfinite(zNorms[k])) {
+        x[f] = z[f];
+      }
+    }
+  }
+
+  reportProgress(options.progress, "field: directions", 0.95);
+  field.direction.resize(numFaces);
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const FaceFrame frame = faceFrame(mesh, f);
+      const double theta = std::abs(x[f]) > 0.0 ? 0.25 * std::arg(x[f]) : 0.0;
+      field.set(f, std::cos(theta) * frame.e1 + std::sin(theta) * frame.e2);
+    }
+  });
+  reportProgress(options.progress, "field: directions", 1.0);
+  return field;
+}
+
+CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors) {
+  const std::uint32_t numFaces = mesh.numFaces();
+  if (vectors.size() != numFaces) {
+    throw InputError("projectToTangent: " + std::to_string(vectors.size()) + " vectors for " +
+                     std::to_string(numFaces) + " faces");
+  }
+  CrossField field;
+  field.direction.resize(numFaces);
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const FaceFrame frame = faceFrame(mesh, f);
+      const Vec3d& v = vectors[f];
+      const Vec3d t = v.allFinite() ? Vec3d(v - v.dot(frame.n) * frame.n) : Vec3d::Zero();
+      const double len = t.norm();
+      // Parallel to the normal, zero or not finite: the frame's first direction.
+      field.set(f, len > 1e-12 * std::max(1.0, v.norm()) ? Vec3d(t / len) : frame.e1);
+    }
+  });
+  return field;
+}
+
+}  // namespace seamvox

@@ -1,0 +1,60 @@
+#pragma once
+/// Cross fields: per-face unit tangent direction u_T (the cross is {u, n x u, -u, -n x u}),
+/// per-edge matchings and per-vertex singularity indices. DESIGN section 4.
+///
+/// CONVENTIONS (written once; see also topology.h):
+/// * Angles are measured counter-clockwise about the face normal; rot(x) = n x x is a quarter
+///   turn. Each face has a reference frame: its first edge (vertex 0 -> vertex 1) is angle 0.
+/// * matching[c] = k for the edge of corner c, going from face f = face(c) to g = face(opposite c):
+///   the cross direction rot^k(u_f), parallel-transported across the edge, is the one closest to
+///   u_g. Hence matching[opposite(c)] == (4 - matching[c]) % 4. Boundary corners hold 0.
+/// * singularity index of a vertex in quarter turns: index4(v) = round(4 (K_v + sum eps) / 2 pi)
+///   walking counter-clockwise around v (DESIGN section 4); a flat fan whose field turns by +phi/4
+///   around the vertex has index4 = +1. On a closed mesh sum index4 = 4 chi (Poincare-Hopf).
+///   Boundary vertices get index 0 (the boundary is free).
+#include <cstdint>
+#include <vector>
+
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+struct CrossField {
+  /// #F unit tangent vectors u_T (world coordinates), stored in float to halve their memory
+  /// (12 bytes per face); computations read them in double through at().
+  std::vector<Vec3f> direction;
+  Vec3d at(FaceId f) const { return direction[f].cast<double>(); }
+  void set(FaceId f, const Vec3d& u) { direction[f] = u.cast<float>(); }
+};
+
+struct FieldSingularities {
+  std::vector<std::uint8_t> matching;  ///< 3 #F, per corner, in {0,1,2,3}
+  std::vector<std::int32_t> index4;    ///< #V, singularity index in quarter turns
+  std::vector<VertexId> cones;         ///< vertices with index4 != 0, increasing
+  std::int64_t indexSum4() const;      ///< sum of index4 (== 4 chi on closed meshes)
+};
+
+/// Matchings, indices and cones of a field. Linear, parallel. Zero-area faces are handled
+/// without NaN (their frame falls back to any tangent direction).
+FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology& topology,
+                                        const CrossField& field);
+
+struct SmoothFieldOptions {
+  /// 0 = smoothest field only; larger values align more strongly with principal curvature.
+  /// (w > 0 solves (A - lambda M) z = M q per component, q the principal directions as 4th
+  /// powers, lambda = lambda_1 / 2 - w 4 pi^2 / area: w = 1 already follows curvature closely.)
+  double curvatureWeight = 0.0;
+  ProgressFn progress;
+};
+/// Smoothest 4-direction field (Knoppel et al. 2013): per-face z^4, discrete connection across
+/// edges, one sparse Hermitian CHOLMOD solve. Exact; practical up to a few million faces.
+CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topology,
+                                 const SmoothFieldOptions& options = {});
+
+/// Projects arbitrary per-face 3D vectors onto each face's tangent plane and normalizes them.
+/// Vectors parallel to the normal (or zero) get the face's first edge direction.
+CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors);
+
+}  // namespace seamvox

@@ -1,0 +1,532 @@
+// The proxy cross field: grid-cell elements, the connection Laplacian on the element graph
+// solved by inverse iteration (CHOLMOD), transfer to faces and coloured smoothing sweeps.
+// Conventions: core/field/field.h; the method: DESIGN section 4.
+#include "core/field/field_proxy.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "core/mesh/detail_union_find.h"
+#include "core/system/errors.h"
+
+namespace seamvox {
+
+namespace {
+
+using Complex = std::complex<double>;
+
+/// Geometry of one face: unit normal, first-edge frame, centroid. Zero-area faces get a frame
+/// from their longest edge and are flagged.
+struct FaceGeometry {
+  Vec3d n, e1, e2, centroid;
+  double area = 0.0;
+  bool degenerate = false;
+};
+
+FaceGeometry faceGeometry(const TriangleMesh& mesh, FaceId f) {
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d p0 = mesh.position(t[0]), p1 = mesh.position(t[1]), p2 = mesh.position(t[2]);
+  FaceGeometry g;
+  g.centroid = (p0 + p1 + p2) / 3.0;
+  const Vec3d cross = (p1 - p0).cross(p2 - p0);
+  const double twiceArea = cross.norm();
+  const double len01 = (p1 - p0).norm();
+  if (twiceArea > 0.0 && len01 > 0.0 && std::isfinite(twiceArea)) {
+    g.n = cross / twiceArea;
+    g.e1 = (p1 - p0) / len01;
+    g.area = 0.5 * twiceArea;
+  } else {
+    Vec3d longest = p1 - p0;
+    for (const Vec3d& e : {Vec3d(p2 - p1), Vec3d(p0 - p2)}) {
+      if (e.squaredNorm() > longest.squaredNorm()) longest = e;
+    }
+    const double len = longest.norm();
+    g.e1 = len > 0.0 && std::isfinite(len) ? Vec3d(longest / len) : Vec3d::UnitX();
+    g.n = g.e1.unitOrthogonal();
+    g.degenerate = true;
+  }
+  g.e2 = g.n.cross(g.e1);
+  return g;
+}
+
+/// v rotated by the smallest rotation taking unit vector `from` to unit vector `to` (for the two
+/// faces of an edge: the rotation about the edge, the discrete parallel transport). Opposite
+/// normals: a half turn about an axis perpendicular to `from`.
+Vec3d rotateBetween(const Vec3d& from, const Vec3d& to, const Vec3d& v) {
+  const double c = from.dot(to);
+  if (c > -1.0 + 1e-9) {
+    const Vec3d k = from.cross(to);
+    return c * v + k.cross(v) + (k.dot(v) / (1.0 + c)) * k;
+  }
+  const Vec3d axis = from.unitOrthogonal();
+  return 2.0 * axis.dot(v) * axis - v;
+}
+
+/// Unit 4th power of the tangent vector v written in the frame (e1, e2); 0 for a zero vector.
+/// (x + iy)^4 / (x^2 + y^2)^2: no trigonometry, no square root.
+Complex fourthPower(const Vec3d& v, const Vec3d& e1, const Vec3d& e2) {
+  const double x = v.dot(e1), y = v.dot(e2);
+  const double r2 = x * x + y * y;
+  if (!(r2 > 0.0) || !std::isfinite(r2)) return 0.0;
+  const double a = (x * x - y * y) / r2, b = 2.0 * x * y / r2;  // unit square
+  return {a * a - b * b, 2.0 * a * b};
+}
+
+/// Principal square root of a unit complex number (half the angle, in (-pi/2, pi/2]).
+Complex unitSqrt(Complex w) {
+  const double c = std::sqrt(std::max(0.0, 0.5 * (1.0 + w.real())));
+  const double s = std::sqrt(std::max(0.0, 0.5 * (1.0 - w.real())));
+  return {c, std::signbit(w.imag()) ? -s : s};
+}
+
+/// The direction whose 4th power has the argument of z, in the frame (e1, e2): the quarter-turn
+/// representative closest to e1 (angle arg(z) / 4). e1 itself when z is 0.
+Vec3d directionOf(Complex z, const Vec3d& e1, const Vec3d& e2) {
+  const double len = std::sqrt(std::norm(z));
+  if (!(len > 0.0) || !std::isfinite(len)) return e1;
+  const Complex r = unitSqrt(unitSqrt(z / len));
+  return r.real() * e1 + r.imag() * e2;
+}
+
+bool isZero(const Vec3f& n) { return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f; }
+
+/// Dual-edge weight |e| / |b_f - b_g|, bounded for needles and zero-length edges.
+double dualWeight(double edgeLength, const Vec3d& bf, const Vec3d& bg) {
+  constexpr double kMaxWeight = 1e3, kMinWeight = 1e-3;
+  if (!(edgeLength > 0.0) || !std::isfinite(edgeLength)) return kMinWeight;
+  return std::clamp(edgeLength / std::max((bf - bg).norm(), edgeLength / kMaxWeight), kMinWeight,
+                    kMaxWeight);
+}
+
+double edgeLength(const TriangleMesh& mesh, const Topology& topology, CornerId c) {
+  return (mesh.position(topology.vertex(nextCorner(c))) - mesh.position(topology.vertex(prevCorner(c))))
+      .norm();
+}
+
+/// The proxy: elements (connected pieces of the mesh inside one grid cell) and their graph.
+struct Proxy {
+  std::vector<std::uint32_t> faceElement;     ///< #F
+  std::vector<std::uint32_t> elementStart;    ///< #E + 1, offsets into elementFaces
+  std::vector<std::uint32_t> elementFaces;    ///< faces grouped by element, increasing in each
+  std::vector<Vec3d> normal, centroid;        ///< #E, area-weighted unit normal and centroid
+  std::vector<double> area;                   ///< #E
+  std::vector<std::uint32_t> neighbourStart;  ///< #E + 1, offsets into neighbours
+  std::vector<std::pair<std::uint32_t, double>> neighbours;  ///< (element, shared edge length)
+  double cellSize = 0.0;
+  std::uint32_t numElements() const { return static_cast<std::uint32_t>(area.size()); }
+};
+
+/// Cell of every face's centroid, then faces of one cell joined through their shared edges.
+void buildElements(const TriangleMesh& mesh, const Topology& topology, std::int32_t resolution,
+                   Proxy& proxy) {
+  const std::uint32_t numFaces = topology.numFaces();
+  const BoundingBox box = computeBoundingBox(mesh.positions);
+  const Vec3d extent = box.extent();
+  const double longest = std::max(extent.maxCoeff(), 1e-300);
+  // Cubic cells, the grid centred on the box and padded by a few percent of a cell.
+  proxy.cellSize = longest * (1.0 + 1e-3) / resolution;
+  if (!(proxy.cellSize > 0.0) || !std::isfinite(proxy.cellSize)) proxy.cellSize = 1.0;
+  const Vec3d origin = 0.5 * (box.min + box.max) - Vec3d::Constant(0.5 * resolution * proxy.cellSize);
+  const std::uint32_t r = static_cast<std::uint32_t>(resolution);
+
+  std::vector<std::uint32_t> cell(numFaces);
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      const Vec3d b = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
+      std::uint32_t key = 0;
+      for (int axis = 2; axis >= 0; --axis) {
+        const double x = (b[axis] - origin[axis]) / proxy.cellSize;
+        const std::uint32_t i = x >= 0.0 ? std::min(static_cast<std::uint32_t>(std::min(x, 1e9)), r - 1) : 0;
+        key = key * r + i;  // NaN centroids land in cell 0
+      }
+      cell[f] = key;
+    }
+  });
+  detail::UnionFind sets(numFaces);
+  for (CornerId c = 0; c < topology.numCorners(); ++c) {
+    const CornerId o = topology.opposite(c);
+    if (o != kInvalidId && o > c && cell[cornerFace(c)] == cell[cornerFace(o)]) {
+      sets.unite(cornerFace(c), cornerFace(o));
+    }
+  }
+  std::vector<std::uint32_t>().swap(cell);
+  // Parents never point to a larger id, so one increasing pass turns roots into element ids
+  // (numbered by their smallest face) and every other face into its root's id.
+  std::vector<std::uint32_t>& element = sets.parent;
+  std::uint32_t numElements = 0;
+  for (FaceId f = 0; f < numFaces; ++f) element[f] = element[f] == f ? numElements++ : element[element[f]];
+  proxy.faceElement = std::move(element);
+
+  proxy.elementStart.assign(numElements + 1, 0);
+  for (FaceId f = 0; f < numFaces; ++f) ++proxy.elementStart[proxy.faceElement[f] + 1];
+  for (std::uint32_t e = 0; e < numElements; ++e) proxy.elementStart[e + 1] += proxy.elementStart[e];
+  proxy.elementFaces.resize(numFaces);
+  {
+    std::vector<std::uint32_t> fill(proxy.elementStart.begin(), proxy.elementStart.end() - 1);
+    for (FaceId f = 0; f < numFaces; ++f) proxy.elementFaces[fill[proxy.faceElement[f]]++] = f;
+  }
+}
+
+/// Area, normal and centroid per element; neighbours with the summed length of shared edges.
+/// Parallel over elements, each summing its faces in increasing order (deterministic).
+void accumulateElements(const TriangleMesh& mesh, const Topology& topology, Proxy& proxy) {
+  const std::uint32_t numElements = static_cast<std::uint32_t>(proxy.elementStart.size() - 1);
+  proxy.normal.resize(numElements);
+  proxy.centroid.resize(numElements);
+  proxy.area.resize(numElements);
+  std::vector<std::vector<std::pair<std::uint32_t, double>>> adjacent(numElements);
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, numElements, 64), [&](const auto& range) {
+    for (std::uint32_t e = range.begin(); e != range.end(); ++e) {
+      Vec3d normal = Vec3d::Zero(), weighted = Vec3d::Zero(), plain = Vec3d::Zero();
+      double area = 0.0;
+      auto& list = adjacent[e];
+      for (std::uint32_t i = proxy.elementStart[e]; i < proxy.elementStart[e + 1]; ++i) {
+        const FaceId f = proxy.elementFaces[i];
+        const FaceGeometry g = faceGeometry(mesh, f);
+        normal += g.area * g.n;
+        weighted += g.area * g.centroid;
+        plain += g.centroid;
+        area += g.area;
+        for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+          const CornerId o = topology.opposite(c);
+          if (o == kInvalidId) continue;
+          const std::uint32_t other = proxy.faceElement[cornerFace(o)];
+          if (other == e) continue;
+          const double len = edgeLength(mesh, topology, c);
+          auto it = std::find_if(list.begin(), list.end(), [&](const auto& p) { return p.first == other; });
+          if (it == list.end()) {
+            list.emplace_back(other, std::isfinite(len) ? len : 0.0);
+          } else {
+            it->second += std::isfinite(len) ? len : 0.0;
+          }
+        }
+      }
+      std::sort(list.begin(), list.end());
+      const std::uint32_t count = proxy.elementStart[e + 1] - proxy.elementStart[e];
+      const double len = normal.norm();
+      proxy.normal[e] = len > 0.0 && std::isfinite(len) ? Vec3d(normal / len) : Vec3d::UnitZ();
+      proxy.centroid[e] = area > 0.0 && std::isfinite(area) ? Vec3d(weighted / area) : Vec3d(plain / count);
+      proxy.area[e] = std::isfinite(area) ? area : 0.0;
+    }
+  });
+  proxy.neighbourStart.assign(numElements + 1, 0);
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    proxy.neighbourStart[e + 1] = proxy.neighbourStart[e] + static_cast<std::uint32_t>(adjacent[e].size());
+  }
+  proxy.neighbours.reserve(proxy.neighbourStart[numElements]);
+  for (auto& list : adjacent) {
+    proxy.neighbours.insert(proxy.neighbours.end(), list.begin(), list.end());
+    std::vector<std::pair<std::uint32_t, double>>().swap(list);
+  }
+}
+
+/// Tangent frame of an element: e1 any unit vector perpendicular to its normal.
+void elementFrame(const Vec3d& n, Vec3d& e1, Vec3d& e2) {
+  e1 = n.unitOrthogonal();
+  e2 = n.cross(e1);
+}
+
+using SparseMatrixC = Eigen::SparseMatrix<Complex, Eigen::ColMajor, int>;
+using VectorC = Eigen::VectorXcd;
+
+/// Smallest eigenvector of the element connection Laplacian A z = lambda M z (energy
+/// sum w_ab |z_b - exp(4 i kappa_ab) z_a|^2, M the element areas), normalized per component.
+VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
+  const std::uint32_t numElements = proxy.numElements();
+  std::vector<Vec3d> e1(numElements), e2(numElements);
+  for (std::uint32_t e = 0; e < numElements; ++e) elementFrame(proxy.normal[e], e1[e], e2[e]);
+
+  // Lower triangle, one column per element: diagonal first, then the neighbours b > a.
+  SparseMatrixC a(numElements, numElements);
+  std::vector<int> start(numElements + 1, 0);
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    int n = 1;
+    for (std::uint32_t i = proxy.neighbourStart[e]; i < proxy.neighbourStart[e + 1]; ++i) n += proxy.neighbours[i].first > e;
+    start[e + 1] = start[e] + n;
+  }
+  a.resizeNonZeros(start[numElements]);
+  std::copy(start.begin(), start.end(), a.outerIndexPtr());
+  Eigen::VectorXd mass(numElements);
+  double totalArea = 0.0;
+  for (double area : proxy.area) totalArea += area;
+  const double minMass = std::max(1e-6 * totalArea / std::max<std::uint32_t>(numElements, 1), 1e-300);
+  double trace = 0.0;
+  detail::UnionFind components(numElements);
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    mass[e] = std::max(proxy.area[e], minMass);
+    int p = start[e];
+    double diagonal = 0.0;
+    for (std::uint32_t i = proxy.neighbourStart[e]; i < proxy.neighbourStart[e + 1]; ++i) {
+      const auto [b, length] = proxy.neighbours[i];
+      const double w = dualWeight(length, proxy.centroid[e], proxy.centroid[b]);
+      diagonal += w;
+      if (b < e) continue;
+      components.unite(e, b);
+      // Angle of e1[e], transported to b, in b's frame: z_b ~ exp(4 i kappa) z_e.
+      const Vec3d moved = rotateBetween(proxy.normal[e], proxy.normal[b], e1[e]);
+      const Complex transport = fourthPower(moved, e1[b], e2[b]);
+      ++p;
+      a.innerIndexPtr()[p] = static_cast<int>(b);
+      a.valuePtr()[p] = -w * (std::abs(transport) > 0.0 ? transport : Complex(1.0));
+    }
+    a.innerIndexPtr()[start[e]] = static_cast<int>(e);
+    a.valuePtr()[start[e]] = diagonal;
+    trace += diagonal;
+  }
+  // A tiny shift keeps the matrix definite for fields without holonomy (flat pieces).
+  // (No edge at all, e.g. a single element: any positive shift.)
+  const double sigma = trace > 0.0 ? 1e-9 * trace / mass.sum() : 1.0;
+  for (std::uint32_t e = 0; e < numElements; ++e) a.valuePtr()[start[e]] += sigma * mass[e];
+
+  std::vector<std::uint32_t> comp(numElements);
+  std::uint32_t numComponents = 0;
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    comp[e] = components.find(e) == e ? numComponents++ : comp[components.find(e)];
+  }
+  reportProgress(progress, "proxy field: factor", 0.3);
+  Eigen::CholmodSupernodalLLT<SparseMatrixC, Eigen::Lower> factor;
+  factor.cholmod().print = 0;
+  factor.compute(a);
+  if (factor.info() != Eigen::Success) {
+    throw SolverError("proxy field: CHOLMOD could not factor the element connection Laplacian (" +
+                      std::to_string(numElements) + " elements); not positive definite or out of memory");
+  }
+  // Inverse iteration from a fixed pseudo-random start, normalized per component.
+  VectorC x(numElements);
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    std::uint64_t h = (std::uint64_t(e) + 7) * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 29;
+    h *= 0xBF58476D1CE4E5B9ull;
+    x[e] = std::polar(1.0, (h >> 11) * (2.0 * M_PI / 9007199254740992.0));
+  }
+  auto normalize = [&](VectorC& v) {
+    std::vector<double> norm2(numComponents, 0.0);
+    for (std::uint32_t e = 0; e < numElements; ++e) norm2[comp[e]] += mass[e] * std::norm(v[e]);
+    for (std::uint32_t e = 0; e < numElements; ++e) {
+      if (norm2[comp[e]] > 0.0) v[e] /= std::sqrt(norm2[comp[e]]);
+    }
+  };
+  normalize(x);
+  constexpr int kMaxIterations = 40;
+  for (int it = 0; it < kMaxIterations; ++it) {
+    reportProgress(progress, "proxy field: eigenvector", 0.3 + 0.2 * it / kMaxIterations);
+    VectorC y = factor.solve(VectorC(mass.cast<Complex>().cwiseProduct(x)));
+    if (!y.allFinite()) throw SolverError("proxy field: inverse iteration produced NaN");
+    normalize(y);
+    std::vector<Complex> overlap(numComponents, 0.0);
+    for (std::uint32_t e = 0; e < numElements; ++e) overlap[comp[e]] += mass[e] * std::conj(x[e]) * y[e];
+    x.swap(y);
+    double change = 0.0;
+    for (const Complex& o : overlap) change = std::max(change, 1.0 - std::abs(o));
+    if (change < 1e-10) break;
+  }
+  return x;
+}
+
+/// Greedy colouring of the face graph (faces adjacent through edges), in face order: at most 4
+/// colours since a face has at most 3 neighbours.
+std::uint32_t colourFaces(const Topology& topology, std::vector<std::uint8_t>& colour) {
+  const std::uint32_t numFaces = topology.numFaces();
+  colour.assign(numFaces, 0xff);
+  std::uint32_t used = 0;
+  for (FaceId f = 0; f < numFaces; ++f) {
+    unsigned taken = 0;
+    for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+      const CornerId o = topology.opposite(c);
+      if (o != kInvalidId && colour[cornerFace(o)] != 0xff) taken |= 1u << colour[cornerFace(o)];
+    }
+    std::uint8_t k = 0;
+    while (taken & (1u << k)) ++k;
+    colour[f] = k;
+    used = std::max<std::uint32_t>(used, k + 1u);
+  }
+  return used;
+}
+
+}  // namespace
+
+ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& topology,
+                                   const ProxyFieldOptions& options) {
+  const std::uint32_t numFaces = topology.numFaces();
+  if (mesh.triangles.size() != numFaces) {
+    throw InputError("computeProxyField: mesh has " + std::to_string(mesh.triangles.size()) +
+                     " faces, topology " + std::to_string(numFaces));
+  }
+  if (options.gridResolution < 4 || options.gridResolution > 1024) {
+    throw InputError("computeProxyField: grid resolution " + std::to_string(options.gridResolution) +
+                     " outside 4..1024");
+  }
+  if (options.smoothingSweeps < 0) {
+    throw InputError("computeProxyField: negative number of smoothing sweeps");
+  }
+  ProxyFieldResult result;
+  if (numFaces == 0) return result;
+
+  reportProgress(options.progress, "proxy field: elements", 0.0);
+  Proxy proxy;
+  buildElements(mesh, topology, options.gridResolution, proxy);
+  accumulateElements(mesh, topology, proxy);
+  std::vector<std::uint32_t>().swap(proxy.elementFaces);
+  std::vector<std::uint32_t>().swap(proxy.elementStart);
+  result.elements = proxy.numElements();
+  result.elementEdges = proxy.neighbours.size() / 2;
+
+  const VectorC z = solveElementField(proxy, options.progress);
+  // Element directions in world coordinates, with the magnitude |z| as confidence.
+  const std::uint32_t numElements = proxy.numElements();
+  std::vector<Vec3d> elementDirection(numElements);
+  std::vector<double> confidence(numElements);
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    Vec3d e1, e2;
+    elementFrame(proxy.normal[e], e1, e2);
+    elementDirection[e] = directionOf(z[e], e1, e2);
+    confidence[e] = std::isfinite(std::abs(z[e])) ? std::abs(z[e]) : 0.0;
+  }
+
+  // Transfer: each face averages the 4th powers of its element and the element's neighbours,
+  // transported to the face's plane, weighted by confidence and a bump of the centroid distance.
+  reportProgress(options.progress, "proxy field: transfer", 0.5);
+  CrossField& field = result.field;
+  field.direction.resize(numFaces);
+  // Unit normals as floats for the sweeps (zero for a zero-area face): 12 bytes per face, read
+  // 4 times per face and sweep without decoding.
+  std::vector<Vec3f> sweepNormal(options.smoothingSweeps > 0 ? numFaces : 0);
+  const double radius = 2.0 * proxy.cellSize;
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 2048), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const FaceGeometry g = faceGeometry(mesh, f);
+      const std::uint32_t own = proxy.faceElement[f];
+      Complex sum = 0.0;
+      auto add = [&](std::uint32_t e) {
+        const double d = (g.centroid - proxy.centroid[e]).norm() / radius;
+        const double bump = d < 1.0 ? (1.0 - d * d) * (1.0 - d * d) : 0.0;
+        // The own element always counts a little, so no face is left without a value.
+        const double w = confidence[e] * (e == own ? std::max(bump, 1e-3) : bump);
+        if (w > 0.0) sum += w * fourthPower(rotateBetween(proxy.normal[e], g.n, elementDirection[e]), g.e1, g.e2);
+      };
+      add(own);
+      for (std::uint32_t i = proxy.neighbourStart[own]; i < proxy.neighbourStart[own + 1]; ++i) {
+        add(proxy.neighbours[i].first);
+      }
+      field.set(f, directionOf(sum, g.e1, g.e2));
+      if (!sweepNormal.empty()) sweepNormal[f] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
+    }
+  });
+  std::vector<std::uint32_t>().swap(proxy.faceElement);  // freed before the sweeps
+
+  // Smoothing: Gauss-Seidel by colour; faces of one colour share no edge, so each colour is a
+  // race-free parallel loop and the result does not depend on the thread count.
+  std::vector<std::uint8_t> colour;
+  result.colours = options.smoothingSweeps > 0 ? colourFaces(topology, colour) : 0;
+  // A sweep reads only the corner table, the float normals and the directions (unit weights):
+  // memory traffic, not geometry. The exact tangent planes are restored once at the end.
+  for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
+    reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
+    for (std::uint32_t k = 0; k < result.colours; ++k) {
+      tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+        for (FaceId f = range.begin(); f != range.end(); ++f) {
+          if (colour[f] != k || isZero(sweepNormal[f])) continue;
+          const Vec3d n = sweepNormal[f].cast<double>();
+          // Frame with e1 = the current direction: the new one is the representative nearest it.
+          const Vec3d u = field.at(f);
+          const Vec3d v = n.cross(u);
+          Complex sum = 0.0;
+          for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+            const CornerId o = topology.opposite(c);
+            if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
+            const FaceId g = cornerFace(o);
+            sum += fourthPower(rotateBetween(sweepNormal[g].cast<double>(), n, field.at(g)), u, v);
+          }
+          const Vec3d next = directionOf(sum, u, v);
+          const Vec3d tangent = next - next.dot(n) * n;
+          const double len = tangent.norm();
+          if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
+        }
+      });
+    }
+  }
+  if (options.smoothingSweeps > 0) {
+    tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+      for (FaceId f = range.begin(); f != range.end(); ++f) {
+        if (isZero(sweepNormal[f])) continue;
+        const Vec3d n = faceNormal(mesh, f);
+        const Vec3d u = field.at(f);
+        const Vec3d tangent = u - u.dot(n) * n;
+        const double len = tangent.norm();
+        if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
+      }
+    });
+  }
+  reportProgress(options.progress, "proxy field: smooth", 1.0);
+  return result;
+}
+
+FieldMethod resolveFieldMethod(FieldMethod method, std::uint32_t numFaces) {
+  if (method != FieldMethod::Auto) return method;
+  return numFaces <= kDirectFieldMaxFaces ? FieldMethod::Direct : FieldMethod::Proxy;
+}
+
+const char* fieldMethodName(FieldMethod method) {
+  switch (method) {
+    case FieldMethod::Auto: return "auto";
+    case FieldMethod::Direct: return "direct";
+    case FieldMethod::Proxy: return "proxy";
+  }
+  return "unknown";
+}
+
+FieldMethod parseFieldMethod(const std::string& name) {
+  if (name == "auto") return FieldMethod::Auto;
+  if (name == "direct" || name == "smooth") return FieldMethod::Direct;
+  if (name == "proxy") return FieldMethod::Proxy;
+  throw InputError("unknown field method '" + name + "' (known: auto, direct or smooth, proxy)");
+}
+
+CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology, FieldMethod method,
+                             const SmoothFieldOptions& smooth, const ProxyFieldOptions& proxy) {
+  if (resolveFieldMethod(method, topology.numFaces()) == FieldMethod::Direct) {
+    return computeSmoothestField(mesh, topology, smooth);
+  }
+  if (smooth.curvatureWeight > 0.0) {
+    throw InputError("curvature alignment needs the direct field: the proxy field (used above " +
+                     std::to_string(kDirectFieldMaxFaces) + " faces) is the smoothest field only");
+  }
+  return computeProxyField(mesh, topology, proxy).field;
+}
+
+double measureFieldEnergy(const TriangleMesh& mesh, const Topology& topology, const CrossField& field) {
+  const std::uint32_t numFaces = topology.numFaces();
+  if (field.direction.size() != numFaces) {
+    throw InputError("measureFieldEnergy: field has " + std::to_string(field.direction.size()) +
+                     " directions for " + std::to_string(numFaces) + " faces");
+  }
+  std::vector<double> perFace(numFaces, 0.0);
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const FaceGeometry g = faceGeometry(mesh, f);
+      const Complex zf = fourthPower(field.at(f), g.e1, g.e2);
+      for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+        const CornerId o = topology.opposite(c);
+        if (o == kInvalidId || o < c) continue;
+        const FaceGeometry h = faceGeometry(mesh, cornerFace(o));
+        const Complex zg = fourthPower(rotateBetween(h.n, g.n, field.at(cornerFace(o))), g.e1, g.e2);
+        perFace[f] += dualWeight(edgeLength(mesh, topology, c), g.centroid, h.centroid) * std::norm(zf - zg);
+      }
+    }
+  });
+  double sum = 0.0;
+  for (double e : perFace) sum += e;
+  return sum;
+}
+
+}  // namespace seamvox

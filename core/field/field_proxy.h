@@ -1,0 +1,65 @@
+#pragma once
+/// Scalable cross field for massive meshes (DESIGN section 4, "scalable field"): the smoothest
+/// field solved on a coarse proxy (connected pieces of the mesh inside the cells of a grid over
+/// the bounding box), transferred to faces and smoothed by a few coloured sweeps. Time and memory
+/// are linear in the mesh; the solve's size depends on the grid only. Conventions: field.h.
+#include <cstdint>
+#include <string>
+
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+struct ProxyFieldOptions {
+  /// Cells along the longest axis of the bounding box (4..1024). The proxy has about one
+  /// element per cell the surface crosses (more where thin parts put two sheets in one cell).
+  std::int32_t gridResolution = 128;
+  /// Gauss-Seidel sweeps on the faces after the transfer (each face := normalized transported
+  /// average of its neighbours' 4th powers), one colour of the face graph at a time.
+  std::int32_t smoothingSweeps = 4;
+  ProgressFn progress;
+};
+
+struct ProxyFieldResult {
+  CrossField field;
+  std::uint32_t elements = 0;      ///< proxy elements (graph nodes)
+  std::uint64_t elementEdges = 0;  ///< adjacent element pairs
+  std::uint32_t colours = 0;       ///< colours of the face graph used by the sweeps
+};
+
+/// Smoothest 4-direction field through the proxy. Extra memory at most 12 bytes per face beyond
+/// the output, plus the proxy solve (bounded by the grid). Deterministic for any thread count.
+ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& topology,
+                                   const ProxyFieldOptions& options = {});
+
+/// How the field of computeCrossField is computed.
+enum class FieldMethod {
+  Auto,    ///< Direct up to kDirectFieldMaxFaces faces, Proxy above
+  Direct,  ///< computeSmoothestField: one CHOLMOD solve over all faces
+  Proxy,   ///< computeProxyField
+};
+/// Largest mesh Auto solves directly. Measured at 1M faces: direct 39 s and 976 MB, proxy 5.6 s and
+/// 181 MB with the same cones; the direct solve grows superlinearly beyond (bench/RESULTS.md).
+constexpr std::uint32_t kDirectFieldMaxFaces = 1000000;
+/// Direct or Proxy: Auto resolved by the face count.
+FieldMethod resolveFieldMethod(FieldMethod method, std::uint32_t numFaces);
+/// "auto", "direct", "proxy".
+const char* fieldMethodName(FieldMethod method);
+/// Parses "auto", "direct" (or "smooth"), "proxy"; throws InputError listing them.
+FieldMethod parseFieldMethod(const std::string& name);
+
+/// The smoothest field by the given method. Throws InputError when curvature alignment is asked
+/// of the proxy field (it computes the smoothest field only).
+CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology, FieldMethod method,
+                             const SmoothFieldOptions& smooth = {},
+                             const ProxyFieldOptions& proxy = {});
+
+/// Smoothness energy of a field: sum over interior edges of w_e |z_g - T_fg z_f|^2, z the unit
+/// 4th powers, T_fg the rotation about the shared edge, w_e = |e| / |b_f - b_g| (bounded).
+/// Zero for a parallel field on a flat mesh. Linear, parallel.
+double measureFieldEnergy(const TriangleMesh& mesh, const Topology& topology, const CrossField& field);
+
+}  // namespace seamvox

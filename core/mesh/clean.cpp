@@ -1,0 +1,329 @@
+#include "core/mesh/clean.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "core/mesh/detail_corner_table.h"
+#include "core/mesh/detail_union_find.h"
+#include "core/system/errors.h"
+
+namespace seamvox {
+namespace {
+
+constexpr std::size_t kGrain = 4096;
+
+void checkInput(const TriangleMesh& mesh) {
+  const std::uint32_t nv = mesh.numVertices();
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    if (!mesh.positions[v].allFinite()) {
+      throw InputError("vertex " + std::to_string(v) + " has a non-finite coordinate (NaN or inf)");
+    }
+  }
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    for (VertexId v : mesh.triangles[f]) {
+      if (v >= nv) {
+        throw InputError("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
+                         " but the mesh has " + std::to_string(nv) + " vertices");
+      }
+    }
+  }
+  if (!mesh.cornerUV.empty() && mesh.cornerUV.size() != 3 * mesh.triangles.size()) {
+    throw InputError("the mesh has " + std::to_string(mesh.cornerUV.size()) +
+                     " texture coordinates for " + std::to_string(mesh.triangles.size()) +
+                     " faces (expected 3 per face)");
+  }
+}
+
+/// Representative (smallest index) of each vertex's weld cluster. tolerance 0: equal positions.
+std::vector<VertexId> weldMap(const std::vector<Vec3f>& positions, double tolerance) {
+  const std::uint32_t nv = static_cast<std::uint32_t>(positions.size());
+  std::vector<VertexId> order(nv);
+  std::iota(order.begin(), order.end(), 0u);
+  detail::UnionFind sets(nv);
+  if (tolerance <= 0.0) {
+    auto less = [&](VertexId a, VertexId b) {
+      const Vec3f &p = positions[a], &q = positions[b];
+      if (p.x() != q.x()) return p.x() < q.x();
+      if (p.y() != q.y()) return p.y() < q.y();
+      if (p.z() != q.z()) return p.z() < q.z();
+      return a < b;
+    };
+    tbb::parallel_sort(order.begin(), order.end(), less);
+    for (std::uint32_t i = 1; i < nv; ++i) {
+      if (positions[order[i]] == positions[order[i - 1]]) sets.unite(order[i], order[i - 1]);
+    }
+  } else {
+    // Hash vertices into cells of size tolerance; compare against the 27 surrounding cells.
+    using Cell = std::array<std::int64_t, 3>;
+    auto cellOf = [&](VertexId v) {
+      const Vec3d p = positions[v].cast<double>() / tolerance;
+      return Cell{std::int64_t(std::floor(p.x())), std::int64_t(std::floor(p.y())),
+                  std::int64_t(std::floor(p.z()))};
+    };
+    std::vector<Cell> cells(nv);
+    tbb::parallel_for(std::uint32_t(0), nv, [&](std::uint32_t v) { cells[v] = cellOf(v); });
+    tbb::parallel_sort(order.begin(), order.end(), [&](VertexId a, VertexId b) {
+      return cells[a] != cells[b] ? cells[a] < cells[b] : a < b;
+    });
+    const double tol2 = tolerance * tolerance;
+    for (std::uint32_t i = 0; i < nv; ++i) {
+      const VertexId v = order[i];
+      const Cell c = cells[v];
+      for (std::int64_t dx = -1; dx <= 1; ++dx)
+        for (std::int64_t dy = -1; dy <= 1; ++dy)
+          for (std::int64_t dz = -1; dz <= 1; ++dz) {
+            const Cell n{c[0] + dx, c[1] + dy, c[2] + dz};
+            if (n > c) continue;  // each pair of cells once (same cell: below)
+            auto lo = std::lower_bound(order.begin(), order.end(), n,
+                                       [&](VertexId a, const Cell& key) { return cells[a] < key; });
+            for (auto it = lo; it != order.end() && cells[*it] == n; ++it) {
+              if (n == c && *it >= v) break;
+              if ((positions[*it] - positions[v]).cast<double>().squaredNorm() <= tol2) {
+                sets.unite(*it, v);
+              }
+            }
+          }
+    }
+  }
+  std::vector<VertexId> rep(nv);
+  for (std::uint32_t v = 0; v < nv; ++v) rep[v] = sets.find(v);
+  return rep;
+}
+
+/// Keeps the faces for which keep[f] is set (in order), with their UVs and origins.
+void compactFaces(TriangleMesh& mesh, std::vector<FaceId>& faceOrigin, const std::vector<std::uint8_t>& keep) {
+  std::size_t out = 0;
+  const bool uv = mesh.hasUV();
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    if (!keep[f]) continue;
+    mesh.triangles[out] = mesh.triangles[f];
+    faceOrigin[out] = faceOrigin[f];
+    if (uv) {
+      for (int k = 0; k < 3; ++k) mesh.cornerUV.copyCorner(3 * out + k, 3 * f + k);
+    }
+    ++out;
+  }
+  mesh.triangles.resize(out);
+  mesh.triangles.shrink_to_fit();
+  faceOrigin.resize(out);
+  if (uv) mesh.cornerUV.resizeCorners(3 * out);
+}
+
+/// Marks faces with the same vertex set as an earlier face (either orientation).
+std::vector<std::uint8_t> findUniqueFaces(const std::vector<Triangle>& tris, std::uint32_t nv,
+                                          std::uint64_t& duplicates) {
+  // Group faces by their smallest vertex (counting sort), then compare within each group.
+  const std::uint32_t nf = static_cast<std::uint32_t>(tris.size());
+  auto sorted = [&](FaceId f) {
+    Triangle t = tris[f];
+    std::sort(t.begin(), t.end());
+    return t;
+  };
+  std::vector<std::uint32_t> offsets(std::size_t(nv) + 1, 0);
+  for (const Triangle& t : tris) ++offsets[std::min({t[0], t[1], t[2]}) + 1];
+  for (std::uint32_t v = 0; v < nv; ++v) offsets[v + 1] += offsets[v];
+  std::vector<FaceId> faces(nf);
+  {
+    std::vector<std::uint32_t> cursor(offsets.begin(), offsets.end() - 1);
+    for (FaceId f = 0; f < nf; ++f) faces[cursor[std::min({tris[f][0], tris[f][1], tris[f][2]})]++] = f;
+  }
+  std::vector<std::uint8_t> keep(nf, 1);
+  duplicates = tbb::parallel_reduce(
+      tbb::blocked_range<std::uint32_t>(0, nv, kGrain), std::uint64_t(0),
+      [&](const tbb::blocked_range<std::uint32_t>& r, std::uint64_t n) {
+        for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
+          for (std::uint32_t i = offsets[v]; i < offsets[v + 1]; ++i) {
+            const Triangle a = sorted(faces[i]);
+            for (std::uint32_t j = offsets[v]; j < i; ++j) {  // faces[] is increasing per group
+              if (keep[faces[j]] && sorted(faces[j]) == a) {
+                keep[faces[i]] = 0;
+                ++n;
+                break;
+              }
+            }
+          }
+        }
+        return n;
+      },
+      std::plus<>());
+  return keep;
+}
+
+/// Flips faces so each component is consistently oriented where its edges allow it. Per
+/// component, keeps the orientation most of its faces already have. Returns the flips made.
+std::uint64_t orientFaces(TriangleMesh& mesh, const detail::VertexCorners& vc) {
+  const std::uint32_t nf = mesh.numFaces();
+  std::vector<std::uint8_t> visited(nf, 0), flip(nf, 0);
+  std::vector<FaceId> queue;
+  std::uint64_t flips = 0;
+  for (FaceId seed = 0; seed < nf; ++seed) {
+    if (visited[seed]) continue;
+    queue.assign(1, seed);
+    visited[seed] = 1;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const FaceId f = queue[head];
+      for (int k = 0; k < 3; ++k) {
+        const detail::EdgeMatch m = detail::matchEdge(mesh.triangles, vc, 3 * f + k);
+        if (m.sameDirection + m.reverseDirection != 2) continue;
+        const bool same = m.sameDirection == 2;
+        const FaceId g = (same ? m.sameCorner : m.reverseCorner) / 3;
+        if (!visited[g]) {
+          visited[g] = 1;
+          flip[g] = flip[f] ^ std::uint8_t(same);
+          queue.push_back(g);
+        }
+        // A conflict (non-orientable surface) stays an orientation clash: that edge is split.
+      }
+    }
+    std::size_t flipped = 0;
+    for (FaceId f : queue) flipped += flip[f];
+    const bool invert = 2 * flipped > queue.size();
+    for (FaceId f : queue) flip[f] ^= std::uint8_t(invert);
+  }
+  for (FaceId f = 0; f < nf; ++f) {
+    if (!flip[f]) continue;
+    ++flips;
+    std::swap(mesh.triangles[f][1], mesh.triangles[f][2]);
+    if (mesh.hasUV()) mesh.cornerUV.swapCorners(3 * f + 1, 3 * f + 2);
+  }
+  return flips;
+}
+
+}  // namespace
+
+CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
+  CleanResult result;
+  CleanReport& report = result.report;
+  report.inputVertices = mesh.numVertices();
+  report.inputFaces = mesh.numFaces();
+  checkInput(mesh);
+  reportProgress(options.progress, "cleaning", 0.0);
+
+  // 1. Welding and degenerate faces.
+  std::vector<FaceId>& faceOrigin = result.faceOrigin;
+  faceOrigin.resize(mesh.numFaces());
+  std::iota(faceOrigin.begin(), faceOrigin.end(), 0u);
+  if (options.weldVertices) {
+    const std::vector<VertexId> rep = weldMap(mesh.positions, options.weldTolerance);
+    for (std::uint32_t v = 0; v < rep.size(); ++v) report.weldedVertices += rep[v] != v;
+    tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t f) {
+      for (VertexId& v : mesh.triangles[f]) v = rep[v];
+    });
+  }
+  {
+    std::vector<std::uint8_t> keep(mesh.numFaces());
+    tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t f) {
+      const Triangle& t = mesh.triangles[f];
+      keep[f] = t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+    });
+    report.degenerateFaces = std::count(keep.begin(), keep.end(), std::uint8_t(0));
+    if (report.degenerateFaces) compactFaces(mesh, faceOrigin, keep);
+  }
+  reportProgress(options.progress, "cleaning", 0.15);
+
+  // 2. Duplicate faces.
+  {
+    const std::vector<std::uint8_t> keep = findUniqueFaces(mesh.triangles, mesh.numVertices(), report.duplicateFaces);
+    if (report.duplicateFaces) compactFaces(mesh, faceOrigin, keep);
+  }
+  if (mesh.triangles.empty()) {
+    throw InputError("the mesh has no valid faces (" + std::to_string(report.inputFaces) +
+                     " faces in the input, all degenerate or duplicates)");
+  }
+  reportProgress(options.progress, "cleaning", 0.3);
+
+  // 3. Unreferenced vertices.
+  {
+    std::vector<VertexId> newId(mesh.numVertices(), kInvalidId);
+    for (const Triangle& t : mesh.triangles) {
+      for (VertexId v : t) newId[v] = 0;
+    }
+    std::uint32_t n = 0;
+    for (VertexId v = 0; v < newId.size(); ++v) {
+      if (newId[v] == kInvalidId) continue;
+      newId[v] = n;
+      mesh.positions[n] = mesh.positions[v];
+      result.vertexOrigin.push_back(v);
+      ++n;
+    }
+    report.unreferencedVertices = mesh.numVertices() - n - report.weldedVertices;
+    mesh.positions.resize(n);
+    mesh.positions.shrink_to_fit();
+    tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t f) {
+      for (VertexId& v : mesh.triangles[f]) v = newId[v];
+    });
+  }
+  reportProgress(options.progress, "cleaning", 0.4);
+
+  // 4. Orientation and edge gluing: every edge shared by exactly two opposite faces is glued,
+  //    every other edge becomes boundary (this splits non-manifold edges).
+  std::vector<CornerId> opposite;
+  auto vc = std::make_unique<detail::VertexCorners>(detail::VertexCorners::build(mesh.triangles, mesh.numVertices()));
+  detail::GlueStats glue = detail::glueEdges(mesh.triangles, *vc, opposite);
+  if (glue.orientationClashes) {
+    report.flippedFaces = orientFaces(mesh, *vc);
+    if (report.flippedFaces) {
+      *vc = detail::VertexCorners::build(mesh.triangles, mesh.numVertices());
+      glue = detail::glueEdges(mesh.triangles, *vc, opposite);
+    }
+  }
+  report.nonManifoldEdges = glue.nonManifoldEdges + glue.orientationClashes;
+  reportProgress(options.progress, "cleaning", 0.75);
+
+  // 5. Non-manifold vertices: every fan beyond the first gets its own copy of the vertex.
+  vc.reset();
+  const detail::FanTable fans = detail::findFans(mesh.triangles, mesh.numVertices(), opposite);
+  const std::uint32_t nv = mesh.numVertices();
+  std::vector<CornerId> vertexCorner(fans.fanOffsets.back() , kInvalidId);
+  std::vector<VertexId> firstExtra(nv);
+  std::uint32_t next = nv;
+  for (VertexId v = 0; v < nv; ++v) {
+    firstExtra[v] = next;
+    next += fans.fanOffsets[v + 1] - fans.fanOffsets[v] - 1;  // every vertex is referenced: >= 1 fan
+  }
+  report.nonManifoldVertices = 0;
+  mesh.positions.resize(next);
+  result.vertexOrigin.resize(next);
+  tbb::parallel_for(tbb::blocked_range<VertexId>(0, nv, kGrain), [&](const tbb::blocked_range<VertexId>& r) {
+    for (VertexId v = r.begin(); v != r.end(); ++v) {
+      const std::uint32_t begin = fans.fanOffsets[v], end = fans.fanOffsets[v + 1];
+      vertexCorner[v] = fans.fanStart[begin];
+      for (std::uint32_t i = begin + 1; i < end; ++i) {
+        const VertexId copy = firstExtra[v] + (i - begin - 1);
+        vertexCorner[copy] = fans.fanStart[i];
+        mesh.positions[copy] = mesh.positions[v];
+        result.vertexOrigin[copy] = result.vertexOrigin[v];
+        detail::walkFan(opposite, fans.fanStart[i], [&](CornerId c) { mesh.triangles[c / 3][c % 3] = copy; });
+      }
+    }
+  });
+  for (VertexId v = 0; v < nv; ++v) report.nonManifoldVertices += fans.fanOffsets[v + 1] - fans.fanOffsets[v] > 1;
+  reportProgress(options.progress, "cleaning", 0.9);
+
+  // 6. Zero-area faces are kept (removing them would open holes) but counted.
+  const double diag = computeBoundingBox(mesh.positions).diagonal();
+  const double tiny = 1e-14 * diag * diag;
+  report.zeroAreaFaces = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), kGrain), std::uint64_t(0),
+      [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t n) {
+        for (std::size_t f = r.begin(); f != r.end(); ++f) n += faceArea(mesh, FaceId(f)) <= tiny;
+        return n;
+      },
+      std::plus<>());
+
+  report.outputVertices = mesh.numVertices();
+  report.outputFaces = mesh.numFaces();
+  result.mesh = std::move(mesh);
+  result.topology = Topology::viewParts(result.mesh.triangles, std::move(opposite), std::move(vertexCorner));
+  reportProgress(options.progress, "cleaning", 1.0);
+  return result;
+}
+
+}  // namespace seamvox

@@ -1,0 +1,53 @@
+#pragma once
+/// Cleaning a raw scan into a manifold, consistently oriented mesh ready for Topology::build.
+#include <cstdint>
+#include <vector>
+
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+struct CleanOptions {
+  /// Weld vertices whose positions coincide within this distance (0 = exactly equal positions).
+  bool weldVertices = false;
+  double weldTolerance = 0.0;
+  ProgressFn progress;
+};
+
+/// What cleanMesh changed, in counts of input elements.
+struct CleanReport {
+  std::uint64_t inputVertices = 0, inputFaces = 0;
+  std::uint64_t weldedVertices = 0;        ///< vertices merged into another
+  std::uint64_t degenerateFaces = 0;       ///< removed: a repeated vertex
+  std::uint64_t duplicateFaces = 0;        ///< removed: same vertex set as an earlier face
+  std::uint64_t zeroAreaFaces = 0;         ///< kept (removing them would open holes), counted
+  std::uint64_t unreferencedVertices = 0;  ///< removed
+  std::uint64_t nonManifoldEdges = 0;      ///< edges split apart (> 2 faces, or orientation clash)
+  std::uint64_t nonManifoldVertices = 0;   ///< vertices duplicated, one copy per extra fan
+  std::uint64_t flippedFaces = 0;          ///< faces reoriented to agree with their component
+  std::uint64_t outputVertices = 0, outputFaces = 0;
+};
+
+/// Move-only: topology views mesh.triangles (no second copy of the faces).
+struct CleanResult {
+  CleanResult() = default;
+  CleanResult(CleanResult&&) = default;
+  CleanResult& operator=(CleanResult&&) = default;
+  CleanResult(const CleanResult&) = delete;
+  CleanResult& operator=(const CleanResult&) = delete;
+
+  TriangleMesh mesh;  ///< cleaned positions and triangles (cornerUV carried along when present)
+  Topology topology;  ///< corner table of mesh.triangles
+  CleanReport report;
+  std::vector<FaceId> faceOrigin;      ///< #F out: the input face each output face comes from
+  std::vector<VertexId> vertexOrigin;  ///< #V out: the input vertex each output vertex comes from
+};
+
+/// Welds (optional), drops degenerate and duplicate faces and unreferenced vertices, orients
+/// each component consistently where possible, splits non-manifold edges and vertices, and
+/// builds the corner table. Consumes the input mesh. Linear memory; parallel where it pays.
+CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options = {});
+
+}  // namespace seamvox

@@ -1,0 +1,45 @@
+#pragma once
+/// The in-memory triangle mesh: plain arrays indexed by 32-bit ids.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/mesh/mesh_types.h"
+#include "core/mesh/wedge_map.h"
+
+namespace seamvox {
+
+/// A triangle soup or indexed mesh. Positions are float (scans; 12 bytes per vertex), all
+/// geometric computation is done in double. Triangles are counter-clockwise seen from outside.
+struct TriangleMesh {
+  std::vector<Vec3f> positions;     ///< #V
+  std::vector<Triangle> triangles;  ///< #F
+  /// Optional texture coordinates (u, v) in grid units per corner (3 * #F corners) or empty,
+  /// stored per wedge. Double: seam checks need 1e-6 absolute accuracy on coordinates of
+  /// several thousand.
+  WedgeMap cornerUV;
+
+  std::uint32_t numVertices() const { return static_cast<std::uint32_t>(positions.size()); }
+  std::uint32_t numFaces() const { return static_cast<std::uint32_t>(triangles.size()); }
+  bool hasUV() const { return !cornerUV.empty(); }
+  Vec3d position(VertexId v) const { return positions[v].cast<double>(); }
+};
+
+/// Axis-aligned bounding box of the positions (empty mesh: min > max).
+struct BoundingBox {
+  Vec3d min{Vec3d::Constant(1e300)};
+  Vec3d max{Vec3d::Constant(-1e300)};
+  bool isEmpty() const { return (min.array() > max.array()).any(); }
+  Vec3d extent() const { return isEmpty() ? Vec3d::Zero() : Vec3d(max - min); }
+  double diagonal() const { return extent().norm(); }
+};
+BoundingBox computeBoundingBox(const std::vector<Vec3f>& positions);
+
+/// Unit normal of a face (zero vector for a zero-area face).
+Vec3d faceNormal(const TriangleMesh& mesh, FaceId f);
+/// Area of a face.
+double faceArea(const TriangleMesh& mesh, FaceId f);
+
+}  // namespace seamvox

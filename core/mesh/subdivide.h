@@ -1,0 +1,36 @@
+#pragma once
+/// 1-to-4 midpoint subdivision (the scaling series of the paper: each level quadruples the faces).
+#include <cstdint>
+#include <vector>
+
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+struct SubdivideOptions {
+  std::uint32_t levels = 1;
+  ProgressFn progress;
+};
+
+/// Child face 4 f + k (k < 3) is the corner triangle at triangles[f][k], 4 f + 3 the middle one.
+/// New vertices come after the old ones, one per undirected edge, numbered in increasing order of
+/// the edge's corner (edgeCorner = min(c, opposite(c)), topology.h), at the exact edge midpoint
+/// (computed in double, rounded once to float).
+struct SubdivideResult {
+  TriangleMesh mesh;                 ///< 4^levels #F faces; orientation kept
+  std::vector<FaceId> parentFace;    ///< #F out: the input face each output face lies in
+  std::uint64_t edges = 0;           ///< undirected edges of the input (V' = V + E for one level)
+};
+
+/// Subdivides a manifold mesh (with its corner table) `levels` times. Linear per level,
+/// parallel; cornerUV is not carried. Throws TopologyError if topology does not match mesh.
+SubdivideResult subdivideMesh(const TriangleMesh& mesh, const Topology& topology,
+                              const SubdivideOptions& options = {});
+
+/// Carries per-face vectors (e.g. a field) to the children: out[f] = values[parentFace[f]].
+std::vector<Vec3d> inheritFaceVectors(const std::vector<Vec3d>& values,
+                                      const std::vector<FaceId>& parentFace);
+
+}  // namespace seamvox

@@ -1,0 +1,81 @@
+#pragma once
+/// The map (u, v) at the corners of a mesh, stored once per wedge: a set of corners of one vertex
+/// that share one value (interior vertices away from seams have a single wedge). A 32-bit wedge
+/// id per corner plus one double pair per wedge: about 20 bytes per face instead of 48.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/mesh/mesh_types.h"
+
+namespace seamvox {
+
+class WedgeMap {
+ public:
+  WedgeMap() = default;
+  /// Adopts a wedge structure: cornerWedge[c] < wedgeValues.size() for every corner (checked,
+  /// InputError otherwise).
+  WedgeMap(std::vector<std::uint32_t> cornerWedge, std::vector<Vec2d> wedgeValues);
+  /// Per-corner values (3 #F, corner c = 3 f + k at triangles[f][k]); corners of one vertex with
+  /// exactly equal values share a wedge. Throws InputError on mismatched sizes or a bad vertex.
+  static WedgeMap fromCorners(const std::vector<Triangle>& triangles, const std::vector<Vec2d>& values);
+
+  std::size_t size() const { return wedge_.size(); }  ///< number of corners
+  bool empty() const { return wedge_.empty(); }
+  std::uint32_t numWedges() const { return static_cast<std::uint32_t>(value_.size()); }
+  /// Value of corner c (by value: corners do not own storage).
+  Vec2d operator[](CornerId c) const { return value_[wedge_[c]]; }
+  std::uint32_t wedge(CornerId c) const { return wedge_[c]; }
+  const Vec2d& wedgeValue(std::uint32_t w) const { return value_[w]; }
+  /// Sets the value of every corner of wedge w.
+  void setWedgeValue(std::uint32_t w, const Vec2d& q) { value_[w] = q; }
+  /// The smallest corner of each wedge (#wedges; kInvalidId for a wedge without corners). O(#corners).
+  std::vector<CornerId> wedgeCorners() const;
+
+  /// Sets one corner: a no-op when the value is unchanged, else c moves to a new wedge of its own
+  /// (its old wedge may be left without corners). For many corners use assign().
+  void set(CornerId c, const Vec2d& q);
+  /// Sets corners[k] to values[k]. A wedge whose corners all get one value keeps its id and only
+  /// changes value; a wedge only part of whose corners change is split (one new wedge per new
+  /// value). One pass over the wedge ids of all corners. Throws InputError on a bad corner or sizes.
+  void assign(const std::vector<CornerId>& corners, const std::vector<Vec2d>& values);
+
+  /// Corner-table edits (cleaning): corner `to` takes the wedge of corner `from`; swap two corners'
+  /// wedges; keep the first n corners.
+  void copyCorner(CornerId to, CornerId from) { wedge_[to] = wedge_[from]; }
+  void swapCorners(CornerId a, CornerId b) { std::swap(wedge_[a], wedge_[b]); }
+  void resizeCorners(std::size_t n);
+  void clear();
+  /// Bytes held (for memory reports).
+  std::size_t memoryBytes() const;
+
+ private:
+  friend class WedgeMapBuilder;
+  std::vector<std::uint32_t> wedge_;  // #corners
+  std::vector<Vec2d> value_;          // #wedges
+};
+
+/// Throws InputError saying `what` needs `corners` corners unless the map has exactly that many.
+void checkCorners(const WedgeMap& map, std::size_t corners, const std::string& what);
+
+/// Builds a WedgeMap corner after corner (readers, streams): a corner joins a wedge of its vertex
+/// with exactly the same value (searched among the vertex's first kMaxSearch wedges), else starts
+/// one. Holds 4 bytes per vertex and per wedge besides the map until finish().
+class WedgeMapBuilder {
+ public:
+  static constexpr int kMaxSearch = 64;
+  void reserve(std::size_t corners);
+  /// Appends the next corner (id = corners added so far), at vertex v with value q; v = kInvalidId
+  /// (vertex not known yet) gives the corner a wedge of its own.
+  void add(VertexId v, const Vec2d& q);
+  std::size_t size() const { return map_.wedge_.size(); }
+  /// The map; the builder is empty afterwards.
+  WedgeMap finish();
+
+ private:
+  WedgeMap map_;
+  std::vector<std::uint32_t> vertexWedge_;  // latest wedge of each vertex
+  std::vector<std::uint32_t> nextWedge_;    // earlier wedge of the same vertex
+};
+
+}  // namespace seamvox

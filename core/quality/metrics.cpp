@@ -1,0 +1,236 @@
+#include "core/quality/metrics.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+
+#include "core/system/errors.h"
+#include "core/basis/gaussian_int.h"
+
+namespace seamvox {
+
+namespace {
+
+using Complex = std::complex<double>;
+Complex toComplex(const Vec2d& q) { return {q.x(), q.y()}; }
+
+void checkSizes(const TriangleMesh& mesh, const WedgeMap& cornerUV) {
+  checkCorners(cornerUV, 3 * static_cast<std::size_t>(mesh.numFaces()), "metrics");
+}
+
+double edgeLength3d(const TriangleMesh& mesh, const Topology& topology, CornerId c) {
+  return (mesh.position(topology.vertex(nextCorner(c))) - mesh.position(topology.vertex(prevCorner(c))))
+      .norm();
+}
+
+// The two endpoint pairs (left, right) of the edge of corner c: at vertex(next c) and vertex(prev c).
+struct EdgeSides {
+  Complex leftA, rightA, leftB, rightB;
+};
+EdgeSides edgeSides(const WedgeMap& uv, CornerId c, CornerId o) {
+  return {toComplex(uv[nextCorner(c)]), toComplex(uv[prevCorner(o)]), toComplex(uv[prevCorner(c)]),
+          toComplex(uv[nextCorner(o)])};
+}
+
+}  // namespace
+
+double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
+                          double edgeLength) {
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d p0 = mesh.position(t[0]);
+  const double area = 0.5 * (mesh.position(t[1]) - p0).cross(mesh.position(t[2]) - p0).norm();
+  const Vec2d a = cornerUV[3 * f + 1] - cornerUV[3 * f], b = cornerUV[3 * f + 2] - cornerUV[3 * f];
+  const double uvArea = 0.5 * (a.x() * b.y() - a.y() * b.x());
+  return uvArea * (edgeLength * edgeLength) / area;
+}
+
+bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
+                           const std::vector<std::uint8_t>& isCone) {
+  const Triangle& t = mesh.triangles[f];
+  for (int k = 0; k < 3; ++k) {
+    const int l = (k + 1) % 3;
+    if (isCone[t[k]] && isCone[t[l]] &&
+        (cornerUV[3 * f + k] - cornerUV[3 * f + l]).norm() <= kCoincidentConeDistance) {
+      return true;
+    }
+  }
+  return false;
+}
+
+SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
+                         const WedgeMap& cornerUV) {
+  checkSizes(mesh, cornerUV);
+  SeamQuality out;
+  out.seams = static_cast<std::uint32_t>(cut.seams.size());
+  for (const SeamCurve& seam : cut.seams) {
+    if (seam.corners.empty()) continue;
+    const Complex r = unitPower(-static_cast<int>(seam.matching)).toComplex();
+    const CornerId first = seam.corners.front();
+    const EdgeSides s0 = edgeSides(cornerUV, first, topology.opposite(first));
+    const Complex t = s0.rightA - r * s0.leftA;
+    out.maxIntegerDistance = std::max(out.maxIntegerDistance, gaussianIntegerDistance(t));
+    for (CornerId c : seam.corners) {
+      const EdgeSides s = edgeSides(cornerUV, c, topology.opposite(c));
+      const double res = std::max(std::abs(s.rightA - (r * s.leftA + t)),
+                                  std::abs(s.rightB - (r * s.leftB + t)));
+      if (res > out.maxResidual || out.worstEdgeCorner == kInvalidId) {
+        out.worstEdgeCorner = c;
+        out.maxResidual = res;
+      }
+      ++out.seamEdges;
+      out.seamLength += edgeLength3d(mesh, topology, c);
+    }
+  }
+  return out;
+}
+
+SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topology,
+                               const WedgeMap& cornerUV) {
+  checkSizes(mesh, cornerUV);
+  SeamQuality out;
+  for (CornerId c = 0; c < topology.numCorners(); ++c) {
+    const CornerId o = topology.opposite(c);
+    if (o == kInvalidId || o < c) continue;
+    const EdgeSides s = edgeSides(cornerUV, c, o);
+    if (s.leftA == s.rightA && s.leftB == s.rightB) continue;
+    double bestResidual = std::numeric_limits<double>::infinity(), bestDistance = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const Complex r = unitPower(k).toComplex();
+      const Complex t = s.rightA - r * s.leftA;
+      const double res = std::abs(s.rightB - (r * s.leftB + t));
+      const double dist = gaussianIntegerDistance(t);
+      if (res < bestResidual - 1e-12 || (res <= bestResidual + 1e-12 && dist < bestDistance)) {
+        bestResidual = std::min(res, bestResidual);
+        bestDistance = dist;
+      }
+    }
+    if (bestResidual > out.maxResidual) out.worstEdgeCorner = c;
+    out.maxResidual = std::max(out.maxResidual, bestResidual);
+    out.maxIntegerDistance = std::max(out.maxIntegerDistance, bestDistance);
+    ++out.seamEdges;
+    out.seamLength += edgeLength3d(mesh, topology, c);
+  }
+  return out;
+}
+
+MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
+                      const CrossField* field, double edgeLength,
+                      const std::vector<VertexId>* cones) {
+  checkSizes(mesh, cornerUV);
+  if (field && field->direction.size() != mesh.numFaces()) {
+    throw InputError("metrics: field has " + std::to_string(field->direction.size()) +
+                     " directions for " + std::to_string(mesh.numFaces()) + " faces");
+  }
+  const FaceId nf = mesh.numFaces();
+  // Per face: gradient G = gu + i gv of q and the cross direction u nearest to it (w = u + i n x u).
+  struct Face {
+    double area = 0.0;
+    Vec3d gu = Vec3d::Zero(), gv = Vec3d::Zero(), u = Vec3d::Zero(), v = Vec3d::Zero();
+    double gw() const { return gu.dot(u) + gv.dot(v); }  // Re<G, w>
+  };
+  auto faceFigures = [&](FaceId f) {
+    Face out;
+    const Triangle& t = mesh.triangles[f];
+    const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+    const Complex q[3] = {toComplex(cornerUV[3 * f]), toComplex(cornerUV[3 * f + 1]),
+                          toComplex(cornerUV[3 * f + 2])};
+    const Vec3d normal = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double twiceArea = normal.norm();
+    out.area = 0.5 * twiceArea;
+    if (!(twiceArea > 0.0)) return out;
+    const Vec3d n = normal / twiceArea;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d g = n.cross(p[(k + 2) % 3] - p[(k + 1) % 3]) / twiceArea;
+      out.gu += q[k].real() * g;
+      out.gv += q[k].imag() * g;
+    }
+    if (field) {
+      Vec3d u = field->at(f);
+      u -= n * n.dot(u);
+      const double len = u.norm();
+      if (len > 0.0) {
+        u /= len;
+        double best = -std::numeric_limits<double>::infinity();
+        for (int m = 0; m < 4; ++m) {  // the four cross directions
+          const double score = out.gu.dot(u) + out.gv.dot(n.cross(u));
+          if (score > best) best = score, out.u = u, out.v = n.cross(u);
+          u = n.cross(u);
+        }
+      }
+    }
+    return out;
+  };
+  struct Sums {
+    double area = 0.0, uvArea = 0.0, gw = 0.0, error = 0.0, target = 0.0;
+  };
+  auto sumFaces = [&](double h) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<FaceId>(0, nf, 8192), Sums{},
+        [&](const tbb::blocked_range<FaceId>& range, Sums s) {
+          for (FaceId f = range.begin(); f != range.end(); ++f) {
+            const Face x = faceFigures(f);
+            const Complex q0 = toComplex(cornerUV[3 * f]);
+            s.area += x.area;
+            s.uvArea += 0.5 * std::abs(std::imag(std::conj(toComplex(cornerUV[3 * f + 1]) - q0) *
+                                                 (toComplex(cornerUV[3 * f + 2]) - q0)));
+            s.gw += x.area * x.gw();
+            if (h > 0.0) {
+              s.error += x.area * ((x.gu - x.u / h).squaredNorm() + (x.gv - x.v / h).squaredNorm());
+              s.target += x.area * (x.u.squaredNorm() + x.v.squaredNorm()) / (h * h);
+            }
+          }
+          return s;
+        },
+        [](Sums a, const Sums& b) {
+          a.area += b.area, a.uvArea += b.uvArea, a.gw += b.gw, a.error += b.error,
+              a.target += b.target;
+          return a;
+        });
+  };
+  MapQuality out;
+  out.faces = nf;
+  double h = edgeLength;
+  if (!(h > 0.0)) {
+    // Least squares scale 1/h of the target (|w|^2 = 2); without a field, from the areas.
+    const Sums fit = sumFaces(0.0);
+    h = field && fit.gw > 0.0 ? 2.0 * fit.area / fit.gw
+                              : (fit.uvArea > 0.0 ? std::sqrt(fit.area / fit.uvArea) : 1.0);
+  }
+  out.edgeLength = h;
+  const Sums sums = sumFaces(h);
+  out.relativeGradientError = field && sums.target > 0.0
+                                  ? std::sqrt(sums.error / sums.target)
+                                  : std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::uint8_t> isCone;
+  if (cones) {
+    isCone.assign(mesh.numVertices(), 0);
+    for (VertexId v : *cones) {
+      if (v >= mesh.numVertices()) {
+        throw InputError("metrics: cone " + std::to_string(v) + " out of range (" +
+                         std::to_string(mesh.numVertices()) + " vertices)");
+      }
+      isCone[v] = 1;
+    }
+  }
+  std::uint64_t flipped = 0, collapsed = 0, collapsedAtCones = 0;
+  for (FaceId f = 0; f < nf; ++f) {
+    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
+    if (std::abs(ratio) < kCollapsedAreaFraction) {
+      ++collapsed;
+      collapsedAtCones += cones && collapsesBetweenCones(mesh, cornerUV, f, isCone);
+    } else if (ratio < 0.0) {
+      ++flipped;
+    }
+  }
+  out.flipped = flipped;
+  out.collapsed = collapsed;
+  out.collapsedAtCones = collapsedAtCones;
+  out.flippedFraction = nf ? static_cast<double>(flipped) / nf : 0.0;
+  return out;
+}
+
+}  // namespace seamvox

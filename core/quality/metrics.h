@@ -1,0 +1,82 @@
+#pragma once
+/// Quality figures of a parameterization (DESIGN section 11).
+#include <cstdint>
+#include <vector>
+
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+/// Seam figures. A map is seamless when both maxima are below the tolerance (1e-6).
+struct SeamQuality {
+  std::uint64_t seamEdges = 0;
+  std::uint32_t seams = 0;           ///< seam curves (0 when reconstructed from UVs)
+  double seamLength = 0.0;           ///< 3D length of the seam edges
+  double maxResidual = 0.0;          ///< max |q' - (r q + t)| over seam corners
+  double maxIntegerDistance = 0.0;   ///< max distance of a seam's t from Z + iZ
+  std::uint64_t worstEdgeCorner = kInvalidId;  ///< corner of the edge with the largest residual
+  bool isSeamless(double tolerance = 1e-6) const {
+    return maxResidual <= tolerance && maxIntegerDistance <= tolerance;
+  }
+};
+
+/// Seams of a known cut: per seam, t is read at its first corner with r = i^(-matching) (cut.h)
+/// and q_right = r q_left + t is checked at both ends of every edge.
+SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
+                         const WedgeMap& cornerUV);
+
+/// Seams reconstructed from per-corner UVs alone: every interior edge whose two sides differ is a
+/// seam edge; r in {1, i, -1, -i} and t come from one endpoint (the r fitting best at the other),
+/// the residual from the other endpoint.
+SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topology,
+                               const WedgeMap& cornerUV);
+
+/// A face whose |parameter area| is below this fraction of its expected area A_T / h^2 is collapsed.
+constexpr double kCollapsedAreaFraction = 1e-6;
+
+/// Signed parameter-space area of face f (corners 3 f .. 3 f + 2 of cornerUV) over its expected
+/// area A_T / h^2: 1 for a map with |grad q| = 1/h and no shear, negative when flipped, +-inf or
+/// NaN for a face of zero 3D area.
+double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
+                          double edgeLength);
+
+/// Two cones whose corners are this close in (u, v) (grid units) coincide.
+constexpr double kCoincidentConeDistance = 1e-9;
+
+/// True when face f has an edge between two cones (isCone per vertex) whose corners have the same
+/// (u, v) within kCoincidentConeDistance. In a seamless map a cone sits where the rotations of
+/// its seams fix it (DESIGN section 7: c_0 = beta . t / alpha), on the half-integer lattice once
+/// the translations are rounded, whatever the other vertices do. Two cones closer than about h/2 (cone pairs of a
+/// noisy field, often one edge apart) then land on the same point and their shared triangles
+/// collapse in every solver (hat included): only other translations could separate them, at the
+/// price of a large distortion. This collapse belongs to the field and the rounding, not to the
+/// basis, so it is counted apart (MapQuality::collapsedAtCones).
+bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
+                           const std::vector<std::uint8_t>& isCone);
+
+struct MapQuality {
+  std::uint64_t faces = 0;
+  std::uint64_t flipped = 0;    ///< negative parameter-space area (not collapsed)
+  /// |parameter area| < kCollapsedAreaFraction of the expected area A / h^2
+  std::uint64_t collapsed = 0;
+  /// Of the collapsed faces, those between two coincident cones (collapsesBetweenCones); 0 when
+  /// measureMap was given no cones.
+  std::uint64_t collapsedAtCones = 0;
+  double flippedFraction = 0.0;
+  /// sqrt(sum A |grad q - w/h|^2 / sum A |w/h|^2), w the nearest of the 4 cross directions;
+  /// NaN without a field.
+  double relativeGradientError = 0.0;
+  double edgeLength = 0.0;  ///< h used (given, or fitted by least squares when given <= 0)
+};
+
+/// Flips, collapses and the gradient error against a field (may be null) for target spacing h
+/// (<= 0: fitted); with the cones (vertex ids, e.g. CutResult::cones) also collapsedAtCones.
+/// Linear, parallel.
+MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
+                      const CrossField* field, double edgeLength,
+                      const std::vector<VertexId>* cones = nullptr);
+
+}  // namespace seamvox

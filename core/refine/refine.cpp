@@ -1,0 +1,749 @@
+#include "core/refine/refine.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iterator>
+#include <string>
+
+#include "core/basis/basis.h"
+#include "core/system/errors.h"
+#include "core/solve/evaluate.h"
+#include "core/basis/gaussian_int.h"
+#include "core/quality/metrics.h"
+#include "core/basis/reduce.h"
+#include "core/solve/seamless_solve.h"
+
+namespace seamvox {
+
+namespace {
+
+using Complex = std::complex<double>;
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Why a face is in the region (kOutside: it is not).
+enum FaceFlag : std::uint8_t { kOutside = 0, kMarked = 1, kCollapsed = 2, kFlipped = 3, kRing = 4 };
+
+// kCollapsed when the parameter area of face f is below threshold times its expected area
+// (non-finite values included), kFlipped when negative.
+FaceFlag classifyFace(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f,
+                      double threshold, double edgeLength) {
+  const double ratio = parameterAreaRatio(mesh, uv, f, edgeLength);
+  if (std::isnan(ratio) || ratio >= threshold) return kOutside;  // NaN: zero-area face, no energy
+  return ratio < 0.0 ? kFlipped : kCollapsed;
+}
+
+bool isSortedUnique(const std::vector<FaceId>& faces) {
+  for (std::size_t i = 1; i < faces.size(); ++i) {
+    if (faces[i] <= faces[i - 1]) return false;
+  }
+  return true;
+}
+
+// Every face sharing a vertex with the frontier joins the region (flag kRing), rings times.
+void addRings(const Topology& topology, std::vector<FaceId> frontier, std::uint32_t rings,
+              std::vector<std::uint8_t>& flag, std::vector<FaceId>& region) {
+  std::vector<std::uint8_t> vertexSeen(topology.numVertices(), 0);
+  for (std::uint32_t ring = 0; ring < rings && !frontier.empty(); ++ring) {
+    std::vector<FaceId> added;
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) {
+        const VertexId v = topology.vertex(3 * f + k);
+        if (vertexSeen[v]) continue;
+        vertexSeen[v] = 1;
+        topology.forEachCornerAround(v, [&](CornerId c) {
+          const FaceId g = cornerFace(c);
+          if (flag[g] == kOutside) {
+            flag[g] = kRing;
+            added.push_back(g);
+          }
+        });
+      }
+    }
+    region.insert(region.end(), added.begin(), added.end());
+    frontier = std::move(added);
+  }
+  std::sort(region.begin(), region.end());
+}
+
+// selectRefineRegion with the per-face flags kept for later rounds.
+std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topology,
+                                  const WedgeMap& cornerUV, const RefineOptions& options,
+                                  std::vector<std::uint8_t>& flag, RefineStats* stats) {
+  const FaceId nf = topology.numFaces();
+  if (cornerUV.size() != 3u * static_cast<std::size_t>(nf) || mesh.numFaces() != nf) {
+    throw InputError("refine: " + std::to_string(cornerUV.size()) + " corner UVs for " +
+                     std::to_string(nf) + " faces (need 3 per face)");
+  }
+  if (!(options.edgeLength > 0.0) || !std::isfinite(options.edgeLength)) {
+    throw InputError("refine: edge length must be positive and finite");
+  }
+  flag.assign(nf, kOutside);
+  for (FaceId f : options.markedFaces) {
+    if (f >= nf) {
+      throw InputError("refine: marked face " + std::to_string(f) + " out of range (" +
+                       std::to_string(nf) + " faces)");
+    }
+    flag[f] = kMarked;
+  }
+  tbb::parallel_for(tbb::blocked_range<FaceId>(0, nf, 1u << 14), [&](const auto& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      if (flag[f] != kOutside) continue;
+      flag[f] = classifyFace(mesh, cornerUV, f, options.collapseThreshold, options.edgeLength);
+    }
+  });
+  RefineStats counts;
+  std::vector<FaceId> region;
+  for (FaceId f = 0; f < nf; ++f) {
+    if (flag[f] == kOutside) continue;
+    region.push_back(f);
+    counts.markedFaces += flag[f] == kMarked;
+    counts.collapsedFaces += flag[f] == kCollapsed;
+    counts.flippedFaces += flag[f] == kFlipped;
+  }
+  reportProgress(options.progress, "refine region", 0.5);
+  addRings(topology, region, options.rings, flag, region);
+  counts.regionFaces = region.size();
+  if (stats) {
+    stats->markedFaces = counts.markedFaces;
+    stats->collapsedFaces = counts.collapsedFaces;
+    stats->flippedFaces = counts.flippedFaces;
+    stats->regionFaces = counts.regionFaces;
+  }
+  reportProgress(options.progress, "refine region", 1.0);
+  return region;
+}
+
+// Collapsed and flipped faces by MapQuality's criteria.
+struct FaceCounts {
+  std::uint64_t collapsed = 0, collapsedAtCones = 0, flipped = 0;
+  void add(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f, double ratio,
+           const std::vector<std::uint8_t>& isCone) {
+    if (std::abs(ratio) < kCollapsedAreaFraction) {
+      ++collapsed;
+      collapsedAtCones += collapsesBetweenCones(mesh, uv, f, isCone);
+    } else if (ratio < 0.0) {
+      ++flipped;
+    }
+  }
+};
+
+/// A whole-mesh corner solved by some refinement round; free: its vertex was free in a solve.
+struct SolvedCorner {
+  CornerId corner;
+  Vec2d uv;
+  bool free;
+};
+
+/// The input of a region solve: the corners solved so far where there are any, else the map.
+WedgeMap regionInput(const RegionMesh& region, const WedgeMap& cornerUV,
+                     const std::vector<SolvedCorner>& current) {
+  const std::uint32_t rf = region.topology.numFaces();
+  std::vector<Vec2d> values(3u * rf);
+  for (std::uint32_t i = 0; i < rf; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const CornerId c = 3 * region.faceOrigin[i] + k;
+      const auto it = std::lower_bound(current.begin(), current.end(), c,
+                                       [](const SolvedCorner& s, CornerId x) { return s.corner < x; });
+      values[3 * i + k] = it != current.end() && it->corner == c ? it->uv : cornerUV[c];
+    }
+  }
+  return WedgeMap::fromCorners(region.mesh.triangles, values);
+}
+
+/// Records a region's solution in `current` (sorted by corner; these values replace older ones,
+/// a corner stays free once freed).
+void mergeSolved(const RegionMesh& region, const RegionSolution& solved,
+                 std::vector<SolvedCorner>& current) {
+  std::vector<SolvedCorner> fresh;
+  fresh.reserve(solved.cornerUV.size());
+  for (CornerId c = 0; c < solved.cornerUV.size(); ++c) {
+    fresh.push_back({3 * region.faceOrigin[c / 3] + c % 3, solved.cornerUV[c],
+                     region.vertexFree[region.mesh.triangles[c / 3][c % 3]] != 0});
+  }
+  const auto byCorner = [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; };
+  std::sort(fresh.begin(), fresh.end(), byCorner);
+  std::vector<SolvedCorner> merged;
+  merged.reserve(current.size() + fresh.size());
+  auto i = current.begin(), j = fresh.begin();
+  while (i != current.end() || j != fresh.end()) {
+    if (j == fresh.end() || (i != current.end() && i->corner < j->corner)) {
+      merged.push_back(*i++);
+    } else if (i == current.end() || j->corner < i->corner) {
+      merged.push_back(*j++);
+    } else {
+      merged.push_back({j->corner, j->uv, j->free || i->free});
+      ++i, ++j;
+    }
+  }
+  current = std::move(merged);
+}
+
+/// Faces within `rings` vertex rings of the seeds (the seeds included), whatever their flag;
+/// faces outside the region so far are flagged kRing.
+std::vector<FaceId> growPatch(const Topology& topology, std::vector<FaceId> frontier,
+                              std::uint32_t rings, std::vector<std::uint8_t>& flag) {
+  std::vector<FaceId> patch = frontier;
+  std::sort(patch.begin(), patch.end());
+  patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
+  std::vector<VertexId> seen;  // vertices expanded (sorted per ring)
+  for (std::uint32_t ring = 0; ring < rings && !frontier.empty(); ++ring) {
+    std::vector<FaceId> added;
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) {
+        const VertexId v = topology.vertex(3 * f + k);
+        if (std::binary_search(seen.begin(), seen.end(), v)) continue;
+        topology.forEachCornerAround(v, [&](CornerId c) {
+          const FaceId g = cornerFace(c);
+          if (!std::binary_search(patch.begin(), patch.end(), g)) added.push_back(g);
+        });
+      }
+    }
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) seen.push_back(topology.vertex(3 * f + k));
+    }
+    std::sort(seen.begin(), seen.end());
+    seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+    std::sort(added.begin(), added.end());
+    added.erase(std::unique(added.begin(), added.end()), added.end());
+    std::vector<FaceId> grown;
+    std::merge(patch.begin(), patch.end(), added.begin(), added.end(), std::back_inserter(grown));
+    patch = std::move(grown);
+    frontier = std::move(added);
+  }
+  for (FaceId f : patch) {
+    if (flag[f] == kOutside) flag[f] = kRing;
+  }
+  return patch;
+}
+
+}  // namespace
+
+std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
+                                       const WedgeMap& cornerUV,
+                                       const RefineOptions& options, RefineStats* stats) {
+  std::vector<std::uint8_t> flag;
+  return selectFlagged(mesh, topology, cornerUV, options, flag, stats);
+}
+
+RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
+                         const CrossField& field, const CutResult& cut,
+                         const std::vector<FaceId>& regionFaces) {
+  const FaceId nf = topology.numFaces();
+  if (field.direction.size() != nf || cut.corners.size() != 3u * nf ||
+      cut.faceRotation.size() != nf || mesh.numFaces() != nf) {
+    throw InputError("refine: field or cut sizes do not match the mesh (" + std::to_string(nf) +
+                     " faces)");
+  }
+  if (!isSortedUnique(regionFaces) || (!regionFaces.empty() && regionFaces.back() >= nf)) {
+    throw InputError("refine: region faces must be increasing face ids below " +
+                     std::to_string(nf));
+  }
+  RegionMesh out;
+  out.faceOrigin = regionFaces;
+  const std::uint32_t rf = static_cast<std::uint32_t>(regionFaces.size());
+  auto subFace = [&](FaceId f) -> std::uint32_t {
+    const auto it = std::lower_bound(regionFaces.begin(), regionFaces.end(), f);
+    return it != regionFaces.end() && *it == f ? static_cast<std::uint32_t>(it - regionFaces.begin())
+                                               : kInvalidId;
+  };
+  auto subCorner = [&](CornerId c) -> CornerId {
+    if (c == kInvalidId) return kInvalidId;
+    const std::uint32_t i = subFace(cornerFace(c));
+    return i == kInvalidId ? kInvalidId : 3 * i + c % 3;
+  };
+
+  // Sub vertices: one per fan piece of region corners around each whole-mesh vertex.
+  std::vector<VertexId> cornerVertex(3u * rf, kInvalidId);
+  std::vector<CornerId> vertexCorner;
+  for (CornerId sc = 0; sc < 3u * rf; ++sc) {
+    if (cornerVertex[sc] != kInvalidId) continue;
+    const CornerId start = 3 * regionFaces[sc / 3] + sc % 3;
+    // Most clockwise corner of the piece; a piece reaching a face outside the region is locked.
+    CornerId first = start;
+    bool free = true;
+    for (;;) {
+      const CornerId before = topology.cw(first);
+      if (before == kInvalidId) break;
+      if (before == start) break;  // closed fan, all in the region
+      if (subFace(cornerFace(before)) == kInvalidId) {
+        free = false;
+        break;
+      }
+      first = before;
+    }
+    const VertexId id = static_cast<VertexId>(out.vertexOrigin.size());
+    CornerId c = first;
+    for (;;) {
+      const CornerId sc2 = subCorner(c);  // in the region by construction
+      if (sc2 == kInvalidId) break;
+      cornerVertex[sc2] = id;
+      const CornerId after = topology.ccw(c);
+      if (after == kInvalidId || after == first) break;
+      if (subFace(cornerFace(after)) == kInvalidId) {
+        free = false;
+        break;
+      }
+      c = after;
+    }
+    out.vertexOrigin.push_back(topology.vertex(start));
+    out.vertexFree.push_back(free ? 1 : 0);
+    vertexCorner.push_back(subCorner(first));
+  }
+
+  const std::uint32_t nv = static_cast<std::uint32_t>(out.vertexOrigin.size());
+  TriangleMesh& sub = out.mesh;
+  sub.positions.resize(nv);
+  for (VertexId v = 0; v < nv; ++v) sub.positions[v] = mesh.positions[out.vertexOrigin[v]];
+  sub.triangles.resize(rf);
+  std::vector<CornerId> opposite(3u * rf);
+  out.field.direction.resize(rf);
+  CutResult& subCut = out.cut;
+  subCut.corners = CutCorners(3u * rf, false);
+  subCut.faceRotation.resize(rf);
+  for (std::uint32_t i = 0; i < rf; ++i) {
+    const FaceId f = regionFaces[i];
+    out.field.direction[i] = field.direction[f];
+    subCut.faceRotation[i] = cut.faceRotation[f];
+    for (int k = 0; k < 3; ++k) {
+      const CornerId c = 3 * f + k, sc = 3 * i + k;
+      sub.triangles[i][k] = cornerVertex[sc];
+      opposite[sc] = subCorner(topology.opposite(c));
+      subCut.corners.setCut(sc, cut.corners.isCut(c) || opposite[sc] == kInvalidId);
+      subCut.corners.setMatching(sc, cut.corners.matching(c));
+    }
+  }
+  // Seams: the edges with both faces in the region, in curve order, under local ids.
+  for (std::uint32_t s = 0; s < cut.seams.size(); ++s) {
+    SeamCurve local;
+    local.matching = cut.seams[s].matching;
+    for (CornerId c : cut.seams[s].corners) {
+      const CornerId sc = subCorner(c), so = subCorner(topology.opposite(c));
+      if (sc == kInvalidId || so == kInvalidId) continue;
+      local.corners.push_back(sc);
+    }
+    if (local.corners.empty()) continue;
+    local.start = sub.triangles[local.corners.front() / 3][nextCorner(local.corners.front()) % 3];
+    local.end = sub.triangles[local.corners.back() / 3][prevCorner(local.corners.back()) % 3];
+    subCut.seams.push_back(std::move(local));
+    out.seamOrigin.push_back(s);
+  }
+  for (VertexId v = 0; v < nv; ++v) {
+    if (std::binary_search(cut.cones.begin(), cut.cones.end(), out.vertexOrigin[v])) {
+      subCut.cones.push_back(v);
+    }
+  }
+  out.topology = Topology::fromParts(sub.triangles, std::move(opposite), std::move(vertexCorner));
+  return out;
+}
+
+RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
+                           const std::vector<Complex>& seamT, double edgeLength,
+                           RefineStats* stats) {
+  const std::uint32_t rf = region.topology.numFaces();
+  const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
+  if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
+    throw InputError("refine: region has " + std::to_string(rf) + " faces and " +
+                     std::to_string(ns) + " seams but got " + std::to_string(cornerUV.size()) +
+                     " corner UVs and " + std::to_string(seamT.size()) + " translations");
+  }
+  HatBasisOptions basisOptions;
+  basisOptions.edgeLength = edgeLength;
+  const HatBasis basis(region.mesh, region.topology, region.field, region.cut, basisOptions);
+  // No translation constraints: then column np + j of P is t_j itself (t = s).
+  const std::vector<GaussVector> noConstraints;
+  ReduceOptions reduceOptions;
+  reduceOptions.translationConstraints = &noConstraints;
+  const Reduction reduction = reduceBasis(basis, reduceOptions);
+  const ReducedMap& P = reduction.map;
+  const std::uint32_t nd = basis.numDomains();
+  const std::uint32_t np = reduction.numPositional;
+  const auto& cornerDomain = basis.cornerDomain();
+  auto isLockedVertex = [&](VertexId v) { return !region.vertexFree[v]; };
+  auto isLocked = [&](std::uint32_t d) {
+    return isLockedVertex(basis.basisVertex()[basis.domainBasis()[d]]);
+  };
+  std::vector<CornerId> domainCorner(nd, kInvalidId);
+  for (CornerId c = 0; c < 3u * rf; ++c) {
+    if (domainCorner[cornerDomain[c]] == kInvalidId) domainCorner[cornerDomain[c]] = c;
+  }
+  auto input = [&](std::uint32_t d) {
+    const Vec2d q = cornerUV[domainCorner[d]];
+    return Complex(q.x(), q.y());
+  };
+
+  // Translations: a seam touching a locked vertex keeps the input's t (the locked values on its
+  // two sides obey it). The other seams lie among free vertices only (e.g. between a cone and a
+  // seam node): the input map says little about their t (the Vox solve barely sees them), so
+  // t = seamT + U s is solved, rounded and solved again, where U spans the Gaussian-integer
+  // solutions of the cycle constraints restricted to these seams (seamT obeys the constraints,
+  // so every t of this form does too).
+  std::vector<std::uint8_t> freeSeam(ns, 1);
+  for (std::uint32_t j = 0; j < ns; ++j) {
+    for (CornerId c : region.cut.seams[j].corners) {
+      const Triangle& t = region.mesh.triangles[c / 3];
+      if (isLockedVertex(t[(c + 1) % 3]) || isLockedVertex(t[(c + 2) % 3])) freeSeam[j] = 0;
+    }
+  }
+  LatticeEliminator lattice(ns);
+  for (const GaussVector& row : reduction.cycleConstraints) {
+    GaussVector restricted;
+    for (const auto& entry : row) {
+      if (freeSeam[entry.first]) restricted.push_back(entry);
+    }
+    if (!restricted.empty()) lattice.addConstraint(restricted);
+  }
+  lattice.finish();
+  std::vector<std::uint32_t> sIndex(lattice.numFree(), kInvalidId);
+  std::uint32_t numS = 0;
+  for (std::uint32_t j = 0; j < ns; ++j) {
+    if (!freeSeam[j]) continue;
+    for (const auto& [k, u] : lattice.row(j)) {
+      if (sIndex[k] == kInvalidId) sIndex[k] = numS++;
+    }
+  }
+
+  // Fixed part of every domain's coefficient: the translations seamT.
+  std::vector<Complex> fixedPart(nd, 0.0);
+  for (std::uint32_t d = 0; d < nd; ++d) {
+    for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+      const std::uint32_t j = P.column[k];
+      if (j >= np) fixedPart[d] += P.value[k] * seamT[j - np];
+    }
+  }
+
+  // Kernel: a region component without a locked vertex and without a fixed seam of rotation
+  // r != 1 can shift freely; pin one positional unknown there to its input value (kept in both
+  // solves: such a component is the whole surface component, not a repair).
+  const ComponentsResult components = computeComponents(region.topology);
+  std::vector<std::uint8_t> anchored(components.components.size(), 0);
+  for (CornerId c = 0; c < 3u * rf; ++c) {
+    if (isLocked(cornerDomain[c])) anchored[components.faceComponent[c / 3]] = 1;
+  }
+  for (std::uint32_t j = 0; j < ns; ++j) {
+    const SeamCurve& seam = region.cut.seams[j];
+    if (seam.matching % 4 != 0 && !freeSeam[j]) {
+      anchored[components.faceComponent[seam.corners.front() / 3]] = 1;
+    }
+  }
+  std::vector<std::uint8_t> pinned(np, 0);
+  std::vector<Complex> pinValue(np, 0.0);
+  RefineStats local;
+  for (CornerId c = 0; c < 3u * rf; ++c) {
+    const std::uint32_t comp = components.faceComponent[c / 3];
+    const std::uint32_t d = cornerDomain[c];
+    if (anchored[comp]) continue;
+    // A domain whose row is value c_0 + fixed translations only.
+    std::uint32_t column = kInvalidId;
+    Complex value;
+    bool onlyFixed = true;
+    for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+      if (P.column[k] < np) {
+        column = P.column[k];
+        value = P.value[k];
+      } else if (freeSeam[P.column[k] - np]) {
+        onlyFixed = false;
+      }
+    }
+    if (column == kInvalidId || !onlyFixed) continue;
+    pinned[column] = 1;
+    pinValue[column] = (input(d) - fixedPart[d]) / value;
+    anchored[comp] = 1;
+    ++local.pinned;
+  }
+
+  // The local map: free domains keep their positional column (compacted) and the free
+  // translations (through U); fixed translations, pins and locked wedges go to the offset.
+  std::vector<std::uint32_t> newIndex(np, kInvalidId);
+  Reduction system;
+  std::uint32_t numPositional = 0;
+  for (std::uint32_t d = 0; d < nd; ++d) {
+    if (isLocked(d)) continue;
+    for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+      const std::uint32_t j = P.column[k];
+      if (j < np && !pinned[j] && newIndex[j] == kInvalidId) newIndex[j] = numPositional++;
+    }
+  }
+  system.numPositional = numPositional;
+  system.numTranslational = numS;
+  ReducedMap& Q = system.map;
+  Q.rowStart.assign(nd + 1, 0);
+  Q.offset.resize(nd);
+  std::vector<std::pair<std::uint32_t, Complex>> row;
+  for (std::uint32_t d = 0; d < nd; ++d) {
+    row.clear();
+    if (isLocked(d)) {
+      Q.offset[d] = input(d);
+    } else {
+      Q.offset[d] = fixedPart[d];
+      for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+        const std::uint32_t j = P.column[k];
+        if (j < np) {
+          if (pinned[j]) {
+            Q.offset[d] += P.value[k] * pinValue[j];
+          } else {
+            row.emplace_back(newIndex[j], P.value[k]);
+          }
+        } else if (freeSeam[j - np]) {
+          for (const auto& [col, u] : lattice.row(j - np)) {
+            row.emplace_back(numPositional + sIndex[col], P.value[k] * u.toComplex());
+          }
+        }
+      }
+      std::sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    }
+    for (std::size_t k = 0; k < row.size(); ++k) {
+      if (k > 0 && row[k].first == row[k - 1].first) {
+        Q.value.back() += row[k].second;
+      } else {
+        Q.column.push_back(row[k].first);
+        Q.value.push_back(row[k].second);
+      }
+    }
+    Q.rowStart[d + 1] = Q.column.size();
+  }
+  // Translations per seam in terms of the local s (for seamTranslations).
+  system.seamTranslation.resize(ns);
+  for (std::uint32_t j = 0; j < ns; ++j) {
+    if (!freeSeam[j]) continue;
+    for (const auto& [col, u] : lattice.row(j)) system.seamTranslation[j].emplace_back(sIndex[col], u);
+  }
+  // No component bookkeeping: solveSeamless then pins nothing (the pins above are offsets).
+  system.unknownComponent.assign(system.numUnknowns(), kInvalidId);
+  local.unknowns = system.numUnknowns();
+  local.freeTranslations = numS;
+
+  RegionSolution out;
+  std::vector<Complex> x;
+  if (system.numUnknowns() > 0) {
+    const SeamlessSolution solution = solveSeamless(basis, system);
+    x = solution.unknowns;
+    local.systemNonzeros = solution.stats.systemNonzeros;
+    local.factorNonzeros = solution.stats.factorNonzeros;
+    local.factorBytes = solution.stats.factorBytes;
+    local.factorPeakBytes = solution.stats.factorPeakBytes;
+  }
+  out.seamT = seamT;
+  if (numS > 0) {
+    const std::vector<Complex> s(x.begin() + numPositional, x.end());
+    const std::vector<Complex> t = seamTranslations(system, s);
+    for (std::uint32_t j = 0; j < ns; ++j) out.seamT[j] += t[j];
+  }
+  out.cornerUV = buildCutWedges(region.topology, region.cut);
+  evaluateMap(basis, system, x, out.cornerUV);
+  std::vector<CornerId> locked;
+  std::vector<Vec2d> lockedUV;
+  for (CornerId c = 0; c < 3u * rf; ++c) {
+    if (!isLocked(cornerDomain[c])) continue;
+    locked.push_back(c);
+    lockedUV.push_back(cornerUV[c]);  // exactly the input
+  }
+  out.cornerUV.assign(locked, lockedUV);
+  if (stats) {
+    stats->unknowns = local.unknowns;
+    stats->freeTranslations = local.freeTranslations;
+    stats->pinned = local.pinned;
+    stats->systemNonzeros = local.systemNonzeros;
+    stats->factorNonzeros = local.factorNonzeros;
+    stats->factorBytes = local.factorBytes;
+    stats->factorPeakBytes = local.factorPeakBytes;
+  }
+  return out;
+}
+
+RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
+                             const CrossField& field, const CutResult& cut,
+                             const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
+                             const RefineOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (seamT.size() != cut.seams.size()) {
+    throw InputError("refine: " + std::to_string(seamT.size()) + " translations for " +
+                     std::to_string(cut.seams.size()) + " seams");
+  }
+  RefineResult out;
+  RefineStats& stats = out.stats;
+  auto lap = std::chrono::steady_clock::now();
+  std::vector<std::uint8_t> flag;
+  std::vector<FaceId> faces = selectFlagged(mesh, topology, cornerUV, options, flag, &stats);
+  stats.secondsRegion = secondsSince(lap);
+  const double h = options.edgeLength;
+  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
+  for (VertexId v : cut.cones) {
+    if (v >= mesh.numVertices()) {
+      throw InputError("refine: cone " + std::to_string(v) + " out of range (" +
+                       std::to_string(mesh.numVertices()) + " vertices)");
+    }
+    isCone[v] = 1;
+  }
+
+  // Rounds: solve the region from the input map; then, while faces stay bad at the locked border,
+  // solve a patch around them (rings doubling) from the map as refined so far. `current` holds
+  // every corner solved so far (sorted by corner; the latest solve wins), currentT the seams.
+  const std::uint32_t maxRounds = std::max(1u, options.maxRounds);
+  std::uint64_t seeds = stats.markedFaces + stats.collapsedFaces + stats.flippedFaces;
+  std::vector<SolvedCorner> current;
+  std::vector<Complex> currentT = seamT;
+  RefineStats largest;  // system figures of the largest solve
+  for (std::uint32_t round = 0; !faces.empty(); ++round) {
+    const auto roundStart = std::chrono::steady_clock::now();
+    RefineRound figures;
+    figures.seedFaces = seeds;
+    figures.regionFaces = faces.size();
+    lap = roundStart;
+    const RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
+    WedgeMap regionUV = regionInput(region, cornerUV, current);
+    std::vector<Complex> regionT(region.seamOrigin.size());
+    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
+    const std::uint32_t numFree = static_cast<std::uint32_t>(
+        std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
+    figures.freeVertices = numFree;
+    stats.secondsExtract += secondsSince(lap);
+
+    lap = std::chrono::steady_clock::now();
+    RegionSolution solved;
+    if (numFree > 0) {
+      solved = solveRegion(region, regionUV, regionT, h, &stats);
+      figures.unknowns = stats.unknowns;
+      if (stats.unknowns >= largest.unknowns) largest = stats;
+    } else {
+      solved.cornerUV = std::move(regionUV);
+      solved.seamT = std::move(regionT);
+    }
+    stats.secondsSolve += secondsSince(lap);
+    mergeSolved(region, solved, current);
+    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) currentT[region.seamOrigin[j]] = solved.seamT[j];
+
+    // Measure the region again; bad faces touching a locked vertex seed the next round.
+    std::vector<std::uint8_t> subCone(region.mesh.numVertices(), 0);
+    for (VertexId v : region.cut.cones) subCone[v] = 1;
+    FaceCounts inRegion;
+    std::vector<FaceId> border;
+    bool collapsedAtBorder = false;  // a border face below the threshold but not flipped
+    const std::uint32_t rf = region.topology.numFaces();
+    for (std::uint32_t i = 0; i < rf; ++i) {
+      const double ratio = parameterAreaRatio(region.mesh, solved.cornerUV, i, h);
+      inRegion.add(region.mesh, solved.cornerUV, i, ratio, subCone);
+      if (std::isnan(ratio) || ratio >= options.collapseThreshold) continue;
+      const Triangle& t = region.mesh.triangles[i];
+      const bool locked = !region.vertexFree[t[0]] || !region.vertexFree[t[1]] || !region.vertexFree[t[2]];
+      if (locked && !collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone)) {
+        border.push_back(region.faceOrigin[i]);
+        collapsedAtBorder = collapsedAtBorder || ratio >= 0.0;
+      }
+    }
+    figures.collapsed = inRegion.collapsed;
+    figures.collapsedAtCones = inRegion.collapsedAtCones;
+    figures.flipped = inRegion.flipped;
+    figures.borderFaces = border.size();
+    figures.seconds = secondsSince(roundStart);
+    stats.rounds.push_back(figures);
+    reportProgress(options.progress, "refine", double(round + 1) / maxRounds);
+    if (border.empty() || round + 1 >= maxRounds) break;
+    // Another solve pays while it removes collapses, or while the border shrinks fast. Flipped
+    // faces that stay at the border round after round are the map's own flips near cones (hat has
+    // them too); chasing them cost 3 extra solves and 27% of the time of a 22M-face run for 32 of
+    // 8174 flips.
+    if (!collapsedAtBorder && 2 * border.size() > seeds) break;
+    seeds = border.size();
+    // Rings double each round: damage that outlasts a round usually spreads further out. The
+    // patch is solved on its own, the rest of the map (refined or not) locked around it.
+    faces = growPatch(topology, std::move(border), std::max(1u, options.rings) << std::min(round, 4u), flag);
+  }
+  if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
+  if (largest.unknowns > 0) {
+    stats.unknowns = largest.unknowns;
+    stats.freeTranslations = largest.freeTranslations;
+    stats.pinned = largest.pinned;
+    stats.systemNonzeros = largest.systemNonzeros;
+    stats.factorNonzeros = largest.factorNonzeros;
+    stats.factorBytes = largest.factorBytes;
+    stats.factorPeakBytes = largest.factorPeakBytes;
+  }
+
+  // Whole-map counts: every face ever solved (flag set) with the refined values, every other face
+  // as in the input. The refined faces are measured as one region of their own.
+  std::vector<FaceId> touched;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    if (flag[f] != kOutside) touched.push_back(f);
+  }
+  FaceCounts inside;
+  if (!touched.empty()) {
+    const RegionMesh all = extractRegion(mesh, topology, field, cut, touched);
+    const WedgeMap allUV = regionInput(all, cornerUV, current);
+    std::vector<std::uint8_t> subCone(all.mesh.numVertices(), 0);
+    for (VertexId v : all.cut.cones) subCone[v] = 1;
+    for (std::uint32_t i = 0; i < all.topology.numFaces(); ++i) {
+      inside.add(all.mesh, allUV, i, parameterAreaRatio(all.mesh, allUV, i, h), subCone);
+    }
+    stats.regionFaces = touched.size();
+  }
+  const FaceCounts outside = tbb::parallel_reduce(
+      tbb::blocked_range<FaceId>(0, mesh.numFaces(), 1u << 14), FaceCounts(),
+      [&](const tbb::blocked_range<FaceId>& range, FaceCounts counts) {
+        for (FaceId f = range.begin(); f != range.end(); ++f) {
+          if (flag[f] != kOutside) continue;
+          counts.add(mesh, cornerUV, f, parameterAreaRatio(mesh, cornerUV, f, h), isCone);
+        }
+        return counts;
+      },
+      [](FaceCounts a, const FaceCounts& b) {
+        a.collapsed += b.collapsed, a.collapsedAtCones += b.collapsedAtCones, a.flipped += b.flipped;
+        return a;
+      });
+  stats.collapsedAfter = outside.collapsed + inside.collapsed;
+  stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
+  stats.flippedAfter = outside.flipped + inside.flipped;
+
+  // The corners of every vertex freed in some solve, with their latest values.
+  std::vector<VertexId> freed;
+  for (const SolvedCorner& s : current) {
+    if (!s.free) continue;
+    out.corners.push_back(s.corner);
+    out.cornerUV.push_back(s.uv);
+    freed.push_back(topology.vertex(s.corner));
+  }
+  std::sort(freed.begin(), freed.end());
+  freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
+  stats.freeVertices = static_cast<std::uint32_t>(freed.size());
+  std::vector<VertexId> around;  // vertices of every refined face
+  around.reserve(3 * touched.size());
+  for (FaceId f : touched) {
+    for (int k = 0; k < 3; ++k) around.push_back(topology.vertex(3 * f + k));
+  }
+  std::sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
+  stats.lockedVertices = static_cast<std::uint32_t>(around.size() - freed.size());
+  stats.refinedVertexFraction = mesh.numVertices() ? double(freed.size()) / mesh.numVertices() : 0.0;
+  for (std::uint32_t j = 0; j < currentT.size(); ++j) {
+    if (currentT[j] == seamT[j]) continue;
+    out.seams.push_back(j);
+    out.seamT.push_back(currentT[j]);
+  }
+  reportProgress(options.progress, "refine", 1.0);
+  stats.secondsTotal = secondsSince(start);
+  return out;
+}
+
+void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
+                     std::vector<Complex>* translations) {
+  if (translations) {
+    for (std::size_t k = 0; k < refinement.seams.size(); ++k) {
+      if (refinement.seams[k] >= translations->size()) {
+        throw InputError("refine: seam " + std::to_string(refinement.seams[k]) +
+                         " out of range (" + std::to_string(translations->size()) + " seams)");
+      }
+      (*translations)[refinement.seams[k]] = refinement.seamT[k];
+    }
+  }
+  // The corners of each free vertex's wedge all change together: the wedges keep their ids.
+  cornerUV.assign(refinement.corners, refinement.cornerUV);
+}
+
+}  // namespace seamvox

@@ -1,0 +1,162 @@
+#pragma once
+/// Local refinement of a seamless map in the hat basis near cones: the "HatLoc" half of the
+/// Vox+HatLoc solver (DESIGN section 10). A region of triangles (marked faces, triangles the input
+/// map collapsed or flipped, plus rings of neighbours) is cut out as a mesh of its own; vertices
+/// whose triangles all lie in the region are re-solved with the seam translations fixed, every
+/// other vertex keeps the input map's values (per wedge) and enters the right-hand side.
+///
+/// Rounds: the locked border keeps the input map, which may itself be damaged just outside the
+/// first region. After each solve the region's faces are measured again; a face still collapsed
+/// (below collapseThreshold) or flipped that touches a locked vertex seeds a patch: those faces
+/// and rings around them (rings double each round), solved on their own with everything around
+/// locked to the map as refined so far, up to maxRounds solves. (Re-solving the whole grown region
+/// instead cost as much as the first solve per round: 26 of a 54 s run on 9.2M faces.)
+/// A further solve runs only while it pays: while a border face is collapsed but not flipped, or
+/// while the border at least halves from one round to the next (flips that persist at the border
+/// are the map's own near cones; a 22M-face armadillo spent 3 extra solves on 32 of 8174 flips).
+/// Faces whose vertices are all free are not grown around: the local hat solve is exact for its
+/// border, and what remains there is the hat map's own damage (on the shared meshes: flips of
+/// triangles touching a cone, as many as the hat solver's up to how the translations round).
+/// Faces between two coincident cones (metrics.h collapsesBetweenCones) are not grown around
+/// either: the cones' positions follow from the rounded translations, no free vertex moves them.
+/// On the shared meshes these are the only collapsed faces left, in the hat map as well.
+#include <complex>
+#include <cstdint>
+#include <vector>
+
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+struct RefineOptions {
+  double edgeLength = 1.0;  ///< h, as in the map being refined (> 0)
+  /// Faces to refine whatever the map looks like there (e.g. VoxelParamResult::markedFaces).
+  std::vector<FaceId> markedFaces;
+  /// A face whose signed parameter-space area is below this fraction of its expected area
+  /// A_T / h^2 is added to the region (collapsed; negative area = flipped is always added).
+  double collapseThreshold = 0.1;
+  /// Rings of neighbouring faces (sharing a vertex) added around the region, and around the
+  /// faces that grow it in later rounds (at least one ring there).
+  std::uint32_t rings = 1;
+  /// Solves at most (>= 1; 1: no re-detection).
+  std::uint32_t maxRounds = 6;
+  ProgressFn progress;
+};
+
+/// One solve of the (grown) region.
+struct RefineRound {
+  /// Faces the region grew around: round 0 the input's marked, collapsed and flipped faces; later
+  /// rounds the previous round's borderFaces.
+  std::uint64_t seedFaces = 0;
+  std::uint64_t regionFaces = 0;
+  std::uint32_t freeVertices = 0;
+  std::uint32_t unknowns = 0;
+  /// The region's faces after this solve, by MapQuality's criteria (metrics.h).
+  std::uint64_t collapsed = 0, collapsedAtCones = 0, flipped = 0;
+  /// Region faces after this solve below collapseThreshold or flipped, touching a locked vertex
+  /// and not between coincident cones: the next round's seeds.
+  std::uint64_t borderFaces = 0;
+  double seconds = 0.0;
+};
+
+/// Figures over all rounds unless said otherwise.
+struct RefineStats {
+  std::uint64_t markedFaces = 0, collapsedFaces = 0, flippedFaces = 0;  ///< found in the input
+  std::uint64_t regionFaces = 0;   ///< faces solved in some round
+  std::uint32_t freeVertices = 0;  ///< vertices re-solved in some round (all their faces in it)
+  std::uint32_t lockedVertices = 0;  ///< other vertices of those faces, kept at the input values
+  double refinedVertexFraction = 0.0;  ///< freeVertices / #V
+  /// System figures (unknowns to factorPeakBytes) of the largest solve.
+  std::uint32_t unknowns = 0;  ///< size of the local system
+  /// Translation unknowns solved locally: seams among free vertices only, e.g. between two cones
+  /// (their input t is not trusted; rounded to Gaussian integers and solved again).
+  std::uint32_t freeTranslations = 0;
+  std::uint32_t pinned = 0;    ///< region components without any locked vertex or rotation
+  std::uint64_t systemNonzeros = 0, factorNonzeros = 0, factorBytes = 0, factorPeakBytes = 0;
+  double secondsRegion = 0.0, secondsExtract = 0.0, secondsSolve = 0.0, secondsTotal = 0.0;  ///< all rounds
+  std::vector<RefineRound> rounds;  ///< empty when the region is empty
+  /// The whole refined map by MapQuality's criteria (metrics.h), cones from the cut: what
+  /// measureMap(mesh, refined, field, h, &cut.cones) counts.
+  std::uint64_t collapsedAfter = 0, collapsedAtConesAfter = 0, flippedAfter = 0;
+  /// Last round's borderFaces: 0 unless maxRounds ran out or the rounds stopped paying (only
+  /// flipped faces left at the border, and no fewer than half as many as the round before).
+  std::uint64_t unresolvedFaces = 0;
+};
+
+/// New (u, v) of the corners of the free vertices: cornerUV[k] belongs to corner corners[k].
+/// Every other corner keeps the input value exactly. Seams whose translation was re-solved
+/// (all their edges among free vertices) get seamT[k] for seam seams[k].
+struct RefineResult {
+  std::vector<CornerId> corners;
+  std::vector<Vec2d> cornerUV;
+  std::vector<std::uint32_t> seams;
+  std::vector<std::complex<double>> seamT;
+  RefineStats stats;
+};
+
+/// The region's triangles as a mesh of their own, with index maps back to the whole mesh. Sub
+/// face i is whole face faceOrigin[i] with its corners in the same order (sub corner 3 i + k is
+/// whole corner 3 faceOrigin[i] + k). A locked vertex whose region faces form several fans gets
+/// one sub vertex per fan, so the sub mesh is manifold; a free vertex keeps its whole fan. The
+/// cut keeps the seam edges with both faces in the region (local seam ids, seamOrigin maps back);
+/// region-border edges are boundary edges.
+struct RegionMesh {
+  TriangleMesh mesh;
+  Topology topology;
+  CrossField field;
+  CutResult cut;
+  std::vector<FaceId> faceOrigin;          ///< #sub faces, increasing
+  std::vector<VertexId> vertexOrigin;      ///< #sub vertices
+  std::vector<std::uint8_t> vertexFree;    ///< #sub vertices: all its whole-mesh faces are here
+  std::vector<std::uint32_t> seamOrigin;   ///< #local seams
+};
+
+/// Faces to refine: marked faces, faces whose input parameter area is below the collapse
+/// threshold or negative, then options.rings rings of neighbours. Sorted, unique. Linear in #F
+/// (one pass over the map) plus the region's size times the valence.
+std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
+                                       const WedgeMap& cornerUV,
+                                       const RefineOptions& options, RefineStats* stats = nullptr);
+
+/// Cuts the given faces (sorted, unique) out of the mesh. Cost: the region's size times the
+/// valence; no per-face array of the whole mesh. Throws InputError on bad sizes or ids.
+RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
+                         const CrossField& field, const CutResult& cut,
+                         const std::vector<FaceId>& regionFaces);
+
+/// The region's corner values (3 #sub faces) and translations (per local seam) after the solve.
+struct RegionSolution {
+  WedgeMap cornerUV;  ///< on the region's cut wedges
+  std::vector<std::complex<double>> seamT;
+};
+
+/// Re-solves the free vertices of a region in the hat basis (DESIGN section 10): locked wedges
+/// fixed to the given corner values (3 #sub faces, the input map on the region) and moved to the
+/// right-hand side; translations fixed to seamT (per local seam) except on seams among free
+/// vertices only, which are solved, rounded to Gaussian integers and solved again (solveSeamless).
+/// Locked corners keep their input values exactly. Throws SolverError when a factorization fails.
+RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
+                           const std::vector<std::complex<double>>& seamT, double edgeLength,
+                           RefineStats* stats = nullptr);
+
+/// The whole stage: select, extract, solve, re-detect and grow (rounds, above). cornerUV is the
+/// input map (3 #F), seamT its rounded translation per seam of cut (Gaussian integers). Holds one
+/// byte per face and per vertex of the whole mesh besides the region. Throws InputError on bad
+/// sizes.
+RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
+                             const CrossField& field, const CutResult& cut,
+                             const WedgeMap& cornerUV,
+                             const std::vector<std::complex<double>>& seamT,
+                             const RefineOptions& options = {});
+
+/// Writes a refinement's corner values into a whole-mesh map (3 #F; a free vertex's wedges
+/// change whole, in place: WedgeMap::assign) and, when given, its re-solved translations into
+/// the per-seam translations.
+void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
+                     std::vector<std::complex<double>>* translations = nullptr);
+
+}  // namespace seamvox

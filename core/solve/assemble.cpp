@@ -1,0 +1,154 @@
+#include "core/solve/assemble.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <mutex>
+
+namespace seamvox {
+
+namespace {
+
+using Triplet = Eigen::Triplet<std::complex<double>, int>;
+
+// Per-thread accumulation: triplets, compressed into a sparse matrix when the buffer fills.
+struct Accumulator {
+  std::vector<Triplet> triplets;
+  ComplexSparse sum;
+  ComplexVector rhs;
+  double area = 0.0, target = 0.0;
+  void flush(int n) {
+    if (triplets.empty()) return;
+    ComplexSparse part(n, n);
+    part.setFromTriplets(triplets.begin(), triplets.end());
+    if (sum.rows() == 0) {
+      sum = std::move(part);
+    } else {
+      sum += part;
+    }
+    triplets.clear();
+  }
+};
+
+constexpr std::size_t kFlushTriplets = 1u << 21;
+
+}  // namespace
+
+LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
+                            const AssembleOptions& options) {
+  const int n = static_cast<int>(reduction.numUnknowns());
+  const ReducedMap& P = reduction.map;
+  const bool hasOffset = !P.offset.empty();
+  tbb::enumerable_thread_specific<Accumulator> locals([n] {
+    Accumulator a;
+    a.rhs = ComplexVector::Zero(n);
+    return a;
+  });
+  const std::uint64_t ne = basis.numElements();
+  std::atomic<std::uint64_t> done{0};
+  std::mutex progressMutex;
+  reportProgress(options.progress, "assemble", 0.0);
+  // One task per range of elements: the basis' own blocks (e.g. OpenVDB leaf nodes) when it has
+  // them, else fixed-size ranges. Each thread accumulates into its own triplets; one merge.
+  const std::vector<std::uint64_t> blocks = basis.elementBlocks();
+  const auto assembleRange = [&](std::uint64_t begin, std::uint64_t end) {
+    Accumulator& acc = locals.local();
+    ElementIntegrals el;
+    for (std::uint64_t e = begin; e != end; ++e) {
+      basis.elementIntegrals(e, el);
+      const std::uint32_t m = el.count;
+      acc.area += el.area;
+      std::complex<double> local[kMaxElementFunctions];
+      for (std::uint32_t a = 0; a < m; ++a) {
+        local[a] = el.rhs[a];
+        if (hasOffset) {
+          for (std::uint32_t b = 0; b < m; ++b) {
+            if (el.domain[b] != kInvalidId) local[a] -= el.stiffness[m * a + b] * P.offset[el.domain[b]];
+          }
+        }
+      }
+      for (std::uint32_t a = 0; a < m; ++a) {
+        const std::uint32_t da = el.domain[a];
+        if (da == kInvalidId) continue;
+        for (std::uint64_t ka = P.rowStart[da]; ka < P.rowStart[da + 1]; ++ka) {
+          const int i = static_cast<int>(P.column[ka]);
+          const std::complex<double> pa = std::conj(P.value[ka]);
+          acc.rhs[i] += pa * local[a];
+          for (std::uint32_t b = 0; b < m; ++b) {
+            const std::uint32_t db = el.domain[b];
+            const double l = el.stiffness[m * a + b];
+            if (db == kInvalidId || l == 0.0) continue;
+            for (std::uint64_t kb = P.rowStart[db]; kb < P.rowStart[db + 1]; ++kb) {
+              const int j = static_cast<int>(P.column[kb]);
+              if (i >= j) acc.triplets.emplace_back(i, j, pa * l * P.value[kb]);
+            }
+          }
+        }
+      }
+      if (acc.triplets.size() > kFlushTriplets) acc.flush(n);
+    }
+    const std::uint64_t total = done += end - begin;
+    if (options.progress) {
+      std::lock_guard<std::mutex> lock(progressMutex);
+      reportProgress(options.progress, "assemble", static_cast<double>(total) / ne);
+    }
+  };
+  if (blocks.size() >= 2 && blocks.front() == 0 && blocks.back() == ne) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size() - 1, 8), [&](const auto& range) {
+      assembleRange(blocks[range.begin()], blocks[range.end()]);
+    });
+  } else {
+    tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, ne, 4096),
+                      [&](const auto& range) { assembleRange(range.begin(), range.end()); });
+  }
+  LinearSystem out;
+  out.lower.resize(n, n);
+  out.rhs = ComplexVector::Zero(n);
+  for (Accumulator& acc : locals) {
+    acc.flush(n);
+    if (acc.sum.rows() != 0) out.lower += acc.sum;
+    acc.sum = ComplexSparse();
+    out.rhs += acc.rhs;
+    out.totalArea += acc.area;
+  }
+  out.lower.makeCompressed();
+  return out;
+}
+
+RestrictedSystem restrictSystem(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
+                                const std::vector<std::complex<double>>& values) {
+  const int n = static_cast<int>(system.lower.rows());
+  RestrictedSystem out;
+  std::vector<int> index(n, -1);
+  for (int i = 0; i < n; ++i) {
+    if (!fixed[i]) {
+      index[i] = static_cast<int>(out.freeUnknowns.size());
+      out.freeUnknowns.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  const int nf = static_cast<int>(out.freeUnknowns.size());
+  out.rhs.resize(nf);
+  for (int k = 0; k < nf; ++k) out.rhs[k] = system.rhs[out.freeUnknowns[k]];
+  std::vector<Triplet> triplets;
+  triplets.reserve(system.lower.nonZeros());
+  for (int j = 0; j < n; ++j) {
+    for (ComplexSparse::InnerIterator it(system.lower, j); it; ++it) {
+      const int i = it.row();  // i >= j; K_ij = value, K_ji = conj(value)
+      if (index[i] >= 0 && index[j] >= 0) {
+        triplets.emplace_back(index[i], index[j], it.value());
+      } else if (index[i] >= 0) {
+        out.rhs[index[i]] -= it.value() * values[j];
+      } else if (index[j] >= 0) {
+        out.rhs[index[j]] -= std::conj(it.value()) * values[i];
+      }
+    }
+  }
+  out.lower.resize(nf, nf);
+  out.lower.setFromTriplets(triplets.begin(), triplets.end());
+  return out;
+}
+
+}  // namespace seamvox

@@ -1,0 +1,44 @@
+#pragma once
+/// Assembly of the reduced system K = P* L P, rhs = P* (b - L offset) (DESIGN section 8).
+#include <Eigen/SparseCore>
+#include <complex>
+#include <cstdint>
+#include <vector>
+
+#include "core/basis/basis.h"
+#include "core/system/progress.h"
+#include "core/basis/reduce.h"
+
+namespace seamvox {
+
+using ComplexSparse = Eigen::SparseMatrix<std::complex<double>, Eigen::ColMajor, int>;
+using ComplexVector = Eigen::VectorXcd;
+
+/// Hermitian system over all reduced unknowns; K holds the lower triangle (row >= column).
+/// Minimising x* K x - 2 Re(x* rhs) minimises sum_T A_T |grad q - w_T / h|^2.
+struct LinearSystem {
+  ComplexSparse lower;
+  ComplexVector rhs;
+  double totalArea = 0.0;
+};
+
+struct AssembleOptions {
+  ProgressFn progress;
+};
+
+/// Sums the element integrals through the map P in parallel (TBB; thread-local accumulation,
+/// one merge). Memory: the nonzeros of K plus a bounded buffer per thread.
+LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
+                            const AssembleOptions& options = {});
+
+/// The system on the free unknowns: fixed[i] != 0 moves unknown i (value values[i]) to the
+/// right-hand side. Returns the lower triangle of K_ff, rhs_f - K_fx x_x and the free indices.
+struct RestrictedSystem {
+  ComplexSparse lower;
+  ComplexVector rhs;
+  std::vector<std::uint32_t> freeUnknowns;
+};
+RestrictedSystem restrictSystem(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
+                                const std::vector<std::complex<double>>& values);
+
+}  // namespace seamvox

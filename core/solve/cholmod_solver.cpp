@@ -1,0 +1,204 @@
+#include "core/solve/cholmod_solver.h"
+
+#include <cholmod.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "core/system/errors.h"
+#include "core/system/huge_pages.h"
+
+namespace seamvox {
+namespace {
+
+// CHOLMOD allocates through SuiteSparse_config: its large blocks (the factor, the workspace) get
+// the same huge-page advice as the command's own arrays (core/system/huge_pages.h).
+void* adviseCalloc(std::size_t count, std::size_t size) {
+  void* p = std::calloc(count, size);
+  if (p && size != 0 && count <= ~std::size_t(0) / size) adviseHugePages(p, count * size);
+  return p;
+}
+void* adviseRealloc(void* old, std::size_t size) {
+  void* p = std::realloc(old, size);
+  adviseHugePages(p, size);
+  return p;
+}
+void useAdvisedAllocation() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    SuiteSparse_config.malloc_func = [](std::size_t size) { return mallocAdvised(size); };
+    SuiteSparse_config.calloc_func = adviseCalloc;
+    SuiteSparse_config.realloc_func = adviseRealloc;
+    SuiteSparse_config.free_func = std::free;
+  });
+}
+
+}  // namespace
+
+struct CholmodFactor::Impl {
+  cholmod_common common;
+  cholmod_factor* L = nullptr;
+  bool realForm = false;
+  std::int64_t n = 0;
+  std::uint64_t factorBytes = 0, peakBytes = 0, nonzeros = 0;
+  Impl() {
+    useAdvisedAllocation();
+    cholmod_l_start(&common);
+    common.print = 0;  // core never prints; failures become exceptions
+    common.supernodal = CHOLMOD_SUPERNODAL;
+  }
+  ~Impl() {
+    clear();
+    cholmod_l_finish(&common);
+  }
+  void clear() {
+    if (L) cholmod_l_free_factor(&L, &common);
+    L = nullptr;
+  }
+  // Factors A; returns false (and frees the factor) when it is not positive definite.
+  bool tryFactor(cholmod_sparse* A, std::string* why) {
+    clear();
+    L = cholmod_l_analyze(A, &common);
+    if (!L || common.status < CHOLMOD_OK) {
+      *why = "analysis failed (status " + std::to_string(common.status) + ")";
+      clear();
+      return false;
+    }
+    const int ok = cholmod_l_factorize(A, L, &common);
+    if (!ok || common.status < CHOLMOD_OK || L->minor < L->n) {
+      *why = L && L->minor < L->n ? "not positive definite at column " + std::to_string(L->minor)
+                                  : "factorization failed (status " +
+                                        std::to_string(common.status) + ")";
+      clear();
+      return false;
+    }
+    nonzeros = static_cast<std::uint64_t>(common.lnz);
+    return true;
+  }
+};
+
+CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
+CholmodFactor::~CholmodFactor() = default;
+CholmodFactor::CholmodFactor(CholmodFactor&&) noexcept = default;
+CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
+
+void CholmodFactor::factor(const ComplexSparse& lowerIn) {
+  ComplexSparse lower = lowerIn;
+  lower.makeCompressed();
+  Impl& m = *impl_;
+  m.n = lower.rows();
+  m.realForm = false;
+  const std::int64_t n = m.n, nnz = lower.nonZeros();
+  if (n == 0) {
+    m.clear();
+    return;
+  }
+  std::string why;
+  {
+    cholmod_sparse* A = cholmod_l_allocate_sparse(n, n, nnz, 1, 1, -1, CHOLMOD_COMPLEX, &m.common);
+    if (!A) throw SolverError("CHOLMOD: out of memory allocating a " + std::to_string(n) + " matrix");
+    auto* p = static_cast<SuiteSparse_long*>(A->p);
+    auto* i = static_cast<SuiteSparse_long*>(A->i);
+    auto* x = static_cast<double*>(A->x);
+    for (std::int64_t j = 0; j <= n; ++j) p[j] = lower.outerIndexPtr()[j];
+    for (std::int64_t k = 0; k < nnz; ++k) {
+      i[k] = lower.innerIndexPtr()[k];
+      x[2 * k] = lower.valuePtr()[k].real();
+      x[2 * k + 1] = lower.valuePtr()[k].imag();
+    }
+    const bool ok = m.tryFactor(A, &why);
+    cholmod_l_free_sparse(&A, &m.common);
+    if (ok) {
+      m.factorBytes = m.common.memory_inuse;
+      m.peakBytes = m.common.memory_usage;
+      return;
+    }
+  }
+  // Real form [Re -Im; Im Re], lower triangle: blocks (1,1) and (2,2) = lower(Re K), block (2,1) =
+  // Im K in full (Im K is antisymmetric: entry (i, j) from the lower triangle, (j, i) negated).
+  std::string whyReal;
+  {
+    const std::int64_t n2 = 2 * n;
+    std::vector<std::vector<std::pair<std::int64_t, double>>> cols(n2);
+    for (std::int64_t j = 0; j < n; ++j) {
+      for (ComplexSparse::InnerIterator it(lower, j); it; ++it) {
+        const std::int64_t r = it.row();
+        cols[j].emplace_back(r, it.value().real());
+        cols[n + j].emplace_back(n + r, it.value().real());
+        cols[j].emplace_back(n + r, it.value().imag());
+        if (r != j) cols[r].emplace_back(n + j, -it.value().imag());
+      }
+    }
+    std::int64_t total = 0;
+    for (auto& c : cols) {
+      std::sort(c.begin(), c.end());
+      total += static_cast<std::int64_t>(c.size());
+    }
+    cholmod_sparse* A = cholmod_l_allocate_sparse(n2, n2, total, 1, 1, -1, CHOLMOD_REAL, &m.common);
+    if (!A) throw SolverError("CHOLMOD: out of memory allocating the real form");
+    auto* p = static_cast<SuiteSparse_long*>(A->p);
+    auto* i = static_cast<SuiteSparse_long*>(A->i);
+    auto* x = static_cast<double*>(A->x);
+    std::int64_t k = 0;
+    for (std::int64_t j = 0; j < n2; ++j) {
+      p[j] = k;
+      for (const auto& [r, v] : cols[j]) i[k] = r, x[k] = v, ++k;
+    }
+    p[n2] = k;
+    cols.clear();
+    const bool ok = m.tryFactor(A, &whyReal);
+    cholmod_l_free_sparse(&A, &m.common);
+    if (ok) {
+      m.realForm = true;
+      m.factorBytes = m.common.memory_inuse;
+      m.peakBytes = m.common.memory_usage;
+      return;
+    }
+  }
+  throw SolverError("CHOLMOD: cannot factor the " + std::to_string(n) +
+                    "-unknown Hermitian system: " + why + "; real form: " + whyReal +
+                    " (a component without a pinned unknown, or a degenerate mesh region)");
+}
+
+ComplexVector CholmodFactor::solve(const ComplexVector& rhs) const {
+  const Impl& m = *impl_;
+  if (m.n == 0) return ComplexVector();
+  if (!m.L) throw SolverError("CHOLMOD: solve called without a factor");
+  auto& common = const_cast<cholmod_common&>(m.common);
+  const std::int64_t rows = m.realForm ? 2 * m.n : m.n;
+  cholmod_dense* B = cholmod_l_allocate_dense(rows, 1, rows, m.realForm ? CHOLMOD_REAL : CHOLMOD_COMPLEX,
+                                              &common);
+  if (!B) throw SolverError("CHOLMOD: out of memory allocating the right-hand side");
+  auto* b = static_cast<double*>(B->x);
+  for (std::int64_t k = 0; k < m.n; ++k) {
+    if (m.realForm) {
+      b[k] = rhs[k].real();
+      b[m.n + k] = rhs[k].imag();
+    } else {
+      b[2 * k] = rhs[k].real();
+      b[2 * k + 1] = rhs[k].imag();
+    }
+  }
+  cholmod_dense* X = cholmod_l_solve(CHOLMOD_A, m.L, B, &common);
+  cholmod_l_free_dense(&B, &common);
+  if (!X) throw SolverError("CHOLMOD: solve failed (status " + std::to_string(common.status) + ")");
+  ComplexVector out(m.n);
+  const auto* xv = static_cast<const double*>(X->x);
+  for (std::int64_t k = 0; k < m.n; ++k) {
+    out[k] = m.realForm ? std::complex<double>(xv[k], xv[m.n + k])
+                        : std::complex<double>(xv[2 * k], xv[2 * k + 1]);
+  }
+  cholmod_l_free_dense(&X, &common);
+  return out;
+}
+
+std::uint64_t CholmodFactor::factorNonzeros() const { return impl_->nonzeros; }
+std::uint64_t CholmodFactor::factorBytes() const { return impl_->factorBytes; }
+std::uint64_t CholmodFactor::peakBytes() const { return impl_->peakBytes; }
+bool CholmodFactor::usedRealFallback() const { return impl_->realForm; }
+bool CholmodFactor::isSupernodal() const { return impl_->L && impl_->L->is_super; }
+
+}  // namespace seamvox

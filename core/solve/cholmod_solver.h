@@ -1,0 +1,39 @@
+#pragma once
+/// Owning CHOLMOD factorization of a Hermitian positive definite complex matrix (DESIGN
+/// section 8). CHOLMOD's headers stay in solve.cpp.
+#include <cstdint>
+#include <memory>
+
+#include "core/solve/assemble.h"
+
+namespace seamvox {
+
+/// Supernodal complex Hermitian Cholesky; falls back to the real 2n x 2n form [Re -Im; Im Re]
+/// only when the complex factorization fails. Move-only.
+class CholmodFactor {
+ public:
+  CholmodFactor();
+  ~CholmodFactor();
+  CholmodFactor(CholmodFactor&&) noexcept;
+  CholmodFactor& operator=(CholmodFactor&&) noexcept;
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+
+  /// Analyses and factors the matrix given by its lower triangle. Throws SolverError (not
+  /// positive definite, out of memory) naming the column where it failed.
+  void factor(const ComplexSparse& lower);
+  /// Solves K x = rhs with the last factor.
+  ComplexVector solve(const ComplexVector& rhs) const;
+
+  std::uint64_t factorNonzeros() const;  ///< entries of L (complex or real form)
+  std::uint64_t factorBytes() const;     ///< memory held by the factor
+  std::uint64_t peakBytes() const;       ///< CHOLMOD's peak memory during analyse + factor
+  bool usedRealFallback() const;
+  bool isSupernodal() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace seamvox

@@ -1,0 +1,87 @@
+#include "core/solve/evaluate.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace seamvox {
+
+namespace {
+
+/// Calls f(corner) for the corners of v counter-clockwise, starting just after a cut edge when v
+/// has one (at the fan's start on the boundary), and f(kInvalidId) after every cut edge crossed:
+/// the wedge boundaries.
+template <class F>
+void walkWedges(const Topology& topology, const CutCorners& corners, VertexId v, F&& f) {
+  CornerId start = topology.vertexCorner(v);
+  if (start == kInvalidId) return;
+  // The edge between corner c and ccw(c) is the edge of next(c) (topology.h).
+  if (topology.cw(start) != kInvalidId) {
+    const CornerId fanStart = start;
+    CornerId c = fanStart;
+    do {
+      if (corners.isCut(nextCorner(c))) {
+        start = topology.ccw(c);
+        break;
+      }
+      c = topology.ccw(c);
+    } while (c != fanStart);
+  }
+  CornerId c = start;
+  do {
+    f(c);
+    if (corners.isCut(nextCorner(c))) f(kInvalidId);
+    c = topology.ccw(c);
+  } while (c != kInvalidId && c != start);
+}
+
+}  // namespace
+
+WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
+  const std::uint32_t nv = topology.numVertices();
+  const CutCorners& corners = cut.corners;
+  // Wedges per vertex (a fan with k > 0 cut edges has k wedges, unless it is a boundary fan,
+  // whose last edge is a boundary edge), then one prefix sum, then the numbering.
+  std::vector<std::uint32_t> first(nv + std::size_t(1), 0);
+  tbb::parallel_for(tbb::blocked_range<VertexId>(0, nv, 1u << 14), [&](const auto& range) {
+    for (VertexId v = range.begin(); v != range.end(); ++v) {
+      std::uint32_t wedges = 0;
+      bool open = false;
+      walkWedges(topology, corners, v, [&](CornerId c) {
+        if (c == kInvalidId) {
+          open = false;
+        } else if (!open) {
+          open = true;
+          ++wedges;
+        }
+      });
+      first[v + 1] = wedges;
+    }
+  });
+  for (VertexId v = 0; v < nv; ++v) first[v + 1] += first[v];
+  std::vector<std::uint32_t> cornerWedge(topology.numCorners(), 0);
+  tbb::parallel_for(tbb::blocked_range<VertexId>(0, nv, 1u << 14), [&](const auto& range) {
+    for (VertexId v = range.begin(); v != range.end(); ++v) {
+      std::uint32_t w = first[v];
+      bool open = false;
+      walkWedges(topology, corners, v, [&](CornerId c) {
+        if (c == kInvalidId) {
+          if (open) ++w;
+          open = false;
+        } else {
+          open = true;
+          cornerWedge[c] = w;
+        }
+      });
+    }
+  });
+  const std::uint32_t numWedges = first[nv];
+  std::vector<std::uint32_t>().swap(first);
+  return WedgeMap(std::move(cornerWedge), std::vector<Vec2d>(numWedges, Vec2d::Zero()));
+}
+
+void evaluateMap(const Basis& basis, const Reduction& reduction,
+                 const std::vector<std::complex<double>>& unknowns, WedgeMap& cornerUV) {
+  basis.evaluateCorners(expandCoefficients(reduction, unknowns), cornerUV);
+}
+
+}  // namespace seamvox

@@ -1,0 +1,46 @@
+#pragma once
+/// The hat-basis seamless parameterization of a cut mesh: basis, reduction, assembly, solves,
+/// rounding and evaluation in one call (DESIGN sections 6-9).
+#include <vector>
+
+#include "core/basis/gaussian_int.h"
+
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+#include "core/solve/seamless_solve.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+struct ParamOptions {
+  double edgeLength = 1.0;  ///< h, target grid spacing in mesh units (> 0)
+  bool greedyRounding = false;
+  ProgressFn progress;
+};
+
+struct ParamResult {
+  WedgeMap cornerUV;  ///< 3 #F corners on the cut's wedges, (u, v) in grid units
+  std::vector<std::complex<double>> translations;  ///< t per seam
+  SeamlessStats stats;
+  std::uint32_t basisFunctions = 0, domains = 0, seamAdjacencies = 0;
+  std::uint32_t translationConstraints = 0;  ///< cycle constraints found
+  double secondsBasis = 0.0, secondsReduce = 0.0, secondsEvaluate = 0.0;
+};
+
+/// Seamless map of a mesh cut to a disk per component (cutToDisk), following the combed field.
+/// Throws InputError for mismatched sizes, SolverError when a factorization fails.
+ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
+                             const CrossField& field, const CutResult& cut,
+                             const ParamOptions& options = {});
+
+/// The translation constraints of the hat basis (Reduction::cycleConstraints, DESIGN section 7)
+/// from a hat basis built only on the faces around seam vertices: cycles of seam crossings only
+/// close around those vertices, so the constraints span the same lattice as a whole-mesh
+/// reduction at a cost that follows the seams, not the mesh. Empty when there are no seams.
+std::vector<GaussVector> seamCycleConstraints(const TriangleMesh& mesh, const Topology& topology,
+                                              const CrossField& field, const CutResult& cut,
+                                              double edgeLength);
+
+}  // namespace seamvox

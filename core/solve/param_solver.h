@@ -1,0 +1,68 @@
+#pragma once
+/// Solver selection for the seamless parameterization (DESIGN sections 6-10): the hat solver
+/// (core/solve/hat_solver.h), the Vox solver (voxel_grid.h) and Vox+HatLoc, the Vox map repaired near cones
+/// by a local hat solve (core/refine/refine.h).
+#include <cstdint>
+#include <string>
+
+#include "core/solve/hat_solver.h"
+#include "core/refine/refine.h"
+#include "core/basis/voxel_basis.h"
+#include "core/system/memory.h"
+
+namespace seamvox {
+
+enum class ParamSolver {
+  Hat,     ///< per-vertex hat basis, one global solve (exact reference)
+  Vox,     ///< volumetric basis on a 2^D grid
+  VoxLoc,  ///< Vox, then refineNearCones on its marked, collapsed and flipped faces (default)
+};
+/// "hat", "vox", "voxloc".
+const char* paramSolverName(ParamSolver solver);
+/// Parses a solver name; throws InputError listing the known names.
+ParamSolver parseParamSolver(const std::string& name);
+
+/// Memory the hat solve needs per face beyond the mesh, field and cut, rounded up from the scaling
+/// study (bench/RESULTS.md: 0.99-1.15 KB per face of whole-process peak from 1.4M to 9.2M faces).
+constexpr std::uint64_t kHatBytesPerFace = 1200;
+/// The hat fallback is refused (SolverError naming both figures and `reason`) when it would need
+/// more than availableBytes (kHatBytesPerFace per face); availableBytes 0 means unknown: allowed.
+void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason);
+
+struct SolverOptions {
+  ParamSolver solver = ParamSolver::VoxLoc;
+  std::int32_t gridResolution = 128;  ///< voxels per axis (vox, voxloc)
+  /// Region and rings of the local refinement (voxloc); markedFaces and edgeLength are filled in.
+  RefineOptions refine;
+  /// When set, the solve closes its stages on it: "solve" (the hat or voxel solve, with the
+  /// fallback if any) and, for voxloc, "refine".
+  StageMeter* meter = nullptr;
+};
+
+struct SolverResult {
+  ParamResult param;  ///< the final map (refined for voxloc)
+  ParamSolver solver = ParamSolver::Hat;
+  VoxelBasisStats basisStats;  ///< vox, voxloc
+  std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
+  std::uint64_t markedFaces = 0;  ///< faces of marked voxel basis functions
+  bool refined = false;           ///< voxloc ran the local refinement
+  RefineStats refine;
+  /// vox/voxloc: regularization the voxel solve succeeded with and failed factorizations before.
+  double regularization = 0.0;
+  std::uint32_t failedAttempts = 0;
+  std::uint32_t invisibleTranslations = 0;  ///< Reduction::invisibleTranslations (vox, voxloc)
+  /// Set when the voxel system could not be factored and the hat solver ran instead (solver is
+  /// then Hat): CHOLMOD's message. Reported, never silent.
+  std::string fallbackReason;
+};
+
+/// Runs the chosen solver on a mesh cut to a disk per component (cutToDisk). Throws like
+/// parameterizeMesh and refineNearCones. vox and voxloc fall back to the hat solver when the
+/// voxel system cannot be factored (see SolverResult::fallbackReason) and the hat solve fits in
+/// memory (checkHatFallbackFits); otherwise they throw SolverError.
+SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology& topology,
+                                        const CrossField& field, const CutResult& cut,
+                                        const ParamOptions& options,
+                                        const SolverOptions& solverOptions = {});
+
+}  // namespace seamvox

@@ -1,0 +1,52 @@
+#pragma once
+/// The seamless solve (DESIGN sections 8-9): assemble, first solve with the translations s free
+/// (one pinned positional unknown per component), rounding of s to Gaussian integers (direct or
+/// greedy), second solve with s fixed (pinned only on components whose seams all have r = 1).
+#include <complex>
+#include <cstdint>
+#include <vector>
+
+#include "core/solve/assemble.h"
+#include "core/basis/basis.h"
+#include "core/system/progress.h"
+#include "core/basis/reduce.h"
+
+namespace seamvox {
+
+struct RoundOptions {
+  /// false: round every s at once. true: round in `greedyRounds` batches, those nearest to an
+  /// integer first, re-solving in between.
+  bool greedy = false;
+  std::uint32_t greedyRounds = 4;
+  ProgressFn progress;
+};
+
+struct SeamlessStats {
+  std::uint32_t unknowns = 0, positional = 0, translational = 0;
+  std::uint32_t determinedPositions = 0, nonUnitConstraints = 0, components = 0;
+  std::uint32_t pinnedFirst = 0, pinnedSecond = 0;
+  std::uint64_t systemNonzeros = 0;      ///< lower triangle of K
+  std::uint64_t factorNonzeros = 0;      ///< largest factor
+  std::uint64_t factorBytes = 0;         ///< largest factor
+  std::uint64_t factorPeakBytes = 0;     ///< CHOLMOD's peak
+  bool realFallback = false;
+  double maxRoundingShift = 0.0;         ///< max |s - round(s)| after the first solve
+  double secondsAssemble = 0.0, secondsFirstSolve = 0.0, secondsRound = 0.0,
+         secondsSecondSolve = 0.0;
+};
+
+struct SeamlessSolution {
+  std::vector<std::complex<double>> unknowns;      ///< reduced unknowns (positional, then s)
+  std::vector<std::complex<double>> translations;  ///< t per seam (Gaussian integers)
+  SeamlessStats stats;
+};
+
+/// Runs the whole solve for a reduced basis. Throws SolverError when a factorization fails.
+SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
+                               const RoundOptions& options = {});
+
+/// Rounds s (the translational unknowns of x) to the nearest Gaussian integers in place and
+/// returns the largest change.
+double roundTranslations(const Reduction& reduction, std::vector<std::complex<double>>& unknowns);
+
+}  // namespace seamvox

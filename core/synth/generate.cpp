@@ -1,0 +1,776 @@
+#include "core/synth/generate.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+#include "core/system/errors.h"
+
+namespace seamvox {
+namespace {
+
+// ---- deterministic randomness ------------------------------------------------------------------
+// Only integer arithmetic and IEEE +, -, *, /, sqrt below, so results are identical everywhere.
+
+std::uint64_t mix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+/// Uniform in [0, 1) from 53 random bits.
+double unitFromBits(std::uint64_t h) { return static_cast<double>(h >> 11) * 0x1.0p-53; }
+
+/// A small sequential generator (splitmix64) for placing holes and islands.
+class Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : state_(mix64(seed ^ 0x5eed5eed5eedull)) {}
+  std::uint64_t next() {
+    state_ += 0x9e3779b97f4a7c15ull;
+    return mix64(state_);
+  }
+  double uniform(double lo, double hi) { return lo + (hi - lo) * unitFromBits(next()); }
+  std::uint32_t below(std::uint32_t n) { return static_cast<std::uint32_t>(next() % n); }
+
+ private:
+  std::uint64_t state_;
+};
+
+/// Value in [-1, 1] attached to an integer lattice point.
+double latticeValue(std::int64_t x, std::int64_t y, std::int64_t z, std::uint64_t seed) {
+  const std::uint64_t h = mix64(seed ^ (static_cast<std::uint64_t>(x) * 0x9e3779b97f4a7c15ull) ^
+                                (static_cast<std::uint64_t>(y) * 0xc2b2ae3d27d4eb4full) ^
+                                (static_cast<std::uint64_t>(z) * 0x165667b19e3779f9ull));
+  return 2.0 * unitFromBits(h) - 1.0;
+}
+
+double smoothStep(double t) { return t * t * (3.0 - 2.0 * t); }
+
+/// Trilinear value noise with smooth-step weights; C1, in [-1, 1].
+double valueNoise(const Vec3d& p, std::uint64_t seed) {
+  const double fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
+  const auto x = static_cast<std::int64_t>(fx), y = static_cast<std::int64_t>(fy),
+             z = static_cast<std::int64_t>(fz);
+  const double tx = smoothStep(p.x() - fx), ty = smoothStep(p.y() - fy), tz = smoothStep(p.z() - fz);
+  double layer[2];
+  for (int k = 0; k < 2; ++k) {
+    const double v00 = latticeValue(x, y, z + k, seed), v10 = latticeValue(x + 1, y, z + k, seed);
+    const double v01 = latticeValue(x, y + 1, z + k, seed);
+    const double v11 = latticeValue(x + 1, y + 1, z + k, seed);
+    const double a = v00 + tx * (v10 - v00), b = v01 + tx * (v11 - v01);
+    layer[k] = a + ty * (b - a);
+  }
+  return layer[0] + tz * (layer[1] - layer[0]);
+}
+
+/// Smooth multi-octave bumps: sum of value noise at doubling frequencies, halving weights,
+/// normalized to [-1, 1].
+struct Bumps {
+  double amplitude = 0.0;  ///< displacement scale (absolute units)
+  double frequency = 2.0;  ///< of the first octave, per unit length
+  int octaves = 4;
+  std::uint64_t seed = 1;
+
+  double operator()(const Vec3d& p) const {
+    if (amplitude == 0.0) return 0.0;
+    double sum = 0.0, weight = 1.0, total = 0.0, freq = frequency;
+    for (int o = 0; o < octaves; ++o) {
+      sum += weight * valueNoise(p * freq, seed + 0x1000u * static_cast<std::uint64_t>(o));
+      total += weight;
+      weight *= 0.5;
+      freq *= 2.0;
+    }
+    return amplitude * sum / total;
+  }
+};
+
+/// sin and cos of an angle given in turns (1 turn = 2 pi), by range reduction to
+/// [-pi/4, pi/4] and fixed polynomials (|error| < 1e-16), so no libm difference can creep in.
+void sinCosTurns(double turns, double& sine, double& cosine) {
+  const double q = std::floor(4.0 * turns + 0.5);
+  const double x = (turns - 0.25 * q) * 6.283185307179586476925;
+  const double x2 = x * x;
+  const double s =
+      x * (1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 * (1.0 / 362880 +
+          x2 * (-1.0 / 39916800 + x2 * (1.0 / 6227020800.0 + x2 * (-1.0 / 1307674368000.0))))))));
+  const double c =
+      1.0 + x2 * (-1.0 / 2 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320 +
+          x2 * (-1.0 / 3628800 + x2 * (1.0 / 479001600 + x2 * (-1.0 / 87178291200.0 +
+          x2 * (1.0 / 20922789888000.0))))))));
+  switch (static_cast<std::int64_t>(q) & 3) {
+    case 0: sine = s; cosine = c; break;
+    case 1: sine = c; cosine = -s; break;
+    case 2: sine = -s; cosine = -c; break;
+    default: sine = -c; cosine = s; break;
+  }
+}
+
+template <class F>
+void parallelRange(std::uint64_t n, F&& body) {
+  if (n < 20000) {
+    body(std::uint64_t{0}, n);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, n, 8192),
+                    [&](const tbb::blocked_range<std::uint64_t>& r) { body(r.begin(), r.end()); });
+}
+
+Vec3f toFloat(const Vec3d& p) { return p.cast<float>(); }
+
+// ---- the surface of a box of a x b x c cells, as a lattice of vertices ---------------------------
+
+/// Vertices: the lattice points (i, j, k), 0 <= i <= a etc., on the box surface, numbered layer
+/// by layer: the full bottom layer k = 0, one ring per middle layer, the full top layer k = c.
+/// Faces: each of the 6 sides is a grid of quads, two triangles each, outward oriented.
+struct BoxLattice {
+  std::uint32_t n[3] = {1, 1, 1};
+
+  std::uint64_t layerSize() const { return std::uint64_t(n[0] + 1) * (n[1] + 1); }
+  std::uint64_t ringSize() const { return 2 * std::uint64_t(n[0] + n[1]); }
+  std::uint64_t numVertices() const { return 2 * layerSize() + (n[2] - 1) * ringSize(); }
+  std::uint64_t numFaces() const {
+    return 4 * (std::uint64_t(n[0]) * n[1] + std::uint64_t(n[1]) * n[2] + std::uint64_t(n[2]) * n[0]);
+  }
+
+  std::uint64_t id(std::uint32_t i, std::uint32_t j, std::uint32_t k) const {
+    const std::uint32_t a = n[0], b = n[1];
+    if (k == 0) return std::uint64_t(i) * (b + 1) + j;
+    if (k == n[2]) return layerSize() + (n[2] - 1) * ringSize() + std::uint64_t(i) * (b + 1) + j;
+    std::uint64_t r;
+    if (j == 0 && i < a) r = i;
+    else if (i == a && j < b) r = a + j;
+    else if (j == b && i > 0) r = a + b + (a - i);
+    else r = 2 * a + b + (b - j);
+    return layerSize() + (k - 1) * ringSize() + r;
+  }
+
+  void point(std::uint64_t id, std::uint32_t& i, std::uint32_t& j, std::uint32_t& k) const {
+    const std::uint32_t a = n[0], b = n[1];
+    const std::uint64_t middle = (n[2] - 1) * ringSize();
+    if (id < layerSize() || id >= layerSize() + middle) {
+      const bool top = id >= layerSize();
+      const std::uint64_t local = top ? id - layerSize() - middle : id;
+      i = static_cast<std::uint32_t>(local / (b + 1));
+      j = static_cast<std::uint32_t>(local % (b + 1));
+      k = top ? n[2] : 0;
+      return;
+    }
+    const std::uint64_t local = id - layerSize();
+    k = static_cast<std::uint32_t>(1 + local / ringSize());
+    const auto r = static_cast<std::uint32_t>(local % ringSize());
+    if (r < a) { i = r; j = 0; }
+    else if (r < a + b) { i = a; j = r - a; }
+    else if (r < 2 * a + b) { i = a - (r - a - b); j = b; }
+    else { i = 0; j = b - (r - 2 * a - b); }
+  }
+
+  /// Side s in 0..5: axis d = s / 2, on the low (s even) or high (s odd) face. The side's grid
+  /// runs over axes u = (d + 1) % 3 and v = (d + 2) % 3 (e_u x e_v = e_d).
+  std::uint32_t sideWidth(int s) const { return n[(s / 2 + 1) % 3]; }
+  std::uint32_t sideHeight(int s) const { return n[(s / 2 + 2) % 3]; }
+  std::uint64_t sideFaces(int s) const { return 2 * std::uint64_t(sideWidth(s)) * sideHeight(s); }
+  std::uint64_t sideOffset(int s) const {
+    std::uint64_t o = 0;
+    for (int t = 0; t < s; ++t) o += sideFaces(t);
+    return o;
+  }
+  std::uint64_t sideVertex(int s, std::uint32_t x, std::uint32_t y) const {
+    const int d = s / 2;
+    std::uint32_t c[3];
+    c[d] = (s & 1) ? n[d] : 0;
+    c[(d + 1) % 3] = x;
+    c[(d + 2) % 3] = y;
+    return id(c[0], c[1], c[2]);
+  }
+  /// First of the two triangles of quad (x, y) of side s.
+  std::uint64_t quadFace(int s, std::uint32_t x, std::uint32_t y) const {
+    return sideOffset(s) + 2 * (std::uint64_t(y) * sideWidth(s) + x);
+  }
+};
+
+/// Box dimensions a <= b <= c near a cube with 4 (ab + bc + ca) as close as possible to faces
+/// (ties: the first found, i.e. the smallest a).
+BoxLattice chooseBox(std::uint64_t faces) {
+  const auto n0 = static_cast<std::int64_t>(std::sqrt(static_cast<double>(faces) / 12.0));
+  BoxLattice best;
+  std::uint64_t bestError = std::numeric_limits<std::uint64_t>::max();
+  // Sides may differ by up to 4 cells (a nearly cubic box), which gives fine steps in 4 (ab+bc+ca).
+  for (std::int64_t a = std::max<std::int64_t>(1, n0 - 3); a <= n0 + 2; ++a) {
+    for (std::int64_t b = a; b <= a + 4; ++b) {
+      for (std::int64_t c = b; c <= a + 4; ++c) {
+        BoxLattice box;
+        box.n[0] = static_cast<std::uint32_t>(a);
+        box.n[1] = static_cast<std::uint32_t>(b);
+        box.n[2] = static_cast<std::uint32_t>(c);
+        const std::uint64_t f = box.numFaces();
+        const std::uint64_t error = f > faces ? f - faces : faces - f;
+        if (error < bestError) {
+          bestError = error;
+          best = box;
+        }
+      }
+    }
+  }
+  return best;
+}
+
+/// Appends a bumpy sphere made from the box lattice projected radially (with an equal-angle
+/// warp). jitter adds per-vertex radial noise of that relative size (scan noise).
+void appendBoxSphere(TriangleMesh& mesh, const BoxLattice& box, const Vec3d& center, double radius,
+                     const Bumps& bumps, double jitter, std::uint64_t seed) {
+  const std::uint64_t v0 = mesh.positions.size(), f0 = mesh.triangles.size();
+  mesh.positions.resize(v0 + box.numVertices());
+  mesh.triangles.resize(f0 + box.numFaces());
+  // Equal-angle warp of each axis: lattice i -> tan(pi/4 (2 i / n - 1)).
+  std::vector<double> warp[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::uint32_t i = 0; i <= box.n[axis]; ++i) {
+      double s, c;
+      sinCosTurns((2.0 * i / box.n[axis] - 1.0) / 8.0, s, c);
+      warp[axis].push_back(s / c);
+    }
+  }
+  parallelRange(box.numVertices(), [&](std::uint64_t begin, std::uint64_t end) {
+    for (std::uint64_t v = begin; v < end; ++v) {
+      std::uint32_t ijk[3];
+      box.point(v, ijk[0], ijk[1], ijk[2]);
+      Vec3d d(warp[0][ijk[0]], warp[1][ijk[1]], warp[2][ijk[2]]);
+      d /= d.norm();
+      double r = radius * (1.0 + bumps(d));
+      if (jitter != 0.0) r *= 1.0 + jitter * (2.0 * unitFromBits(mix64(seed ^ mix64(v))) - 1.0);
+      mesh.positions[v0 + v] = toFloat(center + r * d);
+    }
+  });
+  for (int s = 0; s < 6; ++s) {
+    const std::uint32_t w = box.sideWidth(s), h = box.sideHeight(s);
+    const bool high = s & 1;
+    parallelRange(h, [&](std::uint64_t yBegin, std::uint64_t yEnd) {
+      for (auto y = static_cast<std::uint32_t>(yBegin); y < yEnd; ++y) {
+        for (std::uint32_t x = 0; x < w; ++x) {
+          const auto p00 = static_cast<VertexId>(v0 + box.sideVertex(s, x, y));
+          const auto p10 = static_cast<VertexId>(v0 + box.sideVertex(s, x + 1, y));
+          const auto p11 = static_cast<VertexId>(v0 + box.sideVertex(s, x + 1, y + 1));
+          const auto p01 = static_cast<VertexId>(v0 + box.sideVertex(s, x, y + 1));
+          Triangle t0, t1;
+          if ((x + y) & 1) {
+            t0 = {p00, p10, p01};
+            t1 = {p10, p11, p01};
+          } else {
+            t0 = {p00, p10, p11};
+            t1 = {p00, p11, p01};
+          }
+          if (!high) {
+            std::swap(t0[1], t0[2]);
+            std::swap(t1[1], t1[2]);
+          }
+          const std::uint64_t f = f0 + box.quadFace(s, x, y);
+          mesh.triangles[f] = t0;
+          mesh.triangles[f + 1] = t1;
+        }
+      }
+    });
+  }
+}
+
+// ---- tori ------------------------------------------------------------------------------------
+
+/// An m x n torus grid: major angle i / m turns, tube angle j / n turns; vertex id i * n + j.
+struct TorusGrid {
+  std::uint32_t m = 3, n = 3;
+  double major = 1.0, minor = 0.4;
+  double centerX = 0.0;
+  bool mirrored = false;  ///< reflected through the plane x = 0 (faces reversed to stay outward)
+
+  VertexId id(std::int64_t i, std::int64_t j) const {
+    const std::int64_t im = ((i % m) + m) % m, jm = ((j % n) + n) % n;
+    return static_cast<VertexId>(im * n + jm);
+  }
+  void point(std::int64_t i, std::int64_t j, Vec3d& position, Vec3d& normal) const {
+    double su, cu, sv, cv;
+    sinCosTurns(static_cast<double>(i) / m, su, cu);
+    sinCosTurns(static_cast<double>(j) / n, sv, cv);
+    normal = Vec3d(cv * cu, cv * su, sv);
+    position = Vec3d(centerX + major * cu, major * su, 0.0) + minor * normal;
+    if (mirrored) {
+      position.x() = -position.x();
+      normal.x() = -normal.x();
+    }
+  }
+};
+
+/// Appends a bumpy torus; quads with skip(i, j) are left out (their vertices stay, unreferenced).
+template <class Skip>
+void appendTorus(TriangleMesh& mesh, const TorusGrid& torus, const Bumps& bumps, Skip&& skip) {
+  const std::uint64_t v0 = mesh.positions.size();
+  mesh.positions.resize(v0 + std::uint64_t(torus.m) * torus.n);
+  parallelRange(torus.m, [&](std::uint64_t begin, std::uint64_t end) {
+    for (std::uint64_t i = begin; i < end; ++i) {
+      for (std::uint32_t j = 0; j < torus.n; ++j) {
+        Vec3d p, nrm;
+        torus.point(static_cast<std::int64_t>(i), j, p, nrm);
+        mesh.positions[v0 + torus.id(static_cast<std::int64_t>(i), j)] = toFloat(p + bumps(p) * nrm);
+      }
+    }
+  });
+  // Count kept quads per row so rows can be filled in parallel.
+  std::vector<std::uint64_t> rowStart(torus.m + 1, 0);
+  for (std::uint32_t i = 0; i < torus.m; ++i) {
+    std::uint64_t kept = 0;
+    for (std::uint32_t j = 0; j < torus.n; ++j) kept += skip(i, j) ? 0 : 1;
+    rowStart[i + 1] = rowStart[i] + 2 * kept;
+  }
+  const std::uint64_t f0 = mesh.triangles.size();
+  mesh.triangles.resize(f0 + rowStart[torus.m]);
+  parallelRange(torus.m, [&](std::uint64_t begin, std::uint64_t end) {
+    for (std::uint64_t i = begin; i < end; ++i) {
+      std::uint64_t f = f0 + rowStart[i];
+      const auto ii = static_cast<std::int64_t>(i);
+      for (std::uint32_t j = 0; j < torus.n; ++j) {
+        if (skip(static_cast<std::uint32_t>(i), j)) continue;
+        const auto p00 = static_cast<VertexId>(v0 + torus.id(ii, j));
+        const auto p10 = static_cast<VertexId>(v0 + torus.id(ii + 1, j));
+        const auto p11 = static_cast<VertexId>(v0 + torus.id(ii + 1, j + 1));
+        const auto p01 = static_cast<VertexId>(v0 + torus.id(ii, j + 1));
+        Triangle t0 = {p00, p10, p11}, t1 = {p00, p11, p01};
+        if (torus.mirrored) {
+          std::swap(t0[1], t0[2]);
+          std::swap(t1[1], t1[2]);
+        }
+        mesh.triangles[f++] = t0;
+        mesh.triangles[f++] = t1;
+      }
+    }
+  });
+}
+
+/// Drops vertices no triangle uses, keeping the order of the others.
+void compactVertices(TriangleMesh& mesh) {
+  std::vector<VertexId> newId(mesh.positions.size(), 0);
+  for (const Triangle& t : mesh.triangles) {
+    for (VertexId v : t) newId[v] = 1;
+  }
+  VertexId next = 0;
+  for (std::size_t v = 0; v < newId.size(); ++v) {
+    if (newId[v]) {
+      mesh.positions[next] = mesh.positions[v];
+      newId[v] = next++;
+    } else {
+      newId[v] = kInvalidId;
+    }
+  }
+  mesh.positions.resize(next);  // keeps the capacity: no second copy of the positions
+  parallelRange(mesh.triangles.size(), [&](std::uint64_t begin, std::uint64_t end) {
+    for (std::uint64_t f = begin; f < end; ++f) {
+      for (VertexId& v : mesh.triangles[f]) v = newId[v];
+    }
+  });
+}
+
+// ---- the kinds -------------------------------------------------------------------------------
+
+const Bumps kSphereBumps{0.08, 1.5, 5, 0};
+
+GenerateResult generateSphere(const GenerateOptions& options) {
+  GenerateResult result;
+  Bumps bumps = kSphereBumps;
+  bumps.seed = options.seed;
+  appendBoxSphere(result.mesh, chooseBox(options.faces), Vec3d::Zero(), 1.0, bumps, 0.0, 0);
+  return result;
+}
+
+/// Torus m x n with m / n near ratio and 2 m n close to faces.
+TorusGrid chooseTorus(std::uint64_t faces, double ratio) {
+  const auto n0 = static_cast<std::int64_t>(std::sqrt(static_cast<double>(faces) / (2.0 * ratio)));
+  TorusGrid best;
+  std::uint64_t bestError = std::numeric_limits<std::uint64_t>::max();
+  for (std::int64_t n = std::max<std::int64_t>(3, n0 - 2); n <= std::max<std::int64_t>(3, n0 + 2); ++n) {
+    for (std::int64_t m = std::max<std::int64_t>(3, 2 * n); m <= 3 * n; ++m) {
+      const std::uint64_t f = 2 * std::uint64_t(m) * std::uint64_t(n);
+      const std::uint64_t error = f > faces ? f - faces : faces - f;
+      if (error < bestError) {
+        bestError = error;
+        best.m = static_cast<std::uint32_t>(m);
+        best.n = static_cast<std::uint32_t>(n);
+      }
+    }
+  }
+  return best;
+}
+
+GenerateResult generateTorus(const GenerateOptions& options) {
+  GenerateResult result;
+  TorusGrid torus = chooseTorus(options.faces, 2.5);
+  const Bumps bumps{0.04, 2.5, 4, options.seed};
+  appendTorus(result.mesh, torus, bumps, [](std::uint32_t, std::uint32_t) { return false; });
+  return result;
+}
+
+/// Layout of the genus-2 shape: two m x n tori (the second mirrored through x = 0), each with a
+/// hole of 2ha x 2hb quads around its outer equator point facing the other, joined by a tube
+/// of `rings` quad rings.
+struct Genus2Layout {
+  TorusGrid torus;
+  std::int64_t ha = 1, hb = 1;
+  std::uint32_t rings = 1;
+  std::uint64_t faces() const {
+    const std::uint64_t mn = std::uint64_t(torus.m) * torus.n;
+    return 4 * (mn - 4 * std::uint64_t(ha * hb)) + 8 * std::uint64_t(ha + hb) * rings;
+  }
+};
+
+constexpr double kGenus2Gap = 0.4;  // between the two tori, along x
+
+Genus2Layout chooseGenus2(std::uint64_t faces) {
+  const auto n0 = static_cast<std::int64_t>(std::sqrt(static_cast<double>(faces) / 10.0));
+  Genus2Layout best;
+  std::uint64_t bestError = std::numeric_limits<std::uint64_t>::max();
+  for (std::int64_t n = std::max<std::int64_t>(4, n0 - 2); n <= std::max<std::int64_t>(4, n0 + 2); ++n) {
+    for (std::int64_t m = 2 * n; m <= 3 * n; ++m) {
+      Genus2Layout g;
+      g.torus.m = static_cast<std::uint32_t>(m);
+      g.torus.n = static_cast<std::uint32_t>(n);
+      g.ha = std::max<std::int64_t>(1, std::llround(0.3 * m / 6.283185307179586));
+      g.hb = std::max<std::int64_t>(1, std::llround(0.8 * n / 6.283185307179586));
+      g.hb = std::min<std::int64_t>(g.hb, (n - 2) / 2);
+      const double edge = 6.283185307179586 * g.torus.major / m;
+      g.rings = static_cast<std::uint32_t>(std::max<std::int64_t>(1, std::llround((kGenus2Gap + 0.1) / edge)));
+      const std::uint64_t f = g.faces();
+      const std::uint64_t error = f > faces ? f - faces : faces - f;
+      if (error < bestError) {
+        bestError = error;
+        best = g;
+      }
+    }
+  }
+  return best;
+}
+
+GenerateResult generateGenus2(const GenerateOptions& options) {
+  GenerateResult result;
+  TriangleMesh& mesh = result.mesh;
+  const Genus2Layout layout = chooseGenus2(options.faces);
+  const std::int64_t ha = layout.ha, hb = layout.hb;
+  TorusGrid left = layout.torus;
+  left.centerX = -(left.major + left.minor + 0.5 * kGenus2Gap);
+  TorusGrid right = left;
+  right.mirrored = true;
+  const Bumps bumps{0.03, 2.5, 4, options.seed};
+  const auto inHole = [&](std::int64_t i, std::int64_t j) {
+    return (i + ha) % left.m < 2 * ha && (j + hb) % left.n < 2 * hb;
+  };
+  mesh.positions.reserve(2 * std::uint64_t(left.m) * left.n + 4 * std::uint64_t(ha + hb) * layout.rings);
+  mesh.triangles.reserve(layout.faces());
+  appendTorus(mesh, left, bumps, inHole);
+  const VertexId rightOffset = mesh.numVertices();
+  appendTorus(mesh, right, bumps, inHole);
+
+  // The hole's boundary, counter-clockwise in the (i, j) grid. The left torus's faces run it
+  // clockwise, the mirrored right torus's counter-clockwise; the tube's faces run it the other way.
+  std::vector<std::pair<std::int64_t, std::int64_t>> loop;
+  for (std::int64_t i = -ha; i < ha; ++i) loop.emplace_back(i, -hb);
+  for (std::int64_t j = -hb; j < hb; ++j) loop.emplace_back(ha, j);
+  for (std::int64_t i = ha; i > -ha; --i) loop.emplace_back(i, hb);
+  for (std::int64_t j = hb; j > -hb; --j) loop.emplace_back(-ha, j);
+  const auto L = static_cast<std::uint32_t>(loop.size());
+  const std::uint32_t rings = layout.rings;
+  const VertexId tubeOffset = mesh.numVertices();
+  const auto ringVertex = [&](std::uint32_t s, std::uint32_t l) -> VertexId {
+    const auto& [i, j] = loop[l % L];
+    if (s == 0) return left.id(i, j);
+    if (s == rings) return rightOffset + right.id(i, j);
+    return tubeOffset + (s - 1) * L + l % L;
+  };
+  for (std::uint32_t s = 1; s < rings; ++s) {
+    const double t = static_cast<double>(s) / rings;
+    for (std::uint32_t l = 0; l < L; ++l) {
+      Vec3d pl, nl, pr, nr;
+      left.point(loop[l].first, loop[l].second, pl, nl);
+      right.point(loop[l].first, loop[l].second, pr, nr);
+      const Vec3d a = mesh.positions[ringVertex(0, l)].cast<double>();
+      const Vec3d b = mesh.positions[ringVertex(rings, l)].cast<double>();
+      const Vec3d p = a + t * (b - a);
+      Vec3d nrm = nl + t * (nr - nl);
+      nrm /= nrm.norm();
+      mesh.positions.push_back(toFloat(p + (4.0 * t * (1.0 - t)) * bumps(p) * nrm));
+    }
+  }
+  for (std::uint32_t s = 0; s < rings; ++s) {
+    for (std::uint32_t l = 0; l < L; ++l) {
+      const VertexId a = ringVertex(s, l), b = ringVertex(s, l + 1);
+      const VertexId c = ringVertex(s + 1, l + 1), d = ringVertex(s + 1, l);
+      mesh.triangles.push_back({a, b, c});
+      mesh.triangles.push_back({a, c, d});
+    }
+  }
+  compactVertices(mesh);
+  return result;
+}
+
+/// A uniformly random unit vector (rejection sampling in the unit ball).
+Vec3d randomDirection(Rng& rng) {
+  for (;;) {
+    const Vec3d d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    const double len = d.norm();
+    if (len > 0.2 && len <= 1.0) return d / len;
+  }
+}
+
+/// A floating p x q quad patch facing away from the origin at `center` (one boundary loop).
+void appendPatch(TriangleMesh& mesh, const Vec3d& center, std::uint32_t p, std::uint32_t q,
+                 double spacing, const Bumps& bumps) {
+  const Vec3d d = center.normalized();
+  Vec3d e1 = d.unitOrthogonal();
+  const Vec3d e2 = d.cross(e1);  // e1 x e2 = d: quads counter-clockwise seen from outside
+  const VertexId v0 = mesh.numVertices();
+  for (std::uint32_t t = 0; t <= q; ++t) {
+    for (std::uint32_t s = 0; s <= p; ++s) {
+      const Vec3d x = center + (s - 0.5 * p) * spacing * e1 + (t - 0.5 * q) * spacing * e2;
+      mesh.positions.push_back(toFloat(x + bumps(x) * d));
+    }
+  }
+  for (std::uint32_t t = 0; t < q; ++t) {
+    for (std::uint32_t s = 0; s < p; ++s) {
+      const VertexId a = v0 + t * (p + 1) + s, b = a + 1, c = b + p + 1, e = a + p + 1;
+      mesh.triangles.push_back({a, b, c});
+      mesh.triangles.push_back({a, c, e});
+    }
+  }
+}
+
+/// Where the scan kind puts its holes and islands; depends only on the box and the seed.
+struct ScanPlan {
+  struct Hole {
+    int side;
+    double cx, cy, radius;  // in grid cells of the side
+  };
+  struct Island {
+    Vec3d center;
+    std::uint32_t p, q;  // patch size in quads; 0 x 0 for a closed blob
+  };
+  std::vector<Hole> holes;
+  std::vector<Island> islands;
+  std::uint32_t blobCells = 1;
+  std::uint64_t removedFaces = 0, islandFaces = 0;
+
+  static bool inHole(const Hole& h, std::uint32_t x, std::uint32_t y) {
+    const double dx = x + 0.5 - h.cx, dy = y + 0.5 - h.cy;
+    return dx * dx + dy * dy <= h.radius * h.radius;
+  }
+  /// Calls f(x, y) for the quads of hole h.
+  template <class F>
+  static void forEachQuad(const Hole& h, F&& f) {
+    const auto y0 = static_cast<std::uint32_t>(std::max(0.0, std::floor(h.cy - h.radius)));
+    const auto x0 = static_cast<std::uint32_t>(std::max(0.0, std::floor(h.cx - h.radius)));
+    for (std::uint32_t y = y0; y <= h.cy + h.radius; ++y) {
+      for (std::uint32_t x = x0; x <= h.cx + h.radius; ++x) {
+        if (inHole(h, x, y)) f(x, y);
+      }
+    }
+  }
+};
+
+constexpr double kScanHoleFraction = 0.03;  // of the sphere's area, over 5 holes
+constexpr std::uint32_t kScanDegenerateFaces = 3, kScanDuplicateFaces = 5;
+constexpr std::uint64_t kScanBadFaces = kScanDegenerateFaces + kScanDuplicateFaces;
+
+ScanPlan planScan(const BoxLattice& box, std::uint64_t seed) {
+  ScanPlan plan;
+  Rng rng(seed);
+  const std::uint32_t w = box.n[0];  // smallest side length in cells
+  // Holes: one round hole (in grid cells) inside each of sides 0..4, away from the side's edges.
+  const double targetRadius = std::sqrt(kScanHoleFraction * 6.0 / (5.0 * 3.141592653589793)) * w;
+  for (int s = 0; s < 5; ++s) {
+    const double sw = box.sideWidth(s), sh = box.sideHeight(s);
+    ScanPlan::Hole h;
+    h.side = s;
+    h.radius = std::max(1.0, targetRadius * rng.uniform(0.75, 1.25));
+    h.cx = rng.uniform(h.radius + 1.0, sw - h.radius - 1.0);
+    h.cy = rng.uniform(h.radius + 1.0, sh - h.radius - 1.0);
+    ScanPlan::forEachQuad(h, [&](std::uint32_t, std::uint32_t) { plan.removedFaces += 2; });
+    plan.holes.push_back(h);
+  }
+  // Islands: three open patches and two closed blobs floating just above the surface.
+  const std::uint32_t maxPatch = 2 + std::min<std::uint32_t>(3, w / 8);
+  for (int k = 0; k < 3; ++k) {
+    ScanPlan::Island island;
+    island.p = 2 + rng.below(maxPatch - 1);
+    island.q = 2 + rng.below(maxPatch - 1);
+    island.center = rng.uniform(1.15, 1.3) * randomDirection(rng);
+    plan.islandFaces += 2 * island.p * island.q;
+    plan.islands.push_back(island);
+  }
+  plan.blobCells = w >= 16 ? 2 : 1;
+  for (int k = 0; k < 2; ++k) {
+    ScanPlan::Island island;
+    island.p = island.q = 0;
+    island.center = rng.uniform(1.15, 1.3) * randomDirection(rng);
+    plan.islandFaces += 12 * plan.blobCells * plan.blobCells;
+    plan.islands.push_back(island);
+  }
+  return plan;
+}
+
+GenerateResult generateScan(const GenerateOptions& options) {
+  GenerateResult result;
+  TriangleMesh& mesh = result.mesh;
+  ScanDefects& defects = result.defects;
+  // Choose the sphere so that sphere - holes + islands + bad faces comes close to the target
+  // (the plan predicts the count exactly; a few rounds of correction, keep the best).
+  const auto predicted = [](const BoxLattice& b, const ScanPlan& p) {
+    return static_cast<std::int64_t>(b.numFaces() - p.removedFaces + p.islandFaces + kScanBadFaces);
+  };
+  const auto target = static_cast<std::int64_t>(options.faces);
+  BoxLattice box = chooseBox(static_cast<std::uint64_t>(options.faces / (1.0 - kScanHoleFraction)));
+  ScanPlan plan = planScan(box, options.seed);
+  BoxLattice candidate = box;
+  for (int round = 0; round < 4; ++round) {
+    const ScanPlan candidatePlan = planScan(candidate, options.seed);
+    if (std::llabs(predicted(candidate, candidatePlan) - target) < std::llabs(predicted(box, plan) - target)) {
+      box = candidate;
+      plan = candidatePlan;
+    }
+    const std::int64_t sphereFaces = target + static_cast<std::int64_t>(candidatePlan.removedFaces) -
+                                     static_cast<std::int64_t>(candidatePlan.islandFaces + kScanBadFaces);
+    candidate = chooseBox(static_cast<std::uint64_t>(std::max<std::int64_t>(sphereFaces, 12)));
+  }
+  const std::uint32_t w = box.n[0];
+  const double spacing = 1.5707963267948966 / w;  // about one edge length on the unit sphere
+  Bumps bumps = kSphereBumps;
+  bumps.seed = options.seed;
+  // Room for the seam copies, islands and bad faces, so that nothing is reallocated later.
+  mesh.positions.reserve(box.numVertices() + box.sideWidth(5) + 4096);
+  mesh.triangles.reserve(box.numFaces() + plan.islandFaces + 64);
+  appendBoxSphere(mesh, box, Vec3d::Zero(), 1.0, bumps, 0.1 * spacing, options.seed);
+  reportProgress(options.progress, "generate", 0.5);
+
+  std::vector<std::uint8_t> removed(mesh.triangles.size(), 0);
+  for (const ScanPlan::Hole& h : plan.holes) {
+    ScanPlan::forEachQuad(h, [&](std::uint32_t x, std::uint32_t y) {
+      const std::uint64_t f = box.quadFace(h.side, x, y);
+      removed[f] = removed[f + 1] = 1;
+    });
+    ++defects.holes;
+  }
+
+  // An unwelded seam on side 5: the quads just above the middle grid line use copies of the
+  // line's inner vertices (same positions), as when a scanner stitches two sweeps.
+  {
+    const int s = 5;
+    const std::uint32_t sw = box.sideWidth(s), y0 = box.sideHeight(s) / 2;
+    const std::uint32_t x0 = sw / 4, x1 = sw - sw / 4;
+    for (std::uint32_t x = x0 + 1; x < x1; ++x) {
+      const auto original = static_cast<VertexId>(box.sideVertex(s, x, y0));
+      const VertexId copy = mesh.numVertices();
+      mesh.positions.push_back(mesh.positions[original]);
+      ++defects.seamDuplicates;
+      for (std::uint32_t qx = x - 1; qx <= x; ++qx) {
+        const std::uint64_t f = box.quadFace(s, qx, y0);
+        for (std::uint64_t g = f; g < f + 2; ++g) {
+          for (VertexId& v : mesh.triangles[g]) v = v == original ? copy : v;
+        }
+      }
+    }
+  }
+
+  // Remove the holes' faces (their inner vertices go with compactVertices below).
+  {
+    std::uint64_t kept = 0;
+    for (std::uint64_t f = 0; f < mesh.triangles.size(); ++f) {
+      if (!removed[f]) mesh.triangles[kept++] = mesh.triangles[f];
+    }
+    mesh.triangles.resize(kept);
+  }
+
+  std::uint64_t islandSeed = options.seed;
+  for (const ScanPlan::Island& island : plan.islands) {
+    islandSeed = mix64(islandSeed);
+    if (island.p > 0) {
+      const Bumps islandBumps{0.2 * spacing, 1.0 / spacing, 2, islandSeed};
+      appendPatch(mesh, island.center, island.p, island.q, 1.5 * spacing, islandBumps);
+      ++defects.openIslands;
+    } else {
+      BoxLattice blob;
+      blob.n[0] = blob.n[1] = blob.n[2] = plan.blobCells;
+      const Bumps blobBumps{0.15, 1.0, 2, islandSeed};
+      appendBoxSphere(mesh, blob, island.center, 2.0 * spacing, blobBumps, 0.0, 0);
+      ++defects.closedIslands;
+    }
+  }
+  compactVertices(mesh);
+
+  // Bad faces, as scanners and converters leave them: repeated vertices and duplicates.
+  Rng rng(mix64(options.seed));
+  const auto sphereFaces = static_cast<std::uint32_t>(box.numFaces() / 2);  // all still main surface
+  for (std::uint32_t k = 0; k < kScanDegenerateFaces; ++k) {
+    const std::uint32_t stride = sphereFaces / kScanDegenerateFaces;
+    const Triangle t = mesh.triangles[k * stride + rng.below(stride)];
+    mesh.triangles.push_back({t[0], t[1], t[1]});
+    ++defects.degenerateFaces;
+  }
+  for (std::uint32_t k = 0; k < kScanDuplicateFaces; ++k) {
+    const std::uint32_t stride = sphereFaces / kScanDuplicateFaces;
+    const Triangle t = mesh.triangles[k * stride + rng.below(stride)];
+    if (k + 1 == kScanDuplicateFaces) mesh.triangles.push_back({t[0], t[2], t[1]});  // reversed copy
+    else mesh.triangles.push_back({t[1], t[2], t[0]});
+    ++defects.duplicateFaces;
+  }
+  return result;
+}
+
+}  // namespace
+
+const char* meshKindName(MeshKind kind) {
+  switch (kind) {
+    case MeshKind::Sphere: return "sphere";
+    case MeshKind::Torus: return "torus";
+    case MeshKind::Genus2: return "genus2";
+    case MeshKind::Scan: return "scan";
+  }
+  return "?";
+}
+
+MeshKind parseMeshKind(const std::string& name) {
+  for (MeshKind k : {MeshKind::Sphere, MeshKind::Torus, MeshKind::Genus2, MeshKind::Scan}) {
+    if (name == meshKindName(k)) return k;
+  }
+  throw InputError("unknown mesh kind '" + name + "' (known: sphere, torus, genus2, scan)");
+}
+
+std::uint64_t minimumFaces(MeshKind kind) {
+  switch (kind) {
+    case MeshKind::Sphere: return 12;
+    case MeshKind::Torus: return 36;
+    case MeshKind::Genus2: return 200;
+    case MeshKind::Scan: return 600;
+  }
+  return 0;
+}
+
+GenerateResult generateMesh(const GenerateOptions& options) {
+  if (options.faces < minimumFaces(options.kind)) {
+    throw InputError(std::string("cannot generate a ") + meshKindName(options.kind) + " with " +
+                     std::to_string(options.faces) + " faces: use at least " +
+                     std::to_string(minimumFaces(options.kind)));
+  }
+  if (options.faces >= (1ull << 31)) {
+    throw InputError("cannot generate " + std::to_string(options.faces) +
+                     " faces: 32-bit indices allow fewer than 2^31");
+  }
+  reportProgress(options.progress, "generate", 0.0);
+  GenerateResult result;
+  switch (options.kind) {
+    case MeshKind::Sphere: result = generateSphere(options); break;
+    case MeshKind::Torus: result = generateTorus(options); break;
+    case MeshKind::Genus2: result = generateGenus2(options); break;
+    case MeshKind::Scan: result = generateScan(options); break;
+  }
+  reportProgress(options.progress, "generate", 1.0);
+  return result;
+}
+
+}  // namespace seamvox
