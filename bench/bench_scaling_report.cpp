@@ -28,197 +28,17 @@
 #include "core/synth/render.h"
 #include "io/atomic_file.h"
 #include "io/json.h"
+#include "io/json_reader.h"
 #include "io/png_io.h"
 
 using namespace seamvox;
 
 namespace {
 
-// ---------------------------------------------------------------------------------------------
-// A small JSON reader: flattens a document into "a.b.c" (arrays: "a.0") -> scalar.
-
-struct JsonScalar {
-  enum class Kind { Number, String, Bool, Null } kind = Kind::Null;
-  double number = 0.0;
-  std::string text;
-  bool flag = false;
-};
-using FlatJson = std::map<std::string, JsonScalar>;
-
-class FlatJsonParser {
- public:
-  FlatJsonParser(const std::string& text, std::string source) : s_(text), source_(std::move(source)) {}
-
-  FlatJson parse() {
-    skipSpace();
-    parseValue("", 0);
-    skipSpace();
-    if (pos_ != s_.size()) fail("unexpected text after the document");
-    return std::move(out_);
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& what) const {
-    std::size_t line = 1, column = 1;
-    for (std::size_t i = 0; i < pos_ && i < s_.size(); ++i) {
-      if (s_[i] == '\n') {
-        ++line;
-        column = 1;
-      } else {
-        ++column;
-      }
-    }
-    throw InputError(source_ + ":" + std::to_string(line) + ":" + std::to_string(column) + ": " + what);
-  }
-  void skipSpace() {
-    while (pos_ < s_.size() && (s_[pos_] == ' ' || s_[pos_] == '\t' || s_[pos_] == '\n' || s_[pos_] == '\r')) ++pos_;
-  }
-  bool consume(const char* word) {
-    const std::size_t n = std::strlen(word);
-    if (s_.compare(pos_, n, word) != 0) return false;
-    pos_ += n;
-    return true;
-  }
-  static std::string join(const std::string& prefix, const std::string& key) {
-    return prefix.empty() ? key : prefix + "." + key;
-  }
-
-  void parseValue(const std::string& path, int depth) {
-    if (depth > 64) fail("nested deeper than 64 levels");
-    if (pos_ >= s_.size()) fail("unexpected end of the document");
-    const char c = s_[pos_];
-    JsonScalar v;
-    if (c == '{' || c == '[') {
-      const char close = c == '{' ? '}' : ']';
-      ++pos_;
-      skipSpace();
-      if (pos_ < s_.size() && s_[pos_] == close) {
-        ++pos_;
-        return;
-      }
-      for (std::size_t i = 0;; ++i) {
-        skipSpace();
-        std::string item = std::to_string(i);
-        if (c == '{') {
-          if (pos_ >= s_.size() || s_[pos_] != '"') fail("expected a quoted key");
-          item = parseString();
-          skipSpace();
-          if (pos_ >= s_.size() || s_[pos_] != ':') fail("expected ':' after key \"" + item + "\"");
-          ++pos_;
-          skipSpace();
-        }
-        parseValue(join(path, item), depth + 1);
-        skipSpace();
-        if (pos_ < s_.size() && (s_[pos_] == ',' || s_[pos_] == close)) {
-          if (s_[pos_++] == close) return;
-          continue;
-        }
-        fail(std::string("expected ',' or '") + close + "'");
-      }
-    }
-    if (c == '"') {
-      v.kind = JsonScalar::Kind::String;
-      v.text = parseString();
-    } else if (consume("true")) {
-      v.kind = JsonScalar::Kind::Bool;
-      v.flag = true;
-    } else if (consume("false")) {
-      v.kind = JsonScalar::Kind::Bool;
-    } else if (consume("null")) {
-      v.kind = JsonScalar::Kind::Null;
-    } else {
-      v.kind = JsonScalar::Kind::Number;
-      v.number = parseNumber();
-    }
-    out_[path] = std::move(v);
-  }
-
-  std::string parseString() {
-    ++pos_;  // opening quote
-    std::string out;
-    for (;;) {
-      if (pos_ >= s_.size()) fail("unterminated string");
-      const char c = s_[pos_++];
-      if (c == '"') return out;
-      if (static_cast<unsigned char>(c) < 0x20) fail("control character inside a string");
-      if (c != '\\') {
-        out += c;
-        continue;
-      }
-      if (pos_ >= s_.size()) fail("unterminated escape");
-      const char e = s_[pos_++];
-      switch (e) {
-        case '"': out += '"'; break;
-        case '\\': out += '\\'; break;
-        case '/': out += '/'; break;
-        case 'b': out += '\b'; break;
-        case 'f': out += '\f'; break;
-        case 'n': out += '\n'; break;
-        case 'r': out += '\r'; break;
-        case 't': out += '\t'; break;
-        case 'u': {
-          if (pos_ + 4 > s_.size()) fail("short \\u escape");
-          unsigned code = 0;
-          for (int k = 0; k < 4; ++k) {
-            const char h = s_[pos_++];
-            code <<= 4;
-            if (h >= '0' && h <= '9') code |= unsigned(h - '0');
-            else if (h >= 'a' && h <= 'f') code |= unsigned(h - 'a' + 10);
-            else if (h >= 'A' && h <= 'F') code |= unsigned(h - 'A' + 10);
-            else fail("bad hex digit in \\u escape");
-          }
-          // UTF-8 of a BMP code point (surrogate pairs are kept as two 3-byte sequences).
-          if (code < 0x80) {
-            out += char(code);
-          } else if (code < 0x800) {
-            out += char(0xC0 | (code >> 6));
-            out += char(0x80 | (code & 0x3F));
-          } else {
-            out += char(0xE0 | (code >> 12));
-            out += char(0x80 | ((code >> 6) & 0x3F));
-            out += char(0x80 | (code & 0x3F));
-          }
-          break;
-        }
-        default: fail(std::string("unknown escape \\") + e);
-      }
-    }
-  }
-
-  double parseNumber() {
-    // JSON grammar: -? (0 | [1-9][0-9]*) (. [0-9]+)? ([eE] [+-]? [0-9]+)?
-    const std::size_t start = pos_;
-    auto digits = [&] {
-      const std::size_t from = pos_;
-      while (pos_ < s_.size() && s_[pos_] >= '0' && s_[pos_] <= '9') ++pos_;
-      return pos_ > from;
-    };
-    if (pos_ < s_.size() && s_[pos_] == '-') ++pos_;
-    if (pos_ < s_.size() && s_[pos_] == '0') {
-      ++pos_;
-    } else if (!digits()) {
-      fail("expected a value");
-    }
-    if (pos_ < s_.size() && s_[pos_] == '.') {
-      ++pos_;
-      if (!digits()) fail("expected digits after '.'");
-    }
-    if (pos_ < s_.size() && (s_[pos_] == 'e' || s_[pos_] == 'E')) {
-      ++pos_;
-      if (pos_ < s_.size() && (s_[pos_] == '+' || s_[pos_] == '-')) ++pos_;
-      if (!digits()) fail("expected digits in the exponent");
-    }
-    return std::strtod(s_.substr(start, pos_ - start).c_str(), nullptr);
-  }
-
-  const std::string& s_;
-  std::string source_;
-  std::size_t pos_ = 0;
-  FlatJson out_;
-};
-
+// Reports are read through io/json_reader, flattened to "a.b.c" (arrays: "a.0") -> scalar.
+using FlatJson = std::map<std::string, JsonValue>;
 FlatJson parseFlatJson(const std::string& text, const std::string& source) {
-  return FlatJsonParser(text, source).parse();
+  return flattenJson(parseJson(text, source));
 }
 
 std::string readTextFile(const std::string& path) {
@@ -249,14 +69,14 @@ struct Run {
   FlatJson json;
   double number(const std::string& key) const {
     const auto it = json.find(key);
-    if (it == json.end() || it->second.kind != JsonScalar::Kind::Number) return std::nan("");
+    if (it == json.end() || !it->second.isNumber()) return std::nan("");
     return it->second.number;
   }
   std::string text(const std::string& key) const {
     const auto it = json.find(key);
     if (it == json.end()) return "";
-    if (it->second.kind == JsonScalar::Kind::String) return it->second.text;
-    if (it->second.kind == JsonScalar::Kind::Bool) return it->second.flag ? "true" : "false";
+    if (it->second.type == JsonValue::Type::String) return it->second.text;
+    if (it->second.type == JsonValue::Type::Bool) return it->second.flag ? "true" : "false";
     return "";
   }
   bool ok() const { return status == "ok"; }
@@ -316,8 +136,8 @@ void readTimeFile(const std::filesystem::path& path, Run& run) {
     char* end = nullptr;
     const double v = std::strtod(item.c_str() + eq + 1, &end);
     if (end == item.c_str() + eq + 1 || !std::isfinite(v)) continue;
-    JsonScalar x;
-    x.kind = JsonScalar::Kind::Number;
+    JsonValue x;
+    x.type = JsonValue::Type::Number;
     x.number = v;
     if (key == "wallSeconds" && !run.json.count("wallSeconds")) run.json["wallSeconds"] = x;
     if (key == "maxRssBytes" && !std::isfinite(run.peak())) run.json["peakResidentBytes"] = x;
@@ -968,8 +788,8 @@ int selfCheck() {
   check(j.at("faces").number == 2304000.0, "integer");
   check(j.at("name").text == "a \"b\"\n\\c", "escapes");
   check(j.at("seconds.total").number == 12.5e-3 && j.at("seconds.round").number == -1.25e7, "nested numbers");
-  check(j.at("list.0").number == 1 && j.at("list.1").flag && j.at("list.2").kind == JsonScalar::Kind::Null, "array");
-  check(j.count("empty") == 0 && j.at("nan").kind == JsonScalar::Kind::Null, "empty object, null");
+  check(j.at("list.0").number == 1 && j.at("list.1").flag && j.at("list.2").type == JsonValue::Type::Null, "array");
+  check(j.count("empty") == 0 && j.at("nan").type == JsonValue::Type::Null, "empty object, null");
   check(parseFlatJson(" {\"u\": \"\\u00e9\\u0041\"} ", "u").at("u").text == "\xc3\xa9" "A", "unicode escape");
   for (const char* bad : {"", "{", "{\"a\":}", "{\"a\" 1}", "{\"a\":1,}", "[1 2]", "{\"a\":01}", "{\"a\":1.}",
                           "{\"a\":-}", "{\"a\":\"x}", "{\"a\":tru}", "{} x", "{\"a\":\"\\q\"}", "{'a':1}"}) {
@@ -1025,8 +845,8 @@ int selfCheck() {
       run.level = level;
       run.solver = s == 0 ? "hat" : "voxloc128";
       auto num = [](double v) {
-        JsonScalar x;
-        x.kind = JsonScalar::Kind::Number;
+        JsonValue x;
+        x.type = JsonValue::Type::Number;
         x.number = v;
         return x;
       };

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <vector>
 
+#include "io/json_reader.h"
 #include "testing.h"
 
 namespace seamvox {
@@ -19,141 +20,7 @@ namespace {
 using testing::runSeamvox;
 using testing::TempDir;
 
-// ---- a small JSON reader, enough to check the shape of reports --------------------------------
-
-struct Json {
-  enum Type { Null, Bool, Number, String, Array, Object } type = Null;
-  double number = 0;
-  std::string text;
-  std::vector<Json> items;
-  std::map<std::string, Json> members;
-
-  bool has(const std::string& key) const { return type == Object && members.count(key); }
-  const Json& operator[](const std::string& key) const { return members.at(key); }
-};
-
-class JsonParser {
- public:
-  explicit JsonParser(const std::string& s) : s_(s) {}
-  /// Parses the whole input; throws std::runtime_error at the first syntax error.
-  Json parseDocument() {
-    Json v = parseValue();
-    skipSpace();
-    if (pos_ != s_.size()) fail("trailing characters");
-    return v;
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& what) {
-    throw std::runtime_error("JSON: " + what + " at offset " + std::to_string(pos_));
-  }
-  void skipSpace() {
-    while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) ++pos_;
-  }
-  void expect(char c) {
-    skipSpace();
-    if (pos_ >= s_.size() || s_[pos_] != c) fail(std::string("expected '") + c + "'");
-    ++pos_;
-  }
-  bool consume(const char* word) {
-    const std::size_t n = std::strlen(word);
-    if (s_.compare(pos_, n, word) != 0) return false;
-    pos_ += n;
-    return true;
-  }
-  std::string parseString() {
-    expect('"');
-    std::string out;
-    while (pos_ < s_.size() && s_[pos_] != '"') {
-      if (s_[pos_] == '\\') {
-        if (++pos_ >= s_.size()) fail("bad escape");
-        const char e = s_[pos_];
-        if (e == 'u') {
-          if (pos_ + 4 >= s_.size()) fail("bad \\u escape");
-          pos_ += 4;
-          out += '?';
-        } else {
-          out += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'r' ? '\r' : e;
-        }
-        ++pos_;
-      } else {
-        out += s_[pos_++];
-      }
-    }
-    expect('"');
-    return out;
-  }
-  Json parseValue() {
-    skipSpace();
-    if (pos_ >= s_.size()) fail("unexpected end");
-    Json v;
-    const char c = s_[pos_];
-    if (c == '{') {
-      v.type = Json::Object;
-      ++pos_;
-      skipSpace();
-      if (pos_ < s_.size() && s_[pos_] == '}') {
-        ++pos_;
-        return v;
-      }
-      for (;;) {
-        const std::string key = parseString();
-        expect(':');
-        v.members[key] = parseValue();
-        skipSpace();
-        if (pos_ < s_.size() && s_[pos_] == ',') {
-          ++pos_;
-          continue;
-        }
-        expect('}');
-        return v;
-      }
-    }
-    if (c == '[') {
-      v.type = Json::Array;
-      ++pos_;
-      skipSpace();
-      if (pos_ < s_.size() && s_[pos_] == ']') {
-        ++pos_;
-        return v;
-      }
-      for (;;) {
-        v.items.push_back(parseValue());
-        skipSpace();
-        if (pos_ < s_.size() && s_[pos_] == ',') {
-          ++pos_;
-          continue;
-        }
-        expect(']');
-        return v;
-      }
-    }
-    if (c == '"') {
-      v.type = Json::String;
-      v.text = parseString();
-      return v;
-    }
-    if (consume("null")) return v;
-    if (consume("true") || consume("false")) {
-      v.type = Json::Bool;
-      return v;
-    }
-    std::size_t used = 0;
-    try {
-      v.number = std::stod(s_.substr(pos_, 64), &used);
-    } catch (const std::exception&) {
-      fail("bad value");
-    }
-    v.type = Json::Number;
-    pos_ += used;
-    return v;
-  }
-
-  const std::string& s_;
-  std::size_t pos_ = 0;
-};
-
-Json parseJson(const std::string& text) { return JsonParser(text).parseDocument(); }
+using Json = JsonValue;
 
 /// Runs seamvox, expects exit code `code`, returns the combined output.
 std::string run(const std::string& arguments, int code) {

@@ -10,6 +10,8 @@
 #include <mutex>
 
 #include "core/field/cone_merge.h"
+#include "core/solve/param_solver.h"
+#include "core/system/errors.h"
 #include "io/atomic_file.h"
 
 namespace seamvox::cli {
@@ -114,16 +116,22 @@ GridSpacing parseGridSpacing(Args& args) {
   GridSpacing g;
   g.edgeLength = args.number("edge-length", 0.0);
   g.cells = args.number("cells", 0.0);
-  if (args.value("edge-length") && args.value("cells")) {
-    throw UsageError("give either --edge-length or --cells, not both");
-  }
-  if (args.value("edge-length") && !(g.edgeLength > 0.0 && std::isfinite(g.edgeLength))) {
-    throw UsageError("--edge-length must be a positive number");
-  }
-  if (args.value("cells") && !(g.cells > 0.0 && std::isfinite(g.cells))) {
-    throw UsageError("--cells must be a positive number");
+  if (args.value("edge-length") && !(g.edgeLength > 0.0)) throw UsageError("--edge-length must be a positive number");
+  if (args.value("cells") && !(g.cells > 0.0)) throw UsageError("--cells must be a positive number");
+  try {
+    g.validate();
+  } catch (const InputError& e) {
+    throw UsageError(std::string("--edge-length/--cells: ") + e.what());
   }
   return g;
+}
+
+std::int32_t parseGridResolution(Args& args) {
+  const std::int64_t grid = args.integer("grid", kDefaultGridResolution);
+  if (grid < 4 || grid > 1024 || (grid & (grid - 1)) != 0) {
+    throw UsageError("--grid must be a power of two between 4 and 1024");
+  }
+  return static_cast<std::int32_t>(grid);
 }
 
 double parseMergeCones(Args& args) {

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/pipeline/grid_spacing.h"
 #include "core/system/progress.h"
 
 namespace seamvox::cli {
@@ -53,14 +54,11 @@ bool registerCommand(Command command);
 const std::vector<Command>& commands();
 
 /// The grid spacing h of param and field: --edge-length H, or --cells N for H = bounding-box
-/// diagonal / N (default kDefaultCells); validated when parsed (UsageError).
-struct GridSpacing {
-  static constexpr double kDefaultCells = 100.0;
-  double edgeLength = 0.0;  ///< given H, or 0
-  double cells = 0.0;       ///< given N, or 0
-  double spacing(double diagonal) const { return edgeLength > 0.0 ? edgeLength : diagonal / (cells > 0.0 ? cells : kDefaultCells); }
-};
+/// diagonal / N (default GridSpacing::kDefaultCells); validated when parsed (UsageError).
 GridSpacing parseGridSpacing(Args& args);
+/// --grid N of param and jobs: voxels per axis, a power of two in [4, 1024]
+/// (default kDefaultGridResolution).
+std::int32_t parseGridResolution(Args& args);
 /// --merge-cones F (param, field): cones closer than F * h are merged; default kConeMergeFraction.
 double parseMergeCones(Args& args);
 

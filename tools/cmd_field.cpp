@@ -1,32 +1,17 @@
 // seamvox field: cross field (smoothest, curvature-aligned or imported), cones, cut and seams.
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
 
-#include "core/mesh/clean.h"
-#include "core/field/cone_merge.h"
-#include "core/cut/cut.h"
+#include "core/pipeline/parameterize.h"
 #include "core/system/errors.h"
-#include "core/field/field.h"
-#include "core/field/field_proxy.h"
 #include "io/field_io.h"
 #include "io/json.h"
 #include "io/mesh_io.h"
-#include "core/system/memory.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point& mark) {
-  const Clock::time_point now = Clock::now();
-  const double s = std::chrono::duration<double>(now - mark).count();
-  mark = now;
-  return s;
-}
 
 /// Cones as OBJ points: a comment with vertex id and index, `v x y z r g b` (red for positive,
 /// blue for negative index), then one `p` element per cone.
@@ -96,49 +81,43 @@ int runField(Args& args) {
   const ProgressFn progress = makeProgress(args.flag("quiet"));
   args.finish(1);
 
-  Clock::time_point mark = Clock::now();
-  std::map<std::string, double> seconds;
+  StageMeter meter;
   TriangleMesh raw = readMesh(input);
   const std::uint32_t inputFaces = raw.numFaces();
   raw.cornerUV.clear();
-  seconds["read"] = secondsSince(mark);
+  FieldSource source;
+  source.method = method;
+  source.curvatureWeight = curvature;
+  if (importPath) source.importedPerInputFace = readFieldVectors(*importPath, inputFaces);
+  meter.finish("read");
   CleanOptions cleanOptions;
   cleanOptions.weldVertices = weld;
   cleanOptions.progress = progress;
   CleanResult clean = cleanMesh(std::move(raw), cleanOptions);
   const TriangleMesh& mesh = clean.mesh;
   const Topology& topology = clean.topology;
-  seconds["clean"] = secondsSince(mark);
+  meter.finish("clean");
 
-  CrossField field;
   method = resolveFieldMethod(method, mesh.numFaces());
   if (curvature > 0.0 && method == FieldMethod::Proxy) {
     throw UsageError("--curvature needs the direct field (--field smooth): the proxy field is the smoothest field only");
   }
-  if (importPath) {
-    field = importField(*importPath, mesh, clean.faceOrigin, inputFaces);  // per input face
-  } else {
-    SmoothFieldOptions options;
-    options.curvatureWeight = curvature;
-    options.progress = progress;
-    ProxyFieldOptions proxyOptions;
-    proxyOptions.progress = progress;
-    field = computeCrossField(mesh, topology, method, options, proxyOptions);
+  CrossField field;
+  try {
+    field = computeFieldFromSource(mesh, topology, clean.faceOrigin, inputFaces, source, progress);
+  } catch (...) {
+    rethrowWithContext(importPath ? *importPath : input);
   }
-  seconds["field"] = secondsSince(mark);
+  meter.finish("field");
   // The cones param cuts through: those closer than the merge distance are merged, as param does
   // before its first cut (param may merge a few more pairs that a solve puts on one point).
-  FieldSingularities sing = computeSingularities(mesh, topology, field);
-  const std::size_t conesBeforeMerge = sing.cones.size();
   const double edgeLength = spacing.spacing(computeBoundingBox(mesh.positions).diagonal());
-  ConeMergeOptions mergeOptions;
-  mergeOptions.maxDistance = mergeCones * edgeLength;
-  const ConeMergeResult merged = mergeCloseCones(mesh, topology, sing, mergeOptions);
-  seconds["singularities"] = secondsSince(mark);
-  CutOptions cutOptions;
-  cutOptions.progress = progress;
-  const CutResult cut = cutToDisk(mesh, topology, field, sing, cutOptions);
-  seconds["cut"] = secondsSince(mark);
+  const ConeCut coneCut = cutThroughCones(mesh, topology, field, mergeCones * edgeLength, {}, progress);
+  const FieldSingularities& sing = coneCut.singularities;
+  const CutResult& cut = coneCut.cut;
+  const std::size_t conesBeforeMerge = coneCut.conesBeforeMerge;
+  const ConeMergeResult& merged = coneCut.merged;
+  meter.finish("cut");
 
   // Written per input face (faces cleaning dropped get a zero vector: "no preference").
   std::vector<Vec3d> perInputFace(inputFaces, Vec3d::Zero());
@@ -146,7 +125,7 @@ int runField(Args& args) {
   writeField(*output, perInputFace);
   if (conesPath) writeConesObj(*conesPath, mesh, sing);
   if (seamsPath) writeSeamsObj(*seamsPath, mesh, topology, cut);
-  seconds["write"] = secondsSince(mark);
+  meter.finish("write");
 
   std::int64_t chi = 0;
   std::uint32_t closedComponents = 0;
@@ -162,9 +141,8 @@ int runField(Args& args) {
     if (cut.corners.isCut(c) && (o == kInvalidId || c < o)) ++cutEdges;
   }
   for (const SeamCurve& s : cut.seams) seamEdges += s.corners.size();
-  double total = 0.0;
-  for (const auto& [stage, s] : seconds) total += s;
-  const std::uint64_t peak = peakResidentBytes();
+  const double total = meter.totalSeconds();
+  const std::uint64_t peak = meter.peakBytes();
 
   if (json) {
     JsonWriter j;
@@ -186,7 +164,7 @@ int runField(Args& args) {
     j.key("seams").value(std::uint64_t{cut.seams.size()});
     j.key("seamEdges").value(seamEdges).key("cutEdges").value(cutEdges);
     j.key("seconds").beginObject();
-    for (const auto& [stage, s] : seconds) j.key(stage).value(s);
+    for (const StageFigures& stage : meter.stages()) j.key(stage.name).value(stage.seconds);
     j.key("total").value(total).endObject();
     j.key("peakResidentBytes").value(peak);
     j.endObject();
@@ -210,9 +188,9 @@ int runField(Args& args) {
   }
   std::printf("cut: %llu edges, %zu seams with %llu edges\n", static_cast<unsigned long long>(cutEdges),
               cut.seams.size(), static_cast<unsigned long long>(seamEdges));
-  std::printf("time: read %.2fs, clean %.2fs, field %.2fs, singularities %.2fs, cut %.2fs, write %.2fs\n",
-              seconds["read"], seconds["clean"], seconds["field"], seconds["singularities"], seconds["cut"],
-              seconds["write"]);
+  std::printf("time:");
+  for (const StageFigures& stage : meter.stages()) std::printf(" %s %.2fs", stage.name.c_str(), stage.seconds);
+  std::printf("\n");
   std::printf("peak memory: %.1f MB\n", peak / 1048576.0);
   return 0;
 }

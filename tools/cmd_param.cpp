@@ -1,325 +1,142 @@
 // seamvox param: seamless parameterization of a mesh (hat, vox or vox + local hat refinement).
-#include <cmath>
+// Parses the options, reads, calls the library pipeline (core/pipeline), prints, writes.
 #include <cstdio>
-#include <unordered_map>
 
-#include "core/mesh/clean.h"
-#include "core/field/cone_merge.h"
-#include "core/cut/cut.h"
-#include "core/system/errors.h"
-#include "core/field/field.h"
-#include "core/field/field_proxy.h"
-#include "core/quality/metrics.h"
-#include "core/solve/hat_solver.h"
+#include "core/pipeline/parameterize.h"
 #include "core/synth/render.h"
+#include "core/system/errors.h"
 #include "io/field_io.h"
-#include "io/json.h"
 #include "io/mesh_io.h"
+#include "io/param_report.h"
 #include "io/png_io.h"
-#include "core/system/memory.h"
-#include "core/solve/param_solver.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
 namespace {
 
-/// Cut-and-solve passes at most when coincident cones are merged after a solve.
-constexpr std::uint32_t kMaxConePasses = 3;
+struct ParamCommand {
+  std::string input, output;
+  std::string solverName, fieldSource;
+  std::optional<std::string> reportPath, renderPath;
+  PipelineOptions options;
+};
 
-int runParam(Args& args) {
-  const std::string input = args.positional(0, "the input mesh (seamvox param MESH -o OUT)");
+ParamCommand parseParamArgs(Args& args) {
+  ParamCommand c;
+  c.input = args.positional(0, "the input mesh (seamvox param MESH -o OUT)");
   const auto output = args.value("output");
   if (!output) throw UsageError("missing -o OUT (.obj, .ply or .drc)");
-  if (formatFromPath(*output) == MeshFormat::Unknown || formatFromPath(*output) == MeshFormat::Off) {
-    throw UsageError("output must be .obj, .ply or .drc (OFF has no texture coordinates): " + *output);
+  c.output = *output;
+  if (formatFromPath(c.output) == MeshFormat::Unknown || formatFromPath(c.output) == MeshFormat::Off) {
+    throw UsageError("output must be .obj, .ply or .drc (OFF has no texture coordinates): " + c.output);
   }
-  const std::string solver = args.value("solver", "voxloc");
-  SolverOptions solverOptions;
+  PipelineOptions& o = c.options;
+  c.solverName = args.value("solver", "voxloc");
   try {
-    solverOptions.solver = parseParamSolver(solver);
+    o.solver.solver = parseParamSolver(c.solverName);
   } catch (const InputError& e) {
     throw UsageError(std::string("--solver: ") + e.what());
   }
-  const std::int64_t grid = args.integer("grid", 128);
-  if (grid < 4 || grid > 1024 || (grid & (grid - 1)) != 0) {
-    throw UsageError("--grid must be a power of two between 4 and 1024");
-  }
-  solverOptions.gridResolution = static_cast<std::int32_t>(grid);
-  const std::int64_t rings = args.integer("rings", solverOptions.refine.rings);
+  o.solver.gridResolution = parseGridResolution(args);
+  const std::int64_t rings = args.integer("rings", o.solver.refine.rings);
   if (rings < 0 || rings > 64) throw UsageError("--rings must be between 0 and 64");
-  solverOptions.refine.rings = static_cast<std::uint32_t>(rings);
-  const std::string fieldSource = args.value("field", "auto");
-  const double mergeCones = parseMergeCones(args);
-  const GridSpacing spacing = parseGridSpacing(args);
-  const bool greedy = args.flag("greedy");
-  const bool weld = args.flag("weld");
-  const auto reportPath = args.value("report");
-  const auto renderPath = args.value("render");
-  const ProgressFn progress = makeProgress(args.flag("quiet"));
+  o.solver.refine.rings = static_cast<std::uint32_t>(rings);
+  c.fieldSource = args.value("field", "auto");
+  o.mergeCones = parseMergeCones(args);
+  o.spacing = parseGridSpacing(args);
+  o.greedyRounding = args.flag("greedy");
+  o.clean.weldVertices = args.flag("weld");
+  c.reportPath = args.value("report");
+  c.renderPath = args.value("render");
+  o.progress = makeProgress(args.flag("quiet"));
   args.finish(1);
+  return c;
+}
 
-  StageMeter meter;
-  TriangleMesh raw = readMesh(input);
-  const std::uint64_t inputFaces = raw.numFaces();
-  const double secondsRead = meter.finish("read").seconds;
-  CleanOptions cleanOptions;
-  cleanOptions.weldVertices = weld;
-  cleanOptions.progress = progress;
-  CleanResult clean = cleanMesh(std::move(raw), cleanOptions);
-  std::vector<VertexId>().swap(clean.vertexOrigin);  // faceOrigin stays for a field file
-  TriangleMesh& mesh = clean.mesh;
-  const Topology& topology = clean.topology;
-  const double secondsClean = meter.finish("clean").seconds;
-
-  CrossField field;
-  std::string fieldMethod = "file";
-  if (fieldSource == "auto" || fieldSource == "smooth" || fieldSource == "proxy") {
-    const FieldMethod method = resolveFieldMethod(parseFieldMethod(fieldSource), mesh.numFaces());
-    fieldMethod = fieldMethodName(method);
-    SmoothFieldOptions fieldOptions;
-    fieldOptions.progress = progress;
-    ProxyFieldOptions proxyOptions;
-    proxyOptions.progress = progress;
-    field = computeCrossField(mesh, topology, method, fieldOptions, proxyOptions);
-  } else {
-    // The file has one vector per input face; cleaning may have dropped or reordered faces.
-    const std::vector<Vec3d> vectors = readFieldVectors(fieldSource, static_cast<std::uint32_t>(inputFaces));
-    std::vector<Vec3d> perFace(mesh.numFaces());
-    for (FaceId f = 0; f < mesh.numFaces(); ++f) perFace[f] = vectors[clean.faceOrigin[f]];
-    field = projectToTangent(mesh, std::move(perFace));
-  }
-  std::vector<FaceId>().swap(clean.faceOrigin);  // only the field file needed it
-  const double secondsField = meter.finish("field").seconds;
-  const double diagonal = computeBoundingBox(mesh.positions).diagonal();
-  ParamOptions options;
-  options.edgeLength = spacing.spacing(diagonal);
-  if (!(options.edgeLength > 0.0)) throw InputError(input + ": the mesh has zero extent");
-
-  options.greedyRounding = greedy;
-  options.progress = progress;
-  solverOptions.meter = &meter;  // closes the "solve" and "refine" stages
-
-  // Cones closer than the grid resolves are merged before cutting; adjacent cones the solve still
-  // puts on one point (collapsing the faces between them) are merged too and the cut and solve
-  // redone, at most kMaxConePasses times in all.
-  CutOptions cutOptions;
-  cutOptions.progress = progress;
-  ConeMergeResult merged;
-  std::vector<std::pair<VertexId, VertexId>> coincident;
-  std::unordered_map<VertexId, std::int32_t> coneIndex;  // of the last cut's cones
-  CutResult cut;
-  SolverResult solved;
-  std::uint32_t conePasses = 0;
-  double secondsCut = 0.0;
-  for (;;) {
-    ++conePasses;
-    {
-      // Matchings and indices are only needed to cut; the cut keeps the combed matchings and cones.
-      FieldSingularities singularities = computeSingularities(mesh, topology, field);
-      ConeMergeOptions mergeOptions;
-      mergeOptions.maxDistance = mergeCones * options.edgeLength;
-      merged = mergeCloseCones(mesh, topology, singularities, mergeOptions);
-      const ConeMergeResult adjacent = mergeAdjacentCones(topology, singularities, coincident);
-      merged.cancelledPairs += adjacent.cancelledPairs;
-      merged.mergedPairs += adjacent.mergedPairs;
-      cut = cutToDisk(mesh, topology, field, singularities, cutOptions);
-      coneIndex.clear();
-      for (VertexId v : singularities.cones) coneIndex[v] = singularities.index4[v];
-    }
-    secondsCut += meter.finish("cut").seconds;
-    solved = parameterizeMeshWithSolver(mesh, topology, field, cut, options, solverOptions);
-    if (!(mergeCones > 0.0) || conePasses == kMaxConePasses) break;
-    std::size_t mergeable = 0;
-    for (const auto& [a, b] : coincidentConeEdges(topology, cut.cones, solved.param.cornerUV)) {
-      if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b))) {
-        coincident.push_back({a, b});
-        ++mergeable;
-      }
-    }
-    if (mergeable == 0) break;
-    solved = SolverResult{};  // free the map and the cut before the next pass
-    cut = CutResult{};
-  }
-  ParamResult& result = solved.param;
-  const RefineStats& refine = solved.refine;
-  double secondsParam = 0.0;
-  for (const StageFigures& stage : meter.stages()) {
-    if (stage.name == "solve" || stage.name == "refine") secondsParam += stage.seconds;
-  }
-
-  const SeamQuality seams = measureSeams(mesh, topology, cut, result.cornerUV);
-  const MapQuality map = measureMap(mesh, result.cornerUV, &field, options.edgeLength);
-  const double secondsMetrics = meter.finish("metrics").seconds;
-  const std::uint64_t wedges = result.cornerUV.numWedges(), mapBytes = result.cornerUV.memoryBytes();
-  // The writer needs the mesh and its map only (the render also the corner table): release the
-  // field and the cut before the output is written.
-  const std::size_t numCones = cut.cones.size(), numSeams = cut.seams.size();
-  field = CrossField();
-  cut = CutResult();
-  if (!renderPath) clean.topology = Topology();
-  mesh.cornerUV = std::move(result.cornerUV);
-  writeMesh(*output, mesh);
-  const double secondsWrite = meter.finish("write").seconds;
-  if (renderPath) {
-    RenderOptions renderOptions;
-    renderOptions.drawSeams = renderOptions.drawCones = true;
-    renderOptions.progress = progress;
-    writePng(*renderPath, renderCheckerboard(mesh, topology, renderOptions).image);
-    meter.finish("render");
-  }
-  const double secondsTotal = meter.totalSeconds();
-  const std::uint64_t peak = meter.peakBytes();
-  const bool seamless = seams.isSeamless();
-  const SeamlessStats& st = result.stats;
-
-  std::printf("%s -> %s: %u faces, %zu cones, %zu seams, h = %.6g (%.1f cells on the diagonal)\n",
-              input.c_str(), output->c_str(), mesh.numFaces(), numCones, numSeams,
-              options.edgeLength, diagonal / options.edgeLength);
+void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMeter& meter) {
+  const SeamlessStats& st = r.solved.param.stats;
+  const std::uint64_t wedges = r.mesh.cornerUV.numWedges();
+  std::printf("%s -> %s: %u faces, %zu cones, %u seams, h = %.6g (%.1f cells on the diagonal)\n",
+              c.input.c_str(), c.output.c_str(), r.mesh.numFaces(), r.cones.size(), r.seams,
+              r.edgeLength, r.diagonal / r.edgeLength);
   std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
               st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
-              peak / 1048576.0);
+              meter.peakBytes() / 1048576.0);
   std::printf("map: %llu wedges (%.3f per vertex), %.1f MB\n", static_cast<unsigned long long>(wedges),
-              mesh.numVertices() ? double(wedges) / mesh.numVertices() : 0.0, mapBytes / 1048576.0);
+              r.mesh.numVertices() ? double(wedges) / r.mesh.numVertices() : 0.0,
+              r.mesh.cornerUV.memoryBytes() / 1048576.0);
   std::printf("seam residual %.3g, integer distance %.3g, gradient error %.4f, flipped %llu, "
               "collapsed %llu: %s\n",
-              seams.maxResidual, seams.maxIntegerDistance, map.relativeGradientError,
-              static_cast<unsigned long long>(map.flipped),
-              static_cast<unsigned long long>(map.collapsed), seamless ? "seamless" : "NOT seamless");
-  if (solved.refined) {
+              r.seamQuality.maxResidual, r.seamQuality.maxIntegerDistance,
+              r.mapQuality.relativeGradientError, static_cast<unsigned long long>(r.mapQuality.flipped),
+              static_cast<unsigned long long>(r.mapQuality.collapsed),
+              r.isSeamless() ? "seamless" : "NOT seamless");
+  const RefineStats& refine = r.solved.refine;
+  if (r.solved.refined) {
     std::printf("refined %u vertices (%.3f%%) in %llu faces: %u local unknowns (%u translations), "
                 "factor %.1f MB, %.2f s\n",
                 refine.freeVertices, 100.0 * refine.refinedVertexFraction,
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
-  if (!solved.fallbackReason.empty()) {
+  if (!r.solved.fallbackReason.empty()) {
     std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
-                solver.c_str(), solved.fallbackReason.c_str());
+                c.solverName.c_str(), r.solved.fallbackReason.c_str());
   }
-  std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", secondsTotal, secondsField,
-              secondsCut, secondsParam);
+  const auto& stages = meter.stages();
+  std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", meter.totalSeconds(),
+              stageSeconds(stages, "field"), stageSeconds(stages, "cut"),
+              stageSeconds(stages, "solve") + stageSeconds(stages, "refine"));
   std::printf("stages (s / peak MB):");
-  for (const StageFigures& stage : meter.stages()) {
+  for (const StageFigures& stage : stages) {
     std::printf(" %s %.1f / %.0f;", stage.name.c_str(), stage.seconds, stage.peakBytes / 1048576.0);
   }
   std::printf("\n");
+}
 
-  if (reportPath) {
-    JsonWriter j;
-    j.beginObject();
-    j.key("input").value(input).key("output").value(*output).key("solver").value(solver);
-    j.key("solverUsed").value(paramSolverName(solved.solver));
-    if (!solved.fallbackReason.empty()) j.key("fallbackReason").value(solved.fallbackReason);
-    j.key("field").value(fieldSource).key("fieldMethod").value(fieldMethod);
-    j.key("faces").value(static_cast<std::uint64_t>(mesh.numFaces()));
-    j.key("vertices").value(static_cast<std::uint64_t>(mesh.numVertices()));
-    j.key("components").value(static_cast<std::uint64_t>(st.components));
-    j.key("cones").value(static_cast<std::uint64_t>(numCones));
-    j.key("conesCancelled").value(static_cast<std::uint64_t>(2 * merged.cancelledPairs));
-    j.key("conesMerged").value(static_cast<std::uint64_t>(merged.mergedPairs));
-    j.key("conePasses").value(static_cast<std::uint64_t>(conePasses));
-    j.key("seams").value(static_cast<std::uint64_t>(numSeams));
-    j.key("seamEdges").value(seams.seamEdges).key("seamLength").value(seams.seamLength);
-    j.key("wedges").value(wedges).key("mapBytes").value(mapBytes);
-    j.key("edgeLength").value(options.edgeLength);
-    j.key("cellsOnDiagonal").value(diagonal / options.edgeLength);
-    j.key("system").beginObject();
-    j.key("basisFunctions").value(static_cast<std::uint64_t>(result.basisFunctions));
-    j.key("domains").value(static_cast<std::uint64_t>(result.domains));
-    j.key("unknowns").value(static_cast<std::uint64_t>(st.unknowns));
-    j.key("positional").value(static_cast<std::uint64_t>(st.positional));
-    j.key("translational").value(static_cast<std::uint64_t>(st.translational));
-    j.key("conePositions").value(static_cast<std::uint64_t>(st.determinedPositions));
-    j.key("translationConstraints").value(static_cast<std::uint64_t>(result.translationConstraints));
-    j.key("nonUnitConstraints").value(static_cast<std::uint64_t>(st.nonUnitConstraints));
-    j.key("pinnedFirstSolve").value(static_cast<std::uint64_t>(st.pinnedFirst));
-    j.key("pinnedSecondSolve").value(static_cast<std::uint64_t>(st.pinnedSecond));
-    j.key("matrixNonzeros").value(st.systemNonzeros);
-    j.key("factorNonzeros").value(st.factorNonzeros);
-    j.key("factorBytes").value(st.factorBytes);
-    j.key("factorPeakBytes").value(st.factorPeakBytes);
-    j.key("realFallback").value(st.realFallback);
-    j.key("maxRoundingShift").value(st.maxRoundingShift);
-    j.endObject();
-    if (solved.solver != ParamSolver::Hat) {
-      j.key("voxel").beginObject();
-      j.key("grid").value(static_cast<std::uint64_t>(solverOptions.gridResolution));
-      j.key("regularization").value(solved.regularization);
-      j.key("failedFactorizations").value(static_cast<std::uint64_t>(solved.failedAttempts));
-      j.key("invisibleTranslations").value(static_cast<std::uint64_t>(solved.invisibleTranslations));
-      j.key("voxels").value(solved.basisStats.voxels);
-      j.key("elements").value(solved.basisStats.elements);
-      j.key("basisBytes").value(solved.basisStats.bytes);
-      j.key("conePositions").value(static_cast<std::uint64_t>(solved.determinedBasis));
-      j.key("inconsistentBasis").value(static_cast<std::uint64_t>(solved.inconsistentBasis));
-      j.key("markedFaces").value(solved.markedFaces);
-      j.endObject();
-    }
-    if (solved.refined) {
-      j.key("refine").beginObject();
-      j.key("refinedVertexFraction").value(refine.refinedVertexFraction);
-      j.key("freeVertices").value(static_cast<std::uint64_t>(refine.freeVertices));
-      j.key("lockedVertices").value(static_cast<std::uint64_t>(refine.lockedVertices));
-      j.key("regionFaces").value(refine.regionFaces);
-      j.key("markedFaces").value(refine.markedFaces);
-      j.key("collapsedFaces").value(refine.collapsedFaces);
-      j.key("flippedFaces").value(refine.flippedFaces);
-      j.key("rings").value(static_cast<std::uint64_t>(solverOptions.refine.rings));
-      j.key("localUnknowns").value(static_cast<std::uint64_t>(refine.unknowns));
-      j.key("localTranslations").value(static_cast<std::uint64_t>(refine.freeTranslations));
-      j.key("localNonzeros").value(refine.systemNonzeros);
-      j.key("factorNonzeros").value(refine.factorNonzeros);
-      j.key("factorBytes").value(refine.factorBytes);
-      j.key("factorPeakBytes").value(refine.factorPeakBytes);
-      j.key("seconds").value(refine.secondsTotal);
-      // Whole refined map (metrics.h criteria); collapsedAtCones: between coincident cones.
-      j.key("collapsedAfter").value(refine.collapsedAfter);
-      j.key("collapsedAtConesAfter").value(refine.collapsedAtConesAfter);
-      j.key("collapsedBeyondConesAfter").value(refine.collapsedAfter - refine.collapsedAtConesAfter);
-      j.key("flippedAfter").value(refine.flippedAfter);
-      j.key("unresolvedFaces").value(refine.unresolvedFaces);
-      j.key("maxRounds").value(static_cast<std::uint64_t>(solverOptions.refine.maxRounds));
-      j.key("rounds").beginArray();
-      for (const RefineRound& round : refine.rounds) {
-        j.beginObject();
-        j.key("seedFaces").value(round.seedFaces).key("regionFaces").value(round.regionFaces);
-        j.key("freeVertices").value(static_cast<std::uint64_t>(round.freeVertices));
-        j.key("unknowns").value(static_cast<std::uint64_t>(round.unknowns));
-        j.key("collapsed").value(round.collapsed).key("collapsedAtCones").value(round.collapsedAtCones);
-        j.key("flipped").value(round.flipped).key("borderFaces").value(round.borderFaces);
-        j.key("seconds").value(round.seconds);
-        j.endObject();
-      }
-      j.endArray();
-      j.endObject();
-    }
-    j.key("quality").beginObject();
-    j.key("seamless").value(seamless);
-    j.key("maxSeamResidual").value(seams.maxResidual);
-    j.key("maxIntegerDistance").value(seams.maxIntegerDistance);
-    j.key("relativeGradientError").value(map.relativeGradientError);
-    j.key("flipped").value(map.flipped).key("flippedFraction").value(map.flippedFraction);
-    j.key("collapsed").value(map.collapsed);
-    j.endObject();
-    j.key("seconds").beginObject();
-    j.key("read").value(secondsRead).key("clean").value(secondsClean);
-    j.key("field").value(secondsField).key("cut").value(secondsCut);
-    j.key("basis").value(result.secondsBasis).key("reduce").value(result.secondsReduce);
-    j.key("assemble").value(st.secondsAssemble).key("firstSolve").value(st.secondsFirstSolve);
-    j.key("round").value(st.secondsRound).key("secondSolve").value(st.secondsSecondSolve);
-    j.key("evaluate").value(result.secondsEvaluate).key("refine").value(refine.secondsTotal).key("metrics").value(secondsMetrics);
-    j.key("write").value(secondsWrite).key("total").value(secondsTotal);
-    j.endObject();
-    j.key("peakResidentBytes").value(peak);
-    // Wall time, peak and end resident size of each stage, in order.
-    j.key("stages").beginArray();
-    for (const StageFigures& stage : meter.stages()) {
-      j.beginObject().key("name").value(stage.name).key("seconds").value(stage.seconds);
-      j.key("peakBytes").value(stage.peakBytes).key("endBytes").value(stage.endBytes).endObject();
-    }
-    j.endArray();
-    j.endObject();
-    writeTextOutput(*reportPath, j.str());
+int runParam(Args& args) {
+  ParamCommand c = parseParamArgs(args);
+  StageMeter meter;
+  c.options.meter = &meter;
+  TriangleMesh raw = readMesh(c.input);
+  if (c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy") {
+    // The file has one vector per input face; cleaning may drop or reorder faces.
+    c.options.field.importedPerInputFace = readFieldVectors(c.fieldSource, raw.numFaces());
+  } else {
+    c.options.field.method = parseFieldMethod(c.fieldSource);
+  }
+  meter.finish("read");
+  PipelineResult r;
+  try {
+    r = parameterize(std::move(raw), c.options);
+  } catch (...) {
+    rethrowWithContext(c.input);
+  }
+  // The writer needs the mesh and its map only (the render also the corner table).
+  if (!c.renderPath) r.topology = Topology();
+  writeMesh(c.output, r.mesh);
+  meter.finish("write");
+  if (c.renderPath) {
+    RenderOptions renderOptions;
+    renderOptions.drawSeams = renderOptions.drawCones = true;
+    renderOptions.progress = c.options.progress;
+    writePng(*c.renderPath, renderCheckerboard(r.mesh, r.topology, renderOptions).image);
+    meter.finish("render");
+  }
+  printSummary(c, r, meter);
+  if (c.reportPath) {
+    ParamReportContext context;
+    context.input = c.input;
+    context.output = c.output;
+    context.solverAsked = c.solverName;
+    context.fieldSource = c.fieldSource;
+    context.gridResolution = c.options.solver.gridResolution;
+    context.rings = c.options.solver.refine.rings;
+    context.maxRounds = c.options.solver.refine.maxRounds;
+    context.stages = meter.stages();
+    context.totalSeconds = meter.totalSeconds();
+    context.peakBytes = meter.peakBytes();
+    writeTextOutput(*c.reportPath, paramReportJson(r, context));
   }
   return 0;
 }

@@ -29,9 +29,12 @@ constexpr std::uint64_t kHatBytesPerFace = 1200;
 /// more than availableBytes (kHatBytesPerFace per face); availableBytes 0 means unknown: allowed.
 void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason);
 
+/// Default voxels per axis of the voxel basis's grid (vox, voxloc).
+constexpr std::int32_t kDefaultGridResolution = 128;
+
 struct SolverOptions {
   ParamSolver solver = ParamSolver::VoxLoc;
-  std::int32_t gridResolution = 128;  ///< voxels per axis (vox, voxloc)
+  std::int32_t gridResolution = kDefaultGridResolution;  ///< voxels per axis (vox, voxloc)
   /// Region and rings of the local refinement (voxloc); markedFaces and edgeLength are filled in.
   RefineOptions refine;
   /// When set, the solve closes its stages on it: "solve" (the hat or voxel solve, with the

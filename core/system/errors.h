@@ -37,4 +37,9 @@ class CancelledError : public Error {
   using Error::Error;
 };
 
+/// Inside a catch block: rethrows the current seamvox error as the same type with
+/// "context: " before its message (e.g. the file a stage was working on); anything else is
+/// rethrown unchanged. A message that already starts with the context is not prefixed again.
+[[noreturn]] void rethrowWithContext(const std::string& context);
+
 }  // namespace seamvox

@@ -1,0 +1,148 @@
+// The whole pipeline as one call: clean, field, cone passes (merge, cut, solve), quality.
+#include "core/pipeline/parameterize.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <unordered_map>
+
+#include "core/system/errors.h"
+
+namespace seamvox {
+
+CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topology,
+                                  const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces,
+                                  const FieldSource& source, const ProgressFn& progress) {
+  if (!source.importedPerInputFace.empty()) {
+    if (source.importedPerInputFace.size() != inputFaces) {
+      throw InputError("the field has " + std::to_string(source.importedPerInputFace.size()) +
+                       " vectors for a mesh of " + std::to_string(inputFaces) + " faces");
+    }
+    std::vector<Vec3d> perFace(mesh.numFaces());
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) perFace[f] = source.importedPerInputFace[faceOrigin[f]];
+    return projectToTangent(mesh, perFace);
+  }
+  SmoothFieldOptions smooth;
+  smooth.curvatureWeight = source.curvatureWeight;
+  smooth.progress = progress;
+  ProxyFieldOptions proxy;
+  proxy.progress = progress;
+  return computeCrossField(mesh, topology, resolveFieldMethod(source.method, mesh.numFaces()), smooth, proxy);
+}
+
+ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                        double mergeDistance,
+                        const std::vector<std::pair<VertexId, VertexId>>& coincident,
+                        const ProgressFn& progress) {
+  ConeCut result;
+  result.singularities = computeSingularities(mesh, topology, field);
+  result.conesBeforeMerge = static_cast<std::uint32_t>(result.singularities.cones.size());
+  ConeMergeOptions mergeOptions;
+  mergeOptions.maxDistance = mergeDistance;
+  result.merged = mergeCloseCones(mesh, topology, result.singularities, mergeOptions);
+  const ConeMergeResult adjacent = mergeAdjacentCones(topology, result.singularities, coincident);
+  result.merged.cancelledPairs += adjacent.cancelledPairs;
+  result.merged.mergedPairs += adjacent.mergedPairs;
+  result.merged.changedEdges += adjacent.changedEdges;
+  result.merged.longestPath = std::max(result.merged.longestPath, adjacent.longestPath);
+  CutOptions cutOptions;
+  cutOptions.progress = progress;
+  result.cut = cutToDisk(mesh, topology, field, result.singularities, cutOptions);
+  return result;
+}
+
+namespace {
+
+/// Adjacent cone pairs the map put on one point that may still be merged (canMergeCoincident).
+std::vector<std::pair<VertexId, VertexId>> mergeableCoincidentCones(
+    const Topology& topology, const std::vector<VertexId>& cones,
+    const std::unordered_map<VertexId, std::int32_t>& coneIndex, const WedgeMap& map) {
+  std::vector<std::pair<VertexId, VertexId>> pairs;
+  for (const auto& [a, b] : coincidentConeEdges(topology, cones, map)) {
+    if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b))) pairs.push_back({a, b});
+  }
+  return pairs;
+}
+
+/// The cone passes: merge and cut, solve; again with the pairs a solve put on one point merged,
+/// while there are such pairs (at most options.maxConePasses passes).
+void solveConePasses(PipelineResult& r, const CrossField& field, const PipelineOptions& options,
+                     StageMeter& meter) {
+  ParamOptions param;
+  param.edgeLength = r.edgeLength;
+  param.greedyRounding = options.greedyRounding;
+  param.progress = options.progress;
+  SolverOptions solverOptions = options.solver;
+  solverOptions.meter = &meter;  // closes "solve" and "refine"
+  const double mergeDistance = options.mergeCones * r.edgeLength;
+  std::vector<std::pair<VertexId, VertexId>> coincident;
+  for (;;) {
+    ++r.conePasses;
+    ConeCut coneCut = cutThroughCones(r.mesh, r.topology, field, mergeDistance, coincident, options.progress);
+    if (r.conePasses == 1) r.conesBeforeMerge = coneCut.conesBeforeMerge;
+    r.merged.cancelledPairs += coneCut.merged.cancelledPairs;
+    r.merged.mergedPairs += coneCut.merged.mergedPairs;
+    r.merged.changedEdges += coneCut.merged.changedEdges;
+    r.merged.longestPath = std::max(r.merged.longestPath, coneCut.merged.longestPath);
+    std::unordered_map<VertexId, std::int32_t> coneIndex;
+    for (VertexId v : coneCut.singularities.cones) coneIndex[v] = coneCut.singularities.index4[v];
+    coneCut.singularities = FieldSingularities();  // the cut keeps the combed matchings and cones
+    meter.finish("cut");
+    r.solved = parameterizeMeshWithSolver(r.mesh, r.topology, field, coneCut.cut, param, solverOptions);
+    bool again = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
+    if (again) {
+      const auto pairs = mergeableCoincidentCones(r.topology, coneCut.cut.cones, coneIndex, r.solved.param.cornerUV);
+      coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+      again = !pairs.empty();
+    }
+    if (!again) {
+      r.cones = coneCut.cut.cones;
+      std::sort(r.cones.begin(), r.cones.end());
+      r.coneIndex4.clear();
+      for (VertexId v : r.cones) r.coneIndex4.push_back(coneIndex.at(v));
+      r.seams = static_cast<std::uint32_t>(coneCut.cut.seams.size());
+      r.seamQuality = measureSeams(r.mesh, r.topology, coneCut.cut, r.solved.param.cornerUV);
+      return;
+    }
+    r.solved = SolverResult{};  // free the map before the next pass
+  }
+}
+
+}  // namespace
+
+PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
+  options.spacing.validate();
+  std::unique_ptr<StageMeter> ownMeter;
+  if (!options.meter) ownMeter = std::make_unique<StageMeter>();
+  StageMeter& meter = options.meter ? *options.meter : *ownMeter;
+
+  PipelineResult r;
+  r.inputFaces = raw.numFaces();
+  CleanOptions cleanOptions = options.clean;
+  cleanOptions.progress = options.progress;
+  CleanResult clean = cleanMesh(std::move(raw), cleanOptions);
+  std::vector<VertexId>().swap(clean.vertexOrigin);  // faceOrigin stays for an imported field
+  r.mesh = std::move(clean.mesh);
+  r.topology = std::move(clean.topology);
+  r.cleanReport = clean.report;
+  meter.finish("clean");
+
+  CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces,
+                                            options.field, options.progress);
+  r.fieldMethod = options.field.importedPerInputFace.empty()
+                      ? fieldMethodName(resolveFieldMethod(options.field.method, r.mesh.numFaces()))
+                      : "file";
+  std::vector<FaceId>().swap(clean.faceOrigin);
+  meter.finish("field");
+  r.diagonal = computeBoundingBox(r.mesh.positions).diagonal();
+  r.edgeLength = options.spacing.spacing(r.diagonal);
+
+  solveConePasses(r, field, options, meter);
+  r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength);
+  r.mesh.cornerUV = std::move(r.solved.param.cornerUV);
+  meter.finish("metrics");
+  return r;
+}
+
+}  // namespace seamvox

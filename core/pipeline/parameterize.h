@@ -1,0 +1,98 @@
+#pragma once
+/// The whole pipeline as one library call (DESIGN section 2): clean, cross field, cones merged
+/// where the grid cannot separate them, cut, seamless solve (hat, vox or voxloc with its fallback
+/// and local refinement), repeated while a solve still puts adjacent cones on one point, and the
+/// quality figures. No file I/O: the caller reads the mesh (and an imported field) and writes what
+/// it gets back. `seamvox param`, `seamvox field` and the benchmarks call these stages.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/cut/cut.h"
+#include "core/field/cone_merge.h"
+#include "core/field/field.h"
+#include "core/field/field_proxy.h"
+#include "core/mesh/clean.h"
+#include "core/pipeline/grid_spacing.h"
+#include "core/quality/metrics.h"
+#include "core/solve/param_solver.h"
+#include "core/system/memory.h"
+#include "core/system/progress.h"
+
+namespace seamvox {
+
+/// Where the field comes from.
+struct FieldSource {
+  FieldMethod method = FieldMethod::Auto;
+  double curvatureWeight = 0.0;  ///< > 0: curvature-aligned (direct field only)
+  /// When not empty: an imported field, one vector per input face (before cleaning), projected
+  /// on the cleaned faces; method and curvatureWeight are then unused.
+  std::vector<Vec3d> importedPerInputFace;
+};
+
+/// The cross field of a cleaned mesh from its source; faceOrigin maps cleaned faces to input
+/// faces (CleanResult::faceOrigin) for an imported field. Throws InputError for a field whose
+/// size does not match inputFaces.
+CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topology,
+                                  const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces,
+                                  const FieldSource& source, const ProgressFn& progress = {});
+
+/// Singularities of a field with close cones merged, and the cut through them.
+struct ConeCut {
+  FieldSingularities singularities;  ///< after merging
+  CutResult cut;
+  std::uint32_t conesBeforeMerge = 0;
+  ConeMergeResult merged;  ///< both kinds of merges added up
+};
+
+/// computeSingularities, mergeCloseCones (cones at most mergeDistance apart, mesh units; <= 0
+/// merges nothing), mergeAdjacentCones on `coincident` (pairs a previous solve put on one
+/// point), then cutToDisk.
+ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                        double mergeDistance,
+                        const std::vector<std::pair<VertexId, VertexId>>& coincident = {},
+                        const ProgressFn& progress = {});
+
+struct PipelineOptions {
+  CleanOptions clean;  ///< weld, tolerance (progress is set from below)
+  FieldSource field;
+  GridSpacing spacing;
+  /// Cones closer than this many grid spacings are merged (kConeMergeFraction); 0 keeps them all
+  /// and runs a single cone pass.
+  double mergeCones = kConeMergeFraction;
+  /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
+  std::uint32_t maxConePasses = 3;
+  SolverOptions solver;  ///< solver, grid resolution, refinement (its meter is set from below)
+  bool greedyRounding = false;
+  ProgressFn progress;  ///< every stage reports and may cancel (CancelledError) through it
+  /// Stages are closed on this meter when given ("clean", "field", "cut", "solve", "refine",
+  /// "metrics"), so a caller can add its own ("read", "write") on the same one.
+  StageMeter* meter = nullptr;
+};
+
+struct PipelineResult {
+  /// The cleaned mesh with the map in mesh.cornerUV (grid units, per wedge of the cut).
+  TriangleMesh mesh;
+  Topology topology;        ///< of mesh
+  CleanReport cleanReport;  ///< what cleaning changed
+  std::uint32_t inputFaces = 0;
+  std::string fieldMethod;  ///< "direct", "proxy" or "file"
+  double edgeLength = 0.0, diagonal = 0.0;
+  std::vector<VertexId> cones;   ///< of the last cut, sorted
+  std::vector<std::int32_t> coneIndex4;  ///< index of each cone, quarter turns
+  std::uint32_t seams = 0;       ///< seam curves of the last cut
+  std::uint32_t conesBeforeMerge = 0;  ///< of the first pass
+  ConeMergeResult merged;        ///< over all passes
+  std::uint32_t conePasses = 0;
+  SolverResult solved;           ///< figures of the last solve (its map moved to mesh.cornerUV)
+  SeamQuality seamQuality;
+  MapQuality mapQuality;
+  bool isSeamless() const { return seamQuality.isSeamless(); }
+};
+
+/// Runs the whole pipeline on a raw mesh (consumed). Throws InputError (an empty or flat mesh,
+/// a field of the wrong size), TopologyError, SolverError, CancelledError. Memory: about 80
+/// bytes per face at the peak (bench/RESULTS.md).
+PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options);
+
+}  // namespace seamvox

@@ -1,0 +1,171 @@
+// The JSON report of a parameterization: counts, system sizes, refinement, quality, stages.
+#include "io/param_report.h"
+
+#include "core/pipeline/parameterize.h"
+#include "io/json.h"
+
+namespace seamvox {
+
+namespace {
+
+using U64 = std::uint64_t;
+
+void writeSystem(JsonWriter& j, const PipelineResult& r) {
+  const ParamResult& p = r.solved.param;
+  const SeamlessStats& st = p.stats;
+  j.key("system").beginObject();
+  j.key("basisFunctions").value(U64{p.basisFunctions});
+  j.key("domains").value(U64{p.domains});
+  j.key("unknowns").value(U64{st.unknowns});
+  j.key("positional").value(U64{st.positional});
+  j.key("translational").value(U64{st.translational});
+  j.key("conePositions").value(U64{st.determinedPositions});
+  j.key("translationConstraints").value(U64{p.translationConstraints});
+  j.key("nonUnitConstraints").value(U64{st.nonUnitConstraints});
+  j.key("pinnedFirstSolve").value(U64{st.pinnedFirst});
+  j.key("pinnedSecondSolve").value(U64{st.pinnedSecond});
+  j.key("matrixNonzeros").value(st.systemNonzeros);
+  j.key("factorNonzeros").value(st.factorNonzeros);
+  j.key("factorBytes").value(st.factorBytes);
+  j.key("factorPeakBytes").value(st.factorPeakBytes);
+  j.key("realFallback").value(st.realFallback);
+  j.key("maxRoundingShift").value(st.maxRoundingShift);
+  j.endObject();
+}
+
+void writeVoxel(JsonWriter& j, const SolverResult& s, std::int32_t grid) {
+  j.key("voxel").beginObject();
+  j.key("grid").value(static_cast<U64>(grid));
+  j.key("regularization").value(s.regularization);
+  j.key("failedFactorizations").value(U64{s.failedAttempts});
+  j.key("invisibleTranslations").value(U64{s.invisibleTranslations});
+  j.key("voxels").value(s.basisStats.voxels);
+  j.key("elements").value(s.basisStats.elements);
+  j.key("basisBytes").value(s.basisStats.bytes);
+  j.key("conePositions").value(U64{s.determinedBasis});
+  j.key("inconsistentBasis").value(U64{s.inconsistentBasis});
+  j.key("markedFaces").value(s.markedFaces);
+  j.endObject();
+}
+
+void writeRefineRounds(JsonWriter& j, const RefineStats& refine) {
+  j.key("rounds").beginArray();
+  for (const RefineRound& round : refine.rounds) {
+    j.beginObject();
+    j.key("seedFaces").value(round.seedFaces).key("regionFaces").value(round.regionFaces);
+    j.key("freeVertices").value(U64{round.freeVertices});
+    j.key("unknowns").value(U64{round.unknowns});
+    j.key("collapsed").value(round.collapsed).key("collapsedAtCones").value(round.collapsedAtCones);
+    j.key("flipped").value(round.flipped).key("borderFaces").value(round.borderFaces);
+    j.key("seconds").value(round.seconds);
+    j.endObject();
+  }
+  j.endArray();
+}
+
+void writeRefine(JsonWriter& j, const RefineStats& refine, const ParamReportContext& c) {
+  j.key("refine").beginObject();
+  j.key("refinedVertexFraction").value(refine.refinedVertexFraction);
+  j.key("freeVertices").value(U64{refine.freeVertices});
+  j.key("lockedVertices").value(U64{refine.lockedVertices});
+  j.key("regionFaces").value(refine.regionFaces);
+  j.key("markedFaces").value(refine.markedFaces);
+  j.key("collapsedFaces").value(refine.collapsedFaces);
+  j.key("flippedFaces").value(refine.flippedFaces);
+  j.key("rings").value(U64{c.rings});
+  j.key("localUnknowns").value(U64{refine.unknowns});
+  j.key("localTranslations").value(U64{refine.freeTranslations});
+  j.key("localNonzeros").value(refine.systemNonzeros);
+  j.key("factorNonzeros").value(refine.factorNonzeros);
+  j.key("factorBytes").value(refine.factorBytes);
+  j.key("factorPeakBytes").value(refine.factorPeakBytes);
+  j.key("seconds").value(refine.secondsTotal);
+  // Whole refined map (metrics.h criteria); collapsedAtCones: between coincident cones.
+  j.key("collapsedAfter").value(refine.collapsedAfter);
+  j.key("collapsedAtConesAfter").value(refine.collapsedAtConesAfter);
+  j.key("collapsedBeyondConesAfter").value(refine.collapsedAfter - refine.collapsedAtConesAfter);
+  j.key("flippedAfter").value(refine.flippedAfter);
+  j.key("unresolvedFaces").value(refine.unresolvedFaces);
+  j.key("maxRounds").value(U64{c.maxRounds});
+  writeRefineRounds(j, refine);
+  j.endObject();
+}
+
+void writeQuality(JsonWriter& j, const PipelineResult& r) {
+  j.key("quality").beginObject();
+  j.key("seamless").value(r.isSeamless());
+  j.key("maxSeamResidual").value(r.seamQuality.maxResidual);
+  j.key("maxIntegerDistance").value(r.seamQuality.maxIntegerDistance);
+  j.key("relativeGradientError").value(r.mapQuality.relativeGradientError);
+  j.key("flipped").value(r.mapQuality.flipped).key("flippedFraction").value(r.mapQuality.flippedFraction);
+  j.key("collapsed").value(r.mapQuality.collapsed);
+  j.endObject();
+}
+
+void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportContext& c) {
+  const ParamResult& p = r.solved.param;
+  const SeamlessStats& st = p.stats;
+  j.key("seconds").beginObject();
+  j.key("read").value(stageSeconds(c.stages, "read")).key("clean").value(stageSeconds(c.stages, "clean"));
+  j.key("field").value(stageSeconds(c.stages, "field")).key("cut").value(stageSeconds(c.stages, "cut"));
+  j.key("basis").value(p.secondsBasis).key("reduce").value(p.secondsReduce);
+  j.key("assemble").value(st.secondsAssemble).key("firstSolve").value(st.secondsFirstSolve);
+  j.key("round").value(st.secondsRound).key("secondSolve").value(st.secondsSecondSolve);
+  j.key("evaluate").value(p.secondsEvaluate).key("refine").value(r.solved.refine.secondsTotal);
+  j.key("metrics").value(stageSeconds(c.stages, "metrics"));
+  j.key("write").value(stageSeconds(c.stages, "write")).key("total").value(c.totalSeconds);
+  j.endObject();
+  j.key("peakResidentBytes").value(c.peakBytes);
+  // Wall time, peak and end resident size of each stage, in order.
+  j.key("stages").beginArray();
+  for (const StageFigures& stage : c.stages) {
+    j.beginObject().key("name").value(stage.name).key("seconds").value(stage.seconds);
+    j.key("peakBytes").value(stage.peakBytes).key("endBytes").value(stage.endBytes).endObject();
+  }
+  j.endArray();
+}
+
+void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContext& c) {
+  j.key("input").value(c.input).key("output").value(c.output).key("solver").value(c.solverAsked);
+  j.key("solverUsed").value(paramSolverName(r.solved.solver));
+  if (!r.solved.fallbackReason.empty()) j.key("fallbackReason").value(r.solved.fallbackReason);
+  j.key("field").value(c.fieldSource).key("fieldMethod").value(r.fieldMethod);
+  j.key("faces").value(U64{r.mesh.numFaces()});
+  j.key("vertices").value(U64{r.mesh.numVertices()});
+  j.key("components").value(U64{r.solved.param.stats.components});
+  j.key("cones").value(static_cast<U64>(r.cones.size()));
+  j.key("conesBeforeMerge").value(U64{r.conesBeforeMerge});
+  j.key("conesCancelled").value(U64{2 * r.merged.cancelledPairs});
+  j.key("conesMerged").value(U64{r.merged.mergedPairs});
+  j.key("conePasses").value(U64{r.conePasses});
+  j.key("seams").value(U64{r.seams});
+  j.key("seamEdges").value(r.seamQuality.seamEdges).key("seamLength").value(r.seamQuality.seamLength);
+  j.key("wedges").value(U64{r.mesh.cornerUV.numWedges()}).key("mapBytes").value(U64{r.mesh.cornerUV.memoryBytes()});
+  j.key("edgeLength").value(r.edgeLength);
+  j.key("cellsOnDiagonal").value(r.diagonal / r.edgeLength);
+}
+
+}  // namespace
+
+double stageSeconds(const std::vector<StageFigures>& stages, const std::string& name) {
+  double seconds = 0.0;
+  for (const StageFigures& stage : stages) {
+    if (stage.name == name) seconds += stage.seconds;
+  }
+  return seconds;
+}
+
+std::string paramReportJson(const PipelineResult& r, const ParamReportContext& c) {
+  JsonWriter j;
+  j.beginObject();
+  writeCounts(j, r, c);
+  writeSystem(j, r);
+  if (r.solved.solver != ParamSolver::Hat) writeVoxel(j, r.solved, c.gridResolution);
+  if (r.solved.refined) writeRefine(j, r.solved.refine, c);
+  writeQuality(j, r);
+  writeSeconds(j, r, c);
+  j.endObject();
+  return j.str();
+}
+
+}  // namespace seamvox

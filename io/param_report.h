@@ -1,0 +1,33 @@
+#pragma once
+/// The JSON report of a parameterization (`seamvox param --report`, jobs, bench): one writer for
+/// every key, so the command, the library user and the readers see the same figures.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/system/memory.h"
+
+namespace seamvox {
+
+struct PipelineResult;
+
+/// What the report says beyond the pipeline's result: the caller's names and settings and the
+/// stages it measured (the pipeline's own and the caller's "read" and "write").
+struct ParamReportContext {
+  std::string input, output;
+  std::string solverAsked;  ///< as given: "hat", "vox", "voxloc"
+  std::string fieldSource;  ///< "auto", "smooth", "proxy" or the field file
+  std::int32_t gridResolution = 0;
+  std::uint32_t rings = 0, maxRounds = 0;
+  std::vector<StageFigures> stages;
+  double totalSeconds = 0.0;
+  std::uint64_t peakBytes = 0;
+};
+
+/// The report as pretty-printed JSON.
+std::string paramReportJson(const PipelineResult& result, const ParamReportContext& context);
+
+/// Seconds of the named stage in a stage list (0 when absent; summed when repeated).
+double stageSeconds(const std::vector<StageFigures>& stages, const std::string& name);
+
+}  // namespace seamvox

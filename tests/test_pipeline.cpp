@@ -1,0 +1,178 @@
+// The library pipeline: one call gives what `seamvox param` gives, validates h in one place,
+// reports through the stage meter, cancels, and names the input in errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/mesh/topology.h"
+#include "core/pipeline/grid_spacing.h"
+#include "core/pipeline/parameterize.h"
+#include "core/synth/generate.h"
+#include "core/system/errors.h"
+#include "io/json_reader.h"
+#include "io/mesh_io.h"
+#include "io/param_report.h"
+#include "test_meshes.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+TriangleMesh sphere(std::uint64_t faces) {
+  GenerateOptions options;
+  options.kind = MeshKind::Sphere;
+  options.faces = faces;
+  return generateMesh(options).mesh;
+}
+
+std::int64_t eulerCharacteristic(const Topology& topology) {
+  std::int64_t chi = 0;
+  for (const ComponentInfo& c : computeComponents(topology).components) chi += c.eulerCharacteristic;
+  return chi;
+}
+
+class PipelineSolvers : public ::testing::TestWithParam<ParamSolver> {};
+
+TEST_P(PipelineSolvers, SeamlessWithConesSummingToEulerCharacteristic) {
+  PipelineOptions options;
+  options.solver.solver = GetParam();
+  options.solver.gridResolution = 32;
+  options.spacing.cells = 20;
+  StageMeter meter;
+  options.meter = &meter;
+  const PipelineResult r = parameterize(testing::concatMeshes({sphere(3000), testing::torusMesh(24, 12)}), options);
+  EXPECT_TRUE(r.isSeamless()) << r.seamQuality.maxResidual << " " << r.seamQuality.maxIntegerDistance;
+  EXPECT_EQ(r.mesh.cornerUV.size(), 3u * r.mesh.numFaces());
+  std::int64_t indexSum4 = 0;
+  for (std::int32_t k : r.coneIndex4) {
+    EXPECT_NE(k, 0);
+    indexSum4 += k;
+  }
+  EXPECT_EQ(r.cones.size(), r.coneIndex4.size());
+  EXPECT_EQ(indexSum4, 4 * eulerCharacteristic(r.topology));  // Poincare-Hopf: 2 (sphere) + 0
+  EXPECT_GE(r.conePasses, 1u);
+  EXPECT_LT(r.mapQuality.relativeGradientError, 0.5);
+  // The stages the pipeline closes, in order, on the caller's meter.
+  std::vector<std::string> names;
+  for (const StageFigures& s : meter.stages()) names.push_back(s.name);
+  ASSERT_GE(names.size(), 5u);
+  EXPECT_EQ(names[0], "clean");
+  EXPECT_EQ(names[1], "field");
+  EXPECT_EQ(names[2], "cut");
+  EXPECT_EQ(names.back(), "metrics");
+  EXPECT_GT(meter.peakBytes(), 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Solvers, PipelineSolvers,
+                         ::testing::Values(ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc));
+
+TEST(Pipeline, GivesWhatTheCommandWrites) {
+  testing::TempDir dir;
+  const std::string input = dir.path("s.obj"), output = dir.path("s_uv.obj"), report = dir.path("r.json");
+  writeMesh(input, sphere(4000));
+  std::string log;
+  ASSERT_EQ(testing::runSeamvox("param " + input + " -o " + output + " --solver hat --quiet --report " + report, &log), 0) << log;
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::Hat;
+  const PipelineResult r = parameterize(readMesh(input), options);
+  const JsonValue j = parseJson(testing::readFile(report), report);
+  EXPECT_EQ(j.numberAt("faces"), r.mesh.numFaces());
+  EXPECT_EQ(j.numberAt("cones"), static_cast<double>(r.cones.size()));
+  EXPECT_EQ(j.numberAt("seams"), r.seams);
+  EXPECT_EQ(j.numberAt("quality.seamless"), 1.0);
+  EXPECT_TRUE(r.isSeamless());
+  EXPECT_EQ(j.numberAt("quality.flipped"), static_cast<double>(r.mapQuality.flipped));
+  EXPECT_NEAR(j.numberAt("quality.relativeGradientError"), r.mapQuality.relativeGradientError, 1e-9);
+  // The library's report has the same keys as the command's.
+  ParamReportContext context;
+  const JsonValue mine = parseJson(paramReportJson(r, context));
+  for (const auto& [key, value] : flattenJson(j)) {
+    if (key.rfind("stages.", 0) == 0) continue;  // the command adds read and write stages
+    EXPECT_NE(mine.find(key), nullptr) << key;
+  }
+}
+
+TEST(Pipeline, CancelsThroughProgress) {
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::Hat;
+  int calls = 0;
+  options.progress = [&](const char*, double) { return ++calls < 3; };
+  EXPECT_THROW(parameterize(sphere(3000), options), CancelledError);
+  EXPECT_GE(calls, 3);
+}
+
+TEST(Pipeline, ImportedFieldOfTheWrongSizeIsAnInputError) {
+  PipelineOptions options;
+  options.field.importedPerInputFace.assign(10, Vec3d(1, 0, 0));
+  EXPECT_THROW(parameterize(sphere(3000), options), InputError);
+}
+
+TEST(Pipeline, ImportedFieldFollowsCleanedFaces) {
+  // A mesh with a duplicate face: cleaning drops it, the field is still one vector per input face.
+  TriangleMesh mesh = sphere(3000);
+  mesh.triangles.push_back(mesh.triangles[5]);
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::Hat;
+  options.field.importedPerInputFace.assign(mesh.numFaces(), Vec3d(1, 0.3, 0.2));
+  const PipelineResult r = parameterize(std::move(mesh), options);
+  EXPECT_EQ(r.fieldMethod, "file");
+  EXPECT_TRUE(r.isSeamless());
+}
+
+TEST(GridSpacing, ValidatesInOnePlace) {
+  GridSpacing g;
+  EXPECT_DOUBLE_EQ(g.spacing(10.0), 10.0 / GridSpacing::kDefaultCells);
+  g.cells = 50;
+  EXPECT_DOUBLE_EQ(g.spacing(10.0), 0.2);
+  g.edgeLength = 0.5;
+  EXPECT_THROW(g.validate(), InputError);  // both
+  g.cells = 0;
+  EXPECT_DOUBLE_EQ(g.spacing(10.0), 0.5);
+  EXPECT_THROW(g.spacing(0.0), InputError);
+  EXPECT_THROW(g.spacing(std::nan("")), InputError);
+  g.edgeLength = 1e-300;
+  EXPECT_THROW(g.spacing(10.0), InputError);  // more than kMaxCells cells
+  for (double bad : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    GridSpacing e;
+    e.edgeLength = bad;
+    EXPECT_THROW(e.validate(), InputError) << bad;
+    GridSpacing c;
+    c.cells = bad;
+    EXPECT_THROW(c.validate(), InputError) << bad;
+  }
+  GridSpacing huge;
+  huge.cells = 1e308;
+  EXPECT_THROW(huge.validate(), InputError);
+}
+
+TEST(Errors, RethrowWithContextKeepsTheTypeAndPrefixesOnce) {
+  auto rethrown = [](auto error, const std::string& context) -> std::string {
+    try {
+      try {
+        throw error;
+      } catch (...) {
+        rethrowWithContext(context);
+      }
+    } catch (const decltype(error)& e) {
+      return e.what();
+    }
+    return "wrong type";
+  };
+  EXPECT_EQ(rethrown(SolverError("cannot factor"), "a.ply"), "a.ply: cannot factor");
+  EXPECT_EQ(rethrown(InputError("a.ply: line 3: bad"), "a.ply"), "a.ply: line 3: bad");
+  EXPECT_EQ(rethrown(TopologyError("x"), "m.obj"), "m.obj: x");
+  EXPECT_EQ(rethrown(IoError("x"), "m.obj"), "m.obj: x");
+  EXPECT_EQ(rethrown(CancelledError("cancelled"), "m.obj"), "cancelled");
+  EXPECT_THROW(
+      {
+        try {
+          throw std::runtime_error("other");
+        } catch (...) {
+          rethrowWithContext("m.obj");
+        }
+      },
+      std::runtime_error);
+}
+
+}  // namespace
+}  // namespace seamvox
