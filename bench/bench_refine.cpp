@@ -22,14 +22,12 @@
 #include "core/system/memory.h"
 #include "core/basis/voxel_grid.h"
 #include "core/system/blas_threads.h"
+#include "core/system/stopwatch.h"
 
 using namespace seamvox;
 
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 struct Options {
   std::int32_t grid = 128;

@@ -8,13 +8,11 @@
 #include "io/json.h"
 #include "io/mesh_io.h"
 #include "core/system/memory.h"
+#include "core/system/stopwatch.h"
 
 namespace seamvox::cli {
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 std::string format(const char* pattern, ...) __attribute__((format(printf, 1, 2)));
 std::string format(const char* pattern, ...) {

@@ -1,7 +1,5 @@
 #include "core/basis/voxel_basis.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +9,7 @@
 
 #include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -151,7 +150,7 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   // Elements: per voxel, fragments joined through shared non-cut edges (union-find).
   fragmentElement_.assign(nfrag, 0);
   voxelElementStart_.assign(nv + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, nv, 64), [&](const auto& range) {
+  parallelFor(nv, 64, [&](const IndexRange& range) {
     std::vector<FaceId> faces;
     for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
       const std::uint32_t begin = voxelFragmentStart[v], m = voxelFragmentStart[v + 1] - begin;
@@ -198,7 +197,7 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   records_.assign(ne, VoxelIntegrals{});
   normalStiffness_.assign(ne, std::array<double, 36>{});
   setRegularization(options.regularization);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, nv, 16), [&](const auto& range) {
+  parallelFor(nv, 16, [&](const IndexRange& range) {
     for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
       for (std::uint32_t k = voxelFragmentStart[v]; k < voxelFragmentStart[v + 1]; ++k) {
         const std::uint32_t i = voxelFragments[k];
@@ -416,7 +415,7 @@ void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coeffi
   // One evaluation per wedge, at its smallest corner: the basis is continuous across the
   // non-cut edges inside a wedge.
   const std::vector<CornerId> wedgeCorner = cornerUV.wedgeCorners();
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, cornerUV.numWedges(), 4096), [&](const auto& range) {
+  parallelFor(cornerUV.numWedges(), 4096, [&](const IndexRange& range) {
     for (std::uint32_t wedge = range.begin(); wedge != range.end(); ++wedge) {
       const CornerId c = wedgeCorner[wedge];
       if (c == kInvalidId) continue;

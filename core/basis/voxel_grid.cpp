@@ -12,6 +12,7 @@
 #include "core/solve/evaluate.h"
 #include "core/basis/reduce.h"
 #include "core/solve/seamless_solve.h"
+#include "core/system/stopwatch.h"
 
 namespace seamvox {
 
@@ -24,9 +25,6 @@ void initializeOpenVdb() {
 
 openvdb::Coord toCoord(const VoxelCoord& v) { return openvdb::Coord(v[0], v[1], v[2]); }
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // Fragments of one chunk of faces, before their voxels have ids.
 struct ClippedChunk {

@@ -3,8 +3,6 @@
 // core/field/field.h.
 #include "core/field/field.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
@@ -14,6 +12,7 @@
 #include <cstdint>
 
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -131,7 +130,7 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
     float theta, edge[3];
   };
   std::vector<FaceData> faceData(numFaces);
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceAngles a = faceAngles(mesh, f);
       faceData[f] = {float(frameAngle(a.frame, field.at(f))), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
@@ -141,7 +140,7 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
   // Matchings and residuals: once per interior edge (from its smaller corner), so that the two
   // sides are exactly opposite. kappa as in transportAngle.
   std::vector<float> eps(3 * std::size_t(numFaces), 0.0f);  // residual rotation per corner
-  tbb::parallel_for(tbb::blocked_range<CornerId>(0, 3 * numFaces, 8192), [&](const auto& range) {
+  parallelFor(3 * numFaces, 8192, [&](const IndexRange& range) {
     for (CornerId c = range.begin(); c != range.end(); ++c) {
       const CornerId o = topology.opposite(c);
       if (o == kInvalidId || o < c) continue;
@@ -160,7 +159,7 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
 
   // Index: walk counter-clockwise around each interior vertex; crossing from face(c) to the next
   // face ccw goes through the edge of next(c).
-  tbb::parallel_for(tbb::blocked_range<VertexId>(0, numVertices, 4096), [&](const auto& range) {
+  parallelFor(numVertices, 4096, [&](const IndexRange& range) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) continue;
       double sum = 2.0 * M_PI;
@@ -213,7 +212,7 @@ ConnectionSystem buildConnectionSystem(const TriangleMesh& mesh, const Topology&
   // Column f holds the diagonal and the rows g > f of its neighbours (merged when two edges are
   // shared with the same face).
   std::vector<int> count(numFaces + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       sys.mass[f] = faceArea(mesh, f);
       FaceId seen[3];
@@ -238,7 +237,7 @@ ConnectionSystem buildConnectionSystem(const TriangleMesh& mesh, const Topology&
   a.resize(numFaces, numFaces);
   a.resizeNonZeros(count[numFaces]);
   std::copy(count.begin(), count.end(), a.outerIndexPtr());
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 2048), [&](const auto& range) {
+  parallelFor(numFaces, 2048, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceAngles af = faceAngles(mesh, f);
       std::pair<FaceId, Complex> entries[3];
@@ -284,7 +283,7 @@ ConnectionSystem buildConnectionSystem(const TriangleMesh& mesh, const Topology&
 VectorC curvatureTarget(const TriangleMesh& mesh, const Topology& topology) {
   const std::uint32_t numFaces = topology.numFaces(), numVertices = topology.numVertices();
   std::vector<Vec3d> normal(numVertices, Vec3d::Zero());
-  tbb::parallel_for(tbb::blocked_range<VertexId>(0, numVertices, 4096), [&](const auto& range) {
+  parallelFor(numVertices, 4096, [&](const IndexRange& range) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       Vec3d sum = Vec3d::Zero();
       topology.forEachCornerAround(v, [&](CornerId c) {
@@ -296,7 +295,7 @@ VectorC curvatureTarget(const TriangleMesh& mesh, const Topology& topology) {
     }
   });
   VectorC q(numFaces);
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       q[f] = 0.0;
       const FaceFrame frame = faceFrame(mesh, f);
@@ -456,7 +455,7 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
 
   reportProgress(options.progress, "field: directions", 0.95);
   field.direction.resize(numFaces);
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceFrame frame = faceFrame(mesh, f);
       const double theta = std::abs(x[f]) > 0.0 ? 0.25 * std::arg(x[f]) : 0.0;
@@ -475,7 +474,7 @@ CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& 
   }
   CrossField field;
   field.direction.resize(numFaces);
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceFrame frame = faceFrame(mesh, f);
       const Vec3d& v = vectors[f];

@@ -3,8 +3,6 @@
 // Conventions: core/field/field.h; the method: DESIGN section 4.
 #include "core/field/field_proxy.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
@@ -17,6 +15,7 @@
 
 #include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -139,7 +138,7 @@ void buildElements(const TriangleMesh& mesh, const Topology& topology, std::int3
   const std::uint32_t r = static_cast<std::uint32_t>(resolution);
 
   std::vector<std::uint32_t> cell(numFaces);
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const Triangle& t = mesh.triangles[f];
       const Vec3d b = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
@@ -185,7 +184,7 @@ void accumulateElements(const TriangleMesh& mesh, const Topology& topology, Prox
   proxy.centroid.resize(numElements);
   proxy.area.resize(numElements);
   std::vector<std::vector<std::pair<std::uint32_t, double>>> adjacent(numElements);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, numElements, 64), [&](const auto& range) {
+  parallelFor(numElements, 64, [&](const IndexRange& range) {
     for (std::uint32_t e = range.begin(); e != range.end(); ++e) {
       Vec3d normal = Vec3d::Zero(), weighted = Vec3d::Zero(), plain = Vec3d::Zero();
       double area = 0.0;
@@ -402,7 +401,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   // 4 times per face and sweep without decoding.
   std::vector<Vec3f> sweepNormal(options.smoothingSweeps > 0 ? numFaces : 0);
   const double radius = 2.0 * proxy.cellSize;
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 2048), [&](const auto& range) {
+  parallelFor(numFaces, 2048, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceGeometry g = faceGeometry(mesh, f);
       const std::uint32_t own = proxy.faceElement[f];
@@ -433,7 +432,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
     reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
     for (std::uint32_t k = 0; k < result.colours; ++k) {
-      tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+      parallelFor(numFaces, 4096, [&](const IndexRange& range) {
         for (FaceId f = range.begin(); f != range.end(); ++f) {
           if (colour[f] != k || isZero(sweepNormal[f])) continue;
           const Vec3d n = sweepNormal[f].cast<double>();
@@ -456,7 +455,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
     }
   }
   if (options.smoothingSweeps > 0) {
-    tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+    parallelFor(numFaces, 4096, [&](const IndexRange& range) {
       for (FaceId f = range.begin(); f != range.end(); ++f) {
         if (isZero(sweepNormal[f])) continue;
         const Vec3d n = faceNormal(mesh, f);
@@ -511,7 +510,7 @@ double measureFieldEnergy(const TriangleMesh& mesh, const Topology& topology, co
                      " directions for " + std::to_string(numFaces) + " faces");
   }
   std::vector<double> perFace(numFaces, 0.0);
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, numFaces, 4096), [&](const auto& range) {
+  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceGeometry g = faceGeometry(mesh, f);
       const Complex zf = fourthPower(field.at(f), g.e1, g.e2);

@@ -13,6 +13,7 @@
 #include "core/mesh/detail_corner_table.h"
 #include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 namespace {
@@ -68,7 +69,7 @@ std::vector<VertexId> weldMap(const std::vector<Vec3f>& positions, double tolera
                   std::int64_t(std::floor(p.z()))};
     };
     std::vector<Cell> cells(nv);
-    tbb::parallel_for(std::uint32_t(0), nv, [&](std::uint32_t v) { cells[v] = cellOf(v); });
+    parallelForEach(nv, 4096, [&](std::uint64_t v) { cells[v] = cellOf(v); });
     tbb::parallel_sort(order.begin(), order.end(), [&](VertexId a, VertexId b) {
       return cells[a] != cells[b] ? cells[a] < cells[b] : a < b;
     });
@@ -213,13 +214,13 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   if (options.weldVertices) {
     const std::vector<VertexId> rep = weldMap(mesh.positions, options.weldTolerance);
     for (std::uint32_t v = 0; v < rep.size(); ++v) report.weldedVertices += rep[v] != v;
-    tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t f) {
+    parallelForEach(mesh.triangles.size(), 4096, [&](std::uint64_t f) {
       for (VertexId& v : mesh.triangles[f]) v = rep[v];
     });
   }
   {
     std::vector<std::uint8_t> keep(mesh.numFaces());
-    tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t f) {
+    parallelForEach(mesh.triangles.size(), 4096, [&](std::uint64_t f) {
       const Triangle& t = mesh.triangles[f];
       keep[f] = t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
     });
@@ -256,7 +257,7 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
     report.unreferencedVertices = mesh.numVertices() - n - report.weldedVertices;
     mesh.positions.resize(n);
     mesh.positions.shrink_to_fit();
-    tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t f) {
+    parallelForEach(mesh.triangles.size(), 4096, [&](std::uint64_t f) {
       for (VertexId& v : mesh.triangles[f]) v = newId[v];
     });
   }
@@ -291,7 +292,7 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   report.nonManifoldVertices = 0;
   mesh.positions.resize(next);
   result.vertexOrigin.resize(next);
-  tbb::parallel_for(tbb::blocked_range<VertexId>(0, nv, kGrain), [&](const tbb::blocked_range<VertexId>& r) {
+  parallelFor(nv, kGrain, [&](const IndexRange& r) {
     for (VertexId v = r.begin(); v != r.end(); ++v) {
       const std::uint32_t begin = fans.fanOffsets[v], end = fans.fanOffsets[v + 1];
       vertexCorner[v] = fans.fanStart[begin];

@@ -1,23 +1,13 @@
 #include "core/mesh/subdivide.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <string>
 
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 namespace {
-
-/// Calls f(i) for i in [0, n), in parallel blocks.
-template <class F>
-void forEachIndex(std::uint64_t n, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, n, 16384),
-                    [&](const tbb::blocked_range<std::uint64_t>& r) {
-                      for (std::uint64_t i = r.begin(); i != r.end(); ++i) f(i);
-                    });
-}
 
 /// One level: fills out (positions and triangles) and returns the number of edges.
 std::uint64_t subdivideOnce(const TriangleMesh& mesh, const Topology& topology, TriangleMesh& out) {
@@ -34,14 +24,14 @@ std::uint64_t subdivideOnce(const TriangleMesh& mesh, const Topology& topology, 
     throw TopologyError("subdivision would need " + std::to_string(numVertices + edges) +
                         " vertices, more than 32-bit ids allow");
   }
-  forEachIndex(numCorners, [&](std::uint64_t c) {
+  parallelForEach(numCorners, 16384, [&](std::uint64_t c) {
     const CornerId o = topology.opposite(static_cast<CornerId>(c));
     if (o != kInvalidId && o < c) edgeOf[c] = edgeOf[o];
   });
 
   out.positions.resize(numVertices + edges);
   std::copy(mesh.positions.begin(), mesh.positions.end(), out.positions.begin());
-  forEachIndex(numCorners, [&](std::uint64_t c) {
+  parallelForEach(numCorners, 16384, [&](std::uint64_t c) {
     const auto cc = static_cast<CornerId>(c);
     const CornerId o = topology.opposite(cc);
     if (o != kInvalidId && o < cc) return;
@@ -52,7 +42,7 @@ std::uint64_t subdivideOnce(const TriangleMesh& mesh, const Topology& topology, 
 
   const std::uint64_t numFaces = topology.numFaces();
   out.triangles.resize(4 * numFaces);
-  forEachIndex(numFaces, [&](std::uint64_t f) {
+  parallelForEach(numFaces, 16384, [&](std::uint64_t f) {
     const Triangle& t = topology.triangles()[f];
     // m_k: midpoint of the edge opposite corner k.
     const auto m0 = static_cast<VertexId>(numVertices + edgeOf[3 * f]);
@@ -98,7 +88,7 @@ SubdivideResult subdivideMesh(const TriangleMesh& mesh, const Topology& topology
   }
   // Child 4 f + k of every level: the original face is the index shifted by 2 bits per level.
   result.parentFace.resize(result.mesh.numFaces());
-  forEachIndex(result.parentFace.size(), [&](std::uint64_t f) {
+  parallelForEach(result.parentFace.size(), 16384, [&](std::uint64_t f) {
     result.parentFace[f] = static_cast<FaceId>(f >> (2 * options.levels));
   });
   reportProgress(options.progress, "subdivide", 1.0);

@@ -10,6 +10,7 @@
 
 #include "core/mesh/detail_corner_table.h"
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 namespace detail {
@@ -135,8 +136,7 @@ FanTable findFans(const std::vector<Triangle>& tris, std::uint32_t numVertices,
   }
   // One walk per vertex; a fan that reaches all corners of its vertex is the only one.
   std::vector<std::uint8_t> several(numVertices, 0);
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, numVertices, 2048),
-                    [&](const tbb::blocked_range<std::uint32_t>& r) {
+  parallelFor(numVertices, 2048, [&](const IndexRange& r) {
                       for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
                         if (!count[v]) continue;
                         const CornerId s = mostClockwise(start[v]);

@@ -17,6 +17,8 @@
 #include "core/quality/metrics.h"
 #include "core/basis/reduce.h"
 #include "core/solve/seamless_solve.h"
+#include "core/system/parallel.h"
+#include "core/system/stopwatch.h"
 
 namespace seamvox {
 
@@ -24,9 +26,6 @@ namespace {
 
 using Complex = std::complex<double>;
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // Why a face is in the region (kOutside: it is not).
 enum FaceFlag : std::uint8_t { kOutside = 0, kMarked = 1, kCollapsed = 2, kFlipped = 3, kRing = 4 };
@@ -93,7 +92,7 @@ std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topo
     }
     flag[f] = kMarked;
   }
-  tbb::parallel_for(tbb::blocked_range<FaceId>(0, nf, 1u << 14), [&](const auto& range) {
+  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       if (flag[f] != kOutside) continue;
       flag[f] = classifyFace(mesh, cornerUV, f, options.collapseThreshold, options.edgeLength);

@@ -1,8 +1,7 @@
 #include "core/solve/assemble.h"
+#include "core/system/parallel.h"
 
-#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
@@ -97,12 +96,11 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
     }
   };
   if (blocks.size() >= 2 && blocks.front() == 0 && blocks.back() == ne) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size() - 1, 8), [&](const auto& range) {
+    parallelFor(blocks.size() - 1, 8, [&](const IndexRange& range) {
       assembleRange(blocks[range.begin()], blocks[range.end()]);
     });
   } else {
-    tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, ne, 4096),
-                      [&](const auto& range) { assembleRange(range.begin(), range.end()); });
+    parallelFor(ne, 4096, [&](const IndexRange& range) { assembleRange(range.begin(), range.end()); });
   }
   LinearSystem out;
   out.lower.resize(n, n);

@@ -1,7 +1,6 @@
 #include "core/solve/evaluate.h"
+#include "core/system/parallel.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 namespace seamvox {
 
@@ -42,7 +41,7 @@ WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
   // Wedges per vertex (a fan with k > 0 cut edges has k wedges, unless it is a boundary fan,
   // whose last edge is a boundary edge), then one prefix sum, then the numbering.
   std::vector<std::uint32_t> first(nv + std::size_t(1), 0);
-  tbb::parallel_for(tbb::blocked_range<VertexId>(0, nv, 1u << 14), [&](const auto& range) {
+  parallelFor(nv, 1u << 14, [&](const IndexRange& range) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       std::uint32_t wedges = 0;
       bool open = false;
@@ -59,7 +58,7 @@ WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
   });
   for (VertexId v = 0; v < nv; ++v) first[v + 1] += first[v];
   std::vector<std::uint32_t> cornerWedge(topology.numCorners(), 0);
-  tbb::parallel_for(tbb::blocked_range<VertexId>(0, nv, 1u << 14), [&](const auto& range) {
+  parallelFor(nv, 1u << 14, [&](const IndexRange& range) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       std::uint32_t w = first[v];
       bool open = false;

@@ -6,14 +6,9 @@
 #include "core/basis/basis.h"
 #include "core/solve/evaluate.h"
 #include "core/basis/reduce.h"
+#include "core/system/stopwatch.h"
 
 namespace seamvox {
-
-namespace {
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-}  // namespace
 
 ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,

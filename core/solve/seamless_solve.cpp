@@ -7,14 +7,12 @@
 
 #include "core/system/errors.h"
 #include "core/solve/cholmod_solver.h"
+#include "core/system/stopwatch.h"
 
 namespace seamvox {
 
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // Solves the system with the given unknowns fixed; writes the free ones into x.
 void solveWithFixed(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,

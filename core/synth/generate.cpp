@@ -1,7 +1,5 @@
 #include "core/synth/generate.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +7,7 @@
 #include <limits>
 
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 namespace {
@@ -116,8 +115,7 @@ void parallelRange(std::uint64_t n, F&& body) {
     body(std::uint64_t{0}, n);
     return;
   }
-  tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, n, 8192),
-                    [&](const tbb::blocked_range<std::uint64_t>& r) { body(r.begin(), r.end()); });
+  parallelFor(n, 8192, [&](const IndexRange& r) { body(r.begin(), r.end()); });
 }
 
 Vec3f toFloat(const Vec3d& p) { return p.cast<float>(); }

@@ -1,7 +1,6 @@
 #include "core/synth/render.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 #include <string>
 
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 namespace {
@@ -23,15 +23,6 @@ constexpr std::uint32_t kMaxSide = 8192;
 /// Sample buffers stay within this many samples (8 bytes of depth + id and 3 of colour each).
 constexpr std::uint64_t kMaxSamples = 4096ull * 4096ull;
 constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
-
-/// Calls f(i) for i in [0, n), in parallel blocks.
-template <class F>
-void forEachIndex(std::uint64_t n, std::uint64_t grain, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, n, grain),
-                    [&](const tbb::blocked_range<std::uint64_t>& r) {
-                      for (std::uint64_t i = r.begin(); i != r.end(); ++i) f(i);
-                    });
-}
 
 struct ViewAxes {
   Vec3d right, up, forward;
@@ -95,7 +86,7 @@ class SampleCanvas {
   SampleCanvas(std::uint32_t width, std::uint32_t height)
       : width_(width), height_(height), keys_(new std::atomic<std::uint64_t>[count()]),
         colors_(3 * count()) {
-    forEachIndex(count(), 1 << 16, [&](std::uint64_t i) {
+    parallelForEach(count(), 1 << 16, [&](std::uint64_t i) {
       keys_[i].store(kEmpty, std::memory_order_relaxed);
     });
   }
@@ -165,7 +156,7 @@ class SampleCanvas {
 std::vector<Vec3d> projectVertices(const TriangleMesh& mesh, const RenderCamera& camera,
                                    double samplesPerPixel) {
   std::vector<Vec3d> screen(mesh.numVertices());
-  forEachIndex(screen.size(), 1 << 14, [&](std::uint64_t v) {
+  parallelForEach(screen.size(), 1 << 14, [&](std::uint64_t v) {
     const Vec3d p = mesh.position(static_cast<VertexId>(v));
     const Vec2d s = camera.project(p) * samplesPerPixel;
     screen[v] = Vec3d(s.x(), s.y(), camera.depth(p));
@@ -180,7 +171,7 @@ double edgeFunction(const Vec3d& a, const Vec3d& b, double x, double y) {
 /// Z-buffers every face (both sides) into the canvas, in parallel over faces.
 void rasterizeFaces(const TriangleMesh& mesh, const std::vector<Vec3d>& screen, SampleCanvas& canvas) {
   const double maxX = canvas.width(), maxY = canvas.height();
-  forEachIndex(mesh.numFaces(), 4096, [&](std::uint64_t fi) {
+  parallelForEach(mesh.numFaces(), 4096, [&](std::uint64_t fi) {
     const FaceId f = static_cast<FaceId>(fi);
     const Triangle& t = mesh.triangles[f];
     const Vec3d& a = screen[t[0]];
@@ -222,10 +213,10 @@ void shadeSamples(const TriangleMesh& mesh, const std::vector<Vec3d>& screen, co
   const Vec3d light = (-axes.forward + 0.5 * axes.up - 0.3 * axes.right).normalized();
   constexpr double kAmbient = 0.3, kDiffuse = 0.7;
   std::vector<float> faceShade(mesh.numFaces());
-  forEachIndex(faceShade.size(), 1 << 14, [&](std::uint64_t f) {
+  parallelForEach(faceShade.size(), 1 << 14, [&](std::uint64_t f) {
     faceShade[f] = float(kAmbient + kDiffuse * std::fabs(faceNormal(mesh, FaceId(f)).dot(light)));
   });
-  forEachIndex(canvas.height(), 8, [&](std::uint64_t y) {
+  parallelForEach(canvas.height(), 8, [&](std::uint64_t y) {
     for (std::uint32_t x = 0; x < canvas.width(); ++x) {
       const std::uint64_t i = canvas.index(x, std::uint32_t(y));
       std::uint8_t* out = canvas.color(i);
@@ -329,7 +320,7 @@ std::vector<CornerId> findSeamEdges(const TriangleMesh& mesh, const Topology& to
     const double scale = std::max({1.0, a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff()});
     return !((a - b).cwiseAbs().maxCoeff() <= tolerance * scale);
   };
-  forEachIndex(numCorners, 1 << 14, [&](std::uint64_t ci) {
+  parallelForEach(numCorners, 1 << 14, [&](std::uint64_t ci) {
     const CornerId c = static_cast<CornerId>(ci);
     const CornerId o = topology.opposite(c);
     if (o == kInvalidId || o < c) return;
@@ -346,7 +337,7 @@ std::vector<CornerId> findSeamEdges(const TriangleMesh& mesh, const Topology& to
 MapCones findMapCones(const TriangleMesh& mesh, const Topology& topology, double angleTolerance) {
   constexpr std::int8_t kIrregular = std::numeric_limits<std::int8_t>::min();
   std::vector<std::int8_t> turns(topology.numVertices(), 0);
-  forEachIndex(turns.size(), 1 << 13, [&](std::uint64_t vi) {
+  parallelForEach(turns.size(), 1 << 13, [&](std::uint64_t vi) {
     const VertexId v = static_cast<VertexId>(vi);
     if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) return;
     double angleSum = 0.0;
@@ -436,7 +427,7 @@ RenderResult renderCheckerboard(const TriangleMesh& mesh, const Topology& topolo
   image.height = options.height;
   image.pixels.assign(3 * std::size_t(image.width) * image.height, 0);
   std::vector<std::uint32_t> coveredRows(image.height, 0);
-  forEachIndex(image.height, 4, [&](std::uint64_t y) {
+  parallelForEach(image.height, 4, [&](std::uint64_t y) {
     for (std::uint32_t x = 0; x < image.width; ++x) {
       std::uint32_t sum[3] = {0, 0, 0};
       bool covered = false;
