@@ -18,6 +18,7 @@
 #include "core/field/field.h"
 #include "core/quality/metrics.h"
 #include "core/basis/reduce.h"
+#include "core/solve/assemble.h"
 #include "core/solve/seamless_solve.h"
 #include "core/mesh/subdivide.h"
 #include "bench/bench_common.h"

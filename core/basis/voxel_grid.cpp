@@ -11,6 +11,7 @@
 #include "core/system/errors.h"
 #include "core/solve/evaluate.h"
 #include "core/basis/reduce.h"
+#include "core/solve/assemble.h"
 #include "core/solve/seamless_solve.h"
 #include "core/system/stopwatch.h"
 

@@ -16,6 +16,7 @@
 #include "core/basis/gaussian_int.h"
 #include "core/quality/metrics.h"
 #include "core/basis/reduce.h"
+#include "core/solve/assemble.h"
 #include "core/solve/seamless_solve.h"
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"

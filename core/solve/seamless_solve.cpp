@@ -1,3 +1,4 @@
+#include "core/solve/assemble.h"
 #include "core/solve/seamless_solve.h"
 
 #include <algorithm>

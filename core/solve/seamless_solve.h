@@ -6,7 +6,6 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/solve/assemble.h"
 #include "core/basis/basis.h"
 #include "core/system/progress.h"
 #include "core/basis/reduce.h"
