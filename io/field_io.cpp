@@ -11,6 +11,7 @@
 
 #include "core/system/errors.h"
 #include "io/atomic_file.h"
+#include "io/detail_mesh_io.h"
 
 namespace seamvox {
 
@@ -49,17 +50,11 @@ class LineError {
 
 double parseNumber(const char* begin, const char* end, const LineError& where) {
   // from_chars: no locale, no allocation (several times faster than strtod on 10M-line files).
-  const char* first = begin != end && *begin == '+' ? begin + 1 : begin;
   double x = 0.0;
-  const std::from_chars_result r = std::from_chars(first, end, x);
-  const bool signTwice = first != begin && first != end && *first == '-';  // "+-1"
-  if (begin == end || r.ptr != end || signTwice ||
-      (r.ec != std::errc() && r.ec != std::errc::result_out_of_range)) {
+  if (!detail::parseNumber(std::string_view(begin, static_cast<std::size_t>(end - begin)), x)) {
     where.fail("'" + std::string(begin, end) + "' is not a number");
   }
-  if (!std::isfinite(x) || r.ec == std::errc::result_out_of_range) {
-    where.fail("non-finite value '" + std::string(begin, end) + "'");
-  }
+  if (!std::isfinite(x)) where.fail("non-finite value '" + std::string(begin, end) + "'");
   return x;
 }
 
