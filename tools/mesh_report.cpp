@@ -8,6 +8,7 @@
 #include "io/json.h"
 #include "io/mesh_io.h"
 #include "core/system/memory.h"
+#include "tools/cli.h"
 
 namespace seamvox::cli {
 namespace {
@@ -42,7 +43,7 @@ MeshSummary summarizeMeshFile(const std::string& path, const SummarizeOptions& o
   cleanOptions.weldVertices = options.weld;
   cleanOptions.weldTolerance = options.weldTolerance;
   cleanOptions.progress = options.progress;
-  CleanResult cleaned = cleanMesh(std::move(mesh), cleanOptions);
+  CleanResult cleaned = cleanMeshOf(path, std::move(mesh), cleanOptions);
   summary.cleanSeconds = secondsSince(start);
   summary.clean = cleaned.report;
   summary.vertices = cleaned.mesh.numVertices();
