@@ -4,11 +4,13 @@
 #include <charconv>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "core/mesh/mesh.h"
@@ -19,45 +21,68 @@
 namespace seamvox::detail {
 
 /// A file read through one large buffer: binary blocks (ensure/data/advance) and text lines.
+/// Regular files and pipes (named FIFOs, /dev/stdin when piped) are read; a pipe is read as a
+/// stream of unknown size. Folders, devices (/dev/zero, a terminal) and sockets are refused, so a
+/// link named x.obj to /dev/zero fails at once. A pipe is opened without blocking and waited on
+/// for at most ReadOptions::pipeWaitSeconds until a writer sends data or closes it.
 class InputFile {
  public:
-  /// Opens path for reading. Throws IoError when it is missing, a folder or unreadable.
-  explicit InputFile(std::string path);
+  /// Opens path for reading. Throws IoError when it is missing, a folder, a device or socket,
+  /// unreadable, or a pipe nobody writes to within pipeWaitSeconds.
+  explicit InputFile(std::string path, double pipeWaitSeconds = ReadOptions().pipeWaitSeconds);
   ~InputFile();
   InputFile(const InputFile&) = delete;
   InputFile& operator=(const InputFile&) = delete;
 
+  /// Most bytes a pipe is buffered up to at once (a whole Draco file, one list, one line).
+  static constexpr std::uint64_t kMaxStreamBytes = std::uint64_t(4) << 30;
+  /// Longest text line readLine accepts by default (a binary or endless input is not a line).
+  static constexpr std::size_t kMaxLineBytes = std::size_t(1) << 26;
+
   const std::string& path() const { return path_; }
-  /// Size in bytes (the maximum value when the input is not a regular file).
+  /// False for a pipe: its size is unknown until it ends.
+  bool isRegular() const { return regular_; }
+  /// Size in bytes (the maximum value when the input is a pipe).
   std::uint64_t size() const { return size_; }
   /// Bytes consumed so far.
   std::uint64_t offset() const { return consumed_ + pos_; }
   std::uint64_t remaining() const { return size_ > offset() ? size_ - offset() : 0; }
 
-  /// Makes n bytes available at data(); false when the file ends first (never allocates more
-  /// than the rest of the file).
+  /// Makes n bytes available at data(); false when the input ends first (never allocates more
+  /// than the rest of a file, or more than the bytes a pipe delivered plus one buffer).
   bool ensure(std::size_t n) { return end_ - pos_ >= n || refill(n); }
   const char* data() const { return buffer_.data() + pos_; }
   void advance(std::size_t n) { pos_ += n; }
-  /// Skips n bytes; false when the file ends first.
+  /// Skips n bytes; false when the input ends first.
   bool skip(std::uint64_t n);
+  /// Buffers everything up to the end of the input and returns its size (at data()). Throws
+  /// IoError when a pipe delivers more than kMaxStreamBytes.
+  std::size_t readToEnd();
+  /// Skips a UTF-8 byte order mark at the current position; true when there was one.
+  bool skipByteOrderMark();
 
-  /// Next line without its "\n" or "\r\n"; false at the end of the file. The view stays valid
-  /// until the next call. A line longer than maxLength throws InputError.
-  bool readLine(std::string_view& line, std::size_t maxLength = SIZE_MAX);
+  /// Next line without its end ("\n", "\r\n", or "\r" in a file whose first line ends in a lone
+  /// "\r"); false at the end of the input. A UTF-8 byte order mark before the first line is
+  /// skipped. The view stays valid until the next call. A line longer than maxLength throws
+  /// InputError.
+  bool readLine(std::string_view& line, std::size_t maxLength = kMaxLineBytes);
   /// Number of the line last returned by readLine (1-based).
   std::uint64_t lineNumber() const { return line_; }
 
  private:
   bool refill(std::size_t n);
+  std::size_t readSome(char* into, std::size_t n);
+  void detectLineEnd();
 
   std::string path_;
-  std::FILE* file_ = nullptr;
+  int fd_ = -1;
+  bool regular_ = true;
   std::uint64_t size_ = 0;
-  std::uint64_t consumed_ = 0;  ///< file bytes before buffer_[0]
+  std::uint64_t consumed_ = 0;  ///< input bytes before buffer_[0]
   std::vector<char> buffer_;
   std::size_t pos_ = 0, end_ = 0;
   std::uint64_t line_ = 0;
+  char lineEnd_ = 0;  ///< '\n' or '\r' once the first line was read
 };
 
 /// Cuts the next whitespace-separated token off the front of text ("" when none is left).
@@ -78,15 +103,37 @@ inline std::string_view nextToken(std::string_view& text) {
   return token;
 }
 
-/// Whole-token number parsing (std::from_chars, a leading '+' allowed). False on any garbage or
-/// overflow; "nan"/"inf" parse (callers check finiteness).
+/// A token std::from_chars found out of T's range: +-infinity beyond it, the nearest denormal or
+/// zero below it (strtod's rounding; the rare path).
+template <class T>
+T outOfRangeReal(std::string_view token) {
+  const std::string text(token);
+  if constexpr (std::is_same_v<T, float>) return std::strtof(text.c_str(), nullptr);
+  else if constexpr (std::is_same_v<T, double>) return std::strtod(text.c_str(), nullptr);
+  else return static_cast<T>(std::strtold(text.c_str(), nullptr));
+}
+
+/// Whole-token number parsing (std::from_chars, a leading '+' allowed). False on any garbage
+/// and on integer overflow. Reals beyond the type's range read as +-infinity and "nan"/"inf"
+/// parse (callers check finiteness); reals below it read as a denormal or zero (1e-320 is valid).
 template <class T>
 inline bool parseNumber(std::string_view token, T& value) {
-  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
-  if (token.empty() || token[0] == '+' || token[0] == ' ') return false;
+  if (!token.empty() && token[0] == '+') {
+    token.remove_prefix(1);
+    if (!token.empty() && token[0] == '-') return false;  // "+-1"
+  }
+  if (token.empty()) return false;
   const char* end = token.data() + token.size();
   const auto result = std::from_chars(token.data(), end, value);
-  return result.ec == std::errc() && result.ptr == end;
+  if (result.ptr != end) return false;
+  if (result.ec == std::errc()) return true;
+  if constexpr (std::is_floating_point_v<T>) {
+    if (result.ec == std::errc::result_out_of_range) {
+      value = outOfRangeReal<T>(token);
+      return true;
+    }
+  }
+  return false;
 }
 
 /// Buffered output into an AtomicFile: numbers are formatted with std::to_chars (shortest

@@ -73,10 +73,11 @@ int dracoUVBitsFor(const TriangleMesh& mesh, const WriteOptions& options) {
 namespace detail {
 
 TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
-  InputFile in(path);  // missing file / folder errors, and the size
-  if (!in.ensure(static_cast<std::size_t>(in.size()))) throw IoError(path + ": read failed");
+  // The decoder needs the whole file in memory: a pipe is read to its end first.
+  InputFile in(path, options.pipeWaitSeconds);
+  const std::size_t size = in.readToEnd();
   draco::DecoderBuffer buffer;
-  buffer.Init(in.data(), static_cast<std::size_t>(in.size()));
+  buffer.Init(in.data(), size);
   draco::Decoder decoder;
   auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
   if (!decoded.ok()) {

@@ -2,15 +2,14 @@
 #include "io/field_io.h"
 
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 
 #include "core/system/errors.h"
 #include "io/atomic_file.h"
+#include "io/detail_mesh_io.h"
 
 namespace seamvox {
 
@@ -18,14 +17,15 @@ namespace {
 
 /// Splits a line into whitespace-separated tokens (at most maxTokens + 1 are kept, enough to
 /// tell "too many").
-int splitTokens(const std::string& line, const char** begin, const char** end, int maxTokens) {
+int splitTokens(std::string_view line, const char** begin, const char** end, int maxTokens) {
   int n = 0;
-  const char* p = line.c_str();
-  while (*p) {
-    while (*p == ' ' || *p == '\t' || *p == '\r') ++p;
-    if (!*p) break;
+  const char* p = line.data();
+  const char* const stop = p + line.size();
+  while (p != stop) {
+    while (p != stop && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
+    if (p == stop) break;
     const char* start = p;
-    while (*p && *p != ' ' && *p != '\t' && *p != '\r') ++p;
+    while (p != stop && *p != ' ' && *p != '\t' && *p != '\r') ++p;
     if (n <= maxTokens) {
       begin[n] = start;
       end[n] = p;
@@ -49,17 +49,11 @@ class LineError {
 
 double parseNumber(const char* begin, const char* end, const LineError& where) {
   // from_chars: no locale, no allocation (several times faster than strtod on 10M-line files).
-  const char* first = begin != end && *begin == '+' ? begin + 1 : begin;
   double x = 0.0;
-  const std::from_chars_result r = std::from_chars(first, end, x);
-  const bool signTwice = first != begin && first != end && *first == '-';  // "+-1"
-  if (begin == end || r.ptr != end || signTwice ||
-      (r.ec != std::errc() && r.ec != std::errc::result_out_of_range)) {
+  if (!detail::parseNumber(std::string_view(begin, static_cast<std::size_t>(end - begin)), x)) {
     where.fail("'" + std::string(begin, end) + "' is not a number");
   }
-  if (!std::isfinite(x) || r.ec == std::errc::result_out_of_range) {
-    where.fail("non-finite value '" + std::string(begin, end) + "'");
-  }
+  if (!std::isfinite(x)) where.fail("non-finite value '" + std::string(begin, end) + "'");
   return x;
 }
 
@@ -77,19 +71,19 @@ std::uint64_t parseCount(const char* begin, const char* end, const LineError& wh
 }  // namespace
 
 std::vector<Vec3d> readFieldVectors(const std::string& path, std::uint32_t expectedFaces) {
-  std::ifstream in(path);
-  if (!in) throw IoError(path + ": cannot open field file: " + std::strerror(errno));
+  // Like mesh files: a BOM and any line ends are accepted, devices refused, pipes streamed.
+  detail::InputFile in(path);
   enum class Kind { Unknown, Plain, CrossField } kind = Kind::Unknown;
   bool haveHeader = false;
   std::vector<Vec3d> vectors;
   vectors.reserve(expectedFaces);
-  std::string line;
+  std::string_view line;
   std::uint64_t lineNo = 0;
   const char* begin[8];
   const char* end[8];
   const std::string expected = std::to_string(expectedFaces);
-  while (std::getline(in, line)) {
-    ++lineNo;
+  while (in.readLine(line)) {
+    lineNo = in.lineNumber();
     const LineError where(path, lineNo);
     const int n = splitTokens(line, begin, end, 7);
     if (n == 0 || *begin[0] == '#') continue;
@@ -97,7 +91,7 @@ std::vector<Vec3d> readFieldVectors(const std::string& path, std::uint32_t expec
       const std::uint64_t perFace = parseCount(begin[0], end[0], where);
       const std::uint64_t faces = parseCount(begin[1], end[1], where);
       if (perFace != 1 && perFace != 2) {
-        where.fail("header '" + line + "': expected '1 F' (plain) or '2 F' (crossfield)");
+        where.fail("header '" + std::string(line) + "': expected '1 F' (plain) or '2 F' (crossfield)");
       }
       if (faces != expectedFaces) {
         where.fail("header declares " + std::to_string(faces) + " faces but the mesh has " + expected);
@@ -125,7 +119,6 @@ std::vector<Vec3d> readFieldVectors(const std::string& path, std::uint32_t expec
                          parseNumber(begin[first + 1], end[first + 1], where),
                          parseNumber(begin[first + 2], end[first + 2], where));
   }
-  if (in.bad()) throw IoError(path + ": read error after line " + std::to_string(lineNo));
   if (vectors.size() != expectedFaces) {
     throw InputError(path + ":" + std::to_string(lineNo) + ": file ends after " +
                      std::to_string(vectors.size()) + " field lines but the mesh has " + expected +

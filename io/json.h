@@ -8,7 +8,7 @@ namespace seamvox {
 
 /// Builds a JSON document incrementally:
 ///   JsonWriter j; j.beginObject(); j.key("faces").value(12); j.endObject(); j.str();
-/// Non-finite numbers are written as null.
+/// Non-finite numbers are written as null; strings are escaped by jsonQuote.
 class JsonWriter {
  public:
   JsonWriter& beginObject();
@@ -35,7 +35,10 @@ class JsonWriter {
   bool afterKey_ = false;
 };
 
-/// Escapes a string for JSON (quotes included).
+/// Escapes a string for JSON (quotes included). Any bytes give valid UTF-8 JSON: control
+/// characters and DEL are escaped, well-formed UTF-8 is kept, and every byte that is not part of
+/// well-formed UTF-8 (a Latin-1 file name, a cut sequence) is written as \u00XX, its Latin-1
+/// reading, so such a name reads correctly and nothing is lost to U+FFFD.
 std::string jsonQuote(const std::string& text);
 
 }  // namespace seamvox

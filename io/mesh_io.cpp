@@ -1,8 +1,12 @@
 #include "io/mesh_io.h"
 
+#include <fcntl.h>
+#include <poll.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -14,39 +18,101 @@
 namespace seamvox {
 namespace detail {
 
-InputFile::InputFile(std::string path) : path_(std::move(path)) {
+namespace {
+
+/// What a path that is neither a regular file nor a pipe is, for messages.
+const char* describeNonFile(mode_t mode) {
+  if (S_ISDIR(mode)) return "a folder";
+  if (S_ISCHR(mode)) return "a character device (like /dev/zero or a terminal)";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+[[noreturn]] void throwNotAFile(const std::string& path, mode_t mode) {
+  throw IoError(path + ": is " + describeNonFile(mode) +
+                ", not a mesh file (seamvox reads regular files and pipes)");
+}
+
+/// Waits until a pipe opened without blocking has data or was closed by its writer.
+void waitForWriter(int fd, const std::string& path, double seconds) {
+  using Clock = std::chrono::steady_clock;
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(std::max(seconds, 0.0)));
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    pollfd request{fd, POLLIN, 0};
+    const int ready = ::poll(&request, 1, static_cast<int>(std::max<std::int64_t>(left.count(), 0)));
+    if (ready > 0) return;  // data, or the writer closed its end
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready < 0) throw IoError(path + ": cannot wait for the pipe: " + std::strerror(errno));
+    char waited[32];
+    std::snprintf(waited, sizeof waited, "%g", seconds);
+    throw IoError(path + ": is a pipe and nothing was written to it within " + waited +
+                  " s (is a writer running?)");
+  }
+}
+
+}  // namespace
+
+InputFile::InputFile(std::string path, double pipeWaitSeconds) : path_(std::move(path)) {
+  // Checked before opening: opening a device can block or have side effects.
   struct stat info {};
   if (::stat(path_.c_str(), &info) != 0) {
     throw IoError(path_ + ": cannot open: " + std::strerror(errno));
   }
-  if (S_ISDIR(info.st_mode)) throw IoError(path_ + ": is a folder, not a mesh file");
-  file_ = std::fopen(path_.c_str(), "rb");
-  if (!file_) throw IoError(path_ + ": cannot open: " + std::strerror(errno));
-  size_ = S_ISREG(info.st_mode) ? static_cast<std::uint64_t>(info.st_size)
-                                : std::numeric_limits<std::uint64_t>::max();
-  buffer_.resize(std::size_t(1) << 22);
+  if (!S_ISREG(info.st_mode) && !S_ISFIFO(info.st_mode)) throwNotAFile(path_, info.st_mode);
+  // Without O_NONBLOCK, opening a FIFO waits for a writer forever.
+  fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd_ < 0) throw IoError(path_ + ": cannot open: " + std::strerror(errno));
+  try {
+    if (::fstat(fd_, &info) != 0) throw IoError(path_ + ": cannot open: " + std::strerror(errno));
+    if (!S_ISREG(info.st_mode) && !S_ISFIFO(info.st_mode)) throwNotAFile(path_, info.st_mode);
+    regular_ = S_ISREG(info.st_mode);
+    if (!regular_) waitForWriter(fd_, path_, pipeWaitSeconds);
+    const int flags = ::fcntl(fd_, F_GETFL);
+    if (flags < 0 || ::fcntl(fd_, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+      throw IoError(path_ + ": cannot open: " + std::strerror(errno));
+    }
+  } catch (...) {
+    ::close(fd_);
+    throw;
+  }
+  size_ = regular_ ? static_cast<std::uint64_t>(info.st_size) : std::numeric_limits<std::uint64_t>::max();
+  buffer_.resize(static_cast<std::size_t>(std::clamp<std::uint64_t>(size_, 4096, std::uint64_t(1) << 22)));
 }
 
-InputFile::~InputFile() {
-  if (file_) std::fclose(file_);
+InputFile::~InputFile() { ::close(fd_); }
+
+std::size_t InputFile::readSome(char* into, std::size_t n) {
+  for (;;) {
+    const ssize_t got = ::read(fd_, into, n);
+    if (got >= 0) return static_cast<std::size_t>(got);
+    if (errno != EINTR) throw IoError(path_ + ": read failed: " + std::strerror(errno));
+  }
 }
 
 bool InputFile::refill(std::size_t n) {
   // Never grow the buffer beyond what the file can still deliver (absurd counts in headers).
   if (n > remaining()) return false;
+  if (!regular_ && n > kMaxStreamBytes) {
+    throw IoError(path_ + ": needs " + std::to_string(n) + " bytes at once from a pipe, more than the " +
+                  std::to_string(kMaxStreamBytes >> 30) + " GiB limit for pipes");
+  }
   if (pos_ > 0) {
     std::memmove(buffer_.data(), buffer_.data() + pos_, end_ - pos_);
     consumed_ += pos_;
     end_ -= pos_;
     pos_ = 0;
   }
-  if (buffer_.size() < n) buffer_.resize(std::max(n, 2 * buffer_.size()));
+  // A file holds the bytes asked for; a pipe's buffer only grows as its data arrives.
+  if (regular_ && buffer_.size() < n) buffer_.resize(std::max(n, 2 * buffer_.size()));
   while (end_ < n) {
-    const std::size_t got = std::fread(buffer_.data() + end_, 1, buffer_.size() - end_, file_);
-    if (got == 0) {
-      if (std::ferror(file_)) throw IoError(path_ + ": read failed: " + std::strerror(errno));
-      return false;
+    if (end_ == buffer_.size()) {
+      buffer_.resize(std::max<std::size_t>(n, std::min<std::uint64_t>(2 * buffer_.size(), kMaxStreamBytes)));
     }
+    const std::size_t got = readSome(buffer_.data() + end_, buffer_.size() - end_);
+    if (got == 0) return false;
     end_ += got;
   }
   return true;
@@ -62,17 +128,63 @@ bool InputFile::skip(std::uint64_t n) {
   n -= inBuffer;
   consumed_ += end_;
   pos_ = end_ = 0;
-  if (std::fseek(file_, static_cast<long>(n), SEEK_CUR) != 0) {
-    throw IoError(path_ + ": seek failed: " + std::strerror(errno));
+  if (regular_) {
+    if (::lseek(fd_, static_cast<off_t>(n), SEEK_CUR) < 0) {
+      throw IoError(path_ + ": seek failed: " + std::strerror(errno));
+    }
+    consumed_ += n;
+    return true;
   }
-  consumed_ += n;
+  while (n > 0) {  // a pipe cannot seek: read and drop
+    const std::size_t got = readSome(buffer_.data(), static_cast<std::size_t>(std::min<std::uint64_t>(n, buffer_.size())));
+    if (got == 0) return false;
+    consumed_ += got;
+    n -= got;
+  }
   return true;
 }
 
+std::size_t InputFile::readToEnd() {
+  if (regular_) {
+    if (!ensure(static_cast<std::size_t>(remaining()))) {
+      throw IoError(path_ + ": the file ended before its " + std::to_string(size_) +
+                    " bytes were read (did it change while being read?)");
+    }
+    return end_ - pos_;
+  }
+  for (;;) {
+    if (end_ - pos_ >= kMaxStreamBytes) {
+      throw IoError(path_ + ": the pipe delivers more than the " + std::to_string(kMaxStreamBytes >> 30) +
+                    " GiB limit for pipes");
+    }
+    if (!refill(end_ - pos_ + 1)) return end_ - pos_;
+  }
+}
+
+bool InputFile::skipByteOrderMark() {
+  if (!ensure(3) || std::memcmp(data(), "\xEF\xBB\xBF", 3) != 0) return false;
+  advance(3);
+  return true;
+}
+
+void InputFile::detectLineEnd() {
+  if (offset() == 0) skipByteOrderMark();
+  // A lone '\r' before any '\n' in the first 64 KB: lines end in '\r' (classic Mac OS).
+  constexpr std::size_t kLook = std::size_t(1) << 16;
+  while (end_ - pos_ < kLook && refill(end_ - pos_ + 1)) {
+  }
+  const std::string_view head(buffer_.data() + pos_, std::min(end_ - pos_, kLook));
+  const std::size_t first = head.find_first_of("\r\n");
+  const bool loneCR = first != std::string_view::npos && head[first] == '\r' &&
+                      first + 1 < end_ - pos_ && buffer_[pos_ + first + 1] != '\n';
+  lineEnd_ = loneCR ? '\r' : '\n';
+}
+
 bool InputFile::readLine(std::string_view& line, std::size_t maxLength) {
+  if (!lineEnd_) detectLineEnd();
   std::size_t scanFrom = pos_;
   for (;;) {
-    const void* found = std::memchr(buffer_.data() + scanFrom, '\n', end_ - scanFrom);
+    const void* found = std::memchr(buffer_.data() + scanFrom, lineEnd_, end_ - scanFrom);
     std::size_t lineEnd = 0, next = 0;
     if (found) {
       lineEnd = static_cast<std::size_t>(static_cast<const char*>(found) - buffer_.data());
@@ -95,7 +207,9 @@ bool InputFile::readLine(std::string_view& line, std::size_t maxLength) {
                        std::to_string(maxLength) + " bytes)");
     }
     line = std::string_view(buffer_.data() + pos_, lineEnd - pos_);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    // "\r\n" ends a line in either mode (a CR file may mix them in).
+    if (lineEnd_ == '\n' && !line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (lineEnd_ == '\r' && !line.empty() && line.front() == '\n') line.remove_prefix(1);
     pos_ = next;
     ++line_;
     return true;
@@ -134,7 +248,7 @@ std::unique_ptr<MeshStream> openMeshStream(const std::string& path, const ReadOp
     auto mesh = std::make_shared<const TriangleMesh>(detail::readDraco(path, options));
     return makeMemoryStream(path, std::move(mesh), options.chunkTriangles);
   }
-  auto in = std::make_unique<detail::InputFile>(path);
+  auto in = std::make_unique<detail::InputFile>(path, options.pipeWaitSeconds);
   switch (format) {
     case MeshFormat::Ply: return detail::openPlyStream(std::move(in), options);
     case MeshFormat::Obj: return detail::openObjStream(std::move(in), options);

@@ -1,6 +1,9 @@
 #pragma once
 /// Reading and writing triangle meshes: PLY (ascii, binary little/big endian, faces and
-/// tristrips), OBJ, OFF. Errors name the file, the line or element, and the problem.
+/// tristrips), OBJ, OFF, Draco. Errors name the file, the line or element, and the problem.
+/// Inputs are regular files or pipes (a named FIFO, /dev/stdin when piped: read as a stream; a
+/// Draco file is buffered whole, up to 4 GiB); folders, devices and sockets are refused. Text
+/// files may start with a UTF-8 byte order mark and end lines in LF, CRLF or CR alone.
 #include <memory>
 #include <string>
 
@@ -18,6 +21,9 @@ struct ReadOptions {
   bool readUV = false;
   /// Triangles per chunk handed out by the stream.
   std::size_t chunkTriangles = 1u << 18;
+  /// A pipe is opened without blocking; reading fails (IoError) when no writer sends data or
+  /// closes it within this time, instead of waiting forever in open().
+  double pipeWaitSeconds = 10.0;
 };
 
 /// Opens a mesh file as a chunked stream. The format is detected from the extension and checked

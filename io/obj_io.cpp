@@ -47,7 +47,7 @@ class ObjReader final : public MeshStream {
       const std::string_view token = nextToken(line);
       if (token.empty()) fail("vertex has fewer than 3 coordinates");
       if (!parseNumber(token, p[k])) fail("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
-      if (!std::isfinite(p[k])) fail("vertex coordinate is NaN or infinite");
+      if (!std::isfinite(p[k])) fail("vertex coordinate '" + std::string(token.substr(0, 40)) + "' is NaN or infinite (or beyond float range)");
     }
     if (vertices_ + 1 >= std::numeric_limits<std::uint32_t>::max()) {
       fail("more vertices than 32-bit ids allow");
@@ -63,7 +63,7 @@ class ObjReader final : public MeshStream {
       const std::string_view token = nextToken(line);
       if (token.empty() && k == 1) break;  // v is optional and defaults to 0
       if (!parseNumber(token, t[k])) fail("bad texture coordinate '" + std::string(token.substr(0, 40)) + "'");
-      if (!std::isfinite(t[k])) fail("texture coordinate is NaN or infinite");
+      if (!std::isfinite(t[k])) fail("texture coordinate '" + std::string(token.substr(0, 40)) + "' is NaN or infinite");
     }
     texcoords_.push_back(t);
   }

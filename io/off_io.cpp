@@ -36,8 +36,9 @@ class OffReader final : public MeshStream {
   }
 
   const std::string& name() const override { return in_->path(); }
-  std::uint64_t declaredVertices() const override { return numVertices_; }
-  std::uint64_t expectedTriangles() const override { return numFaces_; }
+  // Hints to reserve by: the counts were checked against the size of a file, not of a pipe.
+  std::uint64_t declaredVertices() const override { return in_->isRegular() ? numVertices_ : 0; }
+  std::uint64_t expectedTriangles() const override { return in_->isRegular() ? numFaces_ : 0; }
 
  private:
   [[noreturn]] void fail(const std::string& problem) const {
@@ -119,7 +120,7 @@ class OffReader final : public MeshStream {
       if (token.empty()) fail("vertex has fewer than " + std::to_string(dimension_) + " coordinates");
       float value;
       if (!parseNumber(token, value)) fail("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
-      if (!std::isfinite(value)) fail("vertex coordinate is NaN or infinite");
+      if (!std::isfinite(value)) fail("vertex coordinate '" + std::string(token.substr(0, 40)) + "' is NaN or infinite (or beyond float range)");
       if (k < 3) p[k] = value;
     }
     chunk.positions.push_back(p);

@@ -105,6 +105,7 @@ void classify(const InputFile& in, PlyElement& e) {
 
 PlyHeader readHeader(InputFile& in) {
   constexpr std::size_t kMaxHeaderLine = 1 << 16;
+  in.skipByteOrderMark();
   if (!in.ensure(3) || std::string_view(in.data(), 3) != "ply") {
     throw InputError(in.path() + ": not a PLY file (it does not start with 'ply')");
   }
@@ -212,6 +213,16 @@ double loadReal(PlyType t, const char* p, bool swap) {
     case PlyType::Float64: return loadRaw<double>(p, swap);
   }
   return 0;
+}
+
+/// The strip restart marker as read from an index of type t: -1, or all bits set when unsigned.
+std::int64_t restartIndex(PlyType t) {
+  switch (t) {
+    case PlyType::UInt8: return 0xFF;
+    case PlyType::UInt16: return 0xFFFF;
+    case PlyType::UInt32: return 0xFFFFFFFF;
+    default: return -1;
+  }
 }
 
 /// Integer value of an integral real; false when it is not one (or is out of range).
@@ -378,8 +389,9 @@ class PlyReader final : public MeshStream {
   }
 
   const std::string& name() const override { return in_->path(); }
-  std::uint64_t declaredVertices() const override { return vertexCount_; }
-  std::uint64_t expectedTriangles() const override { return faceCount_; }
+  // Hints to reserve by: the counts were checked against the size of a file, not of a pipe.
+  std::uint64_t declaredVertices() const override { return in_->isRegular() ? vertexCount_ : 0; }
+  std::uint64_t expectedTriangles() const override { return in_->isRegular() ? faceCount_ : 0; }
 
  private:
   void readVertices(const PlyElement& e, MeshChunk& chunk) {
@@ -490,12 +502,14 @@ class PlyReader final : public MeshStream {
     while (instance_ < e.count && chunk.triangles.size() < limit_) {
       readIndexInstance(e, false);
       // Triangle i of a strip is (s[i], s[i+1], s[i+2]) with every odd one flipped so that all
-      // keep the orientation of the first; -1 restarts. Degenerate triangles still count for
-      // the parity (strips use them to turn) but are not emitted.
+      // keep the orientation of the first; -1 restarts (for an unsigned index type, its -1 bit
+      // pattern: 0xFFFFFFFF for uint). Degenerate triangles still count for the parity (strips
+      // use them to turn) but are not emitted.
+      const std::int64_t restart = restartIndex(e.properties[e.indices].type);
       std::size_t run = 0;
       VertexId a = 0, b = 0;
       for (const std::int64_t value : indices_) {
-        if (value == -1) {
+        if (value == restart) {
           run = 0;
           continue;
         }

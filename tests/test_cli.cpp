@@ -162,6 +162,60 @@ TEST(Cli, BadInputGivesAClearMessageAndNonZeroExit) {
   EXPECT_FALSE(std::filesystem::exists(dir.path("f.ply")));
 }
 
+TEST(Cli, OptionValuesOutsideTheirRangeAreUsageErrorsSayingIt) {
+  TempDir dir;
+  const std::string mesh = dir.path("m.ply"), out = dir.path("out.obj");
+  run("gen sphere --faces 200 -o " + mesh, 0);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"check " + mesh + " --edge-length -1", "--edge-length must be a positive finite number, got '-1'"},
+      {"check " + mesh + " --edge-length nan", "--edge-length must be a positive finite number"},
+      {"check " + mesh + " --edge-length 0", "--edge-length must be a positive finite number"},
+      {"check " + mesh + " --tolerance inf", "--tolerance must be a finite number >= 0"},
+      {"info " + mesh + " --weld --weld-tolerance nan", "--weld-tolerance must be a finite number >= 0"},
+      {"info " + mesh + " --threads 0", "--threads must be a whole number from 1 to 4096, got '0'"},
+      {"param " + mesh + " -o " + out + " --cells 1e308", "--cells must be a number above 0 and at most 1e+06, got '1e308'"},
+      {"param " + mesh + " -o " + out + " --cells nan", "--cells must be a number above 0 and at most 1e+06"},
+      {"param " + mesh + " -o " + out + " --cells 5 --edge-length 1", "not both"},
+      {"param " + mesh + " -o " + out + " --edge-length inf", "--edge-length must be a positive finite number"},
+      {"param " + mesh + " -o " + out + " --merge-cones nan", "--merge-cones must be a number from 0 to 10"},
+      {"param " + mesh + " -o " + out + " --grid 2048", "--grid must be a whole number from 4 to 1024"},
+      {"render " + mesh + " -o " + dir.path("p.png") + " --checker -inf", "--checker must be a positive finite number"},
+  };
+  for (const auto& [arguments, message] : cases) {
+    const std::string output = run(arguments, 2);
+    EXPECT_TRUE(contains(output, message)) << arguments << "\n" << output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST(Cli, ErrorsAfterReadingNameTheFile) {
+  TempDir dir;
+  // Every face repeats a vertex: cleaning leaves nothing.
+  const std::string degenerate = dir.path("degenerate.obj");
+  testing::writeFile(degenerate, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 1 2\nf 2 3 3\n");
+  for (const std::string& command : {std::string("info "), "param -o " + dir.path("o.obj") + " ",
+                                     "subdivide -o " + dir.path("o.ply") + " ",
+                                     "field -o " + dir.path("o.field") + " "}) {
+    const std::string output = run(command + degenerate, 1);
+    EXPECT_TRUE(contains(output, degenerate + ": the mesh has no valid faces")) << output;
+  }
+}
+
+TEST(Cli, DracoThroughAPipeIsRead) {
+  TempDir dir;
+  const std::string mesh = dir.path("m.drc"), link = dir.path("stdin.drc");
+  run("gen sphere --faces 500 -o " + mesh, 0);
+  std::filesystem::create_symlink("/dev/stdin", link);
+  const std::string command = "cat " + mesh + " | " + testing::seamvoxBinary() + " info --json --quiet " + link + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string text;
+  char buffer[4096];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) text.append(buffer, n);
+  EXPECT_EQ(pclose(pipe), 0) << text;
+  EXPECT_EQ(parseJson(text)["faces"].number, infoJson(mesh)["faces"].number) << text;
+}
+
 TEST(Cli, DemoRunsTheMainJobOnAGeneratedScan) {
   TempDir dir;
   const std::string out = run("demo --quiet --faces 5000 --keep " + dir.path("demo"), 0);

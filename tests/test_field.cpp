@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -290,6 +291,25 @@ TEST(FieldIo, BadFilesNameFileAndLine) {
     }
   }
   EXPECT_THROW(readFieldVectors(dir.path("missing.field"), 3), IoError);
+}
+
+TEST(FieldIo, ByteOrderMarkLineEndsTinyNumbersAndDevices) {
+  testing::TempDir dir;
+  for (const char* end : {"\n", "\r\n", "\r"}) {
+    const std::string path = dir.path("e.field");
+    testing::writeFile(path, std::string("\xEF\xBB\xBF# comment") + end + "1 2" + end + "1 0 1e-320" + end + "0 1 0" + end);
+    const std::vector<Vec3d> v = readFieldVectors(path, 2);
+    EXPECT_EQ(v[0], Vec3d(1, 0, 1e-320)) << "a denormal is a number";
+    EXPECT_EQ(v[1], Vec3d(0, 1, 0));
+  }
+  const std::string zero = dir.path("zero.field");
+  std::filesystem::create_symlink("/dev/zero", zero);
+  try {
+    readFieldVectors(zero, 3);
+    ADD_FAILURE() << "/dev/zero was read";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(zero + ": is a character device"), std::string::npos) << e.what();
+  }
 }
 
 TEST(FieldIo, LiliumCrossfieldImport) {

@@ -87,6 +87,42 @@ std::int64_t Args::integer(const std::string& name, std::int64_t fallback) {
   throw UsageError("option --" + name + " expects an integer, got '" + *v + "'");
 }
 
+namespace {
+
+std::string formatNumber(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
+}
+
+}  // namespace
+
+double Args::number(const std::string& name, double fallback, double min, double max) {
+  const double x = number(name, fallback);
+  if (!value(name) || (std::isfinite(x) && x >= min && x <= max)) return x;
+  throw UsageError("--" + name + " must be " +
+                   (max >= std::numeric_limits<double>::max() ? "a finite number >= " + formatNumber(min)
+                                                             : "a number from " + formatNumber(min) + " to " +
+                                                                   formatNumber(max)) +
+                   ", got '" + *value(name) + "'");
+}
+
+double Args::positiveNumber(const std::string& name, double fallback, double max) {
+  const double x = number(name, fallback);
+  if (!value(name) || (std::isfinite(x) && x > 0.0 && x <= max)) return x;
+  throw UsageError("--" + name + " must be " +
+                   (max >= std::numeric_limits<double>::max() ? std::string("a positive finite number")
+                                                             : "a number above 0 and at most " + formatNumber(max)) +
+                   ", got '" + *value(name) + "'");
+}
+
+std::int64_t Args::integer(const std::string& name, std::int64_t fallback, std::int64_t min, std::int64_t max) {
+  const std::int64_t x = integer(name, fallback);
+  if (!value(name) || (x >= min && x <= max)) return x;
+  throw UsageError("--" + name + " must be a whole number from " + std::to_string(min) + " to " +
+                   std::to_string(max) + ", got '" + *value(name) + "'");
+}
+
 void Args::finish(std::size_t maxPositionals) {
   for (const auto& [name, val] : values_) {
     if (!used_.count(name)) {
@@ -114,12 +150,10 @@ const std::vector<Command>& commands() { return registry(); }
 
 GridSpacing parseGridSpacing(Args& args) {
   GridSpacing g;
-  g.edgeLength = args.number("edge-length", 0.0);
-  g.cells = args.number("cells", 0.0);
-  if (args.value("edge-length") && !(g.edgeLength > 0.0)) throw UsageError("--edge-length must be a positive number");
-  if (args.value("cells") && !(g.cells > 0.0)) throw UsageError("--cells must be a positive number");
+  g.edgeLength = args.positiveNumber("edge-length", 0.0);
+  g.cells = args.positiveNumber("cells", 0.0, GridSpacing::kMaxCells);
   try {
-    g.validate();
+    g.validate();  // both given
   } catch (const InputError& e) {
     throw UsageError(std::string("--edge-length/--cells: ") + e.what());
   }
@@ -127,17 +161,21 @@ GridSpacing parseGridSpacing(Args& args) {
 }
 
 std::int32_t parseGridResolution(Args& args) {
-  const std::int64_t grid = args.integer("grid", kDefaultGridResolution);
-  if (grid < 4 || grid > 1024 || (grid & (grid - 1)) != 0) {
-    throw UsageError("--grid must be a power of two between 4 and 1024");
-  }
+  const std::int64_t grid = args.integer("grid", kDefaultGridResolution, 4, 1024);
+  if ((grid & (grid - 1)) != 0) throw UsageError("--grid must be a power of two between 4 and 1024");
   return static_cast<std::int32_t>(grid);
 }
 
 double parseMergeCones(Args& args) {
-  const double f = args.number("merge-cones", kConeMergeFraction);
-  if (!(f >= 0.0 && f <= 10.0)) throw UsageError("--merge-cones must be between 0 and 10 (grid spacings)");
-  return f;
+  return args.number("merge-cones", kConeMergeFraction, 0.0, 10.0);
+}
+
+CleanResult cleanMeshOf(const std::string& path, TriangleMesh mesh, const CleanOptions& options) {
+  try {
+    return cleanMesh(std::move(mesh), options);
+  } catch (const Error&) {
+    rethrowWithContext(path);
+  }
 }
 
 ProgressFn makeProgress(bool quiet) {

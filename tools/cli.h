@@ -1,6 +1,7 @@
 #pragma once
 /// Shared pieces of the `seamvox` command line: argument parsing, command registry, progress.
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -8,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mesh/clean.h"
 #include "core/pipeline/grid_spacing.h"
 #include "core/system/progress.h"
 
@@ -32,6 +34,14 @@ class Args {
   std::string value(const std::string& name, const std::string& fallback);
   double number(const std::string& name, double fallback);
   std::int64_t integer(const std::string& name, std::int64_t fallback);
+  /// Validated options: when given, the value must be finite and in [min, max] (a UsageError
+  /// says the valid range, e.g. "--threads must be a whole number from 1 to 4096, got '0'");
+  /// when absent, fallback is returned as it is.
+  double number(const std::string& name, double fallback, double min, double max);
+  std::int64_t integer(const std::string& name, std::int64_t fallback, std::int64_t min, std::int64_t max);
+  /// A finite number above 0 and at most max.
+  double positiveNumber(const std::string& name, double fallback,
+                        double max = std::numeric_limits<double>::max());
   /// Throws UsageError for options given but never read and for extra positionals.
   void finish(std::size_t maxPositionals);
 
@@ -61,6 +71,10 @@ GridSpacing parseGridSpacing(Args& args);
 std::int32_t parseGridResolution(Args& args);
 /// --merge-cones F (param, field): cones closer than F * h are merged; default kConeMergeFraction.
 double parseMergeCones(Args& args);
+
+/// cleanMesh on a mesh read from path: its errors ("the mesh has no valid faces", a NaN) name
+/// the file.
+CleanResult cleanMeshOf(const std::string& path, TriangleMesh mesh, const CleanOptions& options = {});
 
 /// Progress reporting on stderr: a one-line percentage per stage when stderr is a terminal and
 /// quiet is false; nothing otherwise.

@@ -20,9 +20,8 @@ constexpr int kNotSeamless = 5;
 int runCheck(Args& args) {
   const std::string path = args.positional(0, "the parameterized mesh (seamvox check MESH)");
   const auto fieldPath = args.value("field");
-  const double edgeLength = args.number("edge-length", 0.0);
-  const double tolerance = args.number("tolerance", 1e-6);
-  if (!(tolerance >= 0.0)) throw UsageError("--tolerance must be >= 0");
+  const double edgeLength = args.positiveNumber("edge-length", 0.0);
+  const double tolerance = args.number("tolerance", 1e-6, 0.0, std::numeric_limits<double>::max());
   const bool json = args.flag("json");
   args.finish(1);
 
@@ -31,7 +30,7 @@ int runCheck(Args& args) {
   TriangleMesh raw = readMesh(path, readOptions);
   if (!raw.hasUV()) throw InputError(path + ": the mesh has no per-corner texture coordinates");
   const std::uint32_t inputFaces = raw.numFaces();
-  CleanResult clean = cleanMesh(std::move(raw));
+  CleanResult clean = cleanMeshOf(path, std::move(raw));
   const TriangleMesh& mesh = clean.mesh;
   CrossField field;
   if (fieldPath) {

@@ -26,12 +26,8 @@ int runConvert(Args& args) {
     throw UsageError("unknown output format (use .ply, .obj, .off or .drc): " + output);
   }
   WriteOptions options;
-  const std::int64_t uvBits = args.integer("uv-bits", options.dracoUVBits);
-  if (uvBits < 0 || uvBits > 23) throw UsageError("--uv-bits must be between 0 (lossless) and 23");
-  const std::int64_t positionBits = args.integer("position-bits", options.dracoPositionBits);
-  if (positionBits < 0 || positionBits > 30) {
-    throw UsageError("--position-bits must be between 0 (lossless) and 30");
-  }
+  const std::int64_t uvBits = args.integer("uv-bits", options.dracoUVBits, 0, 23);  // 0: lossless
+  const std::int64_t positionBits = args.integer("position-bits", options.dracoPositionBits, 0, 30);
   options.dracoUVBits = static_cast<int>(uvBits);
   options.dracoPositionBits = static_cast<int>(positionBits);
   options.binary = !args.flag("ascii");

@@ -61,8 +61,7 @@ int runField(Args& args) {
   const auto output = args.value("output");
   if (!output) throw UsageError("missing -o FIELD (the field file to write)");
   const auto importPath = args.value("import");
-  const double curvature = args.number("curvature", 0.0);
-  if (!(curvature >= 0.0 && std::isfinite(curvature))) throw UsageError("--curvature must be >= 0");
+  const double curvature = args.number("curvature", 0.0, 0.0, std::numeric_limits<double>::max());
   if (importPath && args.value("curvature")) throw UsageError("--curvature has no effect with --import");
   if (importPath && args.value("field")) throw UsageError("--field has no effect with --import");
   FieldMethod method;
@@ -93,7 +92,7 @@ int runField(Args& args) {
   CleanOptions cleanOptions;
   cleanOptions.weldVertices = weld;
   cleanOptions.progress = progress;
-  CleanResult clean = cleanMesh(std::move(raw), cleanOptions);
+  CleanResult clean = cleanMeshOf(input, std::move(raw), cleanOptions);
   const TriangleMesh& mesh = clean.mesh;
   const Topology& topology = clean.topology;
   meter.finish("clean");

@@ -11,8 +11,7 @@ int runInfo(Args& args) {
   const std::string path = args.positional(0, "the mesh file (seamvox info MESH)");
   SummarizeOptions options;
   options.weld = args.flag("weld");
-  options.weldTolerance = args.number("weld-tolerance", 0.0);
-  if (options.weldTolerance < 0.0) throw UsageError("--weld-tolerance must be >= 0");
+  options.weldTolerance = args.number("weld-tolerance", 0.0, 0.0, std::numeric_limits<double>::max());
   if (options.weldTolerance > 0.0 && !options.weld) {
     throw UsageError("--weld-tolerance needs --weld");
   }

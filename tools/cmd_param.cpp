@@ -38,8 +38,7 @@ ParamCommand parseParamArgs(Args& args) {
     throw UsageError(std::string("--solver: ") + e.what());
   }
   o.solver.gridResolution = parseGridResolution(args);
-  const std::int64_t rings = args.integer("rings", o.solver.refine.rings);
-  if (rings < 0 || rings > 64) throw UsageError("--rings must be between 0 and 64");
+  const std::int64_t rings = args.integer("rings", o.solver.refine.rings, 0, 64);
   o.solver.refine.rings = static_cast<std::uint32_t>(rings);
   c.fieldSource = args.value("field", "auto");
   o.mergeCones = parseMergeCones(args);

@@ -52,12 +52,8 @@ int runRender(Args& args) {
   const std::string up = args.value("up", "y");
   if (up != "x" && up != "y" && up != "z") throw UsageError("--up must be x, y or z");
   options.upAxis = up[0] - 'x';
-  options.checker = args.number("checker", 1.0);
-  if (!(options.checker > 0.0) || !std::isfinite(options.checker)) {
-    throw UsageError("--checker must be a positive number of cells per unit");
-  }
-  const std::int64_t supersample = args.integer("supersample", 2);
-  if (supersample < 1 || supersample > 4) throw UsageError("--supersample must be 1..4");
+  options.checker = args.positiveNumber("checker", 1.0);
+  const std::int64_t supersample = args.integer("supersample", 2, 1, 4);
   options.supersample = static_cast<std::uint32_t>(supersample);
   options.drawSeams = args.flag("seams");
   options.drawCones = args.flag("cones");
@@ -75,7 +71,7 @@ int runRender(Args& args) {
     throw InputError(path + ": has no texture coordinates; run seamvox param first");
   }
   cleanOptions.progress = progress;
-  const CleanResult cleaned = cleanMesh(std::move(mesh), cleanOptions);
+  const CleanResult cleaned = cleanMeshOf(path, std::move(mesh), cleanOptions);
   const double secondsRead =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   options.progress = progress;

@@ -13,8 +13,7 @@ namespace {
 
 int runSubdivide(Args& args) {
   const std::string path = args.positional(0, "the mesh file (seamvox subdivide MESH)");
-  const std::int64_t levels = args.integer("levels", 1);
-  if (levels < 0 || levels > 10) throw UsageError("--levels must be between 0 and 10");
+  const std::int64_t levels = args.integer("levels", 1, 0, 10);
   const auto output = args.value("output");
   if (!output) throw UsageError("missing -o OUT (.ply .obj .off .drc)");
   const auto fieldIn = args.value("field");
@@ -39,7 +38,7 @@ int runSubdivide(Args& args) {
   std::vector<Vec3d> field;
   if (fieldIn) field = readFieldVectors(*fieldIn, inputFaces);
   cleanOptions.progress = progress;
-  CleanResult cleaned = cleanMesh(std::move(input), cleanOptions);
+  CleanResult cleaned = cleanMeshOf(path, std::move(input), cleanOptions);
 
   SubdivideOptions options;
   options.levels = static_cast<std::uint32_t>(levels);

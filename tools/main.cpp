@@ -54,8 +54,7 @@ int main(int argc, char** argv) {
     cli::Args args(tokens, flags);
     args.flag("quiet");  // every command accepts it; commands read it again when they show progress
     std::unique_ptr<tbb::global_control> threads;
-    const std::int64_t n = args.integer("threads", 0);
-    if (n < 0 || n > 4096) throw cli::UsageError("--threads must be between 1 and 4096");
+    const std::int64_t n = args.integer("threads", 0, 1, 4096);
     limitBlasThreads(1);
     if (n > 0) {
       threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

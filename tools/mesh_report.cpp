@@ -9,10 +9,10 @@
 #include "io/mesh_io.h"
 #include "core/system/memory.h"
 #include "core/system/stopwatch.h"
+#include "tools/cli.h"
 
 namespace seamvox::cli {
 namespace {
-
 
 std::string format(const char* pattern, ...) __attribute__((format(printf, 1, 2)));
 std::string format(const char* pattern, ...) {
@@ -40,7 +40,7 @@ MeshSummary summarizeMeshFile(const std::string& path, const SummarizeOptions& o
   cleanOptions.weldVertices = options.weld;
   cleanOptions.weldTolerance = options.weldTolerance;
   cleanOptions.progress = options.progress;
-  CleanResult cleaned = cleanMesh(std::move(mesh), cleanOptions);
+  CleanResult cleaned = cleanMeshOf(path, std::move(mesh), cleanOptions);
   summary.cleanSeconds = secondsSince(start);
   summary.clean = cleaned.report;
   summary.vertices = cleaned.mesh.numVertices();
