@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/synth/generate.h"
 #include "core/system/progress.h"
 
 namespace seamvox::cli {
@@ -63,6 +64,18 @@ struct GridSpacing {
 GridSpacing parseGridSpacing(Args& args);
 /// --merge-cones F (param, field): cones closer than F * h are merged; default kConeMergeFraction.
 double parseMergeCones(Args& args);
+
+/// --noise A, --spikes N, --folds N (gen, subdivide) into ScanNoiseOptions (seed left as is);
+/// validated (UsageError). Returns whether any defect was asked for.
+bool parseScanNoise(Args& args, ScanNoiseOptions& options);
+/// One line on stdout: what addScanNoise did.
+void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& result);
+/// Help lines of those options, spliced into the commands' usage texts.
+#define SEAMVOX_SCAN_NOISE_HELP                                                              \
+  "  --noise A   scan noise: every vertex moves up to A mean edge lengths along its normal\n" \
+  "              and up to A tangentially (deterministic for a seed)\n"                       \
+  "  --spikes N  N outlier vertices pushed 2-6 edge lengths along their normal\n"            \
+  "  --folds N   N small fold-overs (a vertex and its ring slid over their neighbours)\n"
 
 /// Progress reporting on stderr: a one-line percentage per stage when stderr is a terminal and
 /// quiet is false; nothing otherwise.
