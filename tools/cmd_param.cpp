@@ -33,7 +33,7 @@ int runParam(Args& args) {
   if (formatFromPath(*output) == MeshFormat::Unknown || formatFromPath(*output) == MeshFormat::Off) {
     throw UsageError("output must be .obj, .ply or .drc (OFF has no texture coordinates): " + *output);
   }
-  const std::string solver = args.value("solver", "voxloc");
+  const std::string solver = args.value("solver", "auto");
   SolverOptions solverOptions;
   try {
     solverOptions.solver = parseParamSolver(solver);
@@ -196,6 +196,7 @@ int runParam(Args& args) {
     std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
                 solver.c_str(), solved.fallbackReason.c_str());
   }
+  std::printf("solver %s: %s\n", paramSolverName(solved.solver), solved.solverReason.c_str());
   std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", secondsTotal, secondsField,
               secondsCut, secondsParam);
   std::printf("stages (s / peak MB):");
@@ -209,6 +210,7 @@ int runParam(Args& args) {
     j.beginObject();
     j.key("input").value(input).key("output").value(*output).key("solver").value(solver);
     j.key("solverUsed").value(paramSolverName(solved.solver));
+    j.key("solverReason").value(solved.solverReason);
     if (!solved.fallbackReason.empty()) j.key("fallbackReason").value(solved.fallbackReason);
     j.key("field").value(fieldSource).key("fieldMethod").value(fieldMethod);
     j.key("faces").value(static_cast<std::uint64_t>(mesh.numFaces()));
@@ -327,7 +329,7 @@ int runParam(Args& args) {
 }  // namespace
 
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
-                 "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver hat|vox|voxloc] [--grid N]\n"
+                 "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
@@ -336,8 +338,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
                  "quarter turn and t an integer vector, and grad q follows the field with spacing H.\n"
                  "\n"
+                 "  --solver auto       hat up to 300K faces (x (N/128)^2), voxloc above (default)\n"
                  "  --solver voxloc     volumetric B-spline basis on an N^3 grid, then a local hat\n"
-                 "                      solve near cones and on collapsed or flipped triangles (default)\n"
+                 "                      solve near cones and on collapsed or flipped triangles\n"
                  "  --solver vox        the volumetric basis alone\n"
                  "  --solver hat        the per-vertex hat basis (exact reference, one global solve)\n"
                  "  --grid N            voxels per axis for vox and voxloc: 64, 128 (default), 256, 512\n"
