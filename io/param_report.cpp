@@ -128,6 +128,7 @@ void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportConte
 void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContext& c) {
   j.key("input").value(c.input).key("output").value(c.output).key("solver").value(c.solverAsked);
   j.key("solverUsed").value(paramSolverName(r.solved.solver));
+  j.key("solverReason").value(r.solved.solverReason);
   if (!r.solved.fallbackReason.empty()) j.key("fallbackReason").value(r.solved.fallbackReason);
   j.key("field").value(c.fieldSource).key("fieldMethod").value(r.fieldMethod);
   j.key("faces").value(U64{r.mesh.numFaces()});

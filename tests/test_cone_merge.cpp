@@ -127,6 +127,31 @@ TEST(ConeMerge, KeepsPoincareHopfAndBoundsTheMergedIndex) {
   }
 }
 
+// Many close cone pairs (a random field on a flat grid: a cone at about every other vertex):
+// the work of the merge grows like the number of cones, four times the grid gives about four
+// times the work (the pairwise scan it replaced gave sixteen).
+TEST(ConeMerge, WorkGrowsLinearlyWithTheNumberOfCones) {
+  std::size_t cones[2];
+  std::uint64_t work[2];
+  for (int k = 0; k < 2; ++k) {
+    const int n = 60 << k;
+    const Surface s = testing::makeSurface(testing::gridMesh(n, n));
+    FieldSingularities sing = computeSingularities(s.mesh, s.topology, testing::randomField(s.mesh, 3));
+    cones[k] = sing.cones.size();
+    const std::int64_t sum = indexSum(sing);
+    const ConeMergeResult merged = mergeCloseCones(s.mesh, s.topology, sing, {2.0});
+    work[k] = merged.searchedVertices;
+    EXPECT_EQ(indexSum(sing), sum);
+    EXPECT_GT(merged.cancelledPairs, cones[k] / 8) << "n " << n;
+    EXPECT_LT(sing.cones.size(), cones[k] / 2) << "n " << n;
+  }
+  ASSERT_GT(cones[0], 1000u);
+  EXPECT_GT(double(cones[1]) / cones[0], 3.5);
+  const double perCone[2] = {double(work[0]) / cones[0], double(work[1]) / cones[1]};
+  EXPECT_LT(perCone[1], 1.2 * perCone[0]) << work[0] << " and " << work[1] << " vertices searched";
+  EXPECT_LT(perCone[0], 60.0);  // a ball of radius 2 on the unit grid holds about 20 vertices
+}
+
 TEST(ConeMerge, CoincidentConeEdgesAreFoundAndMerged) {
   const Surface s = testing::makeSurface(testing::torusMesh(30, 12));
   const CrossField field = testing::randomField(s.mesh, 7);

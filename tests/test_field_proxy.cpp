@@ -14,7 +14,9 @@
 #include "core/field/field.h"
 #include "core/field/field_proxy.h"
 #include "core/synth/generate.h"
+#include "core/mesh/subdivide.h"
 #include "core/mesh/topology.h"
+#include "core/mesh/clean.h"
 #include "io/mesh_io.h"
 #include "test_meshes.h"
 #include "testing.h"
@@ -113,6 +115,72 @@ TEST(ProxyField, PoincareHopfAndDiskCutOnGeneratedClosedMeshes) {
       EXPECT_LE(proxy.colours, 4u);
       expectValidField(s, proxy.field, name + " grid " + std::to_string(grid));
     }
+  }
+}
+
+Surface cleanSurface(TriangleMesh mesh) {
+  CleanResult cleaned = cleanMesh(std::move(mesh));
+  return {std::move(cleaned.mesh), std::move(cleaned.topology)};
+}
+
+// Scan noise (every vertex moved up to A edge lengths along its normal and across) folds faces
+// over, and the field on the mesh itself gets a cone pair at each fold (several times the clean
+// count). computeCrossField works on the smoothed surface: within 1.5x of the clean cones, for
+// both methods, several amplitudes and seeds, with Poincare-Hopf and a disk cut.
+TEST(ProxyField, NoisyScansKeepTheCleanConeCount) {
+  struct Case {
+    std::string name;
+    TriangleMesh mesh;
+    FieldMethod method;
+  };
+  std::vector<Case> cases;
+  for (const MeshKind kind : {MeshKind::Genus2, MeshKind::Scan}) {
+    GenerateOptions options;
+    options.kind = kind;
+    options.faces = 30000;
+    cases.push_back({meshKindName(kind), generateMesh(options).mesh, FieldMethod::Direct});
+  }
+  const std::string fertility = testing::sharedMesh("fertility.off");
+  if (!fertility.empty()) {
+    const Surface base = testing::loadShared(fertility);
+    SubdivideOptions twice;
+    twice.levels = 2;
+    cases.push_back({"fertility x16", subdivideMesh(base.mesh, base.topology, twice).mesh, FieldMethod::Proxy});
+  }
+  const auto coneCount = [](const Surface& s, FieldMethod method, const std::string& what) {
+    const CrossField field = computeCrossField(s.mesh, s.topology, method);
+    expectValidField(s, field, what);
+    return computeSingularities(s.mesh, s.topology, field).cones.size();
+  };
+  for (const Case& c : cases) {
+    const std::size_t clean = coneCount(cleanSurface(c.mesh), c.method, c.name);
+    for (const auto& [amplitude, seed] : {std::pair{0.25, 1u}, {0.25, 2u}, {0.5, 3u}}) {
+      TriangleMesh mesh = c.mesh;
+      ScanNoiseOptions noise;
+      noise.amplitude = amplitude;
+      noise.seed = seed;
+      addScanNoise(mesh, noise);
+      const std::string what = c.name + " noise " + std::to_string(amplitude) + " seed " + std::to_string(seed);
+      const std::size_t noisy = coneCount(cleanSurface(mesh), c.method, what);
+      EXPECT_LE(noisy, 1.5 * clean) << what << " (clean: " << clean << " cones)";
+    }
+  }
+  if (fertility.empty()) GTEST_SKIP() << testing::missingSharedMessage("fertility.off");
+}
+
+TEST(ProxyField, SmoothingKeepsBoundaryAndPlanesAndRotationsInvert) {
+  const Surface s = makeSurface(testing::gridMesh(6, 5));
+  const std::vector<Vec3f> smoothed = smoothPositions(s.mesh, s.topology, 3);
+  for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+    EXPECT_EQ(smoothed[v].z(), 0.0f);
+    if (s.topology.isBoundaryVertex(v)) EXPECT_EQ(smoothed[v], s.mesh.positions[v]);
+  }
+  const Vec3d a = Vec3d(1, 2, 3).normalized(), b = Vec3d(-2, 0.5, 1).normalized();
+  for (const Vec3d& to : {b, Vec3d(-a)}) {
+    const Vec3d u = a.unitOrthogonal();
+    const Vec3d there = rotateBetween(a, to, u);
+    EXPECT_NEAR(there.dot(to), 0.0, 1e-12);
+    EXPECT_NEAR((rotateBetween(to, a, there) - u).norm(), 0.0, 1e-12);
   }
 }
 

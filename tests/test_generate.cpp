@@ -127,6 +127,112 @@ TEST(Generate, ScanHasHolesIslandsAndDefectsThatCleaningFinds) {
   }
 }
 
+TriangleMesh noisy(TriangleMesh mesh, double amplitude, std::uint64_t seed, std::uint32_t spikes = 0,
+                   std::uint32_t folds = 0, ScanNoiseResult* result = nullptr) {
+  ScanNoiseOptions options;
+  options.amplitude = amplitude;
+  options.seed = seed;
+  options.spikes = spikes;
+  options.folds = folds;
+  const ScanNoiseResult r = addScanNoise(mesh, options);
+  if (result) *result = r;
+  return mesh;
+}
+
+std::vector<double> moves(const TriangleMesh& before, const TriangleMesh& after) {
+  std::vector<double> out(before.numVertices());
+  for (VertexId v = 0; v < before.numVertices(); ++v) out[v] = (after.position(v) - before.position(v)).norm();
+  return out;
+}
+
+TEST(ScanNoise, SameSeedSameBytesOtherSeedOtherMesh) {
+  const TriangleMesh scan = generate(MeshKind::Scan, 5000);
+  const TriangleMesh a = noisy(scan, 0.25, 4, 3, 2), b = noisy(scan, 0.25, 4, 3, 2);
+  EXPECT_TRUE(sameMesh(a, b));
+  EXPECT_FALSE(sameMesh(a, noisy(scan, 0.25, 5, 3, 2)));
+  EXPECT_FALSE(sameMesh(a, scan));
+  EXPECT_TRUE(sameMesh(noisy(scan, 0.0, 4), scan));
+}
+
+TEST(ScanNoise, MovesStayWithinTheAmplitudeAlongTheNormalAndAcross) {
+  const TriangleMesh sphere = generate(MeshKind::Sphere, 8000);
+  for (const double amplitude : {0.1, 0.25, 0.5}) {
+    ScanNoiseResult result;
+    const TriangleMesh moved = noisy(sphere, amplitude, 2, 0, 0, &result);
+    ASSERT_GT(result.meanEdgeLength, 0.0);
+    const double bound = amplitude * result.meanEdgeLength * (1.0 + 1e-4) + 1e-6;
+    // The same normals as the noise: area-weighted sums of the face normals.
+    std::vector<Vec3d> normal(sphere.numVertices(), Vec3d::Zero());
+    for (const Triangle& t : sphere.triangles) {
+      const Vec3d n = (sphere.position(t[1]) - sphere.position(t[0])).cross(sphere.position(t[2]) - sphere.position(t[0]));
+      for (VertexId v : t) normal[v] += n;
+    }
+    double largestAlong = 0.0, largestAcross = 0.0;
+    for (VertexId v = 0; v < sphere.numVertices(); ++v) {
+      const Vec3d d = moved.position(v) - sphere.position(v), n = normal[v].normalized();
+      const double along = std::abs(d.dot(n)), across = (d - d.dot(n) * n).norm();
+      EXPECT_LE(along, bound) << "vertex " << v;
+      EXPECT_LE(across, bound) << "vertex " << v;
+      largestAlong = std::max(largestAlong, along);
+      largestAcross = std::max(largestAcross, across);
+    }
+    // Uniform noise reaches near its bound somewhere among thousands of vertices.
+    EXPECT_GT(largestAlong, 0.9 * amplitude * result.meanEdgeLength);
+    EXPECT_GT(largestAcross, 0.9 * amplitude * result.meanEdgeLength);
+    EXPECT_LE(result.maxDisplacement, std::sqrt(2.0) * bound);
+  }
+  EXPECT_THROW(noisy(sphere, -0.1, 1), InputError);
+  EXPECT_THROW(noisy(sphere, std::nan(""), 1), InputError);
+  EXPECT_THROW(noisy(generate(MeshKind::Sphere, 12), 0.1, 1, 5, 5), InputError);
+}
+
+TEST(ScanNoise, KeepsTheTopologyAndTheUnweldedSeam) {
+  GenerateOptions options;
+  options.kind = MeshKind::Scan;
+  options.faces = 20000;
+  const GenerateResult generated = generateMesh(options);
+  const TriangleMesh moved = noisy(generated.mesh, 0.5, 9, 10, 10);
+  ASSERT_EQ(moved.triangles.size(), generated.mesh.triangles.size());
+  EXPECT_EQ(std::memcmp(moved.triangles.data(), generated.mesh.triangles.data(),
+                        moved.triangles.size() * sizeof(Triangle)), 0);
+  for (const bool weld : {false, true}) {
+    CleanOptions clean;
+    clean.weldVertices = weld;
+    const CleanResult a = cleanMesh(generated.mesh, clean), b = cleanMesh(moved, clean);
+    EXPECT_EQ(a.report.weldedVertices, b.report.weldedVertices) << "the seam copies move alike";
+    EXPECT_EQ(a.mesh.numFaces(), b.mesh.numFaces());
+    const ComponentsResult ca = computeComponents(a.topology), cb = computeComponents(b.topology);
+    ASSERT_EQ(ca.components.size(), cb.components.size());
+    EXPECT_EQ(ca.boundaryLoops, cb.boundaryLoops);
+    for (std::size_t k = 0; k < ca.components.size(); ++k) {
+      EXPECT_EQ(ca.components[k].eulerCharacteristic, cb.components[k].eulerCharacteristic);
+    }
+  }
+}
+
+TEST(ScanNoise, SpikesAndFoldsMoveTheAskedVertices) {
+  const TriangleMesh sphere = generate(MeshKind::Sphere, 20000);
+  ScanNoiseResult result;
+  const TriangleMesh spiked = noisy(sphere, 0.0, 3, 7, 0, &result);
+  EXPECT_EQ(result.spikes, 7u);
+  std::size_t far = 0;
+  for (double d : moves(sphere, spiked)) far += d >= 1.99 * result.meanEdgeLength;
+  EXPECT_EQ(far, 7u);
+  const TriangleMesh folded = noisy(sphere, 0.0, 3, 0, 5, &result);
+  EXPECT_EQ(result.folds, 5u);
+  std::size_t centres = 0, ring = 0;
+  for (double d : moves(sphere, folded)) {
+    centres += d >= 1.99 * result.meanEdgeLength;
+    ring += d > 0.99 * result.meanEdgeLength && d < 1.01 * result.meanEdgeLength;
+  }
+  EXPECT_EQ(centres, 5u);
+  EXPECT_GE(ring, 5u * 3u);  // a ring has 3 or more vertices
+  // A fold turns faces over.
+  std::size_t flipped = 0;
+  for (FaceId f = 0; f < sphere.numFaces(); ++f) flipped += faceNormal(sphere, f).dot(faceNormal(folded, f)) < 0.0;
+  EXPECT_GE(flipped, 5u);
+}
+
 TEST(Generate, FaceCountFollowsTheTarget) {
   for (MeshKind kind : {MeshKind::Sphere, MeshKind::Torus, MeshKind::Genus2, MeshKind::Scan}) {
     for (std::uint64_t faces : {1000u, 2500u, 9999u, 47000u}) {

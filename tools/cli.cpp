@@ -178,6 +178,26 @@ CleanResult cleanMeshOf(const std::string& path, TriangleMesh mesh, const CleanO
   }
 }
 
+bool parseScanNoise(Args& args, ScanNoiseOptions& options) {
+  options.amplitude = args.number("noise", 0.0);
+  if (!(options.amplitude >= 0.0 && options.amplitude <= 10.0)) {
+    throw UsageError("--noise must be between 0 and 10 (mean edge lengths)");
+  }
+  const std::int64_t spikes = args.integer("spikes", 0), folds = args.integer("folds", 0);
+  if (spikes < 0 || spikes > (1 << 30) || folds < 0 || folds > (1 << 30)) {
+    throw UsageError("--spikes and --folds must be between 0 and 2^30");
+  }
+  options.spikes = static_cast<std::uint32_t>(spikes);
+  options.folds = static_cast<std::uint32_t>(folds);
+  return options.amplitude > 0.0 || spikes > 0 || folds > 0;
+}
+
+void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& result) {
+  std::printf("scan noise %.3g mean edge lengths (edge %.4g, largest move %.4g), %u spikes, %u folds\n",
+              options.amplitude, result.meanEdgeLength, result.maxDisplacement, result.spikes,
+              result.folds);
+}
+
 ProgressFn makeProgress(bool quiet) {
   if (quiet || !isatty(STDERR_FILENO)) return {};
   struct State {

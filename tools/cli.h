@@ -11,6 +11,7 @@
 
 #include "core/mesh/clean.h"
 #include "core/pipeline/grid_spacing.h"
+#include "core/synth/generate.h"
 #include "core/system/progress.h"
 
 namespace seamvox::cli {
@@ -75,6 +76,17 @@ double parseMergeCones(Args& args);
 /// cleanMesh on a mesh read from path: its errors ("the mesh has no valid faces", a NaN) name
 /// the file.
 CleanResult cleanMeshOf(const std::string& path, TriangleMesh mesh, const CleanOptions& options = {});
+/// --noise A, --spikes N, --folds N (gen, subdivide) into ScanNoiseOptions (seed left as is);
+/// validated (UsageError). Returns whether any defect was asked for.
+bool parseScanNoise(Args& args, ScanNoiseOptions& options);
+/// One line on stdout: what addScanNoise did.
+void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& result);
+/// Help lines of those options, spliced into the commands' usage texts.
+#define SEAMVOX_SCAN_NOISE_HELP                                                              \
+  "  --noise A   scan noise: every vertex moves up to A mean edge lengths along its normal\n" \
+  "              and up to A tangentially (deterministic for a seed)\n"                       \
+  "  --spikes N  N outlier vertices pushed 2-6 edge lengths along their normal\n"            \
+  "  --folds N   N small fold-overs (a vertex and its ring slid over their neighbours)\n"
 
 /// Progress reporting on stderr: a one-line percentage per stage when stderr is a terminal and
 /// quiet is false; nothing otherwise.

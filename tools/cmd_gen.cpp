@@ -24,6 +24,9 @@ int runGen(Args& args) {
   const std::int64_t seed = args.integer("seed", 1);
   if (seed < 0) throw UsageError("--seed must be >= 0");
   options.seed = static_cast<std::uint64_t>(seed);
+  ScanNoiseOptions noise;
+  noise.seed = options.seed;
+  const bool noisy = parseScanNoise(args, noise);
   const auto output = args.value("output");
   if (!output) throw UsageError("missing -o OUT (.ply .obj .off .drc)");
   WriteOptions writeOptions;
@@ -35,7 +38,9 @@ int runGen(Args& args) {
   }
 
   const auto start = std::chrono::steady_clock::now();
-  const GenerateResult generated = generateMesh(options);
+  GenerateResult generated = generateMesh(options);
+  ScanNoiseResult noiseAdded;
+  if (noisy) noiseAdded = addScanNoise(generated.mesh, noise);
   const auto generatedAt = std::chrono::steady_clock::now();
   writeMesh(*output, generated.mesh, writeOptions);
   const auto end = std::chrono::steady_clock::now();
@@ -45,6 +50,7 @@ int runGen(Args& args) {
               generated.mesh.numVertices(),
               std::chrono::duration<double>(generatedAt - start).count(),
               std::chrono::duration<double>(end - generatedAt).count());
+  if (noisy) printScanNoise(noise, noiseAdded);
   return 0;
 }
 
@@ -52,6 +58,7 @@ int runGen(Args& args) {
 
 SEAMVOX_COMMAND({"gen", "generate a synthetic scan-like mesh (sphere, torus, genus2, scan)",
                  "usage: seamvox gen KIND --faces N -o OUT [--seed S] [--ascii]\n"
+                 "                      [--noise A] [--spikes N] [--folds N]\n"
                  "\n"
                  "Writes a deterministic synthetic mesh with about N faces (within a few percent):\n"
                  "the same KIND, N and seed give a byte-identical file on every machine.\n"
@@ -65,6 +72,7 @@ SEAMVOX_COMMAND({"gen", "generate a synthetic scan-like mesh (sphere, torus, gen
                  "  -o OUT      output mesh; the extension picks the format (.ply is binary PLY)\n"
                  "  --seed S    random seed (default 1)\n"
                  "  --ascii     ascii PLY instead of binary\n"
+                 SEAMVOX_SCAN_NOISE_HELP
                  "  --quiet     no progress on stderr\n",
                  {"ascii"},
                  &runGen});

@@ -31,7 +31,7 @@ ParamCommand parseParamArgs(Args& args) {
     throw UsageError("output must be .obj, .ply or .drc (OFF has no texture coordinates): " + c.output);
   }
   PipelineOptions& o = c.options;
-  c.solverName = args.value("solver", "voxloc");
+  c.solverName = args.value("solver", "auto");
   try {
     o.solver.solver = parseParamSolver(c.solverName);
   } catch (const InputError& e) {
@@ -82,6 +82,7 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
     std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
                 c.solverName.c_str(), r.solved.fallbackReason.c_str());
   }
+  std::printf("solver %s: %s\n", paramSolverName(r.solved.solver), r.solved.solverReason.c_str());
   const auto& stages = meter.stages();
   std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", meter.totalSeconds(),
               stageSeconds(stages, "field"), stageSeconds(stages, "cut"),
@@ -143,7 +144,7 @@ int runParam(Args& args) {
 }  // namespace
 
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
-                 "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver hat|vox|voxloc] [--grid N]\n"
+                 "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
@@ -152,8 +153,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
                  "quarter turn and t an integer vector, and grad q follows the field with spacing H.\n"
                  "\n"
+                 "  --solver auto       hat up to 300K faces (x (N/128)^2), voxloc above (default)\n"
                  "  --solver voxloc     volumetric B-spline basis on an N^3 grid, then a local hat\n"
-                 "                      solve near cones and on collapsed or flipped triangles (default)\n"
+                 "                      solve near cones and on collapsed or flipped triangles\n"
                  "  --solver vox        the volumetric basis alone\n"
                  "  --solver hat        the per-vertex hat basis (exact reference, one global solve)\n"
                  "  --grid N            voxels per axis for vox and voxloc: 64, 128 (default), 256, 512\n"

@@ -21,6 +21,11 @@ int runSubdivide(Args& args) {
   if (fieldIn.has_value() != fieldOut.has_value()) {
     throw UsageError("--field and --field-out go together");
   }
+  ScanNoiseOptions noise;
+  const bool noisy = parseScanNoise(args, noise);
+  const std::int64_t seed = args.integer("seed", 1);
+  if (seed < 0) throw UsageError("--seed must be >= 0");
+  noise.seed = static_cast<std::uint64_t>(seed);
   CleanOptions cleanOptions;
   cleanOptions.weldVertices = args.flag("weld");
   WriteOptions writeOptions;
@@ -43,7 +48,9 @@ int runSubdivide(Args& args) {
   SubdivideOptions options;
   options.levels = static_cast<std::uint32_t>(levels);
   options.progress = progress;
-  const SubdivideResult result = subdivideMesh(cleaned.mesh, cleaned.topology, options);
+  SubdivideResult result = subdivideMesh(cleaned.mesh, cleaned.topology, options);
+  ScanNoiseResult noiseAdded;
+  if (noisy) noiseAdded = addScanNoise(result.mesh, noise);
   writeMesh(*output, result.mesh, writeOptions);
   if (fieldIn) {
     // Input face -> cleaned face (faceOrigin) -> children (parentFace).
@@ -58,6 +65,7 @@ int runSubdivide(Args& args) {
               output->c_str(), result.mesh.numFaces(), result.mesh.numVertices(),
               static_cast<long long>(levels), levels == 1 ? "" : "s", cleaned.mesh.numFaces(),
               inputFaces, seconds);
+  if (noisy) printScanNoise(noise, noiseAdded);
   if (fieldOut) std::printf("wrote %s: field on %u faces\n", fieldOut->c_str(), result.mesh.numFaces());
   return 0;
 }
@@ -66,6 +74,7 @@ int runSubdivide(Args& args) {
 
 SEAMVOX_COMMAND({"subdivide", "1-to-4 midpoint subdivision (the scaling series), carrying a field",
                  "usage: seamvox subdivide MESH --levels K -o OUT [--field IN --field-out OUT]\n"
+                 "                        [--noise A [--seed S]] [--spikes N] [--folds N]\n"
                  "\n"
                  "Cleans MESH, then splits every triangle into four at its edge midpoints, K times\n"
                  "(faces x 4^K; old vertices keep their positions).\n"
@@ -76,6 +85,9 @@ SEAMVOX_COMMAND({"subdivide", "1-to-4 midpoint subdivision (the scaling series),
                  "  --field-out OUT   the field carried to the fine faces (children keep their\n"
                  "                    parent's direction), plain format\n"
                  "  --weld            weld coincident vertices while cleaning\n"
+                 "  --seed S          seed of the scan defects below (default 1), added after the\n"
+                 "                    subdivision\n"
+                 SEAMVOX_SCAN_NOISE_HELP
                  "  --ascii           ascii PLY instead of binary\n"
                  "  --quiet           no progress on stderr\n",
                  {"weld", "ascii"},

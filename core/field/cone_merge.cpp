@@ -97,13 +97,14 @@ ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topolo
     double distance;
     VertexId a, b;
   };
+  // Pairs within reach: the cones each ball settles (index4 tells a cone in O(1)), so the work
+  // is the balls' size, linear in the number of cones, not quadratic.
   std::vector<Candidate> candidates;
   for (VertexId a : singularities.cones) {
     const Ball ball = searchBall(mesh, topology, a, options.maxDistance);
-    for (VertexId b : singularities.cones) {
-      if (b <= a || !mergeable(a, b)) continue;
-      const auto it = ball.distance.find(b);
-      if (it != ball.distance.end()) candidates.push_back({it->second, a, b});
+    out.searchedVertices += ball.distance.size();
+    for (const auto& [b, distance] : ball.distance) {
+      if (b > a && mergeable(a, b)) candidates.push_back({distance, a, b});
     }
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
@@ -117,6 +118,7 @@ ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topolo
     const bool keepA = std::abs(index4[pair.a]) >= std::abs(index4[pair.b]);
     const VertexId keep = keepA ? pair.a : pair.b, gone = keepA ? pair.b : pair.a;
     const Ball ball = searchBall(mesh, topology, keep, options.maxDistance, gone);
+    out.searchedVertices += ball.distance.size();
     if (!ball.pred.count(gone)) continue;  // the same search reached it before: cannot happen
     std::vector<CornerId> path;
     for (VertexId y = gone; y != keep; y = topology.vertex(nextCorner(path.back()))) {

@@ -48,12 +48,16 @@ struct ConeMergeResult {
   std::uint32_t mergedPairs = 0;     ///< cones moved onto another one that stays a cone
   double longestPath = 0.0;          ///< longest path used (mesh units)
   std::uint32_t changedEdges = 0;
+  /// Vertices reached by the bounded searches (mergeCloseCones): the work done, about the
+  /// number of cones times the vertices within maxDistance of one.
+  std::uint64_t searchedVertices = 0;
 };
 
 /// Greedily, closest pair first, moves the whole index of one cone onto another no farther than
 /// options.maxDistance along interior edges, when the sum keeps |index4| <= kMaxMergedIndex4 (the
 /// cone with the larger |index4|, or the smaller id, stays). Changes matchings, index4 and cones
-/// in place; the index sum (Poincare-Hopf) is unchanged. Cost: one bounded search per cone.
+/// in place; the index sum (Poincare-Hopf) is unchanged. Cost: one bounded search per cone and
+/// per merge (ConeMergeResult::searchedVertices), independent of how many cones there are.
 ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topology,
                                 FieldSingularities& singularities, const ConeMergeOptions& options);
 

@@ -40,9 +40,10 @@ double wrapAngle(double a) {
   return a;
 }
 
-FaceFrame faceFrame(const TriangleMesh& mesh, FaceId f) {
-  const Triangle& t = mesh.triangles[f];
-  const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+Vec3d pointOf(const std::vector<Vec3f>& positions, VertexId v) { return positions[v].cast<double>(); }
+
+FaceFrame faceFrame(const std::vector<Vec3f>& positions, const Triangle& t) {
+  const Vec3d p[3] = {pointOf(positions, t[0]), pointOf(positions, t[1]), pointOf(positions, t[2])};
   FaceFrame frame;
   const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
   const double area2 = n.norm();
@@ -68,6 +69,8 @@ FaceFrame faceFrame(const TriangleMesh& mesh, FaceId f) {
   return frame;
 }
 
+FaceFrame faceFrame(const TriangleMesh& mesh, FaceId f) { return faceFrame(mesh.positions, mesh.triangles[f]); }
+
 double frameAngle(const FaceFrame& frame, const Vec3d& v) {
   const double x = v.dot(frame.e1), y = v.dot(frame.e2);
   return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : std::atan2(y, x);
@@ -87,16 +90,17 @@ void cornerAngles(const T edge[3], double corner[3]) {
   corner[2] = M_PI - turn2;
 }
 
-FaceAngles faceAngles(const TriangleMesh& mesh, FaceId f) {
-  const Triangle& t = mesh.triangles[f];
-  const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+FaceAngles faceAngles(const std::vector<Vec3f>& positions, const Triangle& t) {
+  const Vec3d p[3] = {pointOf(positions, t[0]), pointOf(positions, t[1]), pointOf(positions, t[2])};
   FaceAngles a;
-  a.frame = faceFrame(mesh, f);
+  a.frame = faceFrame(positions, t);
   // Corner k names the edge from vertex k+1 to vertex k+2 (topology.h).
   for (int k = 0; k < 3; ++k) a.edge[k] = frameAngle(a.frame, p[(k + 2) % 3] - p[(k + 1) % 3]);
   cornerAngles(a.edge, a.corner);
   return a;
 }
+
+FaceAngles faceAngles(const TriangleMesh& mesh, FaceId f) { return faceAngles(mesh.positions, mesh.triangles[f]); }
 
 /// kappa: the angle of the edge of c in the frame of face(opposite c) minus its angle in face(c).
 /// The edge as face(c) traverses it is traversed reversed by the other face: add pi.
@@ -121,6 +125,11 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
                      " directions, mesh " + std::to_string(mesh.triangles.size()) +
                      " faces, topology " + std::to_string(numFaces) + " faces");
   }
+  if (!field.framePositions.empty() && field.framePositions.size() != mesh.positions.size()) {
+    throw InputError("computeSingularities: field has " + std::to_string(field.framePositions.size()) +
+                     " frame positions for " + std::to_string(mesh.positions.size()) + " vertices");
+  }
+  const std::vector<Vec3f>& positions = field.framePositions.empty() ? mesh.positions : field.framePositions;
   FieldSingularities out;
   out.matching.assign(3 * std::size_t(numFaces), 0);
   out.index4.assign(numVertices, 0);
@@ -130,10 +139,12 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
     float theta, edge[3];
   };
   std::vector<FaceData> faceData(numFaces);
+  const bool ownFrames = field.framePositions.empty();
   parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
-      const FaceAngles a = faceAngles(mesh, f);
-      faceData[f] = {float(frameAngle(a.frame, field.at(f))), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
+      const FaceAngles a = faceAngles(positions, mesh.triangles[f]);
+      const Vec3d u = ownFrames ? field.at(f) : rotateBetween(faceFrame(mesh, f).n, a.frame.n, field.at(f));
+      faceData[f] = {float(frameAngle(a.frame, u)), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
     }
   });
 
@@ -464,6 +475,46 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
   });
   reportProgress(options.progress, "field: directions", 1.0);
   return field;
+}
+
+Vec3d rotateBetween(const Vec3d& from, const Vec3d& to, const Vec3d& v) {
+  const double c = from.dot(to);
+  if (c > -1.0 + 1e-9) {
+    const Vec3d k = from.cross(to);
+    return c * v + k.cross(v) + (k.dot(v) / (1.0 + c)) * k;
+  }
+  const Vec3d axis = from.unitOrthogonal();
+  return 2.0 * axis.dot(v) * axis - v;
+}
+
+std::vector<Vec3f> smoothPositions(const TriangleMesh& mesh, const Topology& topology,
+                                   std::uint32_t iterations) {
+  const std::uint32_t numVertices = topology.numVertices();
+  if (mesh.positions.size() != numVertices) {
+    throw InputError("smoothPositions: mesh has " + std::to_string(mesh.positions.size()) +
+                     " vertices, topology " + std::to_string(numVertices));
+  }
+  std::vector<Vec3f> current = mesh.positions;
+  if (iterations == 0) return current;
+  std::vector<Vec3f> next(numVertices);
+  for (std::uint32_t it = 0; it < iterations; ++it) {
+    parallelFor(numVertices, 4096, [&](const IndexRange& range) {
+      for (VertexId v = range.begin(); v != range.end(); ++v) {
+        next[v] = current[v];
+        if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) continue;
+        Vec3d sum = Vec3d::Zero();
+        std::uint32_t count = 0;
+        topology.forEachCornerAround(v, [&](CornerId c) {
+          sum += pointOf(current, topology.vertex(nextCorner(c)));
+          ++count;
+        });
+        const Vec3d target = 0.5 * (pointOf(current, v) + sum / count);
+        if (target.allFinite()) next[v] = target.cast<float>();
+      }
+    });
+    current.swap(next);
+  }
+  return current;
 }
 
 CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors) {

@@ -25,6 +25,12 @@ struct CrossField {
   /// #F unit tangent vectors u_T (world coordinates), stored in float to halve their memory
   /// (12 bytes per face); computations read them in double through at().
   std::vector<Vec3f> direction;
+  /// Empty, or #V positions of a smoothed copy of the mesh (same triangles) whose discrete
+  /// connection defines the matchings and indices (computeSingularities turns each direction onto
+  /// the smoothed face by rotateBetween their normals, the inverse of what computeCrossField did). On a noisy scan every fold-over of the mesh's own faces turns the
+  /// connection by up to half a turn and puts a pair of cones there; the smoothed surface has
+  /// the scan's shape without them. The directions stay tangent to the mesh's own faces.
+  std::vector<Vec3f> framePositions;
   Vec3d at(FaceId f) const { return direction[f].cast<double>(); }
   void set(FaceId f, const Vec3d& u) { direction[f] = u.cast<float>(); }
 };
@@ -36,8 +42,9 @@ struct FieldSingularities {
   std::int64_t indexSum4() const;      ///< sum of index4 (== 4 chi on closed meshes)
 };
 
-/// Matchings, indices and cones of a field. Linear, parallel. Zero-area faces are handled
-/// without NaN (their frame falls back to any tangent direction).
+/// Matchings, indices and cones of a field, on the surface of field.framePositions when set (the
+/// mesh's own otherwise). Linear, parallel. Zero-area faces are handled without NaN (their frame
+/// falls back to any tangent direction).
 FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology& topology,
                                         const CrossField& field);
 
@@ -52,6 +59,18 @@ struct SmoothFieldOptions {
 /// edges, one sparse Hermitian CHOLMOD solve. Exact; practical up to a few million faces.
 CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topology,
                                  const SmoothFieldOptions& options = {});
+
+/// v rotated by the smallest rotation taking unit vector `from` to unit vector `to` (for two faces
+/// of an edge: the rotation about the edge, the discrete parallel transport). Opposite vectors: a
+/// half turn about from.unitOrthogonal(). Rotating back (to, from) restores v.
+Vec3d rotateBetween(const Vec3d& from, const Vec3d& to, const Vec3d& v);
+
+/// Positions after `iterations` steps of uniform Laplacian smoothing (each interior vertex moves
+/// halfway to the mean of its neighbours; boundary and isolated vertices stay). Each step damps
+/// edge-scale noise by half or more and moves features larger than a few edges very little.
+/// Linear, parallel, deterministic.
+std::vector<Vec3f> smoothPositions(const TriangleMesh& mesh, const Topology& topology,
+                                   std::uint32_t iterations);
 
 /// Projects arbitrary per-face 3D vectors onto each face's tangent plane and normalizes them.
 /// Vectors parallel to the normal (or zero) get the face's first edge direction.

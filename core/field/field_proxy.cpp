@@ -57,19 +57,6 @@ FaceGeometry faceGeometry(const TriangleMesh& mesh, FaceId f) {
   return g;
 }
 
-/// v rotated by the smallest rotation taking unit vector `from` to unit vector `to` (for the two
-/// faces of an edge: the rotation about the edge, the discrete parallel transport). Opposite
-/// normals: a half turn about an axis perpendicular to `from`.
-Vec3d rotateBetween(const Vec3d& from, const Vec3d& to, const Vec3d& v) {
-  const double c = from.dot(to);
-  if (c > -1.0 + 1e-9) {
-    const Vec3d k = from.cross(to);
-    return c * v + k.cross(v) + (k.dot(v) / (1.0 + c)) * k;
-  }
-  const Vec3d axis = from.unitOrthogonal();
-  return 2.0 * axis.dot(v) * axis - v;
-}
-
 /// Unit 4th power of the tangent vector v written in the frame (e1, e2); 0 for a zero vector.
 /// (x + iy)^4 / (x^2 + y^2)^2: no trigonometry, no square root.
 Complex fourthPower(const Vec3d& v, const Vec3d& e1, const Vec3d& e2) {
@@ -492,15 +479,33 @@ FieldMethod parseFieldMethod(const std::string& name) {
 }
 
 CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology, FieldMethod method,
-                             const SmoothFieldOptions& smooth, const ProxyFieldOptions& proxy) {
-  if (resolveFieldMethod(method, topology.numFaces()) == FieldMethod::Direct) {
-    return computeSmoothestField(mesh, topology, smooth);
-  }
-  if (smooth.curvatureWeight > 0.0) {
+                             const SmoothFieldOptions& smooth, const ProxyFieldOptions& proxy,
+                             const FieldGeometryOptions& geometry) {
+  const bool direct = resolveFieldMethod(method, topology.numFaces()) == FieldMethod::Direct;
+  if (!direct && smooth.curvatureWeight > 0.0) {
     throw InputError("curvature alignment needs the direct field: the proxy field (used above " +
                      std::to_string(kDirectFieldMaxFaces) + " faces) is the smoothest field only");
   }
-  return computeProxyField(mesh, topology, proxy).field;
+  const auto compute = [&](const TriangleMesh& surface) {
+    return direct ? computeSmoothestField(surface, topology, smooth)
+                  : computeProxyField(surface, topology, proxy).field;
+  };
+  if (geometry.smoothingIterations == 0) return compute(mesh);
+  TriangleMesh smoothed;
+  smoothed.positions = smoothPositions(mesh, topology, geometry.smoothingIterations);
+  smoothed.triangles = mesh.triangles;
+  CrossField field = compute(smoothed);
+  // Onto the mesh's own faces by the rotation between the two normals, which computeSingularities
+  // undoes exactly (a projection would not: on a tilted face it turns the direction).
+  parallelFor(topology.numFaces(), 4096, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const FaceGeometry own = faceGeometry(mesh, f), flat = faceGeometry(smoothed, f);
+      field.set(f, rotateBetween(flat.n, own.n, field.at(f)));
+    }
+  });
+  std::vector<Triangle>().swap(smoothed.triangles);
+  field.framePositions = std::move(smoothed.positions);
+  return field;
 }
 
 double measureFieldEnergy(const TriangleMesh& mesh, const Topology& topology, const CrossField& field) {

@@ -51,11 +51,26 @@ const char* fieldMethodName(FieldMethod method);
 /// Parses "auto", "direct" (or "smooth"), "proxy"; throws InputError listing them.
 FieldMethod parseFieldMethod(const std::string& name);
 
-/// The smoothest field by the given method. Throws InputError when curvature alignment is asked
-/// of the proxy field (it computes the smoothest field only).
+/// Uniform Laplacian steps of the surface computeCrossField works on by default: two leave a
+/// fold-over of a scan jittered by half an edge length, three remove those of spikes and folds
+/// too (bench/RESULTS.md, noisy scans).
+constexpr std::uint32_t kFieldSmoothingIterations = 3;
+
+/// The surface the field is computed on (CrossField::framePositions).
+struct FieldGeometryOptions {
+  /// smoothPositions steps before the field is computed; 0 computes it on the mesh itself.
+  std::uint32_t smoothingIterations = kFieldSmoothingIterations;
+};
+
+/// The smoothest field by the given method, computed on the mesh smoothed by
+/// geometry.smoothingIterations steps (kept in framePositions, so that computeSingularities
+/// reads the cones off that surface) and projected onto the mesh's own faces. Extra memory
+/// while it runs: 12 bytes per face and 24 per vertex. Throws InputError when curvature
+/// alignment is asked of the proxy field (it computes the smoothest field only).
 CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology, FieldMethod method,
                              const SmoothFieldOptions& smooth = {},
-                             const ProxyFieldOptions& proxy = {});
+                             const ProxyFieldOptions& proxy = {},
+                             const FieldGeometryOptions& geometry = {});
 
 /// Smoothness energy of a field: sum over interior edges of w_e |z_g - T_fg z_f|^2, z the unit
 /// 4th powers, T_fg the rotation about the shared edge, w_e = |e| / |b_f - b_g| (bounded).

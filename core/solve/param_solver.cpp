@@ -1,6 +1,7 @@
 #include "core/solve/param_solver.h"
 
 #include <cstdio>
+#include <string>
 
 #include "core/system/errors.h"
 #include "core/basis/voxel_grid.h"
@@ -12,15 +13,31 @@ const char* paramSolverName(ParamSolver solver) {
     case ParamSolver::Hat: return "hat";
     case ParamSolver::Vox: return "vox";
     case ParamSolver::VoxLoc: return "voxloc";
+    case ParamSolver::Auto: return "auto";
   }
   return "?";
 }
 
 ParamSolver parseParamSolver(const std::string& name) {
-  for (ParamSolver s : {ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc}) {
+  for (ParamSolver s : {ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc, ParamSolver::Auto}) {
     if (name == paramSolverName(s)) return s;
   }
-  throw InputError("unknown solver '" + name + "' (available: hat, vox, voxloc)");
+  throw InputError("unknown solver '" + name + "' (available: auto, hat, vox, voxloc)");
+}
+
+SolverChoice chooseParamSolver(ParamSolver requested, std::uint64_t numFaces,
+                               std::int32_t gridResolution) {
+  if (requested != ParamSolver::Auto) return {requested, "asked for"};
+  const double scale = double(gridResolution) / 128.0;
+  const auto limit = static_cast<std::uint64_t>(double(kAutoHatMaxFacesGrid128) * scale * scale);
+  const bool hat = numFaces <= limit;
+  char text[200];
+  std::snprintf(text, sizeof text, "%llu faces, %s %llu: the %s system is smaller than the %s",
+                static_cast<unsigned long long>(numFaces), hat ? "at most" : "more than",
+                static_cast<unsigned long long>(limit),
+                hat ? "hat (one unknown per vertex)" : ("voxel (grid " + std::to_string(gridResolution) + ")").c_str(),
+                hat ? ("voxel one (grid " + std::to_string(gridResolution) + ")").c_str() : "hat one (one unknown per vertex)");
+  return {hat ? ParamSolver::Hat : ParamSolver::VoxLoc, text};
 }
 
 void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason) {
@@ -39,8 +56,11 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
                                         const ParamOptions& options,
                                         const SolverOptions& solverOptions) {
   SolverResult out;
-  out.solver = solverOptions.solver;
-  if (solverOptions.solver == ParamSolver::Hat) {
+  const SolverChoice choice =
+      chooseParamSolver(solverOptions.solver, mesh.numFaces(), solverOptions.gridResolution);
+  out.solver = choice.solver;
+  out.solverReason = choice.reason;
+  if (choice.solver == ParamSolver::Hat) {
     out.param = parameterizeMesh(mesh, topology, field, cut, options);
     if (solverOptions.meter) solverOptions.meter->finish("solve");
     return out;
@@ -55,6 +75,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     checkHatFallbackFits(mesh.numFaces(), availableMemoryBytes(), e.what());
     out.fallbackReason = e.what();
     out.solver = ParamSolver::Hat;
+    out.solverReason = "the voxel system could not be factored";
     out.param = parameterizeMesh(mesh, topology, field, cut, options);
     if (solverOptions.meter) solverOptions.meter->finish("solve");
     return out;
@@ -68,7 +89,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   out.determinedBasis = vox.determinedBasis;
   out.inconsistentBasis = vox.inconsistentBasis;
   out.markedFaces = vox.markedFaces.size();
-  if (solverOptions.solver == ParamSolver::VoxLoc) {
+  if (choice.solver == ParamSolver::VoxLoc) {
     RefineOptions refineOptions = solverOptions.refine;
     refineOptions.edgeLength = options.edgeLength;
     refineOptions.markedFaces = std::move(vox.markedFaces);

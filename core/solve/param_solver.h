@@ -15,12 +15,28 @@ namespace seamvox {
 enum class ParamSolver {
   Hat,     ///< per-vertex hat basis, one global solve (exact reference)
   Vox,     ///< volumetric basis on a 2^D grid
-  VoxLoc,  ///< Vox, then refineNearCones on its marked, collapsed and flipped faces (default)
+  VoxLoc,  ///< Vox, then refineNearCones on its marked, collapsed and flipped faces
+  Auto,    ///< Hat where its system is the cheaper one, VoxLoc above (chooseParamSolver; default)
 };
-/// "hat", "vox", "voxloc".
+/// "hat", "vox", "voxloc", "auto".
 const char* paramSolverName(ParamSolver solver);
 /// Parses a solver name; throws InputError listing the known names.
 ParamSolver parseParamSolver(const std::string& name);
+
+/// Largest mesh Auto solves with the hat basis at grid 128. The hat system has one unknown per
+/// vertex, the voxel one about one per occupied grid corner (fixed by the grid); the scaling study
+/// (bench/RESULTS.md) measured voxloc128 faster from 270K faces (fertility) and 410K (armadillo).
+constexpr std::uint64_t kAutoHatMaxFacesGrid128 = 300000;
+
+struct SolverChoice {
+  ParamSolver solver = ParamSolver::VoxLoc;  ///< never Auto
+  std::string reason;                        ///< one sentence for reports
+};
+/// Resolves Auto by the face count against kAutoHatMaxFacesGrid128 scaled by (grid / 128)^2 (the
+/// occupied corners of a surface grow as the square of the grid); other solvers are kept, with
+/// "asked for" as the reason.
+SolverChoice chooseParamSolver(ParamSolver requested, std::uint64_t numFaces,
+                               std::int32_t gridResolution);
 
 /// Memory the hat solve needs per face beyond the mesh, field and cut, rounded up from the scaling
 /// study (bench/RESULTS.md: 0.99-1.15 KB per face of whole-process peak from 1.4M to 9.2M faces).
@@ -33,7 +49,7 @@ void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, con
 constexpr std::int32_t kDefaultGridResolution = 128;
 
 struct SolverOptions {
-  ParamSolver solver = ParamSolver::VoxLoc;
+  ParamSolver solver = ParamSolver::Auto;
   std::int32_t gridResolution = kDefaultGridResolution;  ///< voxels per axis (vox, voxloc)
   /// Region and rings of the local refinement (voxloc); markedFaces and edgeLength are filled in.
   RefineOptions refine;
@@ -44,7 +60,8 @@ struct SolverOptions {
 
 struct SolverResult {
   ParamResult param;  ///< the final map (refined for voxloc)
-  ParamSolver solver = ParamSolver::Hat;
+  ParamSolver solver = ParamSolver::Hat;  ///< the solver that made the map (never Auto)
+  std::string solverReason;              ///< why that one (chooseParamSolver, or the fallback)
   VoxelBasisStats basisStats;  ///< vox, voxloc
   std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
   std::uint64_t markedFaces = 0;  ///< faces of marked voxel basis functions
@@ -59,7 +76,8 @@ struct SolverResult {
   std::string fallbackReason;
 };
 
-/// Runs the chosen solver on a mesh cut to a disk per component (cutToDisk). Throws like
+/// Runs the chosen solver (Auto resolved by chooseParamSolver) on a mesh cut to a disk per
+/// component (cutToDisk). Throws like
 /// parameterizeMesh and refineNearCones. vox and voxloc fall back to the hat solver when the
 /// voxel system cannot be factored (see SolverResult::fallbackReason) and the hat solve fits in
 /// memory (checkHatFallbackFits); otherwise they throw SolverError.

@@ -1,10 +1,17 @@
 #include "core/synth/generate.h"
 
+#include <tbb/combinable.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
+#include <numeric>
+#include <string>
+#include <unordered_map>
 
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
@@ -747,6 +754,160 @@ std::uint64_t minimumFaces(MeshKind kind) {
     case MeshKind::Scan: return 600;
   }
   return 0;
+}
+
+namespace {
+
+std::array<std::uint32_t, 3> positionBits(const Vec3f& p) {
+  std::array<std::uint32_t, 3> bits;
+  std::memcpy(bits.data(), p.data(), sizeof bits);
+  return bits;
+}
+
+/// Per vertex, the smallest id of the vertices at exactly its position.
+std::vector<VertexId> coincidentRepresentatives(const std::vector<Vec3f>& positions) {
+  std::vector<VertexId> order(positions.size());
+  std::iota(order.begin(), order.end(), VertexId{0});
+  tbb::parallel_sort(order.begin(), order.end(), [&](VertexId a, VertexId b) {
+    const auto pa = positionBits(positions[a]), pb = positionBits(positions[b]);
+    return pa != pb ? pa < pb : a < b;
+  });
+  std::vector<VertexId> rep(positions.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const bool same = i > 0 && positionBits(positions[order[i]]) == positionBits(positions[order[i - 1]]);
+    rep[order[i]] = same ? rep[order[i - 1]] : order[i];
+  }
+  return rep;
+}
+
+/// A unit tangent at angle `turns` (in turns) in a frame perpendicular to the unit normal n.
+Vec3d tangentAt(const Vec3d& n, double turns) {
+  const Vec3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  double s, c;
+  sinCosTurns(turns, s, c);
+  return c * e1 + s * e2;
+}
+
+/// Distinct representative vertices picked at random (at most count, fewer only on tiny meshes).
+std::vector<VertexId> pickVertices(Rng& rng, const std::vector<VertexId>& rep, std::uint32_t count,
+                                   std::unordered_map<VertexId, Vec3d>& taken) {
+  std::vector<VertexId> picked;
+  const auto n = static_cast<std::uint32_t>(rep.size());
+  for (std::uint64_t tries = 0; picked.size() < count && tries < 64ull * count; ++tries) {
+    const VertexId v = rep[rng.below(n)];
+    if (taken.emplace(v, Vec3d::Zero()).second) picked.push_back(v);
+  }
+  return picked;
+}
+
+}  // namespace
+
+ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options) {
+  if (!(options.amplitude >= 0.0) || !std::isfinite(options.amplitude)) {
+    throw InputError("scan noise: the amplitude must be a finite number >= 0, not " +
+                     std::to_string(options.amplitude));
+  }
+  const std::uint64_t numVertices = mesh.positions.size();
+  if (std::uint64_t(options.spikes) + options.folds > numVertices) {
+    throw InputError("scan noise: " + std::to_string(options.spikes) + " spikes and " +
+                     std::to_string(options.folds) + " folds asked of a mesh with " +
+                     std::to_string(numVertices) + " vertices");
+  }
+  ScanNoiseResult result;
+  if (numVertices == 0 || mesh.triangles.empty()) return result;
+  for (const Triangle& t : mesh.triangles) {
+    for (VertexId v : t) {
+      if (v >= numVertices) throw InputError("scan noise: a triangle names vertex " + std::to_string(v) +
+                                             " of " + std::to_string(numVertices));
+    }
+  }
+  const std::vector<VertexId> rep = coincidentRepresentatives(mesh.positions);
+
+  // Area-weighted normals per representative and the mean edge length, summed in face order.
+  std::vector<Vec3d> normal(numVertices, Vec3d::Zero());
+  double edgeSum = 0.0;
+  std::uint64_t edgeCount = 0;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+    const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+    for (int k = 0; k < 3; ++k) {
+      if (n.allFinite()) normal[rep[t[k]]] += n;
+      const double len = (p[(k + 1) % 3] - p[k]).norm();
+      if (std::isfinite(len)) {
+        edgeSum += len;
+        ++edgeCount;
+      }
+    }
+  }
+  const double edge = edgeCount ? edgeSum / edgeCount : 0.0;
+  result.meanEdgeLength = edge;
+  parallelRange(numVertices, [&](std::uint64_t begin, std::uint64_t end) {
+    for (std::uint64_t v = begin; v < end; ++v) {
+      if (rep[v] != v) continue;
+      const double len = normal[v].norm();
+      normal[v] = len > 0.0 && std::isfinite(len) ? Vec3d(normal[v] / len) : Vec3d::UnitZ();
+    }
+  });
+
+  // Spikes and folds: extra moves per representative, decided before any position changes.
+  Rng rng(mix64(options.seed ^ 0x5ca7ull));
+  std::unordered_map<VertexId, Vec3d> extra;
+  for (VertexId v : pickVertices(rng, rep, options.spikes, extra)) {
+    const double sign = rng.below(2) ? 1.0 : -1.0;
+    extra[v] = sign * rng.uniform(2.0, 6.0) * edge * normal[v];
+    ++result.spikes;
+  }
+  std::unordered_map<VertexId, Vec3d> foldMove;  // centre -> its tangent move
+  for (VertexId v : pickVertices(rng, rep, options.folds, extra)) {
+    foldMove[v] = 2.0 * edge * tangentAt(normal[v], rng.uniform(0.0, 1.0));
+    ++result.folds;
+  }
+  if (!foldMove.empty()) {
+    // The ring of each fold centre moves half as far in the same direction (first fold wins).
+    for (const Triangle& t : mesh.triangles) {
+      for (int k = 0; k < 3; ++k) {
+        const auto centre = foldMove.find(rep[t[k]]);
+        if (centre == foldMove.end()) continue;
+        for (int j = 1; j < 3; ++j) {
+          const VertexId w = rep[t[(k + j) % 3]];
+          if (!foldMove.count(w)) extra.emplace(w, 0.5 * centre->second);
+        }
+      }
+    }
+    for (const auto& [v, move] : foldMove) extra[v] = move;
+  }
+
+  // Per-vertex noise from a hash of the seed and the position: coincident copies move alike.
+  // Copies move first, reading their representative's position before it moves itself.
+  const double amplitude = options.amplitude * edge;
+  tbb::combinable<double> largest([] { return 0.0; });
+  for (const bool representatives : {false, true}) {
+    parallelRange(numVertices, [&](std::uint64_t begin, std::uint64_t end) {
+      double& local = largest.local();
+      for (std::uint64_t v = begin; v < end; ++v) {
+        const VertexId r = rep[v];
+        if ((r == v) != representatives) continue;
+        Vec3d move = Vec3d::Zero();
+        if (amplitude > 0.0) {
+          const auto bits = positionBits(mesh.positions[r]);
+          const std::uint64_t h0 = mix64(options.seed ^ mix64(bits[0] ^ (std::uint64_t(bits[1]) << 32)) ^
+                                         mix64(std::uint64_t(bits[2]) + 0x7a11ull));
+          const std::uint64_t h1 = mix64(h0), h2 = mix64(h1);
+          const double along = amplitude * (2.0 * unitFromBits(h0) - 1.0);
+          const double across = amplitude * std::sqrt(unitFromBits(h1));
+          move = along * normal[r] + across * tangentAt(normal[r], unitFromBits(h2));
+          local = std::max(local, move.norm());
+        }
+        if (!extra.empty()) {
+          const auto it = extra.find(r);
+          if (it != extra.end()) move += it->second;
+        }
+        mesh.positions[v] = toFloat(mesh.position(static_cast<VertexId>(v)) + move);
+      }
+    });
+  }
+  result.maxDisplacement = largest.combine([](double a, double b) { return std::max(a, b); });
+  return result;
 }
 
 GenerateResult generateMesh(const GenerateOptions& options) {

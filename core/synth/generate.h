@@ -49,4 +49,31 @@ struct GenerateResult {
 /// Throws InputError when faces < minimumFaces(kind) or faces >= 2^31.
 GenerateResult generateMesh(const GenerateOptions& options);
 
+/// Scanner defects added to an existing mesh: per-vertex noise, outlier spikes and small folds.
+/// Lengths are in units of the mean edge length L (over the triangles' edges).
+struct ScanNoiseOptions {
+  /// Every vertex moves by at most amplitude * L along its normal and at most amplitude * L
+  /// tangentially (uniform in [-A L, A L] along the normal, uniform in the disc of radius A L).
+  double amplitude = 0.0;
+  /// Vertices pushed along their normal by 2..6 L (outliers), one sign at random each.
+  std::uint32_t spikes = 0;
+  /// Small fold-overs: a vertex moved 2 L along a tangent, its ring 1 L, so the faces around it
+  /// overlap (a foldover of two rings).
+  std::uint32_t folds = 0;
+  std::uint64_t seed = 1;
+};
+
+struct ScanNoiseResult {
+  double meanEdgeLength = 0.0;     ///< L
+  double maxDisplacement = 0.0;    ///< largest vertex move of the per-vertex noise (mesh units)
+  std::uint32_t spikes = 0, folds = 0;
+};
+
+/// Moves the vertices of mesh in place; triangles (the topology) stay as they are. Deterministic
+/// for any thread count: a vertex's noise depends on the seed and its position only, so exactly
+/// coincident vertices (unwelded seams) get the same normal and the same move and stay
+/// coincident. Normals: area-weighted, summed over coincident copies. Throws InputError when
+/// amplitude is negative or not finite, or spikes + folds exceed the vertex count.
+ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options);
+
 }  // namespace seamvox
