@@ -3,6 +3,8 @@
 // rounding both end seamless, and the two solves minimise the energy they claim to.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+#include <cmath>
 #include <complex>
 #include <random>
 #include <vector>
@@ -12,6 +14,7 @@
 #include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/quality/metrics.h"
+#include "core/solve/assemble.h"
 #include "core/solve/evaluate.h"
 #include "core/solve/seamless_solve.h"
 #include "tests/test_meshes.h"
