@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <Eigen/Dense>
+
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -305,7 +308,9 @@ TEST(ProxyField, MethodSelection) {
   SmoothFieldOptions curvature;
   curvature.curvatureWeight = 1.0;
   EXPECT_THROW(computeCrossField(s.mesh, s.topology, FieldMethod::Proxy, curvature), InputError);
-  EXPECT_NO_THROW(computeCrossField(s.mesh, s.topology, FieldMethod::Auto, curvature));
+  // Auto on a small mesh is the direct solve, curvature alignment included.
+  EXPECT_EQ(computeCrossField(s.mesh, s.topology, FieldMethod::Auto, curvature).direction,
+            computeSmoothestField(s.mesh, s.topology, curvature).direction);
   const CrossField proxy = computeCrossField(s.mesh, s.topology, FieldMethod::Proxy);
   expectValidField(s, proxy, "computeCrossField proxy");
   ProxyFieldOptions bad;
@@ -314,6 +319,48 @@ TEST(ProxyField, MethodSelection) {
   bad.gridResolution = 64;
   bad.smoothingSweeps = -1;
   EXPECT_THROW(computeProxyField(s.mesh, s.topology, bad), InputError);
+}
+
+// Angle in [0, 45] degrees between a cross field direction and a tangent line direction.
+double crossAngleDegrees(const Vec3d& u, const Vec3d& d, const Vec3d& n) {
+  const double a = std::atan2(n.dot(d.cross(u)), d.dot(u));
+  const double quarter = std::remainder(a, M_PI / 2);  // in [-45, 45] degrees
+  return std::abs(quarter) * 180.0 / M_PI;
+}
+
+TEST(ProxyField, CurvatureAlignedFieldFollowsPrincipalDirectionsOnAnEllipsoid) {
+  // Ellipsoid x^2/a^2 + y^2/b^2 + z^2/c^2 = 1: the principal directions at p are the tangent
+  // eigenvectors of P H P (H = diag(2/a^2, 2/b^2, 2/c^2), P the tangent projector).
+  const Vec3d radii(1.6, 1.0, 0.6);
+  TriangleMesh mesh = testing::icosphereMesh(4);
+  for (Vec3f& p : mesh.positions) p = (p.cast<double>().cwiseProduct(radii)).cast<float>();
+  const Surface s = makeSurface(std::move(mesh));
+  SmoothFieldOptions curvature;
+  curvature.curvatureWeight = 1.0;
+  const CrossField aligned = computeCrossField(s.mesh, s.topology, FieldMethod::Auto, curvature);
+  const CrossField smoothest = computeCrossField(s.mesh, s.topology, FieldMethod::Auto);
+  const Eigen::Matrix3d H = Eigen::Vector3d(2 / (radii.x() * radii.x()), 2 / (radii.y() * radii.y()),
+                                            2 / (radii.z() * radii.z())).asDiagonal();
+  std::uint32_t within10Aligned = 0, within10Smoothest = 0, counted = 0;
+  for (FaceId f = 0; f < s.mesh.numFaces(); ++f) {
+    const Vec3d n = faceNormal(s.mesh, f);
+    const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - n * n.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(P * H * P);
+    // The largest eigenvalue's vector is a principal direction; skip near-umbilic faces, where
+    // the two tangent eigenvalues (the largest two) nearly agree.
+    const Eigen::Vector3d values = eigen.eigenvalues();
+    if (values[2] - values[1] < 0.1 * values[2]) continue;
+    const Vec3d d = eigen.eigenvectors().col(2);
+    ++counted;
+    within10Aligned += crossAngleDegrees(aligned.at(f), d, n) < 10.0;
+    within10Smoothest += crossAngleDegrees(smoothest.at(f), d, n) < 10.0;
+  }
+  ASSERT_GT(counted, s.mesh.numFaces() / 2);
+  EXPECT_GT(within10Aligned, 0.9 * counted) << "of " << counted << " faces";
+  // The smoothest field alone does not follow curvature (the alignment above is the weight's).
+  EXPECT_LT(within10Smoothest, within10Aligned);
+  std::printf("ellipsoid: %u of %u faces within 10 degrees of a principal direction (smoothest: %u)\n",
+              within10Aligned, counted, within10Smoothest);
 }
 
 TEST(ProxyField, CommandsSelectTheMethodAndReportIt) {

@@ -29,21 +29,8 @@ namespace {
 
 using Complex = std::complex<double>;
 
-// A cut made of the boundary only: no seams, no combing.
-CutResult boundaryCut(const Topology& topology) {
-  CutResult cut;
-  const std::uint32_t nc = topology.numCorners();
-  cut.corners = CutCorners(nc, false);
-  cut.faceRotation.assign(topology.numFaces(), 0);
-  for (CornerId c = 0; c < nc; ++c) cut.corners.setCut(c, topology.isBoundaryEdge(c));
-  return cut;
-}
-
-CrossField constantField(const TriangleMesh& mesh, const Vec3d& direction) {
-  CrossField field;
-  field.direction.assign(mesh.numFaces(), direction.normalized().cast<float>());
-  return field;
-}
+using testing::boundaryCut;
+using testing::constantField;
 
 // Cylinder of testing::cylinderMesh(n, m) cut along the generator through vertices j * n
 // (vertex index 0 mod n): one seam with matching 0 from the bottom to the top boundary.

@@ -1,12 +1,14 @@
 // Resident memory figures (stream/memory) used in reports.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <memory>
+#include <thread>
 
 #include "core/system/errors.h"
 #include "core/system/huge_pages.h"
@@ -50,10 +52,29 @@ TEST(Memory, StageMeterSeparatesThePeaksOfConsecutiveStages) {
   EXPECT_EQ(meter.stages()[0].name, "big");
   EXPECT_GE(big.peakBytes, big.endBytes + kBytes / 2) << "the freed block is in the stage's peak";
   EXPECT_GE(meter.peakBytes(), big.peakBytes) << "the whole-run peak keeps every stage's";
-  EXPECT_GE(big.seconds, 0.0);
   if (resetPeakResidentBytes()) {
     EXPECT_LT(small.peakBytes + kBytes / 2, big.peakBytes) << "the next stage starts a new peak";
   }
+}
+
+TEST(Memory, StageMeterMeasuresEachStagesTimeAndPeak) {
+  StageMeter meter;
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const StageFigures sleeping = meter.finish("sleep");
+  EXPECT_GE(sleeping.seconds, 0.04);
+  EXPECT_LT(sleeping.seconds, 10.0);
+  const std::uint64_t start = currentResidentBytes();
+  constexpr std::size_t kBytes = 64u << 20;
+  {
+    std::unique_ptr<char[]> block(new char[kBytes]);
+    std::memset(block.get(), 1, kBytes);
+    volatile char sink = block[kBytes / 3];
+    (void)sink;
+  }
+  const StageFigures allocating = meter.finish("allocate");
+  EXPECT_GE(allocating.peakBytes, start + (60u << 20)) << "start " << start;
+  EXPECT_LT(allocating.seconds, 10.0);
+  EXPECT_GE(meter.peakBytes(), allocating.peakBytes);
 }
 
 TEST(Memory, AvailableMemoryIsKnownOnLinux) {
@@ -112,10 +133,33 @@ TEST(Memory, AdvisedBlocksGetHugePages) {
   // At least one 2 MB page of the block's 2 MB-aligned interior (12 MB or more) is huge.
   EXPECT_GE(after - before, 2ll << 20) << "before " << before << " after " << after;
   std::free(block);
-  // Small blocks and null are left alone.
-  adviseHugePages(nullptr, bytes);
-  char small[64] = {};
+}
+
+TEST(Memory, AdviceKeepsContentsAndAdvisedMallocHonoursItsContract) {
+  // Advice given after the pages were written must not discard them (MADV_HUGEPAGE, not a
+  // madvise that frees), for large blocks, small blocks below the threshold and null.
+  const std::size_t bytes = std::size_t(16) << 20;
+  std::unique_ptr<unsigned char[]> block(new unsigned char[bytes]);
+  for (std::size_t i = 0; i < bytes; ++i) block[i] = static_cast<unsigned char>(i * 131 + 7);
+  adviseHugePages(block.get(), bytes);
+  std::size_t changed = 0;
+  for (std::size_t i = 0; i < bytes; ++i) changed += block[i] != static_cast<unsigned char>(i * 131 + 7);
+  EXPECT_EQ(changed, 0u);
+  char small[64];
+  for (int i = 0; i < 64; ++i) small[i] = static_cast<char>(i);
   adviseHugePages(small, sizeof small);
+  adviseHugePages(nullptr, bytes);
+  for (int i = 0; i < 64; ++i) EXPECT_EQ(small[i], static_cast<char>(i));
+  // mallocAdvised: at least one byte for 0, null (not a crash) when the request cannot be met.
+  void* zero = mallocAdvised(0);
+  EXPECT_NE(zero, nullptr);
+  std::free(zero);
+  EXPECT_EQ(mallocAdvised(~std::size_t(0) - 4095), nullptr);  // beyond PTRDIFF_MAX: refused
+  char* advised = static_cast<char*>(mallocAdvised(bytes));
+  ASSERT_NE(advised, nullptr);
+  std::memset(advised, 3, bytes);
+  EXPECT_EQ(advised[bytes - 1], 3);
+  std::free(advised);
 }
 
 }  // namespace

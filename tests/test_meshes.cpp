@@ -106,9 +106,33 @@ Surface makeSurface(TriangleMesh mesh) {
   return s;
 }
 
+CutSurface makeCutSurface(TriangleMesh mesh, std::uint32_t randomFieldSeed) {
+  CutSurface out;
+  out.s = makeSurface(std::move(mesh));
+  out.field = randomFieldSeed ? randomField(out.s.mesh, randomFieldSeed)
+                              : computeSmoothestField(out.s.mesh, out.s.topology);
+  out.cut = cutToDisk(out.s.mesh, out.s.topology, out.field,
+                      computeSingularities(out.s.mesh, out.s.topology, out.field));
+  return out;
+}
+
 Surface loadShared(const std::string& path) {
   CleanResult cleaned = cleanMesh(readMesh(path));
   return {std::move(cleaned.mesh), std::move(cleaned.topology)};
+}
+
+CutResult boundaryCut(const Topology& topology) {
+  CutResult cut;
+  cut.corners = CutCorners(topology.numCorners(), false);
+  for (CornerId c = 0; c < topology.numCorners(); ++c) cut.corners.setCut(c, topology.isBoundaryEdge(c));
+  cut.faceRotation.assign(topology.numFaces(), 0);
+  return cut;
+}
+
+CrossField constantField(const TriangleMesh& mesh, const Vec3d& direction) {
+  CrossField field;
+  field.direction.assign(mesh.numFaces(), direction.normalized().cast<float>());
+  return field;
 }
 
 CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed) {

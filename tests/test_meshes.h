@@ -2,6 +2,7 @@
 /// Small meshes built in code for the test suites (closed, boundary, several components).
 #include <string>
 
+#include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/topology.h"
@@ -26,8 +27,20 @@ struct Surface {
 };
 /// Corner table of a mesh that is already clean (Topology::build throws otherwise).
 Surface makeSurface(TriangleMesh mesh);
+/// A surface with a field and the field's cut (cutToDisk).
+struct CutSurface {
+  Surface s;
+  CrossField field;
+  CutResult cut;
+};
+/// randomFieldSeed 0: the smoothest field (few cones); else randomField(seed) (many cones).
+CutSurface makeCutSurface(TriangleMesh mesh, std::uint32_t randomFieldSeed = 0);
 /// Reads and cleans a mesh file.
 Surface loadShared(const std::string& path);
+/// A cut made of the boundary only: no seams, no combing (flat meshes, hand-built seams).
+CutResult boundaryCut(const Topology& topology);
+/// The same direction on every face (stored as float).
+CrossField constantField(const TriangleMesh& mesh, const Vec3d& direction = Vec3d::UnitX());
 /// Unit tangent directions at pseudo-random angles (a field with many cones); deterministic.
 CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed);
 

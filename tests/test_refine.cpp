@@ -398,19 +398,8 @@ TEST_F(RefineSphere, ExtractedRegionIsAManifoldSubMeshWithIndexMaps) {
   EXPECT_EQ(freeCones, s.cut.cones.size());
 }
 
-// A flat mesh's cut: its boundary only (no seams, no combing), and a field along x.
-CutResult boundaryCut(const Topology& topology) {
-  CutResult cut;
-  cut.corners = CutCorners(topology.numCorners(), false);
-  for (CornerId c = 0; c < topology.numCorners(); ++c) cut.corners.setCut(c, topology.isBoundaryEdge(c));
-  cut.faceRotation.assign(topology.numFaces(), 0);
-  return cut;
-}
-CrossField constantField(const TriangleMesh& mesh) {
-  CrossField field;
-  field.direction.assign(mesh.numFaces(), Vec3f::UnitX());
-  return field;
-}
+using testing::boundaryCut;
+using testing::constantField;
 
 TEST(RefineRegion, PinchedVertexGetsOneSubVertexPerFan) {
   const TriangleMesh mesh = testing::gridMesh(4, 4);

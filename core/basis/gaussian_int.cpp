@@ -104,8 +104,11 @@ GaussVector LatticeEliminator::express(const GaussVector& row) const {
 }
 
 void LatticeEliminator::addToColumn(std::uint32_t target, GaussInt q, std::uint32_t source) {
-  // column_target += q column_source, over every row holding the source column.
-  const std::vector<std::uint32_t> rows = colRows_[source];
+  // column_target += q column_source, over every row holding the source column. A row is listed
+  // twice when its entry cancelled and came back: update it once.
+  std::vector<std::uint32_t> rows = colRows_[source];
+  std::sort(rows.begin(), rows.end());
+  rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
   for (std::uint32_t r : rows) {
     const GaussInt* x = findEntry(rows_[r], source);
     if (!x) continue;  // stale index entry

@@ -29,6 +29,8 @@ class CholmodFactor {
   std::uint64_t factorBytes() const;     ///< memory held by the factor
   std::uint64_t peakBytes() const;       ///< CHOLMOD's peak memory during analyse + factor
   bool usedRealFallback() const;
+  /// Test hook: factor() skips the complex factorization and goes to the real form directly.
+  void setRealFormOnly(bool realFormOnly);
   bool isSupernodal() const;
 
  private:

@@ -67,6 +67,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   }
   VoxelParamResult vox;
   try {
+    if (solverOptions.beforeVoxelSolve) solverOptions.beforeVoxelSolve();
     vox = parameterizeMeshVoxel(mesh, topology, field, cut, options, solverOptions.gridResolution);
   } catch (const SolverError& e) {
     // The voxel system could not be factored: the hat solver gives the same kind of map, if it

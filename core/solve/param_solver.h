@@ -3,6 +3,7 @@
 /// (core/solve/hat_solver.h), the Vox solver (voxel_grid.h) and Vox+HatLoc, the Vox map repaired near cones
 /// by a local hat solve (core/refine/refine.h).
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "core/solve/hat_solver.h"
@@ -56,6 +57,9 @@ struct SolverOptions {
   /// When set, the solve closes its stages on it: "solve" (the hat or voxel solve, with the
   /// fallback if any) and, for voxloc, "refine".
   StageMeter* meter = nullptr;
+  /// Test hook, run just before the voxel solve: a SolverError it throws takes the path of a
+  /// voxel system that cannot be factored (the hat fallback).
+  std::function<void()> beforeVoxelSolve;
 };
 
 struct SolverResult {

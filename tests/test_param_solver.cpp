@@ -1,0 +1,94 @@
+// Solver selection (core/solve/param_solver): names, and the vox -> hat fallback when the voxel
+// system cannot be factored: the hat map, seamless, with the reason reported; other errors are
+// not swallowed.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/quality/metrics.h"
+#include "core/solve/param_solver.h"
+#include "core/system/errors.h"
+#include "tests/test_meshes.h"
+
+namespace seamvox {
+namespace {
+
+struct FieldTorus : testing::CutSurface {
+  FieldTorus() : CutSurface(testing::makeCutSurface(testing::torusMesh(30, 12))) {}
+  ParamOptions options() const {
+    ParamOptions o;
+    o.edgeLength = 0.3;
+    return o;
+  }
+};
+
+TEST(ParamSolver, NamesRoundTrip) {
+  for (ParamSolver s : {ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc}) {
+    EXPECT_EQ(parseParamSolver(paramSolverName(s)), s);
+  }
+  try {
+    parseParamSolver("voxel");
+    FAIL() << "an unknown solver name was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("available: hat, vox, voxloc"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ParamSolver, UnfactorableVoxelSystemFallsBackToTheHatSolver) {
+  const FieldTorus t;
+  const ParamResult hat = parameterizeMesh(t.s.mesh, t.s.topology, t.field, t.cut, t.options());
+  for (ParamSolver chosen : {ParamSolver::Vox, ParamSolver::VoxLoc}) {
+    SCOPED_TRACE(paramSolverName(chosen));
+    SolverOptions solverOptions;
+    solverOptions.solver = chosen;
+    solverOptions.gridResolution = 16;
+    StageMeter meter;
+    solverOptions.meter = &meter;
+    solverOptions.beforeVoxelSolve = [] {
+      throw SolverError("CHOLMOD: not positive definite at column 7 (injected)");
+    };
+    const SolverResult result =
+        parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, t.options(), solverOptions);
+    EXPECT_EQ(result.solver, ParamSolver::Hat);
+    EXPECT_NE(result.fallbackReason.find("not positive definite at column 7 (injected)"), std::string::npos)
+        << result.fallbackReason;
+    EXPECT_FALSE(result.refined) << "the hat map is not refined";
+    ASSERT_EQ(meter.stages().size(), 1u);
+    EXPECT_EQ(meter.stages()[0].name, "solve");
+    // The map is the hat solver's, corner for corner, and seamless.
+    ASSERT_EQ(result.param.cornerUV.size(), hat.cornerUV.size());
+    for (CornerId c = 0; c < hat.cornerUV.size(); ++c) {
+      ASSERT_EQ(result.param.cornerUV[c], hat.cornerUV[c]) << "corner " << c;
+    }
+    EXPECT_TRUE(measureSeams(t.s.mesh, t.s.topology, t.cut, result.param.cornerUV).isSeamless(1e-8));
+  }
+}
+
+TEST(ParamSolver, OtherErrorsOfTheVoxelSolveAreNotSwallowed) {
+  const FieldTorus t;
+  SolverOptions solverOptions;
+  solverOptions.solver = ParamSolver::Vox;
+  solverOptions.beforeVoxelSolve = [] { throw InputError("bad input (injected)"); };
+  EXPECT_THROW(parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, t.options(), solverOptions),
+               InputError);
+}
+
+TEST(ParamSolver, VoxelSolveRunsWhenItCanBeFactored) {
+  const FieldTorus t;
+  SolverOptions solverOptions;
+  solverOptions.solver = ParamSolver::Vox;
+  solverOptions.gridResolution = 16;
+  bool called = false;
+  solverOptions.beforeVoxelSolve = [&called] { called = true; };
+  const SolverResult result =
+      parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, t.options(), solverOptions);
+  EXPECT_TRUE(called);
+  EXPECT_EQ(result.solver, ParamSolver::Vox) << result.fallbackReason;
+  EXPECT_TRUE(result.fallbackReason.empty());
+  EXPECT_TRUE(measureSeams(t.s.mesh, t.s.topology, t.cut, result.param.cornerUV).isSeamless(1e-6));
+}
+
+}  // namespace
+}  // namespace seamvox

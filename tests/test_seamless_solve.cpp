@@ -1,0 +1,156 @@
+// The seamless solve (core/solve/seamless_solve): rounding gives Gaussian-integer translations,
+// a linear function is reproduced exactly on a flat mesh without seams, direct and greedy
+// rounding both end seamless, and the two solves minimise the energy they claim to.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <complex>
+#include <random>
+#include <vector>
+
+#include "core/basis/basis.h"
+#include "core/basis/reduce.h"
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/quality/metrics.h"
+#include "core/solve/assemble.h"
+#include "core/solve/evaluate.h"
+#include "core/solve/seamless_solve.h"
+#include "tests/test_meshes.h"
+
+namespace seamvox {
+namespace {
+
+using Complex = std::complex<double>;
+
+struct Solved {
+  SeamlessSolution solution;
+  WedgeMap cornerUV;
+};
+
+// A torus with a smooth field (its cones, seams with rotations and translations) at spacing h.
+struct FieldTorus : testing::CutSurface {
+  FieldTorus() : CutSurface(testing::makeCutSurface(testing::torusMesh(24, 12))) {}
+  HatBasisOptions basisOptions() const {
+    HatBasisOptions options;
+    options.edgeLength = 0.35;
+    return options;
+  }
+  HatBasis basis{s.mesh, s.topology, field, cut, basisOptions()};
+  Reduction reduction = reduceBasis(basis);
+
+  Solved solve(const RoundOptions& options) const {
+    Solved out;
+    out.solution = solveSeamless(basis, reduction, options);
+    out.cornerUV = buildCutWedges(s.topology, cut);
+    evaluateMap(basis, reduction, out.solution.unknowns, out.cornerUV);
+    return out;
+  }
+};
+
+void expectIntegralAndSeamless(const FieldTorus& t, const Solved& solved) {
+  const SeamlessSolution& solution = solved.solution;
+  ASSERT_EQ(solution.translations.size(), t.cut.seams.size());
+  for (const Complex& tr : solution.translations) EXPECT_LT(gaussianIntegerDistance(tr), 1e-9);
+  for (std::uint32_t j = t.reduction.numPositional; j < t.reduction.numUnknowns(); ++j) {
+    EXPECT_EQ(solution.unknowns[j], roundGaussian(solution.unknowns[j])) << "s fixed to an integer";
+  }
+  const SeamQuality seams = measureSeams(t.s.mesh, t.s.topology, t.cut, solved.cornerUV);
+  EXPECT_TRUE(seams.isSeamless(1e-8)) << "residual " << seams.maxResidual << ", integer distance "
+                                      << seams.maxIntegerDistance;
+  EXPECT_GT(seams.seamEdges, 0u);
+  EXPECT_LE(solution.stats.maxRoundingShift, std::sqrt(0.5) + 1e-12);
+}
+
+TEST(SeamlessSolve, DirectRoundingGivesGaussianIntegerTranslations) {
+  const FieldTorus t;
+  ASSERT_GT(t.reduction.numTranslational, 0u);
+  const Solved direct = t.solve({});
+  expectIntegralAndSeamless(t, direct);
+  const SeamlessStats& stats = direct.solution.stats;
+  EXPECT_EQ(stats.unknowns, t.reduction.numUnknowns());
+  EXPECT_EQ(stats.translational, t.reduction.numTranslational);
+  EXPECT_EQ(stats.components, 1u);
+  EXPECT_GT(stats.systemNonzeros, 0u);
+  EXPECT_GT(stats.factorNonzeros, 0u);
+  EXPECT_FALSE(stats.realFallback);
+}
+
+TEST(SeamlessSolve, GreedyRoundingIsSeamlessToo) {
+  const FieldTorus t;
+  RoundOptions greedy;
+  greedy.greedy = true;
+  greedy.greedyRounds = 3;
+  const Solved solved = t.solve(greedy);
+  expectIntegralAndSeamless(t, solved);
+  // Direct and greedy minimise the same energy over integer s: neither is far from the other.
+  const Solved direct = t.solve({});
+  const MapQuality a = measureMap(t.s.mesh, solved.cornerUV, &t.field, 0.35);
+  const MapQuality b = measureMap(t.s.mesh, direct.cornerUV, &t.field, 0.35);
+  EXPECT_LT(a.relativeGradientError, 2.0 * b.relativeGradientError + 0.05);
+}
+
+TEST(SeamlessSolve, LinearFunctionIsReproducedExactlyOnAFlatGrid) {
+  // No seams, constant field along x at spacing h: the minimiser is u = (x - x0) / h, v = (y - y0) / h.
+  const testing::Surface s = testing::makeSurface(testing::gridMesh(7, 5, 0.5));
+  const CrossField field = testing::constantField(s.mesh, Vec3d::UnitX());
+  const CutResult cut = testing::boundaryCut(s.topology);
+  HatBasisOptions options;
+  options.edgeLength = 0.25;
+  const HatBasis basis(s.mesh, s.topology, field, cut, options);
+  const Reduction reduction = reduceBasis(basis);
+  EXPECT_EQ(reduction.numTranslational, 0u);
+  const SeamlessSolution solution = solveSeamless(basis, reduction);
+  EXPECT_EQ(solution.stats.pinnedFirst, 1u);
+  EXPECT_TRUE(solution.translations.empty());
+  WedgeMap uv = buildCutWedges(s.topology, cut);
+  evaluateMap(basis, reduction, solution.unknowns, uv);
+  const Vec2d origin = uv[0];
+  const Vec3d p0 = s.mesh.position(s.topology.vertex(0));
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    const Vec3d d = s.mesh.position(s.topology.vertex(c)) - p0;
+    EXPECT_LT((uv[c] - origin - Vec2d(d.x(), d.y()) / 0.25).norm(), 1e-9) << "corner " << c;
+  }
+}
+
+TEST(SeamlessSolve, RoundTranslationsRoundsOnlyTheTranslationalUnknowns) {
+  Reduction reduction;
+  reduction.numPositional = 2;
+  reduction.numTranslational = 3;
+  std::vector<Complex> x{{0.4, 0.6}, {1.2, -3.7}, {0.4, 0.6}, {-2.49, 7.51}, {5.0, -1.0}};
+  const double shift = roundTranslations(reduction, x);
+  EXPECT_EQ(x[0], Complex(0.4, 0.6));
+  EXPECT_EQ(x[1], Complex(1.2, -3.7));
+  EXPECT_EQ(x[2], Complex(0.0, 1.0));
+  EXPECT_EQ(x[3], Complex(-2.0, 8.0));
+  EXPECT_EQ(x[4], Complex(5.0, -1.0));
+  EXPECT_NEAR(shift, std::abs(Complex(-0.49, -0.49)), 1e-12);  // the largest change, x[3]
+}
+
+TEST(SeamlessSolve, SecondSolveMinimisesTheEnergyWithIntegerTranslations) {
+  // Perturbing the free unknowns of the final solution can only raise x* K x - 2 Re(x* rhs).
+  const FieldTorus t;
+  const SeamlessSolution solution = solveSeamless(t.basis, t.reduction);
+  const LinearSystem system = assembleSystem(t.basis, t.reduction);
+  const std::uint32_t n = t.reduction.numUnknowns();
+  Eigen::MatrixXcd L = Eigen::MatrixXcd(system.lower);
+  Eigen::MatrixXcd K = L + L.adjoint();
+  K.diagonal() -= L.diagonal();
+  const auto energy = [&](const std::vector<Complex>& x) {
+    const Eigen::VectorXcd v = Eigen::Map<const Eigen::VectorXcd>(x.data(), n);
+    return (v.adjoint() * K * v)(0).real() - 2.0 * v.dot(system.rhs).real();
+  };
+  const double best = energy(solution.unknowns);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> value(-0.1, 0.1);
+  std::uniform_int_distribution<std::uint32_t> pick(0, t.reduction.numPositional - 1);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Complex> x = solution.unknowns;
+    x[pick(rng)] += Complex(value(rng), value(rng));
+    EXPECT_GE(energy(x), best - 1e-9 * std::abs(best));
+  }
+}
+
+}  // namespace
+}  // namespace seamvox
