@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
 
@@ -196,6 +197,13 @@ void checkOutputPaths(const std::vector<NamedPath>& inputs, const std::vector<Na
       }
     }
   }
+}
+
+std::string errorMessage(const std::exception& error) {
+  const auto* fsError = dynamic_cast<const std::filesystem::filesystem_error*>(&error);
+  if (!fsError) return error.what();
+  const std::string path = fsError->path1().empty() ? "" : fsError->path1().string() + ": ";
+  return path + fsError->code().message();
 }
 
 void requirePngPath(const std::string& option, const std::string& path) {

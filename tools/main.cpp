@@ -78,8 +78,7 @@ int main(int argc, char** argv) {
     return 1;
   } catch (const std::filesystem::filesystem_error& e) {
     // A folder operation (creating, removing) that a command did not word itself: name the path.
-    const std::string path = e.path1().empty() ? std::string() : e.path1().string() + ": ";
-    std::fprintf(stderr, "seamvox %s: error: %s%s\n", name.c_str(), path.c_str(), e.code().message().c_str());
+    std::fprintf(stderr, "seamvox %s: error: %s\n", name.c_str(), cli::errorMessage(e).c_str());
     return 1;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "seamvox %s: error: out of memory\n", name.c_str());
