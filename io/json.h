@@ -1,8 +1,6 @@
 #pragma once
-/// A minimal JSON writer for reports, and a lookup of one number in a report (no full parser).
-/// Produces pretty-printed, valid JSON.
+/// A minimal JSON writer for reports (no parsing). Produces pretty-printed, valid JSON.
 #include <cstdint>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,11 +37,5 @@ class JsonWriter {
 
 /// Escapes a string for JSON (quotes included).
 std::string jsonQuote(const std::string& text);
-
-/// The number (true 1, false 0) at a dotted path of object keys from the top-level object of a
-/// JSON text ("quality.flipped": member flipped of member quality), or nullopt when a key is
-/// missing, the value is not a number or boolean, or the text is not an object. Keys of nested
-/// objects and arrays off the path are skipped, however they are named.
-std::optional<double> findJsonNumber(const std::string& json, const std::string& dottedPath);
 
 }  // namespace seamvox

@@ -21,6 +21,7 @@
 #include "core/system/errors.h"
 #include "io/interrupt_cleanup.h"
 #include "io/json.h"
+#include "io/json_reader.h"
 #include "io/mesh_io.h"
 #include "tools/cli.h"
 
@@ -88,23 +89,27 @@ std::string lastLine(const std::string& text) {
   return text.substr(begin == std::string::npos ? 0 : begin + 1, end - (begin == std::string::npos ? 0 : begin + 1) + 1);
 }
 
-/// The number at a dotted path of a report (NaN when absent or null).
-double reportNumber(const std::string& report, const std::string& path) {
-  return findJsonNumber(report, path).value_or(std::nan(""));
+/// A report parsed (an empty object when it is missing or malformed: its figures are then NaN).
+JsonValue parseReport(const std::string& text, const std::string& source) {
+  try {
+    return parseJson(text, source);
+  } catch (const InputError&) {
+    return JsonValue();
+  }
 }
 
-std::uint64_t reportCount(const std::string& report, const std::string& path) {
-  const double value = reportNumber(report, path);
+std::uint64_t reportCount(const JsonValue& report, const std::string& path) {
+  const double value = report.numberAt(path);
   return value >= 0.0 ? static_cast<std::uint64_t>(value) : 0;
 }
 
 /// Reads the figures of a report into an outcome: param's (the map's quality under "quality.")
 /// or the job report this runner writes (at the top level, quality = "").
-void readFigures(const std::string& report, const std::string& quality, JobOutcome& outcome) {
+void readFigures(const JsonValue& report, const std::string& quality, JobOutcome& outcome) {
   outcome.faces = reportCount(report, "faces");
-  outcome.seamless = reportNumber(report, quality + "seamless") == 1.0;
-  outcome.maxSeamResidual = reportNumber(report, quality + "maxSeamResidual");
-  outcome.gradientError = reportNumber(report, quality + "relativeGradientError");
+  outcome.seamless = report.numberAt(quality + "seamless") == 1.0;
+  outcome.maxSeamResidual = report.numberAt(quality + "maxSeamResidual");
+  outcome.gradientError = report.numberAt(quality + "relativeGradientError");
   outcome.flipped = reportCount(report, quality + "flipped");
 }
 
@@ -217,9 +222,9 @@ JobOutcome skippedOutcome(const PreparedJob& job) {
   outcome.name = job.spec.name;
   outcome.status = JobStatus::Skipped;
   outcome.estimateBytes = job.estimateBytes;
-  const std::string report = readText(job.reportPath);
+  const JsonValue report = parseReport(readText(job.reportPath), job.reportPath);
   readFigures(report, "", outcome);
-  outcome.seconds = reportNumber(report, "seconds");
+  outcome.seconds = report.numberAt("seconds");
   outcome.peakBytes = reportCount(report, "peakResidentBytes");
   return outcome;
 }
@@ -272,9 +277,10 @@ JobOutcome runJob(const PreparedJob& job, const RunnerOptions& options) {
       paramStep(job.spec.inputs[0], job.outputs[0]);
     }
     const std::string paramText = readText(paramReport);
-    readFigures(paramText, "quality.", outcome);
+    const JsonValue paramFigures = parseReport(paramText, paramReport);
+    readFigures(paramFigures, "quality.", outcome);
     // wait4's peak misses param's largest stages (its meter resets the kernel's peak per stage).
-    outcome.peakBytes = std::max(outcome.peakBytes, reportCount(paramText, "peakResidentBytes"));
+    outcome.peakBytes = std::max(outcome.peakBytes, reportCount(paramFigures, "peakResidentBytes"));
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     outcome.status = JobStatus::Done;
 
