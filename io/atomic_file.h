@@ -7,7 +7,8 @@
 namespace seamvox {
 
 /// Opens "<path>.tmp-<pid>" for binary writing; commit() flushes, checks for write errors and
-/// renames it onto path. If the object is destroyed without commit() the temporary is removed.
+/// renames it onto path. If the object is destroyed without commit() the temporary is removed,
+/// and so it is when the process is interrupted (io/interrupt_cleanup.h).
 class AtomicFile {
  public:
   explicit AtomicFile(std::string path);
@@ -18,14 +19,21 @@ class AtomicFile {
   std::FILE* handle() { return file_; }
   void write(const void* data, std::size_t bytes);
   void write(const std::string& text) { write(text.data(), text.size()); }
-  /// Throws IoError (disk full, permissions) naming the target path.
+  /// Flushes and closes the temporary, which stays until commit() or destruction. Throws
+  /// IoError (disk full) naming the target path. Does nothing when already closed.
+  void close();
+  /// close(), then renames the temporary onto path. Throws IoError (disk full, permissions)
+  /// naming the target path.
   void commit();
   const std::string& path() const { return path_; }
+  const std::string& temporaryPath() const { return tmpPath_; }
 
  private:
   std::string path_, tmpPath_;
   std::FILE* file_ = nullptr;
   std::unique_ptr<char[]> buffer_;
+  int cleanupSlot_ = -1;
+  bool renamed_ = false;
 };
 
 }  // namespace seamvox

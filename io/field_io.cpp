@@ -147,6 +147,11 @@ CrossField importField(const std::string& path, const TriangleMesh& mesh,
 
 void writeField(const std::string& path, const std::vector<Vec3d>& vectors) {
   AtomicFile file(path);
+  writeField(file, vectors);
+  file.commit();
+}
+
+void writeField(AtomicFile& file, const std::vector<Vec3d>& vectors) {
   file.write("# seamvox field: one tangent vector (x y z) per face, in face order\n1 " +
              std::to_string(vectors.size()) + "\n");
   std::string chunk;
@@ -160,7 +165,6 @@ void writeField(const std::string& path, const std::vector<Vec3d>& vectors) {
     }
   }
   file.write(chunk);
-  file.commit();
 }
 
 }  // namespace seamvox

@@ -17,6 +17,8 @@
 
 namespace seamvox {
 
+class AtomicFile;
+
 /// Reads the per-face vectors of a field file (first vector for `.crossfield`), unprojected.
 /// Throws IoError (cannot open) or InputError naming the file and line: a malformed line, a
 /// non-finite number, or a face count different from expectedFaces.
@@ -31,5 +33,7 @@ CrossField importField(const std::string& path, const TriangleMesh& mesh,
 
 /// Writes per-face vectors in the plain format (header `1 F`), atomically. Throws IoError.
 void writeField(const std::string& path, const std::vector<Vec3d>& vectors);
+/// The same into an open output (e.g. one of an OutputSet); the caller commits.
+void writeField(AtomicFile& file, const std::vector<Vec3d>& vectors);
 
 }  // namespace seamvox

@@ -286,17 +286,23 @@ void checkWritable(const std::string& path, const TriangleMesh& mesh) {
 }  // namespace
 
 void writeMesh(const std::string& path, const TriangleMesh& mesh, const WriteOptions& options) {
+  if (formatFromPath(path) == MeshFormat::Unknown) throwUnknownFormat(path);  // before a file
+  AtomicFile file(path);
+  writeMesh(file, mesh, options);
+  file.commit();
+}
+
+void writeMesh(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
+  const std::string& path = file.path();
   const MeshFormat format = formatFromPath(path);
   if (format == MeshFormat::Unknown) throwUnknownFormat(path);
   checkWritable(path, mesh);
-  AtomicFile file(path);
   switch (format) {
     case MeshFormat::Ply: detail::writePly(file, mesh, options); break;
     case MeshFormat::Obj: detail::writeObj(file, mesh, options); break;
     case MeshFormat::Off: detail::writeOff(file, mesh, options); break;
     default: detail::writeDraco(file, mesh, options); break;
   }
-  file.commit();
 }
 
 }  // namespace seamvox

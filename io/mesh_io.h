@@ -12,6 +12,8 @@
 
 namespace seamvox {
 
+class AtomicFile;
+
 enum class MeshFormat { Unknown, Ply, Obj, Off, Draco };
 /// Format from the file extension (case-insensitive): .ply .obj .off .drc.
 MeshFormat formatFromPath(const std::string& path);
@@ -54,5 +56,8 @@ int dracoUVBitsFor(const TriangleMesh& mesh, const WriteOptions& options);
 /// Writes a mesh; the format comes from the extension. The file is written to a temporary file
 /// in the same folder and renamed into place, so a failure never leaves a half-written output.
 void writeMesh(const std::string& path, const TriangleMesh& mesh, const WriteOptions& options = {});
+/// The same into an open output (e.g. one of an OutputSet), format from file.path(); the
+/// caller commits.
+void writeMesh(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options = {});
 
 }  // namespace seamvox

@@ -131,4 +131,6 @@ void writePng(const std::string& path, const RgbImage& image) {
   file.commit();
 }
 
+void writePng(AtomicFile& file, const RgbImage& image) { file.write(encodePng(image)); }
+
 }  // namespace seamvox

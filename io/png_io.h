@@ -6,6 +6,8 @@
 
 namespace seamvox {
 
+class AtomicFile;
+
 /// The complete PNG file (signature, IHDR, IDAT chunks, IEND) of an image. Each row is filtered
 /// with the PNG filter that makes it smallest by the usual sum-of-differences estimate.
 /// Throws InputError for an empty image or a pixel array of the wrong size.
@@ -13,5 +15,7 @@ std::string encodePng(const RgbImage& image, int compressionLevel = 6);
 
 /// Writes encodePng(image) to path atomically (io/atomic_file.h). Throws IoError naming the path.
 void writePng(const std::string& path, const RgbImage& image);
+/// The same into an open output (e.g. one of an OutputSet); the caller commits.
+void writePng(AtomicFile& file, const RgbImage& image);
 
 }  // namespace seamvox

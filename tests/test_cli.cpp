@@ -1,7 +1,16 @@
-// The `seamvox` command: gen, info, subdivide and demo run as a user would run them.
+// The `seamvox` command: gen, info, subdivide and demo run as a user would run them; outputs are
+// all-or-nothing, never clobber an input, and an interrupted run leaves no temporary behind.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cctype>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -13,6 +22,8 @@
 
 #include "io/json_reader.h"
 #include "testing.h"
+
+extern char** environ;
 
 namespace seamvox {
 namespace {
@@ -226,6 +237,113 @@ TEST(Cli, DemoRunsTheMainJobOnAGeneratedScan) {
   EXPECT_FALSE(contains(out, "welded vertices 0,")) << "the demo welds the scan's seam\n" << out;
   EXPECT_TRUE(std::filesystem::exists(dir.path("demo/scan.ply")));
   EXPECT_TRUE(contains(run("demo --faces 10", 2), "--faces"));
+}
+
+TEST(Cli, OutputsOfOneRunAreAllOrNothing) {
+  TempDir dir;
+  const std::string mesh = dir.path("m.ply"), out = dir.path("m_uv.obj");
+  run("gen sphere --faces 1500 -o " + mesh, 0);
+  // The report cannot be written: the map is not written either, and an older map stays.
+  const std::string missing = dir.path("missing/r.json");
+  std::string log = run("param --quiet --solver hat --cells 20 " + mesh + " -o " + out + " --report " + missing, 1);
+  EXPECT_TRUE(contains(log, missing)) << log;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  testing::writeFile(out, "older map");
+  run("param --quiet --solver hat --cells 20 " + mesh + " -o " + out + " --render " + dir.path("no/p.png"), 1);
+  EXPECT_EQ(testing::readFile(out), "older map");
+  log = run("field --quiet " + mesh + " -o " + dir.path("f.field") + " --cones " + dir.path("c.obj") +
+                " --seams " + dir.path("missing/s.obj"), 1);
+  EXPECT_TRUE(contains(log, "missing/s.obj")) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.path("f.field")));
+  EXPECT_FALSE(std::filesystem::exists(dir.path("c.obj")));
+  EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
+  // All of them when everything can be written.
+  run("param --quiet --solver hat --cells 20 " + mesh + " -o " + out + " --report " + dir.path("r.json") +
+          " --render " + dir.path("p.png"), 0);
+  EXPECT_NE(testing::readFile(out), "older map");
+  EXPECT_GT(parseJson(testing::readFile(dir.path("r.json")))["peakResidentBytes"].number, 0);
+  EXPECT_EQ(testing::readFile(dir.path("p.png")).substr(1, 3), "PNG");
+  EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
+}
+
+TEST(Cli, AnOutputThatWouldOverwriteAnInputOrAnotherOutputIsAUsageError) {
+  TempDir dir;
+  const std::string mesh = dir.path("m.obj"), uv = dir.path("uv.obj");
+  run("gen sphere --faces 800 -o " + mesh, 0);
+  run("param --quiet --solver hat --cells 10 " + mesh + " -o " + uv, 0);
+  const std::string meshBytes = testing::readFile(mesh), uvBytes = testing::readFile(uv);
+  std::filesystem::create_directory(dir.path("sub"));
+  std::filesystem::create_symlink(mesh, dir.path("link.obj"));
+  const std::string sameAsMesh[] = {mesh, dir.path("sub/../m.obj"), dir.path("link.obj")};
+  for (const std::string& target : sameAsMesh) {
+    std::string log = run("param --quiet " + mesh + " -o " + target, 2);
+    EXPECT_TRUE(contains(log, "overwrite the input")) << log;
+    run("field --quiet " + mesh + " -o " + target, 2);
+    run("convert " + mesh + " " + target, 2);
+    run("info " + mesh + " --report " + target, 2);
+  }
+  std::string log = run("param --quiet " + mesh + " -o " + dir.path("a.obj") + " --report " + dir.path("a.obj"), 2);
+  EXPECT_TRUE(contains(log, "same file")) << log;
+  run("param --quiet " + mesh + " -o " + dir.path("a.obj") + " --report " + dir.path("sub/../a.obj"), 2);
+  run("field --quiet " + mesh + " -o " + dir.path("f") + " --cones " + dir.path("s.obj") + " --seams " +
+          dir.path("s.obj"), 2);
+  run("subdivide " + mesh + " -o " + dir.path("f.obj") + " --field " + dir.path("x.field") +
+          " --field-out " + dir.path("x.field"), 2);
+  log = run("render " + uv + " -o " + uv, 2);
+  EXPECT_TRUE(contains(log, ".png")) << log;
+  run("render " + uv + " -o " + dir.path("p.jpg"), 2);
+  run("param --quiet " + mesh + " -o " + dir.path("b.obj") + " --render " + dir.path("p.jpg"), 2);
+  EXPECT_EQ(testing::readFile(mesh), meshBytes);
+  EXPECT_EQ(testing::readFile(uv), uvBytes);
+  for (const char* name : {"a.obj", "b.obj", "f", "s.obj", "f.obj", "p.jpg"}) {
+    EXPECT_FALSE(std::filesystem::exists(dir.path(name))) << name;
+  }
+}
+
+/// Starts seamvox with these arguments (output discarded), sends `signal` once its first
+/// temporary output exists and it has run `after` more, and returns its exit code.
+int interruptedExitCode(const std::vector<std::string>& arguments, const TempDir& dir, int signal,
+                        std::chrono::milliseconds after) {
+  std::vector<std::string> argv = {testing::seamvoxBinary()};
+  argv.insert(argv.end(), arguments.begin(), arguments.end());
+  std::vector<char*> pointers;
+  for (std::string& a : argv) pointers.push_back(a.data());
+  pointers.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, pointers.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) return -1;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (testing::temporaryFilesIn(dir.dir()).empty() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::this_thread::sleep_for(after);
+  int status = 0;
+  EXPECT_EQ(waitpid(pid, &status, WNOHANG), 0) << "the run ended before the signal: use a larger mesh";
+  kill(pid, signal);
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+}
+
+TEST(Cli, SigtermAndSigintRemoveUnfinishedOutputs) {
+  TempDir dir;
+  const std::string mesh = dir.path("big.ply");
+  run("gen sphere --faces 60000 -o " + mesh, 0);
+  const std::string out = dir.path("big_uv.obj"), report = dir.path("big.json"), picture = dir.path("big.png");
+  const std::vector<std::string> param = {"param", mesh, "-o", out, "--report", report, "--render", picture, "--quiet"};
+  EXPECT_EQ(interruptedExitCode(param, dir, SIGTERM, std::chrono::milliseconds(500)), 143);
+  EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
+  for (const std::string& path : {out, report, picture}) EXPECT_FALSE(std::filesystem::exists(path)) << path;
+  EXPECT_EQ(interruptedExitCode(param, dir, SIGINT, std::chrono::milliseconds(200)), 130);
+  EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
+  const std::vector<std::string> field = {"field", mesh, "-o", dir.path("f.field"), "--seams", dir.path("s.obj"), "--quiet"};
+  EXPECT_EQ(interruptedExitCode(field, dir, SIGTERM, std::chrono::milliseconds(100)), 143);
+  EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
+  EXPECT_FALSE(std::filesystem::exists(dir.path("f.field")));
 }
 
 }  // namespace

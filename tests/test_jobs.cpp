@@ -11,6 +11,7 @@
 #include "core/system/errors.h"
 #include "core/synth/generate.h"
 #include "core/quality/metrics.h"
+#include "io/json_reader.h"
 #include "io/mesh_io.h"
 #include "core/batch/jobs.h"
 #include "testing.h"
@@ -171,6 +172,11 @@ struct Batch {
   int run(const std::string& extra, std::string* log) {
     return runSeamvox("jobs " + dir.path("jobs.txt") + " --quiet --workers 2 " + extra, log);
   }
+  /// Replaces the manifest, then runs it.
+  int runManifest(const std::string& manifest, std::string* log) {
+    writeFile(dir.path("jobs.txt"), manifest);
+    return run("", log);
+  }
 };
 
 fs::file_time_type mtime(const std::string& path) { return fs::last_write_time(path); }
@@ -287,6 +293,79 @@ TEST(JobsCommand, MpiRanksShareTheJobs) {
   EXPECT_THAT(output, HasSubstr("3 jobs: 0 failed"));
   const std::string csv = readFile(batch.dir.path("out/summary.csv"));
   for (const char* name : {"m0", "m1", "m2"}) EXPECT_THAT(csv, HasSubstr(std::string("\"") + name + "\",done")) << csv;
+}
+
+TEST(JobsCommand, FolderErrorsNameThePathBeforeAnyJobRuns) {
+  Batch batch;
+  writeFile(batch.dir.path("a_file"), "not a folder");
+  const std::string longName(300, 'x');
+  const std::pair<std::string, std::string> cases[] = {
+      {"output /sys/seamvox-jobs-test\n", "/sys/seamvox-jobs-test"},  // read-only, even for root
+      {"output a_file\n", "a_file"},
+      {"output " + longName + "\n", longName},
+  };
+  std::string log;
+  for (const auto& [outputLine, named] : cases) {
+    writeFile(batch.dir.path("bad.txt"), outputLine + "mesh in/m0.ply\n");
+    EXPECT_EQ(runSeamvox("jobs " + batch.dir.path("bad.txt") + " --quiet", &log), 1) << log;
+    EXPECT_THAT(log, HasSubstr(named));
+    EXPECT_THAT(log, ::testing::Not(HasSubstr("internal error")));
+    EXPECT_THAT(log, ::testing::Not(HasSubstr("filesystem error")));
+  }
+  // A summary that cannot be written fails before the jobs run.
+  EXPECT_EQ(batch.run("--summary " + batch.dir.path("missing/s.csv"), &log), 1) << log;
+  EXPECT_THAT(log, HasSubstr("missing/s.csv"));
+  EXPECT_FALSE(fs::exists(batch.dir.path("out/m0.drc")));
+  EXPECT_EQ(batch.run("--summary " + batch.dir.path("jobs.txt"), &log), 2) << log;
+  // A folder is not a manifest.
+  EXPECT_EQ(runSeamvox("jobs " + batch.dir.path("in") + " --quiet", &log), 2) << log;
+  EXPECT_THAT(log, HasSubstr("is a folder"));
+  EXPECT_TRUE(testing::temporaryFilesIn(batch.dir.dir()).empty());
+}
+
+TEST(JobsCommand, AJobsUsageErrorIsRecordedWithItsReason) {
+  Batch batch;
+  std::string log;
+  EXPECT_EQ(batch.runManifest("output out\nmesh in/m0.ply : --solver bogus\n", &log), 6) << log;
+  const std::string csv = readFile(batch.dir.path("out/summary.csv"));
+  EXPECT_THAT(csv, HasSubstr("unknown solver 'bogus'"));
+  EXPECT_THAT(csv, ::testing::Not(HasSubstr("--quiet")));  // the last line of the usage text
+}
+
+TEST(JobsCommand, PeakMemoryAndFlipsAreParamsOwnFigures) {
+  Batch batch;
+  std::string log;
+  ASSERT_EQ(batch.runManifest("output out\nparam --cells 30 --grid 64\nmesh in/m1.ply\n", &log), 0) << log;
+  const JsonValue report = parseJson(readFile(batch.dir.path("out/m1.json")), "m1.json");
+  // param's stage meter resets the kernel's peak, so wait4 alone sees less than param's peak
+  // (on this job about 98 against 158 MB).
+  EXPECT_GT(report.numberAt("param.peakResidentBytes"), 0.0);
+  EXPECT_GE(report.numberAt("peakResidentBytes"), report.numberAt("param.peakResidentBytes"));
+  EXPECT_EQ(report.numberAt("flipped"), report.numberAt("param.quality.flipped"));
+  EXPECT_EQ(report.numberAt("seamless"), report.numberAt("param.quality.seamless"));
+  EXPECT_THAT(readFile(batch.dir.path("out/summary.csv")),
+              HasSubstr(",done,"));
+}
+
+TEST(JobsCommand, SigtermStopsTheRunnerAndItsJobsWithoutTemporaries) {
+  Batch batch;
+  EXPECT_EQ(runSeamvox("gen sphere --faces 60000 -o " + batch.dir.path("in/big.ply")), 0);
+  writeFile(batch.dir.path("jobs.txt"), "output out\nmesh in/big.ply\n");
+  std::string log;
+  // The shell starts the runner, waits for the job's first temporary, then sends SIGTERM.
+  const std::string script =
+      testing::seamvoxBinary() + " jobs " + batch.dir.path("jobs.txt") + " --quiet > /dev/null 2>&1 & pid=$!; "
+      "for i in $(seq 300); do ls " + batch.dir.path("out") + "/*.tmp-* > /dev/null 2>&1 && break; sleep 0.1; done; "
+      "sleep 0.5; kill -TERM $pid; wait $pid; echo exit=$?";
+  FILE* pipe = popen(("bash -c '" + script + "'").c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  char buffer[256];
+  while (fgets(buffer, sizeof buffer, pipe)) log += buffer;
+  pclose(pipe);
+  EXPECT_THAT(log, HasSubstr("exit=143"));
+  EXPECT_TRUE(testing::temporaryFilesIn(batch.dir.dir()).empty());
+  EXPECT_FALSE(fs::exists(batch.dir.path("out/big.drc")));
+  EXPECT_FALSE(fs::exists(batch.dir.path("out/summary.csv")));
 }
 
 }  // namespace

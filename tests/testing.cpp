@@ -51,6 +51,15 @@ int runSeamvox(const std::string& arguments, std::string* output) {
 
 std::string seamvoxBinary() { return SEAMVOX_BINARY; }
 
+std::vector<std::string> temporaryFilesIn(const std::string& dir) {
+  std::vector<std::string> found;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.find(".tmp-") != std::string::npos) found.push_back(name);
+  }
+  return found;
+}
+
 void writeFile(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary);
   out << bytes;

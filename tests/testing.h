@@ -36,6 +36,9 @@ int runSeamvox(const std::string& arguments, std::string* output = nullptr);
 /// Path of the seamvox binary under test (for commands that wrap it, e.g. mpirun).
 std::string seamvoxBinary();
 
+/// Names of the files under dir (recursively) that are unfinished outputs ("<name>.tmp-<pid>").
+std::vector<std::string> temporaryFilesIn(const std::string& dir);
+
 /// Writes bytes to a file (for malformed-input tests).
 void writeFile(const std::string& path, const std::string& bytes);
 std::string readFile(const std::string& path);

@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
 
@@ -13,6 +15,7 @@
 #include "core/solve/param_solver.h"
 #include "core/system/errors.h"
 #include "io/atomic_file.h"
+#include "io/output_set.h"
 
 namespace seamvox::cli {
 
@@ -232,6 +235,39 @@ void writeTextOutput(const std::string& path, const std::string& text) {
   AtomicFile file(path);
   file.write(text);
   file.commit();
+}
+
+void checkOutputPaths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
+  auto given = [](const NamedPath& p) { return !p.path.empty() && p.path != "-"; };
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const NamedPath& out = outputs[i];
+    if (!given(out)) continue;
+    for (const NamedPath& in : inputs) {
+      if (given(in) && isSameFile(in.path, out.path)) {
+        throw UsageError(out.name + " " + out.path + " would overwrite the input " + in.name +
+                         (in.path == out.path ? "" : " " + in.path) + "; write to another file");
+      }
+    }
+    for (std::size_t k = 0; k < i; ++k) {
+      if (given(outputs[k]) && isSameFile(outputs[k].path, out.path)) {
+        throw UsageError(outputs[k].name + " and " + out.name + " name the same file " + out.path +
+                         "; give each output its own file");
+      }
+    }
+  }
+}
+
+std::string errorMessage(const std::exception& error) {
+  const auto* fsError = dynamic_cast<const std::filesystem::filesystem_error*>(&error);
+  if (!fsError) return error.what();
+  const std::string path = fsError->path1().empty() ? "" : fsError->path1().string() + ": ";
+  return path + fsError->code().message();
+}
+
+void requirePngPath(const std::string& option, const std::string& path) {
+  std::string tail = path.size() >= 4 ? path.substr(path.size() - 4) : path;
+  for (char& c : tail) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (tail != ".png") throw UsageError(option + " must be a .png file (the picture is PNG): " + path);
 }
 
 }  // namespace seamvox::cli

@@ -94,6 +94,19 @@ ProgressFn makeProgress(bool quiet);
 /// Writes text to path atomically, or to stdout when path is "-".
 void writeTextOutput(const std::string& path, const std::string& text);
 
+/// A path given on the command line and the option or argument that gave it ("-o", "MESH").
+struct NamedPath {
+  std::string name, path;  ///< an empty path (option not given) and "-" (stdout) are skipped
+};
+/// Checked before any work: an output naming the same file as an input or another output of the
+/// run (same inode, or the same canonical path) is a UsageError naming both.
+void checkOutputPaths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs);
+/// The message of an exception for the user: a std::filesystem error as "PATH: reason" (not the
+/// library's "filesystem error: ..." wording), anything else as what().
+std::string errorMessage(const std::exception& error);
+/// A UsageError unless path ends in .png (case-insensitive): option names it in the message.
+void requirePngPath(const std::string& option, const std::string& path);
+
 }  // namespace seamvox::cli
 
 #define SEAMVOX_COMMAND_CAT2(a, b) a##b

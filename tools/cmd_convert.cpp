@@ -34,6 +34,7 @@ int runConvert(Args& args) {
   options.writeUV = !args.flag("no-uv");
   const bool ratio = args.flag("ratio");
   args.finish(2);
+  checkOutputPaths({{"IN", input}}, {{"OUT", output}});
 
   const auto start = std::chrono::steady_clock::now();
   ReadOptions readOptions;

@@ -8,6 +8,7 @@
 #include "io/field_io.h"
 #include "io/json.h"
 #include "io/mesh_io.h"
+#include "io/output_set.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
@@ -15,7 +16,7 @@ namespace {
 
 /// Cones as OBJ points: a comment with vertex id and index, `v x y z r g b` (red for positive,
 /// blue for negative index), then one `p` element per cone.
-void writeConesObj(const std::string& path, const TriangleMesh& mesh, const FieldSingularities& sing) {
+void writeConesObj(AtomicFile& file, const TriangleMesh& mesh, const FieldSingularities& sing) {
   std::string text = "# seamvox cones: " + std::to_string(sing.cones.size()) +
                      " vertices with nonzero index (in quarter turns)\n";
   char buf[200];
@@ -27,11 +28,11 @@ void writeConesObj(const std::string& path, const TriangleMesh& mesh, const Fiel
     text += buf;
   }
   for (std::size_t i = 0; i < sing.cones.size(); ++i) text += "p " + std::to_string(i + 1) + "\n";
-  writeTextOutput(path, text);
+  file.write(text);
 }
 
 /// Seams as OBJ polylines: the seam vertices once each, then one `l` element per seam.
-void writeSeamsObj(const std::string& path, const TriangleMesh& mesh, const Topology& topology,
+void writeSeamsObj(AtomicFile& file, const TriangleMesh& mesh, const Topology& topology,
                    const CutResult& cut) {
   std::map<VertexId, std::size_t> objIndex;
   std::string vertices, lines;
@@ -53,7 +54,7 @@ void writeSeamsObj(const std::string& path, const TriangleMesh& mesh, const Topo
     for (CornerId c : seam.corners) lines += " " + std::to_string(index(topology.vertex(prevCorner(c))));
     lines += "\n";
   }
-  writeTextOutput(path, "# seamvox seams: " + std::to_string(cut.seams.size()) + " curves\n" + vertices + lines);
+  file.write("# seamvox seams: " + std::to_string(cut.seams.size()) + " curves\n" + vertices + lines);
 }
 
 int runField(Args& args) {
@@ -79,6 +80,13 @@ int runField(Args& args) {
   const bool weld = args.flag("weld");
   const ProgressFn progress = makeProgress(args.flag("quiet"));
   args.finish(1);
+  checkOutputPaths({{"MESH", input}, {"--import", importPath.value_or("")}},
+                   {{"-o", *output}, {"--cones", conesPath.value_or("")}, {"--seams", seamsPath.value_or("")}});
+  // Every output is staged now (a missing folder fails before the work) and committed together.
+  OutputSet outputs;
+  AtomicFile& fieldFile = outputs.add(*output);
+  AtomicFile* conesFile = conesPath ? &outputs.add(*conesPath) : nullptr;
+  AtomicFile* seamsFile = seamsPath ? &outputs.add(*seamsPath) : nullptr;
 
   StageMeter meter;
   TriangleMesh raw = readMesh(input);
@@ -121,9 +129,10 @@ int runField(Args& args) {
   // Written per input face (faces cleaning dropped get a zero vector: "no preference").
   std::vector<Vec3d> perInputFace(inputFaces, Vec3d::Zero());
   for (FaceId f = 0; f < mesh.numFaces(); ++f) perInputFace[clean.faceOrigin[f]] = field.at(f);
-  writeField(*output, perInputFace);
-  if (conesPath) writeConesObj(*conesPath, mesh, sing);
-  if (seamsPath) writeSeamsObj(*seamsPath, mesh, topology, cut);
+  writeField(fieldFile, perInputFace);
+  if (conesFile) writeConesObj(*conesFile, mesh, sing);
+  if (seamsFile) writeSeamsObj(*seamsFile, mesh, topology, cut);
+  outputs.commit();
   meter.finish("write");
 
   std::int64_t chi = 0;

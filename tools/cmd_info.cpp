@@ -19,6 +19,7 @@ int runInfo(Args& args) {
   const auto report = args.value("report");
   options.progress = makeProgress(args.flag("quiet"));
   args.finish(1);
+  checkOutputPaths({{"MESH", path}}, {{"--report", report.value_or("")}});
 
   const MeshSummary summary = summarizeMeshFile(path, options);
   if (report) writeTextOutput(*report, formatSummaryJson(summary));

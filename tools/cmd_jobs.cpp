@@ -12,6 +12,7 @@
 
 #include "core/system/errors.h"
 #include "io/mesh_io.h"
+#include "io/output_set.h"
 #include "core/batch/jobs.h"
 #include "tools/cli.h"
 #include "tools/jobs.h"
@@ -46,6 +47,14 @@ std::uint64_t physicalMemory() {
   return pages > 0 && size > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(size) : 0;
 }
 
+/// Creates a folder and its parents; IoError naming it (read-only place, a file in the way, a
+/// name too long) otherwise.
+void createFolder(const std::string& folder, const char* what) {
+  std::error_code error;
+  fs::create_directories(folder, error);
+  if (error) throw IoError(folder + ": cannot create the " + what + ": " + error.message());
+}
+
 std::vector<TriangleMesh> readTiles(const std::vector<std::string>& paths) {
   std::vector<TriangleMesh> tiles;
   for (const std::string& path : paths) tiles.push_back(readMesh(path));
@@ -70,11 +79,17 @@ int splitTileFiles(const std::string& mapped, const std::string& folder, const s
   const TriangleMesh mesh = readMesh(mapped, readOptions);
   if (!mesh.hasUV()) throw InputError(mapped + ": the parameterized mesh has no texture coordinates");
   SplitTiles split = splitTiles(mesh, readTiles(paths));
-  fs::create_directories(folder);
+  createFolder(folder, "tiles output folder");
+  OutputSet outputs;  // every tile or none
   for (std::size_t t = 0; t < paths.size(); ++t) {
-    const std::string out = folder + "/" + fs::path(paths[t]).stem().string() + "." + format;
+    AtomicFile& out = outputs.add(folder + "/" + fs::path(paths[t]).stem().string() + "." + format);
     writeMesh(out, split.tiles[t]);
-    std::printf("%s: %u faces\n", out.c_str(), split.tiles[t].numFaces());
+    out.close();  // one open file at a time, whatever the number of tiles
+  }
+  outputs.commit();
+  for (std::size_t t = 0; t < paths.size(); ++t) {
+    std::printf("%s/%s.%s: %u faces\n", folder.c_str(), fs::path(paths[t]).stem().c_str(), format.c_str(),
+                split.tiles[t].numFaces());
   }
   if (split.missingFaces) {
     std::printf("%llu tile faces dropped by cleaning (degenerate or duplicate)\n",
@@ -110,6 +125,10 @@ int runJobs(Args& args) {
   const std::int64_t threads = args.integer("threads", 0);
   args.finish(1);
 
+  if (fs::is_directory(manifestPath)) {
+    throw UsageError(manifestPath + " is a folder; give the manifest file (seamvox jobs MANIFEST)");
+  }
+  checkOutputPaths({{"MANIFEST", manifestPath}}, {{"--summary", summaryPath.value_or("")}});
   std::ifstream in(manifestPath, std::ios::binary);
   if (!in) throw IoError(manifestPath + ": cannot open the manifest");
   std::ostringstream text;
@@ -122,7 +141,11 @@ int runJobs(Args& args) {
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   options.threadsPerJob = threads > 0 ? static_cast<std::uint32_t>(threads)
                                       : std::max<std::uint32_t>(1, cores / static_cast<unsigned>(mpi ? 1 : workers));
-  fs::create_directories(manifest.outputDir);
+  createFolder(manifest.outputDir, "output folder");
+  // Staged before any job runs, so a summary that cannot be written fails at once.
+  const std::string summaryTarget = summaryPath.value_or(manifest.outputDir + "/summary.csv");
+  OutputSet summaryOutput;
+  AtomicFile* summary = summaryTarget == "-" ? nullptr : &summaryOutput.add(summaryTarget);
 
   std::vector<JobOutcome> outcomes;
   if (mpi) {
@@ -147,7 +170,12 @@ int runJobs(Args& args) {
     for (std::size_t k = 0; k < ran.size(); ++k) outcomes[runIndex[k]] = ran[k];
   }
   std::printf("%s", formatSummaryText(outcomes).c_str());
-  writeTextOutput(summaryPath.value_or(manifest.outputDir + "/summary.csv"), formatSummaryCsv(outcomes));
+  if (summary) {
+    summary->write(formatSummaryCsv(outcomes));
+    summaryOutput.commit();
+  } else {
+    writeTextOutput("-", formatSummaryCsv(outcomes));
+  }
   for (const JobOutcome& o : outcomes) {
     if (o.status == JobStatus::Failed) return kJobsFailed;
   }

@@ -7,6 +7,7 @@
 #include "core/system/errors.h"
 #include "io/field_io.h"
 #include "io/mesh_io.h"
+#include "io/output_set.h"
 #include "io/param_report.h"
 #include "io/png_io.h"
 #include "tools/cli.h"
@@ -49,6 +50,10 @@ ParamCommand parseParamArgs(Args& args) {
   c.renderPath = args.value("render");
   o.progress = makeProgress(args.flag("quiet"));
   args.finish(1);
+  if (c.renderPath) requirePngPath("--render", *c.renderPath);
+  const bool fieldFile = c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy";
+  checkOutputPaths({{"MESH", c.input}, {"--field", fieldFile ? c.fieldSource : ""}},
+                   {{"-o", c.output}, {"--report", c.reportPath.value_or("")}, {"--render", c.renderPath.value_or("")}});
   return c;
 }
 
@@ -96,6 +101,11 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
 
 int runParam(Args& args) {
   ParamCommand c = parseParamArgs(args);
+  // Every output is staged now (a missing folder fails before the work) and committed together.
+  OutputSet outputs;
+  AtomicFile& meshFile = outputs.add(c.output);
+  AtomicFile* reportFile = c.reportPath && *c.reportPath != "-" ? &outputs.add(*c.reportPath) : nullptr;
+  AtomicFile* renderFile = c.renderPath ? &outputs.add(*c.renderPath) : nullptr;
   StageMeter meter;
   c.options.meter = &meter;
   TriangleMesh raw = readMesh(c.input);
@@ -114,13 +124,13 @@ int runParam(Args& args) {
   }
   // The writer needs the mesh and its map only (the render also the corner table).
   if (!c.renderPath) r.topology = Topology();
-  writeMesh(c.output, r.mesh);
+  writeMesh(meshFile, r.mesh);
   meter.finish("write");
   if (c.renderPath) {
     RenderOptions renderOptions;
     renderOptions.drawSeams = renderOptions.drawCones = true;
     renderOptions.progress = c.options.progress;
-    writePng(*c.renderPath, renderCheckerboard(r.mesh, r.topology, renderOptions).image);
+    writePng(*renderFile, renderCheckerboard(r.mesh, r.topology, renderOptions).image);
     meter.finish("render");
   }
   printSummary(c, r, meter);
@@ -136,8 +146,13 @@ int runParam(Args& args) {
     context.stages = meter.stages();
     context.totalSeconds = meter.totalSeconds();
     context.peakBytes = meter.peakBytes();
-    writeTextOutput(*c.reportPath, paramReportJson(r, context));
+    if (reportFile) {
+      reportFile->write(paramReportJson(r, context));
+    } else {
+      writeTextOutput("-", paramReportJson(r, context));
+    }
   }
+  outputs.commit();
   return 0;
 }
 

@@ -62,6 +62,8 @@ int runRender(Args& args) {
   const bool quiet = args.flag("quiet");
   const ProgressFn progress = makeProgress(quiet);
   args.finish(1);
+  requirePngPath("-o", *output);
+  checkOutputPaths({{"MESH_WITH_UV", path}}, {{"-o", *output}});
 
   const auto start = std::chrono::steady_clock::now();
   ReadOptions readOptions;

@@ -6,6 +6,7 @@
 #include "core/mesh/subdivide.h"
 #include "io/field_io.h"
 #include "io/mesh_io.h"
+#include "io/output_set.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
@@ -35,6 +36,11 @@ int runSubdivide(Args& args) {
   if (formatFromPath(*output) == MeshFormat::Unknown) {
     throw UsageError("cannot tell the format of '" + *output + "' (use .ply .obj .off .drc)");
   }
+  checkOutputPaths({{"MESH", path}, {"--field", fieldIn.value_or("")}},
+                   {{"-o", *output}, {"--field-out", fieldOut.value_or("")}});
+  OutputSet outputs;  // staged now, committed together
+  AtomicFile& meshFile = outputs.add(*output);
+  AtomicFile* fieldFile = fieldOut ? &outputs.add(*fieldOut) : nullptr;
 
   const auto start = std::chrono::steady_clock::now();
   TriangleMesh input = readMesh(path);
@@ -51,13 +57,14 @@ int runSubdivide(Args& args) {
   SubdivideResult result = subdivideMesh(cleaned.mesh, cleaned.topology, options);
   ScanNoiseResult noiseAdded;
   if (noisy) noiseAdded = addScanNoise(result.mesh, noise);
-  writeMesh(*output, result.mesh, writeOptions);
+  writeMesh(meshFile, result.mesh, writeOptions);
   if (fieldIn) {
     // Input face -> cleaned face (faceOrigin) -> children (parentFace).
     std::vector<Vec3d> cleanedField(cleaned.faceOrigin.size());
     for (std::size_t f = 0; f < cleanedField.size(); ++f) cleanedField[f] = field[cleaned.faceOrigin[f]];
-    writeField(*fieldOut, inheritFaceVectors(cleanedField, result.parentFace));
+    writeField(*fieldFile, inheritFaceVectors(cleanedField, result.parentFace));
   }
+  outputs.commit();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("wrote %s: %u faces, %u vertices (%lld level%s from %u cleaned faces, %u input) "

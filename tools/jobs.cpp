@@ -19,7 +19,9 @@
 #include <thread>
 
 #include "core/system/errors.h"
+#include "io/interrupt_cleanup.h"
 #include "io/json.h"
+#include "io/json_reader.h"
 #include "io/mesh_io.h"
 #include "tools/cli.h"
 
@@ -79,39 +81,50 @@ std::uint64_t estimateFaces(const std::string& path) {
   return formatFromPath(path) == MeshFormat::Draco ? bytes : bytes / 20;
 }
 
-/// The first number after "key": in a JSON text (NaN when absent or null).
-double jsonNumber(const std::string& text, const std::string& key) {
-  const std::string pattern = "\"" + key + "\": ";
-  const std::size_t at = text.find(pattern);
-  if (at == std::string::npos) return std::nan("");
-  const char* start = text.c_str() + at + pattern.size();
-  if (!std::strncmp(start, "true", 4)) return 1.0;
-  if (!std::strncmp(start, "false", 5)) return 0.0;
-  char* end = nullptr;
-  const double value = std::strtod(start, &end);
-  return end == start ? std::nan("") : value;
-}
-
-std::uint64_t jsonCount(const std::string& text, const std::string& key) {
-  const double value = jsonNumber(text, key);
-  return value >= 0.0 ? static_cast<std::uint64_t>(value) : 0;
-}
-
-/// Reads the figures of a report (ours or param's) into an outcome.
-void readFigures(const std::string& report, JobOutcome& outcome) {
-  outcome.faces = jsonCount(report, "faces");
-  outcome.seamless = jsonNumber(report, "seamless") == 1.0;
-  outcome.maxSeamResidual = jsonNumber(report, "maxSeamResidual");
-  outcome.gradientError = jsonNumber(report, "relativeGradientError");
-  outcome.flipped = jsonCount(report, "flipped");
-}
-
 /// Last non-empty line of a log (the child's error message).
 std::string lastLine(const std::string& text) {
   std::size_t end = text.find_last_not_of("\r\n ");
   if (end == std::string::npos) return "";
   const std::size_t begin = text.find_last_of('\n', end);
   return text.substr(begin == std::string::npos ? 0 : begin + 1, end - (begin == std::string::npos ? 0 : begin + 1) + 1);
+}
+
+/// A report parsed (an empty object when it is missing or malformed: its figures are then NaN).
+JsonValue parseReport(const std::string& text, const std::string& source) {
+  try {
+    return parseJson(text, source);
+  } catch (const InputError&) {
+    return JsonValue();
+  }
+}
+
+std::uint64_t reportCount(const JsonValue& report, const std::string& path) {
+  const double value = report.numberAt(path);
+  return value >= 0.0 ? static_cast<std::uint64_t>(value) : 0;
+}
+
+/// Reads the figures of a report into an outcome: param's (the map's quality under "quality.")
+/// or the job report this runner writes (at the top level, quality = "").
+void readFigures(const JsonValue& report, const std::string& quality, JobOutcome& outcome) {
+  outcome.faces = reportCount(report, "faces");
+  outcome.seamless = report.numberAt(quality + "seamless") == 1.0;
+  outcome.maxSeamResidual = report.numberAt(quality + "maxSeamResidual");
+  outcome.gradientError = report.numberAt(quality + "relativeGradientError");
+  outcome.flipped = reportCount(report, quality + "flipped");
+}
+
+/// The child's own message in its log: the last line seamvox printed about the run ("seamvox
+/// param: error: ...", or the reason of a usage error above the usage text), else the last line.
+std::string childMessage(const std::string& log) {
+  std::size_t end = log.size();
+  while (end > 0) {
+    const std::size_t begin = log.rfind('\n', end - 1);
+    const std::size_t from = begin == std::string::npos ? 0 : begin + 1;
+    if (log.compare(from, 7, "seamvox") == 0) return log.substr(from, end - from);
+    if (begin == std::string::npos) break;
+    end = begin;
+  }
+  return lastLine(log);
 }
 
 struct ChildResult {
@@ -134,11 +147,16 @@ ChildResult runChild(const std::vector<std::string>& argv, const std::string& lo
   const int spawned = posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, pointers.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   if (spawned != 0) throw IoError("cannot start " + argv[0] + ": " + std::strerror(spawned));
+  const int cleanupSlot = registerChild(pid);  // stopped when the runner is interrupted
   int status = 0;
   struct rusage usage {};
   while (wait4(pid, &status, 0, &usage) < 0) {
-    if (errno != EINTR) throw IoError(std::string("wait4 failed: ") + std::strerror(errno));
+    if (errno != EINTR) {
+      unregisterChild(cleanupSlot);
+      throw IoError(std::string("wait4 failed: ") + std::strerror(errno));
+    }
   }
+  unregisterChild(cleanupSlot);
   ChildResult result;
   result.peakBytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024u;
   if (WIFEXITED(status)) {
@@ -204,10 +222,10 @@ JobOutcome skippedOutcome(const PreparedJob& job) {
   outcome.name = job.spec.name;
   outcome.status = JobStatus::Skipped;
   outcome.estimateBytes = job.estimateBytes;
-  const std::string report = readText(job.reportPath);
-  readFigures(report, outcome);
-  outcome.seconds = jsonNumber(report, "seconds");
-  outcome.peakBytes = jsonCount(report, "peakResidentBytes");
+  const JsonValue report = parseReport(readText(job.reportPath), job.reportPath);
+  readFigures(report, "", outcome);
+  outcome.seconds = report.numberAt("seconds");
+  outcome.peakBytes = reportCount(report, "peakResidentBytes");
   return outcome;
 }
 
@@ -231,7 +249,7 @@ JobOutcome runJob(const PreparedJob& job, const RunnerOptions& options) {
       if (child.exitCode == 0) return;
       std::string why = child.signal ? "killed by signal " + std::to_string(child.signal) +
                                            " (crash or out of memory)"
-                                     : lastLine(readText(logPath));
+                                     : childMessage(readText(logPath));
       if (why.empty()) why = "exit code " + std::to_string(child.exitCode);
       throw Error(std::string(what) + ": " + why);
     };
@@ -259,7 +277,10 @@ JobOutcome runJob(const PreparedJob& job, const RunnerOptions& options) {
       paramStep(job.spec.inputs[0], job.outputs[0]);
     }
     const std::string paramText = readText(paramReport);
-    readFigures(paramText, outcome);
+    const JsonValue paramFigures = parseReport(paramText, paramReport);
+    readFigures(paramFigures, "quality.", outcome);
+    // wait4's peak misses param's largest stages (its meter resets the kernel's peak per stage).
+    outcome.peakBytes = std::max(outcome.peakBytes, reportCount(paramFigures, "peakResidentBytes"));
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     outcome.status = JobStatus::Done;
 
@@ -289,7 +310,7 @@ JobOutcome runJob(const PreparedJob& job, const RunnerOptions& options) {
     fs::remove(logPath);
   } catch (const std::exception& e) {
     outcome.status = JobStatus::Failed;
-    outcome.error = e.what();
+    outcome.error = errorMessage(e);
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   if (!options.quiet) {

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <new>
@@ -11,6 +12,7 @@
 
 #include "core/system/errors.h"
 #include "core/system/blas_threads.h"
+#include "io/interrupt_cleanup.h"
 #include "tools/cli.h"
 
 namespace {
@@ -27,6 +29,9 @@ void printHelp() {
 
 int main(int argc, char** argv) {
   using namespace seamvox;
+  // SIGINT and SIGTERM remove unfinished outputs and exit 130 and 143, as a cancelled stage
+  // (CancelledError) exits 130.
+  installInterruptCleanup();
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
     printHelp();
@@ -69,6 +74,10 @@ int main(int argc, char** argv) {
     return 130;
   } catch (const Error& e) {
     std::fprintf(stderr, "seamvox %s: error: %s\n", name.c_str(), e.what());
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A folder operation (creating, removing) that a command did not word itself: name the path.
+    std::fprintf(stderr, "seamvox %s: error: %s\n", name.c_str(), cli::errorMessage(e).c_str());
     return 1;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "seamvox %s: error: out of memory\n", name.c_str());

@@ -1,0 +1,108 @@
+#include "io/interrupt_cleanup.h"
+
+#include <limits.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <initializer_list>
+
+namespace seamvox {
+namespace {
+
+// A slot is free, being filled, or live; the handler reads live slots only. Fixed tables (no
+// allocation) because the handler may run in the middle of malloc.
+enum SlotState : int { kFree = 0, kFilling = 1, kLive = 2 };
+constexpr int kPathSlots = 512, kChildSlots = 256;
+
+struct PathSlot {
+  std::atomic<int> state{kFree};
+  char path[PATH_MAX];
+};
+struct ChildSlot {
+  std::atomic<int> state{kFree};
+  pid_t pid = 0;
+};
+PathSlot pathSlots[kPathSlots];
+ChildSlot childSlots[kChildSlots];
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs lock-free flags");
+
+template <class Slot, int N>
+int claimSlot(Slot (&slots)[N]) {
+  for (int i = 0; i < N; ++i) {
+    int expected = kFree;
+    if (slots[i].state.compare_exchange_strong(expected, kFilling)) return i;
+  }
+  return -1;
+}
+
+void writeMessage(const char* text) {
+  const ssize_t ignored = ::write(STDERR_FILENO, text, std::strlen(text));
+  (void)ignored;
+}
+
+void onInterrupt(int signal) {
+  const int savedErrno = errno;
+  for (ChildSlot& slot : childSlots) {
+    if (slot.state.load() == kLive) ::kill(slot.pid, SIGTERM);
+  }
+  for (PathSlot& slot : pathSlots) {
+    if (slot.state.load() == kLive) ::unlink(slot.path);
+  }
+  // The children remove their own temporaries before they exit.
+  for (ChildSlot& slot : childSlots) {
+    if (slot.state.load() == kLive) {
+      while (::waitpid(slot.pid, nullptr, 0) < 0 && errno == EINTR) {
+      }
+    }
+  }
+  writeMessage(signal == SIGINT    ? "\nseamvox: interrupted; unfinished outputs removed\n"
+               : signal == SIGHUP ? "\nseamvox: hangup; unfinished outputs removed\n"
+                                  : "\nseamvox: terminated; unfinished outputs removed\n");
+  errno = savedErrno;
+  ::_exit(128 + signal);
+}
+
+}  // namespace
+
+void installInterruptCleanup() {
+  struct sigaction action {};
+  action.sa_handler = onInterrupt;
+  sigemptyset(&action.sa_mask);
+  for (const int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&action.sa_mask, s);
+  for (const int s : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction previous {};
+    if (sigaction(s, nullptr, &previous) == 0 && previous.sa_handler == SIG_IGN) continue;
+    sigaction(s, &action, nullptr);
+  }
+}
+
+int registerTemporary(const char* path) {
+  if (std::strlen(path) >= PATH_MAX) return -1;
+  const int slot = claimSlot(pathSlots);
+  if (slot < 0) return -1;
+  std::strcpy(pathSlots[slot].path, path);
+  pathSlots[slot].state.store(kLive);
+  return slot;
+}
+
+void unregisterTemporary(int slot) {
+  if (slot >= 0 && slot < kPathSlots) pathSlots[slot].state.store(kFree);
+}
+
+int registerChild(pid_t pid) {
+  const int slot = claimSlot(childSlots);
+  if (slot < 0) return -1;
+  childSlots[slot].pid = pid;
+  childSlots[slot].state.store(kLive);
+  return slot;
+}
+
+void unregisterChild(int slot) {
+  if (slot >= 0 && slot < kChildSlots) childSlots[slot].state.store(kFree);
+}
+
+}  // namespace seamvox

@@ -1,0 +1,23 @@
+#pragma once
+/// Cleanup when a command is interrupted: on SIGINT, SIGTERM or SIGHUP the temporaries of
+/// unfinished outputs (io/atomic_file.h registers them) are removed, registered child processes
+/// (seamvox jobs) are stopped and waited for, and the process exits with 128 + the signal
+/// (130, 143, 129). The handler only uses unlink, kill, waitpid, write and _exit.
+#include <sys/types.h>
+
+namespace seamvox {
+
+/// Installs the handler for SIGINT, SIGTERM and SIGHUP. A signal ignored at start (nohup, a
+/// background job of a non-interactive shell) stays ignored.
+void installInterruptCleanup();
+
+/// Adds a file to remove on a signal; returns its slot, or -1 when the table (512 paths) is full
+/// or the path is longer than PATH_MAX: that file is then left behind by a signal.
+int registerTemporary(const char* path);
+void unregisterTemporary(int slot);
+
+/// Adds a child to stop (SIGTERM, then waited for) on a signal; returns its slot or -1.
+int registerChild(pid_t pid);
+void unregisterChild(int slot);
+
+}  // namespace seamvox

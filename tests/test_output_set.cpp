@@ -1,0 +1,141 @@
+// All-or-nothing outputs (io/output_set.h): every target is replaced or none is, whatever fails
+// (a write, a move), and no temporary is left behind; isSameFile for the clobbering checks.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "core/system/errors.h"
+#include "io/output_set.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::readFile;
+using testing::TempDir;
+using testing::writeFile;
+namespace fs = std::filesystem;
+
+TEST(OutputSet, CommitReplacesAndCreatesEveryTarget) {
+  TempDir dir;
+  const std::string a = dir.path("a.txt"), b = dir.path("b.txt");
+  writeFile(a, "old a");
+  {
+    OutputSet outputs;
+    outputs.add(a).write("new a");
+    outputs.add(b).write("new b");
+    // Staged, not yet visible.
+    EXPECT_EQ(readFile(a), "old a");
+    EXPECT_FALSE(fs::exists(b));
+    EXPECT_EQ(testing::temporaryFilesIn(dir.dir()).size(), 2u);
+    outputs.commit();
+  }
+  EXPECT_EQ(readFile(a), "new a");
+  EXPECT_EQ(readFile(b), "new b");
+  EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
+}
+
+TEST(OutputSet, UncommittedSetTouchesNoTarget) {
+  TempDir dir;
+  const std::string a = dir.path("a.txt"), b = dir.path("b.txt");
+  writeFile(a, "old a");
+  try {
+    OutputSet outputs;
+    outputs.add(a).write("new a");
+    outputs.add(b).write("new b");
+    throw InputError("a stage failed");
+  } catch (const InputError&) {
+  }
+  EXPECT_EQ(readFile(a), "old a");
+  EXPECT_FALSE(fs::exists(b));
+  EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
+}
+
+TEST(OutputSet, AFailedMovePutsTheOthersBack) {
+  TempDir dir;
+  const std::string a = dir.path("a.txt"), b = dir.path("b.txt"), c = dir.path("c.txt");
+  writeFile(a, "old a");
+  OutputSet outputs;
+  outputs.add(a).write("new a");
+  outputs.add(b).write("new b");
+  outputs.add(c).write("new c");
+  fs::create_directory(c);  // appears after staging: the third move fails
+  std::string message;
+  try {
+    outputs.commit();
+  } catch (const IoError& e) {
+    message = e.what();
+  }
+  EXPECT_THAT(message, HasSubstr(c));
+  EXPECT_EQ(readFile(a), "old a") << "the replaced target is exchanged back";
+  EXPECT_FALSE(fs::exists(b)) << "the created target is removed";
+  EXPECT_TRUE(fs::is_directory(c));
+  EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
+}
+
+TEST(OutputSet, AFailedWriteLeavesEveryTargetAsItWas) {
+  // A child process whose files may not grow beyond 64 KiB (SIGXFSZ ignored, so writes fail
+  // with EFBIG as on a full disk): the small output is written, the large one fails.
+  TempDir dir;
+  const std::string small = dir.path("small.txt"), large = dir.path("large.bin");
+  writeFile(small, "old small");
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{64 << 10, 64 << 10};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    try {
+      OutputSet outputs;
+      outputs.add(small).write("new small");
+      outputs.add(large).write(std::string(1 << 20, 'x'));
+      outputs.commit();
+    } catch (const IoError&) {
+      _exit(0);
+    }
+    _exit(1);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "the failed write must throw IoError";
+  EXPECT_EQ(readFile(small), "old small");
+  EXPECT_FALSE(fs::exists(large));
+  EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
+}
+
+TEST(OutputSet, FoldersAndTargetsStagedTwiceAreRefused) {
+  TempDir dir;
+  OutputSet outputs;
+  EXPECT_THROW(outputs.add(dir.dir()), IoError);
+  outputs.add(dir.path("a.txt"));
+  EXPECT_THROW(outputs.add(dir.dir() + "/./a.txt"), IoError);
+  EXPECT_THROW(outputs.add(dir.path("missing/a.txt")), IoError);
+  EXPECT_EQ(outputs.size(), 1u);
+}
+
+TEST(OutputSet, SameFileThroughLinksDotsAndMissingFiles) {
+  TempDir dir;
+  const std::string a = dir.path("a.txt");
+  writeFile(a, "a");
+  fs::create_directory(dir.path("sub"));
+  fs::create_symlink(a, dir.path("link.txt"));
+  fs::create_hard_link(a, dir.path("hard.txt"));
+  EXPECT_TRUE(isSameFile(a, dir.path("sub/../a.txt")));
+  EXPECT_TRUE(isSameFile(a, dir.path("link.txt")));
+  EXPECT_TRUE(isSameFile(a, dir.path("hard.txt")));
+  EXPECT_TRUE(isSameFile(dir.path("new.txt"), dir.path("sub/../new.txt")));
+  EXPECT_FALSE(isSameFile(a, dir.path("new.txt")));
+  EXPECT_FALSE(isSameFile(dir.path("new.txt"), dir.path("sub/new.txt")));
+}
+
+}  // namespace
+}  // namespace seamvox
