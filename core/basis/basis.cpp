@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <tuple>
 
 #include "core/system/errors.h"
 
@@ -36,6 +38,145 @@ void hatTriangleIntegrals(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, con
   }
 }
 
+void Basis::setSeamAdjacencies(const std::vector<SeamCurve>& seams,
+                               std::vector<DomainAdjacency> adjacencies) {
+  seamRotation_.resize(seams.size());
+  for (std::size_t s = 0; s < seams.size(); ++s) {
+    seamRotation_[s] = static_cast<std::uint8_t>((4 - seams[s].matching % 4) % 4);  // r = i^(-k)
+  }
+  auto key = [](const DomainAdjacency& a) { return std::make_tuple(a.left, a.right, a.seam); };
+  std::sort(adjacencies.begin(), adjacencies.end(),
+            [&](const auto& a, const auto& b) { return key(a) < key(b); });
+  adjacencies.erase(std::unique(adjacencies.begin(), adjacencies.end(),
+                                [&](const auto& a, const auto& b) { return key(a) == key(b); }),
+                    adjacencies.end());
+  adjacencies_ = std::move(adjacencies);
+}
+
+namespace {
+
+// Faces of the basis (the subset, or all nf) and a per-face flag "in the subset"; InputError on
+// a subset face out of range.
+std::vector<std::uint8_t> selectFaces(std::uint32_t nf, const std::vector<FaceId>& subset,
+                                      std::vector<FaceId>& faces) {
+  std::vector<std::uint8_t> inSubset(nf, subset.empty() ? 1 : 0);
+  if (subset.empty()) {
+    faces.resize(nf);
+    for (FaceId f = 0; f < nf; ++f) faces[f] = f;
+  } else {
+    faces = subset;
+    for (FaceId f : faces) {
+      if (f >= nf) throw InputError("hat basis: face " + std::to_string(f) + " out of range");
+      inSubset[f] = 1;
+    }
+  }
+  return inSubset;
+}
+
+// With a face subset only its vertices can get a wedge: those, in increasing order (as the
+// whole-mesh walk would visit them), so a small subset does not walk every fan of a large mesh.
+std::vector<VertexId> verticesOfFaces(const Topology& topology, const std::vector<FaceId>& faces) {
+  std::vector<VertexId> vertices;
+  vertices.reserve(3 * faces.size());
+  for (FaceId f : faces) {
+    for (VertexId v : topology.triangles()[f]) vertices.push_back(v);
+  }
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  return vertices;
+}
+
+// The wedges (domains) of the hat functions: per corner its domain, per domain its function,
+// per function its vertex.
+struct Wedges {
+  std::vector<std::uint32_t> cornerDomain;
+  std::vector<std::uint32_t> domainBasis;
+  std::vector<VertexId> basisVertex;
+};
+
+// Walks the fan of corners around v counter-clockwise; a cut edge (or the subset's border)
+// starts a new wedge. The first wedge of v makes v's basis function.
+void addFanWedges(const Topology& topology, const CutResult& cut,
+                  const std::vector<std::uint8_t>& inSubset, VertexId v,
+                  const std::vector<CornerId>& fan, Wedges& out) {
+  const std::size_t m = fan.size();
+  const bool closed = topology.ccw(fan.back()) == fan.front();
+  auto separated = [&](std::size_t j) {  // is there a wedge border just before fan[j]?
+    const CornerId before = j > 0 ? fan[j - 1] : fan[m - 1];
+    if (j == 0 && !closed) return true;
+    return cut.corners.isCut(nextCorner(before)) || !inSubset[cornerFace(before)] ||
+           !inSubset[cornerFace(fan[j])];
+  };
+  std::size_t start = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    if (separated(j)) {
+      start = j;
+      break;
+    }
+  }
+  bool anyDomain = false;
+  std::uint32_t current = kInvalidId;
+  for (std::size_t step = 0; step < m; ++step) {
+    const std::size_t j = (start + step) % m;
+    const CornerId c = fan[j];
+    if (!inSubset[cornerFace(c)]) {
+      current = kInvalidId;
+      continue;
+    }
+    if (current == kInvalidId || separated(j)) {
+      if (!anyDomain) {
+        out.basisVertex.push_back(v);
+        anyDomain = true;
+      }
+      current = static_cast<std::uint32_t>(out.domainBasis.size());
+      out.domainBasis.push_back(static_cast<std::uint32_t>(out.basisVertex.size() - 1));
+    }
+    out.cornerDomain[c] = current;
+  }
+}
+
+// Wedges of every vertex (of the subset's vertices when subsetVertices is not empty), in
+// increasing vertex order.
+Wedges buildWedges(const Topology& topology, const CutResult& cut,
+                   const std::vector<std::uint8_t>& inSubset, bool wholeMesh,
+                   const std::vector<VertexId>& subsetVertices) {
+  Wedges out;
+  out.cornerDomain.assign(3u * topology.numFaces(), kInvalidId);
+  const std::size_t numWalked = wholeMesh ? topology.numVertices() : subsetVertices.size();
+  std::vector<CornerId> fan;
+  for (std::size_t i = 0; i < numWalked; ++i) {
+    const VertexId v = wholeMesh ? static_cast<VertexId>(i) : subsetVertices[i];
+    fan.clear();
+    topology.forEachCornerAround(v, [&](CornerId c) { fan.push_back(c); });
+    if (fan.empty()) continue;
+    addFanWedges(topology, cut, inSubset, v, fan, out);
+  }
+  return out;
+}
+
+// Seam adjacency: the wedges on either side of every seam edge inside the subset, at both of
+// its endpoints (unsorted). InputError on a seam along a boundary edge.
+std::vector<DomainAdjacency> collectSeamAdjacencies(const Topology& topology, const CutResult& cut,
+                                                    const std::vector<std::uint8_t>& inSubset,
+                                                    const std::vector<std::uint32_t>& cornerDomain) {
+  std::vector<DomainAdjacency> adjacencies;
+  for (std::uint32_t s = 0; s < cut.seams.size(); ++s) {
+    for (CornerId c : cut.seams[s].corners) {
+      const CornerId o = topology.opposite(c);
+      if (o == kInvalidId) {
+        throw InputError("hat basis: seam " + std::to_string(s) + " has boundary edge of corner " +
+                         std::to_string(c));
+      }
+      if (!inSubset[cornerFace(c)] || !inSubset[cornerFace(o)]) continue;
+      adjacencies.push_back({cornerDomain[nextCorner(c)], cornerDomain[prevCorner(o)], s});
+      adjacencies.push_back({cornerDomain[prevCorner(c)], cornerDomain[nextCorner(o)], s});
+    }
+  }
+  return adjacencies;
+}
+
+}  // namespace
+
 HatBasis::HatBasis(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                    const CutResult& cut, const HatBasisOptions& options)
     : mesh_(mesh), field_(field), cut_(cut), edgeLength_(options.edgeLength) {
@@ -47,97 +188,15 @@ HatBasis::HatBasis(const TriangleMesh& mesh, const Topology& topology, const Cro
     throw InputError("hat basis: field or cut sizes do not match the mesh (" +
                      std::to_string(nf) + " faces)");
   }
-  std::vector<std::uint8_t> inSubset(nf, options.faces.empty() ? 1 : 0);
-  if (options.faces.empty()) {
-    faces_.resize(nf);
-    for (FaceId f = 0; f < nf; ++f) faces_[f] = f;
-  } else {
-    faces_ = options.faces;
-    for (FaceId f : faces_) {
-      if (f >= nf) throw InputError("hat basis: face " + std::to_string(f) + " out of range");
-      inSubset[f] = 1;
-    }
-  }
-
-  // Wedges: walk each fan counter-clockwise; a cut edge (or the subset's border) starts a new one.
-  cornerDomain_.assign(3u * nf, kInvalidId);
-  // With a face subset only its vertices can get a wedge: walk those (in increasing order, as the
-  // whole-mesh walk would), not every fan of a large mesh.
-  std::vector<VertexId> subsetVertices;
-  if (!options.faces.empty()) {
-    subsetVertices.reserve(3 * faces_.size());
-    for (FaceId f : faces_) {
-      for (VertexId v : topology.triangles()[f]) subsetVertices.push_back(v);
-    }
-    std::sort(subsetVertices.begin(), subsetVertices.end());
-    subsetVertices.erase(std::unique(subsetVertices.begin(), subsetVertices.end()), subsetVertices.end());
-  }
-  const std::size_t numWalked = options.faces.empty() ? topology.numVertices() : subsetVertices.size();
-  std::vector<CornerId> fan;
-  for (std::size_t i = 0; i < numWalked; ++i) {
-    const VertexId v = options.faces.empty() ? static_cast<VertexId>(i) : subsetVertices[i];
-    fan.clear();
-    topology.forEachCornerAround(v, [&](CornerId c) { fan.push_back(c); });
-    if (fan.empty()) continue;
-    const std::size_t m = fan.size();
-    const bool closed = topology.ccw(fan.back()) == fan.front();
-    auto separated = [&](std::size_t j) {  // is there a wedge border just before fan[j]?
-      const CornerId before = j > 0 ? fan[j - 1] : fan[m - 1];
-      if (j == 0 && !closed) return true;
-      return cut.corners.isCut(nextCorner(before)) || !inSubset[cornerFace(before)] ||
-             !inSubset[cornerFace(fan[j])];
-    };
-    std::size_t start = 0;
-    for (std::size_t j = 0; j < m; ++j) {
-      if (separated(j)) {
-        start = j;
-        break;
-      }
-    }
-    bool anyDomain = false;
-    std::uint32_t current = kInvalidId;
-    for (std::size_t step = 0; step < m; ++step) {
-      const std::size_t j = (start + step) % m;
-      const CornerId c = fan[j];
-      if (!inSubset[cornerFace(c)]) {
-        current = kInvalidId;
-        continue;
-      }
-      if (current == kInvalidId || separated(j)) {
-        if (!anyDomain) {
-          basisVertex_.push_back(v);
-          anyDomain = true;
-        }
-        current = static_cast<std::uint32_t>(domainBasis_.size());
-        domainBasis_.push_back(static_cast<std::uint32_t>(basisVertex_.size() - 1));
-      }
-      cornerDomain_[c] = current;
-    }
-  }
+  const std::vector<std::uint8_t> inSubset = selectFaces(nf, options.faces, faces_);
+  const bool wholeMesh = options.faces.empty();
+  Wedges wedges = buildWedges(topology, cut, inSubset, wholeMesh,
+                              wholeMesh ? std::vector<VertexId>{} : verticesOfFaces(topology, faces_));
+  cornerDomain_ = std::move(wedges.cornerDomain);
+  domainBasis_ = std::move(wedges.domainBasis);
+  basisVertex_ = std::move(wedges.basisVertex);
   numBasisFunctions_ = static_cast<std::uint32_t>(basisVertex_.size());
-
-  // Seam adjacency: the wedges on either side of every seam edge, at both of its endpoints.
-  seamRotation_.resize(cut.seams.size());
-  for (std::uint32_t s = 0; s < cut.seams.size(); ++s) {
-    const SeamCurve& seam = cut.seams[s];
-    seamRotation_[s] = static_cast<std::uint8_t>((4 - seam.matching % 4) % 4);  // r = i^(-k)
-    for (CornerId c : seam.corners) {
-      const CornerId o = topology.opposite(c);
-      if (o == kInvalidId) {
-        throw InputError("hat basis: seam " + std::to_string(s) + " has boundary edge of corner " +
-                         std::to_string(c));
-      }
-      if (!inSubset[cornerFace(c)] || !inSubset[cornerFace(o)]) continue;
-      adjacencies_.push_back({cornerDomain_[nextCorner(c)], cornerDomain_[prevCorner(o)], s});
-      adjacencies_.push_back({cornerDomain_[prevCorner(c)], cornerDomain_[nextCorner(o)], s});
-    }
-  }
-  auto key = [](const DomainAdjacency& a) { return std::make_tuple(a.left, a.right, a.seam); };
-  std::sort(adjacencies_.begin(), adjacencies_.end(),
-            [&](const auto& a, const auto& b) { return key(a) < key(b); });
-  adjacencies_.erase(std::unique(adjacencies_.begin(), adjacencies_.end(),
-                                 [&](const auto& a, const auto& b) { return key(a) == key(b); }),
-                     adjacencies_.end());
+  setSeamAdjacencies(cut.seams, collectSeamAdjacencies(topology, cut, inSubset, cornerDomain_));
 }
 
 std::uint32_t HatBasis::elementDomains(std::uint64_t e, std::uint32_t* out) const {

@@ -66,6 +66,11 @@ class Basis {
   std::uint32_t numSeams() const { return static_cast<std::uint32_t>(seamRotation_.size()); }
 
  protected:
+  /// Stores the seam rotations r = i^(-matching) of the cut's seams and the adjacencies, sorted
+  /// by (left, right, seam) without repeats (one convention for every basis).
+  void setSeamAdjacencies(const std::vector<SeamCurve>& seams,
+                          std::vector<DomainAdjacency> adjacencies);
+
   std::uint32_t numBasisFunctions_ = 0;
   std::vector<std::uint32_t> domainBasis_;
   std::vector<DomainAdjacency> adjacencies_;

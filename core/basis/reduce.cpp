@@ -100,24 +100,29 @@ void dropInvisibleTranslations(Reduction& out) {
 }
 
 
-Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
-  const std::uint32_t nd = basis.numDomains();
-  const std::uint32_t nb = basis.numBasisFunctions();
-  const std::uint32_t ns = basis.numSeams();
+namespace {
+
+// Domains per basis function and adjacencies per domain (CSR).
+struct DomainIndex {
+  std::vector<std::uint32_t> basisStart, basisDomains;  // #basis + 1, #domains
+  std::vector<std::uint32_t> adjStart, adjList;         // #domains + 1, adjacency ids
+};
+
+// InputError on an adjacency out of range or across basis functions.
+DomainIndex indexDomains(const Basis& basis) {
+  const std::uint32_t nd = basis.numDomains(), nb = basis.numBasisFunctions(), ns = basis.numSeams();
   const auto& domainBasis = basis.domainBasis();
   const auto& adjacency = basis.adjacencies();
-  const auto& rotation = basis.seamRotation();
-  reportProgress(options.progress, "reduce", 0.0);
-
-  // Domains per basis function and adjacencies per domain (CSR).
-  std::vector<std::uint32_t> basisStart(nb + 1, 0), basisDomains(nd);
-  for (std::uint32_t d = 0; d < nd; ++d) ++basisStart[domainBasis[d] + 1];
-  std::partial_sum(basisStart.begin(), basisStart.end(), basisStart.begin());
+  DomainIndex out;
+  out.basisStart.assign(nb + 1, 0);
+  out.basisDomains.resize(nd);
+  for (std::uint32_t d = 0; d < nd; ++d) ++out.basisStart[domainBasis[d] + 1];
+  std::partial_sum(out.basisStart.begin(), out.basisStart.end(), out.basisStart.begin());
   {
-    std::vector<std::uint32_t> fill(basisStart.begin(), basisStart.end() - 1);
-    for (std::uint32_t d = 0; d < nd; ++d) basisDomains[fill[domainBasis[d]]++] = d;
+    std::vector<std::uint32_t> fill(out.basisStart.begin(), out.basisStart.end() - 1);
+    for (std::uint32_t d = 0; d < nd; ++d) out.basisDomains[fill[domainBasis[d]]++] = d;
   }
-  std::vector<std::uint32_t> adjStart(nd + 1, 0), adjList;
+  out.adjStart.assign(nd + 1, 0);
   for (std::uint32_t a = 0; a < adjacency.size(); ++a) {
     const DomainAdjacency& e = adjacency[a];
     if (e.left >= nd || e.right >= nd || e.seam >= ns ||
@@ -125,40 +130,55 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
       throw InputError("reduce: adjacency " + std::to_string(a) +
                        " joins domains of different basis functions or is out of range");
     }
-    ++adjStart[e.left + 1];
-    if (e.right != e.left) ++adjStart[e.right + 1];
+    ++out.adjStart[e.left + 1];
+    if (e.right != e.left) ++out.adjStart[e.right + 1];
   }
-  std::partial_sum(adjStart.begin(), adjStart.end(), adjStart.begin());
-  adjList.resize(adjStart[nd]);
-  {
-    std::vector<std::uint32_t> fill(adjStart.begin(), adjStart.end() - 1);
-    for (std::uint32_t a = 0; a < adjacency.size(); ++a) {
-      adjList[fill[adjacency[a].left]++] = a;
-      if (adjacency[a].right != adjacency[a].left) adjList[fill[adjacency[a].right]++] = a;
-    }
+  std::partial_sum(out.adjStart.begin(), out.adjStart.end(), out.adjStart.begin());
+  out.adjList.resize(out.adjStart[nd]);
+  std::vector<std::uint32_t> fill(out.adjStart.begin(), out.adjStart.end() - 1);
+  for (std::uint32_t a = 0; a < adjacency.size(); ++a) {
+    out.adjList[fill[adjacency[a].left]++] = a;
+    if (adjacency[a].right != adjacency[a].left) out.adjList[fill[adjacency[a].right]++] = a;
   }
+  return out;
+}
 
-  // BFS per basis function: c_d = i^R[d] c_0 + T[d] . t.
-  std::vector<std::uint8_t> R(nd, 0);
-  std::vector<GaussVector> T(nd);
-  std::vector<std::uint32_t> domainGroup(nd, kInvalidId);
-  std::vector<std::uint8_t> isTree(adjacency.size(), 0);
+// Spanning trees of the domains of each basis function: c_d = i^R[d] c_0 + T[d] . t.
+struct DomainTrees {
+  std::vector<std::uint8_t> R;
+  std::vector<GaussVector> T;
+  std::vector<std::uint32_t> domainGroup;
+  std::vector<std::uint8_t> isTree;  // per adjacency
   std::vector<Group> groups;
-  std::vector<std::pair<std::uint32_t, GaussVector>> ownConstraints;  // (basis, row)
+};
+
+// BFS per basis function from each domain not reached yet (one group per BFS).
+DomainTrees spanDomainTrees(const Basis& basis, const DomainIndex& index) {
+  const std::uint32_t nd = basis.numDomains(), nb = basis.numBasisFunctions();
+  const auto& adjacency = basis.adjacencies();
+  const auto& rotation = basis.seamRotation();
+  DomainTrees out;
+  std::vector<std::uint8_t>& R = out.R;
+  std::vector<GaussVector>& T = out.T;
+  std::vector<std::uint32_t>& domainGroup = out.domainGroup;
+  R.assign(nd, 0);
+  T.resize(nd);
+  domainGroup.assign(nd, kInvalidId);
+  out.isTree.assign(adjacency.size(), 0);
   std::deque<std::uint32_t> queue;
   for (std::uint32_t b = 0; b < nb; ++b) {
-    for (std::uint32_t k = basisStart[b]; k < basisStart[b + 1]; ++k) {
-      const std::uint32_t root = basisDomains[k];
+    for (std::uint32_t k = index.basisStart[b]; k < index.basisStart[b + 1]; ++k) {
+      const std::uint32_t root = index.basisDomains[k];
       if (domainGroup[root] != kInvalidId) continue;
-      const std::uint32_t g = static_cast<std::uint32_t>(groups.size());
-      groups.push_back({b, root, false, {}, {}});
+      const std::uint32_t g = static_cast<std::uint32_t>(out.groups.size());
+      out.groups.push_back({b, root, false, {}, {}});
       domainGroup[root] = g;
       queue.push_back(root);
       while (!queue.empty()) {
         const std::uint32_t d = queue.front();
         queue.pop_front();
-        for (std::uint32_t k2 = adjStart[d]; k2 < adjStart[d + 1]; ++k2) {
-          const std::uint32_t a = adjList[k2];
+        for (std::uint32_t k2 = index.adjStart[d]; k2 < index.adjStart[d + 1]; ++k2) {
+          const std::uint32_t a = index.adjList[k2];
           const DomainAdjacency& e = adjacency[a];
           const GaussInt r = unitPower(rotation[e.seam]);
           if (e.left == d && domainGroup[e.right] == kInvalidId) {
@@ -167,7 +187,7 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
             T[e.right] = scaled(T[d], r);
             addScaled(T[e.right], GaussInt(1), unitVector(e.seam));
             domainGroup[e.right] = g;
-            isTree[a] = 1;
+            out.isTree[a] = 1;
             queue.push_back(e.right);
           } else if (e.right == d && domainGroup[e.left] == kInvalidId) {
             // c_left = r^-1 c_right - r^-1 t
@@ -176,25 +196,32 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
             T[e.left] = scaled(T[d], rInv);
             addScaled(T[e.left], -rInv, unitVector(e.seam));
             domainGroup[e.left] = g;
-            isTree[a] = 1;
+            out.isTree[a] = 1;
             queue.push_back(e.left);
           }
         }
       }
     }
   }
-  reportProgress(options.progress, "reduce", 0.3);
+  return out;
+}
 
-  // Cycles: (R_b - r R_a) c_0 = (r T_a + e_seam - T_b) . t for every non-tree adjacency.
+// Cycles: (R_b - r R_a) c_0 = (r T_a + e_seam - T_b) . t for every non-tree adjacency. The first
+// with alpha != 0 determines its group's c_0; the others become (basis, row) constraints on t.
+std::vector<std::pair<std::uint32_t, GaussVector>> closeCycles(const Basis& basis,
+                                                               DomainTrees& trees) {
+  const auto& adjacency = basis.adjacencies();
+  const auto& rotation = basis.seamRotation();
+  std::vector<std::pair<std::uint32_t, GaussVector>> ownConstraints;
   for (std::uint32_t a = 0; a < adjacency.size(); ++a) {
-    if (isTree[a]) continue;
+    if (trees.isTree[a]) continue;
     const DomainAdjacency& e = adjacency[a];
     const GaussInt r = unitPower(rotation[e.seam]);
-    const GaussInt alpha = unitPower(R[e.right]) - r * unitPower(R[e.left]);
-    GaussVector beta = scaled(T[e.left], r);
+    const GaussInt alpha = unitPower(trees.R[e.right]) - r * unitPower(trees.R[e.left]);
+    GaussVector beta = scaled(trees.T[e.left], r);
     addScaled(beta, GaussInt(1), unitVector(e.seam));
-    addScaled(beta, GaussInt(-1), T[e.right]);
-    Group& group = groups[domainGroup[e.left]];
+    addScaled(beta, GaussInt(-1), trees.T[e.right]);
+    Group& group = trees.groups[trees.domainGroup[e.left]];
     if (alpha.isZero()) {
       if (!beta.empty()) ownConstraints.emplace_back(group.basis, std::move(beta));
     } else if (!group.determined) {
@@ -208,9 +235,14 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
       if (!row.empty()) ownConstraints.emplace_back(group.basis, std::move(row));
     }
   }
+  return ownConstraints;
+}
 
-  // Integer-preserving elimination of the translation constraints: t = U s.
-  Reduction out;
+// Integer-preserving elimination of the translation constraints: t = U s. With given
+// constraints, the basis functions whose own constraints they do not imply are inconsistent.
+void eliminateTranslations(std::uint32_t ns, const ReduceOptions& options,
+                           std::vector<std::pair<std::uint32_t, GaussVector>> ownConstraints,
+                           Reduction& out) {
   LatticeEliminator lattice(ns);
   if (options.translationConstraints) {
     for (const GaussVector& row : *options.translationConstraints) lattice.addConstraint(row);
@@ -230,14 +262,18 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
   out.numTranslational = lattice.numFree();
   out.seamTranslation.resize(ns);
   for (std::uint32_t s = 0; s < ns; ++s) out.seamTranslation[s] = lattice.row(s);
-  reportProgress(options.progress, "reduce", 0.6);
+}
 
-  // Positional unknowns: one per group whose c_0 is free.
+// Positional unknowns: one per group whose c_0 is free (returned per group); lists the basis
+// functions whose root group is determined.
+std::vector<std::uint32_t> numberPositionalUnknowns(const std::vector<Group>& groups,
+                                                    const DomainIndex& index, std::uint32_t nb,
+                                                    Reduction& out) {
   std::vector<std::uint32_t> groupPositional(groups.size(), kInvalidId);
   out.basisPositional.assign(nb, kInvalidId);
   for (std::uint32_t g = 0; g < groups.size(); ++g) {
     if (groups[g].determined) {
-      if (groups[g].root == basisDomains[basisStart[groups[g].basis]]) {
+      if (groups[g].root == index.basisDomains[index.basisStart[groups[g].basis]]) {
         out.determinedBasis.push_back(groups[g].basis);
       }
       continue;
@@ -247,8 +283,14 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
       out.basisPositional[groups[g].basis] = groupPositional[g];
     }
   }
+  return groupPositional;
+}
 
-  // P: coefficient of domain d = i^R_d c_0 + (T_d U) s, with c_0 = (beta U) s / alpha if determined.
+// P: coefficient of domain d = i^R_d c_0 + (T_d U) s, with c_0 = (beta U) s / alpha if determined.
+void buildReducedMap(const DomainTrees& trees, const std::vector<std::uint32_t>& groupPositional,
+                     Reduction& out) {
+  const std::vector<Group>& groups = trees.groups;
+  const std::uint32_t nd = static_cast<std::uint32_t>(trees.R.size());
   auto translationalTerms = [&](const GaussVector& v) {  // v . t in terms of s
     GaussVector terms;
     for (const auto& [s, x] : v) addScaled(terms, x, out.seamTranslation[s]);
@@ -265,11 +307,11 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
   P.rowStart.assign(nd + 1, 0);
   std::vector<std::pair<std::uint32_t, std::complex<double>>> row;
   for (std::uint32_t d = 0; d < nd; ++d) {
-    const std::uint32_t g = domainGroup[d];
-    const std::complex<double> unit = unitPower(R[d]).toComplex();
+    const std::uint32_t g = trees.domainGroup[d];
+    const std::complex<double> unit = unitPower(trees.R[d]).toComplex();
     row.clear();
     if (groupPositional[g] != kInvalidId) row.emplace_back(groupPositional[g], unit);
-    for (const auto& [j, x] : translationalTerms(T[d])) {
+    for (const auto& [j, x] : translationalTerms(trees.T[d])) {
       row.emplace_back(out.numPositional + j, x.toComplex());
     }
     if (groups[g].determined) {
@@ -288,9 +330,14 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
     }
     P.rowStart[d + 1] = P.column.size();
   }
-  reportProgress(options.progress, "reduce", 0.8);
+}
 
-  // Components through elements and seams.
+// Components through elements and seams: the component of every unknown and whether a
+// component has a seam with a rotation.
+void assignComponents(const Basis& basis, const DomainTrees& trees,
+                      const std::vector<std::uint32_t>& groupPositional, Reduction& out) {
+  const std::uint32_t nd = basis.numDomains(), ns = basis.numSeams();
+  const std::vector<Group>& groups = trees.groups;
   UnionFind uf(nd);
   {
     std::uint32_t domains[kMaxElementFunctions];
@@ -300,7 +347,7 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
         if (domains[0] != kInvalidId && domains[k] != kInvalidId) uf.unite(domains[0], domains[k]);
       }
     }
-    for (std::uint32_t d = 0; d < nd; ++d) uf.unite(d, groups[domainGroup[d]].root);
+    for (std::uint32_t d = 0; d < nd; ++d) uf.unite(d, groups[trees.domainGroup[d]].root);
   }
   std::vector<std::uint32_t> componentOf(nd, kInvalidId);
   for (std::uint32_t d = 0; d < nd; ++d) {
@@ -316,9 +363,9 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
     }
   }
   std::vector<std::uint32_t> seamComponent(ns, kInvalidId);
-  for (const DomainAdjacency& e : adjacency) {
+  for (const DomainAdjacency& e : basis.adjacencies()) {
     seamComponent[e.seam] = componentOf[e.left];
-    if (rotation[e.seam] % 4 != 0) out.componentHasRotation[componentOf[e.left]] = 1;
+    if (basis.seamRotation()[e.seam] % 4 != 0) out.componentHasRotation[componentOf[e.left]] = 1;
   }
   for (std::uint32_t s = 0; s < ns; ++s) {
     if (seamComponent[s] == kInvalidId) continue;
@@ -326,6 +373,24 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
       out.unknownComponent[out.numPositional + j] = seamComponent[s];
     }
   }
+}
+
+}  // namespace
+
+Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
+  reportProgress(options.progress, "reduce", 0.0);
+  const DomainIndex index = indexDomains(basis);
+  DomainTrees trees = spanDomainTrees(basis, index);
+  reportProgress(options.progress, "reduce", 0.3);
+  std::vector<std::pair<std::uint32_t, GaussVector>> ownConstraints = closeCycles(basis, trees);
+  Reduction out;
+  eliminateTranslations(basis.numSeams(), options, std::move(ownConstraints), out);
+  reportProgress(options.progress, "reduce", 0.6);
+  const std::vector<std::uint32_t> groupPositional =
+      numberPositionalUnknowns(trees.groups, index, basis.numBasisFunctions(), out);
+  buildReducedMap(trees, groupPositional, out);
+  reportProgress(options.progress, "reduce", 0.8);
+  assignComponents(basis, trees, groupPositional, out);
   dropInvisibleTranslations(out);
   reportProgress(options.progress, "reduce", 1.0);
   return out;

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <numeric>
 #include <string>
-#include <tuple>
 
 #include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
@@ -103,6 +102,298 @@ struct SeamLink {
   std::uint32_t left, right, seam;  // element-function nodes 8 e + k
 };
 
+// Fragments per voxel (stable: ordered by face), as CSR.
+struct VoxelFragmentIndex {
+  std::vector<std::uint32_t> start;      // #voxels + 1
+  std::vector<std::uint32_t> fragments;  // fragment ids
+};
+
+// The constructor's inputs every phase reads.
+struct BasisInput {
+  const TriangleMesh& mesh;
+  const Topology& topology;
+  const CrossField& field;
+  const CutResult& cut;
+  const VoxelGridGeometry& grid;
+  const std::vector<VoxelCoord>& voxelCoords;
+  const std::vector<VoxelFragment>& fragments;
+};
+
+// Fragment starts per face (they arrive ordered by face); InputError on a fragment out of range
+// or out of order.
+std::vector<std::uint32_t> indexFragmentsByFace(const std::vector<VoxelFragment>& fragments,
+                                                std::uint32_t nf, std::uint32_t nv) {
+  std::vector<std::uint32_t> faceStart(nf + 1, 0);
+  for (std::uint32_t i = 0; i < fragments.size(); ++i) {
+    const VoxelFragment& fr = fragments[i];
+    if (fr.face >= nf || fr.voxel >= nv || (i > 0 && fr.face < fragments[i - 1].face)) {
+      throw InputError("voxel basis: fragment " + std::to_string(i) +
+                       " is out of range or not ordered by face");
+    }
+    ++faceStart[fr.face + 1];
+  }
+  std::partial_sum(faceStart.begin(), faceStart.end(), faceStart.begin());
+  return faceStart;
+}
+
+VoxelFragmentIndex indexFragmentsByVoxel(const std::vector<VoxelFragment>& fragments,
+                                         std::uint32_t nv) {
+  VoxelFragmentIndex out;
+  out.start.assign(nv + 1, 0);
+  out.fragments.resize(fragments.size());
+  for (const VoxelFragment& fr : fragments) ++out.start[fr.voxel + 1];
+  std::partial_sum(out.start.begin(), out.start.end(), out.start.begin());
+  std::vector<std::uint32_t> fill(out.start.begin(), out.start.end() - 1);
+  for (std::uint32_t i = 0; i < fragments.size(); ++i) out.fragments[fill[fragments[i].voxel]++] = i;
+  return out;
+}
+
+// Elements of voxel v: its fragments joined through shared non-cut edges (union-find). Writes
+// each fragment's element label local to v; returns the number of elements of v.
+std::uint32_t labelVoxelElements(const BasisInput& in, const VoxelFragmentIndex& byVoxel,
+                                 std::uint32_t v, std::vector<FaceId>& faces,
+                                 std::vector<std::uint32_t>& fragmentElement) {
+  const std::vector<VoxelFragment>& fragments = in.fragments;
+  const std::uint32_t begin = byVoxel.start[v], m = byVoxel.start[v + 1] - begin;
+  faces.resize(m);
+  for (std::uint32_t i = 0; i < m; ++i) faces[i] = fragments[byVoxel.fragments[begin + i]].face;
+  UnionFind uf(m);
+  for (std::uint32_t i = 0; i < m; ++i) {
+    const VoxelFragment& fr = fragments[byVoxel.fragments[begin + i]];
+    for (int j = 0; j < 3; ++j) {
+      const CornerId c = 3 * fr.face + j;
+      if (!(fr.edgeMask >> j & 1) || in.cut.corners.isCut(c)) continue;
+      const CornerId o = in.topology.opposite(c);
+      if (o == kInvalidId) continue;
+      const auto it = std::lower_bound(faces.begin(), faces.end(), cornerFace(o));
+      if (it == faces.end() || *it != cornerFace(o)) continue;
+      const std::uint32_t i2 = static_cast<std::uint32_t>(it - faces.begin());
+      if (fragments[byVoxel.fragments[begin + i2]].edgeMask >> (o % 3) & 1) uf.unite(i, i2);
+    }
+  }
+  std::vector<std::uint32_t> label;
+  const std::uint32_t count = denseLabels(uf, label);
+  for (std::uint32_t i = 0; i < m; ++i) fragmentElement[byVoxel.fragments[begin + i]] = label[i];
+  return count;
+}
+
+// Elements numbered in voxel order, and where each fragment and element lies.
+struct Elements {
+  std::vector<std::uint32_t> fragmentElement;    // #fragments
+  std::vector<std::uint32_t> voxelElementStart;  // #voxels + 1
+  std::vector<std::uint32_t> elementVoxel;       // #elements
+};
+
+// Elements: per voxel (in parallel), fragments joined through shared non-cut edges; then
+// numbered globally. InputError when 8 #elements would not fit in 32 bits.
+Elements buildElements(const BasisInput& in, const VoxelFragmentIndex& byVoxel) {
+  const std::uint32_t nv = static_cast<std::uint32_t>(in.voxelCoords.size());
+  const std::uint32_t nfrag = static_cast<std::uint32_t>(in.fragments.size());
+  Elements out;
+  out.fragmentElement.assign(nfrag, 0);
+  out.voxelElementStart.assign(nv + 1, 0);
+  parallelFor(nv, 64, [&](const IndexRange& range) {
+    std::vector<FaceId> faces;
+    for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
+      out.voxelElementStart[v + 1] = labelVoxelElements(in, byVoxel, v, faces, out.fragmentElement);
+    }
+  });
+  std::partial_sum(out.voxelElementStart.begin(), out.voxelElementStart.end(),
+                   out.voxelElementStart.begin());
+  const std::uint32_t ne = out.voxelElementStart[nv];
+  if (std::uint64_t(ne) * 8 >= kInvalidId) {
+    throw InputError("voxel basis: too many elements (" + std::to_string(ne) +
+                     "); use a coarser grid");
+  }
+  for (std::uint32_t i = 0; i < nfrag; ++i) {
+    out.fragmentElement[i] += out.voxelElementStart[in.fragments[i].voxel];
+  }
+  out.elementVoxel.resize(ne);
+  for (std::uint32_t v = 0; v < nv; ++v) {
+    for (std::uint32_t e = out.voxelElementStart[v]; e < out.voxelElementStart[v + 1]; ++e) {
+      out.elementVoxel[e] = v;
+    }
+  }
+  return out;
+}
+
+// Integrals of every element: re-clip each fragment against its voxel (no polygons are stored),
+// in parallel over voxels.
+void integrateFragments(const BasisInput& in, const VoxelFragmentIndex& byVoxel,
+                        const std::vector<std::uint32_t>& fragmentElement, double edgeLength,
+                        std::vector<VoxelIntegrals>& records,
+                        std::vector<std::array<double, 36>>& normalStiffness) {
+  const std::uint32_t nv = static_cast<std::uint32_t>(in.voxelCoords.size());
+  parallelFor(nv, 16, [&](const IndexRange& range) {
+    for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
+      for (std::uint32_t k = byVoxel.start[v]; k < byVoxel.start[v + 1]; ++k) {
+        const std::uint32_t i = byVoxel.fragments[k];
+        const FaceId f = in.fragments[i].face;
+        Vec3d n;
+        const Vec3d u = combedDirection(in.mesh, in.field, in.cut, f, n);
+        if (n.squaredNorm() == 0.0) continue;  // zero-area face: nothing to integrate
+        const ClipPolygon piece =
+            clipTriangleToVoxel(faceGridCoords(in.mesh, in.grid, f), in.voxelCoords[v]);
+        const std::uint32_t e = fragmentElement[i];
+        addFragmentIntegrals(piece, in.voxelCoords[v], in.grid.voxelSize, n, u, edgeLength,
+                             records[e], 0.0, normalStiffness[e].data());
+      }
+    }
+  });
+}
+
+// The element functions (nodes 8 e + k) of one grid corner, their domains being built, and the
+// seam links between them.
+struct DomainLinks {
+  UnionFind functions;
+  std::vector<SeamLink> seamLinks;
+};
+
+// (a) One triangle meets a support (a convex box) in a convex, connected piece: its fragments in
+// any two voxels of the support belong to the same domain. `sorted` is scratch space.
+void joinFacePieces(const BasisInput& in, const std::vector<std::uint32_t>& fragmentElement,
+                    std::uint32_t begin, std::uint32_t end,
+                    std::vector<std::pair<VoxelCoord, std::uint32_t>>& sorted,
+                    UnionFind& functions) {
+  sorted.clear();
+  for (std::uint32_t i = begin; i < end; ++i) {
+    sorted.emplace_back(in.voxelCoords[in.fragments[i].voxel], fragmentElement[i]);
+  }
+  std::sort(sorted.begin(), sorted.end());
+  for (const auto& [a, ea] : sorted) {
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const VoxelCoord b{a[0] + dx, a[1] + dy, a[2] + dz};
+          if (b <= a) continue;
+          const auto it = std::lower_bound(sorted.begin(), sorted.end(),
+                                           std::make_pair(b, std::uint32_t(0)));
+          if (it == sorted.end() || it->first != b) continue;
+          const std::uint32_t eb = it->second;
+          forSharedCorners({dx, dy, dz},
+                           [&](int k, int k2) { functions.unite(8 * ea + k, 8 * eb + k2); });
+        }
+  }
+}
+
+// (b) Two triangles across an edge meet in the support along the edge's piece: non-cut edges of
+// face f's fragment i join their domains, seam edges make a seam link.
+void linkFragmentEdges(const BasisInput& in, const SeamIndex& seamIndex,
+                       const std::vector<std::uint32_t>& faceFragmentStart,
+                       const std::vector<std::uint32_t>& fragmentElement, FaceId f,
+                       std::uint32_t i, DomainLinks& links) {
+  const std::vector<VoxelFragment>& fragments = in.fragments;
+  const VoxelFragment& fr = fragments[i];
+  const VoxelCoord& a = in.voxelCoords[fr.voxel];
+  const std::array<Vec3d, 3> g = faceGridCoords(in.mesh, in.grid, f);
+  for (int j = 0; j < 3; ++j) {
+    const CornerId c = 3 * f + j;
+    const CornerId o = in.topology.opposite(c);
+    if (!(fr.edgeMask >> j & 1) || o == kInvalidId || cornerFace(o) < f) continue;
+    const bool isCut = in.cut.corners.isCut(c);
+    const SeamIndex::Side side = isCut ? seamIndex.find(c) : SeamIndex::Side{};
+    if (isCut && side.seam == kInvalidId) continue;
+    const FaceId h = cornerFace(o);
+    const Vec3d& p = g[(j + 1) % 3];
+    const Vec3d& q = g[(j + 2) % 3];
+    for (std::uint32_t i2 = faceFragmentStart[h]; i2 < faceFragmentStart[h + 1]; ++i2) {
+      const VoxelFragment& other = fragments[i2];
+      if (!(other.edgeMask >> (o % 3) & 1)) continue;
+      const VoxelCoord& b = in.voxelCoords[other.voxel];
+      const VoxelCoord d = difference(b, a);
+      if (!isNeighbourOffset(d)) continue;
+      if (d != VoxelCoord{0, 0, 0}) {
+        // The edge must run inside the shared face or line of the two voxels.
+        Vec3d lo, hi;
+        for (int x = 0; x < 3; ++x) {
+          lo[x] = std::max(a[x], b[x]);
+          hi[x] = std::min(a[x], b[x]) + 1;
+        }
+        if (!segmentOverlapsBox(p, q, lo, hi)) continue;
+      } else if (!isCut) {
+        continue;  // same voxel, joined into one element already
+      }
+      const std::uint32_t ea = fragmentElement[i], eb = fragmentElement[i2];
+      forSharedCorners(d, [&](int k, int k2) {
+        if (!isCut) {
+          links.functions.unite(8 * ea + k, 8 * eb + k2);
+        } else if (side.left) {
+          links.seamLinks.push_back({8 * ea + k, 8 * eb + k2, side.seam});
+        } else {
+          links.seamLinks.push_back({8 * eb + k2, 8 * ea + k, side.seam});
+        }
+      });
+    }
+  }
+}
+
+// Domains: element functions of one grid corner joined inside its support, face by face; and
+// the seam links between domains.
+DomainLinks linkElementFunctions(const BasisInput& in,
+                                 const std::vector<std::uint32_t>& faceFragmentStart,
+                                 const std::vector<std::uint32_t>& fragmentElement,
+                                 std::uint32_t ne) {
+  const SeamIndex seamIndex(in.topology, in.cut.seams);
+  DomainLinks links{UnionFind(std::size_t(ne) * 8), {}};
+  std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, element) of one face
+  const std::uint32_t nf = in.topology.numFaces();
+  for (FaceId f = 0; f < nf; ++f) {
+    const std::uint32_t begin = faceFragmentStart[f], end = faceFragmentStart[f + 1];
+    if (end - begin >= 2) joinFacePieces(in, fragmentElement, begin, end, sorted, links.functions);
+    for (std::uint32_t i = begin; i < end; ++i) {
+      linkFragmentEdges(in, seamIndex, faceFragmentStart, fragmentElement, f, i, links);
+    }
+  }
+  return links;
+}
+
+// Weight of a node: int |grad phi|^2 over its element in grid units (tangential + normal).
+std::vector<double> weighNodes(const std::vector<VoxelIntegrals>& records,
+                               const std::vector<std::array<double, 36>>& normalStiffness) {
+  std::vector<double> nodeWeight(records.size() * 8);
+  for (std::uint32_t e = 0; e < records.size(); ++e) {
+    for (int k = 0; k < 8; ++k) {
+      const int kk = packedIndex(k, k);
+      nodeWeight[8 * e + k] = records[e].stiffness[kk] + normalStiffness[e][kk];
+    }
+  }
+  return nodeWeight;
+}
+
+// Basis functions: domains of one corner joined across seams (parts of a support that are
+// disconnected on the uncut surface are separate functions). Returns their number.
+std::uint32_t joinDomainsAcrossSeams(std::uint32_t nd, const std::vector<SeamLink>& seamLinks,
+                                     const std::vector<std::uint32_t>& elementDomain,
+                                     std::vector<std::uint32_t>& domainBasis) {
+  UnionFind domains(nd);
+  for (const SeamLink& link : seamLinks) {
+    domains.unite(elementDomain[link.left], elementDomain[link.right]);
+  }
+  return denseLabels(domains, domainBasis);
+}
+
+// Grid corner of each basis function; a joined function keeps the corner of its larger part
+// (nodes not flagged in joinedNode are written last).
+std::vector<VoxelCoord> cornersOfBasisFunctions(std::uint32_t numBasisFunctions,
+                                                const std::vector<std::uint32_t>& elementDomain,
+                                                const std::vector<std::uint32_t>& domainBasis,
+                                                const std::vector<VoxelCoord>& voxelCoords,
+                                                const std::vector<std::uint32_t>& elementVoxel,
+                                                const std::vector<std::uint8_t>& joinedNode) {
+  std::vector<VoxelCoord> corner(numBasisFunctions);
+  for (std::uint8_t pass : {1, 0}) {
+    for (std::uint32_t e = 0; e < elementVoxel.size(); ++e) {
+      const VoxelCoord& v = voxelCoords[elementVoxel[e]];
+      for (int k = 0; k < 8; ++k) {
+        if (joinedNode[8 * e + k] != pass) continue;
+        corner[domainBasis[elementDomain[8 * e + k]]] = {
+            v[0] + (k & 1), v[1] + (k >> 1 & 1), v[2] + (k >> 2 & 1)};
+      }
+    }
+  }
+  return corner;
+}
+
 }  // namespace
 
 VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
@@ -123,223 +414,39 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   if (fragments.size() >= kInvalidId) {
     throw InputError("voxel basis: more than 2^32 fragments; use a coarser grid");
   }
-  const std::uint32_t nfrag = static_cast<std::uint32_t>(fragments.size());
+  const BasisInput in{mesh, topology, field, cut, grid_, voxelCoords_, fragments};
   reportProgress(options.progress, "voxel basis", 0.0);
-
-  // Fragments per face (they arrive ordered by face) and per voxel (stable: ordered by face).
-  faceFragmentStart_.assign(nf + 1, 0);
-  for (std::uint32_t i = 0; i < nfrag; ++i) {
-    const VoxelFragment& fr = fragments[i];
-    if (fr.face >= nf || fr.voxel >= nv || (i > 0 && fr.face < fragments[i - 1].face)) {
-      throw InputError("voxel basis: fragment " + std::to_string(i) +
-                       " is out of range or not ordered by face");
-    }
-    ++faceFragmentStart_[fr.face + 1];
-  }
-  std::partial_sum(faceFragmentStart_.begin(), faceFragmentStart_.end(),
-                   faceFragmentStart_.begin());
-  std::vector<std::uint32_t> voxelFragmentStart(nv + 1, 0), voxelFragments(nfrag);
-  for (const VoxelFragment& fr : fragments) ++voxelFragmentStart[fr.voxel + 1];
-  std::partial_sum(voxelFragmentStart.begin(), voxelFragmentStart.end(),
-                   voxelFragmentStart.begin());
-  {
-    std::vector<std::uint32_t> fill(voxelFragmentStart.begin(), voxelFragmentStart.end() - 1);
-    for (std::uint32_t i = 0; i < nfrag; ++i) voxelFragments[fill[fragments[i].voxel]++] = i;
-  }
-
-  // Elements: per voxel, fragments joined through shared non-cut edges (union-find).
-  fragmentElement_.assign(nfrag, 0);
-  voxelElementStart_.assign(nv + 1, 0);
-  parallelFor(nv, 64, [&](const IndexRange& range) {
-    std::vector<FaceId> faces;
-    for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
-      const std::uint32_t begin = voxelFragmentStart[v], m = voxelFragmentStart[v + 1] - begin;
-      faces.resize(m);
-      for (std::uint32_t i = 0; i < m; ++i) faces[i] = fragments[voxelFragments[begin + i]].face;
-      UnionFind uf(m);
-      for (std::uint32_t i = 0; i < m; ++i) {
-        const VoxelFragment& fr = fragments[voxelFragments[begin + i]];
-        for (int j = 0; j < 3; ++j) {
-          const CornerId c = 3 * fr.face + j;
-          if (!(fr.edgeMask >> j & 1) || cut.corners.isCut(c)) continue;
-          const CornerId o = topology.opposite(c);
-          if (o == kInvalidId) continue;
-          const auto it = std::lower_bound(faces.begin(), faces.end(), cornerFace(o));
-          if (it == faces.end() || *it != cornerFace(o)) continue;
-          const std::uint32_t i2 = static_cast<std::uint32_t>(it - faces.begin());
-          if (fragments[voxelFragments[begin + i2]].edgeMask >> (o % 3) & 1) uf.unite(i, i2);
-        }
-      }
-      std::vector<std::uint32_t> label;
-      voxelElementStart_[v + 1] = denseLabels(uf, label);
-      for (std::uint32_t i = 0; i < m; ++i) fragmentElement_[voxelFragments[begin + i]] = label[i];
-    }
-  });
-  std::partial_sum(voxelElementStart_.begin(), voxelElementStart_.end(),
-                   voxelElementStart_.begin());
-  const std::uint32_t ne = voxelElementStart_[nv];
-  if (std::uint64_t(ne) * 8 >= kInvalidId) {
-    throw InputError("voxel basis: too many elements (" + std::to_string(ne) +
-                     "); use a coarser grid");
-  }
-  for (std::uint32_t i = 0; i < nfrag; ++i) {
-    fragmentElement_[i] += voxelElementStart_[fragments[i].voxel];
-  }
-  elementVoxel_.resize(ne);
-  for (std::uint32_t v = 0; v < nv; ++v) {
-    for (std::uint32_t e = voxelElementStart_[v]; e < voxelElementStart_[v + 1]; ++e) {
-      elementVoxel_[e] = v;
-    }
-  }
+  faceFragmentStart_ = indexFragmentsByFace(fragments, nf, nv);
+  VoxelFragmentIndex byVoxel = indexFragmentsByVoxel(fragments, nv);
+  Elements elements = buildElements(in, byVoxel);
+  fragmentElement_ = std::move(elements.fragmentElement);
+  voxelElementStart_ = std::move(elements.voxelElementStart);
+  elementVoxel_ = std::move(elements.elementVoxel);
   reportProgress(options.progress, "voxel basis", 0.2);
 
-  // Integrals: re-clip each fragment against its voxel (no polygons are stored).
-  records_.assign(ne, VoxelIntegrals{});
-  normalStiffness_.assign(ne, std::array<double, 36>{});
+  records_.assign(numElements(), VoxelIntegrals{});
+  normalStiffness_.assign(numElements(), std::array<double, 36>{});
   setRegularization(options.regularization);
-  parallelFor(nv, 16, [&](const IndexRange& range) {
-    for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
-      for (std::uint32_t k = voxelFragmentStart[v]; k < voxelFragmentStart[v + 1]; ++k) {
-        const std::uint32_t i = voxelFragments[k];
-        const FaceId f = fragments[i].face;
-        Vec3d n;
-        const Vec3d u = combedDirection(mesh, field, cut, f, n);
-        if (n.squaredNorm() == 0.0) continue;  // zero-area face: nothing to integrate
-        const ClipPolygon piece = clipTriangleToVoxel(faceGridCoords(mesh, grid_, f), voxelCoords_[v]);
-        const std::uint32_t e = fragmentElement_[i];
-        addFragmentIntegrals(piece, voxelCoords_[v], grid_.voxelSize, n, u, options.edgeLength,
-                             records_[e], 0.0, normalStiffness_[e].data());
-      }
-    }
-  });
-  voxelFragmentStart = {};
-  voxelFragments = {};
+  integrateFragments(in, byVoxel, fragmentElement_, options.edgeLength, records_, normalStiffness_);
+  byVoxel = {};
   reportProgress(options.progress, "voxel basis", 0.5);
 
-  // Domains: element functions (nodes 8 e + k) of one grid corner joined inside its support.
-  const SeamIndex seamIndex(topology, cut.seams);
-  UnionFind functions(std::size_t(ne) * 8);
-  std::vector<SeamLink> seamLinks;
-  std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, element) of one face
-  for (FaceId f = 0; f < nf; ++f) {
-    const std::uint32_t begin = faceFragmentStart_[f], end = faceFragmentStart_[f + 1];
-    // (a) One triangle meets a support (a convex box) in a convex, connected piece: its
-    // fragments in any two voxels of the support belong to the same domain.
-    if (end - begin >= 2) {
-      sorted.clear();
-      for (std::uint32_t i = begin; i < end; ++i) {
-        sorted.emplace_back(voxelCoords_[fragments[i].voxel], fragmentElement_[i]);
-      }
-      std::sort(sorted.begin(), sorted.end());
-      for (const auto& [a, ea] : sorted) {
-        for (int dz = -1; dz <= 1; ++dz)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-              const VoxelCoord b{a[0] + dx, a[1] + dy, a[2] + dz};
-              if (b <= a) continue;
-              const auto it = std::lower_bound(sorted.begin(), sorted.end(),
-                                               std::make_pair(b, std::uint32_t(0)));
-              if (it == sorted.end() || it->first != b) continue;
-              const std::uint32_t eb = it->second;
-              forSharedCorners({dx, dy, dz},
-                               [&](int k, int k2) { functions.unite(8 * ea + k, 8 * eb + k2); });
-            }
-      }
-    }
-    // (b) Two triangles across an edge meet in the support along the edge's piece: non-cut
-    // edges join their domains, seam edges make a seam adjacency.
-    for (std::uint32_t i = begin; i < end; ++i) {
-      const VoxelFragment& fr = fragments[i];
-      const VoxelCoord& a = voxelCoords_[fr.voxel];
-      const std::array<Vec3d, 3> g = faceGridCoords(mesh, grid_, f);
-      for (int j = 0; j < 3; ++j) {
-        const CornerId c = 3 * f + j;
-        const CornerId o = topology.opposite(c);
-        if (!(fr.edgeMask >> j & 1) || o == kInvalidId || cornerFace(o) < f) continue;
-        const bool isCut = cut.corners.isCut(c);
-        const SeamIndex::Side side = isCut ? seamIndex.find(c) : SeamIndex::Side{};
-        if (isCut && side.seam == kInvalidId) continue;
-        const FaceId h = cornerFace(o);
-        const Vec3d& p = g[(j + 1) % 3];
-        const Vec3d& q = g[(j + 2) % 3];
-        for (std::uint32_t i2 = faceFragmentStart_[h]; i2 < faceFragmentStart_[h + 1]; ++i2) {
-          const VoxelFragment& other = fragments[i2];
-          if (!(other.edgeMask >> (o % 3) & 1)) continue;
-          const VoxelCoord& b = voxelCoords_[other.voxel];
-          const VoxelCoord d = difference(b, a);
-          if (!isNeighbourOffset(d)) continue;
-          if (d != VoxelCoord{0, 0, 0}) {
-            // The edge must run inside the shared face or line of the two voxels.
-            Vec3d lo, hi;
-            for (int x = 0; x < 3; ++x) {
-              lo[x] = std::max(a[x], b[x]);
-              hi[x] = std::min(a[x], b[x]) + 1;
-            }
-            if (!segmentOverlapsBox(p, q, lo, hi)) continue;
-          } else if (!isCut) {
-            continue;  // same voxel, joined into one element already
-          }
-          const std::uint32_t ea = fragmentElement_[i], eb = fragmentElement_[i2];
-          forSharedCorners(d, [&](int k, int k2) {
-            if (!isCut) {
-              functions.unite(8 * ea + k, 8 * eb + k2);
-            } else if (side.left) {
-              seamLinks.push_back({8 * ea + k, 8 * eb + k2, side.seam});
-            } else {
-              seamLinks.push_back({8 * eb + k2, 8 * ea + k, side.seam});
-            }
-          });
-        }
-      }
-    }
-  }
+  DomainLinks links = linkElementFunctions(in, faceFragmentStart_, fragmentElement_,
+                                           static_cast<std::uint32_t>(numElements()));
   reportProgress(options.progress, "voxel basis", 0.8);
-
   std::vector<std::uint8_t> joinedNode;
-  {
-    // Weight of a node: int |grad phi|^2 over its element in grid units (tangential + normal).
-    std::vector<double> nodeWeight(std::size_t(ne) * 8);
-    for (std::uint32_t e = 0; e < ne; ++e) {
-      for (int k = 0; k < 8; ++k) {
-        const int kk = packedIndex(k, k);
-        nodeWeight[8 * e + k] = records_[e].stiffness[kk] + normalStiffness_[e][kk];
-      }
-    }
-    joinedDomains_ = joinNegligibleDomains(functions, nodeWeight, options.minDomainWeight, joinedNode);
+  joinedDomains_ = joinNegligibleDomains(links.functions, weighNodes(records_, normalStiffness_),
+                                         options.minDomainWeight, joinedNode);
+  const std::uint32_t nd = denseLabels(links.functions, elementDomain_);
+  links.functions = UnionFind(0);
+  numBasisFunctions_ = joinDomainsAcrossSeams(nd, links.seamLinks, elementDomain_, domainBasis_);
+  basisCorner_ = cornersOfBasisFunctions(numBasisFunctions_, elementDomain_, domainBasis_,
+                                         voxelCoords_, elementVoxel_, joinedNode);
+  std::vector<DomainAdjacency> adjacencies;
+  for (const SeamLink& link : links.seamLinks) {
+    adjacencies.push_back({elementDomain_[link.left], elementDomain_[link.right], link.seam});
   }
-  const std::uint32_t nd = denseLabels(functions, elementDomain_);
-  functions = UnionFind(0);
-  // Basis functions: domains of one corner joined across seams (parts of a support that are
-  // disconnected on the uncut surface are separate functions).
-  UnionFind domains(nd);
-  for (const SeamLink& link : seamLinks) {
-    domains.unite(elementDomain_[link.left], elementDomain_[link.right]);
-  }
-  numBasisFunctions_ = denseLabels(domains, domainBasis_);
-  basisCorner_.resize(numBasisFunctions_);
-  for (std::uint8_t pass : {1, 0}) {  // a joined function keeps the corner of its larger part
-    for (std::uint32_t e = 0; e < ne; ++e) {
-      const VoxelCoord& v = voxelCoords_[elementVoxel_[e]];
-      for (int k = 0; k < 8; ++k) {
-        if (joinedNode[8 * e + k] != pass) continue;
-        basisCorner_[domainBasis_[elementDomain_[8 * e + k]]] = {
-            v[0] + (k & 1), v[1] + (k >> 1 & 1), v[2] + (k >> 2 & 1)};
-      }
-    }
-  }
-  for (const SeamLink& link : seamLinks) {
-    adjacencies_.push_back({elementDomain_[link.left], elementDomain_[link.right], link.seam});
-  }
-  auto key = [](const DomainAdjacency& x) { return std::make_tuple(x.left, x.right, x.seam); };
-  std::sort(adjacencies_.begin(), adjacencies_.end(),
-            [&](const auto& x, const auto& y) { return key(x) < key(y); });
-  adjacencies_.erase(std::unique(adjacencies_.begin(), adjacencies_.end(),
-                                 [&](const auto& x, const auto& y) { return key(x) == key(y); }),
-                     adjacencies_.end());
-  seamRotation_.resize(cut.seams.size());
-  for (std::size_t s = 0; s < cut.seams.size(); ++s) {
-    seamRotation_[s] = static_cast<std::uint8_t>((4 - cut.seams[s].matching % 4) % 4);  // i^-k
-  }
+  setSeamAdjacencies(cut.seams, std::move(adjacencies));
   reportProgress(options.progress, "voxel basis", 1.0);
 }
 

@@ -117,105 +117,109 @@ SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topolog
   return out;
 }
 
-MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
-                      const CrossField* field, double edgeLength,
-                      const std::vector<VertexId>* cones) {
-  checkSizes(mesh, cornerUV);
-  if (field && field->direction.size() != mesh.numFaces()) {
-    throw InputError("metrics: field has " + std::to_string(field->direction.size()) +
-                     " directions for " + std::to_string(mesh.numFaces()) + " faces");
+namespace {
+
+// Per face: gradient G = gu + i gv of q and the cross direction u nearest to it (w = u + i n x u).
+struct FaceFigures {
+  double area = 0.0;
+  Vec3d gu = Vec3d::Zero(), gv = Vec3d::Zero(), u = Vec3d::Zero(), v = Vec3d::Zero();
+  double gw() const { return gu.dot(u) + gv.dot(v); }  // Re<G, w>
+};
+
+// Area, gradient and nearest cross direction of face f (zero gradient on a zero-area face; no
+// direction without a field).
+FaceFigures measureFace(const TriangleMesh& mesh, const WedgeMap& cornerUV, const CrossField* field,
+                        FaceId f) {
+  FaceFigures out;
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+  const Complex q[3] = {toComplex(cornerUV[3 * f]), toComplex(cornerUV[3 * f + 1]),
+                        toComplex(cornerUV[3 * f + 2])};
+  const Vec3d normal = (p[1] - p[0]).cross(p[2] - p[0]);
+  const double twiceArea = normal.norm();
+  out.area = 0.5 * twiceArea;
+  if (!(twiceArea > 0.0)) return out;
+  const Vec3d n = normal / twiceArea;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3d g = n.cross(p[(k + 2) % 3] - p[(k + 1) % 3]) / twiceArea;
+    out.gu += q[k].real() * g;
+    out.gv += q[k].imag() * g;
   }
-  const FaceId nf = mesh.numFaces();
-  // Per face: gradient G = gu + i gv of q and the cross direction u nearest to it (w = u + i n x u).
-  struct Face {
-    double area = 0.0;
-    Vec3d gu = Vec3d::Zero(), gv = Vec3d::Zero(), u = Vec3d::Zero(), v = Vec3d::Zero();
-    double gw() const { return gu.dot(u) + gv.dot(v); }  // Re<G, w>
-  };
-  auto faceFigures = [&](FaceId f) {
-    Face out;
-    const Triangle& t = mesh.triangles[f];
-    const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
-    const Complex q[3] = {toComplex(cornerUV[3 * f]), toComplex(cornerUV[3 * f + 1]),
-                          toComplex(cornerUV[3 * f + 2])};
-    const Vec3d normal = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double twiceArea = normal.norm();
-    out.area = 0.5 * twiceArea;
-    if (!(twiceArea > 0.0)) return out;
-    const Vec3d n = normal / twiceArea;
-    for (int k = 0; k < 3; ++k) {
-      const Vec3d g = n.cross(p[(k + 2) % 3] - p[(k + 1) % 3]) / twiceArea;
-      out.gu += q[k].real() * g;
-      out.gv += q[k].imag() * g;
-    }
-    if (field) {
-      Vec3d u = field->at(f);
-      u -= n * n.dot(u);
-      const double len = u.norm();
-      if (len > 0.0) {
-        u /= len;
-        double best = -std::numeric_limits<double>::infinity();
-        for (int m = 0; m < 4; ++m) {  // the four cross directions
-          const double score = out.gu.dot(u) + out.gv.dot(n.cross(u));
-          if (score > best) best = score, out.u = u, out.v = n.cross(u);
-          u = n.cross(u);
-        }
+  if (field) {
+    Vec3d u = field->at(f);
+    u -= n * n.dot(u);
+    const double len = u.norm();
+    if (len > 0.0) {
+      u /= len;
+      double best = -std::numeric_limits<double>::infinity();
+      for (int m = 0; m < 4; ++m) {  // the four cross directions
+        const double score = out.gu.dot(u) + out.gv.dot(n.cross(u));
+        if (score > best) best = score, out.u = u, out.v = n.cross(u);
+        u = n.cross(u);
       }
     }
-    return out;
-  };
-  struct Sums {
-    double area = 0.0, uvArea = 0.0, gw = 0.0, error = 0.0, target = 0.0;
-  };
-  auto sumFaces = [&](double h) {
-    return tbb::parallel_reduce(
-        tbb::blocked_range<FaceId>(0, nf, 8192), Sums{},
-        [&](const tbb::blocked_range<FaceId>& range, Sums s) {
-          for (FaceId f = range.begin(); f != range.end(); ++f) {
-            const Face x = faceFigures(f);
-            const Complex q0 = toComplex(cornerUV[3 * f]);
-            s.area += x.area;
-            s.uvArea += 0.5 * std::abs(std::imag(std::conj(toComplex(cornerUV[3 * f + 1]) - q0) *
-                                                 (toComplex(cornerUV[3 * f + 2]) - q0)));
-            s.gw += x.area * x.gw();
-            if (h > 0.0) {
-              s.error += x.area * ((x.gu - x.u / h).squaredNorm() + (x.gv - x.v / h).squaredNorm());
-              s.target += x.area * (x.u.squaredNorm() + x.v.squaredNorm()) / (h * h);
-            }
+  }
+  return out;
+}
+
+struct MapSums {
+  double area = 0.0, uvArea = 0.0, gw = 0.0, error = 0.0, target = 0.0;
+};
+
+// Area-weighted sums over all faces (in parallel); the error terms only for a spacing h > 0.
+MapSums sumFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, const CrossField* field,
+                 double h) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<FaceId>(0, mesh.numFaces(), 8192), MapSums{},
+      [&](const tbb::blocked_range<FaceId>& range, MapSums s) {
+        for (FaceId f = range.begin(); f != range.end(); ++f) {
+          const FaceFigures x = measureFace(mesh, cornerUV, field, f);
+          const Complex q0 = toComplex(cornerUV[3 * f]);
+          s.area += x.area;
+          s.uvArea += 0.5 * std::abs(std::imag(std::conj(toComplex(cornerUV[3 * f + 1]) - q0) *
+                                               (toComplex(cornerUV[3 * f + 2]) - q0)));
+          s.gw += x.area * x.gw();
+          if (h > 0.0) {
+            s.error += x.area * ((x.gu - x.u / h).squaredNorm() + (x.gv - x.v / h).squaredNorm());
+            s.target += x.area * (x.u.squaredNorm() + x.v.squaredNorm()) / (h * h);
           }
-          return s;
-        },
-        [](Sums a, const Sums& b) {
-          a.area += b.area, a.uvArea += b.uvArea, a.gw += b.gw, a.error += b.error,
-              a.target += b.target;
-          return a;
-        });
-  };
-  MapQuality out;
-  out.faces = nf;
-  double h = edgeLength;
-  if (!(h > 0.0)) {
-    // Least squares scale 1/h of the target (|w|^2 = 2); without a field, from the areas.
-    const Sums fit = sumFaces(0.0);
-    h = field && fit.gw > 0.0 ? 2.0 * fit.area / fit.gw
-                              : (fit.uvArea > 0.0 ? std::sqrt(fit.area / fit.uvArea) : 1.0);
-  }
-  out.edgeLength = h;
-  const Sums sums = sumFaces(h);
-  out.relativeGradientError = field && sums.target > 0.0
-                                  ? std::sqrt(sums.error / sums.target)
-                                  : std::numeric_limits<double>::quiet_NaN();
-  std::vector<std::uint8_t> isCone;
-  if (cones) {
-    isCone.assign(mesh.numVertices(), 0);
-    for (VertexId v : *cones) {
-      if (v >= mesh.numVertices()) {
-        throw InputError("metrics: cone " + std::to_string(v) + " out of range (" +
-                         std::to_string(mesh.numVertices()) + " vertices)");
-      }
-      isCone[v] = 1;
+        }
+        return s;
+      },
+      [](MapSums a, const MapSums& b) {
+        a.area += b.area, a.uvArea += b.uvArea, a.gw += b.gw, a.error += b.error,
+            a.target += b.target;
+        return a;
+      });
+}
+
+// Least squares scale 1/h of the target (|w|^2 = 2); without a field, from the areas.
+double fitEdgeLength(const TriangleMesh& mesh, const WedgeMap& cornerUV, const CrossField* field) {
+  const MapSums fit = sumFaces(mesh, cornerUV, field, 0.0);
+  return field && fit.gw > 0.0 ? 2.0 * fit.area / fit.gw
+                               : (fit.uvArea > 0.0 ? std::sqrt(fit.area / fit.uvArea) : 1.0);
+}
+
+// Per vertex: is it one of the cones (InputError naming an out-of-range one)?
+std::vector<std::uint8_t> markCones(const TriangleMesh& mesh, const std::vector<VertexId>& cones) {
+  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
+  for (VertexId v : cones) {
+    if (v >= mesh.numVertices()) {
+      throw InputError("metrics: cone " + std::to_string(v) + " out of range (" +
+                       std::to_string(mesh.numVertices()) + " vertices)");
     }
+    isCone[v] = 1;
   }
+  return isCone;
+}
+
+// Counts collapsed faces (those between coincident cones apart when cones are given) and flipped
+// ones into out, for spacing h.
+void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, double h,
+                       const std::vector<VertexId>* cones, MapQuality& out) {
+  std::vector<std::uint8_t> isCone;
+  if (cones) isCone = markCones(mesh, *cones);
+  const FaceId nf = mesh.numFaces();
   std::uint64_t flipped = 0, collapsed = 0, collapsedAtCones = 0;
   for (FaceId f = 0; f < nf; ++f) {
     const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
@@ -230,6 +234,27 @@ MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
   out.collapsed = collapsed;
   out.collapsedAtCones = collapsedAtCones;
   out.flippedFraction = nf ? static_cast<double>(flipped) / nf : 0.0;
+}
+
+}  // namespace
+
+MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
+                      const CrossField* field, double edgeLength,
+                      const std::vector<VertexId>* cones) {
+  checkSizes(mesh, cornerUV);
+  if (field && field->direction.size() != mesh.numFaces()) {
+    throw InputError("metrics: field has " + std::to_string(field->direction.size()) +
+                     " directions for " + std::to_string(mesh.numFaces()) + " faces");
+  }
+  MapQuality out;
+  out.faces = mesh.numFaces();
+  const double h = edgeLength > 0.0 ? edgeLength : fitEdgeLength(mesh, cornerUV, field);
+  out.edgeLength = h;
+  const MapSums sums = sumFaces(mesh, cornerUV, field, h);
+  out.relativeGradientError = field && sums.target > 0.0
+                                  ? std::sqrt(sums.error / sums.target)
+                                  : std::numeric_limits<double>::quiet_NaN();
+  countFlippedFaces(mesh, cornerUV, h, cones, out);
   return out;
 }
 
