@@ -25,14 +25,14 @@ struct FieldTorus : testing::CutSurface {
 };
 
 TEST(ParamSolver, NamesRoundTrip) {
-  for (ParamSolver s : {ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc}) {
+  for (ParamSolver s : {ParamSolver::Auto, ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc}) {
     EXPECT_EQ(parseParamSolver(paramSolverName(s)), s);
   }
   try {
     parseParamSolver("voxel");
     FAIL() << "an unknown solver name was accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("available: hat, vox, voxloc"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("available: auto, hat, vox, voxloc"), std::string::npos) << e.what();
   }
 }
 
