@@ -90,7 +90,7 @@ int runParam(Args& args) {
   }
   std::vector<FaceId>().swap(clean.faceOrigin);  // only the field file needed it
   const double secondsField = meter.finish("field").seconds;
-  const double diagonal = computeBoundingBox(mesh.positions).diagonal();
+  const double diagonal = clean.report.diagonalWithoutSpikes;  // a spike would inflate h
   ParamOptions options;
   options.edgeLength = spacing.spacing(diagonal);
   if (!(options.edgeLength > 0.0)) throw InputError(input + ": the mesh has zero extent");
@@ -192,6 +192,9 @@ int runParam(Args& args) {
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
+  if (st.unsolvedComponents) {
+    std::printf("WARNING: %u components could not be solved and map to the point 0\n", st.unsolvedComponents);
+  }
   if (!solved.fallbackReason.empty()) {
     std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
                 solver.c_str(), solved.fallbackReason.c_str());
@@ -214,6 +217,11 @@ int runParam(Args& args) {
     j.key("faces").value(static_cast<std::uint64_t>(mesh.numFaces()));
     j.key("vertices").value(static_cast<std::uint64_t>(mesh.numVertices()));
     j.key("components").value(static_cast<std::uint64_t>(st.components));
+    j.key("anchoredComponents").value(static_cast<std::uint64_t>(st.anchoredComponents));
+    j.key("unsolvedComponents").value(static_cast<std::uint64_t>(st.unsolvedComponents));
+    j.key("nonManifoldEdgesSplit").value(clean.report.nonManifoldEdges);
+    j.key("nonManifoldVerticesSplit").value(clean.report.nonManifoldVertices);
+    j.key("spikeVertices").value(clean.report.spikeVertices);
     j.key("cones").value(static_cast<std::uint64_t>(numCones));
     j.key("conesCancelled").value(static_cast<std::uint64_t>(2 * merged.cancelledPairs));
     j.key("conesMerged").value(static_cast<std::uint64_t>(merged.mergedPairs));

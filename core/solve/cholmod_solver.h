@@ -30,6 +30,9 @@ class CholmodFactor {
   std::uint64_t peakBytes() const;       ///< CHOLMOD's peak memory during analyse + factor
   bool usedRealFallback() const;
   bool isSupernodal() const;
+  /// After factor() threw for a matrix that is not positive definite: a column (in the
+  /// matrix's own numbering) of the block where the factorization stopped; -1 otherwise.
+  std::int64_t failedColumn() const;
 
  private:
   struct Impl;
