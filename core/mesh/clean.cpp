@@ -266,7 +266,7 @@ void forEachEdgeLength(const TriangleMesh& mesh, const Topology& topology, Verte
 std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology& topology) {
   const std::uint32_t nv = topology.numVertices();
   std::vector<double> typical(nv, 0.0);  // median edge length at each vertex
-  tbb::parallel_for(tbb::blocked_range<VertexId>(0, nv, kGrain), [&](const tbb::blocked_range<VertexId>& r) {
+  parallelFor(nv, kGrain, [&](const IndexRange& r) {
     std::vector<double> lengths;
     for (VertexId v = r.begin(); v != r.end(); ++v) {
       if (topology.isIsolatedVertex(v)) continue;
@@ -276,7 +276,7 @@ std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology
     }
   });
   std::vector<std::uint8_t> spike(nv, 0);
-  tbb::parallel_for(tbb::blocked_range<VertexId>(0, nv, kGrain), [&](const tbb::blocked_range<VertexId>& r) {
+  parallelFor(nv, kGrain, [&](const IndexRange& r) {
     std::vector<double> around;
     for (VertexId v = r.begin(); v != r.end(); ++v) {
       if (topology.isIsolatedVertex(v)) continue;
