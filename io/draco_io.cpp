@@ -5,10 +5,11 @@
 // q * delta + origin are all exact. Rounding to such a lattice commutes with integer translations
 // and quarter turns (up to ties), so q' = r q + t across a seam survives; a corner moves by at
 // most 2^-k / sqrt(2). UVs too large for that range are stored losslessly as float64.
-// Draco merges vertices with equal positions.
+// The writer keeps the mesh's vertices apart even where positions are equal (an unwelded seam,
+// a split non-manifold vertex): the archive decodes to the connectivity that was written.
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
-#include <draco/mesh/triangle_soup_mesh_builder.h>
+#include <draco/mesh/mesh.h>
 
 #include <algorithm>
 #include <cmath>
@@ -62,6 +63,51 @@ UVLattice chooseUVLattice(const TriangleMesh& mesh, const WriteOptions& options)
   lattice.origin[1] = static_cast<float>(lo[1]);
   lattice.step = 1.0 / scale;
   return lattice;
+}
+
+/// Draco points of a mesh: one per (vertex, UV wedge) pair. pointOfCorner is 3 #F,
+/// vertexOfPoint and (with UVs) wedgeOfPoint are #points.
+struct DracoPoints {
+  std::vector<std::uint32_t> pointOfCorner, vertexOfPoint, wedgeOfPoint;
+};
+
+DracoPoints dracoPoints(const TriangleMesh& mesh, bool withUV) {
+  DracoPoints out;
+  const std::size_t numCorners = 3 * mesh.triangles.size();
+  out.pointOfCorner.resize(numCorners);
+  auto vertexOf = [&](std::size_t c) { return mesh.triangles[c / 3][c % 3]; };
+  if (!withUV) {
+    for (std::size_t c = 0; c < numCorners; ++c) out.pointOfCorner[c] = vertexOf(c);
+    out.vertexOfPoint.resize(mesh.numVertices());
+    for (std::uint32_t v = 0; v < mesh.numVertices(); ++v) out.vertexOfPoint[v] = v;
+    return out;
+  }
+  // Points are (vertex, wedge) pairs in order of first appearance.
+  std::vector<std::uint32_t> order(numCorners);
+  for (std::size_t c = 0; c < numCorners; ++c) order[c] = static_cast<std::uint32_t>(c);
+  auto key = [&](std::uint32_t c) { return std::make_pair(vertexOf(c), mesh.cornerUV.wedge(c)); };
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return key(a) != key(b) ? key(a) < key(b) : a < b;
+  });
+  for (std::size_t i = 0; i < numCorners; ++i) {
+    if (i == 0 || key(order[i]) != key(order[i - 1])) {
+      out.vertexOfPoint.push_back(vertexOf(order[i]));
+      out.wedgeOfPoint.push_back(mesh.cornerUV.wedge(order[i]));
+    }
+    out.pointOfCorner[order[i]] = static_cast<std::uint32_t>(out.vertexOfPoint.size() - 1);
+  }
+  return out;
+}
+
+/// Adds an attribute with `values` entries of `components` values of type `type` to the mesh.
+draco::PointAttribute* addDracoAttribute(draco::Mesh& mesh, draco::GeometryAttribute::Type kind,
+                                         int components, draco::DataType type, std::size_t values,
+                                         bool identity) {
+  draco::GeometryAttribute attribute;
+  const int bytes = type == draco::DT_FLOAT64 ? 8 : 4;
+  attribute.Init(kind, nullptr, static_cast<std::uint8_t>(components), type, false,
+                 std::int64_t(bytes) * components, 0);
+  return mesh.attribute(mesh.AddAttribute(attribute, identity, static_cast<std::uint32_t>(values)));
 }
 
 }  // namespace
@@ -141,35 +187,47 @@ void writeDraco(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& 
     throw InputError(file.path() + ": Draco position bits must be between 0 (lossless) and 30");
   }
   const UVLattice lattice = withUV ? chooseUVLattice(mesh, options) : UVLattice{};
-  draco::TriangleSoupMeshBuilder builder;
-  builder.Start(static_cast<int>(mesh.triangles.size()));
-  const int position = builder.AddAttribute(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32);
-  const int texcoord = !withUV ? -1
-                       : builder.AddAttribute(draco::GeometryAttribute::TEX_COORD, 2,
-                                              lattice.bits ? draco::DT_FLOAT32 : draco::DT_FLOAT64);
-  const double scale = lattice.bits ? 1.0 / lattice.step : 0.0;
+  // Points, faces and attributes are set explicitly (no deduplication by value): every vertex
+  // keeps its own position entry, so the encoder's connectivity (taken from the position
+  // entries) is the mesh's own.
+  const DracoPoints points = dracoPoints(mesh, withUV);
+  const std::size_t numPoints = points.vertexOfPoint.size();
+  draco::Mesh built;
+  built.set_num_points(static_cast<std::uint32_t>(numPoints));
+  built.SetNumFaces(mesh.triangles.size());
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    const Triangle& t = mesh.triangles[f];
-    const draco::FaceIndex face(static_cast<std::uint32_t>(f));
-    builder.SetAttributeValuesForFace(position, face, mesh.positions[t[0]].data(),
-                                      mesh.positions[t[1]].data(), mesh.positions[t[2]].data());
-    if (!withUV) continue;
-    const Vec2d uv[3] = {mesh.cornerUV[3 * f], mesh.cornerUV[3 * f + 1], mesh.cornerUV[3 * f + 2]};
-    if (lattice.bits) {
-      // Lattice values: exact in float32 by the choice of the lattice.
-      float rounded[3][2];
-      for (int k = 0; k < 3; ++k) {
-        for (int c = 0; c < 2; ++c) {
-          rounded[k][c] = static_cast<float>(std::nearbyint(uv[k][c] * scale) * lattice.step);
-        }
+    draco::Mesh::Face face;
+    for (int k = 0; k < 3; ++k) face[k] = draco::PointIndex(points.pointOfCorner[3 * f + k]);
+    built.SetFace(draco::FaceIndex(static_cast<std::uint32_t>(f)), face);
+  }
+  draco::PointAttribute* position = addDracoAttribute(
+      built, draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, mesh.numVertices(), false);
+  for (std::uint32_t v = 0; v < mesh.numVertices(); ++v) {
+    position->SetAttributeValue(draco::AttributeValueIndex(v), mesh.positions[v].data());
+  }
+  position->SetExplicitMapping(numPoints);
+  for (std::size_t p = 0; p < numPoints; ++p) {
+    position->SetPointMapEntry(draco::PointIndex(static_cast<std::uint32_t>(p)),
+                               draco::AttributeValueIndex(points.vertexOfPoint[p]));
+  }
+  if (withUV) {
+    draco::PointAttribute* texcoord =
+        addDracoAttribute(built, draco::GeometryAttribute::TEX_COORD, 2,
+                          lattice.bits ? draco::DT_FLOAT32 : draco::DT_FLOAT64, numPoints, true);
+    const double scale = lattice.bits ? 1.0 / lattice.step : 0.0;
+    for (std::size_t p = 0; p < numPoints; ++p) {
+      const Vec2d uv = mesh.cornerUV.wedgeValue(points.wedgeOfPoint[p]);
+      const draco::AttributeValueIndex index(static_cast<std::uint32_t>(p));
+      if (lattice.bits) {
+        // Lattice values: exact in float32 by the choice of the lattice.
+        float rounded[2];
+        for (int c = 0; c < 2; ++c) rounded[c] = static_cast<float>(std::nearbyint(uv[c] * scale) * lattice.step);
+        texcoord->SetAttributeValue(index, rounded);
+      } else {
+        texcoord->SetAttributeValue(index, uv.data());
       }
-      builder.SetAttributeValuesForFace(texcoord, face, rounded[0], rounded[1], rounded[2]);
-    } else {
-      builder.SetAttributeValuesForFace(texcoord, face, uv[0].data(), uv[1].data(), uv[2].data());
     }
   }
-  const std::unique_ptr<draco::Mesh> built = builder.Finalize();
-  if (!built) throw InputError(file.path() + ": Draco could not build the mesh");
 
   draco::Encoder encoder;
   encoder.SetSpeedOptions(5, 5);
@@ -183,7 +241,7 @@ void writeDraco(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& 
                                              lattice.quantizationBits, 2, lattice.origin, range);
   }
   draco::EncoderBuffer buffer;
-  const draco::Status status = encoder.EncodeMeshToBuffer(*built, &buffer);
+  const draco::Status status = encoder.EncodeMeshToBuffer(built, &buffer);
   if (!status.ok()) throw IoError(file.path() + ": Draco encoding failed: " + status.error_msg_string());
   file.write(buffer.data(), buffer.size());
 }

@@ -134,6 +134,11 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("faces").value(U64{r.mesh.numFaces()});
   j.key("vertices").value(U64{r.mesh.numVertices()});
   j.key("components").value(U64{r.solved.param.stats.components});
+  j.key("anchoredComponents").value(U64{r.solved.param.stats.anchoredComponents});
+  j.key("unsolvedComponents").value(U64{r.solved.param.stats.unsolvedComponents});
+  j.key("nonManifoldEdgesSplit").value(r.cleanReport.nonManifoldEdges);
+  j.key("nonManifoldVerticesSplit").value(r.cleanReport.nonManifoldVertices);
+  j.key("spikeVertices").value(r.cleanReport.spikeVertices);
   j.key("cones").value(static_cast<U64>(r.cones.size()));
   j.key("conesBeforeMerge").value(U64{r.conesBeforeMerge});
   j.key("conesCancelled").value(U64{2 * r.merged.cancelledPairs});

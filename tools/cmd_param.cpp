@@ -83,6 +83,9 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
+  if (st.unsolvedComponents) {
+    std::printf("WARNING: %u components could not be solved and map to the point 0\n", st.unsolvedComponents);
+  }
   if (!r.solved.fallbackReason.empty()) {
     std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
                 c.solverName.c_str(), r.solved.fallbackReason.c_str());

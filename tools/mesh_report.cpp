@@ -79,10 +79,11 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
   out += format("boundary loops  %u\n", s.boundaryLoops);
   out += format("cleaning        welded vertices %llu, degenerate faces %llu, duplicate faces %llu,\n"
                 "                zero-area faces %llu (kept), unreferenced vertices %llu,\n"
-                "                non-manifold edges %llu, non-manifold vertices %llu, flipped faces %llu\n",
+                "                non-manifold edges %llu (split), non-manifold vertices %llu (split),\n"
+                "                flipped faces %llu, spike vertices %llu (kept)\n",
                 ull(c.weldedVertices), ull(c.degenerateFaces), ull(c.duplicateFaces),
                 ull(c.zeroAreaFaces), ull(c.unreferencedVertices), ull(c.nonManifoldEdges),
-                ull(c.nonManifoldVertices), ull(c.flippedFaces));
+                ull(c.nonManifoldVertices), ull(c.flippedFaces), ull(c.spikeVertices));
   if (!s.box.isEmpty()) {
     out += format("bounding box    (%g, %g, %g) - (%g, %g, %g), diagonal %g\n", s.box.min.x(),
                   s.box.min.y(), s.box.min.z(), s.box.max.x(), s.box.max.y(), s.box.max.z(),
@@ -131,6 +132,7 @@ std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
   j.key("nonManifoldEdges").value(c.nonManifoldEdges);
   j.key("nonManifoldVertices").value(c.nonManifoldVertices);
   j.key("flippedFaces").value(c.flippedFaces);
+  j.key("spikeVertices").value(c.spikeVertices);
   j.endObject();
   j.key("boundingBox").beginObject();
   j.key("min").beginArray().value(s.box.min.x()).value(s.box.min.y()).value(s.box.min.z()).endArray();

@@ -21,16 +21,23 @@ void hatTriangleIntegrals(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, con
   if (!(twiceArea > 1e-14 * longest) || !std::isfinite(twiceArea)) return;  // zero area
   const Vec3d n = normal / twiceArea;
   const Vec3d v = n.cross(u);
+  // A needle or cap has a huge |cot|: the whole triangle's weight is scaled down so that none
+  // exceeds kMaxCotangent. Clamping single cotangents instead breaks cot_a cot_b + cot_b cot_c +
+  // cot_c cot_a = 1, which keeps the 3x3 stiffness semi-definite (a spike made K indefinite).
+  double cot[3], largest = 0.0;
   for (int k = 0; k < 3; ++k) {
-    const Vec3d& a = p[k];
+    // cot of the angle at vertex k weights the edge opposite it.
+    cot[k] = (p[(k + 1) % 3] - p[k]).dot(p[(k + 2) % 3] - p[k]) / twiceArea;
+    largest = std::max(largest, std::abs(cot[k]));
+  }
+  const double weight = largest > kMaxCotangent ? kMaxCotangent / largest : 1.0;
+  for (int k = 0; k < 3; ++k) {
     const Vec3d& b = p[(k + 1) % 3];
     const Vec3d& c = p[(k + 2) % 3];
-    // cot of the angle at a weights the edge b-c.
-    const double cot = std::clamp((b - a).dot(c - a) / twiceArea, -kMaxCotangent, kMaxCotangent);
     const int i = (k + 1) % 3, j = (k + 2) % 3;
-    stiffness[3 * i + j] = stiffness[3 * j + i] = -0.5 * cot;
-    // grad phi_k = n x e_k / (2A) with e_k = c - b; times the area A.
-    const Vec3d g = n.cross(c - b) * 0.5;
+    stiffness[3 * i + j] = stiffness[3 * j + i] = -0.5 * weight * cot[k];
+    // grad phi_k = n x e_k / (2A) with e_k = c - b; times the area A (and the weight).
+    const Vec3d g = n.cross(c - b) * (0.5 * weight);
     rhs[k] = std::complex<double>(g.dot(u), g.dot(v)) / edgeLength;
   }
   for (int i = 0; i < 3; ++i) {

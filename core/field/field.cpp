@@ -397,6 +397,14 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
     baseDiagonal[f] = a.valuePtr()[a.outerIndexPtr()[f]].real();
     diagonalTrace += baseDiagonal[f];
   }
+  // A face without an interior edge is a component of its own: its field is free and takes its
+  // first edge (x = 1) without a solve. It gets a unit row so the factorization stays definite.
+  std::vector<std::uint8_t> loneFace(numFaces, 0);
+  for (std::uint32_t f = 0; f < numFaces; ++f) {
+    if (baseDiagonal[f] > 0.0) continue;
+    loneFace[f] = 1;
+    baseDiagonal[f] = sys.mass[f];
+  }
   // A tiny shift keeps A + sigma M definite when the field has a flat mode (trivial holonomy,
   // e.g. a flat torus) without changing the smallest eigenvector.
   const double sigma = 1e-9 * diagonalTrace / sys.mass.sum();
@@ -464,6 +472,9 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
     }
   }
 
+  for (std::uint32_t f = 0; f < numFaces; ++f) {
+    if (loneFace[f]) x[f] = 1.0;
+  }
   reportProgress(options.progress, "field: directions", 0.95);
   field.direction.resize(numFaces);
   parallelFor(numFaces, 4096, [&](const IndexRange& range) {

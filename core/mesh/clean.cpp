@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 
@@ -197,7 +198,104 @@ std::uint64_t orientFaces(TriangleMesh& mesh, const detail::VertexCorners& vc) {
   return flips;
 }
 
+/// On every edge shared by more than two faces (all left unglued by glueEdges), glues pairs of
+/// oppositely oriented faces, flattest pair first (most aligned normals): a fin on a closed
+/// surface then leaves the surface closed and only the fin's own edge open. An edge left open
+/// with both sides in one fan of each endpoint would stay shared in the written file (the same
+/// vertex ids on both sides) while the map treats it as a boundary. Serial: such edges are rare.
+void pairNonManifoldEdges(const TriangleMesh& mesh, const detail::VertexCorners& vc,
+                          std::vector<CornerId>& opposite) {
+  const std::vector<Triangle>& tris = mesh.triangles;
+  auto vertexOf = [&](CornerId x) { return tris[x / 3][x % 3]; };
+  std::vector<CornerId> same, reverse;
+  for (CornerId c = 0; c < 3 * tris.size(); ++c) {
+    if (opposite[c] != kInvalidId) continue;
+    const detail::EdgeMatch m = detail::matchEdge(tris, vc, c);
+    if (m.sameDirection + m.reverseDirection <= 2 || m.smallestCorner != c) continue;
+    // Corners naming the edge a -> b (like c) and b -> a, as matchEdge finds them.
+    const VertexId a = vertexOf(nextCorner(c)), b = vertexOf(prevCorner(c));
+    same.clear();
+    reverse.clear();
+    for (std::uint32_t i = vc.offsets[a]; i < vc.offsets[a + 1]; ++i) {
+      const CornerId d = vc.corners[i];
+      if (vertexOf(nextCorner(d)) == b) same.push_back(prevCorner(d));
+      if (vertexOf(prevCorner(d)) == b) reverse.push_back(nextCorner(d));
+    }
+    struct Pair {
+      double alignment;
+      CornerId x, y;
+    };
+    std::vector<Pair> pairs;
+    for (CornerId x : same) {
+      for (CornerId y : reverse) {
+        const double alignment = faceNormal(mesh, x / 3).dot(faceNormal(mesh, y / 3));
+        pairs.push_back({std::isfinite(alignment) ? alignment : -2.0, x, y});
+      }
+    }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) {
+      return p.alignment != q.alignment ? p.alignment > q.alignment : p.x != q.x ? p.x < q.x : p.y < q.y;
+    });
+    for (const Pair& pair : pairs) {
+      if (opposite[pair.x] != kInvalidId || opposite[pair.y] != kInvalidId) continue;
+      opposite[pair.x] = pair.y;
+      opposite[pair.y] = pair.x;
+    }
+  }
+}
+
+/// Median of a small list (reorders it); 0 for an empty one.
+double median(std::vector<double>& values) {
+  if (values.empty()) return 0.0;
+  auto middle = values.begin() + values.size() / 2;
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+/// Calls f(length) for every edge at v (the two edges of each corner around it).
+template <class F>
+void forEachEdgeLength(const TriangleMesh& mesh, const Topology& topology, VertexId v, F&& f) {
+  topology.forEachCornerAround(v, [&](CornerId c) {
+    for (CornerId other : {nextCorner(c), prevCorner(c)}) {
+      f((mesh.position(topology.vertex(other)) - mesh.position(v)).norm());
+    }
+  });
+}
+
 }  // namespace
+
+std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology& topology) {
+  const std::uint32_t nv = topology.numVertices();
+  std::vector<double> typical(nv, 0.0);  // median edge length at each vertex
+  parallelFor(nv, kGrain, [&](const IndexRange& r) {
+    std::vector<double> lengths;
+    for (VertexId v = r.begin(); v != r.end(); ++v) {
+      if (topology.isIsolatedVertex(v)) continue;
+      lengths.clear();
+      forEachEdgeLength(mesh, topology, v, [&](double length) { lengths.push_back(length); });
+      typical[v] = median(lengths);
+    }
+  });
+  std::vector<std::uint8_t> spike(nv, 0);
+  parallelFor(nv, kGrain, [&](const IndexRange& r) {
+    std::vector<double> around;
+    for (VertexId v = r.begin(); v != r.end(); ++v) {
+      if (topology.isIsolatedVertex(v)) continue;
+      around.clear();
+      double shortest = std::numeric_limits<double>::infinity();
+      forEachEdgeLength(mesh, topology, v, [&](double length) { shortest = std::min(shortest, length); });
+      topology.forEachCornerAround(v, [&](CornerId c) {
+        for (CornerId other : {nextCorner(c), prevCorner(c)}) around.push_back(typical[topology.vertex(other)]);
+      });
+      const double scale = median(around);
+      spike[v] = scale > 0.0 && shortest > kSpikeRatio * scale;
+    }
+  });
+  std::vector<VertexId> out;
+  for (VertexId v = 0; v < nv; ++v) {
+    if (spike[v]) out.push_back(v);
+  }
+  return out;
+}
 
 CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   CleanResult result;
@@ -276,6 +374,7 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
     }
   }
   report.nonManifoldEdges = glue.nonManifoldEdges + glue.orientationClashes;
+  if (glue.nonManifoldEdges) pairNonManifoldEdges(mesh, *vc, opposite);
   reportProgress(options.progress, "cleaning", 0.75);
 
   // 5. Non-manifold vertices: every fan beyond the first gets its own copy of the vertex.
@@ -323,6 +422,22 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   report.outputFaces = mesh.numFaces();
   result.mesh = std::move(mesh);
   result.topology = Topology::viewParts(result.mesh.triangles, std::move(opposite), std::move(vertexCorner));
+  result.spikes = findSpikeVertices(result.mesh, result.topology);
+  report.spikeVertices = result.spikes.size();
+  {
+    BoundingBox box;
+    std::size_t next = 0;
+    for (VertexId v = 0; v < result.mesh.numVertices(); ++v) {
+      if (next < result.spikes.size() && result.spikes[next] == v) {
+        ++next;
+        continue;
+      }
+      const Vec3d p = result.mesh.positions[v].cast<double>();
+      box.min = box.min.cwiseMin(p);
+      box.max = box.max.cwiseMax(p);
+    }
+    report.diagonalWithoutSpikes = box.isEmpty() ? 0.0 : box.diagonal();
+  }
   reportProgress(options.progress, "cleaning", 1.0);
   return result;
 }

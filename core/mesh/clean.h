@@ -27,8 +27,17 @@ struct CleanReport {
   std::uint64_t nonManifoldEdges = 0;      ///< edges split apart (> 2 faces, or orientation clash)
   std::uint64_t nonManifoldVertices = 0;   ///< vertices duplicated, one copy per extra fan
   std::uint64_t flippedFaces = 0;          ///< faces reoriented to agree with their component
+  /// Kept, counted: vertices whose every edge is over kSpikeRatio times longer than the typical
+  /// edge around their neighbours (an outlier pulled far out of the surface: needle faces).
+  std::uint64_t spikeVertices = 0;
+  /// Bounding-box diagonal of the output without its spike vertices (the mesh's own extent).
+  double diagonalWithoutSpikes = 0.0;
   std::uint64_t outputVertices = 0, outputFaces = 0;
 };
+
+/// A vertex is a spike when its shortest edge is this many times the median, over its
+/// neighbours, of their median edge length.
+constexpr double kSpikeRatio = 10.0;
 
 /// Move-only: topology views mesh.triangles (no second copy of the faces).
 struct CleanResult {
@@ -43,7 +52,11 @@ struct CleanResult {
   CleanReport report;
   std::vector<FaceId> faceOrigin;      ///< #F out: the input face each output face comes from
   std::vector<VertexId> vertexOrigin;  ///< #V out: the input vertex each output vertex comes from
+  std::vector<VertexId> spikes;        ///< output vertices counted in report.spikeVertices
 };
+
+/// Spike vertices of a mesh (CleanReport::spikeVertices), increasing. Linear, parallel.
+std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology& topology);
 
 /// Welds (optional), drops degenerate and duplicate faces and unreferenced vertices, orients
 /// each component consistently where possible, splits non-manifold edges and vertices, and

@@ -135,7 +135,7 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
                       : "file";
   std::vector<FaceId>().swap(clean.faceOrigin);
   meter.finish("field");
-  r.diagonal = computeBoundingBox(r.mesh.positions).diagonal();
+  r.diagonal = r.cleanReport.diagonalWithoutSpikes;  // a spike would inflate h
   r.edgeLength = options.spacing.spacing(r.diagonal);
 
   solveConePasses(r, field, options, meter);

@@ -392,6 +392,29 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
       if (isLockedVertex(t[(c + 1) % 3]) || isLockedVertex(t[(c + 2) % 3])) freeSeam[j] = 0;
     }
   }
+  // Kernel: a region component without a locked vertex and without a fixed seam of rotation
+  // r != 1 can shift freely; pin one positional unknown there to its input value (kept in both
+  // solves: such a component is the whole surface component, not a repair). A component
+  // without any positional unknown (every vertex a cone, e.g. a tetrahedron) is left to
+  // solveSeamless, which anchors its shift through a translation.
+  const ComponentsResult components = computeComponents(region.topology);
+  std::vector<std::uint8_t> anchored(components.components.size(), 0);
+  for (CornerId c = 0; c < 3u * rf; ++c) {
+    if (isLocked(cornerDomain[c])) anchored[components.faceComponent[c / 3]] = 1;
+  }
+  for (std::uint32_t j = 0; j < ns; ++j) {
+    const SeamCurve& seam = region.cut.seams[j];
+    if (seam.matching % 4 != 0 && !freeSeam[j]) {
+      anchored[components.faceComponent[seam.corners.front() / 3]] = 1;
+    }
+  }
+  std::vector<std::uint8_t> hasPositional(components.components.size(), 0);
+  for (CornerId c = 0; c < 3u * rf; ++c) {
+    const std::uint32_t d = cornerDomain[c];
+    for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+      if (P.column[k] < np) hasPositional[components.faceComponent[c / 3]] = 1;
+    }
+  }
   LatticeEliminator lattice(ns);
   for (const GaussVector& row : reduction.cycleConstraints) {
     GaussVector restricted;
@@ -419,20 +442,6 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
     }
   }
 
-  // Kernel: a region component without a locked vertex and without a fixed seam of rotation
-  // r != 1 can shift freely; pin one positional unknown there to its input value (kept in both
-  // solves: such a component is the whole surface component, not a repair).
-  const ComponentsResult components = computeComponents(region.topology);
-  std::vector<std::uint8_t> anchored(components.components.size(), 0);
-  for (CornerId c = 0; c < 3u * rf; ++c) {
-    if (isLocked(cornerDomain[c])) anchored[components.faceComponent[c / 3]] = 1;
-  }
-  for (std::uint32_t j = 0; j < ns; ++j) {
-    const SeamCurve& seam = region.cut.seams[j];
-    if (seam.matching % 4 != 0 && !freeSeam[j]) {
-      anchored[components.faceComponent[seam.corners.front() / 3]] = 1;
-    }
-  }
   std::vector<std::uint8_t> pinned(np, 0);
   std::vector<Complex> pinValue(np, 0.0);
   RefineStats local;
@@ -515,15 +524,27 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
     if (!freeSeam[j]) continue;
     for (const auto& [col, u] : lattice.row(j)) system.seamTranslation[j].emplace_back(sIndex[col], u);
   }
-  // No component bookkeeping: solveSeamless then pins nothing (the pins above are offsets).
+  // Component bookkeeping only for the components without a positional unknown (solveSeamless
+  // anchors them); elsewhere it pins nothing (the pins above are offsets).
   system.unknownComponent.assign(system.numUnknowns(), kInvalidId);
+  system.numComponents = static_cast<std::uint32_t>(components.components.size());
+  system.componentHasRotation.assign(system.numComponents, 0);
+  for (std::uint32_t j = 0; j < ns; ++j) {
+    const SeamCurve& seam = region.cut.seams[j];
+    const std::uint32_t comp = components.faceComponent[seam.corners.front() / 3];
+    if (anchored[comp] || hasPositional[comp] || !freeSeam[j]) continue;
+    if (seam.matching % 4 != 0) system.componentHasRotation[comp] = 1;
+    for (const auto& [col, u] : lattice.row(j)) system.unknownComponent[numPositional + sIndex[col]] = comp;
+  }
   local.unknowns = system.numUnknowns();
   local.freeTranslations = numS;
 
   RegionSolution out;
   std::vector<Complex> x;
   if (system.numUnknowns() > 0) {
-    const SeamlessSolution solution = solveSeamless(basis, system);
+    RoundOptions roundOptions;
+    roundOptions.dropUnsolvable = false;  // a region's failure is the refinement's, reported whole
+    const SeamlessSolution solution = solveSeamless(basis, system, roundOptions);
     x = solution.unknowns;
     local.systemNonzeros = solution.stats.systemNonzeros;
     local.factorNonzeros = solution.stats.factorNonzeros;

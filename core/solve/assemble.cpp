@@ -117,7 +117,8 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
 }
 
 RestrictedSystem restrictSystem(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
-                                const std::vector<std::complex<double>>& values) {
+                                const std::vector<std::complex<double>>& values,
+                                const std::vector<ComplexTriplet>& extraLower) {
   const int n = static_cast<int>(system.lower.rows());
   RestrictedSystem out;
   std::vector<int> index(n, -1);
@@ -131,19 +132,20 @@ RestrictedSystem restrictSystem(const LinearSystem& system, const std::vector<st
   out.rhs.resize(nf);
   for (int k = 0; k < nf; ++k) out.rhs[k] = system.rhs[out.freeUnknowns[k]];
   std::vector<Triplet> triplets;
-  triplets.reserve(system.lower.nonZeros());
-  for (int j = 0; j < n; ++j) {
-    for (ComplexSparse::InnerIterator it(system.lower, j); it; ++it) {
-      const int i = it.row();  // i >= j; K_ij = value, K_ji = conj(value)
-      if (index[i] >= 0 && index[j] >= 0) {
-        triplets.emplace_back(index[i], index[j], it.value());
-      } else if (index[i] >= 0) {
-        out.rhs[index[i]] -= it.value() * values[j];
-      } else if (index[j] >= 0) {
-        out.rhs[index[j]] -= std::conj(it.value()) * values[i];
-      }
+  triplets.reserve(system.lower.nonZeros() + extraLower.size());
+  const auto add = [&](int i, int j, std::complex<double> value) {  // i >= j; K_ji = conj(K_ij)
+    if (index[i] >= 0 && index[j] >= 0) {
+      triplets.emplace_back(index[i], index[j], value);
+    } else if (index[i] >= 0) {
+      out.rhs[index[i]] -= value * values[j];
+    } else if (index[j] >= 0) {
+      out.rhs[index[j]] -= std::conj(value) * values[i];
     }
+  };
+  for (int j = 0; j < n; ++j) {
+    for (ComplexSparse::InnerIterator it(system.lower, j); it; ++it) add(it.row(), j, it.value());
   }
+  for (const ComplexTriplet& t : extraLower) add(t.row(), t.col(), t.value());
   out.lower.resize(nf, nf);
   out.lower.setFromTriplets(triplets.begin(), triplets.end());
   return out;

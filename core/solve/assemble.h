@@ -13,6 +13,7 @@ namespace seamvox {
 
 using ComplexSparse = Eigen::SparseMatrix<std::complex<double>, Eigen::ColMajor, int>;
 using ComplexVector = Eigen::VectorXcd;
+using ComplexTriplet = Eigen::Triplet<std::complex<double>, int>;
 
 /// Hermitian system over all reduced unknowns; K holds the lower triangle (row >= column).
 /// Minimising x* K x - 2 Re(x* rhs) minimises sum_T A_T |grad q - w_T / h|^2.
@@ -33,12 +34,14 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
 
 /// The system on the free unknowns: fixed[i] != 0 moves unknown i (value values[i]) to the
 /// right-hand side. Returns the lower triangle of K_ff, rhs_f - K_fx x_x and the free indices.
+/// extraLower (row >= column, full numbering) is added to K first (e.g. a penalty term).
 struct RestrictedSystem {
   ComplexSparse lower;
   ComplexVector rhs;
   std::vector<std::uint32_t> freeUnknowns;
 };
 RestrictedSystem restrictSystem(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
-                                const std::vector<std::complex<double>>& values);
+                                const std::vector<std::complex<double>>& values,
+                                const std::vector<ComplexTriplet>& extraLower = {});
 
 }  // namespace seamvox

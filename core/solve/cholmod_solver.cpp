@@ -44,6 +44,7 @@ struct CholmodFactor::Impl {
   bool realForm = false;
   bool realFormOnly = false;  // test hook (setRealFormOnly)
   std::int64_t n = 0;
+  std::int64_t failedColumn = -1;  // of the complex form, in the input numbering
   std::uint64_t factorBytes = 0, peakBytes = 0, nonzeros = 0;
   Impl() {
     useAdvisedAllocation();
@@ -73,6 +74,12 @@ struct CholmodFactor::Impl {
       *why = L && L->minor < L->n ? "not positive definite at column " + std::to_string(L->minor)
                                   : "factorization failed (status " +
                                         std::to_string(common.status) + ")";
+      if (L && L->minor < L->n && failedColumn < 0) {
+        // minor counts in the fill-reducing order; the real form's columns n.. are imaginary parts.
+        const auto* perm = static_cast<const SuiteSparse_long*>(L->Perm);
+        const std::int64_t column = perm ? perm[L->minor] : static_cast<std::int64_t>(L->minor);
+        failedColumn = column % n;
+      }
       clear();
       return false;
     }
@@ -92,6 +99,7 @@ void CholmodFactor::factor(const ComplexSparse& lowerIn) {
   Impl& m = *impl_;
   m.n = lower.rows();
   m.realForm = false;
+  m.failedColumn = -1;
   const std::int64_t n = m.n, nnz = lower.nonZeros();
   if (n == 0) {
     m.clear();
@@ -202,5 +210,6 @@ std::uint64_t CholmodFactor::peakBytes() const { return impl_->peakBytes; }
 bool CholmodFactor::usedRealFallback() const { return impl_->realForm; }
 void CholmodFactor::setRealFormOnly(bool realFormOnly) { impl_->realFormOnly = realFormOnly; }
 bool CholmodFactor::isSupernodal() const { return impl_->L && impl_->L->is_super; }
+std::int64_t CholmodFactor::failedColumn() const { return impl_->failedColumn; }
 
 }  // namespace seamvox

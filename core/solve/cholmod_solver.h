@@ -32,6 +32,9 @@ class CholmodFactor {
   /// Test hook: factor() skips the complex factorization and goes to the real form directly.
   void setRealFormOnly(bool realFormOnly);
   bool isSupernodal() const;
+  /// After factor() threw for a matrix that is not positive definite: a column (in the
+  /// matrix's own numbering) of the block where the factorization stopped; -1 otherwise.
+  std::int64_t failedColumn() const;
 
  private:
   struct Impl;

@@ -14,14 +14,42 @@ namespace seamvox {
 
 namespace {
 
+using Complex = std::complex<double>;
 
-// Solves the system with the given unknowns fixed; writes the free ones into x.
-void solveWithFixed(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
-                    std::vector<std::complex<double>>& x, SeamlessStats& stats) {
-  const RestrictedSystem restricted = restrictSystem(system, fixed, x);
+/// A factorization that failed inside one solve: the stage, an unknown (full numbering) of the
+/// block where CHOLMOD stopped (kInvalidId when not known) and CHOLMOD's message.
+struct FactorFailure {
+  const char* stage;
+  std::uint32_t unknown;
+  std::string message;
+};
+
+/// The restricted system of one solve, factored. Throws FactorFailure.
+struct FactoredSystem {
+  RestrictedSystem restricted;
   CholmodFactor factor;
-  factor.factor(restricted.lower);
-  const ComplexVector y = factor.solve(restricted.rhs);
+};
+
+void factorSystem(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
+                  const std::vector<Complex>& x, const std::vector<ComplexTriplet>& extraLower,
+                  const char* stage, FactoredSystem& out, SeamlessStats& stats) {
+  out.restricted = restrictSystem(system, fixed, x, extraLower);
+  try {
+    out.factor.factor(out.restricted.lower);
+  } catch (const SolverError& e) {
+    const std::int64_t column = out.factor.failedColumn();
+    throw FactorFailure{stage, column >= 0 ? out.restricted.freeUnknowns[column] : kInvalidId, e.what()};
+  }
+  stats.factorNonzeros = std::max(stats.factorNonzeros, out.factor.factorNonzeros());
+  stats.factorBytes = std::max(stats.factorBytes, out.factor.factorBytes());
+  stats.factorPeakBytes = std::max(stats.factorPeakBytes, out.factor.peakBytes());
+  stats.realFallback = stats.realFallback || out.factor.usedRealFallback();
+}
+
+/// Solves the factored system and writes the free unknowns into x.
+void solveInto(const FactoredSystem& factored, std::vector<Complex>& x) {
+  const RestrictedSystem& restricted = factored.restricted;
+  const ComplexVector y = factored.factor.solve(restricted.rhs);
   for (std::size_t k = 0; k < restricted.freeUnknowns.size(); ++k) {
     if (!std::isfinite(y[k].real()) || !std::isfinite(y[k].imag())) {
       throw SolverError("seamless solve: non-finite value for unknown " +
@@ -29,18 +57,241 @@ void solveWithFixed(const LinearSystem& system, const std::vector<std::uint8_t>&
     }
     x[restricted.freeUnknowns[k]] = y[k];
   }
-  stats.factorNonzeros = std::max(stats.factorNonzeros, factor.factorNonzeros());
-  stats.factorBytes = std::max(stats.factorBytes, factor.factorBytes());
-  stats.factorPeakBytes = std::max(stats.factorPeakBytes, factor.peakBytes());
-  stats.realFallback = stats.realFallback || factor.usedRealFallback();
+}
+
+// Solves the system with the given unknowns fixed; writes the free ones into x.
+void solveWithFixed(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
+                    std::vector<Complex>& x, const char* stage, SeamlessStats& stats) {
+  FactoredSystem factored;
+  factorSystem(system, fixed, x, {}, stage, factored, stats);
+  solveInto(factored, x);
+}
+
+/// A component whose global shift is free while none of its positional unknowns is (every
+/// vertex a cone): anchored through the row of one of its domains (P row, translations only).
+struct ShiftAnchor {
+  std::uint32_t component = 0;
+  std::vector<std::pair<std::uint32_t, Complex>> row;
+  double weight = 0.0;
+};
+
+/// The anchors' penalty weight |a x|^2 (lower triangle, full numbering). The shift of such a
+/// component moves every domain coefficient by the same c, so a.v = 1 along the kernel v of K:
+/// K + w a* a is definite and its minimiser has a x = 0 and the energy of K's minimisers.
+std::vector<ComplexTriplet> anchorPenalty(const std::vector<ShiftAnchor>& anchors) {
+  std::vector<ComplexTriplet> out;
+  for (const ShiftAnchor& anchor : anchors) {
+    for (const auto& [i, ai] : anchor.row) {
+      for (const auto& [j, aj] : anchor.row) {
+        if (i >= j) out.emplace_back(int(i), int(j), anchor.weight * std::conj(ai) * aj);
+      }
+    }
+  }
+  return out;
+}
+
+/// Which components need an anchor and the domain row each takes (the first one in P).
+std::vector<ShiftAnchor> findShiftAnchors(const Reduction& reduction, const LinearSystem& system,
+                                          const std::vector<std::uint8_t>& needsAnchor,
+                                          const std::vector<std::uint8_t>& fixed) {
+  std::vector<ShiftAnchor> anchors;
+  std::vector<std::uint8_t> done(needsAnchor.size(), 0);
+  const ReducedMap& P = reduction.map;
+  for (std::size_t d = 0; d + 1 < P.rowStart.size(); ++d) {
+    if (P.rowStart[d] == P.rowStart[d + 1]) continue;
+    const std::uint32_t c = reduction.unknownComponent[P.column[P.rowStart[d]]];
+    if (c == kInvalidId || !needsAnchor[c] || done[c]) continue;
+    ShiftAnchor anchor;
+    anchor.component = c;
+    double diagonal = 0.0, norm2 = 0.0;
+    for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+      const std::uint32_t j = P.column[k];
+      if (fixed[j]) continue;
+      anchor.row.emplace_back(j, P.value[k]);
+      diagonal = std::max(diagonal, system.lower.coeff(int(j), int(j)).real());
+      norm2 += std::norm(P.value[k]);
+    }
+    if (anchor.row.empty() || !(norm2 > 0.0)) continue;
+    anchor.weight = (diagonal > 0.0 ? diagonal : 1.0) / norm2;
+    done[c] = 1;
+    anchors.push_back(std::move(anchor));
+  }
+  return anchors;
+}
+
+/// First solve with anchored components: solves with the anchors' penalty, then moves each
+/// anchored component along its shift (the kernel v of K, from one more solve with the same
+/// factor) until one of its translations is an integer, and fixes that translation: the later
+/// solves see a plain pin, as for components pinned through a positional unknown.
+void solveAnchored(const LinearSystem& system, const Reduction& reduction,
+                   const std::vector<ShiftAnchor>& anchors, std::vector<std::uint8_t>& fixed,
+                   std::vector<Complex>& x, SeamlessStats& stats) {
+  FactoredSystem factored;
+  factorSystem(system, fixed, x, anchorPenalty(anchors), "first solve", factored, stats);
+  solveInto(factored, x);
+  const std::vector<std::uint32_t>& free = factored.restricted.freeUnknowns;
+  // (K + w a* a) v = w a*: v is the shift by 1 of every anchored component (a v = 1, K v = 0).
+  ComplexVector rhs = ComplexVector::Zero(static_cast<Eigen::Index>(free.size()));
+  std::vector<std::int64_t> restrictedIndex(reduction.numUnknowns(), -1);
+  for (std::size_t k = 0; k < free.size(); ++k) restrictedIndex[free[k]] = std::int64_t(k);
+  for (const ShiftAnchor& anchor : anchors) {
+    for (const auto& [j, a] : anchor.row) rhs[restrictedIndex[j]] += anchor.weight * std::conj(a);
+  }
+  const ComplexVector v = factored.factor.solve(rhs);
+  std::vector<std::int64_t> anchorOf(reduction.numComponents, -1);
+  for (std::size_t i = 0; i < anchors.size(); ++i) anchorOf[anchors[i].component] = std::int64_t(i);
+  std::vector<std::int64_t> pin(anchors.size(), -1);  // restricted index of the largest |v|
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    const std::uint32_t c = reduction.unknownComponent[free[k]];
+    if (c == kInvalidId || anchorOf[c] < 0 || free[k] < reduction.numPositional) continue;
+    std::int64_t& p = pin[anchorOf[c]];
+    if (p < 0 || std::abs(v[k]) > std::abs(v[p])) p = std::int64_t(k);
+  }
+  std::vector<Complex> shift(anchors.size(), 0.0);
+  for (std::size_t i = 0; i < anchors.size(); ++i) {
+    if (pin[i] < 0 || !(std::abs(v[pin[i]]) > 1e-9)) {
+      throw FactorFailure{"first solve", anchors[i].row.front().first,
+                          "the shift of the component does not move its translations"};
+    }
+    const std::uint32_t j = free[pin[i]];
+    shift[i] = (roundGaussian(x[j]) - x[j]) / v[pin[i]];
+  }
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    const std::uint32_t c = reduction.unknownComponent[free[k]];
+    if (c != kInvalidId && anchorOf[c] >= 0) x[free[k]] += shift[anchorOf[c]] * v[k];
+  }
+  for (std::size_t i = 0; i < anchors.size(); ++i) {
+    const std::uint32_t j = free[pin[i]];
+    x[j] = roundGaussian(x[j]);
+    fixed[j] = 1;
+  }
+}
+
+/// Per component: its first positional unknown that is not fixed and whether a translation is
+/// free; from them the pins of the first solve.
+struct ComponentPins {
+  std::vector<std::uint8_t> hasFreeTranslation;
+  std::vector<std::uint32_t> firstPositional;
+};
+
+ComponentPins findPins(const Reduction& reduction, const std::vector<std::uint8_t>& excluded) {
+  const std::uint32_t nc = reduction.numComponents;
+  ComponentPins pins;
+  pins.hasFreeTranslation.assign(nc, 0);
+  pins.firstPositional.assign(nc, kInvalidId);
+  for (std::uint32_t j = 0; j < reduction.numUnknowns(); ++j) {
+    const std::uint32_t c = reduction.unknownComponent[j];
+    if (c == kInvalidId || excluded[j]) continue;
+    if (j >= reduction.numPositional) pins.hasFreeTranslation[c] = 1;
+    if (j < reduction.numPositional && pins.firstPositional[c] == kInvalidId) pins.firstPositional[c] = j;
+  }
+  return pins;
+}
+
+/// First solve, rounding and second solve with the unknowns in `excluded` fixed at 0.
+/// Throws FactorFailure.
+void solveRounded(const LinearSystem& system, const Reduction& reduction,
+                  const std::vector<std::uint8_t>& excluded, const RoundOptions& options,
+                  SeamlessSolution& out) {
+  SeamlessStats& stats = out.stats;
+  const std::uint32_t n = reduction.numUnknowns(), nc = reduction.numComponents;
+  stats.pinnedFirst = stats.pinnedSecond = stats.anchoredComponents = 0;
+  stats.maxRoundingShift = 0.0;
+  // The global shift of a component is free when its translations are free (or it has no
+  // rotation at all): the first solve pins one positional unknown there, or anchors the shift
+  // through a translation when every positional unknown is determined (solveAnchored). Second
+  // solve (s fixed): pins only on components whose seams all have r = 1.
+  const ComponentPins pins = findPins(reduction, excluded);
+  std::vector<Complex>& x = out.unknowns;
+  x.assign(n, 0.0);
+  std::vector<std::uint8_t> fixed = excluded;
+  std::vector<std::uint8_t> needsAnchor(nc, 0);
+  for (std::uint32_t c = 0; c < nc; ++c) {
+    const bool shiftFree = pins.hasFreeTranslation[c] || !reduction.componentHasRotation[c];
+    if (!shiftFree) continue;
+    if (pins.firstPositional[c] != kInvalidId) {
+      fixed[pins.firstPositional[c]] = 1;
+      ++stats.pinnedFirst;
+    } else if (pins.hasFreeTranslation[c]) {
+      needsAnchor[c] = 1;
+    }
+  }
+  reportProgress(options.progress, "solve", 0.0);
+  auto start = std::chrono::steady_clock::now();
+  const std::vector<ShiftAnchor> anchors = findShiftAnchors(reduction, system, needsAnchor, fixed);
+  if (anchors.empty()) {
+    solveWithFixed(system, fixed, x, "first solve", stats);
+  } else {
+    solveAnchored(system, reduction, anchors, fixed, x, stats);
+    stats.anchoredComponents = static_cast<std::uint32_t>(anchors.size());
+    stats.pinnedFirst += stats.anchoredComponents;
+  }
+  stats.secondsFirstSolve = secondsSince(start);
+  if (reduction.numTranslational == 0) {
+    stats.pinnedSecond = stats.pinnedFirst;
+    return;
+  }
+  start = std::chrono::steady_clock::now();
+  if (options.greedy && options.greedyRounds > 1) {
+    // Round the s nearest to an integer first, re-solving the rest in between.
+    std::vector<std::uint32_t> pending;
+    for (std::uint32_t j = reduction.numPositional; j < n; ++j) {
+      if (!fixed[j]) pending.push_back(j);
+    }
+    const std::size_t batch =
+        std::max<std::size_t>(1, (pending.size() + options.greedyRounds - 1) / options.greedyRounds);
+    while (pending.size() > batch) {
+      std::sort(pending.begin(), pending.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return gaussianIntegerDistance(x[a]) < gaussianIntegerDistance(x[b]);
+      });
+      for (std::size_t k = 0; k < batch; ++k) {
+        const std::uint32_t j = pending[k];
+        stats.maxRoundingShift = std::max(stats.maxRoundingShift, gaussianIntegerDistance(x[j]));
+        x[j] = roundGaussian(x[j]);
+        fixed[j] = 1;
+      }
+      pending.erase(pending.begin(), pending.begin() + batch);
+      solveWithFixed(system, fixed, x, "greedy rounding", stats);
+    }
+  }
+  stats.maxRoundingShift = std::max(stats.maxRoundingShift, roundTranslations(reduction, x));
+  stats.secondsRound = secondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  fixed = excluded;
+  for (std::uint32_t j = reduction.numPositional; j < n; ++j) fixed[j] = 1;
+  for (std::uint32_t c = 0; c < nc; ++c) {
+    const std::uint32_t first = pins.firstPositional[c];
+    if (reduction.componentHasRotation[c] || first == kInvalidId) continue;
+    // Keep the pinned value of the first solve (0).
+    fixed[first] = 1;
+    x[first] = 0.0;
+    ++stats.pinnedSecond;
+  }
+  reportProgress(options.progress, "solve", 0.5);
+  solveWithFixed(system, fixed, x, "second solve", stats);
+  stats.secondsSecondSolve = secondsSince(start);
+}
+
+/// The message of a failure that is not confined to a component.
+std::string failureMessage(const FactorFailure& failure, const Reduction& reduction,
+                           const std::vector<std::uint32_t>& componentUnknowns) {
+  std::string where = std::string("seamless solve, ") + failure.stage;
+  const std::uint32_t c =
+      failure.unknown != kInvalidId ? reduction.unknownComponent[failure.unknown] : kInvalidId;
+  if (c != kInvalidId) {
+    where += ", component " + std::to_string(c) + " of " + std::to_string(reduction.numComponents) +
+             " (" + std::to_string(componentUnknowns[c]) + " unknowns)";
+  }
+  return where + ": " + failure.message;
 }
 
 }  // namespace
 
-double roundTranslations(const Reduction& reduction, std::vector<std::complex<double>>& x) {
+double roundTranslations(const Reduction& reduction, std::vector<Complex>& x) {
   double shift = 0.0;
   for (std::uint32_t j = reduction.numPositional; j < reduction.numUnknowns(); ++j) {
-    const std::complex<double> r = roundGaussian(x[j]);
+    const Complex r = roundGaussian(x[j]);
     shift = std::max(shift, std::abs(x[j] - r));
     x[j] = r;
   }
@@ -59,7 +310,7 @@ SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
   stats.nonUnitConstraints = reduction.nonUnitConstraints;
   stats.components = reduction.numComponents;
 
-  auto start = std::chrono::steady_clock::now();
+  const auto start = std::chrono::steady_clock::now();
   AssembleOptions assembleOptions;
   assembleOptions.progress = options.progress;
   const LinearSystem system = assembleSystem(basis, reduction, assembleOptions);
@@ -67,84 +318,40 @@ SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
   stats.secondsAssemble = secondsSince(start);
 
   // Unknowns no element touches (zero diagonal) are fixed at 0: they do not affect the map.
-  std::vector<std::uint8_t> untouched(n, 1);
+  std::vector<std::uint8_t> excluded(n, 1);
   for (int j = 0; j < system.lower.outerSize(); ++j) {
     for (ComplexSparse::InnerIterator it(system.lower, j); it; ++it) {
-      if (it.row() == j && it.value().real() > 0.0) untouched[j] = 0;
+      if (it.row() == j && it.value().real() > 0.0) excluded[j] = 0;
     }
   }
-  // The global shift of a component is free when its translations are free (or it has no
-  // rotation at all): first solve pins one positional unknown there. Second solve (s fixed):
-  // only components whose seams all have r = 1.
-  const std::uint32_t nc = reduction.numComponents;
-  std::vector<std::uint8_t> hasFreeTranslation(nc, 0);
-  std::vector<std::uint32_t> firstPositional(nc, kInvalidId);
+  std::vector<std::uint32_t> componentUnknowns(reduction.numComponents, 0);
   for (std::uint32_t j = 0; j < n; ++j) {
-    const std::uint32_t c = reduction.unknownComponent[j];
-    if (c == kInvalidId || untouched[j]) continue;
-    if (j >= reduction.numPositional) hasFreeTranslation[c] = 1;
-    if (j < reduction.numPositional && firstPositional[c] == kInvalidId) firstPositional[c] = j;
+    if (reduction.unknownComponent[j] != kInvalidId) ++componentUnknowns[reduction.unknownComponent[j]];
   }
-  std::vector<std::complex<double>>& x = out.unknowns;
-  x.assign(n, 0.0);
-  std::vector<std::uint8_t> fixed = untouched;
-  for (std::uint32_t c = 0; c < nc; ++c) {
-    const bool shiftFree = hasFreeTranslation[c] || !reduction.componentHasRotation[c];
-    if (shiftFree && firstPositional[c] != kInvalidId) {
-      fixed[firstPositional[c]] = 1;
-      ++stats.pinnedFirst;
-    }
-  }
-  reportProgress(options.progress, "solve", 0.0);
-  start = std::chrono::steady_clock::now();
-  solveWithFixed(system, fixed, x, stats);
-  stats.secondsFirstSolve = secondsSince(start);
-  if (reduction.numTranslational == 0) {
-    stats.pinnedSecond = stats.pinnedFirst;
-  } else {
-    start = std::chrono::steady_clock::now();
-    if (options.greedy && options.greedyRounds > 1) {
-      // Round the s nearest to an integer first, re-solving the rest in between.
-      std::vector<std::uint32_t> pending(reduction.numTranslational);
-      std::iota(pending.begin(), pending.end(), reduction.numPositional);
-      const std::size_t batch =
-          std::max<std::size_t>(1, (pending.size() + options.greedyRounds - 1) / options.greedyRounds);
-      while (pending.size() > batch) {
-        std::sort(pending.begin(), pending.end(), [&](std::uint32_t a, std::uint32_t b) {
-          return gaussianIntegerDistance(x[a]) < gaussianIntegerDistance(x[b]);
-        });
-        for (std::size_t k = 0; k < batch; ++k) {
-          const std::uint32_t j = pending[k];
-          stats.maxRoundingShift = std::max(stats.maxRoundingShift, gaussianIntegerDistance(x[j]));
-          x[j] = roundGaussian(x[j]);
-          fixed[j] = 1;
-        }
-        pending.erase(pending.begin(), pending.begin() + batch);
-        solveWithFixed(system, fixed, x, stats);
+  const std::uint32_t largest = static_cast<std::uint32_t>(
+      std::max_element(componentUnknowns.begin(), componentUnknowns.end()) - componentUnknowns.begin());
+  // A component that cannot be factored is excluded (left at 0) and the rest solved again.
+  for (;;) {
+    try {
+      solveRounded(system, reduction, excluded, options, out);
+      break;
+    } catch (const FactorFailure& failure) {
+      const std::uint32_t c =
+          failure.unknown != kInvalidId ? reduction.unknownComponent[failure.unknown] : kInvalidId;
+      if (!options.dropUnsolvable || c == kInvalidId || c == largest ||
+          std::count(out.unsolvedComponents.begin(), out.unsolvedComponents.end(), c) != 0) {
+        throw SolverError(failureMessage(failure, reduction, componentUnknowns));
+      }
+      out.unsolvedComponents.push_back(c);
+      out.unsolvedReasons.push_back(failureMessage(failure, reduction, componentUnknowns));
+      for (std::uint32_t j = 0; j < n; ++j) {
+        if (reduction.unknownComponent[j] == c) excluded[j] = 1;
       }
     }
-    stats.maxRoundingShift = std::max(stats.maxRoundingShift, roundTranslations(reduction, x));
-    stats.secondsRound = secondsSince(start);
-
-    start = std::chrono::steady_clock::now();
-    fixed = untouched;
-    for (std::uint32_t j = reduction.numPositional; j < n; ++j) fixed[j] = 1;
-    for (std::uint32_t c = 0; c < nc; ++c) {
-      if (!reduction.componentHasRotation[c] && firstPositional[c] != kInvalidId) {
-        fixed[firstPositional[c]] = 1;
-        ++stats.pinnedSecond;
-      }
-    }
-    // Keep the pinned values of the first solve (0) for the pinned unknowns.
-    for (std::uint32_t c = 0; c < nc; ++c) {
-      if (firstPositional[c] != kInvalidId && fixed[firstPositional[c]]) x[firstPositional[c]] = 0.0;
-    }
-    reportProgress(options.progress, "solve", 0.5);
-    solveWithFixed(system, fixed, x, stats);
-    stats.secondsSecondSolve = secondsSince(start);
   }
+  stats.unsolvedComponents = static_cast<std::uint32_t>(out.unsolvedComponents.size());
   reportProgress(options.progress, "solve", 1.0);
-  std::vector<std::complex<double>> s(x.begin() + reduction.numPositional, x.end());
+  std::vector<Complex> s(out.unknowns.begin() + reduction.numPositional, out.unknowns.end());
   out.translations = seamTranslations(reduction, s);
   return out;
 }

@@ -4,6 +4,7 @@
 /// greedy), second solve with s fixed (pinned only on components whose seams all have r = 1).
 #include <complex>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/basis/basis.h"
@@ -17,6 +18,10 @@ struct RoundOptions {
   /// integer first, re-solving in between.
   bool greedy = false;
   std::uint32_t greedyRounds = 4;
+  /// A component whose system cannot be factored is left unsolved (its unknowns stay 0, see
+  /// SeamlessSolution::unsolvedComponents) and the rest solved again, unless it is the component
+  /// with the most unknowns (then, or when false, SolverError names the stage and component).
+  bool dropUnsolvable = true;
   ProgressFn progress;
 };
 
@@ -24,6 +29,11 @@ struct SeamlessStats {
   std::uint32_t unknowns = 0, positional = 0, translational = 0;
   std::uint32_t determinedPositions = 0, nonUnitConstraints = 0, components = 0;
   std::uint32_t pinnedFirst = 0, pinnedSecond = 0;
+  /// Components with a free shift but no free positional unknown (every vertex a cone, e.g. a
+  /// tetrahedron): the first solve fixes their shift through a translation instead.
+  std::uint32_t anchoredComponents = 0;
+  /// Components left unsolved (SeamlessSolution::unsolvedComponents): mapped to the point 0.
+  std::uint32_t unsolvedComponents = 0;
   std::uint64_t systemNonzeros = 0;      ///< lower triangle of K
   std::uint64_t factorNonzeros = 0;      ///< largest factor
   std::uint64_t factorBytes = 0;         ///< largest factor
@@ -38,9 +48,14 @@ struct SeamlessSolution {
   std::vector<std::complex<double>> unknowns;      ///< reduced unknowns (positional, then s)
   std::vector<std::complex<double>> translations;  ///< t per seam (Gaussian integers)
   SeamlessStats stats;
+  /// Components (Reduction numbering) that could not be factored, with CHOLMOD's message: their
+  /// unknowns are 0 (the component maps to the point 0 and has no seam).
+  std::vector<std::uint32_t> unsolvedComponents;
+  std::vector<std::string> unsolvedReasons;
 };
 
-/// Runs the whole solve for a reduced basis. Throws SolverError when a factorization fails.
+/// Runs the whole solve for a reduced basis. Throws SolverError when a factorization fails and
+/// the failure cannot be confined to a component (RoundOptions::dropUnsolvable).
 SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
                                const RoundOptions& options = {});
 
