@@ -239,13 +239,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
     }
   }
   out.regularization = basis.regularization();
-  param.stats = solution.stats;
-  param.translations = std::move(solution.translations);
-
-  start = std::chrono::steady_clock::now();
-  param.cornerUV = buildCutWedges(topology, cut);
-  evaluateMap(basis, reduction, solution.unknowns, param.cornerUV);
-  param.secondsEvaluate = secondsSince(start);
+  storeSeamlessSolution(basis, reduction, std::move(solution), topology, cut, param);
   return out;
 }
 

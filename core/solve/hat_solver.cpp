@@ -33,15 +33,18 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
   RoundOptions roundOptions;
   roundOptions.greedy = options.greedyRounding;
   roundOptions.progress = options.progress;
-  SeamlessSolution solution = solveSeamless(basis, reduction, roundOptions);
+  storeSeamlessSolution(basis, reduction, solveSeamless(basis, reduction, roundOptions), topology, cut, out);
+  return out;
+}
+
+void storeSeamlessSolution(const Basis& basis, const Reduction& reduction, SeamlessSolution solution,
+                           const Topology& topology, const CutResult& cut, ParamResult& out) {
   out.stats = solution.stats;
   out.translations = std::move(solution.translations);
-
-  start = std::chrono::steady_clock::now();
+  const auto start = std::chrono::steady_clock::now();
   out.cornerUV = buildCutWedges(topology, cut);
   evaluateMap(basis, reduction, solution.unknowns, out.cornerUV);
   out.secondsEvaluate = secondsSince(start);
-  return out;
 }
 
 std::vector<GaussVector> seamCycleConstraints(const TriangleMesh& mesh, const Topology& topology,

@@ -35,6 +35,11 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,
                              const ParamOptions& options = {});
 
+/// Stores a solved seamless system in out: its stats and translations, and the map evaluated
+/// once per wedge of the cut (timed as secondsEvaluate). Shared by the hat and voxel solvers.
+void storeSeamlessSolution(const Basis& basis, const Reduction& reduction, SeamlessSolution solution,
+                           const Topology& topology, const CutResult& cut, ParamResult& out);
+
 /// The translation constraints of the hat basis (Reduction::cycleConstraints, DESIGN section 7)
 /// from a hat basis built only on the faces around seam vertices: cycles of seam crossings only
 /// close around those vertices, so the constraints span the same lattice as a whole-mesh
