@@ -9,6 +9,7 @@
 #include "io/json.h"
 #include "io/mesh_io.h"
 #include "io/output_set.h"
+#include "io/param_report.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
@@ -110,8 +111,9 @@ int runField(Args& args) {
     throw UsageError("--curvature needs the direct field (--field smooth): the proxy field is the smoothest field only");
   }
   CrossField field;
+  FieldSolveStats fieldSolve;
   try {
-    field = computeFieldFromSource(mesh, topology, clean.faceOrigin, inputFaces, source, progress);
+    field = computeFieldFromSource(mesh, topology, clean.faceOrigin, inputFaces, source, progress, &fieldSolve);
   } catch (...) {
     rethrowWithContext(importPath ? *importPath : input);
   }
@@ -171,6 +173,7 @@ int runField(Args& args) {
     j.key("indexSum4").value(sing.indexSum4());
     j.key("seams").value(std::uint64_t{cut.seams.size()});
     j.key("seamEdges").value(seamEdges).key("cutEdges").value(cutEdges);
+    writeFieldSolve(j, fieldSolve);
     j.key("seconds").beginObject();
     for (const StageFigures& stage : meter.stages()) j.key(stage.name).value(stage.seconds);
     j.key("total").value(total).endObject();

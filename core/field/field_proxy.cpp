@@ -3,8 +3,6 @@
 // Conventions: core/field/field.h; the method: DESIGN section 4.
 #include "core/field/field_proxy.h"
 
-
-#include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
@@ -13,7 +11,9 @@
 #include <utility>
 #include <vector>
 
+#include "core/field/field_numerics.h"
 #include "core/mesh/detail_union_find.h"
+#include "core/solve/cholmod_solver.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 
@@ -23,8 +23,8 @@ namespace {
 
 using Complex = std::complex<double>;
 
-/// Geometry of one face: unit normal, first-edge frame, centroid. Zero-area faces get a frame
-/// from their longest edge and are flagged.
+/// Geometry of one face: its frame (detail::faceFrame; zero-area faces get a fallback frame and
+/// are flagged), centroid and area (0 when degenerate).
 struct FaceGeometry {
   Vec3d n, e1, e2, centroid;
   double area = 0.0;
@@ -32,28 +32,14 @@ struct FaceGeometry {
 };
 
 FaceGeometry faceGeometry(const TriangleMesh& mesh, FaceId f) {
-  const Triangle& t = mesh.triangles[f];
-  const Vec3d p0 = mesh.position(t[0]), p1 = mesh.position(t[1]), p2 = mesh.position(t[2]);
+  const detail::FaceFrame frame = detail::faceFrame(mesh, f);
   FaceGeometry g;
-  g.centroid = (p0 + p1 + p2) / 3.0;
-  const Vec3d cross = (p1 - p0).cross(p2 - p0);
-  const double twiceArea = cross.norm();
-  const double len01 = (p1 - p0).norm();
-  if (twiceArea > 0.0 && len01 > 0.0 && std::isfinite(twiceArea)) {
-    g.n = cross / twiceArea;
-    g.e1 = (p1 - p0) / len01;
-    g.area = 0.5 * twiceArea;
-  } else {
-    Vec3d longest = p1 - p0;
-    for (const Vec3d& e : {Vec3d(p2 - p1), Vec3d(p0 - p2)}) {
-      if (e.squaredNorm() > longest.squaredNorm()) longest = e;
-    }
-    const double len = longest.norm();
-    g.e1 = len > 0.0 && std::isfinite(len) ? Vec3d(longest / len) : Vec3d::UnitX();
-    g.n = g.e1.unitOrthogonal();
-    g.degenerate = true;
-  }
-  g.e2 = g.n.cross(g.e1);
+  g.n = frame.n;
+  g.e1 = frame.e1;
+  g.e2 = frame.e2;
+  g.centroid = detail::faceCentroid(mesh, f);
+  g.area = frame.degenerate ? 0.0 : faceArea(mesh, f);
+  g.degenerate = frame.degenerate;
   return g;
 }
 
@@ -85,18 +71,8 @@ Vec3d directionOf(Complex z, const Vec3d& e1, const Vec3d& e2) {
 
 bool isZero(const Vec3f& n) { return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f; }
 
-/// Dual-edge weight |e| / |b_f - b_g|, bounded for needles and zero-length edges.
-double dualWeight(double edgeLength, const Vec3d& bf, const Vec3d& bg) {
-  constexpr double kMaxWeight = 1e3, kMinWeight = 1e-3;
-  if (!(edgeLength > 0.0) || !std::isfinite(edgeLength)) return kMinWeight;
-  return std::clamp(edgeLength / std::max((bf - bg).norm(), edgeLength / kMaxWeight), kMinWeight,
-                    kMaxWeight);
-}
-
-double edgeLength(const TriangleMesh& mesh, const Topology& topology, CornerId c) {
-  return (mesh.position(topology.vertex(nextCorner(c))) - mesh.position(topology.vertex(prevCorner(c))))
-      .norm();
-}
+using detail::dualWeight;
+using detail::edgeLength;
 
 /// The proxy: elements (connected pieces of the mesh inside one grid cell) and their graph.
 struct Proxy {
@@ -227,7 +203,7 @@ using VectorC = Eigen::VectorXcd;
 
 /// Smallest eigenvector of the element connection Laplacian A z = lambda M z (energy
 /// sum w_ab |z_b - exp(4 i kappa_ab) z_a|^2, M the element areas), normalized per component.
-VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
+VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress, FieldSolveStats* stats) {
   const std::uint32_t numElements = proxy.numElements();
   std::vector<Vec3d> e1(numElements), e2(numElements);
   for (std::uint32_t e = 0; e < numElements; ++e) elementFrame(proxy.normal[e], e1[e], e2[e]);
@@ -242,14 +218,11 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
   }
   a.resizeNonZeros(start[numElements]);
   std::copy(start.begin(), start.end(), a.outerIndexPtr());
-  Eigen::VectorXd mass(numElements);
-  double totalArea = 0.0;
-  for (double area : proxy.area) totalArea += area;
-  const double minMass = std::max(1e-6 * totalArea / std::max<std::uint32_t>(numElements, 1), 1e-300);
+  Eigen::VectorXd mass = Eigen::Map<const Eigen::VectorXd>(proxy.area.data(), numElements);
+  detail::floorMasses(mass);
   double trace = 0.0;
   detail::UnionFind components(numElements);
   for (std::uint32_t e = 0; e < numElements; ++e) {
-    mass[e] = std::max(proxy.area[e], minMass);
     int p = start[e];
     double diagonal = 0.0;
     for (std::uint32_t i = proxy.neighbourStart[e]; i < proxy.neighbourStart[e + 1]; ++i) {
@@ -270,8 +243,7 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
     trace += diagonal;
   }
   // A tiny shift keeps the matrix definite for fields without holonomy (flat pieces).
-  // (No edge at all, e.g. a single element: any positive shift.)
-  const double sigma = trace > 0.0 ? 1e-9 * trace / mass.sum() : 1.0;
+  const double sigma = detail::flatModeShift(trace, mass.sum());
   for (std::uint32_t e = 0; e < numElements; ++e) a.valuePtr()[start[e]] += sigma * mass[e];
 
   std::vector<std::uint32_t> comp(numElements);
@@ -280,43 +252,17 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
     comp[e] = components.find(e) == e ? numComponents++ : comp[components.find(e)];
   }
   reportProgress(progress, "proxy field: factor", 0.3);
-  Eigen::CholmodSupernodalLLT<SparseMatrixC, Eigen::Lower> factor;
-  factor.cholmod().print = 0;
-  factor.compute(a);
-  if (factor.info() != Eigen::Success) {
-    throw SolverError("proxy field: CHOLMOD could not factor the element connection Laplacian (" +
-                      std::to_string(numElements) + " elements); not positive definite or out of memory");
-  }
-  // Inverse iteration from a fixed pseudo-random start, normalized per component.
-  VectorC x(numElements);
-  for (std::uint32_t e = 0; e < numElements; ++e) {
-    std::uint64_t h = (std::uint64_t(e) + 7) * 0x9E3779B97F4A7C15ull;
-    h ^= h >> 29;
-    h *= 0xBF58476D1CE4E5B9ull;
-    x[e] = std::polar(1.0, (h >> 11) * (2.0 * M_PI / 9007199254740992.0));
-  }
-  auto normalize = [&](VectorC& v) {
-    std::vector<double> norm2(numComponents, 0.0);
-    for (std::uint32_t e = 0; e < numElements; ++e) norm2[comp[e]] += mass[e] * std::norm(v[e]);
-    for (std::uint32_t e = 0; e < numElements; ++e) {
-      if (norm2[comp[e]] > 0.0) v[e] /= std::sqrt(norm2[comp[e]]);
-    }
-  };
-  normalize(x);
-  constexpr int kMaxIterations = 40;
-  for (int it = 0; it < kMaxIterations; ++it) {
-    reportProgress(progress, "proxy field: eigenvector", 0.3 + 0.2 * it / kMaxIterations);
-    VectorC y = factor.solve(VectorC(mass.cast<Complex>().cwiseProduct(x)));
-    if (!y.allFinite()) throw SolverError("proxy field: inverse iteration produced NaN");
-    normalize(y);
-    std::vector<Complex> overlap(numComponents, 0.0);
-    for (std::uint32_t e = 0; e < numElements; ++e) overlap[comp[e]] += mass[e] * std::conj(x[e]) * y[e];
-    x.swap(y);
-    double change = 0.0;
-    for (const Complex& o : overlap) change = std::max(change, 1.0 - std::abs(o));
-    if (change < 1e-10) break;
-  }
-  return x;
+  CholmodFactor factor;
+  detail::factorFieldMatrix(factor, a, "proxy field", "elements", stats);
+  detail::InverseIterationOptions iteration;
+  iteration.maxIterations = 40;
+  iteration.start = detail::StartHash::Elements;
+  iteration.solver = "proxy field";
+  iteration.progress = progress;
+  iteration.stage = "proxy field: eigenvector";
+  iteration.progressFrom = 0.3;
+  iteration.progressSpan = 0.2;
+  return detail::smallestEigenvectors(factor, mass, comp, numComponents, iteration);
 }
 
 /// Greedy colouring of the face graph (faces adjacent through edges), in face order: at most 4
@@ -367,7 +313,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   result.elements = proxy.numElements();
   result.elementEdges = proxy.neighbours.size() / 2;
 
-  const VectorC z = solveElementField(proxy, options.progress);
+  const VectorC z = solveElementField(proxy, options.progress, options.stats);
   // Element directions in world coordinates, with the magnitude |z| as confidence.
   const std::uint32_t numElements = proxy.numElements();
   std::vector<Vec3d> elementDirection(numElements);
