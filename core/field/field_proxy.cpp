@@ -285,10 +285,7 @@ std::uint32_t colourFaces(const Topology& topology, std::vector<std::uint8_t>& c
   return used;
 }
 
-}  // namespace
-
-ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& topology,
-                                   const ProxyFieldOptions& options) {
+void checkProxyFieldInput(const TriangleMesh& mesh, const Topology& topology, const ProxyFieldOptions& options) {
   const std::uint32_t numFaces = topology.numFaces();
   if (mesh.triangles.size() != numFaces) {
     throw InputError("computeProxyField: mesh has " + std::to_string(mesh.triangles.size()) +
@@ -301,19 +298,15 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   if (options.smoothingSweeps < 0) {
     throw InputError("computeProxyField: negative number of smoothing sweeps");
   }
-  ProxyFieldResult result;
-  if (numFaces == 0) return result;
+}
 
-  reportProgress(options.progress, "proxy field: elements", 0.0);
-  Proxy proxy;
-  buildElements(mesh, topology, options.gridResolution, proxy);
-  accumulateElements(mesh, topology, proxy);
-  std::vector<std::uint32_t>().swap(proxy.elementFaces);
-  std::vector<std::uint32_t>().swap(proxy.elementStart);
-  result.elements = proxy.numElements();
-  result.elementEdges = proxy.neighbours.size() / 2;
-
-  const VectorC z = solveElementField(proxy, options.progress, options.stats);
+/// Transfer: each face averages the 4th powers of its element and the element's neighbours,
+/// transported to the face's plane, weighted by confidence (|z|) and a bump of the centroid
+/// distance. Fills sweepNormal (when not empty) with the faces' unit normals as floats, zero for a
+/// zero-area face.
+void transferToFaces(const TriangleMesh& mesh, const Proxy& proxy, const VectorC& z, CrossField& field,
+                     std::vector<Vec3f>& sweepNormal) {
+  const std::uint32_t numFaces = static_cast<std::uint32_t>(mesh.triangles.size());
   // Element directions in world coordinates, with the magnitude |z| as confidence.
   const std::uint32_t numElements = proxy.numElements();
   std::vector<Vec3d> elementDirection(numElements);
@@ -324,15 +317,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
     elementDirection[e] = directionOf(z[e], e1, e2);
     confidence[e] = std::isfinite(std::abs(z[e])) ? std::abs(z[e]) : 0.0;
   }
-
-  // Transfer: each face averages the 4th powers of its element and the element's neighbours,
-  // transported to the face's plane, weighted by confidence and a bump of the centroid distance.
-  reportProgress(options.progress, "proxy field: transfer", 0.5);
-  CrossField& field = result.field;
   field.direction.resize(numFaces);
-  // Unit normals as floats for the sweeps (zero for a zero-area face): 12 bytes per face, read
-  // 4 times per face and sweep without decoding.
-  std::vector<Vec3f> sweepNormal(options.smoothingSweeps > 0 ? numFaces : 0);
   const double radius = 2.0 * proxy.cellSize;
   parallelFor(numFaces, 2048, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
@@ -354,51 +339,87 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
       if (!sweepNormal.empty()) sweepNormal[f] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
     }
   });
-  std::vector<std::uint32_t>().swap(proxy.faceElement);  // freed before the sweeps
+}
 
-  // Smoothing: Gauss-Seidel by colour; faces of one colour share no edge, so each colour is a
-  // race-free parallel loop and the result does not depend on the thread count.
-  std::vector<std::uint8_t> colour;
-  result.colours = options.smoothingSweeps > 0 ? colourFaces(topology, colour) : 0;
-  // A sweep reads only the corner table, the float normals and the directions (unit weights):
-  // memory traffic, not geometry. The exact tangent planes are restored once at the end.
-  for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
-    reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
-    for (std::uint32_t k = 0; k < result.colours; ++k) {
-      parallelFor(numFaces, 4096, [&](const IndexRange& range) {
-        for (FaceId f = range.begin(); f != range.end(); ++f) {
-          if (colour[f] != k || isZero(sweepNormal[f])) continue;
-          const Vec3d n = sweepNormal[f].cast<double>();
-          // Frame with e1 = the current direction: the new one is the representative nearest it.
-          const Vec3d u = field.at(f);
-          const Vec3d v = n.cross(u);
-          Complex sum = 0.0;
-          for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-            const CornerId o = topology.opposite(c);
-            if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
-            const FaceId g = cornerFace(o);
-            sum += fourthPower(rotateBetween(sweepNormal[g].cast<double>(), n, field.at(g)), u, v);
-          }
-          const Vec3d next = directionOf(sum, u, v);
-          const Vec3d tangent = next - next.dot(n) * n;
-          const double len = tangent.norm();
-          if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
-        }
-      });
-    }
-  }
-  if (options.smoothingSweeps > 0) {
+/// One Gauss-Seidel sweep by colour; faces of one colour share no edge, so each colour is a
+/// race-free parallel loop and the result does not depend on the thread count. A sweep reads
+/// only the corner table, the float normals and the directions (unit weights): memory traffic,
+/// not geometry.
+void smoothSweep(const Topology& topology, const std::vector<std::uint8_t>& colour, std::uint32_t colours,
+                 const std::vector<Vec3f>& sweepNormal, CrossField& field) {
+  const std::uint32_t numFaces = topology.numFaces();
+  for (std::uint32_t k = 0; k < colours; ++k) {
     parallelFor(numFaces, 4096, [&](const IndexRange& range) {
       for (FaceId f = range.begin(); f != range.end(); ++f) {
-        if (isZero(sweepNormal[f])) continue;
-        const Vec3d n = faceNormal(mesh, f);
+        if (colour[f] != k || isZero(sweepNormal[f])) continue;
+        const Vec3d n = sweepNormal[f].cast<double>();
+        // Frame with e1 = the current direction: the new one is the representative nearest it.
         const Vec3d u = field.at(f);
-        const Vec3d tangent = u - u.dot(n) * n;
+        const Vec3d v = n.cross(u);
+        Complex sum = 0.0;
+        for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+          const CornerId o = topology.opposite(c);
+          if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
+          const FaceId g = cornerFace(o);
+          sum += fourthPower(rotateBetween(sweepNormal[g].cast<double>(), n, field.at(g)), u, v);
+        }
+        const Vec3d next = directionOf(sum, u, v);
+        const Vec3d tangent = next - next.dot(n) * n;
         const double len = tangent.norm();
         if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
       }
     });
   }
+}
+
+/// After the sweeps: every direction projected onto its face's exact (double) tangent plane.
+void restoreTangentPlanes(const TriangleMesh& mesh, const std::vector<Vec3f>& sweepNormal, CrossField& field) {
+  parallelFor(mesh.numFaces(), 4096, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      if (isZero(sweepNormal[f])) continue;
+      const Vec3d n = faceNormal(mesh, f);
+      const Vec3d u = field.at(f);
+      const Vec3d tangent = u - u.dot(n) * n;
+      const double len = tangent.norm();
+      if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
+    }
+  });
+}
+
+}  // namespace
+
+ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& topology,
+                                   const ProxyFieldOptions& options) {
+  checkProxyFieldInput(mesh, topology, options);
+  const std::uint32_t numFaces = topology.numFaces();
+  ProxyFieldResult result;
+  if (numFaces == 0) return result;
+
+  reportProgress(options.progress, "proxy field: elements", 0.0);
+  Proxy proxy;
+  buildElements(mesh, topology, options.gridResolution, proxy);
+  accumulateElements(mesh, topology, proxy);
+  std::vector<std::uint32_t>().swap(proxy.elementFaces);
+  std::vector<std::uint32_t>().swap(proxy.elementStart);
+  result.elements = proxy.numElements();
+  result.elementEdges = proxy.neighbours.size() / 2;
+
+  const VectorC z = solveElementField(proxy, options.progress, options.stats);
+  reportProgress(options.progress, "proxy field: transfer", 0.5);
+  // Unit normals as floats for the sweeps (zero for a zero-area face): 12 bytes per face, read
+  // 4 times per face and sweep without decoding.
+  std::vector<Vec3f> sweepNormal(options.smoothingSweeps > 0 ? numFaces : 0);
+  transferToFaces(mesh, proxy, z, result.field, sweepNormal);
+  std::vector<std::uint32_t>().swap(proxy.faceElement);  // freed before the sweeps
+
+  std::vector<std::uint8_t> colour;
+  result.colours = options.smoothingSweeps > 0 ? colourFaces(topology, colour) : 0;
+  for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
+    reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
+    smoothSweep(topology, colour, result.colours, sweepNormal, result.field);
+  }
+  // The exact tangent planes are restored once at the end.
+  if (options.smoothingSweeps > 0) restoreTangentPlanes(mesh, sweepNormal, result.field);
   reportProgress(options.progress, "proxy field: smooth", 1.0);
   return result;
 }
