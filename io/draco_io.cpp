@@ -258,6 +258,12 @@ DracoVertices dracoVertices(const draco::Mesh& source, const draco::PointAttribu
   out.pointOfVertex.assign(position.size(), kInvalidId);
   out.positionOfVertex.resize(position.size());
   for (std::uint32_t v = 0; v < position.size(); ++v) out.positionOfVertex[v] = v;
+  if (kept.empty()) {  // nothing to split by: the vertex of a point is its position value
+    for (std::uint32_t p = 0; p < source.num_points(); ++p) {
+      out.vertexOfPoint[p] = position.mapped_index(draco::PointIndex(p)).value();
+    }
+    return out;
+  }
   std::vector<std::uint32_t> nextCopy(position.size(), kInvalidId);  // split vertices of a position
   std::vector<std::uint8_t> a, b;
   auto sameValues = [&](std::uint32_t p, std::uint32_t q) {
