@@ -1,4 +1,5 @@
-// Wavefront OBJ reading (v with optional r g b colors, vt, f; everything else ignored) and
+// Wavefront OBJ reading (v with optional r g b colors, vt, f; vn named in a warning, everything
+// else ignored) and
 // writing (v with colors when the mesh has them, per-corner vt, f).
 #include <algorithm>
 #include <cmath>
@@ -32,6 +33,11 @@ class ObjReader final : public MeshStream {
       if (keyword == "v") readVertex(line, chunk);
       else if (keyword == "vt") readTexcoord(line);
       else if (keyword == "f") readFace(line, chunk);
+      else if (keyword == "vn" && !warnedNormals_) {
+        // Normals are per corner in OBJ (f v/vt/vn), not vertex properties.
+        warn(warn_, in_->path() + ": line " + std::to_string(in_->lineNumber()) + ": vn normals not kept");
+        warnedNormals_ = true;
+      }
     }
     return !chunk.positions.empty() || !chunk.triangles.empty();
   }
@@ -193,7 +199,7 @@ class ObjReader final : public MeshStream {
   std::size_t limit_;
   WarningFn warn_;
   bool done_ = false;
-  bool colors_ = false, warnedColors_ = false;
+  bool colors_ = false, warnedColors_ = false, warnedNormals_ = false;
   VertexAttributes colorLayout_;  ///< red, green, blue without values
   std::uint64_t vertices_ = 0;
   std::uint64_t maxIndex_ = 0, maxIndexLine_ = 0;

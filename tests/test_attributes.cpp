@@ -380,6 +380,18 @@ TEST(Attributes, ObjWritesColorsInUnitRangeAndWarnsAboutTheRest) {
   EXPECT_EQ(warnings.size(), 2u);  // PLY and Draco hold everything
 }
 
+TEST(Attributes, ObjNormalsAreNamedInAWarning) {
+  TempDir dir;
+  const std::string path = dir.path("normals.obj");
+  testing::writeFile(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 1\nf 1//1 2//1 3//2\n");
+  std::vector<std::string> warnings;
+  ReadOptions options;
+  options.warn = [&](const std::string& message) { warnings.push_back(message); };
+  EXPECT_EQ(readMesh(path, options).numFaces(), 1u);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_THAT(warnings[0], HasSubstr(path + ": line 4: vn normals not kept"));
+}
+
 TEST(Attributes, ObjColorsOnSomeVerticesOnlyAreAnError) {
   TempDir dir;
   const std::string path = dir.path("partial.obj");

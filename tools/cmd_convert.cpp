@@ -46,9 +46,11 @@ int runConvert(Args& args) {
   const auto written = std::chrono::steady_clock::now();
   const std::uint64_t bytes = fileBytes(output);
 
-  std::printf("%s -> %s: %u faces, %u vertices, %s, %llu bytes (read %.2f s, write %.2f s)\n",
+  const std::string properties =
+      mesh.attributes.empty() ? "" : ", vertex properties " + mesh.attributes.describe();
+  std::printf("%s -> %s: %u faces, %u vertices, %s%s, %llu bytes (read %.2f s, write %.2f s)\n",
               input.c_str(), output.c_str(), mesh.numFaces(), mesh.numVertices(),
-              mesh.hasUV() ? "per-corner UVs" : "no UVs", static_cast<unsigned long long>(bytes),
+              mesh.hasUV() ? "per-corner UVs" : "no UVs", properties.c_str(), static_cast<unsigned long long>(bytes),
               std::chrono::duration<double>(read - start).count(),
               std::chrono::duration<double>(written - read).count());
   if (mesh.hasUV() && options.writeUV && formatFromPath(output) == MeshFormat::Off) {
