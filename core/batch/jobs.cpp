@@ -255,9 +255,10 @@ WeldedTiles weldTiles(const std::vector<TriangleMesh>& tiles) {
   for (const TriangleMesh& tile : tiles) faces += tile.numFaces();
   result.mesh.triangles.reserve(faces);
   result.faceTile.reserve(faces);
+  if (!tiles.empty()) result.mesh.attributes = tiles[0].attributes.emptyCopy();
   for (std::uint32_t t = 0; t < tiles.size(); ++t) {
     const TriangleMesh& tile = tiles[t];
-    std::vector<VertexId> merged(tile.numVertices());
+    std::vector<VertexId> merged(tile.numVertices()), fresh;
     for (VertexId v = 0; v < tile.numVertices(); ++v) {
       const auto found = earlier.find(keyOf(tile.positions[v]));
       if (found != earlier.end()) {
@@ -266,7 +267,14 @@ WeldedTiles weldTiles(const std::vector<TriangleMesh>& tiles) {
       } else {
         merged[v] = static_cast<VertexId>(result.mesh.positions.size());
         result.mesh.positions.push_back(tile.positions[v]);
+        fresh.push_back(v);
       }
+    }
+    // A welded vertex keeps the properties of the tile that brought it first.
+    try {
+      result.mesh.attributes.append(tile.attributes.gathered(fresh));
+    } catch (const InputError& e) {
+      throw InputError("tile " + std::to_string(t) + ": " + e.what());
     }
     for (const Triangle& tri : tile.triangles) {
       result.mesh.triangles.push_back({merged[tri[0]], merged[tri[1]], merged[tri[2]]});
@@ -306,8 +314,10 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
   SplitTiles result;
   result.tiles.resize(tiles.size());
   std::vector<VertexId> map(mesh.numVertices(), kInvalidId);  // reset after each tile
+  std::vector<VertexId> source;                                 // of each tile vertex
   for (std::size_t t = 0; t < tiles.size(); ++t) {
     TriangleMesh& out = result.tiles[t];
+    source.clear();
     out.triangles.reserve(first[t + 1] - first[t]);
     WedgeMapBuilder uv;
     if (mesh.hasUV()) uv.reserve(3 * (first[t + 1] - first[t]));
@@ -319,6 +329,7 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
         if (map[v] == kInvalidId) {
           map[v] = out.numVertices();
           out.positions.push_back(mesh.positions[v]);
+          source.push_back(v);
         }
         tri[k] = map[v];
         if (mesh.hasUV()) uv.add(tri[k], mesh.cornerUV[3 * f + k]);
@@ -326,6 +337,7 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
       out.triangles.push_back(tri);
     }
     if (mesh.hasUV()) out.cornerUV = uv.finish();
+    out.attributes = mesh.attributes.gathered(source);
     for (std::uint64_t i = first[t]; i < first[t + 1]; ++i) {
       for (const VertexId v : mesh.triangles[order[i]]) map[v] = kInvalidId;
     }

@@ -36,6 +36,7 @@ void checkInput(const TriangleMesh& mesh) {
       }
     }
   }
+  mesh.attributes.checkSize(mesh.positions.size());
   if (!mesh.cornerUV.empty() && mesh.cornerUV.size() != 3 * mesh.triangles.size()) {
     throw InputError("the mesh has " + std::to_string(mesh.cornerUV.size()) +
                      " texture coordinates for " + std::to_string(mesh.triangles.size()) +
@@ -454,6 +455,10 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   std::vector<CornerId> vertexCorner = splitNonManifoldVertices(mesh, opposite, result.vertexOrigin, report);
   reportProgress(options.progress, "cleaning", 0.9);
   report.zeroAreaFaces = countZeroAreaFaces(mesh);
+
+  // Vertex properties follow every output vertex to the input vertex it comes from: a weld keeps
+  // the values of the vertex whose position it keeps, a split vertex's copies keep the original's.
+  if (!mesh.attributes.empty()) mesh.attributes = mesh.attributes.gathered(result.vertexOrigin);
 
   report.outputVertices = mesh.numVertices();
   report.outputFaces = mesh.numFaces();
