@@ -1,10 +1,10 @@
 // Draco (.drc) reading and writing. Positions are float32 (lossless, or quantized on request).
 // UVs are rounded to a lattice of step 2^-k grid units with an integer origin and stored with
 // Draco's own quantization, chosen so that every Draco decoder returns the lattice values exactly:
-// the range fits 24 bits, so the float32 values, the quantizer's delta 2^-k and the decoder's
-// q * delta + origin are all exact. Rounding to such a lattice commutes with integer translations
-// and quarter turns (up to ties), so q' = r q + t across a seam survives; a corner moves by at
-// most 2^-k / sqrt(2). UVs too large for that range are stored losslessly as float64.
+// the range fits 23 bits (the encoder rounds in float32), so the float32 values, the quantizer's
+// delta 2^-k and the decoder's q * delta + origin are all exact. Rounding to such a lattice
+// commutes with integer translations and quarter turns (up to ties), so q' = r q + t across a
+// seam survives; a corner moves by at most 2^-k / sqrt(2). UVs too large for that range are stored losslessly as float64.
 // The writer keeps the mesh's vertices apart even where positions are equal (an unwelded seam,
 // a split non-manifold vertex): the archive decodes to the connectivity that was written.
 #include <draco/compression/decode.h>
@@ -23,6 +23,10 @@ namespace {
 
 /// Largest magnitude (in lattice steps) a float32 holds exactly.
 constexpr double kExactFloatSteps = 16777216.0;  // 2^24
+/// Most quantization bits whose indices Draco's encoder computes exactly: it rounds with
+/// floor(x + 0.5f) in float32, which is exact only below 2^23 (at 24 bits an index q >= 2^23
+/// came back q + 1 on a spike's wide UV range).
+constexpr int kMaxExactQuantizationBits = 23;
 
 /// The lattice a Draco write rounds UVs to: step 2^-bits, per-component integer origin, and the
 /// quantization bits covering the range; bits == 0 when UVs are stored losslessly.
@@ -53,7 +57,7 @@ UVLattice chooseUVLattice(const TriangleMesh& mesh, const WriteOptions& options)
     magnitude = std::max({magnitude, std::abs(lo[c]), std::abs(hi[c]) + 1.0});
   }
   int quantizationBits = 1;
-  while (quantizationBits < 24 && std::ldexp(1.0, quantizationBits) - 1.0 < steps) ++quantizationBits;
+  while (quantizationBits < kMaxExactQuantizationBits && std::ldexp(1.0, quantizationBits) - 1.0 < steps) ++quantizationBits;
   if (std::ldexp(1.0, quantizationBits) - 1.0 < steps || magnitude * scale >= kExactFloatSteps) {
     return lattice;
   }

@@ -138,6 +138,32 @@ TEST(DracoArchive, LargeUVsFallBackToLosslessOrACoarserLattice) {
   EXPECT_LE(seams.maxIntegerDistance, 1e-4);
 }
 
+TEST(DracoArchive, AWideUVRangeDecodesWithinHalfAStep) {
+  // A range of 2^23 to 2^24 steps of 2^-14 (a spike's chart spans hundreds of cells): Draco's
+  // encoder rounds indices >= 2^23 in float32, one step off, unless the writer avoids them.
+  TempDir dir;
+  TriangleMesh mesh = parameterizedSphere(dir);
+  double lo = 1e300, hi = -1e300;
+  for (std::uint32_t w = 0; w < mesh.cornerUV.numWedges(); ++w) {
+    lo = std::min(lo, mesh.cornerUV.wedgeValue(w).minCoeff());
+    hi = std::max(hi, mesh.cornerUV.wedgeValue(w).maxCoeff());
+  }
+  const double scale = std::ceil(700.0 / (hi - lo));  // an integer: the map stays seamless
+  const double shift = -std::floor(scale * lo) - 500.0;
+  for (std::uint32_t w = 0; w < mesh.cornerUV.numWedges(); ++w) {
+    mesh.cornerUV.setWedgeValue(w, scale * mesh.cornerUV.wedgeValue(w) + Vec2d(shift, shift));
+  }
+  ASSERT_TRUE(seamsOf(mesh).isSeamless(1e-6));
+  writeMesh(dir.path("wide.drc"), mesh);
+  ReadOptions readOptions;
+  readOptions.readUV = true;
+  const TriangleMesh back = readMesh(dir.path("wide.drc"), readOptions);
+  const double change = maxUVChange(mesh, back);
+  ASSERT_GE(change, 0.0);
+  EXPECT_LE(change, 0.5 * std::ldexp(1.0, -14) + 1e-12);
+  EXPECT_TRUE(seamsOf(back).isSeamless(1e-6));
+}
+
 TEST(DracoArchive, QuantizedPositionsStayWithinTheirStep) {
   TempDir dir;
   const TriangleMesh mesh = parameterizedSphere(dir);
