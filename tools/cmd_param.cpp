@@ -46,6 +46,8 @@ ParamCommand parseParamArgs(Args& args) {
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
   o.clean.weldVertices = args.flag("weld");
+  o.listComponents = static_cast<std::uint32_t>(args.integer("report-components", o.listComponents, 0, 100000000));
+  o.dropUnsolved = args.flag("drop-unsolved");
   c.reportPath = args.value("report");
   c.renderPath = args.value("render");
   o.progress = makeProgress(args.flag("quiet"));
@@ -83,8 +85,14 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
-  if (st.unsolvedComponents) {
-    std::printf("WARNING: %u components could not be solved and map to the point 0\n", st.unsolvedComponents);
+  const ComponentSummary& parts = r.components;
+  if (!parts.droppedIds.empty()) {
+    std::printf("WARNING: %zu components (%llu faces) could not be solved and were dropped from the "
+                "output (ids in the report)\n", parts.droppedIds.size(),
+                static_cast<unsigned long long>(parts.droppedFaces));
+  } else if (!parts.unsolvedIds.empty()) {
+    std::printf("WARNING: %zu components could not be solved and are written unmapped at (u, v) = 0 "
+                "(ids in the report; --drop-unsolved removes them)\n", parts.unsolvedIds.size());
   }
   if (!r.solved.fallbackReason.empty()) {
     std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
@@ -166,6 +174,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
+                 "                     [--report-components N] [--drop-unsolved]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
@@ -192,11 +201,15 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --weld              weld coincident vertices before cleaning\n"
                  "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"
-                 "                      stage timings, peak memory\n"
+                 "                      stage timings, peak memory, components\n"
+                 "  --report-components N  components listed one by one in the report, the largest\n"
+                 "                      (default 1000); the rest are counted together\n"
+                 "  --drop-unsolved     remove the components whose system cannot be factored from\n"
+                 "                      the output instead of writing them unmapped at (u, v) = 0\n"
                  "  --render OUT.png    also render the result (checkerboard, seams, cones; 1024x1024,\n"
                  "                      default view of seamvox render)\n"
                  "  --quiet             no progress on stderr\n",
-                 {"greedy", "weld"},
+                 {"greedy", "weld", "drop-unsolved"},
                  &runParam});
 
 }  // namespace seamvox::cli
