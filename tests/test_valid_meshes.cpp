@@ -348,6 +348,20 @@ TEST(ValidMeshes, AnUnsolvableComponentIsReportedByIdAndWrittenUnmappedOrDropped
   EXPECT_EQ(report.numberAt("faces"), dropped.mesh.numFaces());
 }
 
+TEST(ValidMeshes, ParamListsAsManyComponentsAsAskedFor) {
+  testing::TempDir dir;
+  const std::string input = dir.path("islands.obj"), output = dir.path("out.ply"), report = dir.path("r.json");
+  writeMesh(input, sphereAndIslands(10, 10, false));
+  std::string log;
+  ASSERT_EQ(testing::runSeamvox("param '" + input + "' -o '" + output + "' --cells 40 --quiet --report-components 3 --report '" +
+                                report + "'", &log), 0) << log;
+  const JsonValue r = parseJson(testing::readFile(report));
+  EXPECT_EQ(r.numberAt("componentList.count"), 21);
+  EXPECT_EQ(r["componentList"]["components"].items.size(), 3u);
+  EXPECT_EQ(r.numberAt("componentList.unlisted"), 18);
+  EXPECT_EQ(testing::runSeamvox("param '" + input + "' -o '" + output + "' --report-components -1", &log), 2) << log;
+}
+
 TEST(ValidMeshes, RemoveFacesKeepsOrderAndTheMap) {
   TriangleMesh mesh = testing::concatMeshes({testing::gridMesh(2, 2, 1.0), testing::gridMesh(1, 1, 1.0)});
   std::vector<Vec2d> uv;
