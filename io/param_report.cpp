@@ -131,8 +131,8 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("solverReason").value(r.solved.solverReason);
   if (!r.solved.fallbackReason.empty()) j.key("fallbackReason").value(r.solved.fallbackReason);
   j.key("field").value(c.fieldSource).key("fieldMethod").value(r.fieldMethod);
-  j.key("faces").value(U64{r.mesh.numFaces()});
-  j.key("vertices").value(U64{r.mesh.numVertices()});
+  j.key("faces").value(U64{r.size.faces});
+  j.key("vertices").value(U64{r.size.vertices});
   j.key("components").value(U64{r.solved.param.stats.components});
   j.key("anchoredComponents").value(U64{r.solved.param.stats.anchoredComponents});
   j.key("unsolvedComponents").value(U64{r.solved.param.stats.unsolvedComponents});
@@ -146,7 +146,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("conePasses").value(U64{r.conePasses});
   j.key("seams").value(U64{r.seams});
   j.key("seamEdges").value(r.seamQuality.seamEdges).key("seamLength").value(r.seamQuality.seamLength);
-  j.key("wedges").value(U64{r.mesh.cornerUV.numWedges()}).key("mapBytes").value(U64{r.mesh.cornerUV.memoryBytes()});
+  j.key("wedges").value(U64{r.size.wedges}).key("mapBytes").value(r.size.mapBytes);
   j.key("edgeLength").value(r.edgeLength);
   j.key("cellsOnDiagonal").value(r.diagonal / r.edgeLength);
 }

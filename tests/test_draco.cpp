@@ -12,6 +12,7 @@
 #include "core/mesh/clean.h"
 #include "core/system/errors.h"
 #include "core/quality/metrics.h"
+#include "io/atomic_file.h"
 #include "io/mesh_io.h"
 #include "testing.h"
 
@@ -162,6 +163,25 @@ TEST(DracoArchive, AWideUVRangeDecodesWithinHalfAStep) {
   ASSERT_GE(change, 0.0);
   EXPECT_LE(change, 0.5 * std::ldexp(1.0, -14) + 1e-12);
   EXPECT_TRUE(seamsOf(back).isSeamless(1e-6));
+}
+
+TEST(DracoArchive, AConsumingWriteGivesTheSameArchiveAndFreesTheMesh) {
+  TempDir dir;
+  TriangleMesh mesh = parameterizedSphere(dir);
+  writeMesh(dir.path("kept.drc"), mesh);
+  for (const char* ext : {".drc", ".ply"}) {
+    TriangleMesh consumed = mesh;
+    AtomicFile file(dir.path(std::string("consumed") + ext));
+    writeMesh(file, std::move(consumed));
+    file.commit();
+    EXPECT_EQ(consumed.numFaces(), 0u) << ext;
+    EXPECT_EQ(consumed.numVertices(), 0u) << ext;
+    EXPECT_FALSE(consumed.hasUV()) << ext;
+  }
+  EXPECT_EQ(testing::readFile(dir.path("consumed.drc")), testing::readFile(dir.path("kept.drc")));
+  ReadOptions readOptions;
+  readOptions.readUV = true;
+  EXPECT_EQ(maxUVChange(readMesh(dir.path("consumed.ply"), readOptions), mesh), 0.0);
 }
 
 TEST(DracoArchive, QuantizedPositionsStayWithinTheirStep) {

@@ -61,16 +61,15 @@ ParamCommand parseParamArgs(Args& args) {
 
 void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMeter& meter) {
   const SeamlessStats& st = r.solved.param.stats;
-  const std::uint64_t wedges = r.mesh.cornerUV.numWedges();
+  const std::uint64_t wedges = r.size.wedges;
   std::printf("%s -> %s: %u faces, %zu cones, %u seams, h = %.6g (%.1f cells on the diagonal)\n",
-              c.input.c_str(), c.output.c_str(), r.mesh.numFaces(), r.cones.size(), r.seams,
+              c.input.c_str(), c.output.c_str(), r.size.faces, r.cones.size(), r.seams,
               r.edgeLength, r.diagonal / r.edgeLength);
   std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
               st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
               meter.peakBytes() / 1048576.0);
   std::printf("map: %llu wedges (%.3f per vertex), %.1f MB\n", static_cast<unsigned long long>(wedges),
-              r.mesh.numVertices() ? double(wedges) / r.mesh.numVertices() : 0.0,
-              r.mesh.cornerUV.memoryBytes() / 1048576.0);
+              r.size.vertices ? double(wedges) / r.size.vertices : 0.0, r.size.mapBytes / 1048576.0);
   std::printf("seam residual %.3g, integer distance %.3g, gradient error %.4f, flipped %llu, "
               "collapsed %llu: %s\n",
               r.seamQuality.maxResidual, r.seamQuality.maxIntegerDistance,
@@ -133,10 +132,6 @@ int runParam(Args& args) {
   } catch (...) {
     rethrowWithContext(c.input);
   }
-  // The writer needs the mesh and its map only (the render also the corner table).
-  if (!c.renderPath) r.topology = Topology();
-  writeMesh(meshFile, r.mesh);
-  meter.finish("write");
   if (c.renderPath) {
     RenderOptions renderOptions;
     renderOptions.drawSeams = renderOptions.drawCones = true;
@@ -144,6 +139,11 @@ int runParam(Args& args) {
     writePng(*renderFile, renderCheckerboard(r.mesh, r.topology, renderOptions).image);
     meter.finish("render");
   }
+  // The writer takes the mesh and its map (r.size keeps their figures): the corner table goes
+  // first, and a Draco write frees the mesh as its own copy takes it.
+  r.topology = Topology();
+  writeMesh(meshFile, std::move(r.mesh));
+  meter.finish("write");
   printSummary(c, r, meter);
   if (c.reportPath) {
     ParamReportContext context;

@@ -167,6 +167,7 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength);
   r.mesh.cornerUV = std::move(r.solved.param.cornerUV);
   summarizeMappedComponents(r, options);
+  r.size = {r.mesh.numFaces(), r.mesh.numVertices(), r.mesh.cornerUV.numWedges(), r.mesh.cornerUV.memoryBytes()};
   meter.finish("metrics");
   return r;
 }

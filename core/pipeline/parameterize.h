@@ -79,9 +79,17 @@ struct PipelineOptions {
   std::function<bool(std::uint32_t unknowns)> failsToFactor;
 };
 
+/// Sizes of a result's mesh and map, kept apart so they can be reported after the mesh was
+/// handed to a consuming writer (writeMesh(AtomicFile&, TriangleMesh&&)).
+struct MeshSize {
+  std::uint32_t faces = 0, vertices = 0, wedges = 0;
+  std::uint64_t mapBytes = 0;
+};
+
 struct PipelineResult {
   /// The cleaned mesh with the map in mesh.cornerUV (grid units, per wedge of the cut).
   TriangleMesh mesh;
+  MeshSize size;            ///< of mesh as parameterize returned it
   Topology topology;        ///< of mesh
   CleanReport cleanReport;  ///< what cleaning changed
   std::uint32_t inputFaces = 0;
