@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/quality/metrics.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -27,11 +28,11 @@ std::vector<std::uint8_t> faceMask(std::uint32_t numFaces, const std::vector<Fac
   return mask;
 }
 
-/// Per component (computeComponents numbering): its (u, v) extent, whether a face is in the
-/// given set, flipped faces and area.
+/// Per component (computeComponents numbering): whether a corner moves away from the component's
+/// first corner (else it maps to a point), whether a face is in the given sets, flipped faces
+/// and area.
 struct ComponentMapFacts {
-  std::vector<Vec2d> lo, hi;
-  std::vector<std::uint8_t> unsolved, anchored;
+  std::vector<std::uint8_t> moved, unsolved, anchored;
   std::vector<std::uint64_t> flipped;
   std::vector<double> area;
 };
@@ -40,31 +41,48 @@ ComponentMapFacts gatherMapFacts(const TriangleMesh& mesh, const ComponentsResul
                                  const std::vector<FaceId>& unsolvedFaces,
                                  const std::vector<FaceId>& anchoredFaces, double edgeLength) {
   const std::size_t n = components.components.size();
+  const std::vector<std::uint32_t>& faceComponent = components.faceComponent;
   ComponentMapFacts facts;
-  facts.lo.assign(n, Vec2d::Constant(1e300));
-  facts.hi.assign(n, Vec2d::Constant(-1e300));
+  facts.moved.assign(n, 0);
   facts.unsolved.assign(n, 0);
   facts.anchored.assign(n, 0);
   facts.flipped.assign(n, 0);
   facts.area.assign(n, 0.0);
-  for (FaceId f : unsolvedFaces) facts.unsolved[components.faceComponent[f]] = 1;
-  for (FaceId f : anchoredFaces) facts.anchored[components.faceComponent[f]] = 1;
-  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
-    const std::uint32_t k = components.faceComponent[f];
-    facts.area[k] += faceArea(mesh, f);
-    if (!mesh.hasUV()) continue;
-    for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-      facts.lo[k] = facts.lo[k].cwiseMin(mesh.cornerUV[c]);
-      facts.hi[k] = facts.hi[k].cwiseMax(mesh.cornerUV[c]);
+  for (FaceId f : unsolvedFaces) facts.unsolved[faceComponent[f]] = 1;
+  for (FaceId f : anchoredFaces) facts.anchored[faceComponent[f]] = 1;
+  std::vector<Vec2d> first(n, Vec2d::Zero());
+  if (mesh.hasUV()) {
+    std::vector<std::uint8_t> seen(n, 0);
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+      if (!seen[faceComponent[f]]++) first[faceComponent[f]] = mesh.cornerUV[3 * f];
     }
+  }
+  // Per face in parallel (the map's corners are scattered in memory), summed per component after:
+  // area, and bit 0 flipped, bit 1 a corner away from the component's first corner.
+  std::vector<float> area(mesh.numFaces());
+  std::vector<std::uint8_t> bits(mesh.numFaces(), 0);
+  parallelForEach(mesh.numFaces(), 4096, [&](std::uint64_t i) {
+    const auto f = static_cast<FaceId>(i);
+    area[f] = static_cast<float>(faceArea(mesh, f));
+    if (!mesh.hasUV()) return;
     const double ratio = parameterAreaRatio(mesh, mesh.cornerUV, f, edgeLength);
-    facts.flipped[k] += std::abs(ratio) >= kCollapsedAreaFraction && ratio < 0.0;
+    std::uint8_t b = std::abs(ratio) >= kCollapsedAreaFraction && ratio < 0.0;
+    for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+      if ((mesh.cornerUV[c] - first[faceComponent[f]]).cwiseAbs().maxCoeff() > kCoincidentConeDistance) b |= 2;
+    }
+    bits[f] = b;
+  });
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    const std::uint32_t k = faceComponent[f];
+    facts.area[k] += area[f];
+    facts.flipped[k] += bits[f] & 1;
+    facts.moved[k] |= bits[f] >> 1;
   }
   return facts;
 }
 
 ComponentMapping mappingOf(const ComponentMapFacts& facts, std::uint32_t k, bool hasUV) {
-  const bool point = hasUV && (facts.hi[k] - facts.lo[k]).maxCoeff() <= kCoincidentConeDistance;
+  const bool point = hasUV && !facts.moved[k];
   if (facts.unsolved[k] && point) return ComponentMapping::Unsolved;
   if (point) return ComponentMapping::Point;
   if (facts.anchored[k]) return ComponentMapping::Anchored;

@@ -14,7 +14,7 @@ namespace seamvox {
 /// How a component was mapped; when several apply, the first in this order is reported.
 enum class ComponentMapping : std::uint8_t {
   Unsolved,  ///< its system could not be factored: left at (u, v) = 0 (written unmapped or dropped)
-  Point,     ///< every corner at one (u, v): a component smaller than a cell (e.g. all cones)
+  Point,     ///< every corner within kCoincidentConeDistance of one (u, v): smaller than a cell
   Anchored,  ///< closed, every position a cone: its shift was fixed through a translation
   Solved,    ///< its own chart in the global map
 };
@@ -48,7 +48,7 @@ struct ComponentSummary {
 /// Figures of every component of mesh (its cornerUV holds the map, spacing edgeLength) with the
 /// solver's facts: cones (vertex ids), the faces of unsolved and of anchored components (sorted,
 /// ParamResult). When unsolvedComponentFaces is given it receives the faces of the components
-/// reported unsolved. Linear; 12 bytes per face while it runs.
+/// reported unsolved. Linear, parallel; 10 bytes per face while it runs.
 ComponentSummary summarizeComponents(const TriangleMesh& mesh, const Topology& topology,
                                      const std::vector<VertexId>& cones,
                                      const std::vector<FaceId>& unsolvedFaces,
