@@ -166,6 +166,7 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   solveConePasses(r, field, options, meter);
   r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength);
   r.mesh.cornerUV = std::move(r.solved.param.cornerUV);
+  field = CrossField();  // before the per-component figures (10 bytes per face)
   summarizeMappedComponents(r, options);
   r.size = {r.mesh.numFaces(), r.mesh.numVertices(), r.mesh.cornerUV.numWedges(), r.mesh.cornerUV.memoryBytes()};
   meter.finish("metrics");
