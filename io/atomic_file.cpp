@@ -50,6 +50,13 @@ void AtomicFile::close() {
   }
 }
 
+void AtomicFile::adopt(const std::string& finished) {
+  close();
+  if (std::rename(finished.c_str(), tmpPath_.c_str()) != 0) {
+    throw IoError(path_ + ": cannot take " + finished + " as its content: " + std::strerror(errno));
+  }
+}
+
 void AtomicFile::commit() {
   close();
   if (std::rename(tmpPath_.c_str(), path_.c_str()) != 0) {

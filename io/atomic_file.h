@@ -25,6 +25,9 @@ class AtomicFile {
   /// close(), then renames the temporary onto path. Throws IoError (disk full, permissions)
   /// naming the target path.
   void commit();
+  /// Takes a finished file on the same filesystem as the content instead of what was written:
+  /// closes the temporary and renames `finished` onto it (no copy). Throws IoError naming both.
+  void adopt(const std::string& finished);
   const std::string& path() const { return path_; }
   const std::string& temporaryPath() const { return tmpPath_; }
 

@@ -222,5 +222,7 @@ void writeOff(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
 /// Draco decodes whole files (no streaming in the library); readDraco returns the mesh.
 TriangleMesh readDraco(const std::string& path, const ReadOptions& options);
 void writeDraco(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
+/// The same, freeing the mesh's arrays as the Draco mesh takes them.
+void writeDraco(AtomicFile& file, TriangleMesh&& mesh, const WriteOptions& options);
 
 }  // namespace seamvox::detail

@@ -1,10 +1,10 @@
 // Draco (.drc) reading and writing. Positions are float32 (lossless, or quantized on request).
 // UVs are rounded to a lattice of step 2^-k grid units with an integer origin and stored with
 // Draco's own quantization, chosen so that every Draco decoder returns the lattice values exactly:
-// the range fits 24 bits, so the float32 values, the quantizer's delta 2^-k and the decoder's
-// q * delta + origin are all exact. Rounding to such a lattice commutes with integer translations
-// and quarter turns (up to ties), so q' = r q + t across a seam survives; a corner moves by at
-// most 2^-k / sqrt(2). UVs too large for that range are stored losslessly as float64.
+// the range fits 23 bits (the encoder rounds in float32), so the float32 values, the quantizer's
+// delta 2^-k and the decoder's q * delta + origin are all exact. Rounding to such a lattice
+// commutes with integer translations and quarter turns (up to ties), so q' = r q + t across a
+// seam survives; a corner moves by at most 2^-k / sqrt(2). UVs too large for that range are stored losslessly as float64.
 // The writer keeps the mesh's vertices apart even where positions are equal (an unwelded seam,
 // a split non-manifold vertex): the archive decodes to the connectivity that was written.
 // Vertex properties travel as COLOR (red green blue [alpha]), NORMAL (nx ny nz) and GENERIC
@@ -18,6 +18,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <unordered_map>
 
 #include "core/system/errors.h"
 #include "io/detail_mesh_io.h"
@@ -27,6 +29,10 @@ namespace {
 
 /// Largest magnitude (in lattice steps) a float32 holds exactly.
 constexpr double kExactFloatSteps = 16777216.0;  // 2^24
+/// Most quantization bits whose indices Draco's encoder computes exactly: it rounds with
+/// floor(x + 0.5f) in float32, which is exact only below 2^23 (at 24 bits an index q >= 2^23
+/// came back q + 1 on a spike's wide UV range).
+constexpr int kMaxExactQuantizationBits = 23;
 
 /// The lattice a Draco write rounds UVs to: step 2^-bits, per-component integer origin, and the
 /// quantization bits covering the range; bits == 0 when UVs are stored losslessly.
@@ -57,7 +63,7 @@ UVLattice chooseUVLattice(const TriangleMesh& mesh, const WriteOptions& options)
     magnitude = std::max({magnitude, std::abs(lo[c]), std::abs(hi[c]) + 1.0});
   }
   int quantizationBits = 1;
-  while (quantizationBits < 24 && std::ldexp(1.0, quantizationBits) - 1.0 < steps) ++quantizationBits;
+  while (quantizationBits < kMaxExactQuantizationBits && std::ldexp(1.0, quantizationBits) - 1.0 < steps) ++quantizationBits;
   if (std::ldexp(1.0, quantizationBits) - 1.0 < steps || magnitude * scale >= kExactFloatSteps) {
     return lattice;
   }
@@ -69,36 +75,50 @@ UVLattice chooseUVLattice(const TriangleMesh& mesh, const WriteOptions& options)
   return lattice;
 }
 
-/// Draco points of a mesh: one per (vertex, UV wedge) pair. pointOfCorner is 3 #F,
-/// vertexOfPoint and (with UVs) wedgeOfPoint are #points.
+/// Draco points of a mesh: one per (vertex, UV wedge) pair, so every vertex keeps its own
+/// position entry; numbered in order of first use by a corner. A wedge normally belongs to one
+/// vertex: pointOfWedge names its point, and the rare pairs of a wedge with a further vertex are
+/// kept apart in `extra`. Memory follows the wedges (12 bytes each), not the corners.
 struct DracoPoints {
-  std::vector<std::uint32_t> pointOfCorner, vertexOfPoint, wedgeOfPoint;
+  bool withUV = false;
+  std::vector<std::uint32_t> pointOfWedge;                 ///< #wedges, kInvalidId when unused
+  std::unordered_map<std::uint64_t, std::uint32_t> extra;  ///< (wedge, vertex) -> point
+  std::vector<std::uint32_t> vertexOfPoint, wedgeOfPoint;  ///< #points (wedgeOfPoint: with UVs)
+
+  static std::uint64_t key(std::uint32_t wedge, VertexId v) { return std::uint64_t(wedge) << 32 | v; }
+  std::uint32_t point(const TriangleMesh& mesh, std::size_t corner) const {
+    const VertexId v = mesh.triangles[corner / 3][corner % 3];
+    if (!withUV) return v;
+    const std::uint32_t w = mesh.cornerUV.wedge(static_cast<CornerId>(corner));
+    const std::uint32_t p = pointOfWedge[w];
+    return vertexOfPoint[p] == v ? p : extra.at(key(w, v));
+  }
 };
 
 DracoPoints dracoPoints(const TriangleMesh& mesh, bool withUV) {
   DracoPoints out;
-  const std::size_t numCorners = 3 * mesh.triangles.size();
-  out.pointOfCorner.resize(numCorners);
-  auto vertexOf = [&](std::size_t c) { return mesh.triangles[c / 3][c % 3]; };
+  out.withUV = withUV;
   if (!withUV) {
-    for (std::size_t c = 0; c < numCorners; ++c) out.pointOfCorner[c] = vertexOf(c);
     out.vertexOfPoint.resize(mesh.numVertices());
     for (std::uint32_t v = 0; v < mesh.numVertices(); ++v) out.vertexOfPoint[v] = v;
     return out;
   }
-  // Points are (vertex, wedge) pairs in order of first appearance.
-  std::vector<std::uint32_t> order(numCorners);
-  for (std::size_t c = 0; c < numCorners; ++c) order[c] = static_cast<std::uint32_t>(c);
-  auto key = [&](std::uint32_t c) { return std::make_pair(vertexOf(c), mesh.cornerUV.wedge(c)); };
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return key(a) != key(b) ? key(a) < key(b) : a < b;
-  });
-  for (std::size_t i = 0; i < numCorners; ++i) {
-    if (i == 0 || key(order[i]) != key(order[i - 1])) {
-      out.vertexOfPoint.push_back(vertexOf(order[i]));
-      out.wedgeOfPoint.push_back(mesh.cornerUV.wedge(order[i]));
+  out.pointOfWedge.assign(mesh.cornerUV.numWedges(), kInvalidId);
+  auto addPoint = [&](VertexId v, std::uint32_t w) {
+    out.vertexOfPoint.push_back(v);
+    out.wedgeOfPoint.push_back(w);
+    return static_cast<std::uint32_t>(out.vertexOfPoint.size() - 1);
+  };
+  for (std::size_t c = 0; c < 3 * mesh.triangles.size(); ++c) {
+    const VertexId v = mesh.triangles[c / 3][c % 3];
+    const std::uint32_t w = mesh.cornerUV.wedge(static_cast<CornerId>(c));
+    std::uint32_t& p = out.pointOfWedge[w];
+    if (p == kInvalidId) {
+      p = addPoint(v, w);
+    } else if (out.vertexOfPoint[p] != v && !out.extra.count(DracoPoints::key(w, v))) {
+      const std::uint32_t extra = addPoint(v, w);
+      out.extra.emplace(DracoPoints::key(w, v), extra);
     }
-    out.pointOfCorner[order[i]] = static_cast<std::uint32_t>(out.vertexOfPoint.size() - 1);
   }
   return out;
 }
@@ -321,6 +341,93 @@ void readVertexValues(const std::vector<KeptAttribute>& kept, const std::vector<
   }
 }
 
+/// The Draco mesh of a mesh: points, faces, UVs on the lattice and positions (one entry per
+/// vertex, explicitly mapped). Points are set explicitly (no deduplication by value): the
+/// encoder's connectivity, taken from the position entries, is the mesh's own. With `owned`
+/// (the same mesh, given up by the caller) each array of the mesh is freed once copied.
+std::unique_ptr<draco::Mesh> buildDracoMesh(const TriangleMesh& mesh, bool withUV, const UVLattice& lattice,
+                                            TriangleMesh* owned) {
+  DracoPoints points = dracoPoints(mesh, withUV);
+  const std::size_t numPoints = points.vertexOfPoint.size();
+  auto built = std::make_unique<draco::Mesh>();
+  built->set_num_points(static_cast<std::uint32_t>(numPoints));
+  built->SetNumFaces(mesh.triangles.size());
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    draco::Mesh::Face face;
+    for (int k = 0; k < 3; ++k) face[k] = draco::PointIndex(points.point(mesh, 3 * f + k));
+    built->SetFace(draco::FaceIndex(static_cast<std::uint32_t>(f)), face);
+  }
+  if (owned) std::vector<Triangle>().swap(owned->triangles);
+  std::vector<std::uint32_t>().swap(points.pointOfWedge);
+  if (withUV) {
+    draco::PointAttribute* texcoord = built->attribute(
+        addDracoAttribute(*built, draco::GeometryAttribute::TEX_COORD, 2,
+                          lattice.bits ? draco::DT_FLOAT32 : draco::DT_FLOAT64, numPoints, true));
+    const double scale = lattice.bits ? 1.0 / lattice.step : 0.0;
+    for (std::size_t p = 0; p < numPoints; ++p) {
+      const Vec2d uv = mesh.cornerUV.wedgeValue(points.wedgeOfPoint[p]);
+      const draco::AttributeValueIndex index(static_cast<std::uint32_t>(p));
+      if (lattice.bits) {
+        // Lattice values: exact in float32 by the choice of the lattice.
+        float rounded[2];
+        for (int c = 0; c < 2; ++c) rounded[c] = static_cast<float>(std::nearbyint(uv[c] * scale) * lattice.step);
+        texcoord->SetAttributeValue(index, rounded);
+      } else {
+        texcoord->SetAttributeValue(index, uv.data());
+      }
+    }
+    if (owned) owned->cornerUV.clear();
+    std::vector<std::uint32_t>().swap(points.wedgeOfPoint);
+  }
+  draco::PointAttribute* position = built->attribute(addDracoAttribute(
+      *built, draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, mesh.numVertices(), false));
+  for (std::uint32_t v = 0; v < mesh.numVertices(); ++v) {
+    position->SetAttributeValue(draco::AttributeValueIndex(v), mesh.positions[v].data());
+  }
+  const std::uint32_t numVertices = mesh.numVertices();
+  if (owned) std::vector<Vec3f>().swap(owned->positions);
+  mapPointsToVertices(*position, points.vertexOfPoint);
+  addVertexProperties(*built, mesh.attributes, points.vertexOfPoint, numVertices);
+  if (owned) owned->attributes = VertexAttributes();
+  return built;
+}
+
+/// Encodes a Draco mesh (consumed) into file. Speed 5: at 7 the encoder uses less memory (65
+/// instead of 84 bytes per face) but no longer keeps vertices with equal UVs apart from their
+/// positions' connectivity (the decoded mesh has a vertex per point), see bench/RESULTS.md.
+void encodeDraco(AtomicFile& file, std::unique_ptr<draco::Mesh> built, const UVLattice& lattice,
+                 const WriteOptions& options) {
+  draco::Encoder encoder;
+  encoder.SetSpeedOptions(5, 5);
+  if (options.dracoPositionBits > 0) {
+    encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.dracoPositionBits);
+  }
+  if (lattice.bits) {
+    // delta = range / (2^bits - 1) = 2^-k exactly: every quantized value is a lattice index.
+    const float range = static_cast<float>((std::ldexp(1.0, lattice.quantizationBits) - 1.0) * lattice.step);
+    encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::TEX_COORD,
+                                             lattice.quantizationBits, 2, lattice.origin, range);
+  }
+  draco::EncoderBuffer buffer;
+  const draco::Status status = encoder.EncodeMeshToBuffer(*built, &buffer);
+  built.reset();  // before the archive is written out
+  if (!status.ok()) throw IoError(file.path() + ": Draco encoding failed: " + status.error_msg_string());
+  file.write(buffer.data(), buffer.size());
+}
+
+/// Checks the options and the size, then builds and encodes (owned: see buildDracoMesh).
+void writeDracoMesh(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options, TriangleMesh* owned) {
+  const bool withUV = options.writeUV && mesh.hasUV();
+  if (mesh.triangles.size() >= static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw InputError(file.path() + ": too many faces for Draco");
+  }
+  if (options.dracoPositionBits < 0 || options.dracoPositionBits > 30) {
+    throw InputError(file.path() + ": Draco position bits must be between 0 (lossless) and 30");
+  }
+  const UVLattice lattice = withUV ? chooseUVLattice(mesh, options) : UVLattice{};
+  encodeDraco(file, buildDracoMesh(mesh, withUV, lattice, owned), lattice, options);
+}
+
 }  // namespace
 
 int dracoUVBitsFor(const TriangleMesh& mesh, const WriteOptions& options) {
@@ -398,68 +505,12 @@ TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
 }
 
 void writeDraco(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
-  const bool withUV = options.writeUV && mesh.hasUV();
-  if (mesh.triangles.size() >= static_cast<std::size_t>(std::numeric_limits<int>::max())) {
-    throw InputError(file.path() + ": too many faces for Draco");
-  }
-  if (options.dracoPositionBits < 0 || options.dracoPositionBits > 30) {
-    throw InputError(file.path() + ": Draco position bits must be between 0 (lossless) and 30");
-  }
-  const UVLattice lattice = withUV ? chooseUVLattice(mesh, options) : UVLattice{};
-  // Points, faces and attributes are set explicitly (no deduplication by value): every vertex
-  // keeps its own position entry, so the encoder's connectivity (taken from the position
-  // entries) is the mesh's own.
-  const DracoPoints points = dracoPoints(mesh, withUV);
-  const std::size_t numPoints = points.vertexOfPoint.size();
-  draco::Mesh built;
-  built.set_num_points(static_cast<std::uint32_t>(numPoints));
-  built.SetNumFaces(mesh.triangles.size());
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    draco::Mesh::Face face;
-    for (int k = 0; k < 3; ++k) face[k] = draco::PointIndex(points.pointOfCorner[3 * f + k]);
-    built.SetFace(draco::FaceIndex(static_cast<std::uint32_t>(f)), face);
-  }
-  draco::PointAttribute* position = built.attribute(addDracoAttribute(
-      built, draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, mesh.numVertices(), false));
-  for (std::uint32_t v = 0; v < mesh.numVertices(); ++v) {
-    position->SetAttributeValue(draco::AttributeValueIndex(v), mesh.positions[v].data());
-  }
-  mapPointsToVertices(*position, points.vertexOfPoint);
-  addVertexProperties(built, mesh.attributes, points.vertexOfPoint, mesh.numVertices());
-  if (withUV) {
-    draco::PointAttribute* texcoord = built.attribute(
-        addDracoAttribute(built, draco::GeometryAttribute::TEX_COORD, 2,
-                          lattice.bits ? draco::DT_FLOAT32 : draco::DT_FLOAT64, numPoints, true));
-    const double scale = lattice.bits ? 1.0 / lattice.step : 0.0;
-    for (std::size_t p = 0; p < numPoints; ++p) {
-      const Vec2d uv = mesh.cornerUV.wedgeValue(points.wedgeOfPoint[p]);
-      const draco::AttributeValueIndex index(static_cast<std::uint32_t>(p));
-      if (lattice.bits) {
-        // Lattice values: exact in float32 by the choice of the lattice.
-        float rounded[2];
-        for (int c = 0; c < 2; ++c) rounded[c] = static_cast<float>(std::nearbyint(uv[c] * scale) * lattice.step);
-        texcoord->SetAttributeValue(index, rounded);
-      } else {
-        texcoord->SetAttributeValue(index, uv.data());
-      }
-    }
-  }
+  writeDracoMesh(file, mesh, options, nullptr);
+}
 
-  draco::Encoder encoder;
-  encoder.SetSpeedOptions(5, 5);
-  if (options.dracoPositionBits > 0) {
-    encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.dracoPositionBits);
-  }
-  if (lattice.bits) {
-    // delta = range / (2^bits - 1) = 2^-k exactly: every quantized value is a lattice index.
-    const float range = static_cast<float>((std::ldexp(1.0, lattice.quantizationBits) - 1.0) * lattice.step);
-    encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::TEX_COORD,
-                                             lattice.quantizationBits, 2, lattice.origin, range);
-  }
-  draco::EncoderBuffer buffer;
-  const draco::Status status = encoder.EncodeMeshToBuffer(built, &buffer);
-  if (!status.ok()) throw IoError(file.path() + ": Draco encoding failed: " + status.error_msg_string());
-  file.write(buffer.data(), buffer.size());
+void writeDraco(AtomicFile& file, TriangleMesh&& mesh, const WriteOptions& options) {
+  writeDracoMesh(file, mesh, options, &mesh);
+  mesh = TriangleMesh();
 }
 
 }  // namespace detail

@@ -52,6 +52,10 @@ void onInterrupt(int signal) {
   for (PathSlot& slot : pathSlots) {
     if (slot.state.load() == kLive) ::unlink(slot.path);
   }
+  // Folders, now that their registered files are gone; the last registered (inner) first.
+  for (int i = kPathSlots - 1; i >= 0; --i) {
+    if (pathSlots[i].state.load() == kLive) ::rmdir(pathSlots[i].path);
+  }
   // The children remove their own temporaries before they exit.
   for (ChildSlot& slot : childSlots) {
     if (slot.state.load() == kLive) {

@@ -12,7 +12,9 @@ namespace seamvox {
 void installInterruptCleanup();
 
 /// Adds a file to remove on a signal; returns its slot, or -1 when the table (512 paths) is full
-/// or the path is longer than PATH_MAX: that file is then left behind by a signal.
+/// or the path is longer than PATH_MAX: that file is then left behind by a signal. A folder may
+/// be registered too: it is removed after every registered file, if that leaves it empty (the
+/// folders registered last first, so register a folder before the folders inside it).
 int registerTemporary(const char* path);
 void unregisterTemporary(int slot);
 

@@ -350,6 +350,16 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh, const WriteOpt
   file.commit();
 }
 
+void writeMesh(AtomicFile& file, TriangleMesh&& mesh, const WriteOptions& options) {
+  if (formatFromPath(file.path()) != MeshFormat::Draco) {
+    writeMesh(file, static_cast<const TriangleMesh&>(mesh), options);
+    mesh = TriangleMesh();
+    return;
+  }
+  checkWritable(file.path(), mesh);
+  detail::writeDraco(file, std::move(mesh), options);
+}
+
 void writeMesh(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
   const std::string& path = file.path();
   const MeshFormat format = formatFromPath(path);

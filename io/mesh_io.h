@@ -76,5 +76,9 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh, const WriteOpt
 /// The same into an open output (e.g. one of an OutputSet), format from file.path(); the
 /// caller commits.
 void writeMesh(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options = {});
+/// The same, consuming the mesh: a Draco write frees the mesh's arrays as its own copy takes
+/// them, so the encoder's memory comes on top of that copy only (bench/RESULTS.md); the other
+/// formats write, then free.
+void writeMesh(AtomicFile& file, TriangleMesh&& mesh, const WriteOptions& options = {});
 
 }  // namespace seamvox

@@ -131,8 +131,8 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("solverReason").value(r.solved.solverReason);
   if (!r.solved.fallbackReason.empty()) j.key("fallbackReason").value(r.solved.fallbackReason);
   j.key("field").value(c.fieldSource).key("fieldMethod").value(r.fieldMethod);
-  j.key("faces").value(U64{r.mesh.numFaces()});
-  j.key("vertices").value(U64{r.mesh.numVertices()});
+  j.key("faces").value(U64{r.size.faces});
+  j.key("vertices").value(U64{r.size.vertices});
   j.key("components").value(U64{r.solved.param.stats.components});
   j.key("anchoredComponents").value(U64{r.solved.param.stats.anchoredComponents});
   j.key("unsolvedComponents").value(U64{r.solved.param.stats.unsolvedComponents});
@@ -146,9 +146,48 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("conePasses").value(U64{r.conePasses});
   j.key("seams").value(U64{r.seams});
   j.key("seamEdges").value(r.seamQuality.seamEdges).key("seamLength").value(r.seamQuality.seamLength);
-  j.key("wedges").value(U64{r.mesh.cornerUV.numWedges()}).key("mapBytes").value(U64{r.mesh.cornerUV.memoryBytes()});
+  j.key("wedges").value(U64{r.size.wedges}).key("mapBytes").value(r.size.mapBytes);
   j.key("edgeLength").value(r.edgeLength);
   j.key("cellsOnDiagonal").value(r.diagonal / r.edgeLength);
+}
+
+void writeIds(JsonWriter& j, const char* key, const std::vector<std::uint32_t>& ids) {
+  j.key(key).beginArray();
+  for (std::uint32_t id : ids) j.value(U64{id});
+  j.endArray();
+}
+
+// Components of the solved mesh (ids: order of their lowest face), the largest listed one by
+// one, the rest summed, so the report stays bounded on a scan with 100K islands.
+void writeComponents(JsonWriter& j, const ComponentSummary& s) {
+  j.key("componentList").beginObject();
+  j.key("count").value(U64{s.count});
+  j.key("mapped").beginObject();
+  for (ComponentMapping m : {ComponentMapping::Solved, ComponentMapping::Point, ComponentMapping::Anchored,
+                             ComponentMapping::Unsolved}) {
+    j.key(componentMappingName(m)).value(U64{s.mapped[static_cast<int>(m)]});
+  }
+  j.endObject();
+  j.key("limit").value(U64{s.limit}).key("listed").value(static_cast<U64>(s.listed.size()));
+  j.key("unlisted").value(U64{s.unlisted}).key("unlistedFaces").value(s.unlistedFaces);
+  if (s.unlisted) {
+    j.key("note").value("the " + std::to_string(s.listed.size()) +
+                        " largest components are listed; the others are counted in unlisted");
+  }
+  writeIds(j, "unsolvedIds", s.unsolvedIds);
+  writeIds(j, "droppedIds", s.droppedIds);
+  j.key("droppedFaces").value(s.droppedFaces);
+  j.key("components").beginArray();
+  for (const ComponentFigures& c : s.listed) {
+    j.beginObject().key("id").value(U64{c.id}).key("faces").value(U64{c.faces});
+    j.key("vertices").value(U64{c.vertices}).key("boundaryLoops").value(U64{c.boundaryLoops});
+    j.key("eulerCharacteristic").value(c.eulerCharacteristic).key("genus").value(c.genus);
+    j.key("area").value(c.area).key("mapping").value(componentMappingName(c.mapping));
+    j.key("cones").value(U64{c.cones}).key("flippedFaces").value(c.flippedFaces);
+    j.endObject();
+  }
+  j.endArray();
+  j.endObject();
 }
 
 }  // namespace
@@ -178,6 +217,7 @@ std::string paramReportJson(const PipelineResult& r, const ParamReportContext& c
   if (r.solved.solver != ParamSolver::Hat) writeVoxel(j, r.solved, c.gridResolution);
   if (r.solved.refined) writeRefine(j, r.solved.refine, c);
   writeQuality(j, r);
+  writeComponents(j, r.components);
   writeSeconds(j, r, c);
   j.endObject();
   return j.str();

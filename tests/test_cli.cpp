@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <thread>
@@ -344,6 +345,48 @@ TEST(Cli, SigtermAndSigintRemoveUnfinishedOutputs) {
   EXPECT_EQ(interruptedExitCode(field, dir, SIGTERM, std::chrono::milliseconds(100)), 143);
   EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
   EXPECT_FALSE(std::filesystem::exists(dir.path("f.field")));
+}
+
+/// Every file and folder under dir (recursively), relative to it, sorted.
+std::vector<std::string> listTree(const std::string& dir) {
+  std::vector<std::string> out;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir)) {
+    out.push_back(std::filesystem::relative(entry.path(), dir).string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(Cli, DemoOutputsAreAllOrNothing) {
+  TempDir dir;
+  const std::string work = dir.path("demo");
+  // Success: the four outputs and nothing else (no staging folder, no temporaries).
+  run("demo --quiet --faces 5000 --keep " + work, 0);
+  EXPECT_EQ(listTree(work), (std::vector<std::string>{"scan.ply", "scan_uv.json", "scan_uv.ply", "scan_uv.png"}));
+
+  // A target that cannot be written (a folder): refused before any work, nothing else created.
+  const std::string blocked = dir.path("blocked");
+  std::filesystem::create_directories(blocked + "/scan_uv.png");
+  const std::string message = run("demo --quiet --faces 5000 --keep " + blocked, 1);
+  EXPECT_TRUE(contains(message, "scan_uv.png")) << message;
+  EXPECT_EQ(listTree(blocked), std::vector<std::string>{"scan_uv.png"});
+
+  // Interrupted at several points: the earlier outputs stay as they were, nothing is added.
+  const std::vector<std::string> names = {"scan.ply", "scan_uv.json", "scan_uv.ply", "scan_uv.png"};
+  std::vector<std::string> before;
+  for (const std::string& name : names) before.push_back(testing::readFile(work + "/" + name));
+  const std::vector<std::string> demo = {"demo", "--quiet", "--faces", "100000", "--keep", work};
+  for (const int ms : {50, 1500}) {
+    EXPECT_EQ(interruptedExitCode(demo, dir, SIGTERM, std::chrono::milliseconds(ms)), 143) << ms;
+    EXPECT_EQ(listTree(work), names) << ms;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      EXPECT_TRUE(testing::readFile(work + "/" + names[i]) == before[i]) << names[i] << " changed by a run stopped after " << ms << " ms";
+    }
+  }
+  // A folder the demo created is removed again.
+  const std::vector<std::string> fresh = {"demo", "--quiet", "--faces", "100000", "--keep", dir.path("fresh")};
+  EXPECT_EQ(interruptedExitCode(fresh, dir, SIGTERM, std::chrono::milliseconds(300)), 143);
+  EXPECT_FALSE(std::filesystem::exists(dir.path("fresh")));
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "core/mesh/clean.h"
 #include "core/system/errors.h"
 #include "core/quality/metrics.h"
+#include "io/atomic_file.h"
 #include "io/mesh_io.h"
 #include "testing.h"
 
@@ -136,6 +137,51 @@ TEST(DracoArchive, LargeUVsFallBackToLosslessOrACoarserLattice) {
   const SeamQuality seams = seamsOf(coarse);
   EXPECT_LE(seams.maxResidual, 1e-4) << "rounding commutes with quarter turns and integer shifts";
   EXPECT_LE(seams.maxIntegerDistance, 1e-4);
+}
+
+TEST(DracoArchive, AWideUVRangeDecodesWithinHalfAStep) {
+  // A range of 2^23 to 2^24 steps of 2^-14 (a spike's chart spans hundreds of cells): Draco's
+  // encoder rounds indices >= 2^23 in float32, one step off, unless the writer avoids them.
+  TempDir dir;
+  TriangleMesh mesh = parameterizedSphere(dir);
+  double lo = 1e300, hi = -1e300;
+  for (std::uint32_t w = 0; w < mesh.cornerUV.numWedges(); ++w) {
+    lo = std::min(lo, mesh.cornerUV.wedgeValue(w).minCoeff());
+    hi = std::max(hi, mesh.cornerUV.wedgeValue(w).maxCoeff());
+  }
+  const double scale = std::ceil(700.0 / (hi - lo));  // an integer: the map stays seamless
+  const double shift = -std::floor(scale * lo) - 500.0;
+  for (std::uint32_t w = 0; w < mesh.cornerUV.numWedges(); ++w) {
+    mesh.cornerUV.setWedgeValue(w, scale * mesh.cornerUV.wedgeValue(w) + Vec2d(shift, shift));
+  }
+  ASSERT_TRUE(seamsOf(mesh).isSeamless(1e-6));
+  writeMesh(dir.path("wide.drc"), mesh);
+  ReadOptions readOptions;
+  readOptions.readUV = true;
+  const TriangleMesh back = readMesh(dir.path("wide.drc"), readOptions);
+  const double change = maxUVChange(mesh, back);
+  ASSERT_GE(change, 0.0);
+  EXPECT_LE(change, 0.5 * std::ldexp(1.0, -14) + 1e-12);
+  EXPECT_TRUE(seamsOf(back).isSeamless(1e-6));
+}
+
+TEST(DracoArchive, AConsumingWriteGivesTheSameArchiveAndFreesTheMesh) {
+  TempDir dir;
+  TriangleMesh mesh = parameterizedSphere(dir);
+  writeMesh(dir.path("kept.drc"), mesh);
+  for (const char* ext : {".drc", ".ply"}) {
+    TriangleMesh consumed = mesh;
+    AtomicFile file(dir.path(std::string("consumed") + ext));
+    writeMesh(file, std::move(consumed));
+    file.commit();
+    EXPECT_EQ(consumed.numFaces(), 0u) << ext;
+    EXPECT_EQ(consumed.numVertices(), 0u) << ext;
+    EXPECT_FALSE(consumed.hasUV()) << ext;
+  }
+  EXPECT_EQ(testing::readFile(dir.path("consumed.drc")), testing::readFile(dir.path("kept.drc")));
+  ReadOptions readOptions;
+  readOptions.readUV = true;
+  EXPECT_EQ(maxUVChange(readMesh(dir.path("consumed.ply"), readOptions), mesh), 0.0);
 }
 
 TEST(DracoArchive, QuantizedPositionsStayWithinTheirStep) {

@@ -24,6 +24,38 @@ using testing::TempDir;
 using testing::writeFile;
 namespace fs = std::filesystem;
 
+TEST(OutputSet, AnAdoptedFileIsMovedInPlaceOnlyOnCommit) {
+  TempDir dir;
+  const std::string target = dir.path("map.ply"), finished = dir.path("staged/map.ply");
+  fs::create_directories(dir.path("staged"));
+  writeFile(target, "old");
+  {
+    OutputSet outputs;
+    AtomicFile& file = outputs.add(target);
+    file.write("ignored: the adopted file replaces what was written");
+    writeFile(finished, "made elsewhere");
+    file.adopt(finished);
+    EXPECT_FALSE(fs::exists(finished)) << "moved, not copied";
+    EXPECT_EQ(readFile(target), "old");
+  }  // not committed: the adopted content goes with the temporary
+  EXPECT_EQ(readFile(target), "old");
+  EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
+  OutputSet outputs;
+  writeFile(finished, "made elsewhere");
+  outputs.add(target).adopt(finished);
+  outputs.commit();
+  EXPECT_EQ(readFile(target), "made elsewhere");
+  EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
+  std::string message;
+  try {
+    OutputSet more;
+    more.add(target).adopt(dir.path("missing"));
+  } catch (const IoError& e) {
+    message = e.what();
+  }
+  EXPECT_THAT(message, HasSubstr("missing"));
+}
+
 TEST(OutputSet, CommitReplacesAndCreatesEveryTarget) {
   TempDir dir;
   const std::string a = dir.path("a.txt"), b = dir.path("b.txt");

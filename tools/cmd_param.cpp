@@ -46,6 +46,8 @@ ParamCommand parseParamArgs(Args& args) {
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
   o.clean.weldVertices = args.flag("weld");
+  o.listComponents = static_cast<std::uint32_t>(args.integer("report-components", o.listComponents, 0, 100000000));
+  o.dropUnsolved = args.flag("drop-unsolved");
   c.reportPath = args.value("report");
   c.renderPath = args.value("render");
   o.progress = makeProgress(args.flag("quiet"));
@@ -59,19 +61,17 @@ ParamCommand parseParamArgs(Args& args) {
 
 void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMeter& meter) {
   const SeamlessStats& st = r.solved.param.stats;
-  const std::uint64_t wedges = r.mesh.cornerUV.numWedges();
+  const std::uint64_t wedges = r.size.wedges;
   std::printf("%s -> %s: %u faces, %zu cones, %u seams, h = %.6g (%.1f cells on the diagonal)\n",
-              c.input.c_str(), c.output.c_str(), r.mesh.numFaces(), r.cones.size(), r.seams,
+              c.input.c_str(), c.output.c_str(), r.size.faces, r.cones.size(), r.seams,
               r.edgeLength, r.diagonal / r.edgeLength);
   std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
               st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
               meter.peakBytes() / 1048576.0);
   std::printf("map: %llu wedges (%.3f per vertex), %.1f MB\n", static_cast<unsigned long long>(wedges),
-              r.mesh.numVertices() ? double(wedges) / r.mesh.numVertices() : 0.0,
-              r.mesh.cornerUV.memoryBytes() / 1048576.0);
-  if (!r.mesh.attributes.empty()) {
-    std::printf("vertex properties: %s, %.1f MB\n", r.mesh.attributes.describe().c_str(),
-                r.mesh.attributes.memoryBytes() / 1048576.0);
+              r.size.vertices ? double(wedges) / r.size.vertices : 0.0, r.size.mapBytes / 1048576.0);
+  if (r.size.attributeBytes > 0) {
+    std::printf("vertex properties: %s, %.1f MB\n", r.size.attributes.c_str(), r.size.attributeBytes / 1048576.0);
   }
   std::printf("seam residual %.3g, integer distance %.3g, gradient error %.4f, flipped %llu, "
               "collapsed %llu: %s\n",
@@ -87,8 +87,14 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
-  if (st.unsolvedComponents) {
-    std::printf("WARNING: %u components could not be solved and map to the point 0\n", st.unsolvedComponents);
+  const ComponentSummary& parts = r.components;
+  if (!parts.droppedIds.empty()) {
+    std::printf("WARNING: %zu components (%llu faces) could not be solved and were dropped from the "
+                "output (ids in the report)\n", parts.droppedIds.size(),
+                static_cast<unsigned long long>(parts.droppedFaces));
+  } else if (!parts.unsolvedIds.empty()) {
+    std::printf("WARNING: %zu components could not be solved and are written unmapped at (u, v) = 0 "
+                "(ids in the report; --drop-unsolved removes them)\n", parts.unsolvedIds.size());
   }
   if (!r.solved.fallbackReason.empty()) {
     std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
@@ -129,10 +135,6 @@ int runParam(Args& args) {
   } catch (...) {
     rethrowWithContext(c.input);
   }
-  // The writer needs the mesh and its map only (the render also the corner table).
-  if (!c.renderPath) r.topology = Topology();
-  writeMesh(meshFile, r.mesh);
-  meter.finish("write");
   if (c.renderPath) {
     RenderOptions renderOptions;
     renderOptions.drawSeams = renderOptions.drawCones = true;
@@ -140,6 +142,11 @@ int runParam(Args& args) {
     writePng(*renderFile, renderCheckerboard(r.mesh, r.topology, renderOptions).image);
     meter.finish("render");
   }
+  // The writer takes the mesh and its map (r.size keeps their figures): the corner table goes
+  // first, and a Draco write frees the mesh as its own copy takes it.
+  r.topology = Topology();
+  writeMesh(meshFile, std::move(r.mesh));
+  meter.finish("write");
   printSummary(c, r, meter);
   if (c.reportPath) {
     ParamReportContext context;
@@ -170,6 +177,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
+                 "                     [--report-components N] [--drop-unsolved]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
@@ -196,11 +204,15 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --weld              weld coincident vertices before cleaning\n"
                  "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"
-                 "                      stage timings, peak memory\n"
+                 "                      stage timings, peak memory, components\n"
+                 "  --report-components N  components listed one by one in the report, the largest\n"
+                 "                      (default 1000); the rest are counted together\n"
+                 "  --drop-unsolved     remove the components whose system cannot be factored from\n"
+                 "                      the output instead of writing them unmapped at (u, v) = 0\n"
                  "  --render OUT.png    also render the result (checkerboard, seams, cones; 1024x1024,\n"
                  "                      default view of seamvox render)\n"
                  "  --quiet             no progress on stderr\n",
-                 {"greedy", "weld"},
+                 {"greedy", "weld", "drop-unsolved"},
                  &runParam});
 
 }  // namespace seamvox::cli

@@ -224,6 +224,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   RoundOptions roundOptions;
   roundOptions.greedy = options.greedyRounding;
   roundOptions.progress = options.progress;
+  roundOptions.failsToFactor = options.failsToFactor;
   // The reduction depends on domains and adjacency only, and the basis keeps the
   // normal-derivative integrals apart: a stronger regularization only re-assembles and refactors.
   SeamlessSolution solution;

@@ -76,6 +76,7 @@ void solveConePasses(PipelineResult& r, const CrossField& field, const PipelineO
   param.edgeLength = r.edgeLength;
   param.greedyRounding = options.greedyRounding;
   param.progress = options.progress;
+  param.failsToFactor = options.failsToFactor;
   SolverOptions solverOptions = options.solver;
   solverOptions.meter = &meter;  // closes "solve" and "refine"
   const double mergeDistance = options.mergeCones * r.edgeLength;
@@ -112,6 +113,30 @@ void solveConePasses(PipelineResult& r, const CrossField& field, const PipelineO
   }
 }
 
+/// Per-component figures, and with options.dropUnsolved the unsolved components removed (the
+/// corner table rebuilt for the smaller mesh).
+void summarizeMappedComponents(PipelineResult& r, const PipelineOptions& options) {
+  std::vector<FaceId> unsolvedFaces;
+  r.components = summarizeComponents(r.mesh, r.topology, r.cones, r.solved.param.unsolvedFaces,
+                                     r.solved.param.anchoredFaces, r.edgeLength,
+                                     options.listComponents, &unsolvedFaces);
+  if (!options.dropUnsolved || unsolvedFaces.empty()) return;
+  r.components.droppedIds = r.components.unsolvedIds;
+  r.components.droppedFaces = unsolvedFaces.size();
+  std::vector<VertexId> vertexMap;
+  r.mesh = removeFaces(r.mesh, unsolvedFaces, &vertexMap);
+  r.topology = Topology::build(r.mesh.triangles, r.mesh.numVertices());
+  std::vector<VertexId> cones;
+  std::vector<std::int32_t> index4;
+  for (std::size_t k = 0; k < r.cones.size(); ++k) {
+    if (vertexMap[r.cones[k]] == kInvalidId) continue;
+    cones.push_back(vertexMap[r.cones[k]]);
+    index4.push_back(r.coneIndex4[k]);
+  }
+  r.cones = std::move(cones);  // still sorted: the map keeps the vertex order
+  r.coneIndex4 = std::move(index4);
+}
+
 }  // namespace
 
 PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
@@ -144,6 +169,10 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   solveConePasses(r, field, options, meter);
   r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength);
   r.mesh.cornerUV = std::move(r.solved.param.cornerUV);
+  field = CrossField();  // before the per-component figures (10 bytes per face)
+  summarizeMappedComponents(r, options);
+  r.size = {r.mesh.numFaces(), r.mesh.numVertices(), r.mesh.cornerUV.numWedges(), r.mesh.cornerUV.memoryBytes(),
+            r.mesh.attributes.describe(), r.mesh.attributes.memoryBytes()};
   meter.finish("metrics");
   return r;
 }

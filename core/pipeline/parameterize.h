@@ -5,6 +5,7 @@
 /// quality figures. No file I/O: the caller reads the mesh (and an imported field) and writes what
 /// it gets back. `seamvox param`, `seamvox field` and the benchmarks call these stages.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "core/field/field.h"
 #include "core/field/field_proxy.h"
 #include "core/mesh/clean.h"
+#include "core/pipeline/components.h"
 #include "core/pipeline/grid_spacing.h"
 #include "core/quality/metrics.h"
 #include "core/solve/param_solver.h"
@@ -69,11 +71,28 @@ struct PipelineOptions {
   /// Stages are closed on this meter when given ("clean", "field", "cut", "solve", "refine",
   /// "metrics"), so a caller can add its own ("read", "write") on the same one.
   StageMeter* meter = nullptr;
+  /// Components listed one by one in PipelineResult::components (the largest; the rest summed).
+  std::uint32_t listComponents = 1000;
+  /// Components the solve could not map are removed from the result's mesh instead of being
+  /// kept at (u, v) = 0; their ids are in components.droppedIds.
+  bool dropUnsolved = false;
+  /// Test hook (RoundOptions::failsToFactor): components it names are left unsolved.
+  std::function<bool(std::uint32_t unknowns)> failsToFactor;
+};
+
+/// Sizes of a result's mesh and map, kept apart so they can be reported after the mesh was
+/// handed to a consuming writer (writeMesh(AtomicFile&, TriangleMesh&&)).
+struct MeshSize {
+  std::uint32_t faces = 0, vertices = 0, wedges = 0;
+  std::uint64_t mapBytes = 0;
+  std::string attributes;           ///< VertexAttributes::describe() of the vertex properties
+  std::uint64_t attributeBytes = 0;
 };
 
 struct PipelineResult {
   /// The cleaned mesh with the map in mesh.cornerUV (grid units, per wedge of the cut).
   TriangleMesh mesh;
+  MeshSize size;            ///< of mesh as parameterize returned it
   Topology topology;        ///< of mesh
   CleanReport cleanReport;  ///< what cleaning changed
   std::uint32_t inputFaces = 0;
@@ -89,6 +108,7 @@ struct PipelineResult {
   SolverResult solved;           ///< figures of the last solve (its map moved to mesh.cornerUV)
   SeamQuality seamQuality;
   MapQuality mapQuality;
+  ComponentSummary components;  ///< per component, of the mesh before any drop
   bool isSeamless() const { return seamQuality.isSeamless(); }
 };
 

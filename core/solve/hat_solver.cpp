@@ -33,12 +33,44 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
   RoundOptions roundOptions;
   roundOptions.greedy = options.greedyRounding;
   roundOptions.progress = options.progress;
+  roundOptions.failsToFactor = options.failsToFactor;
   storeSeamlessSolution(basis, reduction, solveSeamless(basis, reduction, roundOptions), topology, cut, out);
   return out;
 }
 
+namespace {
+
+/// The faces of the unsolved and of the anchored components: each of their domains is given the
+/// coefficient 1 (unsolved) or i (anchored), every other domain 0, and the basis is evaluated;
+/// by the partition of unity a face of such a component evaluates to that tag (a component of the
+/// surface lies within one component of the reduction). Costs one evaluation, only when needed.
+void findComponentFaces(const Basis& basis, const Reduction& reduction, const SeamlessSolution& solution,
+                        const Topology& topology, const CutResult& cut, ParamResult& out) {
+  if (solution.unsolvedComponents.empty() && solution.anchoredComponents.empty()) return;
+  std::vector<std::complex<double>> tagOfComponent(reduction.numComponents, 0.0);
+  for (std::uint32_t c : solution.unsolvedComponents) tagOfComponent[c] = 1.0;
+  for (std::uint32_t c : solution.anchoredComponents) tagOfComponent[c] = std::complex<double>(0.0, 1.0);
+  const ReducedMap& P = reduction.map;
+  std::vector<std::complex<double>> tag(basis.numDomains(), 0.0);
+  for (std::size_t d = 0; d + 1 < P.rowStart.size() && d < tag.size(); ++d) {
+    if (P.rowStart[d] == P.rowStart[d + 1]) continue;
+    const std::uint32_t c = reduction.unknownComponent[P.column[P.rowStart[d]]];
+    if (c != kInvalidId) tag[d] = tagOfComponent[c];
+  }
+  WedgeMap tagged = buildCutWedges(topology, cut);
+  basis.evaluateCorners(tag, tagged);
+  for (FaceId f = 0; f < topology.numFaces(); ++f) {
+    const Vec2d mean = (tagged[3 * f] + tagged[3 * f + 1] + tagged[3 * f + 2]) / 3.0;
+    if (mean[0] > 0.5) out.unsolvedFaces.push_back(f);
+    if (mean[1] > 0.5) out.anchoredFaces.push_back(f);
+  }
+}
+
+}  // namespace
+
 void storeSeamlessSolution(const Basis& basis, const Reduction& reduction, SeamlessSolution solution,
                            const Topology& topology, const CutResult& cut, ParamResult& out) {
+  findComponentFaces(basis, reduction, solution, topology, cut, out);
   out.stats = solution.stats;
   out.translations = std::move(solution.translations);
   const auto start = std::chrono::steady_clock::now();

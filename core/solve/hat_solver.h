@@ -1,6 +1,7 @@
 #pragma once
 /// The hat-basis seamless parameterization of a cut mesh: basis, reduction, assembly, solves,
 /// rounding and evaluation in one call (DESIGN sections 6-9).
+#include <functional>
 #include <vector>
 
 #include "core/basis/gaussian_int.h"
@@ -18,6 +19,7 @@ struct ParamOptions {
   double edgeLength = 1.0;  ///< h, target grid spacing in mesh units (> 0)
   bool greedyRounding = false;
   ProgressFn progress;
+  std::function<bool(std::uint32_t unknowns)> failsToFactor;  ///< test hook (RoundOptions)
 };
 
 struct ParamResult {
@@ -26,6 +28,9 @@ struct ParamResult {
   SeamlessStats stats;
   std::uint32_t basisFunctions = 0, domains = 0, seamAdjacencies = 0;
   std::uint32_t translationConstraints = 0;  ///< cycle constraints found
+  /// Faces (sorted) of the components the solve left unsolved (mapped to the point 0) and of
+  /// those it anchored through a translation (SeamlessSolution).
+  std::vector<FaceId> unsolvedFaces, anchoredFaces;
   double secondsBasis = 0.0, secondsReduce = 0.0, secondsEvaluate = 0.0;
 };
 

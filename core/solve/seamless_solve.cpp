@@ -196,6 +196,7 @@ void solveRounded(const LinearSystem& system, const Reduction& reduction,
   SeamlessStats& stats = out.stats;
   const std::uint32_t n = reduction.numUnknowns(), nc = reduction.numComponents;
   stats.pinnedFirst = stats.pinnedSecond = stats.anchoredComponents = 0;
+  out.anchoredComponents.clear();
   stats.maxRoundingShift = 0.0;
   // The global shift of a component is free when its translations are free (or it has no
   // rotation at all): the first solve pins one positional unknown there, or anchors the shift
@@ -224,6 +225,7 @@ void solveRounded(const LinearSystem& system, const Reduction& reduction,
   } else {
     solveAnchored(system, reduction, anchors, fixed, x, stats);
     stats.anchoredComponents = static_cast<std::uint32_t>(anchors.size());
+    for (const ShiftAnchor& anchor : anchors) out.anchoredComponents.push_back(anchor.component);
     stats.pinnedFirst += stats.anchoredComponents;
   }
   stats.secondsFirstSolve = secondsSince(start);
@@ -330,6 +332,20 @@ SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
   }
   const std::uint32_t largest = static_cast<std::uint32_t>(
       std::max_element(componentUnknowns.begin(), componentUnknowns.end()) - componentUnknowns.begin());
+  auto leaveUnsolved = [&](std::uint32_t c, std::string reason) {
+    out.unsolvedComponents.push_back(c);
+    out.unsolvedReasons.push_back(std::move(reason));
+    for (std::uint32_t j = 0; j < n; ++j) {
+      if (reduction.unknownComponent[j] == c) excluded[j] = 1;
+    }
+  };
+  if (options.failsToFactor) {
+    for (std::uint32_t c = 0; c < reduction.numComponents; ++c) {
+      if (c != largest && options.failsToFactor(componentUnknowns[c])) {
+        leaveUnsolved(c, "component " + std::to_string(c) + ": failed by the test hook");
+      }
+    }
+  }
   // A component that cannot be factored is excluded (left at 0) and the rest solved again.
   for (;;) {
     try {
@@ -342,11 +358,7 @@ SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
           std::count(out.unsolvedComponents.begin(), out.unsolvedComponents.end(), c) != 0) {
         throw SolverError(failureMessage(failure, reduction, componentUnknowns));
       }
-      out.unsolvedComponents.push_back(c);
-      out.unsolvedReasons.push_back(failureMessage(failure, reduction, componentUnknowns));
-      for (std::uint32_t j = 0; j < n; ++j) {
-        if (reduction.unknownComponent[j] == c) excluded[j] = 1;
-      }
+      leaveUnsolved(c, failureMessage(failure, reduction, componentUnknowns));
     }
   }
   stats.unsolvedComponents = static_cast<std::uint32_t>(out.unsolvedComponents.size());

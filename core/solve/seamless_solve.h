@@ -4,6 +4,7 @@
 /// greedy), second solve with s fixed (pinned only on components whose seams all have r = 1).
 #include <complex>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,9 @@ struct RoundOptions {
   /// SeamlessSolution::unsolvedComponents) and the rest solved again, unless it is the component
   /// with the most unknowns (then, or when false, SolverError names the stage and component).
   bool dropUnsolvable = true;
+  /// Test hook: a component (not the largest) for which it returns true, given its number of
+  /// unknowns, is left unsolved as if it could not be factored (dropUnsolvable's path).
+  std::function<bool(std::uint32_t unknowns)> failsToFactor;
   ProgressFn progress;
 };
 
@@ -52,6 +56,9 @@ struct SeamlessSolution {
   /// unknowns are 0 (the component maps to the point 0 and has no seam).
   std::vector<std::uint32_t> unsolvedComponents;
   std::vector<std::string> unsolvedReasons;
+  /// Components (Reduction numbering) whose shift the first solve anchored through a translation
+  /// (SeamlessStats::anchoredComponents).
+  std::vector<std::uint32_t> anchoredComponents;
 };
 
 /// Runs the whole solve for a reduced basis. Throws SolverError when a factorization fails and
