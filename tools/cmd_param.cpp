@@ -45,6 +45,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.mergeCones = parseMergeCones(args);
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
+  o.untangle = !args.flag("no-untangle");
   o.clean.weldVertices = args.flag("weld");
   c.reportPath = args.value("report");
   c.renderPath = args.value("render");
@@ -82,6 +83,13 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 refine.freeVertices, 100.0 * refine.refinedVertexFraction,
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
+  }
+  if (r.untangled) {
+    std::printf("foldover repair: flipped %llu -> %llu (%llu folded in 3D), %llu patch faces, %u solves, %.2f s\n",
+                static_cast<unsigned long long>(r.untangle.flippedBefore),
+                static_cast<unsigned long long>(r.untangle.flippedAfter),
+                static_cast<unsigned long long>(r.untangle.foldedIn3D),
+                static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves, r.untangle.seconds);
   }
   if (st.unsolvedComponents) {
     std::printf("WARNING: %u components could not be solved and map to the point 0\n", st.unsolvedComponents);
@@ -165,7 +173,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
-                 "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
+                 "                     [--greedy] [--no-untangle] [--weld] [--report R.json]\n"
+                 "                     [--render OUT.png]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
@@ -190,13 +199,15 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      one of them: closer than the grid resolves, they would collapse\n"
                  "                      the faces between them; default 0.5, 0 keeps every cone\n"
                  "  --greedy            round translations in batches, re-solving in between\n"
+                 "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
+                 "                      re-solved with stiffening; seams and translations kept)\n"
                  "  --weld              weld coincident vertices before cleaning\n"
                  "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"
                  "                      stage timings, peak memory\n"
                  "  --render OUT.png    also render the result (checkerboard, seams, cones; 1024x1024,\n"
                  "                      default view of seamvox render)\n"
                  "  --quiet             no progress on stderr\n",
-                 {"greedy", "weld"},
+                 {"greedy", "no-untangle", "weld"},
                  &runParam});
 
 }  // namespace seamvox::cli
