@@ -109,6 +109,8 @@ int runField(Args& args) {
   if (curvature > 0.0 && method == FieldMethod::Proxy) {
     throw UsageError("--curvature needs the direct field (--field smooth): the proxy field is the smoothest field only");
   }
+  // h as param takes it (the diagonal without spikes): the same cone merging.
+  const double edgeLength = spacing.spacing(clean.report.diagonalWithoutSpikes);
   CrossField field;
   try {
     field = computeFieldFromSource(mesh, topology, clean.faceOrigin, inputFaces, source, progress);
@@ -118,7 +120,6 @@ int runField(Args& args) {
   meter.finish("field");
   // The cones param cuts through: those closer than the merge distance are merged, as param does
   // before its first cut (param may merge a few more pairs that a solve puts on one point).
-  const double edgeLength = spacing.spacing(computeBoundingBox(mesh.positions).diagonal());
   const ConeCut coneCut = cutThroughCones(mesh, topology, field, mergeCones * edgeLength, {}, progress);
   const FieldSingularities& sing = coneCut.singularities;
   const CutResult& cut = coneCut.cut;
