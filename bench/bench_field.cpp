@@ -1,7 +1,7 @@
 // Field + cut benchmark: time and peak memory of the smoothest field (direct CHOLMOD solve or the
 // proxy field), singularities and the cut on a mesh file or a generated mesh; cones and the
-// smoothness energy (measureFieldEnergy) of the result. One method per run, so the peak memory
-// is that method's.
+// smoothness energy (measureFieldEnergy) of the result, and the factorization's size. One method
+// per run, so the peak memory is that method's.
 //   bench_field MESH [--method direct|proxy] [--grid N] [--sweeps K] [--curvature W]
 //   bench_field --generate sphere|torus|genus2 FACES [same options]
 #include <chrono>
@@ -72,6 +72,9 @@ int main(int argc, char** argv) {
     FieldMethod method = FieldMethod::Direct;
     ProxyFieldOptions proxyOptions;
     proxyOptions.progress = fieldOptions.progress;
+    FieldSolveStats solve;  // the factorization of either method
+    fieldOptions.stats = &solve;
+    proxyOptions.stats = &solve;
     for (int i = 1; i + 1 < argc; ++i) {
       if (!std::strcmp(argv[i], "--curvature")) fieldOptions.curvatureWeight = std::atof(argv[i + 1]);
       if (!std::strcmp(argv[i], "--method")) method = parseFieldMethod(argv[i + 1]);
@@ -108,6 +111,9 @@ int main(int argc, char** argv) {
       fieldOptions.progress("done", 1.0);
     }
     report(method == FieldMethod::Proxy ? "proxy field" : "direct field", mark);
+    std::printf("factor: %llu unknowns, %llu nonzeros, %.1f MB (CHOLMOD peak %.1f MB)\n",
+                static_cast<unsigned long long>(solve.unknowns), static_cast<unsigned long long>(solve.factorNonzeros),
+                solve.factorBytes / 1048576.0, solve.factorPeakBytes / 1048576.0);
     const FieldSingularities sing = computeSingularities(clean.mesh, clean.topology, field);
     report("singularities", mark);
     const CutResult cut = cutToDisk(clean.mesh, clean.topology, field, sing);

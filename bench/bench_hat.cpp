@@ -1,105 +1,52 @@
-// Hat-solver benchmark: per-stage time and peak memory, relative L2 gradient error and flipped
-// fraction on armadillo and on fertility subdivided 1-to-4 (36K, 144K, 576K, 2.3M faces).
+// Hat-solver benchmark: the library pipeline (parameterize, as `seamvox param --solver hat`) with
+// per-stage time and peak memory, relative L2 gradient error and flipped fraction on armadillo and
+// on fertility subdivided 1-to-4 (36K, 144K, 576K, 2.3M faces).
 //   bench_hat [DATA_DIR] [--levels L] [--cells N] [--mesh NAME]...
 // The field of a subdivided mesh is its parent face's field (children are coplanar with it).
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <functional>
 #include <string>
 #include <vector>
 
-#include "core/basis/basis.h"
-#include "core/mesh/clean.h"
-#include "core/cut/cut.h"
-#include "core/solve/evaluate.h"
-#include "core/field/field.h"
-#include "core/quality/metrics.h"
-#include "core/basis/reduce.h"
-#include "core/solve/assemble.h"
-#include "core/solve/seamless_solve.h"
-#include "core/mesh/subdivide.h"
 #include "bench/bench_common.h"
-#include "io/mesh_io.h"
-#include "core/system/memory.h"
+#include "core/pipeline/parameterize.h"
 #include "core/system/blas_threads.h"
+#include "core/system/memory.h"
+#include "io/mesh_io.h"
 
 using namespace seamvox;
 
 namespace {
 
-// Resets the peak-RSS mark (Linux: writing 5 to clear_refs), so each stage reports its own peak.
-void resetPeak() {
-  std::ofstream clear("/proc/self/clear_refs");
-  if (clear) clear << "5";
-}
-
-struct Stage {
-  std::string name;
-  double seconds = 0;
-  double peakMB = 0;
-};
-
-template <class F>
-void timeStage(std::vector<Stage>& stages, const char* name, F&& f) {
-  resetPeak();
-  const auto start = std::chrono::steady_clock::now();
-  f();
-  stages.push_back({name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                    peakResidentBytes() / 1048576.0});
-}
-
+/// One case through the library pipeline (core/pipeline/parameterize.h) with the hat solver, as
+/// `seamvox param --solver hat` runs it (cones merged, cone passes); an inherited field is passed
+/// as an imported one. Stages from the pipeline's meter, the solve's parts from its figures.
 void runCase(const std::string& label, const TriangleMesh& inputMesh, const CrossField* inherited,
              double cells) {
-  std::vector<Stage> stages;
-  CleanResult clean;
-  timeStage(stages, "clean", [&] { clean = cleanMesh(inputMesh); });
-  const TriangleMesh& mesh = clean.mesh;
-  const Topology& topology = clean.topology;
-  CrossField field;
-  FieldSingularities sing;
-  timeStage(stages, "field", [&] {
-    if (inherited) {
-      std::vector<Vec3d> v(mesh.numFaces());
-      for (FaceId f = 0; f < mesh.numFaces(); ++f) v[f] = inherited->at(clean.faceOrigin[f]);
-      field = projectToTangent(mesh, std::move(v));
-    } else {
-      field = computeSmoothestField(mesh, topology);
-    }
-    sing = computeSingularities(mesh, topology, field);
-  });
-  CutResult cut;
-  timeStage(stages, "cut", [&] { cut = cutToDisk(mesh, topology, field, sing); });
-  const double h = computeBoundingBox(mesh.positions).diagonal() / cells;
-  HatBasisOptions basisOptions;
-  basisOptions.edgeLength = h;
-  std::unique_ptr<HatBasis> basis;
-  timeStage(stages, "basis", [&] { basis = std::make_unique<HatBasis>(mesh, topology, field, cut, basisOptions); });
-  Reduction reduction;
-  timeStage(stages, "reduce", [&] { reduction = reduceBasis(*basis); });
-  SeamlessSolution solution;
-  timeStage(stages, "assemble+solve+round+solve", [&] { solution = solveSeamless(*basis, reduction); });
-  WedgeMap uv;
-  timeStage(stages, "evaluate", [&] {
-    uv = buildCutWedges(topology, cut);
-    evaluateMap(*basis, reduction, solution.unknowns, uv);
-  });
-  SeamQuality seams;
-  MapQuality quality;
-  timeStage(stages, "metrics", [&] {
-    seams = measureSeams(mesh, topology, cut, uv);
-    quality = measureMap(mesh, uv, &field, h);
-  });
-  const SeamlessStats& st = solution.stats;
-  std::printf("\n== %s: %u faces, %u vertices, %zu cones, %zu seams, h = diag/%.0f\n", label.c_str(),
-              mesh.numFaces(), mesh.numVertices(), cut.cones.size(), cut.seams.size(), cells);
-  for (const Stage& s : stages) {
-    std::printf("  %-28s %8.2f s  peak %8.1f MB\n", s.name.c_str(), s.seconds, s.peakMB);
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::Hat;
+  options.spacing.cells = cells;
+  if (inherited) {
+    options.field.importedPerInputFace.resize(inherited->direction.size());
+    for (FaceId f = 0; f < inherited->direction.size(); ++f) options.field.importedPerInputFace[f] = inherited->at(f);
   }
-  std::printf("  solve detail: assemble %.2f s, first solve %.2f s, round %.2f s, second solve %.2f s\n",
-              st.secondsAssemble, st.secondsFirstSolve, st.secondsRound, st.secondsSecondSolve);
+  StageMeter meter;
+  options.meter = &meter;
+  const PipelineResult r = parameterize(inputMesh, options);
+  const ParamResult& p = r.solved.param;
+  const SeamlessStats& st = p.stats;
+  std::printf("\n== %s: %u faces, %u vertices, %zu cones, %u seams, h = diag/%.0f (field %s)\n", label.c_str(),
+              r.mesh.numFaces(), r.mesh.numVertices(), r.cones.size(), r.seams, cells, r.fieldMethod.c_str());
+  for (const StageFigures& s : meter.stages()) {
+    std::printf("  %-28s %8.2f s  peak %8.1f MB\n", s.name.c_str(), s.seconds, s.peakBytes / 1048576.0);
+  }
+  std::printf("  solve detail: basis %.2f s, reduce %.2f s, assemble %.2f s, first solve %.2f s, round %.2f s, "
+              "second solve %.2f s, evaluate %.2f s\n",
+              p.secondsBasis, p.secondsReduce, st.secondsAssemble, st.secondsFirstSolve, st.secondsRound,
+              st.secondsSecondSolve, p.secondsEvaluate);
+  std::printf("  field: %llu unknowns, factor %.1f MB\n", static_cast<unsigned long long>(r.fieldSolve.unknowns),
+              r.fieldSolve.factorBytes / 1048576.0);
   std::printf("  unknowns %u (translational %u), K nonzeros %llu, factor nonzeros %llu, factor %.1f MB "
               "(CHOLMOD peak %.1f MB)%s\n",
               st.unknowns, st.translational, static_cast<unsigned long long>(st.systemNonzeros),
@@ -107,9 +54,9 @@ void runCase(const std::string& label, const TriangleMesh& inputMesh, const Cros
               st.factorPeakBytes / 1048576.0, st.realFallback ? " [real fallback]" : "");
   std::printf("  relative L2 error %.5f, flipped %llu (%.5f%%), collapsed %llu, seam residual %.2e, "
               "integer distance %.2e\n",
-              quality.relativeGradientError, static_cast<unsigned long long>(quality.flipped),
-              100.0 * quality.flippedFraction, static_cast<unsigned long long>(quality.collapsed),
-              seams.maxResidual, seams.maxIntegerDistance);
+              r.mapQuality.relativeGradientError, static_cast<unsigned long long>(r.mapQuality.flipped),
+              100.0 * r.mapQuality.flippedFraction, static_cast<unsigned long long>(r.mapQuality.collapsed),
+              r.seamQuality.maxResidual, r.seamQuality.maxIntegerDistance);
   std::fflush(stdout);
 }
 

@@ -1,7 +1,8 @@
 // Hat vs Vox vs Vox+HatLoc (DESIGN sections 10-11): relative L2 gradient error, flips, collapsed
 // triangles, seam residual, refined vertex fraction, local system size and times, on fertility
-// subdivided 1-to-4 (36K faces at level 1) and armadillo. The local refinement runs on the same
-// Vox map for each number of rings.
+// subdivided 1-to-4 (36K faces at level 1) and armadillo. One cut from the pipeline's stages
+// (field, cone merging) for the three solvers; the local refinement runs on the same Vox map for
+// each number of rings, which is why this one calls the solvers itself rather than parameterize.
 //   bench_refine [DATA_DIR] [--grid N] [--cells N] [--levels L] [--mesh NAME]... [--rings K]...
 #include <chrono>
 #include <cstdio>
@@ -17,6 +18,7 @@
 #include "core/solve/hat_solver.h"
 #include "core/refine/refine.h"
 #include "core/mesh/subdivide.h"
+#include "core/pipeline/parameterize.h"
 #include "bench/bench_common.h"
 #include "io/mesh_io.h"
 #include "core/system/memory.h"
@@ -49,21 +51,20 @@ void printMap(const char* name, double seconds, const TriangleMesh& mesh, const 
 
 void runCase(const std::string& label, const TriangleMesh& input, const CrossField* inherited,
              const Options& options) {
+  // The pipeline's first pass (core/pipeline/parameterize.h): clean, field (an inherited one as
+  // imported), close cones merged, cut. The three maps below then share this cut.
   CleanResult clean = cleanMesh(input);
   const TriangleMesh& mesh = clean.mesh;
   const Topology& topology = clean.topology;
-  CrossField field;
+  FieldSource source;
   if (inherited) {
-    std::vector<Vec3d> v(mesh.numFaces());
-    for (FaceId f = 0; f < mesh.numFaces(); ++f) v[f] = inherited->at(clean.faceOrigin[f]);
-    field = projectToTangent(mesh, std::move(v));
-  } else {
-    field = computeSmoothestField(mesh, topology);
+    source.importedPerInputFace.resize(inherited->direction.size());
+    for (FaceId f = 0; f < inherited->direction.size(); ++f) source.importedPerInputFace[f] = inherited->at(f);
   }
-  const FieldSingularities sing = computeSingularities(mesh, topology, field);
-  const CutResult cut = cutToDisk(mesh, topology, field, sing);
+  const CrossField field = computeFieldFromSource(mesh, topology, clean.faceOrigin, input.numFaces(), source);
   ParamOptions param;
-  param.edgeLength = computeBoundingBox(mesh.positions).diagonal() / options.cells;
+  param.edgeLength = clean.report.diagonalWithoutSpikes / options.cells;
+  const CutResult cut = cutThroughCones(mesh, topology, field, kConeMergeFraction * param.edgeLength).cut;
   std::printf("\n== %s: %u faces, %u vertices, %zu cones, %zu seams, h = diag/%.0f, grid %d\n",
               label.c_str(), mesh.numFaces(), mesh.numVertices(), cut.cones.size(), cut.seams.size(),
               options.cells, options.grid);

@@ -201,6 +201,17 @@ class OutputBuffer {
   std::size_t used_ = 0;
 };
 
+/// Passes a warning to warn, or prints it on stderr when warn is empty.
+void warn(const WarningFn& warn, const std::string& message);
+
+/// Positions in attributes.properties of red, green, blue and (when present) alpha, all of one
+/// type; empty when the mesh has no such colors.
+std::vector<std::size_t> colorProperties(const VertexAttributes& attributes);
+/// Positions of nx, ny, nz of one floating type; empty when absent.
+std::vector<std::size_t> normalProperties(const VertexAttributes& attributes);
+/// A color value in [0, 1]: integers over their type's largest value, floats as they are.
+double normalizedColor(const VertexProperty& property, VertexId v);
+
 // Per-format entry points (io/ply_io.cpp, io/obj_io.cpp, io/off_io.cpp, io/draco_io.cpp).
 std::unique_ptr<MeshStream> openPlyStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
 std::unique_ptr<MeshStream> openObjStream(std::unique_ptr<InputFile> in, const ReadOptions& options);

@@ -7,12 +7,16 @@
 // most 2^-k / sqrt(2). UVs too large for that range are stored losslessly as float64.
 // The writer keeps the mesh's vertices apart even where positions are equal (an unwelded seam,
 // a split non-manifold vertex): the archive decodes to the connectivity that was written.
+// Vertex properties travel as COLOR (red green blue [alpha]), NORMAL (nx ny nz) and GENERIC
+// attributes (named in their metadata), one value per vertex; the reader keeps every attribute
+// but positions and UVs, and splits a position whose points carry different values.
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
 #include <draco/mesh/mesh.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "core/system/errors.h"
@@ -99,15 +103,222 @@ DracoPoints dracoPoints(const TriangleMesh& mesh, bool withUV) {
   return out;
 }
 
-/// Adds an attribute with `values` entries of `components` values of type `type` to the mesh.
-draco::PointAttribute* addDracoAttribute(draco::Mesh& mesh, draco::GeometryAttribute::Type kind,
-                                         int components, draco::DataType type, std::size_t values,
-                                         bool identity) {
+/// Adds an attribute with `values` entries of `components` values of type `type` to the mesh;
+/// returns its id.
+int addDracoAttribute(draco::Mesh& mesh, draco::GeometryAttribute::Type kind, int components,
+                      draco::DataType type, std::size_t values, bool identity) {
   draco::GeometryAttribute attribute;
-  const int bytes = type == draco::DT_FLOAT64 ? 8 : 4;
   attribute.Init(kind, nullptr, static_cast<std::uint8_t>(components), type, false,
-                 std::int64_t(bytes) * components, 0);
-  return mesh.attribute(mesh.AddAttribute(attribute, identity, static_cast<std::uint32_t>(values)));
+                 std::int64_t(draco::DataTypeLength(type)) * components, 0);
+  return mesh.AddAttribute(attribute, identity, static_cast<std::uint32_t>(values));
+}
+
+/// Maps every point to the value of its vertex (values are indexed by vertex).
+void mapPointsToVertices(draco::PointAttribute& attribute, const std::vector<std::uint32_t>& vertexOfPoint) {
+  attribute.SetExplicitMapping(vertexOfPoint.size());
+  for (std::size_t p = 0; p < vertexOfPoint.size(); ++p) {
+    attribute.SetPointMapEntry(draco::PointIndex(static_cast<std::uint32_t>(p)),
+                               draco::AttributeValueIndex(vertexOfPoint[p]));
+  }
+}
+
+draco::DataType dracoType(ScalarType type) {
+  static const draco::DataType kTypes[] = {draco::DT_INT8,  draco::DT_UINT8,  draco::DT_INT16,
+                                           draco::DT_UINT16, draco::DT_INT32, draco::DT_UINT32,
+                                           draco::DT_FLOAT32, draco::DT_FLOAT64};
+  return kTypes[static_cast<int>(type)];
+}
+
+/// The vertex attribute type of a Draco data type; false for 64-bit integers (not kept).
+bool scalarTypeOf(draco::DataType type, ScalarType& out) {
+  switch (type) {
+    case draco::DT_INT8: out = ScalarType::Int8; return true;
+    case draco::DT_UINT8: case draco::DT_BOOL: out = ScalarType::UInt8; return true;
+    case draco::DT_INT16: out = ScalarType::Int16; return true;
+    case draco::DT_UINT16: out = ScalarType::UInt16; return true;
+    case draco::DT_INT32: out = ScalarType::Int32; return true;
+    case draco::DT_UINT32: out = ScalarType::UInt32; return true;
+    case draco::DT_FLOAT32: out = ScalarType::Float32; return true;
+    case draco::DT_FLOAT64: out = ScalarType::Float64; return true;
+    default: return false;
+  }
+}
+
+/// Metadata entry of a GENERIC attribute holding the little-endian bytes of a 32-bit integer: its
+/// PLY type name ("int" or "uint").
+constexpr const char* kBytesOfType = "seamvox_bytes_of";
+
+/// Writes the vertex properties as Draco attributes with one value per vertex, mapped to every
+/// point of that vertex: red green blue [alpha] as COLOR, nx ny nz as NORMAL, every other one as
+/// a GENERIC attribute whose metadata entry "name" keeps its name.
+void addVertexProperties(draco::Mesh& built, const VertexAttributes& attributes,
+                         const std::vector<std::uint32_t>& vertexOfPoint, std::uint32_t numVertices) {
+  const std::vector<VertexProperty>& properties = attributes.properties;
+  std::vector<std::pair<draco::GeometryAttribute::Type, std::vector<std::size_t>>> groups;
+  const std::vector<std::size_t> color = detail::colorProperties(attributes);
+  const std::vector<std::size_t> normal = detail::normalProperties(attributes);
+  if (!color.empty()) groups.emplace_back(draco::GeometryAttribute::COLOR, color);
+  if (!normal.empty()) groups.emplace_back(draco::GeometryAttribute::NORMAL, normal);
+  for (std::size_t i = 0; i < properties.size(); ++i) {
+    const bool grouped = std::find(color.begin(), color.end(), i) != color.end() ||
+                         std::find(normal.begin(), normal.end(), i) != normal.end();
+    if (!grouped) groups.emplace_back(draco::GeometryAttribute::GENERIC, std::vector<std::size_t>{i});
+  }
+  for (const auto& [kind, members] : groups) {
+    const ScalarType type = properties[members[0]].type;
+    const std::size_t width = scalarSize(type);
+    // Draco's integer coding tables grow with the value range (a 32-bit range takes gigabytes or
+    // fails): 32-bit integers travel as their 4 little-endian bytes, typed in the metadata.
+    const bool asBytes = width == 4 && !isFloatingType(type);
+    const int id = asBytes ? addDracoAttribute(built, kind, 4, draco::DT_UINT8, numVertices, false)
+                           : addDracoAttribute(built, kind, static_cast<int>(members.size()),
+                                               dracoType(type), numVertices, false);
+    draco::PointAttribute& attribute = *built.attribute(id);
+    std::vector<std::uint8_t> value(members.size() * width);
+    for (std::uint32_t v = 0; v < numVertices; ++v) {
+      for (std::size_t k = 0; k < members.size(); ++k) {
+        std::memcpy(value.data() + k * width, properties[members[k]].bytes.data() + std::size_t(v) * width, width);
+      }
+      attribute.SetAttributeValue(draco::AttributeValueIndex(v), value.data());
+    }
+    mapPointsToVertices(attribute, vertexOfPoint);
+    if (kind == draco::GeometryAttribute::GENERIC) {
+      auto metadata = std::make_unique<draco::AttributeMetadata>();
+      metadata->AddEntryString("name", properties[members[0]].name);
+      if (asBytes) metadata->AddEntryString(kBytesOfType, scalarTypeName(type));
+      built.AddAttributeMetadata(id, std::move(metadata));
+    }
+  }
+}
+
+/// A Draco attribute kept as vertex properties (one per component).
+struct KeptAttribute {
+  const draco::PointAttribute* source;
+  std::size_t firstProperty;  ///< it fills properties firstProperty, +1, ... (count of them)
+  std::size_t count;
+  std::size_t bytes;          ///< of one value (all components)
+};
+
+/// Vertex properties for every attribute of the decoded mesh besides positions and texture
+/// coordinates: names from the metadata entry "name", else red green blue alpha (COLOR), nx ny nz
+/// (NORMAL) or draco_generic_<id>; a name gets _<k> per component when there are several.
+std::vector<KeptAttribute> keepAttributes(const draco::Mesh& source, VertexAttributes& attributes,
+                                          const std::string& path, const WarningFn& warn) {
+  std::vector<KeptAttribute> kept;
+  std::string unkept;
+  for (int id = 0; id < source.num_attributes(); ++id) {
+    const draco::PointAttribute& a = *source.attribute(id);
+    const auto kind = a.attribute_type();
+    if (kind == draco::GeometryAttribute::POSITION || kind == draco::GeometryAttribute::TEX_COORD) continue;
+    ScalarType type;
+    const int components = a.num_components();
+    if (!scalarTypeOf(a.data_type(), type) || components < 1) {
+      unkept += (unkept.empty() ? "attribute " : ", ") + std::to_string(id);
+      continue;
+    }
+    std::string name, bytesOf;
+    const draco::AttributeMetadata* metadata = source.GetAttributeMetadataByAttributeId(id);
+    if (metadata && metadata->GetEntryString(kBytesOfType, &bytesOf) && a.data_type() == draco::DT_UINT8 &&
+        components == 4 && metadata->GetEntryString("name", &name) && (bytesOf == "int" || bytesOf == "uint")) {
+      kept.push_back({&a, attributes.properties.size(), 1, 4});
+      attributes.add(name, bytesOf == "int" ? ScalarType::Int32 : ScalarType::UInt32, 0);
+      continue;
+    }
+    std::vector<std::string> names;
+    if (!(metadata && metadata->GetEntryString("name", &name))) {
+      if (kind == draco::GeometryAttribute::COLOR && components <= 4 && !attributes.find("red")) {
+        names.assign({"red", "green", "blue", "alpha"});
+      } else if (kind == draco::GeometryAttribute::NORMAL && components == 3 && !attributes.find("nx")) {
+        names.assign({"nx", "ny", "nz"});
+      }
+      name = "draco_generic_" + std::to_string(id);
+    }
+    names.resize(components);
+    for (int k = 0; k < components; ++k) {
+      if (names[k].empty()) names[k] = components == 1 ? name : name + "_" + std::to_string(k);
+    }
+    kept.push_back({&a, attributes.properties.size(), std::size_t(components), std::size_t(components) * scalarSize(type)});
+    for (const std::string& n : names) attributes.add(n, type, 0);
+  }
+  if (!unkept.empty()) detail::warn(warn, path + ": not kept (64-bit integer values): Draco " + unkept);
+  return kept;
+}
+
+/// Vertices of a decoded mesh: one per position value, split where points of one position carry
+/// different values of a kept attribute (a crease in the normals, a color seam). Fills
+/// vertexOfPoint and, per vertex, a point whose values it takes (or kInvalidId).
+struct DracoVertices {
+  std::vector<std::uint32_t> vertexOfPoint, pointOfVertex, positionOfVertex;
+};
+
+DracoVertices dracoVertices(const draco::Mesh& source, const draco::PointAttribute& position,
+                            const std::vector<KeptAttribute>& kept) {
+  DracoVertices out;
+  out.vertexOfPoint.assign(source.num_points(), kInvalidId);
+  out.pointOfVertex.assign(position.size(), kInvalidId);
+  out.positionOfVertex.resize(position.size());
+  for (std::uint32_t v = 0; v < position.size(); ++v) out.positionOfVertex[v] = v;
+  if (kept.empty()) {  // nothing to split by: the vertex of a point is its position value
+    for (std::uint32_t p = 0; p < source.num_points(); ++p) {
+      out.vertexOfPoint[p] = position.mapped_index(draco::PointIndex(p)).value();
+    }
+    return out;
+  }
+  std::vector<std::uint32_t> nextCopy(position.size(), kInvalidId);  // split vertices of a position
+  std::vector<std::uint8_t> a, b;
+  auto sameValues = [&](std::uint32_t p, std::uint32_t q) {
+    for (const KeptAttribute& k : kept) {
+      const auto ip = k.source->mapped_index(draco::PointIndex(p)), iq = k.source->mapped_index(draco::PointIndex(q));
+      if (ip == iq) continue;
+      a.resize(k.bytes);
+      b.resize(k.bytes);
+      k.source->GetValue(ip, a.data());
+      k.source->GetValue(iq, b.data());
+      if (a != b) return false;
+    }
+    return true;
+  };
+  for (std::uint32_t f = 0; f < source.num_faces(); ++f) {
+    for (const draco::PointIndex& point : source.face(draco::FaceIndex(f))) {
+      const std::uint32_t p = point.value();
+      if (p >= out.vertexOfPoint.size() || out.vertexOfPoint[p] != kInvalidId) continue;
+      std::uint32_t v = position.mapped_index(point).value();
+      if (v >= position.size()) continue;  // reported by the caller
+      for (;;) {
+        if (out.pointOfVertex[v] == kInvalidId) out.pointOfVertex[v] = p;
+        if (sameValues(out.pointOfVertex[v], p)) break;
+        if (nextCopy[v] == kInvalidId) {
+          nextCopy[v] = static_cast<std::uint32_t>(out.pointOfVertex.size());
+          out.pointOfVertex.push_back(p);
+          out.positionOfVertex.push_back(out.positionOfVertex[v]);
+          nextCopy.push_back(kInvalidId);
+        }
+        v = nextCopy[v];
+      }
+      out.vertexOfPoint[p] = v;
+    }
+  }
+  return out;
+}
+
+/// Values of the kept attributes at each vertex's point (zero for a vertex no face uses).
+void readVertexValues(const std::vector<KeptAttribute>& kept, const std::vector<std::uint32_t>& pointOfVertex,
+                      VertexAttributes& attributes) {
+  const std::size_t numVertices = pointOfVertex.size();
+  for (VertexProperty& p : attributes.properties) p.bytes.assign(numVertices * scalarSize(p.type), 0);
+  std::vector<std::uint8_t> value;
+  for (const KeptAttribute& k : kept) {
+    const std::size_t components = k.count;
+    const std::size_t width = k.bytes / components;
+    value.resize(k.bytes);
+    for (std::size_t v = 0; v < numVertices; ++v) {
+      if (pointOfVertex[v] == kInvalidId) continue;
+      k.source->GetValue(k.source->mapped_index(draco::PointIndex(pointOfVertex[v])), value.data());
+      for (std::size_t c = 0; c < components; ++c) {
+        std::memcpy(attributes.properties[k.firstProperty + c].bytes.data() + v * width, value.data() + c * width, width);
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -143,11 +354,17 @@ TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
   }
 
   TriangleMesh mesh;
-  // Vertices are the distinct position values; points (position + UV pairs) map onto them.
-  mesh.positions.resize(position->size());
+  // Vertices are the distinct position values (split where other attributes differ); points
+  // (position + UV pairs) map onto them.
+  const std::vector<KeptAttribute> kept = keepAttributes(*source, mesh.attributes, path, options.warn);
+  const DracoVertices vertices = dracoVertices(*source, *position, kept);
+  if (vertices.pointOfVertex.size() >= std::numeric_limits<std::uint32_t>::max()) {
+    throw InputError(path + ": more vertices than 32-bit ids allow");
+  }
+  mesh.positions.resize(vertices.pointOfVertex.size());
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
     float p[3] = {0.0f, 0.0f, 0.0f};
-    if (!position->ConvertValue<float>(draco::AttributeValueIndex(static_cast<std::uint32_t>(v)), 3, p)) {
+    if (!position->ConvertValue<float>(draco::AttributeValueIndex(vertices.positionOfVertex[v]), 3, p)) {
       throw InputError(path + ": vertex " + std::to_string(v) + ": unreadable position");
     }
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
@@ -155,13 +372,15 @@ TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
     }
     mesh.positions[v] = Vec3f(p[0], p[1], p[2]);
   }
+  readVertexValues(kept, vertices.pointOfVertex, mesh.attributes);
   mesh.triangles.resize(source->num_faces());
   WedgeMapBuilder uv;
   if (texcoord) uv.reserve(3 * mesh.triangles.size());
   for (std::uint32_t f = 0; f < source->num_faces(); ++f) {
     const draco::Mesh::Face& face = source->face(draco::FaceIndex(f));
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = position->mapped_index(face[k]).value();
+      const std::uint32_t p = face[k].value();
+      const std::uint32_t v = p < vertices.vertexOfPoint.size() ? vertices.vertexOfPoint[p] : kInvalidId;
       if (v >= mesh.positions.size()) {
         throw InputError(path + ": face " + std::to_string(f) + " refers to a missing vertex");
       }
@@ -200,20 +419,17 @@ void writeDraco(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& 
     for (int k = 0; k < 3; ++k) face[k] = draco::PointIndex(points.pointOfCorner[3 * f + k]);
     built.SetFace(draco::FaceIndex(static_cast<std::uint32_t>(f)), face);
   }
-  draco::PointAttribute* position = addDracoAttribute(
-      built, draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, mesh.numVertices(), false);
+  draco::PointAttribute* position = built.attribute(addDracoAttribute(
+      built, draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, mesh.numVertices(), false));
   for (std::uint32_t v = 0; v < mesh.numVertices(); ++v) {
     position->SetAttributeValue(draco::AttributeValueIndex(v), mesh.positions[v].data());
   }
-  position->SetExplicitMapping(numPoints);
-  for (std::size_t p = 0; p < numPoints; ++p) {
-    position->SetPointMapEntry(draco::PointIndex(static_cast<std::uint32_t>(p)),
-                               draco::AttributeValueIndex(points.vertexOfPoint[p]));
-  }
+  mapPointsToVertices(*position, points.vertexOfPoint);
+  addVertexProperties(built, mesh.attributes, points.vertexOfPoint, mesh.numVertices());
   if (withUV) {
-    draco::PointAttribute* texcoord =
+    draco::PointAttribute* texcoord = built.attribute(
         addDracoAttribute(built, draco::GeometryAttribute::TEX_COORD, 2,
-                          lattice.bits ? draco::DT_FLOAT32 : draco::DT_FLOAT64, numPoints, true);
+                          lattice.bits ? draco::DT_FLOAT32 : draco::DT_FLOAT64, numPoints, true));
     const double scale = lattice.bits ? 1.0 / lattice.step : 0.0;
     for (std::size_t p = 0; p < numPoints; ++p) {
       const Vec2d uv = mesh.cornerUV.wedgeValue(points.wedgeOfPoint[p]);

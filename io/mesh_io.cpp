@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cctype>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 
 #include "core/system/errors.h"
@@ -216,7 +217,59 @@ bool InputFile::readLine(std::string_view& line, std::size_t maxLength) {
   }
 }
 
+void warn(const WarningFn& warn, const std::string& message) {
+  if (warn) warn(message);
+  else std::fprintf(stderr, "seamvox: warning: %s\n", message.c_str());
+}
+
+namespace {
+
+/// Positions of the named properties when all are present with one type (floating if asked).
+std::vector<std::size_t> propertyGroup(const VertexAttributes& attributes,
+                                       std::initializer_list<const char*> names, bool floating) {
+  std::vector<std::size_t> out;
+  for (const char* name : names) {
+    const VertexProperty* p = attributes.find(name);
+    if (!p || p->type != attributes.find(*names.begin())->type || (floating && !isFloatingType(p->type))) {
+      return {};
+    }
+    out.push_back(static_cast<std::size_t>(p - attributes.properties.data()));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::size_t> colorProperties(const VertexAttributes& attributes) {
+  std::vector<std::size_t> rgba = propertyGroup(attributes, {"red", "green", "blue", "alpha"}, false);
+  return rgba.empty() ? propertyGroup(attributes, {"red", "green", "blue"}, false) : rgba;
+}
+
+std::vector<std::size_t> normalProperties(const VertexAttributes& attributes) {
+  return propertyGroup(attributes, {"nx", "ny", "nz"}, true);
+}
+
+double normalizedColor(const VertexProperty& property, VertexId v) {
+  static constexpr double kLargest[] = {127.0, 255.0, 32767.0, 65535.0, 2147483647.0, 4294967295.0, 1.0, 1.0};
+  return std::clamp(property.value(v) / kLargest[static_cast<int>(property.type)], 0.0, 1.0);
+}
+
 }  // namespace detail
+
+std::vector<std::string> droppedVertexProperties(const TriangleMesh& mesh, MeshFormat format) {
+  std::vector<std::string> dropped;
+  const std::vector<VertexProperty>& properties = mesh.attributes.properties;
+  if (format == MeshFormat::Obj || format == MeshFormat::Off) {
+    const std::vector<std::size_t> kept =
+        format == MeshFormat::Obj ? detail::colorProperties(mesh.attributes) : std::vector<std::size_t>{};
+    for (std::size_t i = 0; i < properties.size(); ++i) {
+      // OBJ's `v x y z r g b` has no alpha.
+      const bool written = std::find(kept.begin(), kept.end(), i) != kept.end() && properties[i].name != "alpha";
+      if (!written) dropped.push_back(properties[i].name);
+    }
+  }
+  return dropped;
+}
 
 MeshFormat formatFromPath(const std::string& path) {
   const std::size_t slash = path.find_last_of('/');
@@ -276,6 +329,11 @@ void checkWritable(const std::string& path, const TriangleMesh& mesh) {
       }
     }
   }
+  try {
+    mesh.attributes.checkSize(n);
+  } catch (const InputError& e) {
+    throw InputError(path + ": cannot write: " + e.what());
+  }
   if (mesh.hasUV() && mesh.cornerUV.size() != 3 * mesh.triangles.size()) {
     throw InputError(path + ": cannot write: the mesh has " + std::to_string(mesh.cornerUV.size()) +
                      " corner UVs for " + std::to_string(mesh.triangles.size()) +
@@ -297,6 +355,13 @@ void writeMesh(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& o
   const MeshFormat format = formatFromPath(path);
   if (format == MeshFormat::Unknown) throwUnknownFormat(path);
   checkWritable(path, mesh);
+  const std::vector<std::string> dropped = droppedVertexProperties(mesh, format);
+  if (!dropped.empty()) {
+    std::string names;
+    for (const std::string& name : dropped) names += (names.empty() ? "" : ", ") + name;
+    detail::warn(options.warn, path + ": the format cannot hold the vertex properties " + names +
+                                   ": they are not written");
+  }
   switch (format) {
     case MeshFormat::Ply: detail::writePly(file, mesh, options); break;
     case MeshFormat::Obj: detail::writeObj(file, mesh, options); break;

@@ -1,11 +1,14 @@
 #pragma once
 /// Reading and writing triangle meshes: PLY (ascii, binary little/big endian, faces and
-/// tristrips), OBJ, OFF, Draco. Errors name the file, the line or element, and the problem.
+/// tristrips), OBJ, OFF, Draco, with per-vertex properties (TriangleMesh::attributes) where the
+/// format holds them. Errors name the file, the line or element, and the problem.
 /// Inputs are regular files or pipes (a named FIFO, /dev/stdin when piped: read as a stream; a
 /// Draco file is buffered whole, up to 4 GiB); folders, devices and sockets are refused. Text
 /// files may start with a UTF-8 byte order mark and end lines in LF, CRLF or CR alone.
+#include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/mesh/mesh.h"
 #include "stream/mesh_stream.h"
@@ -18,6 +21,9 @@ enum class MeshFormat { Unknown, Ply, Obj, Off, Draco };
 /// Format from the file extension (case-insensitive): .ply .obj .off .drc.
 MeshFormat formatFromPath(const std::string& path);
 
+/// Receives one line naming a file and what of it a reader or writer cannot keep.
+using WarningFn = std::function<void(const std::string&)>;
+
 struct ReadOptions {
   /// Also read per-corner texture coordinates (OBJ vt, PLY face texcoord). Off: they are ignored.
   bool readUV = false;
@@ -26,6 +32,10 @@ struct ReadOptions {
   /// A pipe is opened without blocking; reading fails (IoError) when no writer sends data or
   /// closes it within this time, instead of waiting forever in open().
   double pipeWaitSeconds = 10.0;
+  /// Told what is read but not kept (PLY face properties other than vertex_indices and texcoord,
+  /// list properties of vertices, other elements; Draco attributes of 64-bit types). Empty:
+  /// printed on stderr.
+  WarningFn warn;
 };
 
 /// Opens a mesh file as a chunked stream. The format is detected from the extension and checked
@@ -48,7 +58,14 @@ struct WriteOptions {
   int dracoUVBits = 14;
   /// Draco: position quantization bits over the bounding box, 1..30; 0 = lossless float32.
   int dracoPositionBits = 0;
+  /// Told which vertex properties the format cannot hold (OBJ: all but red, green, blue written
+  /// as `v x y z r g b` in [0, 1]; OFF: all), in one line naming the output. Empty: printed on
+  /// stderr.
+  WarningFn warn;
 };
+
+/// Vertex properties of the mesh a file of this format cannot hold (empty for PLY and Draco).
+std::vector<std::string> droppedVertexProperties(const TriangleMesh& mesh, MeshFormat format);
 
 /// The UV step exponent a Draco write of this mesh uses with these options (0 = lossless).
 int dracoUVBitsFor(const TriangleMesh& mesh, const WriteOptions& options);

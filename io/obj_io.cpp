@@ -1,4 +1,6 @@
-// Wavefront OBJ reading (v, vt, f; everything else ignored) and writing (v, per-corner vt, f).
+// Wavefront OBJ reading (v with optional r g b colors, vt, f; vn named in a warning, everything
+// else ignored) and
+// writing (v with colors when the mesh has them, per-corner vt, f).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -14,7 +16,8 @@ class ObjReader final : public MeshStream {
   ObjReader(std::unique_ptr<InputFile> in, const ReadOptions& options)
       : in_(std::move(in)),
         readUV_(options.readUV),
-        limit_(std::max<std::size_t>(options.chunkTriangles, 1)) {}
+        limit_(std::max<std::size_t>(options.chunkTriangles, 1)),
+        warn_(options.warn) {}
 
   bool next(MeshChunk& chunk) override {
     chunk.clear();
@@ -30,6 +33,11 @@ class ObjReader final : public MeshStream {
       if (keyword == "v") readVertex(line, chunk);
       else if (keyword == "vt") readTexcoord(line);
       else if (keyword == "f") readFace(line, chunk);
+      else if (keyword == "vn" && !warnedNormals_) {
+        // Normals are per corner in OBJ (f v/vt/vn), not vertex properties.
+        warn(warn_, in_->path() + ": line " + std::to_string(in_->lineNumber()) + ": vn normals not kept");
+        warnedNormals_ = true;
+      }
     }
     return !chunk.positions.empty() || !chunk.triangles.empty();
   }
@@ -52,8 +60,38 @@ class ObjReader final : public MeshStream {
     if (vertices_ + 1 >= std::numeric_limits<std::uint32_t>::max()) {
       fail("more vertices than 32-bit ids allow");
     }
+    readColor(line, chunk);
     chunk.positions.push_back(p);
     ++vertices_;
+  }
+
+  /// `v x y z r g b`: the first vertex decides whether vertices have colors (float red, green,
+  /// blue); then every vertex must have one. Colors after a first vertex without are not kept.
+  void readColor(std::string_view line, MeshChunk& chunk) {
+    std::string_view tokens[4];
+    int n = 0;
+    while (n < 4 && !(tokens[n] = nextToken(line)).empty()) ++n;
+    if (vertices_ == 0) {
+      colors_ = n == 3;
+      for (const char* name : {"red", "green", "blue"}) colorLayout_.add(name, ScalarType::Float32, 0);
+    }
+    if (!colors_) {
+      if (n == 3 && !warnedColors_) {
+        warn(warn_, in_->path() + ": line " + std::to_string(in_->lineNumber()) +
+                        ": vertex colors not kept (the first vertex has none)");
+        warnedColors_ = true;
+      }
+      return;
+    }
+    if (n != 3) fail("vertex has no r g b color but the first vertex has one");
+    if (chunk.attributes.properties.size() != 3) chunk.attributes = colorLayout_.emptyCopy();
+    for (int k = 0; k < 3; ++k) {
+      float c;
+      if (!parseNumber(tokens[k], c) || !std::isfinite(c)) fail("bad vertex color '" + std::string(tokens[k].substr(0, 40)) + "'");
+      const auto* bytes = reinterpret_cast<const std::uint8_t*>(&c);
+      std::vector<std::uint8_t>& into = chunk.attributes.properties[k].bytes;
+      into.insert(into.end(), bytes, bytes + sizeof c);
+    }
   }
 
   void readTexcoord(std::string_view line) {
@@ -159,7 +197,10 @@ class ObjReader final : public MeshStream {
   std::unique_ptr<InputFile> in_;
   bool readUV_;
   std::size_t limit_;
+  WarningFn warn_;
   bool done_ = false;
+  bool colors_ = false, warnedColors_ = false, warnedNormals_ = false;
+  VertexAttributes colorLayout_;  ///< red, green, blue without values
   std::uint64_t vertices_ = 0;
   std::uint64_t maxIndex_ = 0, maxIndexLine_ = 0;
   UVState uvState_ = UVState::Unknown;
@@ -178,9 +219,18 @@ void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
   const bool withUV = options.writeUV && mesh.hasUV();
   OutputBuffer out(file);
   out.put("# written by seamvox\n");
-  for (const Vec3f& p : mesh.positions) {
+  // Colors as the common `v x y z r g b` extension, in [0, 1] (other properties: writeMesh warns).
+  std::vector<std::size_t> color = colorProperties(mesh.attributes);
+  color.resize(std::min<std::size_t>(color.size(), 3));
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
     out.put("v ");
-    out.putRow(p.data(), 3);
+    out.putRow(mesh.positions[v].data(), 3, color.empty() ? '\n' : ' ');
+    if (color.empty()) continue;
+    float rgb[3];
+    for (int k = 0; k < 3; ++k) {
+      rgb[k] = static_cast<float>(normalizedColor(mesh.attributes.properties[color[k]], static_cast<VertexId>(v)));
+    }
+    out.putRow(rgb, 3);
   }
   // Texture coordinates: the first corner of each vertex (in corner order) gets a vt line that
   // every later corner of the vertex with the same (u, v) shares; a corner with another value (the

@@ -164,6 +164,14 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
 
 }  // namespace
 
+void writeFieldSolve(JsonWriter& j, const FieldSolveStats& stats) {
+  j.key("fieldSolve").beginObject();
+  j.key("unknowns").value(stats.unknowns).key("matrixNonzeros").value(stats.matrixNonzeros);
+  j.key("factorNonzeros").value(stats.factorNonzeros).key("factorBytes").value(stats.factorBytes);
+  j.key("factorPeakBytes").value(stats.factorPeakBytes).key("realFallback").value(stats.realFallback);
+  j.endObject();
+}
+
 double stageSeconds(const std::vector<StageFigures>& stages, const std::string& name) {
   double seconds = 0.0;
   for (const StageFigures& stage : stages) {
@@ -176,6 +184,7 @@ std::string paramReportJson(const PipelineResult& r, const ParamReportContext& c
   JsonWriter j;
   j.beginObject();
   writeCounts(j, r, c);
+  writeFieldSolve(j, r.fieldSolve);
   writeSystem(j, r);
   if (r.solved.solver != ParamSolver::Hat) writeVoxel(j, r.solved, c.gridResolution);
   if (r.solved.refined) writeRefine(j, r.solved.refine, c);

@@ -9,6 +9,8 @@
 
 namespace seamvox {
 
+class JsonWriter;
+struct FieldSolveStats;
 struct PipelineResult;
 
 /// What the report says beyond the pipeline's result: the caller's names and settings and the
@@ -26,6 +28,9 @@ struct ParamReportContext {
 
 /// The report as pretty-printed JSON.
 std::string paramReportJson(const PipelineResult& result, const ParamReportContext& context);
+
+/// The "fieldSolve" object: the field's factorization figures (param and field reports).
+void writeFieldSolve(JsonWriter& j, const FieldSolveStats& stats);
 
 /// Seconds of the named stage in a stage list (0 when absent; summed when repeated).
 double stageSeconds(const std::vector<StageFigures>& stages, const std::string& name);

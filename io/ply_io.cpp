@@ -1,7 +1,11 @@
 // PLY reading (ascii, binary little/big endian; vertex, face and tristrips elements; any other
-// element skipped) and writing (binary little endian or ascii).
+// element skipped with a warning) and writing (binary little endian or ascii). Every scalar
+// vertex property besides x, y, z is kept with its name and type (TriangleMesh::attributes) and
+// written back as it was read.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "core/system/errors.h"
@@ -10,13 +14,10 @@
 namespace seamvox::detail {
 namespace {
 
-enum class PlyType : std::uint8_t { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+using PlyType = ScalarType;  // PLY's scalar types are the vertex attributes' types
 
-std::size_t sizeOf(PlyType t) {
-  static constexpr std::size_t kSizes[] = {1, 1, 2, 2, 4, 4, 4, 8};
-  return kSizes[static_cast<int>(t)];
-}
-bool isFloating(PlyType t) { return t == PlyType::Float32 || t == PlyType::Float64; }
+std::size_t sizeOf(PlyType t) { return scalarSize(t); }
+bool isFloating(PlyType t) { return isFloatingType(t); }
 
 bool parseType(std::string_view name, PlyType& type) {
   static const std::pair<std::string_view, PlyType> kNames[] = {
@@ -50,6 +51,7 @@ struct PlyElement {
   std::vector<PlyProperty> properties;
   Role role = Role::Skip;
   int x = -1, y = -1, z = -1;       ///< vertex: property positions
+  std::vector<int> kept;            ///< vertex: attribute of each property (-1: not kept)
   int indices = -1, texcoord = -1;  ///< face / tristrips: property positions
   bool hasList = false;
   std::uint64_t minBytes = 0;  ///< binary size of one instance with empty lists
@@ -87,6 +89,11 @@ void classify(const InputFile& in, PlyElement& e) {
       if (p < 0 || e.properties[p].isList) {
         throw InputError(in.path() + ": PLY element 'vertex' needs scalar properties x, y and z");
       }
+    }
+    int next = 0;
+    for (std::size_t i = 0; i < e.properties.size(); ++i) {
+      const int p = static_cast<int>(i);
+      e.kept.push_back(p == e.x || p == e.y || p == e.z || e.properties[i].isList ? -1 : next++);
     }
   } else if (e.name == "face" || e.name == "tristrips") {
     e.role = e.name == "face" ? Role::Face : Role::Strips;
@@ -261,6 +268,14 @@ class BinarySource {
     }
   }
   void skip(PlyType t) { take(sizeOf(t)); }
+  /// Appends one value of type t in native byte order.
+  void value(PlyType t, std::vector<std::uint8_t>& into) {
+    const std::size_t n = sizeOf(t);
+    const char* p = take(n);
+    const std::size_t at = into.size();
+    into.insert(into.end(), p, p + n);
+    if (swap_) std::reverse(into.begin() + at, into.end());
+  }
   /// Announces n list items of type t (fails at once when the file cannot hold them).
   void expect(PlyType t, std::int64_t n) {
     if (!in_.ensure(static_cast<std::size_t>(n) * sizeOf(t))) {
@@ -318,6 +333,18 @@ class AsciiSource {
     return true;
   }
   void skip(PlyType) { token(); }
+  void value(PlyType type, std::vector<std::uint8_t>& into) {
+    switch (type) {
+      case PlyType::Int8: return put<std::int8_t>(into);
+      case PlyType::UInt8: return put<std::uint8_t>(into);
+      case PlyType::Int16: return put<std::int16_t>(into);
+      case PlyType::UInt16: return put<std::uint16_t>(into);
+      case PlyType::Int32: return put<std::int32_t>(into);
+      case PlyType::UInt32: return put<std::uint32_t>(into);
+      case PlyType::Float32: return put<float>(into);
+      case PlyType::Float64: return put<double>(into);
+    }
+  }
   void expect(PlyType, std::int64_t) {}
   void skipList(PlyType, std::int64_t n) {
     for (std::int64_t i = 0; i < n; ++i) token();
@@ -328,6 +355,15 @@ class AsciiSource {
  private:
   [[noreturn]] static void bad(std::string_view t) {
     throw Fault{false, "bad number '" + std::string(t.substr(0, 40)) + "'"};
+  }
+  /// Parses the next token as a T (integers must fit T) and appends its bytes.
+  template <class T>
+  void put(std::vector<std::uint8_t>& into) {
+    const std::string_view t = token();
+    T value;
+    if (!parseNumber(t, value)) bad(t);
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(&value);
+    into.insert(into.end(), bytes, bytes + sizeof(T));
   }
   InputFile& in_;
   std::string_view line_;
@@ -354,6 +390,13 @@ class PlyReader final : public MeshStream {
     for (const PlyElement& e : header_.elements) {
       if (e.role == Role::Face && e.texcoord >= 0 && options.readUV && !hasStrips) withUV_ = true;
     }
+    for (const PlyElement& e : header_.elements) {
+      if (e.role != Role::Vertex) continue;
+      for (std::size_t k = 0; k < e.properties.size(); ++k) {
+        if (e.kept[k] >= 0) layout_.add(e.properties[k].name, e.properties[k].type, 0);
+      }
+    }
+    warnUnkept(options);
   }
 
   bool next(MeshChunk& chunk) override {
@@ -394,8 +437,27 @@ class PlyReader final : public MeshStream {
   std::uint64_t expectedTriangles() const override { return in_->isRegular() ? faceCount_ : 0; }
 
  private:
+  /// One warning naming what the file has and the mesh will not: list properties of vertices,
+  /// face properties besides vertex_indices and texcoord, elements other than vertex and faces.
+  void warnUnkept(const ReadOptions& options) const {
+    std::string unkept;
+    auto add = [&](const std::string& what) { unkept += (unkept.empty() ? "" : ", ") + what; };
+    for (const PlyElement& e : header_.elements) {
+      if (e.role == Role::Skip && e.count > 0) add("element '" + e.name + "'");
+      for (std::size_t k = 0; k < e.properties.size() && e.role != Role::Skip; ++k) {
+        const int ik = static_cast<int>(k);
+        const bool kept = e.role == Role::Vertex ? ik == e.x || ik == e.y || ik == e.z || e.kept[k] >= 0
+                                                 : ik == e.indices || ik == e.texcoord;
+        if (!kept) add(e.name + " property '" + e.properties[k].name + "'");
+      }
+    }
+    if (!unkept.empty()) warn(options.warn, in_->path() + ": not kept: " + unkept);
+  }
+
   void readVertices(const PlyElement& e, MeshChunk& chunk) {
     const std::size_t numProperties = e.properties.size();
+    if (chunk.attributes.properties.size() != layout_.properties.size()) chunk.attributes = layout_.emptyCopy();
+    std::vector<VertexProperty>& attributes = chunk.attributes.properties;
     while (instance_ < e.count && chunk.positions.size() < limit_) {
       Vec3f p;
       for (std::size_t k = 0; k < numProperties; ++k) {
@@ -403,6 +465,8 @@ class PlyReader final : public MeshStream {
         const int ik = static_cast<int>(k);
         if (ik == e.x || ik == e.y || ik == e.z) {
           p[ik == e.x ? 0 : ik == e.y ? 1 : 2] = source_.coordinate(prop.type);
+        } else if (e.kept[k] >= 0) {
+          source_.value(prop.type, attributes[e.kept[k]].bytes);
         } else {
           skipProperty(prop);
         }
@@ -542,6 +606,7 @@ class PlyReader final : public MeshStream {
 
   std::unique_ptr<InputFile> in_;
   PlyHeader header_;
+  VertexAttributes layout_;  ///< the kept vertex properties, without values
   Source source_;
   std::size_t limit_;
   bool withUV_ = false;
@@ -570,6 +635,52 @@ std::unique_ptr<MeshStream> openPlyStream(std::unique_ptr<InputFile> in, const R
                                                    BinarySource(file, swap));
 }
 
+namespace {
+
+/// A property name as a PLY header token: whitespace becomes '_', an empty name "unnamed".
+std::string plyName(std::string name) {
+  for (char& c : name) {
+    if (std::isspace(static_cast<unsigned char>(c))) c = '_';
+  }
+  return name.empty() ? "unnamed" : name;
+}
+
+template <class T>
+T loadValue(const VertexProperty& p, std::size_t v) {
+  T value;
+  std::memcpy(&value, p.bytes.data() + v * sizeof(T), sizeof(T));
+  return value;
+}
+
+/// Calls f with the value of vertex v as its own C++ type.
+template <class F>
+void withValue(const VertexProperty& p, std::size_t v, F&& f) {
+  switch (p.type) {
+    case PlyType::Int8: return f(loadValue<std::int8_t>(p, v));
+    case PlyType::UInt8: return f(loadValue<std::uint8_t>(p, v));
+    case PlyType::Int16: return f(loadValue<std::int16_t>(p, v));
+    case PlyType::UInt16: return f(loadValue<std::uint16_t>(p, v));
+    case PlyType::Int32: return f(loadValue<std::int32_t>(p, v));
+    case PlyType::UInt32: return f(loadValue<std::uint32_t>(p, v));
+    case PlyType::Float32: return f(loadValue<float>(p, v));
+    case PlyType::Float64: return f(loadValue<double>(p, v));
+  }
+}
+
+void putLittleValue(OutputBuffer& out, const VertexProperty& p, std::size_t v) {
+  withValue(p, v, [&](auto value) { out.putLittle(value); });
+}
+
+void putTextValue(OutputBuffer& out, const VertexProperty& p, std::size_t v) {
+  withValue(p, v, [&](auto value) {
+    // 8-bit values print as numbers, not characters.
+    if constexpr (sizeof(value) == 1) out.putNumber(static_cast<int>(value));
+    else out.putNumber(value);
+  });
+}
+
+}  // namespace
+
 void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
   const bool withUV = options.writeUV && mesh.hasUV();
   const bool wideIndices = mesh.positions.size() > std::size_t(std::numeric_limits<std::int32_t>::max());
@@ -578,7 +689,16 @@ void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
   out.put(options.binary ? "binary_little_endian" : "ascii");
   out.put(" 1.0\ncomment written by seamvox\nelement vertex ");
   out.putNumber(mesh.positions.size());
-  out.put("\nproperty float x\nproperty float y\nproperty float z\nelement face ");
+  out.put("\nproperty float x\nproperty float y\nproperty float z\n");
+  const std::vector<VertexProperty>& properties = mesh.attributes.properties;
+  for (const VertexProperty& p : properties) {
+    out.put("property ");
+    out.put(scalarTypeName(p.type));
+    out.put(' ');
+    out.put(plyName(p.name));
+    out.put('\n');
+  }
+  out.put("element face ");
   out.putNumber(mesh.triangles.size());
   out.put(wideIndices ? "\nproperty list uchar uint vertex_indices\n"
                       : "\nproperty list uchar int vertex_indices\n");
@@ -586,10 +706,12 @@ void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
   out.put("end_header\n");
 
   if (options.binary) {
-    for (const Vec3f& p : mesh.positions) {
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+      const Vec3f& p = mesh.positions[v];
       out.putLittle(p[0]);
       out.putLittle(p[1]);
       out.putLittle(p[2]);
+      for (const VertexProperty& property : properties) putLittleValue(out, property, v);
     }
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
       out.putLittle(std::uint8_t(3));
@@ -603,7 +725,13 @@ void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
       }
     }
   } else {
-    for (const Vec3f& p : mesh.positions) out.putRow(p.data(), 3);
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+      out.putRow(mesh.positions[v].data(), 3, properties.empty() ? '\n' : ' ');
+      for (std::size_t k = 0; k < properties.size(); ++k) {
+        putTextValue(out, properties[k], v);
+        out.put(k + 1 < properties.size() ? ' ' : '\n');
+      }
+    }
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
       out.put("3 ");
       out.putRow(mesh.triangles[f].data(), 3, withUV ? ' ' : '\n');

@@ -27,6 +27,18 @@ TriangleMesh collectMesh(MeshStream& stream) {
         mesh.triangles.size() + chunk.triangles.size() >= kMaxIds) {
       throw InputError(name + ": more than 2^32 - 1 vertices or faces (ids are 32-bit)");
     }
+    if (!chunk.positions.empty()) {
+      if (mesh.positions.empty()) {
+        mesh.attributes = chunk.attributes.emptyCopy();
+        for (VertexProperty& p : mesh.attributes.properties) p.bytes.reserve(mesh.positions.capacity() * scalarSize(p.type));
+      }
+      try {
+        chunk.attributes.checkSize(chunk.positions.size());
+        mesh.attributes.append(chunk.attributes);
+      } catch (const InputError& e) {
+        throw InputError(name + ": " + e.what());
+      }
+    }
     mesh.positions.insert(mesh.positions.end(), chunk.positions.begin(), chunk.positions.end());
     if (chunk.triangles.empty()) continue;
     const bool chunkUV = !chunk.cornerUV.empty();
@@ -77,6 +89,12 @@ class MemoryStream final : public MeshStream {
     if (vertex_ < m.positions.size()) {
       const std::size_t end = std::min(m.positions.size(), vertex_ + chunk_);
       chunk.positions.assign(m.positions.begin() + vertex_, m.positions.begin() + end);
+      chunk.attributes = m.attributes.emptyCopy();
+      for (std::size_t i = 0; i < m.attributes.properties.size(); ++i) {
+        const VertexProperty& from = m.attributes.properties[i];
+        const std::size_t width = scalarSize(from.type);
+        chunk.attributes.properties[i].bytes.assign(from.bytes.begin() + vertex_ * width, from.bytes.begin() + end * width);
+      }
       vertex_ = end;
       return true;
     }

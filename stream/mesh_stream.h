@@ -21,10 +21,14 @@ struct MeshChunk {
   /// Per-corner (u, v) of this chunk's triangles (3 per triangle) when the source has texture
   /// coordinates and they were asked for; empty otherwise.
   std::vector<Vec2d> cornerUV;
+  /// Per-vertex properties of this chunk's positions (the same names and types in every chunk
+  /// of a stream; no properties when the source has none).
+  VertexAttributes attributes;
   void clear() {
     positions.clear();
     triangles.clear();
     cornerUV.clear();
+    attributes.clearValues();
   }
 };
 
@@ -46,11 +50,11 @@ class MeshStream {
 };
 
 /// Drains a stream into one TriangleMesh (validating every index against the final vertex
-/// count). Only the chunk buffer is held besides the result.
+/// count), vertex attributes concatenated. Only the chunk buffer is held besides the result.
 TriangleMesh collectMesh(MeshStream& stream);
 
-/// A stream over a mesh held in memory: its vertices, then its triangles (and corner UVs) in
-/// chunks of chunkTriangles.
+/// A stream over a mesh held in memory: its vertices (and their attributes), then its triangles
+/// (and corner UVs) in chunks of chunkTriangles.
 std::unique_ptr<MeshStream> makeMemoryStream(std::string name, std::shared_ptr<const TriangleMesh> mesh,
                                              std::size_t chunkTriangles = std::size_t(1) << 18);
 

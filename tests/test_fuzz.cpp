@@ -142,6 +142,18 @@ TEST(Fuzz, MutantsOfEveryFormatReadValidOrFailWithTheFileName) {
   writeMesh(dir.path("mesh.off"), mesh);
   writeMesh(dir.path("mesh.drc"), mesh);
   writeMesh(dir.path("lattice.drc"), mesh);
+  // Vertex properties of every PLY type (and their Draco attributes) in the readers' paths too.
+  TriangleMesh withProperties = mesh;
+  const ScalarType types[] = {ScalarType::Int8,  ScalarType::UInt8, ScalarType::Int16,   ScalarType::UInt16,
+                              ScalarType::Int32, ScalarType::UInt32, ScalarType::Float32, ScalarType::Float64};
+  const char* names[] = {"red", "green", "blue", "quality", "label", "id", "nx", "confidence"};
+  for (int k = 0; k < 8; ++k) {
+    VertexProperty& p = withProperties.attributes.add(names[k], types[k], mesh.numVertices());
+    for (VertexId v = 0; v < mesh.numVertices(); ++v) p.setValue(v, 37.0 * v - 50.0 * k);
+  }
+  writeMesh(dir.path("properties.ply"), withProperties);
+  writeMesh(dir.path("properties_ascii.ply"), withProperties, ascii);
+  writeMesh(dir.path("properties.drc"), withProperties);
   testing::writeFile(dir.path("big.ply"), toBigEndian(testing::readFile(dir.path("binary.ply")), mesh));
   ReadOptions withUV;
   withUV.readUV = true;
@@ -152,13 +164,15 @@ TEST(Fuzz, MutantsOfEveryFormatReadValidOrFailWithTheFileName) {
   const int trials = env ? std::atoi(env) : 300;
   Watchdog watchdog;
   std::mt19937 rng(11);
-  for (const char* name : {"binary.ply", "big.ply", "ascii.ply", "mesh.obj", "mesh.off", "mesh.drc", "lattice.drc"}) {
+  for (const char* name : {"binary.ply", "big.ply", "ascii.ply", "mesh.obj", "mesh.off", "mesh.drc", "lattice.drc",
+                           "properties.ply", "properties_ascii.ply", "properties.drc"}) {
     const std::string original = testing::readFile(dir.path(name));
     const std::string path = dir.path(std::string("fuzz_") + name);
     int failures = 0, successes = 0;
     for (int trial = 0; trial < trials; ++trial) {
       testing::writeFile(path, mutate(original, rng));
       ReadOptions options;
+      options.warn = [](const std::string&) {};  // mutants that add elements or properties
       options.readUV = trial % 2 == 0;
       options.chunkTriangles = 1 + trial % 7;
       const std::string what = std::string(name) + " trial " + std::to_string(trial);
@@ -173,6 +187,7 @@ TEST(Fuzz, MutantsOfEveryFormatReadValidOrFailWithTheFileName) {
           ASSERT_TRUE(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) << what;
         }
         ASSERT_TRUE(m.cornerUV.empty() || m.cornerUV.size() == 3 * m.triangles.size()) << what;
+        ASSERT_NO_THROW(m.attributes.checkSize(m.numVertices())) << what;
         for (CornerId c = 0; c < m.cornerUV.size(); ++c) {
           ASSERT_TRUE(std::isfinite(m.cornerUV[c][0]) && std::isfinite(m.cornerUV[c][1])) << what;
         }

@@ -388,6 +388,12 @@ TEST(PlyRead, EveryTypeAndListInAllThreeEncodings) {
       EXPECT_EQ(mesh.cornerUV[c][1], kUV[2 * uvOfCorner[c] + 1]) << c;
     }
     EXPECT_FALSE(readMesh(path).hasUV());
+    // Every scalar vertex property besides x, y, z is kept with its type; the list is not.
+    EXPECT_EQ(mesh.attributes.describe(), "char a, uchar b, short c, ushort d, int e, uint f, char g, double nx");
+    const double values[8] = {-1, 200, -2, 60000, -5, 7, 3, 0.5};
+    for (std::size_t k = 0; k < 8; ++k) {
+      for (VertexId v = 0; v < 5; ++v) EXPECT_EQ(mesh.attributes.properties[k].value(v), values[k]) << k;
+    }
   }
 }
 
@@ -826,7 +832,10 @@ TEST(MeshIo, MissingFilesAndFoldersAreIoErrors) {
 TEST(PlyRead, TruncatedBinaryFailsCleanlyAtEveryCut) {
   TempDir dir;
   const std::string whole = dir.path("whole.ply");
-  writeMesh(whole, makeGrid(5, 5, true));
+  TriangleMesh grid = makeGrid(5, 5, true);
+  grid.attributes.add("red", ScalarType::UInt8, grid.numVertices());  // cuts fall inside them too
+  grid.attributes.add("quality", ScalarType::Float64, grid.numVertices());
+  writeMesh(whole, grid);
   const std::string bytes = testing::readFile(whole);
   const std::size_t body = bytes.find("end_header\n") + 11;
   ReadOptions options;

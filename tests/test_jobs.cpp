@@ -155,6 +155,27 @@ TEST(JobTiles, WeldThenSplitRestoresEveryTile) {
   EXPECT_THROW(splitTiles(stranger, tiles), InputError);
 }
 
+TEST(JobTiles, VertexPropertiesFollowTheWeldAndTheSplit) {
+  std::vector<TriangleMesh> tiles = cutIntoTiles(generatedSphere(3000));
+  auto valueAt = [](const Vec3f& p) { return std::round(1000.0 * (p.x() + 2.0 * p.y() + 4.0 * p.z())); };
+  auto expectValuesOfPositions = [&](const TriangleMesh& mesh, const std::string& what) {
+    const VertexProperty* q = mesh.attributes.find("quality");
+    ASSERT_NE(q, nullptr) << what;
+    ASSERT_EQ(q->size(), mesh.numVertices()) << what;
+    for (VertexId v = 0; v < mesh.numVertices(); ++v) ASSERT_EQ(q->value(v), valueAt(mesh.positions[v])) << what;
+  };
+  for (TriangleMesh& tile : tiles) {
+    VertexProperty& q = tile.attributes.add("quality", ScalarType::Int32, tile.numVertices());
+    for (VertexId v = 0; v < tile.numVertices(); ++v) q.setValue(v, valueAt(tile.positions[v]));
+  }
+  const WeldedTiles welded = weldTiles(tiles);
+  expectValuesOfPositions(welded.mesh, "welded");
+  const SplitTiles split = splitTiles(welded.mesh, tiles);
+  for (std::size_t t = 0; t < tiles.size(); ++t) expectValuesOfPositions(split.tiles[t], "tile " + std::to_string(t));
+  tiles[1].attributes.properties[0].name = "confidence";
+  EXPECT_THROW(weldTiles(tiles), InputError);  // different properties: named, not dropped
+}
+
 /// A folder with three generated meshes, one corrupt file and a manifest over them.
 struct Batch {
   TempDir dir;

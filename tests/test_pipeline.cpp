@@ -7,6 +7,7 @@
 #include "core/mesh/topology.h"
 #include "core/pipeline/grid_spacing.h"
 #include "core/pipeline/parameterize.h"
+#include "core/solve/cholmod_solver.h"
 #include "core/synth/generate.h"
 #include "core/system/errors.h"
 #include "io/json_reader.h"
@@ -117,6 +118,37 @@ TEST(Pipeline, ImportedFieldFollowsCleanedFaces) {
   const PipelineResult r = parameterize(std::move(mesh), options);
   EXPECT_EQ(r.fieldMethod, "file");
   EXPECT_TRUE(r.isSeamless());
+}
+
+// The real 2n x 2n form [Re -Im; Im Re] solves the same Hermitian systems: with every
+// factorization forced into it (field, seamless solves, refinement) the pipeline reports the
+// fallback and gives the same cones and, up to rounding, the same map.
+TEST_P(PipelineSolvers, RealFormFallbackGivesTheSameMap) {
+  PipelineOptions options;
+  options.solver.solver = GetParam();
+  options.solver.gridResolution = 32;
+  options.spacing.cells = 20;
+  const TriangleMesh mesh = testing::concatMeshes({sphere(3000), testing::torusMesh(24, 12)});
+  const PipelineResult complex = parameterize(mesh, options);
+  EXPECT_FALSE(complex.solved.param.stats.realFallback);
+  EXPECT_FALSE(complex.fieldSolve.realFallback);
+  PipelineResult real;
+  {
+    ScopedRealFormOnly realFormOnly;
+    real = parameterize(mesh, options);
+  }
+  EXPECT_TRUE(real.solved.param.stats.realFallback);
+  EXPECT_TRUE(real.fieldSolve.realFallback);
+  EXPECT_GT(real.fieldSolve.factorBytes, complex.fieldSolve.factorBytes) << "2n unknowns";
+  EXPECT_TRUE(complex.isSeamless()) << complex.seamQuality.maxResidual;
+  EXPECT_TRUE(real.isSeamless()) << real.seamQuality.maxResidual;
+  EXPECT_EQ(real.cones, complex.cones);
+  const std::vector<Vec2d> a = testing::cornerValues(complex.mesh.cornerUV);
+  const std::vector<Vec2d> b = testing::cornerValues(real.mesh.cornerUV);
+  ASSERT_EQ(a.size(), b.size());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  EXPECT_LT(worst, 1e-6) << "grid units";
 }
 
 TEST(GridSpacing, ValidatesInOnePlace) {

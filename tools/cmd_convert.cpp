@@ -1,4 +1,5 @@
-// seamvox convert: rewrites a mesh in another format, keeping per-corner UVs when present.
+// seamvox convert: rewrites a mesh in another format, keeping per-corner UVs and vertex
+// properties where the output format can hold them.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -45,9 +46,11 @@ int runConvert(Args& args) {
   const auto written = std::chrono::steady_clock::now();
   const std::uint64_t bytes = fileBytes(output);
 
-  std::printf("%s -> %s: %u faces, %u vertices, %s, %llu bytes (read %.2f s, write %.2f s)\n",
+  const std::string properties =
+      mesh.attributes.empty() ? "" : ", vertex properties " + mesh.attributes.describe();
+  std::printf("%s -> %s: %u faces, %u vertices, %s%s, %llu bytes (read %.2f s, write %.2f s)\n",
               input.c_str(), output.c_str(), mesh.numFaces(), mesh.numVertices(),
-              mesh.hasUV() ? "per-corner UVs" : "no UVs", static_cast<unsigned long long>(bytes),
+              mesh.hasUV() ? "per-corner UVs" : "no UVs", properties.c_str(), static_cast<unsigned long long>(bytes),
               std::chrono::duration<double>(read - start).count(),
               std::chrono::duration<double>(written - read).count());
   if (mesh.hasUV() && options.writeUV && formatFromPath(output) == MeshFormat::Off) {
@@ -90,7 +93,10 @@ SEAMVOX_COMMAND({"convert", "convert a mesh between PLY, OBJ, OFF and Draco (UVs
                  "                       [--ascii] [--ratio]\n"
                  "\n"
                  "Reads IN and writes OUT; the extensions pick the formats (.ply .obj .off .drc).\n"
-                 "Per-corner texture coordinates are kept (OFF cannot hold them: a warning says so).\n"
+                 "Per-corner texture coordinates are kept (OFF cannot hold them: a warning says so),\n"
+                 "and so are vertex properties (colors, normals, scalars) where OUT can hold them:\n"
+                 "PLY and Draco all, OBJ red green blue (v x y z r g b), OFF none; a warning names\n"
+                 "what is dropped.\n"
                  "\n"
                  "  --uv-bits K        Draco: round UVs to steps of 2^-K grid units on a lattice with an\n"
                  "                     integer origin, so seam translations stay integers and a\n"

@@ -2,6 +2,8 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
+#include <string>
 
 #include "core/pipeline/parameterize.h"
 #include "core/system/errors.h"
@@ -9,6 +11,7 @@
 #include "io/json.h"
 #include "io/mesh_io.h"
 #include "io/output_set.h"
+#include "io/param_report.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
@@ -57,150 +60,214 @@ void writeSeamsObj(AtomicFile& file, const TriangleMesh& mesh, const Topology& t
   file.write("# seamvox seams: " + std::to_string(cut.seams.size()) + " curves\n" + vertices + lines);
 }
 
-int runField(Args& args) {
-  const std::string input = args.positional(0, "the input mesh (seamvox field MESH -o FIELD)");
-  const auto output = args.value("output");
-  if (!output) throw UsageError("missing -o FIELD (the field file to write)");
-  const auto importPath = args.value("import");
-  const double curvature = args.number("curvature", 0.0, 0.0, std::numeric_limits<double>::max());
-  if (importPath && args.value("curvature")) throw UsageError("--curvature has no effect with --import");
-  if (importPath && args.value("field")) throw UsageError("--field has no effect with --import");
-  FieldMethod method;
+/// The field command's arguments, checked.
+struct FieldCommand {
+  std::string input;
+  std::optional<std::string> output, importPath, conesPath, seamsPath;
+  double curvature = 0.0;
+  FieldMethod method = FieldMethod::Auto;
+  double mergeCones = 0.0;
+  GridSpacing spacing;
+  bool json = false, weld = false;
+  ProgressFn progress;
+};
+
+FieldCommand parseFieldArgs(Args& args) {
+  FieldCommand c;
+  c.input = args.positional(0, "the input mesh (seamvox field MESH -o FIELD)");
+  c.output = args.value("output");
+  if (!c.output) throw UsageError("missing -o FIELD (the field file to write)");
+  c.importPath = args.value("import");
+  c.curvature = args.number("curvature", 0.0, 0.0, std::numeric_limits<double>::max());
+  if (c.importPath && args.value("curvature")) throw UsageError("--curvature has no effect with --import");
+  if (c.importPath && args.value("field")) throw UsageError("--field has no effect with --import");
   try {
-    method = parseFieldMethod(args.value("field", "auto"));
+    c.method = parseFieldMethod(args.value("field", "auto"));
   } catch (const InputError& e) {
     throw UsageError(std::string("--field: ") + e.what());
   }
-  if (curvature > 0.0 && method == FieldMethod::Proxy) throw UsageError("--curvature needs --field smooth or auto");
-  const double mergeCones = parseMergeCones(args);
-  const GridSpacing spacing = parseGridSpacing(args);
-  const auto conesPath = args.value("cones");
-  const auto seamsPath = args.value("seams");
-  const bool json = args.flag("json");
-  const bool weld = args.flag("weld");
-  const ProgressFn progress = makeProgress(args.flag("quiet"));
+  if (c.curvature > 0.0 && c.method == FieldMethod::Proxy) throw UsageError("--curvature needs --field smooth or auto");
+  c.mergeCones = parseMergeCones(args);
+  c.spacing = parseGridSpacing(args);
+  c.conesPath = args.value("cones");
+  c.seamsPath = args.value("seams");
+  c.json = args.flag("json");
+  c.weld = args.flag("weld");
+  c.progress = makeProgress(args.flag("quiet"));
   args.finish(1);
-  checkOutputPaths({{"MESH", input}, {"--import", importPath.value_or("")}},
-                   {{"-o", *output}, {"--cones", conesPath.value_or("")}, {"--seams", seamsPath.value_or("")}});
-  // Every output is staged now (a missing folder fails before the work) and committed together.
-  OutputSet outputs;
-  AtomicFile& fieldFile = outputs.add(*output);
-  AtomicFile* conesFile = conesPath ? &outputs.add(*conesPath) : nullptr;
-  AtomicFile* seamsFile = seamsPath ? &outputs.add(*seamsPath) : nullptr;
+  checkOutputPaths({{"MESH", c.input}, {"--import", c.importPath.value_or("")}},
+                   {{"-o", *c.output}, {"--cones", c.conesPath.value_or("")}, {"--seams", c.seamsPath.value_or("")}});
+  return c;
+}
 
-  StageMeter meter;
-  TriangleMesh raw = readMesh(input);
-  const std::uint32_t inputFaces = raw.numFaces();
+/// What the command computes: the cleaned mesh, its field and the cut through its cones.
+struct FieldRun {
+  CleanResult clean;
+  std::uint32_t inputFaces = 0;
+  FieldMethod method = FieldMethod::Auto;  ///< resolved
+  CrossField field;
+  FieldSolveStats fieldSolve;
+  double edgeLength = 0.0;
+  ConeCut coneCut;
+};
+
+/// Read, clean, field, cut: each a stage of the meter.
+FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
+  FieldRun run;
+  TriangleMesh raw = readMesh(c.input);
+  run.inputFaces = raw.numFaces();
   raw.cornerUV.clear();
   FieldSource source;
-  source.method = method;
-  source.curvatureWeight = curvature;
-  if (importPath) source.importedPerInputFace = readFieldVectors(*importPath, inputFaces);
+  source.method = c.method;
+  source.curvatureWeight = c.curvature;
+  if (c.importPath) source.importedPerInputFace = readFieldVectors(*c.importPath, run.inputFaces);
   meter.finish("read");
   CleanOptions cleanOptions;
-  cleanOptions.weldVertices = weld;
-  cleanOptions.progress = progress;
-  CleanResult clean = cleanMeshOf(input, std::move(raw), cleanOptions);
-  const TriangleMesh& mesh = clean.mesh;
-  const Topology& topology = clean.topology;
+  cleanOptions.weldVertices = c.weld;
+  cleanOptions.progress = c.progress;
+  run.clean = cleanMeshOf(c.input, std::move(raw), cleanOptions);
+  const TriangleMesh& mesh = run.clean.mesh;
+  const Topology& topology = run.clean.topology;
   meter.finish("clean");
 
-  method = resolveFieldMethod(method, mesh.numFaces());
-  if (curvature > 0.0 && method == FieldMethod::Proxy) {
+  run.method = resolveFieldMethod(c.method, mesh.numFaces());
+  if (c.curvature > 0.0 && run.method == FieldMethod::Proxy) {
     throw UsageError("--curvature needs the direct field (--field smooth): the proxy field is the smoothest field only");
   }
-  // h as param takes it (the diagonal without spikes): the same cone merging.
-  const double edgeLength = spacing.spacing(clean.report.diagonalWithoutSpikes);
-  CrossField field;
   try {
-    field = computeFieldFromSource(mesh, topology, clean.faceOrigin, inputFaces, source, progress);
+    run.field = computeFieldFromSource(mesh, topology, run.clean.faceOrigin, run.inputFaces, source, c.progress,
+                                       &run.fieldSolve);
   } catch (...) {
-    rethrowWithContext(importPath ? *importPath : input);
+    rethrowWithContext(c.importPath ? *c.importPath : c.input);
   }
   meter.finish("field");
   // The cones param cuts through: those closer than the merge distance are merged, as param does
   // before its first cut (param may merge a few more pairs that a solve puts on one point).
-  const ConeCut coneCut = cutThroughCones(mesh, topology, field, mergeCones * edgeLength, {}, progress);
-  const FieldSingularities& sing = coneCut.singularities;
-  const CutResult& cut = coneCut.cut;
-  const std::size_t conesBeforeMerge = coneCut.conesBeforeMerge;
-  const ConeMergeResult& merged = coneCut.merged;
+  // h as param takes it (the diagonal without spikes), so both merge the same cones.
+  run.edgeLength = c.spacing.spacing(run.clean.report.diagonalWithoutSpikes);
+  run.coneCut = cutThroughCones(mesh, topology, run.field, c.mergeCones * run.edgeLength, {}, c.progress);
   meter.finish("cut");
+  return run;
+}
 
-  // Written per input face (faces cleaning dropped get a zero vector: "no preference").
-  std::vector<Vec3d> perInputFace(inputFaces, Vec3d::Zero());
-  for (FaceId f = 0; f < mesh.numFaces(); ++f) perInputFace[clean.faceOrigin[f]] = field.at(f);
+/// The field per input face (faces cleaning dropped get a zero vector: "no preference"), the
+/// cones and the seams, committed together.
+void writeFieldOutputs(const FieldCommand& c, const FieldRun& run, OutputSet& outputs, AtomicFile& fieldFile,
+                       AtomicFile* conesFile, AtomicFile* seamsFile) {
+  const TriangleMesh& mesh = run.clean.mesh;
+  std::vector<Vec3d> perInputFace(run.inputFaces, Vec3d::Zero());
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) perInputFace[run.clean.faceOrigin[f]] = run.field.at(f);
   writeField(fieldFile, perInputFace);
-  if (conesFile) writeConesObj(*conesFile, mesh, sing);
-  if (seamsFile) writeSeamsObj(*seamsFile, mesh, topology, cut);
+  if (conesFile) writeConesObj(*conesFile, mesh, run.coneCut.singularities);
+  if (seamsFile) writeSeamsObj(*seamsFile, mesh, run.clean.topology, run.coneCut.cut);
   outputs.commit();
-  meter.finish("write");
+}
 
+/// Counts for the summary: Euler characteristic, cones per index, cut and seam edges.
+struct FieldFigures {
   std::int64_t chi = 0;
   std::uint32_t closedComponents = 0;
-  for (const ComponentInfo& c : computeComponents(topology).components) {
-    chi += c.eulerCharacteristic;
-    closedComponents += c.boundaryLoops == 0;
-  }
   std::map<int, std::uint64_t> conesByIndex;
-  for (VertexId v : sing.cones) ++conesByIndex[sing.index4[v]];
   std::uint64_t cutEdges = 0, seamEdges = 0;
+};
+
+FieldFigures countFieldFigures(const Topology& topology, const FieldSingularities& sing, const CutResult& cut) {
+  FieldFigures figures;
+  for (const ComponentInfo& c : computeComponents(topology).components) {
+    figures.chi += c.eulerCharacteristic;
+    figures.closedComponents += c.boundaryLoops == 0;
+  }
+  for (VertexId v : sing.cones) ++figures.conesByIndex[sing.index4[v]];
   for (CornerId c = 0; c < topology.numCorners(); ++c) {
     const CornerId o = topology.opposite(c);
-    if (cut.corners.isCut(c) && (o == kInvalidId || c < o)) ++cutEdges;
+    if (cut.corners.isCut(c) && (o == kInvalidId || c < o)) ++figures.cutEdges;
   }
-  for (const SeamCurve& s : cut.seams) seamEdges += s.corners.size();
-  const double total = meter.totalSeconds();
-  const std::uint64_t peak = meter.peakBytes();
+  for (const SeamCurve& s : cut.seams) figures.seamEdges += s.corners.size();
+  return figures;
+}
 
-  if (json) {
-    JsonWriter j;
-    j.beginObject();
-    j.key("input").value(input).key("output").value(*output);
-    j.key("field").value(importPath ? "import" : curvature > 0.0 ? "curvature" : "smoothest");
-    j.key("fieldMethod").value(importPath ? "import" : fieldMethodName(method));
-    j.key("faces").value(std::uint64_t{mesh.numFaces()}).key("vertices").value(std::uint64_t{mesh.numVertices()});
-    j.key("eulerCharacteristic").value(chi);
-    j.key("cones").value(std::uint64_t{sing.cones.size()});
-    j.key("conesBeforeMerge").value(std::uint64_t{conesBeforeMerge});
-    j.key("conesCancelled").value(std::uint64_t{2 * merged.cancelledPairs});
-    j.key("conesMerged").value(std::uint64_t{merged.mergedPairs});
-    j.key("edgeLength").value(edgeLength).key("mergeCones").value(mergeCones);
-    j.key("conesByIndex4").beginObject();
-    for (const auto& [k, n] : conesByIndex) j.key(std::to_string(k)).value(n);
-    j.endObject();
-    j.key("indexSum4").value(sing.indexSum4());
-    j.key("seams").value(std::uint64_t{cut.seams.size()});
-    j.key("seamEdges").value(seamEdges).key("cutEdges").value(cutEdges);
-    j.key("seconds").beginObject();
-    for (const StageFigures& stage : meter.stages()) j.key(stage.name).value(stage.seconds);
-    j.key("total").value(total).endObject();
-    j.key("peakResidentBytes").value(peak);
-    j.endObject();
-    std::printf("%s\n", j.str().c_str());
-    return 0;
-  }
-  std::printf("%s -> %s: %u faces, %u vertices, chi %lld\n", input.c_str(), output->c_str(),
-              mesh.numFaces(), mesh.numVertices(), static_cast<long long>(chi));
-  std::printf("field: %s%s; %zu cones (", importPath ? "imported" : curvature > 0.0 ? "curvature-aligned" : "smoothest",
-              importPath ? "" : method == FieldMethod::Proxy ? " (proxy)" : " (direct)", sing.cones.size());
+void printFieldJson(const FieldCommand& c, const FieldRun& run, const FieldFigures& figures,
+                    const StageMeter& meter, double total, std::uint64_t peak) {
+  const TriangleMesh& mesh = run.clean.mesh;
+  const FieldSingularities& sing = run.coneCut.singularities;
+  const ConeMergeResult& merged = run.coneCut.merged;
+  JsonWriter j;
+  j.beginObject();
+  j.key("input").value(c.input).key("output").value(*c.output);
+  j.key("field").value(c.importPath ? "import" : c.curvature > 0.0 ? "curvature" : "smoothest");
+  j.key("fieldMethod").value(c.importPath ? "import" : fieldMethodName(run.method));
+  j.key("faces").value(std::uint64_t{mesh.numFaces()}).key("vertices").value(std::uint64_t{mesh.numVertices()});
+  j.key("eulerCharacteristic").value(figures.chi);
+  j.key("cones").value(std::uint64_t{sing.cones.size()});
+  j.key("conesBeforeMerge").value(std::uint64_t{run.coneCut.conesBeforeMerge});
+  j.key("conesCancelled").value(std::uint64_t{2 * merged.cancelledPairs});
+  j.key("conesMerged").value(std::uint64_t{merged.mergedPairs});
+  j.key("edgeLength").value(run.edgeLength).key("mergeCones").value(c.mergeCones);
+  j.key("conesByIndex4").beginObject();
+  for (const auto& [k, n] : figures.conesByIndex) j.key(std::to_string(k)).value(n);
+  j.endObject();
+  j.key("indexSum4").value(sing.indexSum4());
+  j.key("seams").value(std::uint64_t{run.coneCut.cut.seams.size()});
+  j.key("seamEdges").value(figures.seamEdges).key("cutEdges").value(figures.cutEdges);
+  writeFieldSolve(j, run.fieldSolve);
+  j.key("seconds").beginObject();
+  for (const StageFigures& stage : meter.stages()) j.key(stage.name).value(stage.seconds);
+  j.key("total").value(total).endObject();
+  j.key("peakResidentBytes").value(peak);
+  j.endObject();
+  std::printf("%s\n", j.str().c_str());
+}
+
+void printFieldText(const FieldCommand& c, const FieldRun& run, const FieldFigures& figures,
+                    const StageMeter& meter, std::uint64_t peak) {
+  const TriangleMesh& mesh = run.clean.mesh;
+  const FieldSingularities& sing = run.coneCut.singularities;
+  const ConeMergeResult& merged = run.coneCut.merged;
+  const std::size_t conesBeforeMerge = run.coneCut.conesBeforeMerge;
+  std::printf("%s -> %s: %u faces, %u vertices, chi %lld\n", c.input.c_str(), c.output->c_str(),
+              mesh.numFaces(), mesh.numVertices(), static_cast<long long>(figures.chi));
+  std::printf("field: %s%s; %zu cones (", c.importPath ? "imported" : c.curvature > 0.0 ? "curvature-aligned" : "smoothest",
+              c.importPath ? "" : run.method == FieldMethod::Proxy ? " (proxy)" : " (direct)", sing.cones.size());
   bool first = true;
-  for (const auto& [k, n] : conesByIndex) {
+  for (const auto& [k, n] : figures.conesByIndex) {
     std::printf("%s%llu of index %+g", first ? "" : ", ", static_cast<unsigned long long>(n), k / 4.0);
     first = false;
   }
   std::printf("), index sum %+g%s\n", sing.indexSum4() / 4.0,
-              closedComponents ? " (Poincare-Hopf: chi on closed components)" : "");
+              figures.closedComponents ? " (Poincare-Hopf: chi on closed components)" : "");
   if (conesBeforeMerge != sing.cones.size()) {
     std::printf("merged cones closer than %g h (h = %.6g): %zu before, %u pairs cancelled, %u merged\n",
-                mergeCones, edgeLength, conesBeforeMerge, merged.cancelledPairs, merged.mergedPairs);
+                c.mergeCones, run.edgeLength, conesBeforeMerge, merged.cancelledPairs, merged.mergedPairs);
   }
-  std::printf("cut: %llu edges, %zu seams with %llu edges\n", static_cast<unsigned long long>(cutEdges),
-              cut.seams.size(), static_cast<unsigned long long>(seamEdges));
+  std::printf("cut: %llu edges, %zu seams with %llu edges\n", static_cast<unsigned long long>(figures.cutEdges),
+              run.coneCut.cut.seams.size(), static_cast<unsigned long long>(figures.seamEdges));
   std::printf("time:");
   for (const StageFigures& stage : meter.stages()) std::printf(" %s %.2fs", stage.name.c_str(), stage.seconds);
   std::printf("\n");
   std::printf("peak memory: %.1f MB\n", peak / 1048576.0);
+}
+
+int runField(Args& args) {
+  const FieldCommand c = parseFieldArgs(args);
+  // Every output is staged now (a missing folder fails before the work) and committed together.
+  OutputSet outputs;
+  AtomicFile& fieldFile = outputs.add(*c.output);
+  AtomicFile* conesFile = c.conesPath ? &outputs.add(*c.conesPath) : nullptr;
+  AtomicFile* seamsFile = c.seamsPath ? &outputs.add(*c.seamsPath) : nullptr;
+
+  StageMeter meter;
+  const FieldRun run = computeField(c, meter);
+  writeFieldOutputs(c, run, outputs, fieldFile, conesFile, seamsFile);
+  meter.finish("write");
+
+  const FieldFigures figures = countFieldFigures(run.clean.topology, run.coneCut.singularities, run.coneCut.cut);
+  const double total = meter.totalSeconds();
+  const std::uint64_t peak = meter.peakBytes();
+  if (c.json) {
+    printFieldJson(c, run, figures, meter, total, peak);
+  } else {
+    printFieldText(c, run, figures, meter, peak);
+  }
   return 0;
 }
 

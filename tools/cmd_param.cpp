@@ -70,6 +70,10 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   std::printf("map: %llu wedges (%.3f per vertex), %.1f MB\n", static_cast<unsigned long long>(wedges),
               r.mesh.numVertices() ? double(wedges) / r.mesh.numVertices() : 0.0,
               r.mesh.cornerUV.memoryBytes() / 1048576.0);
+  if (!r.mesh.attributes.empty()) {
+    std::printf("vertex properties: %s, %.1f MB\n", r.mesh.attributes.describe().c_str(),
+                r.mesh.attributes.memoryBytes() / 1048576.0);
+  }
   std::printf("seam residual %.3g, integer distance %.3g, gradient error %.4f, flipped %llu, "
               "collapsed %llu: %s\n",
               r.seamQuality.maxResidual, r.seamQuality.maxIntegerDistance,

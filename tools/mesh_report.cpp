@@ -43,6 +43,8 @@ MeshSummary summarizeMeshFile(const std::string& path, const SummarizeOptions& o
   CleanResult cleaned = cleanMeshOf(path, std::move(mesh), cleanOptions);
   summary.cleanSeconds = secondsSince(start);
   summary.clean = cleaned.report;
+  summary.properties = cleaned.mesh.attributes.emptyCopy();
+  summary.propertyBytes = cleaned.mesh.attributes.memoryBytes();
   summary.vertices = cleaned.mesh.numVertices();
   summary.faces = cleaned.mesh.numFaces();
 
@@ -62,6 +64,8 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
   out += format("mesh            %s\n", s.path.c_str());
   out += format("vertices        %llu (input %llu)\n", ull(s.vertices), ull(c.inputVertices));
   out += format("faces           %llu (input %llu)\n", ull(s.faces), ull(c.inputFaces));
+  out += "vertex props    " + (s.properties.empty() ? std::string("none") : s.properties.describe()) + "\n";
+  if (!s.properties.empty()) out += format("                %.1f MiB\n", s.propertyBytes / 1048576.0);
   out += format("components      %zu\n", s.components.size());
   const std::size_t shown = std::min(largest, s.components.size());
   if (shown > 0) {
@@ -106,6 +110,12 @@ std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
   j.key("vertices").value(c.inputVertices);
   j.key("faces").value(c.inputFaces);
   j.endObject();
+  j.key("vertexProperties").beginArray();
+  for (const VertexProperty& p : s.properties.properties) {
+    j.beginObject().key("name").value(p.name).key("type").value(std::string(scalarTypeName(p.type))).endObject();
+  }
+  j.endArray();
+  j.key("vertexPropertyBytes").value(s.propertyBytes);
   j.key("components").beginObject();
   j.key("count").value(static_cast<std::uint64_t>(s.components.size()));
   j.key("largest").beginArray();

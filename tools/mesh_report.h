@@ -16,6 +16,8 @@ struct MeshSummary {
   std::string path;
   std::uint64_t vertices = 0, faces = 0;  ///< after cleaning
   CleanReport clean;
+  VertexAttributes properties;  ///< the vertex properties read (names and types, no values)
+  std::uint64_t propertyBytes = 0;  ///< their values in memory after cleaning
   std::vector<ComponentInfo> components;  ///< all, by decreasing face count
   std::uint32_t boundaryLoops = 0;
   BoundingBox box;

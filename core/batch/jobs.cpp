@@ -49,6 +49,75 @@ std::string optionValue(const std::vector<std::string>& args, const std::string&
 
 }  // namespace
 
+namespace {
+
+/// One manifest line: its directive, arguments and job options (after ':'; for 'param' all of
+/// them). Options the job runner sets itself are refused.
+struct ManifestLine {
+  std::string directive;
+  std::vector<std::string> tokens, options;
+};
+
+ManifestLine splitManifestLine(std::vector<std::string> tokens, const std::string& where) {
+  ManifestLine l;
+  l.directive = tokens[0];
+  tokens.erase(tokens.begin());
+  // Job options after ':'.
+  const auto colon = std::find(tokens.begin(), tokens.end(), ":");
+  if (colon != tokens.end()) {
+    l.options.assign(colon + 1, tokens.end());
+    tokens.erase(colon, tokens.end());
+  }
+  if (l.directive == "param") {
+    l.options = tokens;
+    tokens.clear();
+  }
+  for (const std::string& option : l.options) {
+    if (option == "-o" || option == "--output" || option == "--report") {
+      throw InputError(where + "'" + option + "' is set by the job runner; remove it");
+    }
+  }
+  l.tokens = std::move(tokens);
+  return l;
+}
+
+/// The jobs of a 'mesh' line (one per matched file) or a 'tiles' line (one job of every file).
+std::vector<JobSpec> jobsOfLine(const ManifestLine& l, JobSpec base, const std::string& where,
+                                const std::string& baseDir, const ExpandFn& expand) {
+  const bool tiled = base.tiled;
+  std::vector<std::string> files;
+  for (std::size_t i = tiled ? 1 : 0; i < l.tokens.size(); ++i) {
+    const std::vector<std::string> matched = expand(joinPath(baseDir, l.tokens[i]));
+    if (matched.empty()) throw InputError(where + "no file matches '" + l.tokens[i] + "'");
+    files.insert(files.end(), matched.begin(), matched.end());
+  }
+  std::vector<JobSpec> made;
+  if (tiled) {
+    base.name = l.tokens[0];
+    if (base.name.find('/') != std::string::npos) {
+      throw InputError(where + "a tiles name cannot contain '/': " + base.name);
+    }
+    base.inputs = files;
+    std::set<std::string> stems;
+    for (const std::string& f : files) {
+      if (!stems.insert(stemOf(f)).second) {
+        throw InputError(where + "two tiles named '" + stemOf(f) + "' (outputs would collide)");
+      }
+    }
+    made.push_back(base);
+  } else {
+    for (const std::string& f : files) {
+      JobSpec job = base;
+      job.name = stemOf(f);
+      job.inputs = {f};
+      made.push_back(job);
+    }
+  }
+  return made;
+}
+
+}  // namespace
+
 Manifest parseManifest(const std::string& text, const std::string& source, const std::string& baseDir,
                        const ExpandFn& expand) {
   Manifest manifest;
@@ -66,78 +135,34 @@ Manifest parseManifest(const std::string& text, const std::string& source, const
     if (hash != std::string::npos) line.resize(hash);
     std::vector<std::string> tokens = tokenize(line);
     if (tokens.empty()) continue;
-    const std::string directive = tokens[0];
-    tokens.erase(tokens.begin());
-    // Job options after ':'.
-    std::vector<std::string> options;
-    const auto colon = std::find(tokens.begin(), tokens.end(), ":");
-    if (colon != tokens.end()) {
-      options.assign(colon + 1, tokens.end());
-      tokens.erase(colon, tokens.end());
-    }
-    if (directive == "param") {
-      options = tokens;
-      tokens.clear();
-    }
-    for (const std::string& option : options) {
-      if (option == "-o" || option == "--output" || option == "--report") {
-        throw InputError(where + "'" + option + "' is set by the job runner; remove it");
-      }
-    }
+    const ManifestLine l = splitManifestLine(std::move(tokens), where);
+    const std::string& directive = l.directive;
     auto requireArguments = [&](std::size_t count, const char* what) {
-      if (tokens.size() < count) throw InputError(where + "'" + directive + "' needs " + what);
+      if (l.tokens.size() < count) throw InputError(where + "'" + directive + "' needs " + what);
     };
     if (directive == "output") {
       requireArguments(1, "a folder");
-      if (tokens.size() > 1 || !options.empty()) throw InputError(where + "'output' takes one folder");
-      manifest.outputDir = joinPath(baseDir, tokens[0]);
+      if (l.tokens.size() > 1 || !l.options.empty()) throw InputError(where + "'output' takes one folder");
+      manifest.outputDir = joinPath(baseDir, l.tokens[0]);
     } else if (directive == "format") {
       requireArguments(1, "one of drc, obj, ply");
-      format = tokens[0];
+      format = l.tokens[0];
       if (!format.empty() && format[0] == '.') format.erase(0, 1);
       if (format != "drc" && format != "obj" && format != "ply") {
-        throw InputError(where + "unknown format '" + tokens[0] + "' (use drc, obj or ply)");
+        throw InputError(where + "unknown format '" + l.tokens[0] + "' (use drc, obj or ply)");
       }
     } else if (directive == "param") {
-      defaults = options;
+      defaults = l.options;
     } else if (directive == "mesh" || directive == "tiles") {
       const bool tiled = directive == "tiles";
       requireArguments(tiled ? 2 : 1, tiled ? "a name and at least one tile file" : "a file or glob");
       JobSpec base;
       base.paramArgs = defaults;
-      base.paramArgs.insert(base.paramArgs.end(), options.begin(), options.end());
+      base.paramArgs.insert(base.paramArgs.end(), l.options.begin(), l.options.end());
       base.format = format;
       base.tiled = tiled;
       base.line = number;
-      std::vector<std::string> files;
-      for (std::size_t i = tiled ? 1 : 0; i < tokens.size(); ++i) {
-        const std::vector<std::string> matched = expand(joinPath(baseDir, tokens[i]));
-        if (matched.empty()) throw InputError(where + "no file matches '" + tokens[i] + "'");
-        files.insert(files.end(), matched.begin(), matched.end());
-      }
-      std::vector<JobSpec> made;
-      if (tiled) {
-        base.name = tokens[0];
-        if (base.name.find('/') != std::string::npos) {
-          throw InputError(where + "a tiles name cannot contain '/': " + base.name);
-        }
-        base.inputs = files;
-        std::set<std::string> stems;
-        for (const std::string& f : files) {
-          if (!stems.insert(stemOf(f)).second) {
-            throw InputError(where + "two tiles named '" + stemOf(f) + "' (outputs would collide)");
-          }
-        }
-        made.push_back(base);
-      } else {
-        for (const std::string& f : files) {
-          JobSpec job = base;
-          job.name = stemOf(f);
-          job.inputs = {f};
-          made.push_back(job);
-        }
-      }
-      for (JobSpec& job : made) {
+      for (JobSpec& job : jobsOfLine(l, std::move(base), where, baseDir, expand)) {
         if (!names.insert(job.name).second) {
           throw InputError(where + "two jobs named '" + job.name + "' (their outputs would collide)");
         }
@@ -230,9 +255,10 @@ WeldedTiles weldTiles(const std::vector<TriangleMesh>& tiles) {
   for (const TriangleMesh& tile : tiles) faces += tile.numFaces();
   result.mesh.triangles.reserve(faces);
   result.faceTile.reserve(faces);
+  if (!tiles.empty()) result.mesh.attributes = tiles[0].attributes.emptyCopy();
   for (std::uint32_t t = 0; t < tiles.size(); ++t) {
     const TriangleMesh& tile = tiles[t];
-    std::vector<VertexId> merged(tile.numVertices());
+    std::vector<VertexId> merged(tile.numVertices()), fresh;
     for (VertexId v = 0; v < tile.numVertices(); ++v) {
       const auto found = earlier.find(keyOf(tile.positions[v]));
       if (found != earlier.end()) {
@@ -241,7 +267,14 @@ WeldedTiles weldTiles(const std::vector<TriangleMesh>& tiles) {
       } else {
         merged[v] = static_cast<VertexId>(result.mesh.positions.size());
         result.mesh.positions.push_back(tile.positions[v]);
+        fresh.push_back(v);
       }
+    }
+    // A welded vertex keeps the properties of the tile that brought it first.
+    try {
+      result.mesh.attributes.append(tile.attributes.gathered(fresh));
+    } catch (const InputError& e) {
+      throw InputError("tile " + std::to_string(t) + ": " + e.what());
     }
     for (const Triangle& tri : tile.triangles) {
       result.mesh.triangles.push_back({merged[tri[0]], merged[tri[1]], merged[tri[2]]});
@@ -281,8 +314,10 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
   SplitTiles result;
   result.tiles.resize(tiles.size());
   std::vector<VertexId> map(mesh.numVertices(), kInvalidId);  // reset after each tile
+  std::vector<VertexId> source;                                 // of each tile vertex
   for (std::size_t t = 0; t < tiles.size(); ++t) {
     TriangleMesh& out = result.tiles[t];
+    source.clear();
     out.triangles.reserve(first[t + 1] - first[t]);
     WedgeMapBuilder uv;
     if (mesh.hasUV()) uv.reserve(3 * (first[t + 1] - first[t]));
@@ -294,6 +329,7 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
         if (map[v] == kInvalidId) {
           map[v] = out.numVertices();
           out.positions.push_back(mesh.positions[v]);
+          source.push_back(v);
         }
         tri[k] = map[v];
         if (mesh.hasUV()) uv.add(tri[k], mesh.cornerUV[3 * f + k]);
@@ -301,6 +337,7 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
       out.triangles.push_back(tri);
     }
     if (mesh.hasUV()) out.cornerUV = uv.finish();
+    out.attributes = mesh.attributes.gathered(source);
     for (std::uint64_t i = first[t]; i < first[t + 1]; ++i) {
       for (const VertexId v : mesh.triangles[order[i]]) map[v] = kInvalidId;
     }

@@ -61,7 +61,8 @@ std::uint64_t hashBytes(const void* data, std::size_t bytes, std::uint64_t seed 
 
 /// Tiles welded into one mesh: vertices of different tiles at exactly the same position become
 /// one (vertices within a tile are never merged). faceTile[f] is the tile of merged face f; faces
-/// keep their order, tile by tile. UVs are dropped.
+/// keep their order, tile by tile. UVs are dropped; vertex properties are kept (a welded vertex
+/// takes the first tile's values) and must be the same in every tile (InputError otherwise).
 struct WeldedTiles {
   TriangleMesh mesh;
   std::vector<std::uint32_t> faceTile;
@@ -71,7 +72,7 @@ WeldedTiles weldTiles(const std::vector<TriangleMesh>& tiles);
 
 /// Splits a parameterized mesh of welded tiles back into one mesh per tile: each face goes to the
 /// tile holding a face with the same three positions (any order or orientation); vertices are
-/// compacted per tile and UVs kept. Throws InputError when a face matches no tile. missingFaces
+/// compacted per tile and UVs and vertex properties kept. Throws InputError when a face matches no tile. missingFaces
 /// counts tile faces absent from the mesh (dropped as degenerate or duplicate by cleaning).
 struct SplitTiles {
   std::vector<TriangleMesh> tiles;

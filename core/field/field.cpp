@@ -3,14 +3,14 @@
 // core/field/field.h.
 #include "core/field/field.h"
 
-
-#include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstdint>
 
+#include "core/field/field_numerics.h"
+#include "core/solve/cholmod_solver.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 
@@ -18,11 +18,8 @@ namespace seamvox {
 
 namespace {
 
-/// Orthonormal frame of a face: e1 along its first edge, e2 = n x e1.
-struct FaceFrame {
-  Vec3d e1, e2, n;
-  bool degenerate = false;  ///< zero-area face: fallback frame
-};
+using detail::FaceFrame;
+using detail::faceFrame;
 
 /// A frame, the angles of the three corner edges in it and the three corner angles.
 struct FaceAngles {
@@ -41,35 +38,6 @@ double wrapAngle(double a) {
 }
 
 Vec3d pointOf(const std::vector<Vec3f>& positions, VertexId v) { return positions[v].cast<double>(); }
-
-FaceFrame faceFrame(const std::vector<Vec3f>& positions, const Triangle& t) {
-  const Vec3d p[3] = {pointOf(positions, t[0]), pointOf(positions, t[1]), pointOf(positions, t[2])};
-  FaceFrame frame;
-  const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
-  const double area2 = n.norm();
-  const double len01 = (p[1] - p[0]).norm();
-  if (area2 > 0.0 && len01 > 0.0 && std::isfinite(area2)) {
-    frame.n = n / area2;
-    frame.e1 = (p[1] - p[0]) / len01;
-    frame.e2 = frame.n.cross(frame.e1);
-    frame.degenerate = false;
-    return frame;
-  }
-  // Zero-area face: its longest edge (if any) as e1, any perpendicular as e2.
-  Vec3d longest = Vec3d::Zero();
-  for (int k = 0; k < 3; ++k) {
-    const Vec3d e = p[(k + 1) % 3] - p[k];
-    if (e.squaredNorm() > longest.squaredNorm()) longest = e;
-  }
-  const double len = longest.norm();
-  frame.e1 = len > 0.0 && std::isfinite(len) ? Vec3d(longest / len) : Vec3d::UnitX();
-  frame.e2 = frame.e1.unitOrthogonal();
-  frame.n = frame.e1.cross(frame.e2);
-  frame.degenerate = true;
-  return frame;
-}
-
-FaceFrame faceFrame(const TriangleMesh& mesh, FaceId f) { return faceFrame(mesh.positions, mesh.triangles[f]); }
 
 double frameAngle(const FaceFrame& frame, const Vec3d& v) {
   const double x = v.dot(frame.e1), y = v.dot(frame.e2);
@@ -201,19 +169,11 @@ struct ConnectionSystem {
   Eigen::VectorXd mass;  ///< #F face areas, floored to stay positive
 };
 
-/// Dual-edge weight |e| / |b_f - b_g| (barycentres), bounded for needles and zero-length edges.
+/// Dual-edge weight of the edge of corner c between faces f and g (detail::dualWeight).
 double dualWeight(const TriangleMesh& mesh, const Topology& topology, CornerId c, FaceId f,
                   FaceId g) {
-  const Triangle& tf = mesh.triangles[f];
-  const Triangle& tg = mesh.triangles[g];
-  const Vec3d bf = (mesh.position(tf[0]) + mesh.position(tf[1]) + mesh.position(tf[2])) / 3.0;
-  const Vec3d bg = (mesh.position(tg[0]) + mesh.position(tg[1]) + mesh.position(tg[2])) / 3.0;
-  const double len =
-      (mesh.position(topology.vertex(nextCorner(c))) - mesh.position(topology.vertex(prevCorner(c))))
-          .norm();
-  constexpr double kMaxWeight = 1e3, kMinWeight = 1e-3;
-  if (!(len > 0.0) || !std::isfinite(len)) return kMinWeight;
-  return std::clamp(len / std::max((bf - bg).norm(), len / kMaxWeight), kMinWeight, kMaxWeight);
+  return detail::dualWeight(detail::edgeLength(mesh, topology, c), detail::faceCentroid(mesh, f),
+                            detail::faceCentroid(mesh, g));
 }
 
 ConnectionSystem buildConnectionSystem(const TriangleMesh& mesh, const Topology& topology) {
@@ -237,12 +197,7 @@ ConnectionSystem buildConnectionSystem(const TriangleMesh& mesh, const Topology&
     }
   });
   for (std::uint32_t f = 0; f < numFaces; ++f) count[f + 1] += count[f];
-  double totalArea = 0.0;
-  for (std::uint32_t f = 0; f < numFaces; ++f) totalArea += std::isfinite(sys.mass[f]) ? sys.mass[f] : 0.0;
-  const double minMass = numFaces ? std::max(1e-6 * totalArea / numFaces, 1e-300) : 1.0;
-  for (std::uint32_t f = 0; f < numFaces; ++f) {
-    if (!(sys.mass[f] >= minMass)) sys.mass[f] = minMass;  // also catches NaN
-  }
+  detail::floorMasses(sys.mass);
 
   SparseMatrixC& a = sys.laplacian;
   a.resize(numFaces, numFaces);
@@ -334,43 +289,11 @@ VectorC curvatureTarget(const TriangleMesh& mesh, const Topology& topology) {
   return q;
 }
 
-/// Per-component M-norms of x (component of face f: comp[f]).
-std::vector<double> componentNorms(const VectorC& x, const Eigen::VectorXd& mass,
-                                   const std::vector<std::uint32_t>& comp, std::size_t numComp) {
-  std::vector<double> sum(numComp, 0.0);
-  for (Eigen::Index f = 0; f < x.size(); ++f) sum[comp[f]] += mass[f] * std::norm(x[f]);
-  for (double& s : sum) s = std::sqrt(s);
-  return sum;
-}
-
-/// Deterministic pseudo-random start vector (a fixed hash per face).
-VectorC startVector(std::uint32_t n) {
-  VectorC x(n);
-  for (std::uint32_t f = 0; f < n; ++f) {
-    std::uint64_t h = (f + 1) * 0x9E3779B97F4A7C15ull;
-    h ^= h >> 31;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 29;
-    const double angle = (h >> 11) * (2.0 * M_PI / 9007199254740992.0);
-    x[f] = std::polar(1.0, angle);
-  }
-  return x;
-}
-
-using Factor = Eigen::CholmodSupernodalLLT<SparseMatrixC, Eigen::Lower>;
-
 /// Sets the diagonal of the lower-triangle matrix a to base diagonal + shift[f] * mass[f].
 void shiftDiagonal(SparseMatrixC& a, const std::vector<double>& baseDiagonal,
                    const Eigen::VectorXd& mass, const std::vector<double>& shift) {
   for (Eigen::Index f = 0; f < a.cols(); ++f) {
     a.valuePtr()[a.outerIndexPtr()[f]] = baseDiagonal[f] + shift[f] * mass[f];
-  }
-}
-
-void checkFactor(const Factor& factor, const char* what) {
-  if (factor.info() != Eigen::Success) {
-    throw SolverError(std::string("smoothest field: CHOLMOD factorization failed (") + what +
-                      "); the connection Laplacian is not positive definite or memory ran out");
   }
 }
 
@@ -407,38 +330,23 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
   }
   // A tiny shift keeps A + sigma M definite when the field has a flat mode (trivial holonomy,
   // e.g. a flat torus) without changing the smallest eigenvector.
-  const double sigma = 1e-9 * diagonalTrace / sys.mass.sum();
+  const double sigma = detail::flatModeShift(diagonalTrace, sys.mass.sum());
   std::vector<double> shift(numFaces, sigma);
   shiftDiagonal(a, baseDiagonal, sys.mass, shift);
 
   // Smallest eigenvector of A x = lambda M x by inverse power iteration, normalized per
   // component (the matrix is block diagonal, so every component converges on its own).
   reportProgress(options.progress, "field: factor", 0.1);
-  Factor factor;
-  factor.cholmod().print = 0;
-  factor.compute(a);
-  checkFactor(factor, "smoothest field");
-  VectorC x = startVector(numFaces);
-  {
-    const std::vector<double> norms = componentNorms(x, sys.mass, comp, numComp);
-    for (std::uint32_t f = 0; f < numFaces; ++f) x[f] /= norms[comp[f]];
-  }
-  constexpr int kMaxIterations = 30;
-  for (int it = 0; it < kMaxIterations; ++it) {
-    reportProgress(options.progress, "field: eigenvector", 0.5 + 0.4 * it / kMaxIterations);
-    VectorC y = factor.solve(VectorC(sys.mass.cast<Complex>().cwiseProduct(x)));
-    if (!y.allFinite()) throw SolverError("smoothest field: inverse iteration produced NaN");
-    const std::vector<double> norms = componentNorms(y, sys.mass, comp, numComp);
-    std::vector<Complex> overlap(numComp, 0.0);
-    for (std::uint32_t f = 0; f < numFaces; ++f) {
-      y[f] /= norms[comp[f]] > 0.0 ? norms[comp[f]] : 1.0;
-      overlap[comp[f]] += sys.mass[f] * std::conj(x[f]) * y[f];
-    }
-    x.swap(y);
-    double change = 0.0;
-    for (const Complex& o : overlap) change = std::max(change, 1.0 - std::abs(o));
-    if (change < 1e-10) break;
-  }
+  CholmodFactor factor;
+  detail::factorFieldMatrix(factor, a, "smoothest field", "faces", options.stats);
+  detail::InverseIterationOptions iteration;
+  iteration.maxIterations = 30;
+  iteration.solver = "smoothest field";
+  iteration.progress = options.progress;
+  iteration.stage = "field: eigenvector";
+  iteration.progressFrom = 0.5;
+  iteration.progressSpan = 0.4;
+  VectorC x = detail::smallestEigenvectors(factor, sys.mass, comp, numComp, iteration);
 
   if (options.curvatureWeight > 0.0) {
     // Curvature alignment: (A - lambda M) z = M q per component with
@@ -457,12 +365,11 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
       shift[f] = sigma - lambda;
     }
     shiftDiagonal(a, baseDiagonal, sys.mass, shift);
-    factor.factorize(a);
-    checkFactor(factor, "curvature-aligned field");
+    detail::factorFieldMatrix(factor, a, "curvature-aligned field", "faces", options.stats);
     const VectorC q = curvatureTarget(mesh, topology);
     VectorC z = factor.solve(VectorC(sys.mass.cast<Complex>().cwiseProduct(q)));
-    const std::vector<double> qNorms = componentNorms(q, sys.mass, comp, numComp);
-    const std::vector<double> zNorms = componentNorms(z, sys.mass, comp, numComp);
+    const std::vector<double> qNorms = detail::componentNorms(q, sys.mass, comp, numComp);
+    const std::vector<double> zNorms = detail::componentNorms(z, sys.mass, comp, numComp);
     for (std::uint32_t f = 0; f < numFaces; ++f) {
       const std::uint32_t k = comp[f];
       // A flat component has no curvature target: keep its smoothest field.

@@ -48,12 +48,21 @@ struct FieldSingularities {
 FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology& topology,
                                         const CrossField& field);
 
+/// Figures of a field's CHOLMOD factorization (the largest when it factors more than once), as
+/// SeamlessStats has them for the seamless solve.
+struct FieldSolveStats {
+  std::uint64_t unknowns = 0, matrixNonzeros = 0, factorNonzeros = 0;
+  std::uint64_t factorBytes = 0, factorPeakBytes = 0;
+  bool realFallback = false;  ///< the complex factorization failed, the real 2n x 2n form was used
+};
+
 struct SmoothFieldOptions {
   /// 0 = smoothest field only; larger values align more strongly with principal curvature.
   /// (w > 0 solves (A - lambda M) z = M q per component, q the principal directions as 4th
   /// powers, lambda = lambda_1 / 2 - w 4 pi^2 / area: w = 1 already follows curvature closely.)
   double curvatureWeight = 0.0;
   ProgressFn progress;
+  FieldSolveStats* stats = nullptr;  ///< filled when set
 };
 /// Smoothest 4-direction field (Knoppel et al. 2013): per-face z^4, discrete connection across
 /// edges, one sparse Hermitian CHOLMOD solve. Exact; practical up to a few million faces.

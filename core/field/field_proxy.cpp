@@ -3,8 +3,6 @@
 // Conventions: core/field/field.h; the method: DESIGN section 4.
 #include "core/field/field_proxy.h"
 
-
-#include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
@@ -13,7 +11,9 @@
 #include <utility>
 #include <vector>
 
+#include "core/field/field_numerics.h"
 #include "core/mesh/detail_union_find.h"
+#include "core/solve/cholmod_solver.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 
@@ -23,8 +23,8 @@ namespace {
 
 using Complex = std::complex<double>;
 
-/// Geometry of one face: unit normal, first-edge frame, centroid. Zero-area faces get a frame
-/// from their longest edge and are flagged.
+/// Geometry of one face: its frame (detail::faceFrame; zero-area faces get a fallback frame and
+/// are flagged), centroid and area (0 when degenerate).
 struct FaceGeometry {
   Vec3d n, e1, e2, centroid;
   double area = 0.0;
@@ -32,28 +32,14 @@ struct FaceGeometry {
 };
 
 FaceGeometry faceGeometry(const TriangleMesh& mesh, FaceId f) {
-  const Triangle& t = mesh.triangles[f];
-  const Vec3d p0 = mesh.position(t[0]), p1 = mesh.position(t[1]), p2 = mesh.position(t[2]);
+  const detail::FaceFrame frame = detail::faceFrame(mesh, f);
   FaceGeometry g;
-  g.centroid = (p0 + p1 + p2) / 3.0;
-  const Vec3d cross = (p1 - p0).cross(p2 - p0);
-  const double twiceArea = cross.norm();
-  const double len01 = (p1 - p0).norm();
-  if (twiceArea > 0.0 && len01 > 0.0 && std::isfinite(twiceArea)) {
-    g.n = cross / twiceArea;
-    g.e1 = (p1 - p0) / len01;
-    g.area = 0.5 * twiceArea;
-  } else {
-    Vec3d longest = p1 - p0;
-    for (const Vec3d& e : {Vec3d(p2 - p1), Vec3d(p0 - p2)}) {
-      if (e.squaredNorm() > longest.squaredNorm()) longest = e;
-    }
-    const double len = longest.norm();
-    g.e1 = len > 0.0 && std::isfinite(len) ? Vec3d(longest / len) : Vec3d::UnitX();
-    g.n = g.e1.unitOrthogonal();
-    g.degenerate = true;
-  }
-  g.e2 = g.n.cross(g.e1);
+  g.n = frame.n;
+  g.e1 = frame.e1;
+  g.e2 = frame.e2;
+  g.centroid = detail::faceCentroid(mesh, f);
+  g.area = frame.degenerate ? 0.0 : faceArea(mesh, f);
+  g.degenerate = frame.degenerate;
   return g;
 }
 
@@ -85,18 +71,8 @@ Vec3d directionOf(Complex z, const Vec3d& e1, const Vec3d& e2) {
 
 bool isZero(const Vec3f& n) { return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f; }
 
-/// Dual-edge weight |e| / |b_f - b_g|, bounded for needles and zero-length edges.
-double dualWeight(double edgeLength, const Vec3d& bf, const Vec3d& bg) {
-  constexpr double kMaxWeight = 1e3, kMinWeight = 1e-3;
-  if (!(edgeLength > 0.0) || !std::isfinite(edgeLength)) return kMinWeight;
-  return std::clamp(edgeLength / std::max((bf - bg).norm(), edgeLength / kMaxWeight), kMinWeight,
-                    kMaxWeight);
-}
-
-double edgeLength(const TriangleMesh& mesh, const Topology& topology, CornerId c) {
-  return (mesh.position(topology.vertex(nextCorner(c))) - mesh.position(topology.vertex(prevCorner(c))))
-      .norm();
-}
+using detail::dualWeight;
+using detail::edgeLength;
 
 /// The proxy: elements (connected pieces of the mesh inside one grid cell) and their graph.
 struct Proxy {
@@ -227,7 +203,7 @@ using VectorC = Eigen::VectorXcd;
 
 /// Smallest eigenvector of the element connection Laplacian A z = lambda M z (energy
 /// sum w_ab |z_b - exp(4 i kappa_ab) z_a|^2, M the element areas), normalized per component.
-VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
+VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress, FieldSolveStats* stats) {
   const std::uint32_t numElements = proxy.numElements();
   std::vector<Vec3d> e1(numElements), e2(numElements);
   for (std::uint32_t e = 0; e < numElements; ++e) elementFrame(proxy.normal[e], e1[e], e2[e]);
@@ -242,14 +218,11 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
   }
   a.resizeNonZeros(start[numElements]);
   std::copy(start.begin(), start.end(), a.outerIndexPtr());
-  Eigen::VectorXd mass(numElements);
-  double totalArea = 0.0;
-  for (double area : proxy.area) totalArea += area;
-  const double minMass = std::max(1e-6 * totalArea / std::max<std::uint32_t>(numElements, 1), 1e-300);
+  Eigen::VectorXd mass = Eigen::Map<const Eigen::VectorXd>(proxy.area.data(), numElements);
+  detail::floorMasses(mass);
   double trace = 0.0;
   detail::UnionFind components(numElements);
   for (std::uint32_t e = 0; e < numElements; ++e) {
-    mass[e] = std::max(proxy.area[e], minMass);
     int p = start[e];
     double diagonal = 0.0;
     for (std::uint32_t i = proxy.neighbourStart[e]; i < proxy.neighbourStart[e + 1]; ++i) {
@@ -270,8 +243,7 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
     trace += diagonal;
   }
   // A tiny shift keeps the matrix definite for fields without holonomy (flat pieces).
-  // (No edge at all, e.g. a single element: any positive shift.)
-  const double sigma = trace > 0.0 ? 1e-9 * trace / mass.sum() : 1.0;
+  const double sigma = detail::flatModeShift(trace, mass.sum());
   for (std::uint32_t e = 0; e < numElements; ++e) a.valuePtr()[start[e]] += sigma * mass[e];
 
   std::vector<std::uint32_t> comp(numElements);
@@ -280,43 +252,17 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress) {
     comp[e] = components.find(e) == e ? numComponents++ : comp[components.find(e)];
   }
   reportProgress(progress, "proxy field: factor", 0.3);
-  Eigen::CholmodSupernodalLLT<SparseMatrixC, Eigen::Lower> factor;
-  factor.cholmod().print = 0;
-  factor.compute(a);
-  if (factor.info() != Eigen::Success) {
-    throw SolverError("proxy field: CHOLMOD could not factor the element connection Laplacian (" +
-                      std::to_string(numElements) + " elements); not positive definite or out of memory");
-  }
-  // Inverse iteration from a fixed pseudo-random start, normalized per component.
-  VectorC x(numElements);
-  for (std::uint32_t e = 0; e < numElements; ++e) {
-    std::uint64_t h = (std::uint64_t(e) + 7) * 0x9E3779B97F4A7C15ull;
-    h ^= h >> 29;
-    h *= 0xBF58476D1CE4E5B9ull;
-    x[e] = std::polar(1.0, (h >> 11) * (2.0 * M_PI / 9007199254740992.0));
-  }
-  auto normalize = [&](VectorC& v) {
-    std::vector<double> norm2(numComponents, 0.0);
-    for (std::uint32_t e = 0; e < numElements; ++e) norm2[comp[e]] += mass[e] * std::norm(v[e]);
-    for (std::uint32_t e = 0; e < numElements; ++e) {
-      if (norm2[comp[e]] > 0.0) v[e] /= std::sqrt(norm2[comp[e]]);
-    }
-  };
-  normalize(x);
-  constexpr int kMaxIterations = 40;
-  for (int it = 0; it < kMaxIterations; ++it) {
-    reportProgress(progress, "proxy field: eigenvector", 0.3 + 0.2 * it / kMaxIterations);
-    VectorC y = factor.solve(VectorC(mass.cast<Complex>().cwiseProduct(x)));
-    if (!y.allFinite()) throw SolverError("proxy field: inverse iteration produced NaN");
-    normalize(y);
-    std::vector<Complex> overlap(numComponents, 0.0);
-    for (std::uint32_t e = 0; e < numElements; ++e) overlap[comp[e]] += mass[e] * std::conj(x[e]) * y[e];
-    x.swap(y);
-    double change = 0.0;
-    for (const Complex& o : overlap) change = std::max(change, 1.0 - std::abs(o));
-    if (change < 1e-10) break;
-  }
-  return x;
+  CholmodFactor factor;
+  detail::factorFieldMatrix(factor, a, "proxy field", "elements", stats);
+  detail::InverseIterationOptions iteration;
+  iteration.maxIterations = 40;
+  iteration.start = detail::StartHash::Elements;
+  iteration.solver = "proxy field";
+  iteration.progress = progress;
+  iteration.stage = "proxy field: eigenvector";
+  iteration.progressFrom = 0.3;
+  iteration.progressSpan = 0.2;
+  return detail::smallestEigenvectors(factor, mass, comp, numComponents, iteration);
 }
 
 /// Greedy colouring of the face graph (faces adjacent through edges), in face order: at most 4
@@ -339,10 +285,7 @@ std::uint32_t colourFaces(const Topology& topology, std::vector<std::uint8_t>& c
   return used;
 }
 
-}  // namespace
-
-ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& topology,
-                                   const ProxyFieldOptions& options) {
+void checkProxyFieldInput(const TriangleMesh& mesh, const Topology& topology, const ProxyFieldOptions& options) {
   const std::uint32_t numFaces = topology.numFaces();
   if (mesh.triangles.size() != numFaces) {
     throw InputError("computeProxyField: mesh has " + std::to_string(mesh.triangles.size()) +
@@ -355,19 +298,15 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   if (options.smoothingSweeps < 0) {
     throw InputError("computeProxyField: negative number of smoothing sweeps");
   }
-  ProxyFieldResult result;
-  if (numFaces == 0) return result;
+}
 
-  reportProgress(options.progress, "proxy field: elements", 0.0);
-  Proxy proxy;
-  buildElements(mesh, topology, options.gridResolution, proxy);
-  accumulateElements(mesh, topology, proxy);
-  std::vector<std::uint32_t>().swap(proxy.elementFaces);
-  std::vector<std::uint32_t>().swap(proxy.elementStart);
-  result.elements = proxy.numElements();
-  result.elementEdges = proxy.neighbours.size() / 2;
-
-  const VectorC z = solveElementField(proxy, options.progress);
+/// Transfer: each face averages the 4th powers of its element and the element's neighbours,
+/// transported to the face's plane, weighted by confidence (|z|) and a bump of the centroid
+/// distance. Fills sweepNormal (when not empty) with the faces' unit normals as floats, zero for a
+/// zero-area face.
+void transferToFaces(const TriangleMesh& mesh, const Proxy& proxy, const VectorC& z, CrossField& field,
+                     std::vector<Vec3f>& sweepNormal) {
+  const std::uint32_t numFaces = static_cast<std::uint32_t>(mesh.triangles.size());
   // Element directions in world coordinates, with the magnitude |z| as confidence.
   const std::uint32_t numElements = proxy.numElements();
   std::vector<Vec3d> elementDirection(numElements);
@@ -378,15 +317,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
     elementDirection[e] = directionOf(z[e], e1, e2);
     confidence[e] = std::isfinite(std::abs(z[e])) ? std::abs(z[e]) : 0.0;
   }
-
-  // Transfer: each face averages the 4th powers of its element and the element's neighbours,
-  // transported to the face's plane, weighted by confidence and a bump of the centroid distance.
-  reportProgress(options.progress, "proxy field: transfer", 0.5);
-  CrossField& field = result.field;
   field.direction.resize(numFaces);
-  // Unit normals as floats for the sweeps (zero for a zero-area face): 12 bytes per face, read
-  // 4 times per face and sweep without decoding.
-  std::vector<Vec3f> sweepNormal(options.smoothingSweeps > 0 ? numFaces : 0);
   const double radius = 2.0 * proxy.cellSize;
   parallelFor(numFaces, 2048, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
@@ -408,51 +339,87 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
       if (!sweepNormal.empty()) sweepNormal[f] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
     }
   });
-  std::vector<std::uint32_t>().swap(proxy.faceElement);  // freed before the sweeps
+}
 
-  // Smoothing: Gauss-Seidel by colour; faces of one colour share no edge, so each colour is a
-  // race-free parallel loop and the result does not depend on the thread count.
-  std::vector<std::uint8_t> colour;
-  result.colours = options.smoothingSweeps > 0 ? colourFaces(topology, colour) : 0;
-  // A sweep reads only the corner table, the float normals and the directions (unit weights):
-  // memory traffic, not geometry. The exact tangent planes are restored once at the end.
-  for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
-    reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
-    for (std::uint32_t k = 0; k < result.colours; ++k) {
-      parallelFor(numFaces, 4096, [&](const IndexRange& range) {
-        for (FaceId f = range.begin(); f != range.end(); ++f) {
-          if (colour[f] != k || isZero(sweepNormal[f])) continue;
-          const Vec3d n = sweepNormal[f].cast<double>();
-          // Frame with e1 = the current direction: the new one is the representative nearest it.
-          const Vec3d u = field.at(f);
-          const Vec3d v = n.cross(u);
-          Complex sum = 0.0;
-          for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-            const CornerId o = topology.opposite(c);
-            if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
-            const FaceId g = cornerFace(o);
-            sum += fourthPower(rotateBetween(sweepNormal[g].cast<double>(), n, field.at(g)), u, v);
-          }
-          const Vec3d next = directionOf(sum, u, v);
-          const Vec3d tangent = next - next.dot(n) * n;
-          const double len = tangent.norm();
-          if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
-        }
-      });
-    }
-  }
-  if (options.smoothingSweeps > 0) {
+/// One Gauss-Seidel sweep by colour; faces of one colour share no edge, so each colour is a
+/// race-free parallel loop and the result does not depend on the thread count. A sweep reads
+/// only the corner table, the float normals and the directions (unit weights): memory traffic,
+/// not geometry.
+void smoothSweep(const Topology& topology, const std::vector<std::uint8_t>& colour, std::uint32_t colours,
+                 const std::vector<Vec3f>& sweepNormal, CrossField& field) {
+  const std::uint32_t numFaces = topology.numFaces();
+  for (std::uint32_t k = 0; k < colours; ++k) {
     parallelFor(numFaces, 4096, [&](const IndexRange& range) {
       for (FaceId f = range.begin(); f != range.end(); ++f) {
-        if (isZero(sweepNormal[f])) continue;
-        const Vec3d n = faceNormal(mesh, f);
+        if (colour[f] != k || isZero(sweepNormal[f])) continue;
+        const Vec3d n = sweepNormal[f].cast<double>();
+        // Frame with e1 = the current direction: the new one is the representative nearest it.
         const Vec3d u = field.at(f);
-        const Vec3d tangent = u - u.dot(n) * n;
+        const Vec3d v = n.cross(u);
+        Complex sum = 0.0;
+        for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+          const CornerId o = topology.opposite(c);
+          if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
+          const FaceId g = cornerFace(o);
+          sum += fourthPower(rotateBetween(sweepNormal[g].cast<double>(), n, field.at(g)), u, v);
+        }
+        const Vec3d next = directionOf(sum, u, v);
+        const Vec3d tangent = next - next.dot(n) * n;
         const double len = tangent.norm();
         if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
       }
     });
   }
+}
+
+/// After the sweeps: every direction projected onto its face's exact (double) tangent plane.
+void restoreTangentPlanes(const TriangleMesh& mesh, const std::vector<Vec3f>& sweepNormal, CrossField& field) {
+  parallelFor(mesh.numFaces(), 4096, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      if (isZero(sweepNormal[f])) continue;
+      const Vec3d n = faceNormal(mesh, f);
+      const Vec3d u = field.at(f);
+      const Vec3d tangent = u - u.dot(n) * n;
+      const double len = tangent.norm();
+      if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
+    }
+  });
+}
+
+}  // namespace
+
+ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& topology,
+                                   const ProxyFieldOptions& options) {
+  checkProxyFieldInput(mesh, topology, options);
+  const std::uint32_t numFaces = topology.numFaces();
+  ProxyFieldResult result;
+  if (numFaces == 0) return result;
+
+  reportProgress(options.progress, "proxy field: elements", 0.0);
+  Proxy proxy;
+  buildElements(mesh, topology, options.gridResolution, proxy);
+  accumulateElements(mesh, topology, proxy);
+  std::vector<std::uint32_t>().swap(proxy.elementFaces);
+  std::vector<std::uint32_t>().swap(proxy.elementStart);
+  result.elements = proxy.numElements();
+  result.elementEdges = proxy.neighbours.size() / 2;
+
+  const VectorC z = solveElementField(proxy, options.progress, options.stats);
+  reportProgress(options.progress, "proxy field: transfer", 0.5);
+  // Unit normals as floats for the sweeps (zero for a zero-area face): 12 bytes per face, read
+  // 4 times per face and sweep without decoding.
+  std::vector<Vec3f> sweepNormal(options.smoothingSweeps > 0 ? numFaces : 0);
+  transferToFaces(mesh, proxy, z, result.field, sweepNormal);
+  std::vector<std::uint32_t>().swap(proxy.faceElement);  // freed before the sweeps
+
+  std::vector<std::uint8_t> colour;
+  result.colours = options.smoothingSweeps > 0 ? colourFaces(topology, colour) : 0;
+  for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
+    reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
+    smoothSweep(topology, colour, result.colours, sweepNormal, result.field);
+  }
+  // The exact tangent planes are restored once at the end.
+  if (options.smoothingSweeps > 0) restoreTangentPlanes(mesh, sweepNormal, result.field);
   reportProgress(options.progress, "proxy field: smooth", 1.0);
   return result;
 }

@@ -21,6 +21,7 @@ struct ProxyFieldOptions {
   /// average of its neighbours' 4th powers), one colour of the face graph at a time.
   std::int32_t smoothingSweeps = 4;
   ProgressFn progress;
+  FieldSolveStats* stats = nullptr;  ///< the element solve's figures, filled when set
 };
 
 struct ProxyFieldResult {

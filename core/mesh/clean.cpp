@@ -36,6 +36,7 @@ void checkInput(const TriangleMesh& mesh) {
       }
     }
   }
+  mesh.attributes.checkSize(mesh.positions.size());
   if (!mesh.cornerUV.empty() && mesh.cornerUV.size() != 3 * mesh.triangles.size()) {
     throw InputError("the mesh has " + std::to_string(mesh.cornerUV.size()) +
                      " texture coordinates for " + std::to_string(mesh.triangles.size()) +
@@ -297,16 +298,11 @@ std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology
   return out;
 }
 
-CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
-  CleanResult result;
-  CleanReport& report = result.report;
-  report.inputVertices = mesh.numVertices();
-  report.inputFaces = mesh.numFaces();
-  checkInput(mesh);
-  reportProgress(options.progress, "cleaning", 0.0);
+namespace {
 
-  // 1. Welding and degenerate faces.
-  std::vector<FaceId>& faceOrigin = result.faceOrigin;
+/// 1. Welding (optional) and degenerate faces (a repeated vertex) dropped.
+void weldAndDropDegenerateFaces(TriangleMesh& mesh, const CleanOptions& options, std::vector<FaceId>& faceOrigin,
+                                CleanReport& report) {
   faceOrigin.resize(mesh.numFaces());
   std::iota(faceOrigin.begin(), faceOrigin.end(), 0u);
   if (options.weldVertices) {
@@ -316,15 +312,129 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
       for (VertexId& v : mesh.triangles[f]) v = rep[v];
     });
   }
-  {
-    std::vector<std::uint8_t> keep(mesh.numFaces());
-    parallelForEach(mesh.triangles.size(), 4096, [&](std::uint64_t f) {
-      const Triangle& t = mesh.triangles[f];
-      keep[f] = t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
-    });
-    report.degenerateFaces = std::count(keep.begin(), keep.end(), std::uint8_t(0));
-    if (report.degenerateFaces) compactFaces(mesh, faceOrigin, keep);
+  std::vector<std::uint8_t> keep(mesh.numFaces());
+  parallelForEach(mesh.triangles.size(), 4096, [&](std::uint64_t f) {
+    const Triangle& t = mesh.triangles[f];
+    keep[f] = t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+  });
+  report.degenerateFaces = std::count(keep.begin(), keep.end(), std::uint8_t(0));
+  if (report.degenerateFaces) compactFaces(mesh, faceOrigin, keep);
+}
+
+/// 3. Unreferenced vertices dropped; vertexOrigin gets the input id of every kept vertex.
+void dropUnreferencedVertices(TriangleMesh& mesh, std::vector<VertexId>& vertexOrigin, CleanReport& report) {
+  std::vector<VertexId> newId(mesh.numVertices(), kInvalidId);
+  for (const Triangle& t : mesh.triangles) {
+    for (VertexId v : t) newId[v] = 0;
   }
+  std::uint32_t n = 0;
+  for (VertexId v = 0; v < newId.size(); ++v) {
+    if (newId[v] == kInvalidId) continue;
+    newId[v] = n;
+    mesh.positions[n] = mesh.positions[v];
+    vertexOrigin.push_back(v);
+    ++n;
+  }
+  report.unreferencedVertices = mesh.numVertices() - n - report.weldedVertices;
+  mesh.positions.resize(n);
+  mesh.positions.shrink_to_fit();
+  parallelForEach(mesh.triangles.size(), 4096, [&](std::uint64_t f) {
+    for (VertexId& v : mesh.triangles[f]) v = newId[v];
+  });
+}
+
+/// 4. Orientation and edge gluing: every edge shared by exactly two opposite faces is glued,
+///    every other edge becomes boundary (this splits non-manifold edges). Returns opposite.
+std::vector<CornerId> orientAndGlueEdges(TriangleMesh& mesh, CleanReport& report) {
+  std::vector<CornerId> opposite;
+  auto vc = std::make_unique<detail::VertexCorners>(detail::VertexCorners::build(mesh.triangles, mesh.numVertices()));
+  detail::GlueStats glue = detail::glueEdges(mesh.triangles, *vc, opposite);
+  if (glue.orientationClashes) {
+    report.flippedFaces = orientFaces(mesh, *vc);
+    if (report.flippedFaces) {
+      *vc = detail::VertexCorners::build(mesh.triangles, mesh.numVertices());
+      glue = detail::glueEdges(mesh.triangles, *vc, opposite);
+    }
+  }
+  report.nonManifoldEdges = glue.nonManifoldEdges + glue.orientationClashes;
+  if (glue.nonManifoldEdges) pairNonManifoldEdges(mesh, *vc, opposite);
+  return opposite;
+}
+
+/// 5. Non-manifold vertices: every fan beyond the first gets its own copy of the vertex.
+///    Returns one corner per vertex (copies included).
+std::vector<CornerId> splitNonManifoldVertices(TriangleMesh& mesh, const std::vector<CornerId>& opposite,
+                                               std::vector<VertexId>& vertexOrigin, CleanReport& report) {
+  const detail::FanTable fans = detail::findFans(mesh.triangles, mesh.numVertices(), opposite);
+  const std::uint32_t nv = mesh.numVertices();
+  std::vector<CornerId> vertexCorner(fans.fanOffsets.back() , kInvalidId);
+  std::vector<VertexId> firstExtra(nv);
+  std::uint32_t next = nv;
+  for (VertexId v = 0; v < nv; ++v) {
+    firstExtra[v] = next;
+    next += fans.fanOffsets[v + 1] - fans.fanOffsets[v] - 1;  // every vertex is referenced: >= 1 fan
+  }
+  report.nonManifoldVertices = 0;
+  mesh.positions.resize(next);
+  vertexOrigin.resize(next);
+  parallelFor(nv, kGrain, [&](const IndexRange& r) {
+    for (VertexId v = r.begin(); v != r.end(); ++v) {
+      const std::uint32_t begin = fans.fanOffsets[v], end = fans.fanOffsets[v + 1];
+      vertexCorner[v] = fans.fanStart[begin];
+      for (std::uint32_t i = begin + 1; i < end; ++i) {
+        const VertexId copy = firstExtra[v] + (i - begin - 1);
+        vertexCorner[copy] = fans.fanStart[i];
+        mesh.positions[copy] = mesh.positions[v];
+        vertexOrigin[copy] = vertexOrigin[v];
+        detail::walkFan(opposite, fans.fanStart[i], [&](CornerId c) { mesh.triangles[c / 3][c % 3] = copy; });
+      }
+    }
+  });
+  for (VertexId v = 0; v < nv; ++v) report.nonManifoldVertices += fans.fanOffsets[v + 1] - fans.fanOffsets[v] > 1;
+  return vertexCorner;
+}
+
+/// 6. Zero-area faces are kept (removing them would open holes) but counted.
+std::uint64_t countZeroAreaFaces(const TriangleMesh& mesh) {
+  const double diag = computeBoundingBox(mesh.positions).diagonal();
+  const double tiny = 1e-14 * diag * diag;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), kGrain), std::uint64_t(0),
+      [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t n) {
+        for (std::size_t f = r.begin(); f != r.end(); ++f) n += faceArea(mesh, FaceId(f)) <= tiny;
+        return n;
+      },
+      std::plus<>());
+}
+
+/// Bounding-box diagonal of the vertices that are not spikes (spikes: sorted).
+double diagonalWithout(const TriangleMesh& mesh, const std::vector<VertexId>& spikes) {
+  BoundingBox box;
+  std::size_t next = 0;
+  for (VertexId v = 0; v < mesh.numVertices(); ++v) {
+    if (next < spikes.size() && spikes[next] == v) {
+      ++next;
+      continue;
+    }
+    const Vec3d p = mesh.positions[v].cast<double>();
+    box.min = box.min.cwiseMin(p);
+    box.max = box.max.cwiseMax(p);
+  }
+  return box.isEmpty() ? 0.0 : box.diagonal();
+}
+
+}  // namespace
+
+CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
+  CleanResult result;
+  CleanReport& report = result.report;
+  report.inputVertices = mesh.numVertices();
+  report.inputFaces = mesh.numFaces();
+  checkInput(mesh);
+  reportProgress(options.progress, "cleaning", 0.0);
+
+  std::vector<FaceId>& faceOrigin = result.faceOrigin;
+  weldAndDropDegenerateFaces(mesh, options, faceOrigin, report);
   reportProgress(options.progress, "cleaning", 0.15);
 
   // 2. Duplicate faces.
@@ -338,85 +448,17 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   }
   reportProgress(options.progress, "cleaning", 0.3);
 
-  // 3. Unreferenced vertices.
-  {
-    std::vector<VertexId> newId(mesh.numVertices(), kInvalidId);
-    for (const Triangle& t : mesh.triangles) {
-      for (VertexId v : t) newId[v] = 0;
-    }
-    std::uint32_t n = 0;
-    for (VertexId v = 0; v < newId.size(); ++v) {
-      if (newId[v] == kInvalidId) continue;
-      newId[v] = n;
-      mesh.positions[n] = mesh.positions[v];
-      result.vertexOrigin.push_back(v);
-      ++n;
-    }
-    report.unreferencedVertices = mesh.numVertices() - n - report.weldedVertices;
-    mesh.positions.resize(n);
-    mesh.positions.shrink_to_fit();
-    parallelForEach(mesh.triangles.size(), 4096, [&](std::uint64_t f) {
-      for (VertexId& v : mesh.triangles[f]) v = newId[v];
-    });
-  }
+  dropUnreferencedVertices(mesh, result.vertexOrigin, report);
   reportProgress(options.progress, "cleaning", 0.4);
-
-  // 4. Orientation and edge gluing: every edge shared by exactly two opposite faces is glued,
-  //    every other edge becomes boundary (this splits non-manifold edges).
-  std::vector<CornerId> opposite;
-  auto vc = std::make_unique<detail::VertexCorners>(detail::VertexCorners::build(mesh.triangles, mesh.numVertices()));
-  detail::GlueStats glue = detail::glueEdges(mesh.triangles, *vc, opposite);
-  if (glue.orientationClashes) {
-    report.flippedFaces = orientFaces(mesh, *vc);
-    if (report.flippedFaces) {
-      *vc = detail::VertexCorners::build(mesh.triangles, mesh.numVertices());
-      glue = detail::glueEdges(mesh.triangles, *vc, opposite);
-    }
-  }
-  report.nonManifoldEdges = glue.nonManifoldEdges + glue.orientationClashes;
-  if (glue.nonManifoldEdges) pairNonManifoldEdges(mesh, *vc, opposite);
+  std::vector<CornerId> opposite = orientAndGlueEdges(mesh, report);
   reportProgress(options.progress, "cleaning", 0.75);
-
-  // 5. Non-manifold vertices: every fan beyond the first gets its own copy of the vertex.
-  vc.reset();
-  const detail::FanTable fans = detail::findFans(mesh.triangles, mesh.numVertices(), opposite);
-  const std::uint32_t nv = mesh.numVertices();
-  std::vector<CornerId> vertexCorner(fans.fanOffsets.back() , kInvalidId);
-  std::vector<VertexId> firstExtra(nv);
-  std::uint32_t next = nv;
-  for (VertexId v = 0; v < nv; ++v) {
-    firstExtra[v] = next;
-    next += fans.fanOffsets[v + 1] - fans.fanOffsets[v] - 1;  // every vertex is referenced: >= 1 fan
-  }
-  report.nonManifoldVertices = 0;
-  mesh.positions.resize(next);
-  result.vertexOrigin.resize(next);
-  parallelFor(nv, kGrain, [&](const IndexRange& r) {
-    for (VertexId v = r.begin(); v != r.end(); ++v) {
-      const std::uint32_t begin = fans.fanOffsets[v], end = fans.fanOffsets[v + 1];
-      vertexCorner[v] = fans.fanStart[begin];
-      for (std::uint32_t i = begin + 1; i < end; ++i) {
-        const VertexId copy = firstExtra[v] + (i - begin - 1);
-        vertexCorner[copy] = fans.fanStart[i];
-        mesh.positions[copy] = mesh.positions[v];
-        result.vertexOrigin[copy] = result.vertexOrigin[v];
-        detail::walkFan(opposite, fans.fanStart[i], [&](CornerId c) { mesh.triangles[c / 3][c % 3] = copy; });
-      }
-    }
-  });
-  for (VertexId v = 0; v < nv; ++v) report.nonManifoldVertices += fans.fanOffsets[v + 1] - fans.fanOffsets[v] > 1;
+  std::vector<CornerId> vertexCorner = splitNonManifoldVertices(mesh, opposite, result.vertexOrigin, report);
   reportProgress(options.progress, "cleaning", 0.9);
+  report.zeroAreaFaces = countZeroAreaFaces(mesh);
 
-  // 6. Zero-area faces are kept (removing them would open holes) but counted.
-  const double diag = computeBoundingBox(mesh.positions).diagonal();
-  const double tiny = 1e-14 * diag * diag;
-  report.zeroAreaFaces = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), kGrain), std::uint64_t(0),
-      [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t n) {
-        for (std::size_t f = r.begin(); f != r.end(); ++f) n += faceArea(mesh, FaceId(f)) <= tiny;
-        return n;
-      },
-      std::plus<>());
+  // Vertex properties follow every output vertex to the input vertex it comes from: a weld keeps
+  // the values of the vertex whose position it keeps, a split vertex's copies keep the original's.
+  if (!mesh.attributes.empty()) mesh.attributes = mesh.attributes.gathered(result.vertexOrigin);
 
   report.outputVertices = mesh.numVertices();
   report.outputFaces = mesh.numFaces();
@@ -424,20 +466,7 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   result.topology = Topology::viewParts(result.mesh.triangles, std::move(opposite), std::move(vertexCorner));
   result.spikes = findSpikeVertices(result.mesh, result.topology);
   report.spikeVertices = result.spikes.size();
-  {
-    BoundingBox box;
-    std::size_t next = 0;
-    for (VertexId v = 0; v < result.mesh.numVertices(); ++v) {
-      if (next < result.spikes.size() && result.spikes[next] == v) {
-        ++next;
-        continue;
-      }
-      const Vec3d p = result.mesh.positions[v].cast<double>();
-      box.min = box.min.cwiseMin(p);
-      box.max = box.max.cwiseMax(p);
-    }
-    report.diagonalWithoutSpikes = box.isEmpty() ? 0.0 : box.diagonal();
-  }
+  report.diagonalWithoutSpikes = diagonalWithout(result.mesh, result.spikes);
   reportProgress(options.progress, "cleaning", 1.0);
   return result;
 }

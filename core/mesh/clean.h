@@ -47,7 +47,10 @@ struct CleanResult {
   CleanResult(const CleanResult&) = delete;
   CleanResult& operator=(const CleanResult&) = delete;
 
-  TriangleMesh mesh;  ///< cleaned positions and triangles (cornerUV carried along when present)
+  /// Cleaned positions and triangles; cornerUV and vertex attributes carried along (a welded
+  /// vertex keeps the attribute values of the lowest-numbered vertex of its cluster, whose
+  /// position it keeps; the copies of a split vertex keep its values).
+  TriangleMesh mesh;
   Topology topology;  ///< corner table of mesh.triangles
   CleanReport report;
   std::vector<FaceId> faceOrigin;      ///< #F out: the input face each output face comes from

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/mesh/mesh_types.h"
+#include "core/mesh/vertex_attributes.h"
 #include "core/mesh/wedge_map.h"
 
 namespace seamvox {
@@ -20,6 +21,9 @@ struct TriangleMesh {
   /// stored per wedge. Double: seam checks need 1e-6 absolute accuracy on coordinates of
   /// several thousand.
   WedgeMap cornerUV;
+  /// Per-vertex properties read with the mesh (colors, normals, scalars), #V values each or none;
+  /// they follow every vertex edit and are written where the output format can hold them.
+  VertexAttributes attributes;
 
   std::uint32_t numVertices() const { return static_cast<std::uint32_t>(positions.size()); }
   std::uint32_t numFaces() const { return static_cast<std::uint32_t>(triangles.size()); }

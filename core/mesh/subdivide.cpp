@@ -31,14 +31,17 @@ std::uint64_t subdivideOnce(const TriangleMesh& mesh, const Topology& topology, 
 
   out.positions.resize(numVertices + edges);
   std::copy(mesh.positions.begin(), mesh.positions.end(), out.positions.begin());
+  const bool withAttributes = !mesh.attributes.empty();
+  std::vector<std::array<VertexId, 2>> ends(withAttributes ? edges : 0);
   parallelForEach(numCorners, 16384, [&](std::uint64_t c) {
     const auto cc = static_cast<CornerId>(c);
     const CornerId o = topology.opposite(cc);
     if (o != kInvalidId && o < cc) return;
-    const Vec3d a = mesh.position(topology.vertex(nextCorner(cc)));
-    const Vec3d b = mesh.position(topology.vertex(prevCorner(cc)));
-    out.positions[numVertices + edgeOf[c]] = ((a + b) * 0.5).cast<float>();
+    const VertexId a = topology.vertex(nextCorner(cc)), b = topology.vertex(prevCorner(cc));
+    out.positions[numVertices + edgeOf[c]] = ((mesh.position(a) + mesh.position(b)) * 0.5).cast<float>();
+    if (withAttributes) ends[edgeOf[c]] = {a, b};
   });
+  if (withAttributes) out.attributes = mesh.attributes.withMidpoints(ends);
 
   const std::uint64_t numFaces = topology.numFaces();
   out.triangles.resize(4 * numFaces);
@@ -70,9 +73,11 @@ SubdivideResult subdivideMesh(const TriangleMesh& mesh, const Topology& topology
     throw TopologyError("subdividing " + std::to_string(mesh.numFaces()) + " faces " +
                         std::to_string(options.levels) + " times exceeds 32-bit face ids");
   }
+  mesh.attributes.checkSize(mesh.numVertices());
   SubdivideResult result;
   result.mesh.positions = mesh.positions;
   result.mesh.triangles = mesh.triangles;
+  result.mesh.attributes = mesh.attributes;
   Topology next;
   const Topology* current = &topology;
   for (std::uint32_t level = 0; level < options.levels; ++level) {

@@ -17,7 +17,8 @@ struct SubdivideOptions {
 /// Child face 4 f + k (k < 3) is the corner triangle at triangles[f][k], 4 f + 3 the middle one.
 /// New vertices come after the old ones, one per undirected edge, numbered in increasing order of
 /// the edge's corner (edgeCorner = min(c, opposite(c)), topology.h), at the exact edge midpoint
-/// (computed in double, rounded once to float).
+/// (computed in double, rounded once to float). Its vertex attributes are the mean of the edge's
+/// two ends (integers such as 8-bit colors rounded to nearest).
 struct SubdivideResult {
   TriangleMesh mesh;                 ///< 4^levels #F faces; orientation kept
   std::vector<FaceId> parentFace;    ///< #F out: the input face each output face lies in

@@ -13,7 +13,8 @@ namespace seamvox {
 
 CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topology,
                                   const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces,
-                                  const FieldSource& source, const ProgressFn& progress) {
+                                  const FieldSource& source, const ProgressFn& progress,
+                                  FieldSolveStats* stats) {
   if (!source.importedPerInputFace.empty()) {
     if (source.importedPerInputFace.size() != inputFaces) {
       throw InputError("the field has " + std::to_string(source.importedPerInputFace.size()) +
@@ -26,8 +27,10 @@ CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topo
   SmoothFieldOptions smooth;
   smooth.curvatureWeight = source.curvatureWeight;
   smooth.progress = progress;
+  smooth.stats = stats;
   ProxyFieldOptions proxy;
   proxy.progress = progress;
+  proxy.stats = stats;
   return computeCrossField(mesh, topology, resolveFieldMethod(source.method, mesh.numFaces()), smooth, proxy);
 }
 
@@ -141,7 +144,7 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   meter.finish("clean");
 
   CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces,
-                                            options.field, options.progress);
+                                            options.field, options.progress, &r.fieldSolve);
   r.fieldMethod = options.field.importedPerInputFace.empty()
                       ? fieldMethodName(resolveFieldMethod(options.field.method, r.mesh.numFaces()))
                       : "file";

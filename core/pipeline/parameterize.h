@@ -33,10 +33,11 @@ struct FieldSource {
 
 /// The cross field of a cleaned mesh from its source; faceOrigin maps cleaned faces to input
 /// faces (CleanResult::faceOrigin) for an imported field. Throws InputError for a field whose
-/// size does not match inputFaces.
+/// size does not match inputFaces. The field solve's factor figures go to stats when set.
 CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topology,
                                   const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces,
-                                  const FieldSource& source, const ProgressFn& progress = {});
+                                  const FieldSource& source, const ProgressFn& progress = {},
+                                  FieldSolveStats* stats = nullptr);
 
 /// Singularities of a field with close cones merged, and the cut through them.
 struct ConeCut {
@@ -84,6 +85,7 @@ struct PipelineResult {
   CleanReport cleanReport;  ///< what cleaning changed
   std::uint32_t inputFaces = 0;
   std::string fieldMethod;  ///< "direct", "proxy" or "file"
+  FieldSolveStats fieldSolve;  ///< the field's factorization (zero for an imported field)
   double edgeLength = 0.0, diagonal = 0.0;
   std::vector<VertexId> cones;   ///< of the last cut, sorted
   std::vector<std::int32_t> coneIndex4;  ///< index of each cone, quarter turns

@@ -238,9 +238,25 @@ std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology&
   return selectFlagged(mesh, topology, cornerUV, options, flag, stats);
 }
 
-RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
-                         const CrossField& field, const CutResult& cut,
-                         const std::vector<FaceId>& regionFaces) {
+namespace {
+
+/// Whole-mesh faces and corners to their ids in a region (regionFaces sorted); kInvalidId outside.
+struct RegionIndex {
+  const std::vector<FaceId>& regionFaces;
+  std::uint32_t subFace(FaceId f) const {
+    const auto it = std::lower_bound(regionFaces.begin(), regionFaces.end(), f);
+    return it != regionFaces.end() && *it == f ? static_cast<std::uint32_t>(it - regionFaces.begin())
+                                               : kInvalidId;
+  }
+  CornerId subCorner(CornerId c) const {
+    if (c == kInvalidId) return kInvalidId;
+    const std::uint32_t i = subFace(cornerFace(c));
+    return i == kInvalidId ? kInvalidId : 3 * i + c % 3;
+  }
+};
+
+void checkRegionInput(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                      const CutResult& cut, const std::vector<FaceId>& regionFaces) {
   const FaceId nf = topology.numFaces();
   if (field.direction.size() != nf || cut.corners.size() != 3u * nf ||
       cut.faceRotation.size() != nf || mesh.numFaces() != nf) {
@@ -251,23 +267,16 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
     throw InputError("refine: region faces must be increasing face ids below " +
                      std::to_string(nf));
   }
-  RegionMesh out;
-  out.faceOrigin = regionFaces;
-  const std::uint32_t rf = static_cast<std::uint32_t>(regionFaces.size());
-  auto subFace = [&](FaceId f) -> std::uint32_t {
-    const auto it = std::lower_bound(regionFaces.begin(), regionFaces.end(), f);
-    return it != regionFaces.end() && *it == f ? static_cast<std::uint32_t>(it - regionFaces.begin())
-                                               : kInvalidId;
-  };
-  auto subCorner = [&](CornerId c) -> CornerId {
-    if (c == kInvalidId) return kInvalidId;
-    const std::uint32_t i = subFace(cornerFace(c));
-    return i == kInvalidId ? kInvalidId : 3 * i + c % 3;
-  };
+}
 
-  // Sub vertices: one per fan piece of region corners around each whole-mesh vertex.
+/// Sub vertices: one per fan piece of region corners around each whole-mesh vertex (filling
+/// out.vertexOrigin and out.vertexFree); a piece reaching a face outside the region is locked.
+/// Returns the sub vertex of every region corner; vertexCorner gets one corner per sub vertex.
+std::vector<VertexId> regionVertices(const Topology& topology, const RegionIndex& index, RegionMesh& out,
+                                     std::vector<CornerId>& vertexCorner) {
+  const std::vector<FaceId>& regionFaces = index.regionFaces;
+  const std::uint32_t rf = static_cast<std::uint32_t>(regionFaces.size());
   std::vector<VertexId> cornerVertex(3u * rf, kInvalidId);
-  std::vector<CornerId> vertexCorner;
   for (CornerId sc = 0; sc < 3u * rf; ++sc) {
     if (cornerVertex[sc] != kInvalidId) continue;
     const CornerId start = 3 * regionFaces[sc / 3] + sc % 3;
@@ -278,7 +287,7 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
       const CornerId before = topology.cw(first);
       if (before == kInvalidId) break;
       if (before == start) break;  // closed fan, all in the region
-      if (subFace(cornerFace(before)) == kInvalidId) {
+      if (index.subFace(cornerFace(before)) == kInvalidId) {
         free = false;
         break;
       }
@@ -287,12 +296,12 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
     const VertexId id = static_cast<VertexId>(out.vertexOrigin.size());
     CornerId c = first;
     for (;;) {
-      const CornerId sc2 = subCorner(c);  // in the region by construction
+      const CornerId sc2 = index.subCorner(c);  // in the region by construction
       if (sc2 == kInvalidId) break;
       cornerVertex[sc2] = id;
       const CornerId after = topology.ccw(c);
       if (after == kInvalidId || after == first) break;
-      if (subFace(cornerFace(after)) == kInvalidId) {
+      if (index.subFace(cornerFace(after)) == kInvalidId) {
         free = false;
         break;
       }
@@ -300,9 +309,53 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
     }
     out.vertexOrigin.push_back(topology.vertex(start));
     out.vertexFree.push_back(free ? 1 : 0);
-    vertexCorner.push_back(subCorner(first));
+    vertexCorner.push_back(index.subCorner(first));
   }
+  return cornerVertex;
+}
 
+/// Seams: the edges with both faces in the region, in curve order, under local ids; and the
+/// region's cones.
+void regionSeamsAndCones(const Topology& topology, const CutResult& cut, const RegionIndex& index,
+                         RegionMesh& out) {
+  const TriangleMesh& sub = out.mesh;
+  CutResult& subCut = out.cut;
+  for (std::uint32_t s = 0; s < cut.seams.size(); ++s) {
+    SeamCurve local;
+    local.matching = cut.seams[s].matching;
+    for (CornerId c : cut.seams[s].corners) {
+      const CornerId sc = index.subCorner(c), so = index.subCorner(topology.opposite(c));
+      if (sc == kInvalidId || so == kInvalidId) continue;
+      local.corners.push_back(sc);
+    }
+    if (local.corners.empty()) continue;
+    local.start = sub.triangles[local.corners.front() / 3][nextCorner(local.corners.front()) % 3];
+    local.end = sub.triangles[local.corners.back() / 3][prevCorner(local.corners.back()) % 3];
+    subCut.seams.push_back(std::move(local));
+    out.seamOrigin.push_back(s);
+  }
+  const std::uint32_t nv = static_cast<std::uint32_t>(out.vertexOrigin.size());
+  for (VertexId v = 0; v < nv; ++v) {
+    if (std::binary_search(cut.cones.begin(), cut.cones.end(), out.vertexOrigin[v])) {
+      subCut.cones.push_back(v);
+    }
+  }
+}
+
+}  // namespace
+
+RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
+                         const CrossField& field, const CutResult& cut,
+                         const std::vector<FaceId>& regionFaces) {
+  checkRegionInput(mesh, topology, field, cut, regionFaces);
+  RegionMesh out;
+  out.faceOrigin = regionFaces;
+  const std::uint32_t rf = static_cast<std::uint32_t>(regionFaces.size());
+  const RegionIndex index{regionFaces};
+  std::vector<CornerId> vertexCorner;
+  const std::vector<VertexId> cornerVertex = regionVertices(topology, index, out, vertexCorner);
+
+  // Faces, field and cut corners copied under local ids.
   const std::uint32_t nv = static_cast<std::uint32_t>(out.vertexOrigin.size());
   TriangleMesh& sub = out.mesh;
   sub.positions.resize(nv);
@@ -320,184 +373,211 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
     for (int k = 0; k < 3; ++k) {
       const CornerId c = 3 * f + k, sc = 3 * i + k;
       sub.triangles[i][k] = cornerVertex[sc];
-      opposite[sc] = subCorner(topology.opposite(c));
+      opposite[sc] = index.subCorner(topology.opposite(c));
       subCut.corners.setCut(sc, cut.corners.isCut(c) || opposite[sc] == kInvalidId);
       subCut.corners.setMatching(sc, cut.corners.matching(c));
     }
   }
-  // Seams: the edges with both faces in the region, in curve order, under local ids.
-  for (std::uint32_t s = 0; s < cut.seams.size(); ++s) {
-    SeamCurve local;
-    local.matching = cut.seams[s].matching;
-    for (CornerId c : cut.seams[s].corners) {
-      const CornerId sc = subCorner(c), so = subCorner(topology.opposite(c));
-      if (sc == kInvalidId || so == kInvalidId) continue;
-      local.corners.push_back(sc);
-    }
-    if (local.corners.empty()) continue;
-    local.start = sub.triangles[local.corners.front() / 3][nextCorner(local.corners.front()) % 3];
-    local.end = sub.triangles[local.corners.back() / 3][prevCorner(local.corners.back()) % 3];
-    subCut.seams.push_back(std::move(local));
-    out.seamOrigin.push_back(s);
-  }
-  for (VertexId v = 0; v < nv; ++v) {
-    if (std::binary_search(cut.cones.begin(), cut.cones.end(), out.vertexOrigin[v])) {
-      subCut.cones.push_back(v);
-    }
-  }
+  regionSeamsAndCones(topology, cut, index, out);
   out.topology = Topology::fromParts(sub.triangles, std::move(opposite), std::move(vertexCorner));
   return out;
 }
 
-RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
-                           const std::vector<Complex>& seamT, double edgeLength,
-                           RefineStats* stats, const std::vector<double>& faceWeight,
-                           double coneWeightRadius) {
-  const std::uint32_t rf = region.topology.numFaces();
-  const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
-  if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
-    throw InputError("refine: region has " + std::to_string(rf) + " faces and " +
-                     std::to_string(ns) + " seams but got " + std::to_string(cornerUV.size()) +
-                     " corner UVs and " + std::to_string(seamT.size()) + " translations");
+namespace {
+
+/// A region's hat basis and reduction with what every phase of solveRegion reads: the locked
+/// vertices and domains and the input value of a domain.
+struct RegionProblem {
+  const RegionMesh& region;
+  const WedgeMap& cornerUV;
+  const HatBasis& basis;
+  const Reduction& reduction;
+  std::uint32_t rf = 0, ns = 0, nd = 0, np = 0;
+  std::vector<CornerId> domainCorner;  ///< a corner of each domain
+
+  RegionProblem(const RegionMesh& r, const WedgeMap& uv, const HatBasis& b, const Reduction& red)
+      : region(r), cornerUV(uv), basis(b), reduction(red) {
+    rf = region.topology.numFaces();
+    ns = static_cast<std::uint32_t>(region.cut.seams.size());
+    nd = basis.numDomains();
+    np = reduction.numPositional;
+    const auto& cornerDomain = basis.cornerDomain();
+    domainCorner.assign(nd, kInvalidId);
+    for (CornerId c = 0; c < 3u * rf; ++c) {
+      if (domainCorner[cornerDomain[c]] == kInvalidId) domainCorner[cornerDomain[c]] = c;
+    }
   }
-  HatBasisOptions basisOptions;
-  basisOptions.edgeLength = edgeLength;
-  basisOptions.faceWeight = faceWeight;
-  basisOptions.coneWeightRadius = coneWeightRadius;
-  const HatBasis basis(region.mesh, region.topology, region.field, region.cut, basisOptions);
-  // No translation constraints: then column np + j of P is t_j itself (t = s).
-  const std::vector<GaussVector> noConstraints;
-  ReduceOptions reduceOptions;
-  reduceOptions.translationConstraints = &noConstraints;
-  const Reduction reduction = reduceBasis(basis, reduceOptions);
-  const ReducedMap& P = reduction.map;
-  const std::uint32_t nd = basis.numDomains();
-  const std::uint32_t np = reduction.numPositional;
-  const auto& cornerDomain = basis.cornerDomain();
-  auto isLockedVertex = [&](VertexId v) { return !region.vertexFree[v]; };
-  auto isLocked = [&](std::uint32_t d) {
-    return isLockedVertex(basis.basisVertex()[basis.domainBasis()[d]]);
-  };
-  std::vector<CornerId> domainCorner(nd, kInvalidId);
-  for (CornerId c = 0; c < 3u * rf; ++c) {
-    if (domainCorner[cornerDomain[c]] == kInvalidId) domainCorner[cornerDomain[c]] = c;
-  }
-  auto input = [&](std::uint32_t d) {
+  bool isLockedVertex(VertexId v) const { return !region.vertexFree[v]; }
+  bool isLocked(std::uint32_t d) const { return isLockedVertex(basis.basisVertex()[basis.domainBasis()[d]]); }
+  Complex input(std::uint32_t d) const {
     const Vec2d q = cornerUV[domainCorner[d]];
     return Complex(q.x(), q.y());
-  };
+  }
+};
 
-  // Translations: a seam touching a locked vertex keeps the input's t (the locked values on its
-  // two sides obey it). The other seams lie among free vertices only (e.g. between a cone and a
-  // seam node): the input map says little about their t (the Vox solve barely sees them), so
-  // t = seamT + U s is solved, rounded and solved again, where U spans the Gaussian-integer
-  // solutions of the cycle constraints restricted to these seams (seamT obeys the constraints,
-  // so every t of this form does too).
-  std::vector<std::uint8_t> freeSeam(ns, 1);
-  for (std::uint32_t j = 0; j < ns; ++j) {
-    for (CornerId c : region.cut.seams[j].corners) {
-      const Triangle& t = region.mesh.triangles[c / 3];
-      if (isLockedVertex(t[(c + 1) % 3]) || isLockedVertex(t[(c + 2) % 3])) freeSeam[j] = 0;
+/// Translations: a seam touching a locked vertex keeps the input's t (the locked values on its
+/// two sides obey it). The other seams lie among free vertices only (e.g. between a cone and a
+/// seam node): the input map says little about their t (the Vox solve barely sees them), so
+/// t = seamT + U s is solved, rounded and solved again, where U spans the Gaussian-integer
+/// solutions of the cycle constraints restricted to these seams (seamT obeys the constraints,
+/// so every t of this form does too). Returns 1 for the free seams.
+std::vector<std::uint8_t> findFreeSeams(const RegionProblem& p) {
+  std::vector<std::uint8_t> freeSeam(p.ns, 1);
+  for (std::uint32_t j = 0; j < p.ns; ++j) {
+    for (CornerId c : p.region.cut.seams[j].corners) {
+      const Triangle& t = p.region.mesh.triangles[c / 3];
+      if (p.isLockedVertex(t[(c + 1) % 3]) || p.isLockedVertex(t[(c + 2) % 3])) freeSeam[j] = 0;
     }
   }
-  // Kernel: a region component without a locked vertex and without a fixed seam of rotation
-  // r != 1 can shift freely; pin one positional unknown there to its input value (kept in both
-  // solves: such a component is the whole surface component, not a repair). A component
-  // without any positional unknown (every vertex a cone, e.g. a tetrahedron) is left to
-  // solveSeamless, which anchors its shift through a translation.
-  const ComponentsResult components = computeComponents(region.topology);
-  std::vector<std::uint8_t> anchored(components.components.size(), 0);
-  for (CornerId c = 0; c < 3u * rf; ++c) {
-    if (isLocked(cornerDomain[c])) anchored[components.faceComponent[c / 3]] = 1;
+  return freeSeam;
+}
+
+/// Kernel: a region component without a locked vertex and without a fixed seam of rotation
+/// r != 1 can shift freely (anchored stays 0 for it); hasPositional: the component has a
+/// positional unknown.
+struct RegionComponents {
+  ComponentsResult components;
+  std::vector<std::uint8_t> anchored, hasPositional;
+};
+
+RegionComponents findRegionComponents(const RegionProblem& p, const std::vector<std::uint8_t>& freeSeam) {
+  const auto& cornerDomain = p.basis.cornerDomain();
+  const ReducedMap& P = p.reduction.map;
+  RegionComponents rc;
+  rc.components = computeComponents(p.region.topology);
+  const ComponentsResult& components = rc.components;
+  rc.anchored.assign(components.components.size(), 0);
+  for (CornerId c = 0; c < 3u * p.rf; ++c) {
+    if (p.isLocked(cornerDomain[c])) rc.anchored[components.faceComponent[c / 3]] = 1;
   }
-  for (std::uint32_t j = 0; j < ns; ++j) {
-    const SeamCurve& seam = region.cut.seams[j];
+  for (std::uint32_t j = 0; j < p.ns; ++j) {
+    const SeamCurve& seam = p.region.cut.seams[j];
     if (seam.matching % 4 != 0 && !freeSeam[j]) {
-      anchored[components.faceComponent[seam.corners.front() / 3]] = 1;
+      rc.anchored[components.faceComponent[seam.corners.front() / 3]] = 1;
     }
   }
-  std::vector<std::uint8_t> hasPositional(components.components.size(), 0);
-  for (CornerId c = 0; c < 3u * rf; ++c) {
+  rc.hasPositional.assign(components.components.size(), 0);
+  for (CornerId c = 0; c < 3u * p.rf; ++c) {
     const std::uint32_t d = cornerDomain[c];
     for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
-      if (P.column[k] < np) hasPositional[components.faceComponent[c / 3]] = 1;
+      if (P.column[k] < p.np) rc.hasPositional[components.faceComponent[c / 3]] = 1;
     }
   }
-  LatticeEliminator lattice(ns);
-  for (const GaussVector& row : reduction.cycleConstraints) {
+  return rc;
+}
+
+/// U: the Gaussian-integer solutions of the cycle constraints restricted to the free seams, and
+/// the local index of each of its columns that a free seam uses (numS of them).
+struct FreeTranslations {
+  LatticeEliminator lattice;
+  std::vector<std::uint32_t> sIndex;
+  std::uint32_t numS = 0;
+  explicit FreeTranslations(std::uint32_t ns) : lattice(ns) {}
+};
+
+FreeTranslations findFreeTranslations(const RegionProblem& p, const std::vector<std::uint8_t>& freeSeam) {
+  FreeTranslations ft(p.ns);
+  for (const GaussVector& row : p.reduction.cycleConstraints) {
     GaussVector restricted;
     for (const auto& entry : row) {
       if (freeSeam[entry.first]) restricted.push_back(entry);
     }
-    if (!restricted.empty()) lattice.addConstraint(restricted);
+    if (!restricted.empty()) ft.lattice.addConstraint(restricted);
   }
-  lattice.finish();
-  std::vector<std::uint32_t> sIndex(lattice.numFree(), kInvalidId);
-  std::uint32_t numS = 0;
-  for (std::uint32_t j = 0; j < ns; ++j) {
+  ft.lattice.finish();
+  ft.sIndex.assign(ft.lattice.numFree(), kInvalidId);
+  for (std::uint32_t j = 0; j < p.ns; ++j) {
     if (!freeSeam[j]) continue;
-    for (const auto& [k, u] : lattice.row(j)) {
-      if (sIndex[k] == kInvalidId) sIndex[k] = numS++;
+    for (const auto& [k, u] : ft.lattice.row(j)) {
+      if (ft.sIndex[k] == kInvalidId) ft.sIndex[k] = ft.numS++;
     }
   }
+  return ft;
+}
 
-  // Fixed part of every domain's coefficient: the translations seamT.
-  std::vector<Complex> fixedPart(nd, 0.0);
-  for (std::uint32_t d = 0; d < nd; ++d) {
+/// Fixed part of every domain's coefficient: the translations seamT.
+std::vector<Complex> fixedTranslationPart(const RegionProblem& p, const std::vector<Complex>& seamT) {
+  const ReducedMap& P = p.reduction.map;
+  std::vector<Complex> fixedPart(p.nd, 0.0);
+  for (std::uint32_t d = 0; d < p.nd; ++d) {
     for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
       const std::uint32_t j = P.column[k];
-      if (j >= np) fixedPart[d] += P.value[k] * seamT[j - np];
+      if (j >= p.np) fixedPart[d] += P.value[k] * seamT[j - p.np];
     }
   }
+  return fixedPart;
+}
 
-  std::vector<std::uint8_t> pinned(np, 0);
-  std::vector<Complex> pinValue(np, 0.0);
-  RefineStats local;
-  for (CornerId c = 0; c < 3u * rf; ++c) {
-    const std::uint32_t comp = components.faceComponent[c / 3];
+/// Pins one positional unknown to its input value in every component still free to shift (kept
+/// in both solves: such a component is the whole surface component, not a repair). A component
+/// without any positional unknown (every vertex a cone, e.g. a tetrahedron) is left to
+/// solveSeamless, which anchors its shift through a translation. Returns the number of pins.
+std::uint32_t pinFreeComponents(const RegionProblem& p, const std::vector<std::uint8_t>& freeSeam,
+                                const std::vector<Complex>& fixedPart, RegionComponents& rc,
+                                std::vector<std::uint8_t>& pinned, std::vector<Complex>& pinValue) {
+  const auto& cornerDomain = p.basis.cornerDomain();
+  const ReducedMap& P = p.reduction.map;
+  pinned.assign(p.np, 0);
+  pinValue.assign(p.np, 0.0);
+  std::uint32_t count = 0;
+  for (CornerId c = 0; c < 3u * p.rf; ++c) {
+    const std::uint32_t comp = rc.components.faceComponent[c / 3];
     const std::uint32_t d = cornerDomain[c];
-    if (anchored[comp]) continue;
+    if (rc.anchored[comp]) continue;
     // A domain whose row is value c_0 + fixed translations only.
     std::uint32_t column = kInvalidId;
     Complex value;
     bool onlyFixed = true;
     for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
-      if (P.column[k] < np) {
+      if (P.column[k] < p.np) {
         column = P.column[k];
         value = P.value[k];
-      } else if (freeSeam[P.column[k] - np]) {
+      } else if (freeSeam[P.column[k] - p.np]) {
         onlyFixed = false;
       }
     }
     if (column == kInvalidId || !onlyFixed) continue;
     pinned[column] = 1;
-    pinValue[column] = (input(d) - fixedPart[d]) / value;
-    anchored[comp] = 1;
-    ++local.pinned;
+    pinValue[column] = (p.input(d) - fixedPart[d]) / value;
+    rc.anchored[comp] = 1;
+    ++count;
   }
+  return count;
+}
 
-  // The local map: free domains keep their positional column (compacted) and the free
-  // translations (through U); fixed translations, pins and locked wedges go to the offset.
+/// The local map: free domains keep their positional column (compacted) and the free
+/// translations (through U); fixed translations, pins and locked wedges go to the offset. With
+/// the translations per seam in terms of the local s, and the component bookkeeping only for the
+/// components without a positional unknown (solveSeamless anchors them); elsewhere it pins
+/// nothing (the pins are offsets).
+Reduction buildRegionSystem(const RegionProblem& p, const std::vector<std::uint8_t>& freeSeam,
+                            const FreeTranslations& ft, const std::vector<Complex>& fixedPart,
+                            const std::vector<std::uint8_t>& pinned, const std::vector<Complex>& pinValue,
+                            const RegionComponents& rc) {
+  const ReducedMap& P = p.reduction.map;
+  const std::uint32_t nd = p.nd, np = p.np, ns = p.ns;
+  const LatticeEliminator& lattice = ft.lattice;
+  const std::vector<std::uint32_t>& sIndex = ft.sIndex;
   std::vector<std::uint32_t> newIndex(np, kInvalidId);
   Reduction system;
   std::uint32_t numPositional = 0;
   for (std::uint32_t d = 0; d < nd; ++d) {
-    if (isLocked(d)) continue;
+    if (p.isLocked(d)) continue;
     for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
       const std::uint32_t j = P.column[k];
       if (j < np && !pinned[j] && newIndex[j] == kInvalidId) newIndex[j] = numPositional++;
     }
   }
   system.numPositional = numPositional;
-  system.numTranslational = numS;
+  system.numTranslational = ft.numS;
   ReducedMap& Q = system.map;
   Q.rowStart.assign(nd + 1, 0);
   Q.offset.resize(nd);
   std::vector<std::pair<std::uint32_t, Complex>> row;
   for (std::uint32_t d = 0; d < nd; ++d) {
     row.clear();
-    if (isLocked(d)) {
-      Q.offset[d] = input(d);
+    if (p.isLocked(d)) {
+      Q.offset[d] = p.input(d);
     } else {
       Q.offset[d] = fixedPart[d];
       for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
@@ -532,27 +612,30 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
     if (!freeSeam[j]) continue;
     for (const auto& [col, u] : lattice.row(j)) system.seamTranslation[j].emplace_back(sIndex[col], u);
   }
-  // Component bookkeeping only for the components without a positional unknown (solveSeamless
-  // anchors them); elsewhere it pins nothing (the pins above are offsets).
+  const ComponentsResult& components = rc.components;
   system.unknownComponent.assign(system.numUnknowns(), kInvalidId);
   system.numComponents = static_cast<std::uint32_t>(components.components.size());
   system.componentHasRotation.assign(system.numComponents, 0);
   for (std::uint32_t j = 0; j < ns; ++j) {
-    const SeamCurve& seam = region.cut.seams[j];
+    const SeamCurve& seam = p.region.cut.seams[j];
     const std::uint32_t comp = components.faceComponent[seam.corners.front() / 3];
-    if (anchored[comp] || hasPositional[comp] || !freeSeam[j]) continue;
+    if (rc.anchored[comp] || rc.hasPositional[comp] || !freeSeam[j]) continue;
     if (seam.matching % 4 != 0) system.componentHasRotation[comp] = 1;
     for (const auto& [col, u] : lattice.row(j)) system.unknownComponent[numPositional + sIndex[col]] = comp;
   }
-  local.unknowns = system.numUnknowns();
-  local.freeTranslations = numS;
+  return system;
+}
 
+/// Solves the local system (when it has unknowns), evaluates the map on the region's wedges and
+/// puts the locked corners back exactly as in the input.
+RegionSolution solveRegionSystem(const RegionProblem& p, const Reduction& system, const std::vector<Complex>& seamT,
+                                 RefineStats& local) {
   RegionSolution out;
   std::vector<Complex> x;
   if (system.numUnknowns() > 0) {
     RoundOptions roundOptions;
     roundOptions.dropUnsolvable = false;  // a region's failure is the refinement's, reported whole
-    const SeamlessSolution solution = solveSeamless(basis, system, roundOptions);
+    const SeamlessSolution solution = solveSeamless(p.basis, system, roundOptions);
     x = solution.unknowns;
     local.systemNonzeros = solution.stats.systemNonzeros;
     local.factorNonzeros = solution.stats.factorNonzeros;
@@ -560,21 +643,64 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
     local.factorPeakBytes = solution.stats.factorPeakBytes;
   }
   out.seamT = seamT;
-  if (numS > 0) {
-    const std::vector<Complex> s(x.begin() + numPositional, x.end());
+  if (system.numTranslational > 0) {
+    const std::vector<Complex> s(x.begin() + system.numPositional, x.end());
     const std::vector<Complex> t = seamTranslations(system, s);
-    for (std::uint32_t j = 0; j < ns; ++j) out.seamT[j] += t[j];
+    for (std::uint32_t j = 0; j < p.ns; ++j) out.seamT[j] += t[j];
   }
-  out.cornerUV = buildCutWedges(region.topology, region.cut);
-  evaluateMap(basis, system, x, out.cornerUV);
+  out.cornerUV = buildCutWedges(p.region.topology, p.region.cut);
+  evaluateMap(p.basis, system, x, out.cornerUV);
+  const auto& cornerDomain = p.basis.cornerDomain();
   std::vector<CornerId> locked;
   std::vector<Vec2d> lockedUV;
-  for (CornerId c = 0; c < 3u * rf; ++c) {
-    if (!isLocked(cornerDomain[c])) continue;
+  for (CornerId c = 0; c < 3u * p.rf; ++c) {
+    if (!p.isLocked(cornerDomain[c])) continue;
     locked.push_back(c);
-    lockedUV.push_back(cornerUV[c]);  // exactly the input
+    lockedUV.push_back(p.cornerUV[c]);  // exactly the input
   }
   out.cornerUV.assign(locked, lockedUV);
+  return out;
+}
+
+}  // namespace
+
+RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
+                           const std::vector<Complex>& seamT, double edgeLength,
+                           RefineStats* stats, const std::vector<double>& faceWeight,
+                           double coneWeightRadius) {
+  const std::uint32_t rf = region.topology.numFaces();
+  const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
+  if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
+    throw InputError("refine: region has " + std::to_string(rf) + " faces and " +
+                     std::to_string(ns) + " seams but got " + std::to_string(cornerUV.size()) +
+                     " corner UVs and " + std::to_string(seamT.size()) + " translations");
+  }
+  HatBasisOptions basisOptions;
+  basisOptions.edgeLength = edgeLength;
+  basisOptions.faceWeight = faceWeight;
+  basisOptions.coneWeightRadius = coneWeightRadius;
+  const HatBasis basis(region.mesh, region.topology, region.field, region.cut, basisOptions);
+  // No translation constraints: then column np + j of P is t_j itself (t = s).
+  const std::vector<GaussVector> noConstraints;
+  ReduceOptions reduceOptions;
+  reduceOptions.translationConstraints = &noConstraints;
+  const Reduction reduction = reduceBasis(basis, reduceOptions);
+  const RegionProblem problem(region, cornerUV, basis, reduction);
+
+  const std::vector<std::uint8_t> freeSeam = findFreeSeams(problem);
+  RegionComponents components = findRegionComponents(problem, freeSeam);
+  const FreeTranslations translations = findFreeTranslations(problem, freeSeam);
+  const std::vector<Complex> fixedPart = fixedTranslationPart(problem, seamT);
+  RefineStats local;
+  std::vector<std::uint8_t> pinned;
+  std::vector<Complex> pinValue;
+  local.pinned = pinFreeComponents(problem, freeSeam, fixedPart, components, pinned, pinValue);
+  const Reduction system =
+      buildRegionSystem(problem, freeSeam, translations, fixedPart, pinned, pinValue, components);
+  local.unknowns = system.numUnknowns();
+  local.freeTranslations = translations.numS;
+
+  RegionSolution out = solveRegionSystem(problem, system, seamT, local);
   if (stats) {
     stats->unknowns = local.unknowns;
     stats->freeTranslations = local.freeTranslations;
@@ -586,6 +712,136 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
   }
   return out;
 }
+
+namespace {
+
+/// One flag per vertex: 1 on the cut's cones. Throws InputError for a cone out of range.
+std::vector<std::uint8_t> coneFlags(const TriangleMesh& mesh, const CutResult& cut) {
+  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
+  for (VertexId v : cut.cones) {
+    if (v >= mesh.numVertices()) {
+      throw InputError("refine: cone " + std::to_string(v) + " out of range (" +
+                       std::to_string(mesh.numVertices()) + " vertices)");
+    }
+    isCone[v] = 1;
+  }
+  return isCone;
+}
+
+/// Measures a solved region into figures; returns its bad faces touching a locked vertex (whole-
+/// mesh ids: they seed the next round). collapsedAtBorder: one of them is below the threshold
+/// but not flipped.
+std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSolution& solved, double h,
+                                        double collapseThreshold, RefineRound& figures, bool& collapsedAtBorder) {
+  std::vector<std::uint8_t> subCone(region.mesh.numVertices(), 0);
+  for (VertexId v : region.cut.cones) subCone[v] = 1;
+  FaceCounts inRegion;
+  std::vector<FaceId> border;
+  collapsedAtBorder = false;
+  const std::uint32_t rf = region.topology.numFaces();
+  for (std::uint32_t i = 0; i < rf; ++i) {
+    const double ratio = parameterAreaRatio(region.mesh, solved.cornerUV, i, h);
+    inRegion.add(region.mesh, solved.cornerUV, i, ratio, subCone);
+    if (std::isnan(ratio) || ratio >= collapseThreshold) continue;
+    const Triangle& t = region.mesh.triangles[i];
+    const bool locked = !region.vertexFree[t[0]] || !region.vertexFree[t[1]] || !region.vertexFree[t[2]];
+    if (locked && !collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone)) {
+      border.push_back(region.faceOrigin[i]);
+      collapsedAtBorder = collapsedAtBorder || ratio >= 0.0;
+    }
+  }
+  figures.collapsed = inRegion.collapsed;
+  figures.collapsedAtCones = inRegion.collapsedAtCones;
+  figures.flipped = inRegion.flipped;
+  figures.borderFaces = border.size();
+  return border;
+}
+
+/// Whole-map counts into stats: every face ever solved (flag set) with the refined values, every
+/// other face as in the input. The refined faces are measured as one region of their own and
+/// returned.
+std::vector<FaceId> measureRefinedMap(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                                      const CutResult& cut, const WedgeMap& cornerUV,
+                                      const std::vector<SolvedCorner>& current, const std::vector<std::uint8_t>& flag,
+                                      const std::vector<std::uint8_t>& isCone, double h, RefineStats& stats) {
+  std::vector<FaceId> touched;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    if (flag[f] != kOutside) touched.push_back(f);
+  }
+  FaceCounts inside;
+  if (!touched.empty()) {
+    const RegionMesh all = extractRegion(mesh, topology, field, cut, touched);
+    const WedgeMap allUV = regionInput(all, cornerUV, current);
+    std::vector<std::uint8_t> subCone(all.mesh.numVertices(), 0);
+    for (VertexId v : all.cut.cones) subCone[v] = 1;
+    for (std::uint32_t i = 0; i < all.topology.numFaces(); ++i) {
+      inside.add(all.mesh, allUV, i, parameterAreaRatio(all.mesh, allUV, i, h), subCone);
+    }
+    stats.regionFaces = touched.size();
+  }
+  const FaceCounts outside = tbb::parallel_reduce(
+      tbb::blocked_range<FaceId>(0, mesh.numFaces(), 1u << 14), FaceCounts(),
+      [&](const tbb::blocked_range<FaceId>& range, FaceCounts counts) {
+        for (FaceId f = range.begin(); f != range.end(); ++f) {
+          if (flag[f] != kOutside) continue;
+          counts.add(mesh, cornerUV, f, parameterAreaRatio(mesh, cornerUV, f, h), isCone);
+        }
+        return counts;
+      },
+      [](FaceCounts a, const FaceCounts& b) {
+        a.collapsed += b.collapsed, a.collapsedAtCones += b.collapsedAtCones, a.flipped += b.flipped;
+        return a;
+      });
+  stats.collapsedAfter = outside.collapsed + inside.collapsed;
+  stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
+  stats.flippedAfter = outside.flipped + inside.flipped;
+  return touched;
+}
+
+/// The result: the corners of every vertex freed in some solve with their latest values, the
+/// seams whose translation changed, and the freed and locked vertex counts.
+void collectRefinement(const Topology& topology, std::uint32_t numVertices, const std::vector<SolvedCorner>& current,
+                       const std::vector<FaceId>& touched, const std::vector<Complex>& currentT,
+                       const std::vector<Complex>& seamT, RefineResult& out) {
+  RefineStats& stats = out.stats;
+  std::vector<VertexId> freed;
+  for (const SolvedCorner& s : current) {
+    if (!s.free) continue;
+    out.corners.push_back(s.corner);
+    out.cornerUV.push_back(s.uv);
+    freed.push_back(topology.vertex(s.corner));
+  }
+  std::sort(freed.begin(), freed.end());
+  freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
+  stats.freeVertices = static_cast<std::uint32_t>(freed.size());
+  std::vector<VertexId> around;  // vertices of every refined face
+  around.reserve(3 * touched.size());
+  for (FaceId f : touched) {
+    for (int k = 0; k < 3; ++k) around.push_back(topology.vertex(3 * f + k));
+  }
+  std::sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
+  stats.lockedVertices = static_cast<std::uint32_t>(around.size() - freed.size());
+  stats.refinedVertexFraction = numVertices ? double(freed.size()) / numVertices : 0.0;
+  for (std::uint32_t j = 0; j < currentT.size(); ++j) {
+    if (currentT[j] == seamT[j]) continue;
+    out.seams.push_back(j);
+    out.seamT.push_back(currentT[j]);
+  }
+}
+
+/// stats takes the system figures of the largest solve.
+void keepLargestSolve(const RefineStats& largest, RefineStats& stats) {
+  stats.unknowns = largest.unknowns;
+  stats.freeTranslations = largest.freeTranslations;
+  stats.pinned = largest.pinned;
+  stats.systemNonzeros = largest.systemNonzeros;
+  stats.factorNonzeros = largest.factorNonzeros;
+  stats.factorBytes = largest.factorBytes;
+  stats.factorPeakBytes = largest.factorPeakBytes;
+}
+
+}  // namespace
 
 RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,
@@ -603,14 +859,7 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
   std::vector<FaceId> faces = selectFlagged(mesh, topology, cornerUV, options, flag, &stats);
   stats.secondsRegion = secondsSince(lap);
   const double h = options.edgeLength;
-  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
-  for (VertexId v : cut.cones) {
-    if (v >= mesh.numVertices()) {
-      throw InputError("refine: cone " + std::to_string(v) + " out of range (" +
-                       std::to_string(mesh.numVertices()) + " vertices)");
-    }
-    isCone[v] = 1;
-  }
+  const std::vector<std::uint8_t> isCone = coneFlags(mesh, cut);
 
   // Rounds: solve the region from the input map; then, while faces stay bad at the locked border,
   // solve a patch around them (rings doubling) from the map as refined so far. `current` holds
@@ -650,27 +899,9 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) currentT[region.seamOrigin[j]] = solved.seamT[j];
 
     // Measure the region again; bad faces touching a locked vertex seed the next round.
-    std::vector<std::uint8_t> subCone(region.mesh.numVertices(), 0);
-    for (VertexId v : region.cut.cones) subCone[v] = 1;
-    FaceCounts inRegion;
-    std::vector<FaceId> border;
     bool collapsedAtBorder = false;  // a border face below the threshold but not flipped
-    const std::uint32_t rf = region.topology.numFaces();
-    for (std::uint32_t i = 0; i < rf; ++i) {
-      const double ratio = parameterAreaRatio(region.mesh, solved.cornerUV, i, h);
-      inRegion.add(region.mesh, solved.cornerUV, i, ratio, subCone);
-      if (std::isnan(ratio) || ratio >= options.collapseThreshold) continue;
-      const Triangle& t = region.mesh.triangles[i];
-      const bool locked = !region.vertexFree[t[0]] || !region.vertexFree[t[1]] || !region.vertexFree[t[2]];
-      if (locked && !collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone)) {
-        border.push_back(region.faceOrigin[i]);
-        collapsedAtBorder = collapsedAtBorder || ratio >= 0.0;
-      }
-    }
-    figures.collapsed = inRegion.collapsed;
-    figures.collapsedAtCones = inRegion.collapsedAtCones;
-    figures.flipped = inRegion.flipped;
-    figures.borderFaces = border.size();
+    std::vector<FaceId> border =
+        measureSolvedRegion(region, solved, h, options.collapseThreshold, figures, collapsedAtBorder);
     figures.seconds = secondsSince(roundStart);
     stats.rounds.push_back(figures);
     reportProgress(options.progress, "refine", double(round + 1) / maxRounds);
@@ -686,75 +917,10 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     faces = growPatch(topology, std::move(border), std::max(1u, options.rings) << std::min(round, 4u), flag);
   }
   if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
-  if (largest.unknowns > 0) {
-    stats.unknowns = largest.unknowns;
-    stats.freeTranslations = largest.freeTranslations;
-    stats.pinned = largest.pinned;
-    stats.systemNonzeros = largest.systemNonzeros;
-    stats.factorNonzeros = largest.factorNonzeros;
-    stats.factorBytes = largest.factorBytes;
-    stats.factorPeakBytes = largest.factorPeakBytes;
-  }
-
-  // Whole-map counts: every face ever solved (flag set) with the refined values, every other face
-  // as in the input. The refined faces are measured as one region of their own.
-  std::vector<FaceId> touched;
-  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
-    if (flag[f] != kOutside) touched.push_back(f);
-  }
-  FaceCounts inside;
-  if (!touched.empty()) {
-    const RegionMesh all = extractRegion(mesh, topology, field, cut, touched);
-    const WedgeMap allUV = regionInput(all, cornerUV, current);
-    std::vector<std::uint8_t> subCone(all.mesh.numVertices(), 0);
-    for (VertexId v : all.cut.cones) subCone[v] = 1;
-    for (std::uint32_t i = 0; i < all.topology.numFaces(); ++i) {
-      inside.add(all.mesh, allUV, i, parameterAreaRatio(all.mesh, allUV, i, h), subCone);
-    }
-    stats.regionFaces = touched.size();
-  }
-  const FaceCounts outside = tbb::parallel_reduce(
-      tbb::blocked_range<FaceId>(0, mesh.numFaces(), 1u << 14), FaceCounts(),
-      [&](const tbb::blocked_range<FaceId>& range, FaceCounts counts) {
-        for (FaceId f = range.begin(); f != range.end(); ++f) {
-          if (flag[f] != kOutside) continue;
-          counts.add(mesh, cornerUV, f, parameterAreaRatio(mesh, cornerUV, f, h), isCone);
-        }
-        return counts;
-      },
-      [](FaceCounts a, const FaceCounts& b) {
-        a.collapsed += b.collapsed, a.collapsedAtCones += b.collapsedAtCones, a.flipped += b.flipped;
-        return a;
-      });
-  stats.collapsedAfter = outside.collapsed + inside.collapsed;
-  stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
-  stats.flippedAfter = outside.flipped + inside.flipped;
-
-  // The corners of every vertex freed in some solve, with their latest values.
-  std::vector<VertexId> freed;
-  for (const SolvedCorner& s : current) {
-    if (!s.free) continue;
-    out.corners.push_back(s.corner);
-    out.cornerUV.push_back(s.uv);
-    freed.push_back(topology.vertex(s.corner));
-  }
-  std::sort(freed.begin(), freed.end());
-  freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
-  stats.freeVertices = static_cast<std::uint32_t>(freed.size());
-  std::vector<VertexId> around;  // vertices of every refined face
-  around.reserve(3 * touched.size());
-  for (FaceId f : touched) {
-    for (int k = 0; k < 3; ++k) around.push_back(topology.vertex(3 * f + k));
-  }
-  std::sort(around.begin(), around.end());
-  around.erase(std::unique(around.begin(), around.end()), around.end());
-  stats.lockedVertices = static_cast<std::uint32_t>(around.size() - freed.size());
-  stats.refinedVertexFraction = mesh.numVertices() ? double(freed.size()) / mesh.numVertices() : 0.0;
-  for (std::uint32_t j = 0; j < currentT.size(); ++j) {
-    if (currentT[j] == seamT[j]) continue;
-    out.seams.push_back(j);
-    out.seamT.push_back(currentT[j]);
-  }
+  if (largest.unknowns > 0) keepLargestSolve(largest, stats);
+  const std::vector<FaceId> touched =
+      measureRefinedMap(mesh, topology, field, cut, cornerUV, current, flag, isCone, h, stats);
+  collectRefinement(topology, mesh.numVertices(), current, touched, currentT, seamT, out);
   reportProgress(options.progress, "refine", 1.0);
   stats.secondsTotal = secondsSince(start);
   return out;

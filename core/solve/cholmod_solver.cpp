@@ -3,6 +3,7 @@
 #include <cholmod.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <mutex>
 #include <string>
@@ -35,6 +36,8 @@ void useAdvisedAllocation() {
     SuiteSparse_config.free_func = std::free;
   });
 }
+
+std::atomic<int> realFormOnlyScopes{0};  // ScopedRealFormOnly instances alive
 
 }  // namespace
 
@@ -106,7 +109,7 @@ void CholmodFactor::factor(const ComplexSparse& lowerIn) {
     return;
   }
   std::string why = "skipped";
-  if (!m.realFormOnly) {
+  if (!m.realFormOnly && realFormOnlyScopes.load() == 0) {
     cholmod_sparse* A = cholmod_l_allocate_sparse(n, n, nnz, 1, 1, -1, CHOLMOD_COMPLEX, &m.common);
     if (!A) throw SolverError("CHOLMOD: out of memory allocating a " + std::to_string(n) + " matrix");
     auto* p = static_cast<SuiteSparse_long*>(A->p);
@@ -211,5 +214,8 @@ bool CholmodFactor::usedRealFallback() const { return impl_->realForm; }
 void CholmodFactor::setRealFormOnly(bool realFormOnly) { impl_->realFormOnly = realFormOnly; }
 bool CholmodFactor::isSupernodal() const { return impl_->L && impl_->L->is_super; }
 std::int64_t CholmodFactor::failedColumn() const { return impl_->failedColumn; }
+
+ScopedRealFormOnly::ScopedRealFormOnly() { ++realFormOnlyScopes; }
+ScopedRealFormOnly::~ScopedRealFormOnly() { --realFormOnlyScopes; }
 
 }  // namespace seamvox

@@ -41,4 +41,14 @@ class CholmodFactor {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Test hook for whole pipelines: while one lives, every CholmodFactor::factor() in the process
+/// goes to the real form directly, as setRealFormOnly does for one factor.
+class ScopedRealFormOnly {
+ public:
+  ScopedRealFormOnly();
+  ~ScopedRealFormOnly();
+  ScopedRealFormOnly(const ScopedRealFormOnly&) = delete;
+  ScopedRealFormOnly& operator=(const ScopedRealFormOnly&) = delete;
+};
+
 }  // namespace seamvox

@@ -12,6 +12,7 @@
 #include <numeric>
 #include <string>
 #include <unordered_map>
+#include <utility>
 
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
@@ -620,12 +621,9 @@ ScanPlan planScan(const BoxLattice& box, std::uint64_t seed) {
   return plan;
 }
 
-GenerateResult generateScan(const GenerateOptions& options) {
-  GenerateResult result;
-  TriangleMesh& mesh = result.mesh;
-  ScanDefects& defects = result.defects;
-  // Choose the sphere so that sphere - holes + islands + bad faces comes close to the target
-  // (the plan predicts the count exactly; a few rounds of correction, keep the best).
+/// The sphere lattice and the defect plan whose face count comes closest to the target (the plan
+/// predicts the count exactly; a few rounds of correction, keep the best).
+std::pair<BoxLattice, ScanPlan> chooseScanBox(const GenerateOptions& options) {
   const auto predicted = [](const BoxLattice& b, const ScanPlan& p) {
     return static_cast<std::int64_t>(b.numFaces() - p.removedFaces + p.islandFaces + kScanBadFaces);
   };
@@ -643,16 +641,31 @@ GenerateResult generateScan(const GenerateOptions& options) {
                                      static_cast<std::int64_t>(candidatePlan.islandFaces + kScanBadFaces);
     candidate = chooseBox(static_cast<std::uint64_t>(std::max<std::int64_t>(sphereFaces, 12)));
   }
-  const std::uint32_t w = box.n[0];
-  const double spacing = 1.5707963267948966 / w;  // about one edge length on the unit sphere
-  Bumps bumps = kSphereBumps;
-  bumps.seed = options.seed;
-  // Room for the seam copies, islands and bad faces, so that nothing is reallocated later.
-  mesh.positions.reserve(box.numVertices() + box.sideWidth(5) + 4096);
-  mesh.triangles.reserve(box.numFaces() + plan.islandFaces + 64);
-  appendBoxSphere(mesh, box, Vec3d::Zero(), 1.0, bumps, 0.1 * spacing, options.seed);
-  reportProgress(options.progress, "generate", 0.5);
+  return {box, plan};
+}
 
+/// An unwelded seam on side 5: the quads just above the middle grid line use copies of the
+/// line's inner vertices (same positions), as when a scanner stitches two sweeps.
+void addUnweldedSeam(TriangleMesh& mesh, const BoxLattice& box, ScanDefects& defects) {
+  const int s = 5;
+  const std::uint32_t sw = box.sideWidth(s), y0 = box.sideHeight(s) / 2;
+  const std::uint32_t x0 = sw / 4, x1 = sw - sw / 4;
+  for (std::uint32_t x = x0 + 1; x < x1; ++x) {
+    const auto original = static_cast<VertexId>(box.sideVertex(s, x, y0));
+    const VertexId copy = mesh.numVertices();
+    mesh.positions.push_back(mesh.positions[original]);
+    ++defects.seamDuplicates;
+    for (std::uint32_t qx = x - 1; qx <= x; ++qx) {
+      const std::uint64_t f = box.quadFace(s, qx, y0);
+      for (std::uint64_t g = f; g < f + 2; ++g) {
+        for (VertexId& v : mesh.triangles[g]) v = v == original ? copy : v;
+      }
+    }
+  }
+}
+
+/// Removes the faces of the planned holes (their inner vertices go with compactVertices later).
+void removeHoleFaces(TriangleMesh& mesh, const BoxLattice& box, const ScanPlan& plan, ScanDefects& defects) {
   std::vector<std::uint8_t> removed(mesh.triangles.size(), 0);
   for (const ScanPlan::Hole& h : plan.holes) {
     ScanPlan::forEachQuad(h, [&](std::uint32_t x, std::uint32_t y) {
@@ -661,37 +674,17 @@ GenerateResult generateScan(const GenerateOptions& options) {
     });
     ++defects.holes;
   }
-
-  // An unwelded seam on side 5: the quads just above the middle grid line use copies of the
-  // line's inner vertices (same positions), as when a scanner stitches two sweeps.
-  {
-    const int s = 5;
-    const std::uint32_t sw = box.sideWidth(s), y0 = box.sideHeight(s) / 2;
-    const std::uint32_t x0 = sw / 4, x1 = sw - sw / 4;
-    for (std::uint32_t x = x0 + 1; x < x1; ++x) {
-      const auto original = static_cast<VertexId>(box.sideVertex(s, x, y0));
-      const VertexId copy = mesh.numVertices();
-      mesh.positions.push_back(mesh.positions[original]);
-      ++defects.seamDuplicates;
-      for (std::uint32_t qx = x - 1; qx <= x; ++qx) {
-        const std::uint64_t f = box.quadFace(s, qx, y0);
-        for (std::uint64_t g = f; g < f + 2; ++g) {
-          for (VertexId& v : mesh.triangles[g]) v = v == original ? copy : v;
-        }
-      }
-    }
+  std::uint64_t kept = 0;
+  for (std::uint64_t f = 0; f < mesh.triangles.size(); ++f) {
+    if (!removed[f]) mesh.triangles[kept++] = mesh.triangles[f];
   }
+  mesh.triangles.resize(kept);
+}
 
-  // Remove the holes' faces (their inner vertices go with compactVertices below).
-  {
-    std::uint64_t kept = 0;
-    for (std::uint64_t f = 0; f < mesh.triangles.size(); ++f) {
-      if (!removed[f]) mesh.triangles[kept++] = mesh.triangles[f];
-    }
-    mesh.triangles.resize(kept);
-  }
-
-  std::uint64_t islandSeed = options.seed;
+/// The planned islands: open bumpy patches and closed blobs floating above the surface.
+void appendIslands(TriangleMesh& mesh, const ScanPlan& plan, double spacing, std::uint64_t seed,
+                   ScanDefects& defects) {
+  std::uint64_t islandSeed = seed;
   for (const ScanPlan::Island& island : plan.islands) {
     islandSeed = mix64(islandSeed);
     if (island.p > 0) {
@@ -706,11 +699,12 @@ GenerateResult generateScan(const GenerateOptions& options) {
       ++defects.closedIslands;
     }
   }
-  compactVertices(mesh);
+}
 
-  // Bad faces, as scanners and converters leave them: repeated vertices and duplicates.
-  Rng rng(mix64(options.seed));
-  const auto sphereFaces = static_cast<std::uint32_t>(box.numFaces() / 2);  // all still main surface
+/// Bad faces, as scanners and converters leave them: repeated vertices and duplicates, copied
+/// from faces spread over the main surface (the first sphereFaces faces).
+void appendBadFaces(TriangleMesh& mesh, std::uint32_t sphereFaces, std::uint64_t seed, ScanDefects& defects) {
+  Rng rng(mix64(seed));
   for (std::uint32_t k = 0; k < kScanDegenerateFaces; ++k) {
     const std::uint32_t stride = sphereFaces / kScanDegenerateFaces;
     const Triangle t = mesh.triangles[k * stride + rng.below(stride)];
@@ -724,6 +718,30 @@ GenerateResult generateScan(const GenerateOptions& options) {
     else mesh.triangles.push_back({t[1], t[2], t[0]});
     ++defects.duplicateFaces;
   }
+}
+
+GenerateResult generateScan(const GenerateOptions& options) {
+  GenerateResult result;
+  TriangleMesh& mesh = result.mesh;
+  const auto [box, plan] = chooseScanBox(options);
+  const std::uint32_t w = box.n[0];
+  const double spacing = 1.5707963267948966 / w;  // about one edge length on the unit sphere
+  Bumps bumps = kSphereBumps;
+  bumps.seed = options.seed;
+  // Room for the seam copies, islands and bad faces, so that nothing is reallocated later.
+  mesh.positions.reserve(box.numVertices() + box.sideWidth(5) + 4096);
+  mesh.triangles.reserve(box.numFaces() + plan.islandFaces + 64);
+  appendBoxSphere(mesh, box, Vec3d::Zero(), 1.0, bumps, 0.1 * spacing, options.seed);
+  reportProgress(options.progress, "generate", 0.5);
+
+  // The seam edits vertices of faces by lattice index, the holes remove faces by lattice index:
+  // the seam first, while the indices still hold.
+  addUnweldedSeam(mesh, box, result.defects);
+  removeHoleFaces(mesh, box, plan, result.defects);
+  appendIslands(mesh, plan, spacing, options.seed, result.defects);
+  compactVertices(mesh);
+  const auto sphereFaces = static_cast<std::uint32_t>(box.numFaces() / 2);  // all still main surface
+  appendBadFaces(mesh, sphereFaces, options.seed, result.defects);
   return result;
 }
 
@@ -800,9 +818,7 @@ std::vector<VertexId> pickVertices(Rng& rng, const std::vector<VertexId>& rep, s
   return picked;
 }
 
-}  // namespace
-
-ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options) {
+void checkScanNoiseInput(const TriangleMesh& mesh, const ScanNoiseOptions& options) {
   if (!(options.amplitude >= 0.0) || !std::isfinite(options.amplitude)) {
     throw InputError("scan noise: the amplitude must be a finite number >= 0, not " +
                      std::to_string(options.amplitude));
@@ -813,17 +829,20 @@ ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options
                      std::to_string(options.folds) + " folds asked of a mesh with " +
                      std::to_string(numVertices) + " vertices");
   }
-  ScanNoiseResult result;
-  if (numVertices == 0 || mesh.triangles.empty()) return result;
+  if (numVertices == 0) return;  // nothing to move: addScanNoise returns at once
   for (const Triangle& t : mesh.triangles) {
     for (VertexId v : t) {
       if (v >= numVertices) throw InputError("scan noise: a triangle names vertex " + std::to_string(v) +
                                              " of " + std::to_string(numVertices));
     }
   }
-  const std::vector<VertexId> rep = coincidentRepresentatives(mesh.positions);
+}
 
-  // Area-weighted normals per representative and the mean edge length, summed in face order.
+/// Area-weighted unit normals per representative (rep) and the mean edge length, summed in face
+/// order.
+std::vector<Vec3d> representativeNormals(const TriangleMesh& mesh, const std::vector<VertexId>& rep,
+                                         double& meanEdgeLength) {
+  const std::uint64_t numVertices = mesh.positions.size();
   std::vector<Vec3d> normal(numVertices, Vec3d::Zero());
   double edgeSum = 0.0;
   std::uint64_t edgeCount = 0;
@@ -839,8 +858,7 @@ ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options
       }
     }
   }
-  const double edge = edgeCount ? edgeSum / edgeCount : 0.0;
-  result.meanEdgeLength = edge;
+  meanEdgeLength = edgeCount ? edgeSum / edgeCount : 0.0;
   parallelRange(numVertices, [&](std::uint64_t begin, std::uint64_t end) {
     for (std::uint64_t v = begin; v < end; ++v) {
       if (rep[v] != v) continue;
@@ -848,8 +866,13 @@ ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options
       normal[v] = len > 0.0 && std::isfinite(len) ? Vec3d(normal[v] / len) : Vec3d::UnitZ();
     }
   });
+  return normal;
+}
 
-  // Spikes and folds: extra moves per representative, decided before any position changes.
+/// Spikes and folds: extra moves per representative, decided before any position changes.
+std::unordered_map<VertexId, Vec3d> spikeAndFoldMoves(const TriangleMesh& mesh, const std::vector<VertexId>& rep,
+                                                      const std::vector<Vec3d>& normal, double edge,
+                                                      const ScanNoiseOptions& options, ScanNoiseResult& result) {
   Rng rng(mix64(options.seed ^ 0x5ca7ull));
   std::unordered_map<VertexId, Vec3d> extra;
   for (VertexId v : pickVertices(rng, rep, options.spikes, extra)) {
@@ -876,6 +899,21 @@ ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options
     }
     for (const auto& [v, move] : foldMove) extra[v] = move;
   }
+  return extra;
+}
+
+}  // namespace
+
+ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options) {
+  checkScanNoiseInput(mesh, options);
+  const std::uint64_t numVertices = mesh.positions.size();
+  ScanNoiseResult result;
+  if (numVertices == 0 || mesh.triangles.empty()) return result;
+  const std::vector<VertexId> rep = coincidentRepresentatives(mesh.positions);
+  double edge = 0.0;
+  const std::vector<Vec3d> normal = representativeNormals(mesh, rep, edge);
+  result.meanEdgeLength = edge;
+  const std::unordered_map<VertexId, Vec3d> extra = spikeAndFoldMoves(mesh, rep, normal, edge, options, result);
 
   // Per-vertex noise from a hash of the seed and the position: coincident copies move alike.
   // Copies move first, reading their representative's position before it moves itself.

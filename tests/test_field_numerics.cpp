@@ -1,0 +1,111 @@
+// Numerics shared by the direct and proxy fields: dual weights, mass floor, the inverse
+// iteration through the CHOLMOD wrapper, and the factor figures both field solves report.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <limits>
+
+#include "core/field/field_numerics.h"
+#include "core/field/field_proxy.h"
+#include "core/system/errors.h"
+#include "test_meshes.h"
+
+namespace seamvox {
+namespace {
+
+using Complex = std::complex<double>;
+
+TEST(FieldNumerics, DualWeightIsEdgeOverBarycentreDistanceWithinBounds) {
+  const Vec3d o = Vec3d::Zero(), x = Vec3d::UnitX();
+  EXPECT_DOUBLE_EQ(detail::dualWeight(2.0, o, x), 2.0);
+  EXPECT_DOUBLE_EQ(detail::dualWeight(1e6, o, x), 1e3) << "needle: bounded above";
+  EXPECT_DOUBLE_EQ(detail::dualWeight(1.0, o, o), 1e3) << "coincident barycentres";
+  EXPECT_DOUBLE_EQ(detail::dualWeight(1e-9, o, x), 1e-3) << "bounded below";
+  EXPECT_DOUBLE_EQ(detail::dualWeight(0.0, o, x), 1e-3) << "zero-length edge";
+  EXPECT_DOUBLE_EQ(detail::dualWeight(std::nan(""), o, x), 1e-3);
+}
+
+TEST(FieldNumerics, FloorMassesRaisesTinyZeroAndNanToOneMillionthOfTheMean) {
+  Eigen::VectorXd mass(5);
+  mass << 1.0, 0.0, std::numeric_limits<double>::quiet_NaN(), 1e-12, 2.0;
+  detail::floorMasses(mass);
+  const double floor = 1e-6 * (3.0 + 1e-12) / 5.0;  // the NaN counts as 0 in the mean
+  EXPECT_EQ(mass[0], 1.0);
+  EXPECT_EQ(mass[4], 2.0);
+  for (int i : {1, 2, 3}) EXPECT_DOUBLE_EQ(mass[i], floor) << i;
+}
+
+TEST(FieldNumerics, FlatModeShiftIsTinyAgainstTheDiagonalAndPositiveWithoutEdges) {
+  EXPECT_DOUBLE_EQ(detail::flatModeShift(4.0, 2.0), 2e-9);
+  EXPECT_GT(detail::flatModeShift(0.0, 2.0), 0.0);
+}
+
+/// Two components: a real and a Hermitian 2 x 2 block, each with smallest eigenvalue 1.
+ComplexSparse twoComponentLower() {
+  ComplexSparse a(4, 4);
+  std::vector<Eigen::Triplet<Complex>> t = {{0, 0, 2.0}, {1, 0, -1.0}, {1, 1, 2.0},
+                                            {2, 2, 2.0}, {3, 2, Complex(0.0, 1.0)}, {3, 3, 2.0}};
+  a.setFromTriplets(t.begin(), t.end());
+  return a;
+}
+
+TEST(FieldNumerics, InverseIterationFindsTheSmallestEigenvectorOfEveryComponent) {
+  const ComplexSparse lower = twoComponentLower();
+  CholmodFactor factor;
+  FieldSolveStats stats;
+  detail::factorFieldMatrix(factor, lower, "test field", "unknowns", &stats);
+  EXPECT_EQ(stats.unknowns, 4u);
+  EXPECT_EQ(stats.matrixNonzeros, 6u);
+  EXPECT_GT(stats.factorBytes, 0u);
+  EXPECT_GE(stats.factorPeakBytes, stats.factorBytes);
+  EXPECT_FALSE(stats.realFallback);
+
+  const Eigen::VectorXd mass = Eigen::VectorXd::Ones(4);
+  const std::vector<std::uint32_t> comp = {0, 0, 1, 1};
+  detail::InverseIterationOptions options;
+  options.maxIterations = 200;
+  const Eigen::VectorXcd x = detail::smallestEigenvectors(factor, mass, comp, 2, options);
+  const Eigen::MatrixXcd full = ComplexSparse(lower.selfadjointView<Eigen::Lower>());
+  const Eigen::VectorXcd ax = full * x;
+  // It stops when a step turns x by less than 1e-10 in 1 - |<x, y>|, i.e. ~1e-5 radians.
+  for (int i = 0; i < 4; ++i) EXPECT_LT(std::abs(ax[i] - x[i]), 1e-4) << "A x = 1 x at " << i;
+  const std::vector<double> norms = detail::componentNorms(x, mass, comp, 2);
+  EXPECT_NEAR(norms[0], 1.0, 1e-12);
+  EXPECT_NEAR(norms[1], 1.0, 1e-12);
+}
+
+TEST(FieldNumerics, FactoringAnIndefiniteMatrixNamesTheField) {
+  ComplexSparse lower = twoComponentLower();
+  lower.coeffRef(3, 3) = -5.0;
+  CholmodFactor factor;
+  try {
+    detail::factorFieldMatrix(factor, lower, "test field", "unknowns", nullptr);
+    FAIL() << "an indefinite matrix was factored";
+  } catch (const SolverError& e) {
+    EXPECT_NE(std::string(e.what()).find("test field"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FieldNumerics, BothFieldSolvesReportTheirFactorization) {
+  const testing::Surface s = testing::makeSurface(testing::torusMesh(24, 12));
+  FieldSolveStats direct;
+  SmoothFieldOptions smooth;
+  smooth.stats = &direct;
+  computeSmoothestField(s.mesh, s.topology, smooth);
+  EXPECT_EQ(direct.unknowns, s.mesh.numFaces());
+  EXPECT_GT(direct.factorNonzeros, direct.unknowns);
+  EXPECT_GT(direct.factorBytes, 0u);
+
+  FieldSolveStats proxy;
+  ProxyFieldOptions proxyOptions;
+  proxyOptions.gridResolution = 8;
+  proxyOptions.stats = &proxy;
+  const ProxyFieldResult result = computeProxyField(s.mesh, s.topology, proxyOptions);
+  EXPECT_EQ(proxy.unknowns, result.elements);
+  EXPECT_LT(proxy.unknowns, direct.unknowns) << "the proxy solves on fewer elements than faces";
+  EXPECT_GT(proxy.factorBytes, 0u);
+}
+
+}  // namespace
+}  // namespace seamvox
