@@ -91,6 +91,16 @@ void writeRefine(JsonWriter& j, const RefineStats& refine, const ParamReportCont
   j.endObject();
 }
 
+void writeUntangle(JsonWriter& j, const UntangleStats& u) {
+  j.key("untangle").beginObject();
+  j.key("flippedBefore").value(u.flippedBefore).key("flippedAfter").value(u.flippedAfter);
+  j.key("foldedIn3D").value(u.foldedIn3D);
+  j.key("rounds").value(U64{u.rounds}).key("solves").value(U64{u.solves});
+  j.key("patchFaces").value(u.patchFaces).key("freeVertices").value(U64{u.freeVertices});
+  j.key("largestUnknowns").value(U64{u.largestUnknowns}).key("seconds").value(u.seconds);
+  j.endObject();
+}
+
 void writeQuality(JsonWriter& j, const PipelineResult& r) {
   j.key("quality").beginObject();
   j.key("seamless").value(r.isSeamless());
@@ -98,6 +108,7 @@ void writeQuality(JsonWriter& j, const PipelineResult& r) {
   j.key("maxIntegerDistance").value(r.seamQuality.maxIntegerDistance);
   j.key("relativeGradientError").value(r.mapQuality.relativeGradientError);
   j.key("flipped").value(r.mapQuality.flipped).key("flippedFraction").value(r.mapQuality.flippedFraction);
+  j.key("flippedFolded").value(r.mapQuality.flippedFolded);
   j.key("collapsed").value(r.mapQuality.collapsed);
   j.endObject();
 }
@@ -216,6 +227,7 @@ std::string paramReportJson(const PipelineResult& r, const ParamReportContext& c
   writeSystem(j, r);
   if (r.solved.solver != ParamSolver::Hat) writeVoxel(j, r.solved, c.gridResolution);
   if (r.solved.refined) writeRefine(j, r.solved.refine, c);
+  if (r.untangled) writeUntangle(j, r.untangle);
   writeQuality(j, r);
   writeComponents(j, r.components);
   writeSeconds(j, r, c);

@@ -143,7 +143,8 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   meter.finish("field");
   // The cones param cuts through: those closer than the merge distance are merged, as param does
   // before its first cut (param may merge a few more pairs that a solve puts on one point).
-  run.edgeLength = c.spacing.spacing(computeBoundingBox(mesh.positions).diagonal());
+  // h as param takes it (the diagonal without spikes), so both merge the same cones.
+  run.edgeLength = c.spacing.spacing(run.clean.report.diagonalWithoutSpikes);
   run.coneCut = cutThroughCones(mesh, topology, run.field, c.mergeCones * run.edgeLength, {}, c.progress);
   meter.finish("cut");
   return run;

@@ -45,6 +45,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.mergeCones = parseMergeCones(args);
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
+  o.untangle = !args.flag("no-untangle");
   o.clean.weldVertices = args.flag("weld");
   o.listComponents = static_cast<std::uint32_t>(args.integer("report-components", o.listComponents, 0, 100000000));
   o.dropUnsolved = args.flag("drop-unsolved");
@@ -86,6 +87,13 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 refine.freeVertices, 100.0 * refine.refinedVertexFraction,
                 static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
+  }
+  if (r.untangled) {
+    std::printf("foldover repair: flipped %llu -> %llu (%llu folded in 3D), %llu patch faces, %u solves, %.2f s\n",
+                static_cast<unsigned long long>(r.untangle.flippedBefore),
+                static_cast<unsigned long long>(r.untangle.flippedAfter),
+                static_cast<unsigned long long>(r.untangle.foldedIn3D),
+                static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves, r.untangle.seconds);
   }
   const ComponentSummary& parts = r.components;
   if (!parts.droppedIds.empty()) {
@@ -176,6 +184,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
+                 "                     [--greedy] [--no-untangle] [--weld] [--report R.json]\n"
+                 "                     [--render OUT.png]\n"
                  "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
                  "                     [--report-components N] [--drop-unsolved]\n"
                  "\n"
@@ -202,6 +212,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      one of them: closer than the grid resolves, they would collapse\n"
                  "                      the faces between them; default 0.5, 0 keeps every cone\n"
                  "  --greedy            round translations in batches, re-solving in between\n"
+                 "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
+                 "                      re-solved with stiffening; seams and translations kept)\n"
                  "  --weld              weld coincident vertices before cleaning\n"
                  "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"
                  "                      stage timings, peak memory, components\n"
@@ -212,6 +224,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --render OUT.png    also render the result (checkerboard, seams, cones; 1024x1024,\n"
                  "                      default view of seamvox render)\n"
                  "  --quiet             no progress on stderr\n",
+                 {"greedy", "no-untangle", "weld"},
                  {"greedy", "weld", "drop-unsolved"},
                  &runParam});
 

@@ -1,11 +1,14 @@
 #include "core/basis/basis.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <string>
 #include <tuple>
 
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -43,6 +46,36 @@ void hatTriangleIntegrals(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, con
   for (int i = 0; i < 3; ++i) {
     stiffness[3 * i + i] = -(stiffness[3 * i + (i + 1) % 3] + stiffness[3 * i + (i + 2) % 3]);
   }
+}
+
+std::vector<double> coneNeighbourhoodWeights(const TriangleMesh& mesh, const std::vector<VertexId>& cones,
+                                             double radius) {
+  std::vector<double> weight(mesh.numFaces(), 1.0);
+  if (cones.empty() || !(radius > 0.0) || !std::isfinite(radius)) return weight;
+  using Cell = std::array<std::int64_t, 3>;
+  auto cellOf = [&](const Vec3d& x) {
+    return Cell{static_cast<std::int64_t>(std::floor(x.x() / radius)),
+                static_cast<std::int64_t>(std::floor(x.y() / radius)),
+                static_cast<std::int64_t>(std::floor(x.z() / radius))};
+  };
+  std::map<Cell, std::vector<Vec3d>> buckets;
+  for (VertexId v : cones) buckets[cellOf(mesh.position(v))].push_back(mesh.position(v));
+  parallelFor(mesh.numFaces(), 1u << 14, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
+      const Cell cell = cellOf(c);
+      double nearest = radius * radius;
+      for (int d = 0; d < 27; ++d) {
+        const auto it = buckets.find({cell[0] + d % 3 - 1, cell[1] + d / 3 % 3 - 1, cell[2] + d / 9 - 1});
+        if (it == buckets.end()) continue;
+        for (const Vec3d& p : it->second) nearest = std::min(nearest, (p - c).squaredNorm());
+      }
+      // sqrt(R / r) = (R^2 / r^2)^(1/4); capped where a centroid nearly meets its cone.
+      weight[f] = std::pow(radius * radius / std::max(nearest, 1e-12 * radius * radius), 0.25);
+    }
+  });
+  return weight;
 }
 
 void Basis::setSeamAdjacencies(const std::vector<SeamCurve>& seams,
@@ -186,10 +219,23 @@ std::vector<DomainAdjacency> collectSeamAdjacencies(const Topology& topology, co
 
 HatBasis::HatBasis(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                    const CutResult& cut, const HatBasisOptions& options)
-    : mesh_(mesh), field_(field), cut_(cut), edgeLength_(options.edgeLength) {
+    : mesh_(mesh), field_(field), cut_(cut), edgeLength_(options.edgeLength), faceWeight_(options.faceWeight) {
   const std::uint32_t nf = topology.numFaces();
   if (!(edgeLength_ > 0.0) || !std::isfinite(edgeLength_)) {
     throw InputError("hat basis: edge length must be positive and finite");
+  }
+  if (!faceWeight_.empty() && faceWeight_.size() != nf) {
+    throw InputError("hat basis: " + std::to_string(faceWeight_.size()) + " face weights for " +
+                     std::to_string(nf) + " faces");
+  }
+  if (options.coneWeightRadius > 0.0 && !cut.cones.empty()) {
+    const std::vector<double> near =
+        coneNeighbourhoodWeights(mesh, cut.cones, options.coneWeightRadius * edgeLength_);
+    if (faceWeight_.empty()) {
+      faceWeight_ = near;
+    } else {
+      for (FaceId f = 0; f < nf; ++f) faceWeight_[f] *= near[f];
+    }
   }
   if (field.direction.size() != nf || cut.corners.size() != 3u * nf || cut.faceRotation.size() != nf) {
     throw InputError("hat basis: field or cut sizes do not match the mesh (" +
@@ -223,6 +269,10 @@ void HatBasis::elementIntegrals(std::uint64_t e, ElementIntegrals& out) const {
   double stiffness[9];
   std::complex<double> rhs[3];
   hatTriangleIntegrals(p0, p1, p2, u, edgeLength_, stiffness, rhs);
+  if (!faceWeight_.empty()) {
+    for (double& s : stiffness) s *= faceWeight_[f];
+    for (auto& r : rhs) r *= faceWeight_[f];
+  }
   out.count = 3;
   for (int a = 0; a < 3; ++a) {
     out.domain[a] = cornerDomain_[3 * f + a];

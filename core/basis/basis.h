@@ -85,7 +85,24 @@ struct HatBasisOptions {
   /// Optional subset of faces (local refinement); empty = all faces. Vertices not touched by the
   /// subset get no domain.
   std::vector<FaceId> faces;
+  /// Optional per-face multiplier of the energy (stiffness and right-hand side), #F of the mesh
+  /// or empty (all 1): stiffening re-solves weight faces that a solve flipped (core/refine/untangle).
+  std::vector<double> faceWeight;
+  /// Faces closer than this many h to a cone of the cut get their energy multiplied by
+  /// sqrt(R / r), r the distance from the face's centroid to the cone (0: off). A cone's value is
+  /// fixed by its seams' rotation (DESIGN section 7), but the Dirichlet energy barely feels a
+  /// single vertex on a fine mesh: without the weight the map around a cone ignores where the
+  /// rounding put it, and the cone's fan folds over (bench/RESULTS.md, flips near cones).
+  double coneWeightRadius = 0.0;
 };
+
+/// Recommended HatBasisOptions::coneWeightRadius for the solves of a map (global and local).
+constexpr double kConeWeightRadius = 4.0;
+
+/// The per-face factors of HatBasisOptions::coneWeightRadius (radius in mesh units): 1 beyond
+/// the radius. Cones hashed on a grid of the radius: linear in the faces.
+std::vector<double> coneNeighbourhoodWeights(const TriangleMesh& mesh, const std::vector<VertexId>& cones,
+                                             double radius);
 
 /// Per-vertex hat functions; elements = triangles; domains = wedges (sectors of a vertex's
 /// one-ring between cut edges). The target direction of face f is the combed field
@@ -112,6 +129,7 @@ class HatBasis final : public Basis {
   const CrossField& field_;
   const CutResult& cut_;
   double edgeLength_;
+  std::vector<double> faceWeight_;
   std::vector<FaceId> faces_;
   std::vector<std::uint32_t> cornerDomain_;
   std::vector<VertexId> basisVertex_;

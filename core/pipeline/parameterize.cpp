@@ -75,10 +75,12 @@ void solveConePasses(PipelineResult& r, const CrossField& field, const PipelineO
   ParamOptions param;
   param.edgeLength = r.edgeLength;
   param.greedyRounding = options.greedyRounding;
+  param.coneWeightRadius = options.coneWeightRadius;
   param.progress = options.progress;
   param.failsToFactor = options.failsToFactor;
   SolverOptions solverOptions = options.solver;
   solverOptions.meter = &meter;  // closes "solve" and "refine"
+  solverOptions.refine.coneWeightRadius = options.coneWeightRadius;
   const double mergeDistance = options.mergeCones * r.edgeLength;
   std::vector<std::pair<VertexId, VertexId>> coincident;
   for (;;) {
@@ -106,6 +108,16 @@ void solveConePasses(PipelineResult& r, const CrossField& field, const PipelineO
       r.coneIndex4.clear();
       for (VertexId v : r.cones) r.coneIndex4.push_back(coneIndex.at(v));
       r.seams = static_cast<std::uint32_t>(coneCut.cut.seams.size());
+      if (options.untangle) {
+        UntangleOptions untangle = options.untangleOptions;
+        untangle.edgeLength = r.edgeLength;
+        untangle.coneWeightRadius = options.coneWeightRadius;
+        untangle.progress = options.progress;
+        r.untangle = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
+                                   r.solved.param.translations, untangle);
+        r.untangled = true;
+        meter.finish("untangle");
+      }
       r.seamQuality = measureSeams(r.mesh, r.topology, coneCut.cut, r.solved.param.cornerUV);
       return;
     }

@@ -19,6 +19,7 @@
 #include "core/quality/metrics.h"
 #include "core/solve/param_solver.h"
 #include "core/system/memory.h"
+#include "core/refine/untangle.h"
 #include "core/system/progress.h"
 
 namespace seamvox {
@@ -67,6 +68,12 @@ struct PipelineOptions {
   std::uint32_t maxConePasses = 3;
   SolverOptions solver;  ///< solver, grid resolution, refinement (its meter is set from below)
   bool greedyRounding = false;
+  /// Foldover repair after the solve (core/refine/untangle): stiffening re-solves of patches
+  /// around flipped faces, seams and integer translations kept. Stage "untangle".
+  bool untangle = true;
+  /// HatBasisOptions::coneWeightRadius of every hat solve (global, refinement, repair); 0: off.
+  double coneWeightRadius = kConeWeightRadius;
+  UntangleOptions untangleOptions;  ///< edgeLength and progress are set from below
   ProgressFn progress;  ///< every stage reports and may cancel (CancelledError) through it
   /// Stages are closed on this meter when given ("clean", "field", "cut", "solve", "refine",
   /// "metrics"), so a caller can add its own ("read", "write") on the same one.
@@ -106,6 +113,8 @@ struct PipelineResult {
   ConeMergeResult merged;        ///< over all passes
   std::uint32_t conePasses = 0;
   SolverResult solved;           ///< figures of the last solve (its map moved to mesh.cornerUV)
+  bool untangled = false;        ///< the foldover repair ran
+  UntangleStats untangle;
   SeamQuality seamQuality;
   MapQuality mapQuality;
   ComponentSummary components;  ///< per component, of the mesh before any drop

@@ -213,10 +213,12 @@ std::vector<std::uint8_t> markCones(const TriangleMesh& mesh, const std::vector<
   return isCone;
 }
 
+
 // Counts collapsed faces (those between coincident cones apart when cones are given) and flipped
 // ones into out, for spacing h.
 void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, double h,
-                       const std::vector<VertexId>* cones, MapQuality& out) {
+                       const std::vector<VertexId>* cones, const CrossField* field, MapQuality& out) {
+  const bool haveSmooth = field && field->framePositions.size() == mesh.numVertices();
   std::vector<std::uint8_t> isCone;
   if (cones) isCone = markCones(mesh, *cones);
   const FaceId nf = mesh.numFaces();
@@ -228,6 +230,7 @@ void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, doubl
       collapsedAtCones += cones && collapsesBetweenCones(mesh, cornerUV, f, isCone);
     } else if (ratio < 0.0) {
       ++flipped;
+      if (haveSmooth && faceFoldedIn3D(mesh, field->framePositions, f)) ++out.flippedFolded;
     }
   }
   out.flipped = flipped;
@@ -237,6 +240,13 @@ void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, doubl
 }
 
 }  // namespace
+
+bool faceFoldedIn3D(const TriangleMesh& mesh, const std::vector<Vec3f>& smooth, FaceId f) {
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d n = (mesh.position(t[1]) - mesh.position(t[0])).cross(mesh.position(t[2]) - mesh.position(t[0]));
+  const Vec3d a = smooth[t[0]].cast<double>(), b = smooth[t[1]].cast<double>(), c = smooth[t[2]].cast<double>();
+  return n.dot((b - a).cross(c - a)) < 0.0;
+}
 
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
@@ -254,7 +264,7 @@ MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
   out.relativeGradientError = field && sums.target > 0.0
                                   ? std::sqrt(sums.error / sums.target)
                                   : std::numeric_limits<double>::quiet_NaN();
-  countFlippedFaces(mesh, cornerUV, h, cones, out);
+  countFlippedFaces(mesh, cornerUV, h, cones, field, out);
   return out;
 }
 

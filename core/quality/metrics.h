@@ -57,9 +57,17 @@ constexpr double kCoincidentConeDistance = 1e-9;
 bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
                            const std::vector<std::uint8_t>& isCone);
 
+/// True when face f's normal points away from the same face's normal on a smoothed copy of the
+/// surface (same triangles, positions `smooth`, e.g. CrossField::framePositions): the face is
+/// folded in 3D, and a map that follows the smooth surface flips it.
+bool faceFoldedIn3D(const TriangleMesh& mesh, const std::vector<Vec3f>& smooth, FaceId f);
+
 struct MapQuality {
   std::uint64_t faces = 0;
   std::uint64_t flipped = 0;    ///< negative parameter-space area (not collapsed)
+  /// Of the flipped faces, those folded in 3D: normal opposite to the same face on the field's
+  /// smoothed surface (CrossField::framePositions; 0 without one).
+  std::uint64_t flippedFolded = 0;
   /// |parameter area| < kCollapsedAreaFraction of the expected area A / h^2
   std::uint64_t collapsed = 0;
   /// Of the collapsed faces, those between two coincident cones (collapsesBetweenCones); 0 when

@@ -186,10 +186,20 @@ void mergeSolved(const RegionMesh& region, const RegionSolution& solved,
   current = std::move(merged);
 }
 
-/// Faces within `rings` vertex rings of the seeds (the seeds included), whatever their flag;
-/// faces outside the region so far are flagged kRing.
+/// growFaces, with the faces outside the region so far flagged kRing.
 std::vector<FaceId> growPatch(const Topology& topology, std::vector<FaceId> frontier,
                               std::uint32_t rings, std::vector<std::uint8_t>& flag) {
+  std::vector<FaceId> patch = growFaces(topology, std::move(frontier), rings);
+  for (FaceId f : patch) {
+    if (flag[f] == kOutside) flag[f] = kRing;
+  }
+  return patch;
+}
+
+}  // namespace
+
+std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> frontier,
+                              std::uint32_t rings) {
   std::vector<FaceId> patch = frontier;
   std::sort(patch.begin(), patch.end());
   patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
@@ -218,13 +228,8 @@ std::vector<FaceId> growPatch(const Topology& topology, std::vector<FaceId> fron
     patch = std::move(grown);
     frontier = std::move(added);
   }
-  for (FaceId f : patch) {
-    if (flag[f] == kOutside) flag[f] = kRing;
-  }
   return patch;
 }
-
-}  // namespace
 
 std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
                                        const WedgeMap& cornerUV,
@@ -661,7 +666,8 @@ RegionSolution solveRegionSystem(const RegionProblem& p, const Reduction& system
 
 RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<Complex>& seamT, double edgeLength,
-                           RefineStats* stats) {
+                           RefineStats* stats, const std::vector<double>& faceWeight,
+                           double coneWeightRadius) {
   const std::uint32_t rf = region.topology.numFaces();
   const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
   if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
@@ -671,6 +677,8 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
   }
   HatBasisOptions basisOptions;
   basisOptions.edgeLength = edgeLength;
+  basisOptions.faceWeight = faceWeight;
+  basisOptions.coneWeightRadius = coneWeightRadius;
   const HatBasis basis(region.mesh, region.topology, region.field, region.cut, basisOptions);
   // No translation constraints: then column np + j of P is t_j itself (t = s).
   const std::vector<GaussVector> noConstraints;
@@ -879,7 +887,7 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     lap = std::chrono::steady_clock::now();
     RegionSolution solved;
     if (numFree > 0) {
-      solved = solveRegion(region, regionUV, regionT, h, &stats);
+      solved = solveRegion(region, regionUV, regionT, h, &stats, {}, options.coneWeightRadius);
       figures.unknowns = stats.unknowns;
       if (stats.unknowns >= largest.unknowns) largest = stats;
     } else {

@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/basis/basis.h"
 #include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/mesh/mesh.h"
@@ -44,6 +45,7 @@ struct RefineOptions {
   std::uint32_t rings = 1;
   /// Solves at most (>= 1; 1: no re-detection).
   std::uint32_t maxRounds = 6;
+  double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
   ProgressFn progress;
 };
 
@@ -115,6 +117,10 @@ struct RegionMesh {
   std::vector<std::uint32_t> seamOrigin;   ///< #local seams
 };
 
+/// Faces within `rings` vertex rings of the seeds (the seeds included). Sorted, unique. Cost: the
+/// patch's size times the valence.
+std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> seeds, std::uint32_t rings);
+
 /// Faces to refine: marked faces, faces whose input parameter area is below the collapse
 /// threshold or negative, then options.rings rings of neighbours. Sorted, unique. Linear in #F
 /// (one pass over the map) plus the region's size times the valence.
@@ -138,10 +144,12 @@ struct RegionSolution {
 /// fixed to the given corner values (3 #sub faces, the input map on the region) and moved to the
 /// right-hand side; translations fixed to seamT (per local seam) except on seams among free
 /// vertices only, which are solved, rounded to Gaussian integers and solved again (solveSeamless).
-/// Locked corners keep their input values exactly. Throws SolverError when a factorization fails.
+/// Locked corners keep their input values exactly. faceWeight (#sub faces or empty) scales each
+/// face's energy, and so does HatBasisOptions::coneWeightRadius around the region's cones. Throws SolverError when a factorization fails.
 RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<std::complex<double>>& seamT, double edgeLength,
-                           RefineStats* stats = nullptr);
+                           RefineStats* stats = nullptr,
+                           const std::vector<double>& faceWeight = {}, double coneWeightRadius = 0.0);
 
 /// The whole stage: select, extract, solve, re-detect and grow (rounds, above). cornerUV is the
 /// input map (3 #F), seamT its rounded translation per seam of cut (Gaussian integers). Holds one

@@ -17,6 +17,7 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
   auto start = std::chrono::steady_clock::now();
   HatBasisOptions basisOptions;
   basisOptions.edgeLength = options.edgeLength;
+  basisOptions.coneWeightRadius = options.coneWeightRadius;
   const HatBasis basis(mesh, topology, field, cut, basisOptions);
   out.basisFunctions = basis.numBasisFunctions();
   out.domains = basis.numDomains();

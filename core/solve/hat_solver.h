@@ -9,6 +9,7 @@
 #include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/mesh/mesh.h"
+#include "core/basis/basis.h"
 #include "core/system/progress.h"
 #include "core/solve/seamless_solve.h"
 #include "core/mesh/topology.h"
@@ -18,6 +19,8 @@ namespace seamvox {
 struct ParamOptions {
   double edgeLength = 1.0;  ///< h, target grid spacing in mesh units (> 0)
   bool greedyRounding = false;
+  /// HatBasisOptions::coneWeightRadius of the hat solves (global, and local in refinement).
+  double coneWeightRadius = kConeWeightRadius;
   ProgressFn progress;
   std::function<bool(std::uint32_t unknowns)> failsToFactor;  ///< test hook (RoundOptions)
 };

@@ -1,0 +1,206 @@
+// Foldover repair: patches around flipped faces re-solved in the hat basis with stiffening.
+#include "core/refine/untangle.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "core/quality/metrics.h"
+#include "core/refine/refine.h"
+#include "core/system/errors.h"
+#include "core/system/parallel.h"
+#include "core/system/stopwatch.h"
+
+namespace seamvox {
+
+namespace {
+
+using Complex = std::complex<double>;
+
+enum FaceState : std::uint8_t { kFine = 0, kFlipped = 1, kFolded = 2 };
+
+/// kFlipped for a face with negative parameter area (collapsed and zero-area faces excluded),
+/// kFolded when it is also folded in 3D against the smoothed surface.
+std::uint8_t faceState(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f, double h,
+                       const std::vector<Vec3f>* smooth) {
+  const double ratio = parameterAreaRatio(mesh, uv, f, h);
+  if (!(ratio < 0.0) || std::abs(ratio) < kCollapsedAreaFraction) return kFine;
+  return smooth && faceFoldedIn3D(mesh, *smooth, f) ? kFolded : kFlipped;
+}
+
+/// Per region face: stiffened-map state (kFine / kFlipped / kFolded) as in faceState.
+std::vector<std::uint8_t> regionStates(const RegionMesh& region, const WedgeMap& uv, double h,
+                                       const std::vector<std::uint8_t>& foldedWhole) {
+  const std::uint32_t rf = region.topology.numFaces();
+  std::vector<std::uint8_t> state(rf, kFine);
+  for (std::uint32_t i = 0; i < rf; ++i) {
+    const double ratio = parameterAreaRatio(region.mesh, uv, i, h);
+    if (!(ratio < 0.0) || std::abs(ratio) < kCollapsedAreaFraction) continue;
+    state[i] = foldedWhole[region.faceOrigin[i]] ? kFolded : kFlipped;
+  }
+  return state;
+}
+
+/// Flipped (not folded) faces per region component.
+std::vector<std::uint32_t> flipsPerComponent(const std::vector<std::uint8_t>& state,
+                                             const ComponentsResult& components) {
+  std::vector<std::uint32_t> count(components.components.size(), 0);
+  for (std::size_t i = 0; i < state.size(); ++i) count[components.faceComponent[i]] += state[i] == kFlipped;
+  return count;
+}
+
+/// The best stiffened solution of one round's region: re-solves while faces stay flipped, each
+/// time multiplying their energy by options.stiffening; per component the solve with the fewest
+/// flips wins (components are independent: everything around them is locked).
+struct RoundSolution {
+  RegionSolution solution;
+  std::vector<std::uint8_t> componentImproved;
+  std::uint32_t solves = 0, unknowns = 0;
+};
+
+RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
+                            const std::vector<Complex>& regionT, const std::vector<std::uint8_t>& foldedWhole,
+                            const UntangleOptions& options) {
+  const double h = options.edgeLength;
+  const ComponentsResult components = computeComponents(region.topology);
+  const std::vector<std::uint32_t> before = flipsPerComponent(regionStates(region, regionUV, h, foldedWhole), components);
+  std::vector<std::uint32_t> best = before;
+  RoundSolution out;
+  out.componentImproved.assign(before.size(), 0);
+  std::vector<double> weight(region.topology.numFaces(), 1.0);
+  for (std::uint32_t solve = 0; solve < std::max(1u, options.maxSolves); ++solve) {
+    RefineStats stats;
+    RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius);
+    ++out.solves;
+    out.unknowns = std::max(out.unknowns, stats.unknowns);
+    const std::vector<std::uint8_t> state = regionStates(region, solved.cornerUV, h, foldedWhole);
+    const std::vector<std::uint32_t> flips = flipsPerComponent(state, components);
+    // Keep, per component, the corners of the best solve so far.
+    if (out.solution.cornerUV.empty()) {
+      out.solution = solved;
+      for (std::size_t c = 0; c < flips.size(); ++c) out.componentImproved[c] = flips[c] < before[c];
+      best = flips;
+    } else {
+      for (std::uint32_t i = 0; i < region.topology.numFaces(); ++i) {
+        const std::uint32_t c = components.faceComponent[i];
+        if (flips[c] >= best[c]) continue;
+        for (int k = 0; k < 3; ++k) out.solution.cornerUV.set(3 * i + k, solved.cornerUV[3 * i + k]);
+      }
+      for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) {
+        const std::uint32_t c = components.faceComponent[region.cut.seams[j].corners.front() / 3];
+        if (flips[c] < best[c]) out.solution.seamT[j] = solved.seamT[j];
+      }
+      for (std::size_t c = 0; c < flips.size(); ++c) {
+        if (flips[c] < best[c]) best[c] = flips[c], out.componentImproved[c] = 1;
+      }
+    }
+    bool anyFlipped = false;
+    for (std::uint32_t i = 0; i < state.size(); ++i) {
+      if (state[i] != kFlipped) continue;
+      weight[i] *= options.stiffening;
+      anyFlipped = true;
+    }
+    if (!anyFlipped) break;
+  }
+  return out;
+}
+
+/// Vertex rings that reach `radius` (world units) at the mean edge length of the seed faces (at
+/// least 2): the patch must reach as far as the map's damage, which scales with h, not the edges.
+std::uint32_t patchRings(const TriangleMesh& mesh, const std::vector<FaceId>& seeds, double h, double radius) {
+  double sum = 0.0;
+  for (FaceId f : seeds) {
+    const Triangle& t = mesh.triangles[f];
+    for (int k = 0; k < 3; ++k) sum += (mesh.position(t[(k + 1) % 3]) - mesh.position(t[k])).norm();
+  }
+  const double edge = sum / (3.0 * seeds.size());
+  const double rings = edge > 0.0 ? std::ceil(radius * h / edge) : 2.0;
+  return static_cast<std::uint32_t>(std::clamp(rings, 2.0, 64.0));
+}
+
+}  // namespace
+
+UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                            const CutResult& cut, WedgeMap& cornerUV, std::vector<Complex>& seamT,
+                            const UntangleOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const FaceId nf = topology.numFaces();
+  if (cornerUV.size() != 3u * static_cast<std::size_t>(nf) || seamT.size() != cut.seams.size()) {
+    throw InputError("untangle: " + std::to_string(cornerUV.size()) + " corner UVs and " +
+                     std::to_string(seamT.size()) + " translations for " + std::to_string(nf) +
+                     " faces and " + std::to_string(cut.seams.size()) + " seams");
+  }
+  if (!(options.edgeLength > 0.0) || !std::isfinite(options.edgeLength) || !(options.stiffening > 1.0)) {
+    throw InputError("untangle: edge length must be positive and stiffening above 1");
+  }
+  const double h = options.edgeLength;
+  const std::vector<Vec3f>* smooth =
+      field.framePositions.size() == mesh.numVertices() ? &field.framePositions : nullptr;
+  std::vector<std::uint8_t> state(nf, kFine);
+  auto classifyAll = [&] {
+    parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+      for (FaceId f = range.begin(); f != range.end(); ++f) state[f] = faceState(mesh, cornerUV, f, h, smooth);
+    });
+  };
+  classifyAll();
+  std::vector<std::uint8_t> folded(nf, 0);
+  UntangleStats stats;
+  for (FaceId f = 0; f < nf; ++f) {
+    folded[f] = smooth && faceFoldedIn3D(mesh, *smooth, f);
+    stats.flippedBefore += state[f] != kFine;
+  }
+
+  std::vector<VertexId> moved;
+  for (std::uint32_t round = 0; round < std::max(1u, options.maxRounds); ++round) {
+    std::vector<FaceId> seeds;
+    for (FaceId f = 0; f < nf; ++f) {
+      if (state[f] == kFlipped) seeds.push_back(f);
+    }
+    if (seeds.empty()) break;
+    const std::uint32_t rings = patchRings(mesh, seeds, h, options.patchRadius * double(1u << round));
+    const std::vector<FaceId> patch = growFaces(topology, std::move(seeds), rings);
+    const RegionMesh region = extractRegion(mesh, topology, field, cut, patch);
+    std::vector<Vec2d> values(3 * patch.size());
+    for (std::size_t i = 0; i < patch.size(); ++i) {
+      for (int k = 0; k < 3; ++k) values[3 * i + k] = cornerUV[3 * patch[i] + k];
+    }
+    const WedgeMap regionUV = WedgeMap::fromCorners(region.mesh.triangles, values);
+    std::vector<Complex> regionT(region.seamOrigin.size());
+    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
+    ++stats.rounds;
+    stats.patchFaces += patch.size();
+    const RoundSolution solved = stiffenRegion(region, regionUV, regionT, folded, options);
+    stats.solves += solved.solves;
+    stats.largestUnknowns = std::max(stats.largestUnknowns, solved.unknowns);
+
+    // Free corners of the improved components go back into the whole map.
+    const ComponentsResult components = computeComponents(region.topology);
+    std::vector<CornerId> corners;
+    std::vector<Vec2d> uv;
+    for (std::uint32_t c = 0; c < 3 * region.topology.numFaces(); ++c) {
+      const VertexId v = region.mesh.triangles[c / 3][c % 3];
+      if (!region.vertexFree[v] || !solved.componentImproved[components.faceComponent[c / 3]]) continue;
+      corners.push_back(3 * region.faceOrigin[c / 3] + c % 3);
+      uv.push_back(solved.solution.cornerUV[c]);
+      moved.push_back(region.vertexOrigin[v]);
+    }
+    cornerUV.assign(corners, uv);
+    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) {
+      const std::uint32_t c = components.faceComponent[region.cut.seams[j].corners.front() / 3];
+      if (solved.componentImproved[c]) seamT[region.seamOrigin[j]] = solved.solution.seamT[j];
+    }
+    classifyAll();
+    reportProgress(options.progress, "untangle", double(round + 1) / options.maxRounds);
+  }
+  std::sort(moved.begin(), moved.end());
+  stats.freeVertices = static_cast<std::uint32_t>(std::unique(moved.begin(), moved.end()) - moved.begin());
+  for (FaceId f = 0; f < nf; ++f) {
+    stats.flippedAfter += state[f] != kFine;
+    stats.foldedIn3D += state[f] == kFolded;
+  }
+  stats.seconds = secondsSince(start);
+  return stats;
+}
+
+}  // namespace seamvox

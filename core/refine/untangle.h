@@ -1,0 +1,55 @@
+#pragma once
+/// Foldover repair of a seamless map by stiffening re-solves in the hat basis. A least-squares
+/// map that follows a cross field flips triangles where the field cannot be followed: around
+/// cones (on the shared meshes nearly every flip lies within a few rings of one) and on scan noise.
+/// Patches of rings around the flipped faces are re-solved with everything around them locked
+/// and the seam translations kept (seams lying wholly inside a patch re-round theirs, as in
+/// refine), so the map stays exactly seamless; each re-solve multiplies the energy of the faces
+/// still flipped by a stiffening factor, which pulls their gradients towards the field's
+/// orientation-preserving target and spreads the distortion over the unflipped neighbours.
+/// Faces folded in 3D (their normal opposite to the field's smoothed surface) flip under any map
+/// that follows the smooth surface: they are neither seeds nor stiffened, only counted.
+#include <complex>
+#include <cstdint>
+#include <vector>
+
+#include "core/basis/basis.h"
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
+#include "core/system/progress.h"
+
+namespace seamvox {
+
+struct UntangleOptions {
+  double edgeLength = 1.0;  ///< h of the map (> 0)
+  /// Patch radius around the flipped faces in the first round, in grid spacings h (as vertex
+  /// rings at the seeds' mean edge length, at least 2); each further round doubles it.
+  double patchRadius = 0.5;
+  std::uint32_t maxRounds = 3;    ///< patch rounds (>= 1)
+  std::uint32_t maxSolves = 8;    ///< stiffening re-solves per round (>= 1)
+  double stiffening = 2.0;        ///< energy factor per re-solve of a face still flipped (> 1)
+  double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
+  ProgressFn progress;
+};
+
+struct UntangleStats {
+  std::uint64_t flippedBefore = 0, flippedAfter = 0;  ///< whole map, collapsed faces excluded
+  /// Of flippedAfter: folded in 3D against the field's smoothed surface (0 without one).
+  std::uint64_t foldedIn3D = 0;
+  std::uint32_t rounds = 0, solves = 0;
+  std::uint64_t patchFaces = 0;     ///< faces re-solved, summed over rounds
+  std::uint32_t freeVertices = 0;   ///< vertices moved in some round (counted once per round)
+  std::uint32_t largestUnknowns = 0;
+  double seconds = 0.0;
+};
+
+/// Repairs flips of cornerUV (3 #F, on the wedges of cut) in place; seamT (per seam of cut,
+/// Gaussian integers) is updated where a seam inside a patch re-rounded its translation. A round
+/// is kept only where it lowers the flips of its patch. Throws InputError on mismatched sizes.
+UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                            const CutResult& cut, WedgeMap& cornerUV,
+                            std::vector<std::complex<double>>& seamT, const UntangleOptions& options);
+
+}  // namespace seamvox

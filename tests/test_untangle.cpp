@@ -1,0 +1,194 @@
+// Foldover repair (core/refine/untangle) and the cone-neighbourhood weights of the hat energy:
+// flips repaired, the map stays seamless with integer translations, only patches around the
+// flips move, and the weights are what they say.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/basis/basis.h"
+#include "core/pipeline/parameterize.h"
+#include "core/quality/metrics.h"
+#include "core/refine/untangle.h"
+#include "core/solve/hat_solver.h"
+#include "core/synth/generate.h"
+#include "core/system/errors.h"
+#include "test_meshes.h"
+
+namespace seamvox {
+namespace {
+
+TriangleMesh generated(MeshKind kind, std::uint64_t faces) {
+  GenerateOptions options;
+  options.kind = kind;
+  options.faces = faces;
+  return generateMesh(options).mesh;
+}
+
+TriangleMesh sphere(std::uint64_t faces) { return generated(MeshKind::Sphere, faces); }
+
+TEST(ConeWeights, SquareRootOfRadiusOverDistanceInsideOneOutside) {
+  const TriangleMesh mesh = sphere(4000);
+  std::mt19937 random(7);
+  std::vector<VertexId> cones;
+  for (int k = 0; k < 12; ++k) cones.push_back(random() % mesh.numVertices());
+  const double radius = 0.3;
+  const std::vector<double> weight = coneNeighbourhoodWeights(mesh, cones, radius);
+  ASSERT_EQ(weight.size(), mesh.numFaces());
+  std::size_t inside = 0;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
+    double nearest = 1e300;
+    for (VertexId v : cones) nearest = std::min(nearest, (mesh.position(v) - c).norm());
+    const double expected = nearest < radius ? std::sqrt(radius / nearest) : 1.0;
+    EXPECT_NEAR(weight[f], expected, 1e-9 * expected) << "face " << f;
+    inside += nearest < radius;
+  }
+  EXPECT_GT(inside, 100u);  // the check above covered the weighted part, not only ones
+  EXPECT_EQ(coneNeighbourhoodWeights(mesh, {}, radius), std::vector<double>(mesh.numFaces(), 1.0));
+}
+
+TEST(FoldedIn3D, AgainstTheSmoothedCopy) {
+  TriangleMesh mesh = testing::gridMesh(1, 1);
+  std::vector<Vec3f> smooth = mesh.positions;
+  EXPECT_FALSE(faceFoldedIn3D(mesh, smooth, 0));
+  for (Vec3f& p : smooth) p.x() = -p.x();  // mirrored: every face points the other way
+  EXPECT_TRUE(faceFoldedIn3D(mesh, smooth, 0));
+}
+
+/// A seamless hat map of a sphere with its cut, then damaged: a few vertices away from seams and
+/// cones are moved far in (u, v), which folds their fans over.
+struct DamagedMap {
+  testing::CutSurface cs;
+  ParamResult map;
+  std::vector<VertexId> damaged;
+};
+
+DamagedMap damagedSphereMap() {
+  DamagedMap d;
+  d.cs = testing::makeCutSurface(sphere(6000));
+  ParamOptions options;
+  options.edgeLength = 0.15;
+  d.map = parameterizeMesh(d.cs.s.mesh, d.cs.s.topology, d.cs.field, d.cs.cut, options);
+  const Topology& topology = d.cs.s.topology;
+  std::vector<std::uint8_t> nearCut(d.cs.s.mesh.numVertices(), 0);
+  for (VertexId v : d.cs.cut.cones) nearCut[v] = 1;
+  for (const SeamCurve& seam : d.cs.cut.seams) {
+    for (CornerId c : seam.corners) {
+      nearCut[topology.vertex(c)] = 1;
+      nearCut[topology.vertex(3 * (c / 3) + (c + 1) % 3)] = 1;
+    }
+  }
+  std::mt19937 random(3);
+  while (d.damaged.size() < 6) {
+    const VertexId v = random() % d.cs.s.mesh.numVertices();
+    if (nearCut[v]) continue;
+    bool clear = true;  // one wedge around v, and no other damaged vertex near
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      for (int k = 0; k < 3; ++k) clear = clear && !nearCut[topology.vertex(3 * (c / 3) + k)];
+    });
+    for (VertexId w : d.damaged) {
+      clear = clear && (d.cs.s.mesh.position(v) - d.cs.s.mesh.position(w)).norm() > 0.5;
+    }
+    if (!clear) continue;
+    CornerId any = kInvalidId;
+    topology.forEachCornerAround(v, [&](CornerId c) { any = c; });
+    d.map.cornerUV.setWedgeValue(d.map.cornerUV.wedge(any), d.map.cornerUV[any] + Vec2d(2.5, -1.5));
+    d.damaged.push_back(v);
+  }
+  return d;
+}
+
+TEST(Untangle, RepairsFlipsKeepsSeamlessAndMovesOnlyPatches) {
+  DamagedMap d = damagedSphereMap();
+  const TriangleMesh& mesh = d.cs.s.mesh;
+  const double h = 0.15;
+  const WedgeMap before = d.map.cornerUV;
+  const MapQuality damaged = measureMap(mesh, before, &d.cs.field, h);
+  ASSERT_GE(damaged.flipped, d.damaged.size());  // each moved vertex folds part of its fan
+  ASSERT_TRUE(measureSeams(mesh, d.cs.s.topology, d.cs.cut, before).isSeamless());
+
+  UntangleOptions options;
+  options.edgeLength = h;
+  std::vector<std::complex<double>> t = d.map.translations;
+  const UntangleStats stats = untangleFlips(mesh, d.cs.s.topology, d.cs.field, d.cs.cut, d.map.cornerUV, t, options);
+  EXPECT_EQ(stats.flippedBefore, damaged.flipped);
+  EXPECT_EQ(stats.flippedAfter, 0u);
+  EXPECT_EQ(measureMap(mesh, d.map.cornerUV, &d.cs.field, h).flipped, 0u);
+  EXPECT_GE(stats.solves, 1u);
+  const SeamQuality seams = measureSeams(mesh, d.cs.s.topology, d.cs.cut, d.map.cornerUV);
+  EXPECT_TRUE(seams.isSeamless()) << seams.maxResidual << " " << seams.maxIntegerDistance;
+  for (const auto& z : t) {
+    EXPECT_EQ(z.real(), std::round(z.real()));
+    EXPECT_EQ(z.imag(), std::round(z.imag()));
+  }
+  // Only vertices near a damaged one moved: the patches reach at most a few h.
+  std::size_t moved = 0;
+  for (CornerId c = 0; c < 3u * mesh.numFaces(); ++c) {
+    if (d.map.cornerUV[c] == before[c]) continue;
+    ++moved;
+    const Vec3d p = mesh.position(d.cs.s.topology.vertex(c));
+    double nearest = 1e300;
+    for (VertexId v : d.damaged) nearest = std::min(nearest, (p - mesh.position(v)).norm());
+    EXPECT_LT(nearest, 4.0 * h) << "corner " << c;
+  }
+  EXPECT_GT(moved, 0u);
+  EXPECT_EQ(stats.freeVertices > 0, true);
+}
+
+TEST(Untangle, NothingToDoLeavesTheMapAsItIs) {
+  testing::CutSurface cs = testing::makeCutSurface(testing::torusMesh(40, 20));
+  ParamOptions param;
+  param.edgeLength = 0.2;
+  ParamResult map = parameterizeMesh(cs.s.mesh, cs.s.topology, cs.field, cs.cut, param);
+  ASSERT_EQ(measureMap(cs.s.mesh, map.cornerUV, &cs.field, 0.2).flipped, 0u);
+  const WedgeMap before = map.cornerUV;
+  UntangleOptions options;
+  options.edgeLength = 0.2;
+  const UntangleStats stats = untangleFlips(cs.s.mesh, cs.s.topology, cs.field, cs.cut, map.cornerUV, map.translations, options);
+  EXPECT_EQ(stats.flippedBefore, 0u);
+  EXPECT_EQ(stats.solves, 0u);
+  for (CornerId c = 0; c < before.size(); ++c) EXPECT_EQ(map.cornerUV[c], before[c]);
+}
+
+TEST(Untangle, RejectsMismatchedSizes) {
+  DamagedMap d = damagedSphereMap();
+  UntangleOptions options;
+  options.edgeLength = 0.15;
+  std::vector<std::complex<double>> tooFew;
+  EXPECT_THROW(untangleFlips(d.cs.s.mesh, d.cs.s.topology, d.cs.field, d.cs.cut, d.map.cornerUV, tooFew, options),
+               InputError);
+  options.stiffening = 1.0;
+  EXPECT_THROW(untangleFlips(d.cs.s.mesh, d.cs.s.topology, d.cs.field, d.cs.cut, d.map.cornerUV,
+                             d.map.translations, options),
+               InputError);
+}
+
+// The pipeline runs the repair by default as its own stage; off, it reports none. On a fine mesh
+// (hat flips around cones) the repair lowers the flips and the map stays seamless.
+TEST(Untangle, PipelineStageLowersFlips) {
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::Hat;
+  options.spacing.cells = 30;  // a coarse grid on a fine mesh: the hat map flips near cones
+  options.coneWeightRadius = 0.0;
+  options.untangle = false;
+  const PipelineResult off = parameterize(generated(MeshKind::Genus2, 30000), options);
+  EXPECT_FALSE(off.untangled);
+  ASSERT_GT(off.mapQuality.flipped, 0u) << "the test needs a map with flips";
+  options.untangle = true;
+  StageMeter meter;
+  options.meter = &meter;
+  const PipelineResult on = parameterize(generated(MeshKind::Genus2, 30000), options);
+  ASSERT_TRUE(on.untangled);
+  EXPECT_TRUE(on.isSeamless());
+  EXPECT_EQ(on.untangle.flippedBefore, off.mapQuality.flipped);
+  EXPECT_EQ(on.untangle.flippedAfter, on.mapQuality.flipped);
+  EXPECT_LE(on.mapQuality.flipped, off.mapQuality.flipped);
+  bool stage = false;
+  for (const StageFigures& s : meter.stages()) stage = stage || s.name == "untangle";
+  EXPECT_TRUE(stage);
+}
+
+}  // namespace
+}  // namespace seamvox
