@@ -185,9 +185,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--no-untangle] [--weld] [--report R.json]\n"
-                 "                     [--render OUT.png]\n"
-                 "                     [--greedy] [--weld] [--report R.json] [--render OUT.png]\n"
-                 "                     [--report-components N] [--drop-unsolved]\n"
+                 "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
@@ -224,8 +222,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --render OUT.png    also render the result (checkerboard, seams, cones; 1024x1024,\n"
                  "                      default view of seamvox render)\n"
                  "  --quiet             no progress on stderr\n",
-                 {"greedy", "no-untangle", "weld"},
-                 {"greedy", "weld", "drop-unsolved"},
+                 {"greedy", "no-untangle", "weld", "drop-unsolved"},
                  &runParam});
 
 }  // namespace seamvox::cli
