@@ -158,6 +158,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("seams").value(U64{r.seams});
   j.key("seamEdges").value(r.seamQuality.seamEdges).key("seamLength").value(r.seamQuality.seamLength);
   j.key("wedges").value(U64{r.size.wedges}).key("mapBytes").value(r.size.mapBytes);
+  j.key("vertexProperties").value(r.size.attributes).key("vertexPropertyBytes").value(r.size.attributeBytes);
   j.key("edgeLength").value(r.edgeLength);
   j.key("cellsOnDiagonal").value(r.diagonal / r.edgeLength);
 }

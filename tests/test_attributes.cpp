@@ -18,6 +18,7 @@
 #include "core/mesh/subdivide.h"
 #include "core/synth/generate.h"
 #include "core/system/errors.h"
+#include "io/json_reader.h"
 #include "io/mesh_io.h"
 #include "test_meshes.h"
 #include "testing.h"
@@ -431,6 +432,15 @@ TEST(Attributes, ParamWeldCarriesAttributesToPlyDracoAndObj) {
       expectAttributesFollowPositions(out, kAllNames, name);
     }
   }
+  // The report names the properties the run carried and their memory (per cleaned vertex).
+  const std::string report = dir.path("r.json");
+  std::string output;
+  ASSERT_EQ(testing::runSeamvox("param --quiet --weld " + input + " -o " + dir.path("r.ply") + " --report " + report, &output), 0) << output;
+  const TriangleMesh written = readMesh(dir.path("r.ply"));
+  const JsonValue j = parseJson(testing::readFile(report), report);
+  EXPECT_EQ(j.textAt("vertexProperties"), written.attributes.describe());
+  EXPECT_EQ(j.numberAt("vertexPropertyBytes"), static_cast<double>(written.attributes.memoryBytes()));
+  EXPECT_GT(j.numberAt("vertexPropertyBytes"), 0.0);
 }
 
 TEST(Attributes, CommandsSubdivideConvertAndInfoKeepOrNameTheProperties) {
