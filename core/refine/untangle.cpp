@@ -158,8 +158,15 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
       if (state[f] == kFlipped) seeds.push_back(f);
     }
     if (seeds.empty()) break;
-    const std::uint32_t rings = patchRings(mesh, seeds, h, options.patchRadius * double(1u << round));
-    const std::vector<FaceId> patch = growFaces(topology, std::move(seeds), rings);
+    // The patch radius halves until the round's faces fit the budget (at least 2 rings).
+    const std::uint64_t budget = std::max<std::uint64_t>(
+        options.minPatchFaces, static_cast<std::uint64_t>(options.maxPatchFraction * nf));
+    std::uint32_t rings = patchRings(mesh, seeds, h, options.patchRadius * double(1u << round));
+    std::vector<FaceId> patch = growFaces(topology, seeds, rings);
+    while (patch.size() > budget && rings > 2) {
+      rings = std::max(2u, rings / 2);
+      patch = growFaces(topology, seeds, rings);
+    }
     const RegionMesh region = extractRegion(mesh, topology, field, cut, patch);
     std::vector<Vec2d> values(3 * patch.size());
     for (std::size_t i = 0; i < patch.size(); ++i) {
