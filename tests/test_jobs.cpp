@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "core/mesh/clean.h"
+#include "core/mesh/vertex_attributes.h"
 #include "core/system/errors.h"
 #include "core/synth/generate.h"
 #include "core/quality/metrics.h"
@@ -93,6 +94,8 @@ TEST(JobSchedule, FirstPendingJobThatFitsTheBudget) {
   EXPECT_LT(estimateJobPeakBytes(1000, hat), estimateJobPeakBytes(1000000, hat));
   EXPECT_LT(estimateJobPeakBytes(1000, hat), estimateJobPeakBytes(1000, {}));
   EXPECT_LT(estimateJobPeakBytes(1000, {}), estimateJobPeakBytes(1000, vox));
+  // Vertex properties count three times (read, gathered by cleaning, written).
+  EXPECT_EQ(estimateJobPeakBytes(1000, hat, 4000000), estimateJobPeakBytes(1000, hat) + 12000000);
 }
 
 /// A generated sphere cut into three tiles by face centroid x, each tile with its own vertices.
@@ -248,6 +251,37 @@ TEST(JobsCommand, JobsOverTheBudgetFailWithoutRunning) {
   const std::string csv = readFile(batch.dir.path("out/summary.csv"));
   EXPECT_THAT(csv, HasSubstr("exceeds the memory budget"));
   EXPECT_FALSE(fs::exists(batch.dir.path("out/m0.drc")));
+}
+
+// The estimate counts an input's vertex properties: the same mesh with ten double properties per
+// vertex is estimated 3 x 80 bytes per vertex higher (read, gathered by cleaning, written).
+TEST(JobsCommand, EstimatesCountVertexProperties) {
+  TempDir dir;
+  fs::create_directories(dir.path("in"));
+  GenerateOptions options;
+  options.kind = MeshKind::Sphere;
+  options.faces = 200000;
+  TriangleMesh mesh = generateMesh(options).mesh;
+  writeMesh(dir.path("in/plain.ply"), mesh);
+  for (int k = 0; k < 10; ++k) {
+    VertexProperty& p = mesh.attributes.add("q" + std::to_string(k), ScalarType::Float64, mesh.numVertices());
+    for (VertexId v = 0; v < mesh.numVertices(); ++v) p.setValue(v, k + 0.5 * v);
+  }
+  writeMesh(dir.path("in/props.ply"), mesh);
+  writeFile(dir.path("jobs.txt"), "output out\nparam --solver hat\nmesh in/*.ply\n");
+  std::string log;
+  EXPECT_EQ(runSeamvox("jobs " + dir.path("jobs.txt") + " --quiet --memory-budget 0.001", &log), 6) << log;
+  const std::string csv = readFile(dir.path("out/summary.csv"));
+  // summary.csv: "name",status,faces,seconds,peak_bytes,estimated_peak_bytes,...
+  auto estimateBytes = [&](const std::string& job) {
+    const std::size_t line = csv.find("\"" + job + "\",");
+    EXPECT_NE(line, std::string::npos) << csv;
+    std::size_t at = line;
+    for (int comma = 0; comma < 5; ++comma) at = csv.find(',', at) + 1;
+    return std::stod(csv.substr(at));
+  };
+  const double expected = 3.0 * 80.0 * mesh.numVertices();
+  EXPECT_NEAR(estimateBytes("props") - estimateBytes("plain"), expected, 2.0) << csv;
 }
 
 TEST(JobsCommand, TilesAreParameterizedAsOneSeamlessSurface) {

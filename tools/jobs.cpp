@@ -68,17 +68,31 @@ std::uint64_t hashFile(const std::string& path, std::uint64_t seed) {
 }
 
 /// Faces declared in a file's header; otherwise a guess from its size that errs high.
-std::uint64_t estimateFaces(const std::string& path) {
+/// Faces of an input (from its header, else guessed from its size) and the bytes of its vertex
+/// properties (the declared vertices times the bytes per vertex of the first chunk's properties).
+struct InputSize {
+  std::uint64_t faces = 0, propertyBytes = 0;
+};
+
+InputSize estimateInput(const std::string& path) {
   std::error_code error;
   const std::uint64_t bytes = fs::file_size(path, error);
-  if (error) return 0;
+  if (error) return {};
+  InputSize size;
   try {
     const auto stream = openMeshStream(path);
-    if (stream->expectedTriangles() > 0) return stream->expectedTriangles();
+    size.faces = stream->expectedTriangles();
+    MeshChunk chunk;
+    if (stream->declaredVertices() > 0 && stream->next(chunk) && !chunk.positions.empty()) {
+      std::uint64_t perVertex = 0;
+      for (const VertexProperty& p : chunk.attributes.properties) perVertex += scalarSize(p.type);
+      size.propertyBytes = perVertex * stream->declaredVertices();
+    }
   } catch (const Error&) {
-    return 0;  // unreadable: the job fails at once
+    return {};  // unreadable: the job fails at once
   }
-  return formatFromPath(path) == MeshFormat::Draco ? bytes : bytes / 20;
+  if (size.faces == 0) size.faces = formatFromPath(path) == MeshFormat::Draco ? bytes : bytes / 20;
+  return size;
 }
 
 /// Last non-empty line of a log (the child's error message).
@@ -197,7 +211,7 @@ PreparedJob describeJob(const JobSpec& spec, const std::string& outputDir) {
 PreparedJob prepareJob(const JobSpec& spec, const std::string& outputDir) {
   PreparedJob job = describeJob(spec, outputDir);
   std::uint64_t h = hashBytes("seamvox-job-1", 13);
-  std::uint64_t faces = 0;
+  std::uint64_t faces = 0, propertyBytes = 0;
   const std::string kind = spec.tiled ? "tiles" : "mesh";
   h = hashBytes(kind.data(), kind.size(), h);
   for (const std::string& input : spec.inputs) {
@@ -205,12 +219,14 @@ PreparedJob prepareJob(const JobSpec& spec, const std::string& outputDir) {
     const std::uint64_t bytes = fs::file_size(input, error);
     h = hashBytes(&bytes, sizeof bytes, h);
     h = hashFile(input, h);
-    faces += estimateFaces(input);
+    const InputSize size = estimateInput(input);
+    faces += size.faces;
+    propertyBytes += size.propertyBytes;
   }
   for (const std::string& arg : spec.paramArgs) h = hashBytes(arg.data(), arg.size() + 1, h);
   h = hashBytes(spec.format.data(), spec.format.size(), h);
   job.stamp = hex(h);
-  job.estimateBytes = estimateJobPeakBytes(faces, spec.paramArgs);
+  job.estimateBytes = estimateJobPeakBytes(faces, spec.paramArgs, propertyBytes);
   job.upToDate = fs::exists(job.reportPath) &&
                  readText(job.reportPath).find("\"stamp\": \"" + job.stamp + "\"") != std::string::npos;
   for (const std::string& output : job.outputs) job.upToDate = job.upToDate && fs::exists(output);

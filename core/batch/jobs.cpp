@@ -176,7 +176,8 @@ Manifest parseManifest(const std::string& text, const std::string& source, const
   return manifest;
 }
 
-std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::string>& paramArgs) {
+std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::string>& paramArgs,
+                                   std::uint64_t propertyBytes) {
   const std::string solver = optionValue(paramArgs, "--solver", "voxloc");
   const double grid = std::atof(optionValue(paramArgs, "--grid", "128").c_str());
   const double mib = 1048576.0;
@@ -186,6 +187,7 @@ std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::s
   // 85 MB, 64: 213 MB, 128: 648 MB), counted as 48 KB.
   double bytes = 48.0 * mib + 1300.0 * static_cast<double>(faces);
   if (solver != "hat") bytes += 48000.0 * grid * grid;
+  bytes += 3.0 * static_cast<double>(propertyBytes);
   return static_cast<std::uint64_t>(bytes);
 }
 

@@ -47,8 +47,11 @@ Manifest parseManifest(const std::string& text, const std::string& source, const
                        const ExpandFn& expand);
 
 /// Estimated peak resident bytes of one `seamvox param` run on `faces` faces with these param
-/// options (--solver, --grid). Fitted on generated meshes (see bench/RESULTS.md); errs high.
-std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::string>& paramArgs);
+/// options (--solver, --grid), whose input holds propertyBytes of vertex properties (colors,
+/// normals...; held about three times at once: read, gathered by cleaning, written). Fitted on
+/// generated meshes (see bench/RESULTS.md); errs high.
+std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::string>& paramArgs,
+                                   std::uint64_t propertyBytes = 0);
 
 /// The scheduling rule: the first pending job (in order) whose estimate fits next to the running
 /// ones (runningBytes + estimate <= budget), or -1 when none fits now. A job larger than the whole
