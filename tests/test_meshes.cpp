@@ -89,6 +89,13 @@ TriangleMesh cylinderMesh(int n, int m, double radius, double height) {
   return mesh;
 }
 
+TriangleMesh generatedMesh(MeshKind kind, std::uint64_t faces) {
+  GenerateOptions options;
+  options.kind = kind;
+  options.faces = faces;
+  return generateMesh(options).mesh;
+}
+
 TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts) {
   TriangleMesh out;
   for (const TriangleMesh& p : parts) {

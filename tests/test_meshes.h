@@ -6,6 +6,7 @@
 #include "core/field/field.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/topology.h"
+#include "core/synth/generate.h"
 
 namespace seamvox::testing {
 
@@ -17,6 +18,8 @@ TriangleMesh torusMesh(int n, int m, double bigRadius = 2.0, double tubeRadius =
 TriangleMesh icosphereMesh(int levels);
 /// Open cylinder of radius r and height hgt, n segments around and m along (two boundary loops).
 TriangleMesh cylinderMesh(int n, int m, double radius = 1.0, double height = 2.0);
+/// seamvox's generated mesh of this kind with about this many faces (seed 1).
+TriangleMesh generatedMesh(MeshKind kind, std::uint64_t faces);
 /// Concatenates meshes into one with several components.
 TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts);
 

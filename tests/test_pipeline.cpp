@@ -19,12 +19,7 @@
 namespace seamvox {
 namespace {
 
-TriangleMesh sphere(std::uint64_t faces) {
-  GenerateOptions options;
-  options.kind = MeshKind::Sphere;
-  options.faces = faces;
-  return generateMesh(options).mesh;
-}
+TriangleMesh sphere(std::uint64_t faces) { return testing::generatedMesh(MeshKind::Sphere, faces); }
 
 std::int64_t eulerCharacteristic(const Topology& topology) {
   std::int64_t chi = 0;

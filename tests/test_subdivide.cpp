@@ -19,12 +19,7 @@
 namespace seamvox {
 namespace {
 
-TriangleMesh generate(MeshKind kind, std::uint64_t faces) {
-  GenerateOptions options;
-  options.kind = kind;
-  options.faces = faces;
-  return generateMesh(options).mesh;
-}
+TriangleMesh generate(MeshKind kind, std::uint64_t faces) { return testing::generatedMesh(kind, faces); }
 
 /// Checks the invariants of one subdivision of `cleaned` into `result` over `levels` levels.
 void expectSubdivisionInvariants(const CleanResult& cleaned, const SubdivideResult& result,

@@ -18,14 +18,9 @@
 namespace seamvox {
 namespace {
 
-TriangleMesh generated(MeshKind kind, std::uint64_t faces) {
-  GenerateOptions options;
-  options.kind = kind;
-  options.faces = faces;
-  return generateMesh(options).mesh;
-}
+using testing::generatedMesh;
 
-TriangleMesh sphere(std::uint64_t faces) { return generated(MeshKind::Sphere, faces); }
+TriangleMesh sphere(std::uint64_t faces) { return generatedMesh(MeshKind::Sphere, faces); }
 
 TEST(ConeWeights, SquareRootOfRadiusOverDistanceInsideOneOutside) {
   const TriangleMesh mesh = sphere(4000);
@@ -173,13 +168,13 @@ TEST(Untangle, PipelineStageLowersFlips) {
   options.spacing.cells = 30;  // a coarse grid on a fine mesh: the hat map flips near cones
   options.coneWeightRadius = 0.0;
   options.untangle = false;
-  const PipelineResult off = parameterize(generated(MeshKind::Genus2, 30000), options);
+  const PipelineResult off = parameterize(generatedMesh(MeshKind::Genus2, 30000), options);
   EXPECT_FALSE(off.untangled);
   ASSERT_GT(off.mapQuality.flipped, 0u) << "the test needs a map with flips";
   options.untangle = true;
   StageMeter meter;
   options.meter = &meter;
-  const PipelineResult on = parameterize(generated(MeshKind::Genus2, 30000), options);
+  const PipelineResult on = parameterize(generatedMesh(MeshKind::Genus2, 30000), options);
   ASSERT_TRUE(on.untangled);
   EXPECT_TRUE(on.isSeamless());
   EXPECT_EQ(on.untangle.flippedBefore, off.mapQuality.flipped);
