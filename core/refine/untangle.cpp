@@ -20,24 +20,20 @@ using Complex = std::complex<double>;
 
 enum FaceState : std::uint8_t { kFine = 0, kFlipped = 1, kFolded = 2 };
 
-/// kFlipped for a face with negative parameter area (collapsed and zero-area faces excluded),
-/// kFolded when it is also folded in 3D against the smoothed surface.
-std::uint8_t faceState(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f, double h,
-                       const std::vector<Vec3f>* smooth) {
-  const double ratio = parameterAreaRatio(mesh, uv, f, h);
+/// kFlipped for a face with negative parameter area ratio (collapsed and zero-area faces
+/// excluded), kFolded when whole face f is also folded in 3D against the smoothed surface.
+std::uint8_t stateOf(double ratio, const TriangleMesh& mesh, const std::vector<Vec3f>* smooth, FaceId f) {
   if (!(ratio < 0.0) || std::abs(ratio) < kCollapsedAreaFraction) return kFine;
   return smooth && faceFoldedIn3D(mesh, *smooth, f) ? kFolded : kFlipped;
 }
 
-/// Per region face: stiffened-map state (kFine / kFlipped / kFolded) as in faceState.
+/// Per region face: its state under the region's map uv (the 3D fold is the whole face's).
 std::vector<std::uint8_t> regionStates(const RegionMesh& region, const WedgeMap& uv, double h,
-                                       const std::vector<std::uint8_t>& foldedWhole) {
+                                       const TriangleMesh& mesh, const std::vector<Vec3f>* smooth) {
   const std::uint32_t rf = region.topology.numFaces();
   std::vector<std::uint8_t> state(rf, kFine);
   for (std::uint32_t i = 0; i < rf; ++i) {
-    const double ratio = parameterAreaRatio(region.mesh, uv, i, h);
-    if (!(ratio < 0.0) || std::abs(ratio) < kCollapsedAreaFraction) continue;
-    state[i] = foldedWhole[region.faceOrigin[i]] ? kFolded : kFlipped;
+    state[i] = stateOf(parameterAreaRatio(region.mesh, uv, i, h), mesh, smooth, region.faceOrigin[i]);
   }
   return state;
 }
@@ -55,18 +51,21 @@ std::vector<std::uint32_t> flipsPerComponent(const std::vector<std::uint8_t>& st
 /// flips wins (components are independent: everything around them is locked).
 struct RoundSolution {
   RegionSolution solution;
+  ComponentsResult components;  ///< of the region
   std::vector<std::uint8_t> componentImproved;
   std::uint32_t solves = 0, unknowns = 0;
 };
 
 RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
-                            const std::vector<Complex>& regionT, const std::vector<std::uint8_t>& foldedWhole,
-                            const UntangleOptions& options) {
+                            const std::vector<Complex>& regionT, const TriangleMesh& mesh,
+                            const std::vector<Vec3f>* smooth, const UntangleOptions& options) {
   const double h = options.edgeLength;
-  const ComponentsResult components = computeComponents(region.topology);
-  const std::vector<std::uint32_t> before = flipsPerComponent(regionStates(region, regionUV, h, foldedWhole), components);
-  std::vector<std::uint32_t> best = before;
   RoundSolution out;
+  out.components = computeComponents(region.topology);
+  const ComponentsResult& components = out.components;
+  const std::vector<std::uint32_t> before =
+      flipsPerComponent(regionStates(region, regionUV, h, mesh, smooth), components);
+  std::vector<std::uint32_t> best = before;
   out.componentImproved.assign(before.size(), 0);
   std::vector<double> weight(region.topology.numFaces(), 1.0);
   for (std::uint32_t solve = 0; solve < std::max(1u, options.maxSolves); ++solve) {
@@ -74,7 +73,7 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
     RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius);
     ++out.solves;
     out.unknowns = std::max(out.unknowns, stats.unknowns);
-    const std::vector<std::uint8_t> state = regionStates(region, solved.cornerUV, h, foldedWhole);
+    const std::vector<std::uint8_t> state = regionStates(region, solved.cornerUV, h, mesh, smooth);
     const std::vector<std::uint32_t> flips = flipsPerComponent(state, components);
     // Keep, per component, the corners of the best solve so far.
     if (out.solution.cornerUV.empty()) {
@@ -140,16 +139,14 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   std::vector<std::uint8_t> state(nf, kFine);
   auto classifyAll = [&] {
     parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-      for (FaceId f = range.begin(); f != range.end(); ++f) state[f] = faceState(mesh, cornerUV, f, h, smooth);
+      for (FaceId f = range.begin(); f != range.end(); ++f) {
+        state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h), mesh, smooth, f);
+      }
     });
   };
   classifyAll();
-  std::vector<std::uint8_t> folded(nf, 0);
   UntangleStats stats;
-  for (FaceId f = 0; f < nf; ++f) {
-    folded[f] = smooth && faceFoldedIn3D(mesh, *smooth, f);
-    stats.flippedBefore += state[f] != kFine;
-  }
+  for (FaceId f = 0; f < nf; ++f) stats.flippedBefore += state[f] != kFine;
 
   std::vector<VertexId> moved;
   for (std::uint32_t round = 0; round < std::max(1u, options.maxRounds); ++round) {
@@ -177,12 +174,12 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
     ++stats.rounds;
     stats.patchFaces += patch.size();
-    const RoundSolution solved = stiffenRegion(region, regionUV, regionT, folded, options);
+    const RoundSolution solved = stiffenRegion(region, regionUV, regionT, mesh, smooth, options);
     stats.solves += solved.solves;
     stats.largestUnknowns = std::max(stats.largestUnknowns, solved.unknowns);
 
     // Free corners of the improved components go back into the whole map.
-    const ComponentsResult components = computeComponents(region.topology);
+    const ComponentsResult& components = solved.components;
     std::vector<CornerId> corners;
     std::vector<Vec2d> uv;
     for (std::uint32_t c = 0; c < 3 * region.topology.numFaces(); ++c) {
