@@ -208,7 +208,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --cells N           H = bounding-box diagonal / N (default N = 100)\n"
                  "  --merge-cones F     move the index of cones at most F * H apart (along edges) onto\n"
                  "                      one of them: closer than the grid resolves, they would collapse\n"
-                 "                      the faces between them; default 0.5, 0 keeps every cone\n"
+                 "                      the faces between them; default 1, 0 keeps every cone\n"
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
                  "                      re-solved with stiffening; seams and translations kept)\n"
