@@ -143,3 +143,10 @@ def test_write_and_read_keep_the_mesh_and_map(tmp_path, suffix):
     assert seamvox.read_mesh(str(tmp_path / f"m.{suffix}"), uv=True)[2] is not None
     seamvox.write_mesh(str(tmp_path / "plain.ply"), V, F)
     assert seamvox.read_mesh(str(tmp_path / "plain.ply"), uv=True)[2] is None
+
+
+def test_version_is_the_projects():
+    import pathlib
+    import re
+    cmake = (pathlib.Path(__file__).resolve().parents[2] / "CMakeLists.txt").read_text()
+    assert seamvox.__version__ == re.search(r"project\(seamvox VERSION ([0-9.]+)", cmake).group(1)

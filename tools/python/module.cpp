@@ -288,7 +288,11 @@ PYBIND11_MODULE(seamvox, m) {
       "hold the cleaned mesh (V, F) the map is on, which is the input itself for a clean mesh.\n"
       "Errors: seamvox.InputError (a ValueError), IoError (an OSError), TopologyError and\n"
       "SolverError (RuntimeErrors), CancelledError; all derive from seamvox.Error.";
+  m.attr("__version__") = SEAMVOX_VERSION;
   makeExceptions(m);
+  // Each docstring starts with its own signature (pybind11's would say "V: object").
+  py::options options;
+  options.disable_function_signatures();
   // seamvox's loops run on TBB; a second pool of BLAS threads slows CHOLMOD down (as the command).
   sv::limitBlasThreads(1);
 
