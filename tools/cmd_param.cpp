@@ -157,17 +157,8 @@ int runParam(Args& args) {
   meter.finish("write");
   printSummary(c, r, meter);
   if (c.reportPath) {
-    ParamReportContext context;
-    context.input = c.input;
-    context.output = c.output;
-    context.solverAsked = c.solverName;
-    context.fieldSource = c.fieldSource;
-    context.gridResolution = c.options.solver.gridResolution;
-    context.rings = c.options.solver.refine.rings;
-    context.maxRounds = c.options.solver.refine.maxRounds;
-    context.stages = meter.stages();
-    context.totalSeconds = meter.totalSeconds();
-    context.peakBytes = meter.peakBytes();
+    const ParamReportContext context =
+        paramReportContext(c.options, meter, c.input, c.output, c.solverName, c.fieldSource);
     if (reportFile) {
       reportFile->write(paramReportJson(r, context));
     } else {
