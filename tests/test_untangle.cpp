@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/basis/basis.h"
+#include "core/mesh/clean.h"
 #include "core/pipeline/parameterize.h"
 #include "core/quality/metrics.h"
 #include "core/refine/untangle.h"
@@ -50,6 +51,42 @@ TEST(FoldedIn3D, AgainstTheSmoothedCopy) {
   EXPECT_FALSE(faceFoldedIn3D(mesh, smooth, 0));
   for (Vec3f& p : smooth) p.x() = -p.x();  // mirrored: every face points the other way
   EXPECT_TRUE(faceFoldedIn3D(mesh, smooth, 0));
+}
+
+TEST(FoldedIn3D, ReleasedFramePositionsGiveTheSameFacesAndPositions) {
+  // A noisy generated scan folds faces in 3D; the fold test on a field whose smoothed surface was
+  // released (recomputed around the asked faces) must equal the test on the whole surface.
+  ScanNoiseOptions noise;
+  noise.amplitude = 0.6;
+  noise.seed = 4;
+  TriangleMesh raw = generatedMesh(MeshKind::Scan, 20000);
+  addScanNoise(raw, noise);
+  CleanResult clean = cleanMesh(std::move(raw));
+  const TriangleMesh& mesh = clean.mesh;
+  const Topology& topology = clean.topology;
+  for (std::uint32_t steps : {1u, 3u, 5u}) {
+    CrossField field;
+    field.framePositions = smoothPositions(mesh, topology, steps);
+    field.frameSmoothing = steps;
+    std::vector<VertexId> vertices;
+    for (VertexId v = 0; v < mesh.numVertices(); v += 37) vertices.push_back(v);
+    const std::vector<Vec3f> local = smoothPositionsAt(mesh, topology, steps, vertices);
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      ASSERT_EQ(local[i], field.framePositions[vertices[i]]) << "vertex " << vertices[i] << ", " << steps << " steps";
+    }
+    std::vector<FaceId> faces(mesh.numFaces());
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) faces[f] = f;
+    const std::vector<std::uint8_t> whole = facesFoldedIn3D(mesh, &topology, &field, faces);
+    std::size_t folded = 0;
+    for (std::uint8_t x : whole) folded += x;
+    if (steps == 3) EXPECT_GT(folded, 0u) << "the noise folds no face: the comparison below tests nothing";
+    releaseFramePositions(field);
+    EXPECT_TRUE(field.framePositions.empty());
+    EXPECT_EQ(facesFoldedIn3D(mesh, &topology, &field, faces), whole) << steps << " steps";
+    EXPECT_THROW(facesFoldedIn3D(mesh, nullptr, &field, faces), InputError);
+    restoreFramePositions(mesh, topology, field);
+    EXPECT_EQ(field.framePositions, smoothPositions(mesh, topology, steps));
+  }
 }
 
 /// A seamless hat map of a sphere with its cut, then damaged: a few vertices away from seams and

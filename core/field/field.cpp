@@ -8,6 +8,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdint>
+#include <unordered_map>
 
 #include "core/field/field_numerics.h"
 #include "core/solve/cholmod_solver.h"
@@ -405,6 +406,26 @@ Vec3d rotateBetween(const Vec3d& from, const Vec3d& to, const Vec3d& v) {
   return 2.0 * axis.dot(v) * axis - v;
 }
 
+namespace {
+
+// One smoothing step at vertex v: halfway to the mean of its neighbours (valueOf(w) gives the
+// current position of w in double); boundary and isolated vertices stay.
+template <class ValueOf>
+Vec3f smoothingStep(const Topology& topology, VertexId v, const ValueOf& valueOf) {
+  const Vec3d here = valueOf(v);
+  if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) return here.cast<float>();
+  Vec3d sum = Vec3d::Zero();
+  std::uint32_t count = 0;
+  topology.forEachCornerAround(v, [&](CornerId c) {
+    sum += valueOf(topology.vertex(nextCorner(c)));
+    ++count;
+  });
+  const Vec3d target = 0.5 * (here + sum / count);
+  return target.allFinite() ? Vec3f(target.cast<float>()) : Vec3f(here.cast<float>());
+}
+
+}  // namespace
+
 std::vector<Vec3f> smoothPositions(const TriangleMesh& mesh, const Topology& topology,
                                    std::uint32_t iterations) {
   const std::uint32_t numVertices = topology.numVertices();
@@ -418,21 +439,65 @@ std::vector<Vec3f> smoothPositions(const TriangleMesh& mesh, const Topology& top
   for (std::uint32_t it = 0; it < iterations; ++it) {
     parallelFor(numVertices, 4096, [&](const IndexRange& range) {
       for (VertexId v = range.begin(); v != range.end(); ++v) {
-        next[v] = current[v];
-        if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) continue;
-        Vec3d sum = Vec3d::Zero();
-        std::uint32_t count = 0;
-        topology.forEachCornerAround(v, [&](CornerId c) {
-          sum += pointOf(current, topology.vertex(nextCorner(c)));
-          ++count;
-        });
-        const Vec3d target = 0.5 * (pointOf(current, v) + sum / count);
-        if (target.allFinite()) next[v] = target.cast<float>();
+        next[v] = smoothingStep(topology, v, [&](VertexId w) { return pointOf(current, w); });
       }
     });
     current.swap(next);
   }
   return current;
+}
+
+std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& topology,
+                                     std::uint32_t iterations, const std::vector<VertexId>& vertices) {
+  if (mesh.positions.size() != topology.numVertices()) {
+    throw InputError("smoothPositionsAt: mesh has " + std::to_string(mesh.positions.size()) +
+                     " vertices, topology " + std::to_string(topology.numVertices()));
+  }
+  // The ball of `iterations` rings around the vertices, local ids in BFS order. Outside it the
+  // values stay the input positions: after step k, values are exact up to `iterations` - k + 1
+  // rings deep, so the centre is exact after the last step.
+  std::unordered_map<VertexId, std::uint32_t> local;
+  std::vector<VertexId> ball;
+  for (VertexId v : vertices) {
+    if (v >= topology.numVertices()) throw InputError("smoothPositionsAt: vertex " + std::to_string(v) + " out of range");
+    if (local.emplace(v, ball.size()).second) ball.push_back(v);
+  }
+  std::size_t ringStart = 0;
+  for (std::uint32_t ring = 0; ring < iterations; ++ring) {
+    const std::size_t ringEnd = ball.size();
+    for (std::size_t i = ringStart; i < ringEnd; ++i) {
+      if (topology.isIsolatedVertex(ball[i])) continue;
+      topology.forEachCornerAround(ball[i], [&](CornerId c) {
+        for (VertexId w : {topology.vertex(nextCorner(c)), topology.vertex(prevCorner(c))}) {
+          if (local.emplace(w, ball.size()).second) ball.push_back(w);
+        }
+      });
+    }
+    ringStart = ringEnd;
+  }
+  std::vector<Vec3f> current(ball.size()), next(ball.size());
+  for (std::size_t i = 0; i < ball.size(); ++i) current[i] = mesh.positions[ball[i]];
+  const auto valueOf = [&](VertexId w) {
+    const auto it = local.find(w);
+    return it == local.end() ? pointOf(mesh.positions, w) : pointOf(current, it->second);
+  };
+  for (std::uint32_t it = 0; it < iterations; ++it) {
+    for (std::size_t i = 0; i < ball.size(); ++i) next[i] = smoothingStep(topology, ball[i], valueOf);
+    current.swap(next);
+  }
+  std::vector<Vec3f> out(vertices.size());
+  for (std::size_t i = 0; i < vertices.size(); ++i) out[i] = current[local.at(vertices[i])];
+  return out;
+}
+
+void releaseFramePositions(CrossField& field) {
+  if (field.frameSmoothing > 0) std::vector<Vec3f>().swap(field.framePositions);
+}
+
+void restoreFramePositions(const TriangleMesh& mesh, const Topology& topology, CrossField& field) {
+  if (field.frameSmoothing > 0 && field.framePositions.empty()) {
+    field.framePositions = smoothPositions(mesh, topology, field.frameSmoothing);
+  }
 }
 
 CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors) {

@@ -31,6 +31,9 @@ struct CrossField {
   /// connection by up to half a turn and puts a pair of cones there; the smoothed surface has
   /// the scan's shape without them. The directions stay tangent to the mesh's own faces.
   std::vector<Vec3f> framePositions;
+  /// smoothPositions steps framePositions were made with (0: none). With it, a caller may release
+  /// them for the memory (12 bytes per vertex) and recompute them, all or only where needed.
+  std::uint32_t frameSmoothing = 0;
   Vec3d at(FaceId f) const { return direction[f].cast<double>(); }
   void set(FaceId f, const Vec3d& u) { direction[f] = u.cast<float>(); }
 };
@@ -80,6 +83,16 @@ Vec3d rotateBetween(const Vec3d& from, const Vec3d& to, const Vec3d& v);
 /// Linear, parallel, deterministic.
 std::vector<Vec3f> smoothPositions(const TriangleMesh& mesh, const Topology& topology,
                                    std::uint32_t iterations);
+
+/// smoothPositions' values at the given vertices only (the same floats), computed on the
+/// `iterations`-ring neighbourhood of those vertices: cost proportional to that neighbourhood.
+std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& topology,
+                                     std::uint32_t iterations, const std::vector<VertexId>& vertices);
+
+/// Frees field.framePositions when they can be recomputed (frameSmoothing > 0).
+void releaseFramePositions(CrossField& field);
+/// Recomputes released framePositions (smoothPositions with frameSmoothing steps).
+void restoreFramePositions(const TriangleMesh& mesh, const Topology& topology, CrossField& field);
 
 /// Projects arbitrary per-face 3D vectors onto each face's tangent plane and normalizes them.
 /// Vectors parallel to the normal (or zero) get the face's first edge direction.

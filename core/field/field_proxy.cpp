@@ -472,6 +472,7 @@ CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology,
   });
   std::vector<Triangle>().swap(smoothed.triangles);
   field.framePositions = std::move(smoothed.positions);
+  field.frameSmoothing = geometry.smoothingIterations;
   return field;
 }
 

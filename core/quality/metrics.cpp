@@ -217,8 +217,9 @@ std::vector<std::uint8_t> markCones(const TriangleMesh& mesh, const std::vector<
 // Counts collapsed faces (those between coincident cones apart when cones are given) and flipped
 // ones into out, for spacing h.
 void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, double h,
-                       const std::vector<VertexId>* cones, const CrossField* field, MapQuality& out) {
-  const bool haveSmooth = field && field->framePositions.size() == mesh.numVertices();
+                       const std::vector<VertexId>* cones, const CrossField* field,
+                       const Topology* topology, MapQuality& out) {
+  std::vector<FaceId> flippedFaces;
   std::vector<std::uint8_t> isCone;
   if (cones) isCone = markCones(mesh, *cones);
   const FaceId nf = mesh.numFaces();
@@ -230,9 +231,10 @@ void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, doubl
       collapsedAtCones += cones && collapsesBetweenCones(mesh, cornerUV, f, isCone);
     } else if (ratio < 0.0) {
       ++flipped;
-      if (haveSmooth && faceFoldedIn3D(mesh, field->framePositions, f)) ++out.flippedFolded;
+      flippedFaces.push_back(f);
     }
   }
+  for (std::uint8_t folded : facesFoldedIn3D(mesh, topology, field, flippedFaces)) out.flippedFolded += folded;
   out.flipped = flipped;
   out.collapsed = collapsed;
   out.collapsedAtCones = collapsedAtCones;
@@ -241,16 +243,46 @@ void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, doubl
 
 }  // namespace
 
-bool faceFoldedIn3D(const TriangleMesh& mesh, const std::vector<Vec3f>& smooth, FaceId f) {
+namespace {
+
+// faceFoldedIn3D with the smoothed corners given.
+bool foldedAgainst(const TriangleMesh& mesh, FaceId f, const Vec3f& sa, const Vec3f& sb, const Vec3f& sc) {
   const Triangle& t = mesh.triangles[f];
   const Vec3d n = (mesh.position(t[1]) - mesh.position(t[0])).cross(mesh.position(t[2]) - mesh.position(t[0]));
-  const Vec3d a = smooth[t[0]].cast<double>(), b = smooth[t[1]].cast<double>(), c = smooth[t[2]].cast<double>();
+  const Vec3d a = sa.cast<double>(), b = sb.cast<double>(), c = sc.cast<double>();
   return n.dot((b - a).cross(c - a)) < 0.0;
+}
+
+}  // namespace
+
+bool faceFoldedIn3D(const TriangleMesh& mesh, const std::vector<Vec3f>& smooth, FaceId f) {
+  const Triangle& t = mesh.triangles[f];
+  return foldedAgainst(mesh, f, smooth[t[0]], smooth[t[1]], smooth[t[2]]);
+}
+
+std::vector<std::uint8_t> facesFoldedIn3D(const TriangleMesh& mesh, const Topology* topology,
+                                          const CrossField* field, const std::vector<FaceId>& faces) {
+  std::vector<std::uint8_t> folded(faces.size(), 0);
+  if (!field || faces.empty()) return folded;
+  if (field->framePositions.size() == mesh.numVertices()) {
+    for (std::size_t i = 0; i < faces.size(); ++i) folded[i] = faceFoldedIn3D(mesh, field->framePositions, faces[i]);
+    return folded;
+  }
+  if (field->frameSmoothing == 0) return folded;
+  if (!topology) throw InputError("metrics: the field's smoothed positions were released and no topology was given");
+  std::vector<VertexId> corners;
+  corners.reserve(3 * faces.size());
+  for (FaceId f : faces) corners.insert(corners.end(), mesh.triangles[f].begin(), mesh.triangles[f].end());
+  const std::vector<Vec3f> smooth = smoothPositionsAt(mesh, *topology, field->frameSmoothing, corners);
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    folded[i] = foldedAgainst(mesh, faces[i], smooth[3 * i], smooth[3 * i + 1], smooth[3 * i + 2]);
+  }
+  return folded;
 }
 
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
-                      const std::vector<VertexId>* cones) {
+                      const std::vector<VertexId>* cones, const Topology* topology) {
   checkSizes(mesh, cornerUV);
   if (field && field->direction.size() != mesh.numFaces()) {
     throw InputError("metrics: field has " + std::to_string(field->direction.size()) +
@@ -264,7 +296,7 @@ MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
   out.relativeGradientError = field && sums.target > 0.0
                                   ? std::sqrt(sums.error / sums.target)
                                   : std::numeric_limits<double>::quiet_NaN();
-  countFlippedFaces(mesh, cornerUV, h, cones, field, out);
+  countFlippedFaces(mesh, cornerUV, h, cones, field, topology, out);
   return out;
 }
 

@@ -62,6 +62,13 @@ bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, F
 /// folded in 3D, and a map that follows the smooth surface flips it.
 bool faceFoldedIn3D(const TriangleMesh& mesh, const std::vector<Vec3f>& smooth, FaceId f);
 
+/// faceFoldedIn3D for each of `faces` against the field's smoothed surface: its framePositions,
+/// or when they were released (releaseFramePositions) the same positions recomputed around these
+/// faces (smoothPositionsAt; needs the topology, else InputError). All 0 without a smoothed
+/// surface (no field, or a field made on the mesh itself).
+std::vector<std::uint8_t> facesFoldedIn3D(const TriangleMesh& mesh, const Topology* topology,
+                                          const CrossField* field, const std::vector<FaceId>& faces);
+
 struct MapQuality {
   std::uint64_t faces = 0;
   std::uint64_t flipped = 0;    ///< negative parameter-space area (not collapsed)
@@ -83,8 +90,9 @@ struct MapQuality {
 /// Flips, collapses and the gradient error against a field (may be null) for target spacing h
 /// (<= 0: fitted); with the cones (vertex ids, e.g. CutResult::cones) also collapsedAtCones.
 /// Linear, parallel.
+/// The topology is needed only for a field whose framePositions were released (facesFoldedIn3D).
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
-                      const std::vector<VertexId>* cones = nullptr);
+                      const std::vector<VertexId>* cones = nullptr, const Topology* topology = nullptr);
 
 }  // namespace seamvox

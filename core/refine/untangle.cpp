@@ -21,20 +21,35 @@ using Complex = std::complex<double>;
 enum FaceState : std::uint8_t { kFine = 0, kFlipped = 1, kFolded = 2 };
 
 /// kFlipped for a face with negative parameter area ratio (collapsed and zero-area faces
-/// excluded), kFolded when whole face f is also folded in 3D against the smoothed surface.
-std::uint8_t stateOf(double ratio, const TriangleMesh& mesh, const std::vector<Vec3f>* smooth, FaceId f) {
-  if (!(ratio < 0.0) || std::abs(ratio) < kCollapsedAreaFraction) return kFine;
-  return smooth && faceFoldedIn3D(mesh, *smooth, f) ? kFolded : kFlipped;
+/// excluded); markFolded then turns those folded in 3D into kFolded.
+std::uint8_t stateOf(double ratio) {
+  return ratio < 0.0 && std::abs(ratio) >= kCollapsedAreaFraction ? kFlipped : kFine;
+}
+
+/// kFlipped faces (state[i], mesh face origin(i)) whose whole face is folded in 3D against the
+/// field's smoothed surface become kFolded.
+template <class Origin>
+void markFolded(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                std::vector<std::uint8_t>& state, const Origin& origin) {
+  std::vector<std::uint32_t> at;
+  std::vector<FaceId> faces;
+  for (std::uint32_t i = 0; i < state.size(); ++i) {
+    if (state[i] == kFlipped) at.push_back(i), faces.push_back(origin(i));
+  }
+  const std::vector<std::uint8_t> folded = facesFoldedIn3D(mesh, &topology, &field, faces);
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    if (folded[k]) state[at[k]] = kFolded;
+  }
 }
 
 /// Per region face: its state under the region's map uv (the 3D fold is the whole face's).
 std::vector<std::uint8_t> regionStates(const RegionMesh& region, const WedgeMap& uv, double h,
-                                       const TriangleMesh& mesh, const std::vector<Vec3f>* smooth) {
+                                       const TriangleMesh& mesh, const Topology& topology,
+                                       const CrossField& field) {
   const std::uint32_t rf = region.topology.numFaces();
   std::vector<std::uint8_t> state(rf, kFine);
-  for (std::uint32_t i = 0; i < rf; ++i) {
-    state[i] = stateOf(parameterAreaRatio(region.mesh, uv, i, h), mesh, smooth, region.faceOrigin[i]);
-  }
+  for (std::uint32_t i = 0; i < rf; ++i) state[i] = stateOf(parameterAreaRatio(region.mesh, uv, i, h));
+  markFolded(mesh, topology, field, state, [&](std::uint32_t i) { return region.faceOrigin[i]; });
   return state;
 }
 
@@ -58,13 +73,13 @@ struct RoundSolution {
 
 RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
                             const std::vector<Complex>& regionT, const TriangleMesh& mesh,
-                            const std::vector<Vec3f>* smooth, const UntangleOptions& options) {
+                            const Topology& topology, const CrossField& field, const UntangleOptions& options) {
   const double h = options.edgeLength;
   RoundSolution out;
   out.components = computeComponents(region.topology);
   const ComponentsResult& components = out.components;
   const std::vector<std::uint32_t> before =
-      flipsPerComponent(regionStates(region, regionUV, h, mesh, smooth), components);
+      flipsPerComponent(regionStates(region, regionUV, h, mesh, topology, field), components);
   std::vector<std::uint32_t> best = before;
   out.componentImproved.assign(before.size(), 0);
   std::vector<double> weight(region.topology.numFaces(), 1.0);
@@ -73,7 +88,7 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
     RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius);
     ++out.solves;
     out.unknowns = std::max(out.unknowns, stats.unknowns);
-    const std::vector<std::uint8_t> state = regionStates(region, solved.cornerUV, h, mesh, smooth);
+    const std::vector<std::uint8_t> state = regionStates(region, solved.cornerUV, h, mesh, topology, field);
     const std::vector<std::uint32_t> flips = flipsPerComponent(state, components);
     // Keep, per component, the corners of the best solve so far.
     if (out.solution.cornerUV.empty()) {
@@ -134,15 +149,12 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     throw InputError("untangle: edge length must be positive and stiffening above 1");
   }
   const double h = options.edgeLength;
-  const std::vector<Vec3f>* smooth =
-      field.framePositions.size() == mesh.numVertices() ? &field.framePositions : nullptr;
   std::vector<std::uint8_t> state(nf, kFine);
   auto classifyAll = [&] {
     parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-      for (FaceId f = range.begin(); f != range.end(); ++f) {
-        state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h), mesh, smooth, f);
-      }
+      for (FaceId f = range.begin(); f != range.end(); ++f) state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
     });
+    markFolded(mesh, topology, field, state, [](FaceId f) { return f; });
   };
   classifyAll();
   UntangleStats stats;
@@ -174,7 +186,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
     ++stats.rounds;
     stats.patchFaces += patch.size();
-    const RoundSolution solved = stiffenRegion(region, regionUV, regionT, mesh, smooth, options);
+    const RoundSolution solved = stiffenRegion(region, regionUV, regionT, mesh, topology, field, options);
     stats.solves += solved.solves;
     stats.largestUnknowns = std::max(stats.largestUnknowns, solved.unknowns);
 
