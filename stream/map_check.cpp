@@ -1,0 +1,351 @@
+#include "stream/map_check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <tuple>
+
+#include "core/system/errors.h"
+#include "core/system/memory.h"
+#include "stream/external_sort.h"
+
+namespace seamvox {
+namespace {
+
+// Records of the sorts and scratch files (plain arrays: written as bytes).
+struct FaceRecord {  // a face that is not degenerate, in input order
+  std::uint32_t v[3];
+  double uv[3][2];
+};
+struct DuplicateKey {  // its sorted vertex set; face = its rank among non-degenerate faces
+  std::uint32_t a, b, c, face;
+  bool operator<(const DuplicateKey& o) const { return std::tie(a, b, c, face) < std::tie(o.a, o.b, o.c, o.face); }
+};
+struct CornerRequest {  // corner j of face (non-degenerate rank) at vertex; inputFace for messages
+  std::uint32_t vertex, face, j, inputFace;
+  bool operator<(const CornerRequest& o) const { return std::tie(vertex, face, j) < std::tie(o.vertex, o.face, o.j); }
+};
+struct CornerPosition {
+  std::uint64_t corner;  // 3 face + j
+  float p[3];
+  bool operator<(const CornerPosition& o) const { return corner < o.corner; }
+};
+struct EdgeRecord {  // corner c of the cleaned mesh: its edge runs from a = vertex(next c) to b = vertex(prev c)
+  std::uint32_t a, b;
+  std::uint64_t corner;
+  double uvStart[2], uvEnd[2];  // UV at a, at b
+  double length, normal[3];     // the edge's 3D length, the face's unit normal (0 when degenerate)
+  std::uint32_t lo() const { return std::min(a, b); }
+  std::uint32_t hi() const { return std::max(a, b); }
+  bool operator<(const EdgeRecord& o) const {
+    return std::make_tuple(lo(), hi(), corner) < std::make_tuple(o.lo(), o.hi(), o.corner);
+  }
+};
+struct SeamLength {
+  std::uint64_t corner;
+  double length;
+  bool operator<(const SeamLength& o) const { return corner < o.corner; }
+};
+struct FaceArea {  // signed parameter area and 3D area of a cleaned face
+  double uv, area;
+};
+
+Vec2d vec2(const double (&x)[2]) { return {x[0], x[1]}; }
+Vec3d vec3(const double (&x)[3]) { return {x[0], x[1], x[2]}; }
+
+// Sorted vertex sets: the faces (non-degenerate ranks) repeating an earlier face's set, increasing.
+struct Duplicates {
+  std::unique_ptr<ExternalSorter<std::uint32_t>> ranks;
+  std::uint64_t count = 0;
+};
+Duplicates findDuplicateFaces(ExternalSorter<DuplicateKey>& keys, ScratchFolder& scratch,
+                              const ExternalSortOptions& options) {
+  Duplicates out;
+  out.ranks = std::make_unique<ExternalSorter<std::uint32_t>>(scratch, options);
+  keys.finish();
+  DuplicateKey key, previous{kInvalidId, kInvalidId, kInvalidId, kInvalidId};
+  while (keys.next(key)) {
+    if (key.a == previous.a && key.b == previous.b && key.c == previous.c) {
+      out.ranks->add(key.face);
+      ++out.count;
+    }
+    previous = key;
+  }
+  out.ranks->finish();
+  return out;
+}
+
+// Joins corner requests (sorted by vertex) with the positions file (in vertex order).
+void joinPositions(ExternalSorter<CornerRequest>& requests, ScratchFolder& scratch, const ScratchFile& positions,
+                   std::uint64_t numVertices, const std::string& name, ExternalSorter<CornerPosition>& out) {
+  requests.finish();
+  ScratchReader reader(scratch, positions, "positions");
+  std::uint64_t vertex = 0;
+  float p[3] = {0, 0, 0};
+  bool haveVertex = false;
+  CornerRequest r;
+  // Out of range: report the first face (input order) that refers to a missing vertex.
+  CornerRequest bad{0, 0, 0, kInvalidId};
+  while (requests.next(r)) {
+    if (r.vertex >= numVertices) {
+      if (r.inputFace < bad.inputFace || (r.inputFace == bad.inputFace && r.j < bad.j)) bad = r;
+      continue;
+    }
+    while (!haveVertex || vertex < r.vertex) {
+      if (!reader.read(p, sizeof p)) throw IoError(positions.path + ": scratch positions end early");
+      vertex += haveVertex;
+      haveVertex = true;
+    }
+    CornerPosition c{3 * std::uint64_t(r.face) + r.j, {p[0], p[1], p[2]}};
+    out.add(c);
+  }
+  if (bad.inputFace != kInvalidId) {
+    throw InputError(name + ": face " + std::to_string(bad.inputFace) + " refers to vertex " +
+                     std::to_string(bad.vertex) + " but there are only " + std::to_string(numVertices) +
+                     " vertices");
+  }
+  out.finish();
+}
+
+// Measures the seam between the glued sides c < o of an edge.
+void measureSeam(const EdgeRecord& c, const EdgeRecord& o, SeamQuality& seams, ExternalSorter<SeamLength>& lengths) {
+  const Vec2d leftA = vec2(c.uvStart), rightA = vec2(o.uvEnd), leftB = vec2(c.uvEnd), rightB = vec2(o.uvStart);
+  if (leftA == rightA && leftB == rightB) return;
+  const SeamEdgeFit fit = fitSeamEdge(leftA, rightA, leftB, rightB);
+  if (fit.residual > seams.maxResidual) seams.worstEdgeCorner = c.corner;
+  seams.maxResidual = std::max(seams.maxResidual, fit.residual);
+  seams.maxIntegerDistance = std::max(seams.maxIntegerDistance, fit.integerDistance);
+  ++seams.seamEdges;
+  lengths.add({c.corner, c.length});
+}
+
+// Glues the sides of one edge (sorted by corner) as cleanMesh glues them and measures the glued
+// pairs: two sides in opposite directions are glued; on an edge of more than two sides, pairs of
+// opposite directions with the most aligned normals first (ties: smaller corners first). Returns
+// false for two sides in the same direction (an orientation clash: cleanMesh would reorient).
+bool measureEdge(const std::vector<EdgeRecord>& sides, SeamQuality& seams, ExternalSorter<SeamLength>& lengths) {
+  if (sides.size() < 2) return true;  // boundary
+  const bool firstForward = sides[0].a < sides[0].b;
+  if (sides.size() == 2) {
+    if ((sides[1].a < sides[1].b) == firstForward) return false;
+    measureSeam(sides[0], sides[1], seams, lengths);
+    return true;
+  }
+  struct Pair {
+    double alignment;
+    std::size_t x, y;  // same direction as the first side, reverse
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t x = 0; x < sides.size(); ++x) {
+    if ((sides[x].a < sides[x].b) != firstForward) continue;
+    for (std::size_t y = 0; y < sides.size(); ++y) {
+      if ((sides[y].a < sides[y].b) == firstForward) continue;
+      const double alignment = vec3(sides[x].normal).dot(vec3(sides[y].normal));  // as cleanMesh computes it
+      pairs.push_back({std::isfinite(alignment) ? alignment : -2.0, x, y});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) {
+    return p.alignment != q.alignment ? p.alignment > q.alignment : p.x != q.x ? p.x < q.x : p.y < q.y;
+  });
+  std::vector<std::uint8_t> glued(sides.size(), 0);
+  for (const Pair& pair : pairs) {
+    if (glued[pair.x] || glued[pair.y]) continue;
+    glued[pair.x] = glued[pair.y] = 1;
+    const bool xFirst = sides[pair.x].corner < sides[pair.y].corner;
+    measureSeam(sides[xFirst ? pair.x : pair.y], sides[xFirst ? pair.y : pair.x], seams, lengths);
+  }
+  return true;
+}
+
+// Pass 1: the stream into the positions file, the non-degenerate faces file and the two sorts
+// that find duplicate faces and the positions of every corner.
+struct ReadPass {
+  ScratchFile positions, faces;
+  std::uint64_t vertices = 0, inputFaces = 0, kept = 0;
+};
+ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<DuplicateKey>& duplicates,
+                    ExternalSorter<CornerRequest>& requests) {
+  const std::string& name = stream.name();
+  ReadPass out;
+  ScratchWriter positions(scratch, "read"), faces(scratch, "read");
+  MeshChunk chunk;
+  bool uvDecided = false, withUV = false;
+  std::uint64_t nonFinite = kInvalidId;
+  while (stream.next(chunk)) {
+    if (chunk.firstVertex != out.vertices) {
+      throw InputError(name + ": stream chunk starts at vertex " + std::to_string(chunk.firstVertex) + " but " +
+                       std::to_string(out.vertices) + " vertices came before it");
+    }
+    if (out.vertices + chunk.positions.size() >= kInvalidId || out.inputFaces + chunk.triangles.size() >= kInvalidId) {
+      throw InputError(name + ": more than 2^32 - 1 vertices or faces (ids are 32-bit)");
+    }
+    for (const Vec3f& p : chunk.positions) {
+      if (!p.allFinite() && nonFinite == kInvalidId) nonFinite = out.vertices;
+      const float xyz[3] = {p.x(), p.y(), p.z()};
+      positions.write(xyz, sizeof xyz);
+      ++out.vertices;
+    }
+    if (chunk.triangles.empty()) continue;
+    const bool chunkUV = !chunk.cornerUV.empty();
+    if (chunkUV && chunk.cornerUV.size() != 3 * chunk.triangles.size()) {
+      throw InputError(name + ": stream chunk has " + std::to_string(chunk.cornerUV.size()) + " corner UVs for " +
+                       std::to_string(chunk.triangles.size()) + " triangles");
+    }
+    if (!uvDecided) {
+      withUV = chunkUV;
+      uvDecided = true;
+    } else if (withUV != chunkUV) {
+      throw InputError(name + ": some triangles have texture coordinates and others do not");
+    }
+    for (std::size_t f = 0; f < chunk.triangles.size(); ++f, ++out.inputFaces) {
+      const Triangle& t = chunk.triangles[f];
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // degenerate: dropped
+      FaceRecord record{{t[0], t[1], t[2]}, {}};
+      for (int j = 0; j < 3; ++j) {
+        if (withUV) record.uv[j][0] = chunk.cornerUV[3 * f + j].x(), record.uv[j][1] = chunk.cornerUV[3 * f + j].y();
+        requests.add({t[j], static_cast<std::uint32_t>(out.kept), static_cast<std::uint32_t>(j),
+                      static_cast<std::uint32_t>(out.inputFaces)});
+      }
+      faces.write(&record, sizeof record);
+      Triangle s = t;
+      std::sort(s.begin(), s.end());
+      duplicates.add({s[0], s[1], s[2], static_cast<std::uint32_t>(out.kept)});
+      ++out.kept;
+    }
+  }
+  if (out.inputFaces == 0) throw InputError(name + ": the mesh has no faces");
+  if (!withUV) throw InputError(name + ": the mesh has no per-corner texture coordinates");
+  if (nonFinite != kInvalidId) {
+    throw InputError(name + ": vertex " + std::to_string(nonFinite) + " has a non-finite coordinate (NaN or inf)");
+  }
+  out.positions = positions.finish();
+  out.faces = faces.finish();
+  return out;
+}
+
+}  // namespace
+
+std::uint64_t mapCheckScratchBytes(std::uint64_t vertices, std::uint64_t faces) {
+  // Positions and faces files, then the largest sorts alive together: corner positions and
+  // edges (runs and one merge round).
+  return vertices * 12 + faces * (sizeof(FaceRecord) + 3 * 2 * (sizeof(CornerPosition) + sizeof(EdgeRecord)));
+}
+
+MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options) {
+  const std::string& name = stream.name();
+  ScratchFolder scratch(options.scratchParent,
+                        mapCheckScratchBytes(stream.declaredVertices(), stream.expectedTriangles()));
+  if (options.onScratch) options.onScratch(scratch);
+  auto sortOptions = [&](const char* stage) {
+    return ExternalSortOptions{std::max<std::uint64_t>(options.memoryBytes / 4, 4096), stage};
+  };
+
+  ExternalSorter<DuplicateKey> duplicateKeys(scratch, sortOptions("duplicates"));
+  auto requests = std::make_unique<ExternalSorter<CornerRequest>>(scratch, sortOptions("corners"));
+  const ReadPass read = readStream(stream, scratch, duplicateKeys, *requests);
+  Duplicates duplicates = findDuplicateFaces(duplicateKeys, scratch, sortOptions("duplicates"));
+  if (read.kept == duplicates.count) {
+    throw InputError(name + ": the mesh has no valid faces (" + std::to_string(read.inputFaces) +
+                     " faces in the input, all degenerate or duplicates)");
+  }
+  ExternalSorter<CornerPosition> corners(scratch, sortOptions("corners"));
+  joinPositions(*requests, scratch, read.positions, read.vertices, name, corners);
+  requests.reset();
+  scratch.remove(read.positions);
+
+  // Pass over the faces in order: areas, and the sides of every edge.
+  MapCheckResult result;
+  ExternalSorter<EdgeRecord> edges(scratch, sortOptions("edges"));
+  ScratchWriter areas(scratch, "faces");
+  double areaSum = 0.0, uvAreaSum = 0.0;
+  {
+    ScratchReader faces(scratch, read.faces, "faces");
+    FaceRecord face;
+    std::uint32_t nextDuplicate = kInvalidId;
+    bool moreDuplicates = duplicates.ranks->next(nextDuplicate);
+    for (std::uint64_t k = 0; k < read.kept; ++k) {
+      if (!faces.read(&face, sizeof face)) throw IoError(read.faces.path + ": scratch faces end early");
+      Vec3d p[3];
+      for (int j = 0; j < 3; ++j) {
+        CornerPosition c;
+        if (!corners.next(c) || c.corner != 3 * k + j) throw IoError(scratch.path() + ": corner positions out of step");
+        p[j] = Vec3f(c.p[0], c.p[1], c.p[2]).cast<double>();
+      }
+      if (moreDuplicates && nextDuplicate == k) {
+        moreDuplicates = duplicates.ranks->next(nextDuplicate);
+        continue;
+      }
+      const std::uint64_t f = result.faces++;
+      const Vec3d cross = (p[1] - p[0]).cross(p[2] - p[0]);
+      const double length = cross.norm();
+      const Vec3d normal = length > 0.0 ? Vec3d(cross / length) : Vec3d::Zero();
+      const Vec2d a = vec2(face.uv[1]) - vec2(face.uv[0]), b = vec2(face.uv[2]) - vec2(face.uv[0]);
+      const FaceArea area{0.5 * (a.x() * b.y() - a.y() * b.x()), 0.5 * length};
+      areas.write(&area, sizeof area);
+      areaSum += area.area;
+      uvAreaSum += std::abs(area.uv);
+      for (int j = 0; j < 3; ++j) {
+        const int s = (j + 1) % 3, e = (j + 2) % 3;
+        EdgeRecord edge{face.v[s], face.v[e], 3 * f + j, {face.uv[s][0], face.uv[s][1]},
+                        {face.uv[e][0], face.uv[e][1]}, (p[s] - p[e]).norm(), {normal.x(), normal.y(), normal.z()}};
+        edges.add(edge);
+      }
+    }
+  }
+  duplicates.ranks.reset();
+  scratch.remove(read.faces);
+  const ScratchFile areaFile = areas.finish();
+
+  // Edges: glue the sides, measure the seams; their lengths summed in corner order.
+  {
+    ExternalSorter<SeamLength> lengths(scratch, sortOptions("seams"));
+    edges.finish();
+    std::vector<EdgeRecord> sides;
+    EdgeRecord edge;
+    std::uint64_t clashes = 0;
+    auto flush = [&] {
+      clashes += !measureEdge(sides, result.seams, lengths);
+      sides.clear();
+    };
+    while (edges.next(edge)) {
+      if (!sides.empty() && (sides[0].lo() != edge.lo() || sides[0].hi() != edge.hi())) flush();
+      sides.push_back(edge);
+    }
+    flush();
+    if (clashes > 0) {
+      throw InputError(name + ": " + std::to_string(clashes) +
+                       " edges join two faces of the same orientation; the out-of-core check does not "
+                       "reorient faces: check it in memory (a larger --memory-budget)");
+    }
+    lengths.finish();
+    SeamLength seam;
+    while (lengths.next(seam)) result.seams.seamLength += seam.length;
+  }
+
+  // Flips and collapses for the spacing h, given or fitted (measureMap without a field).
+  MapQuality& map = result.map;
+  map.faces = result.faces;
+  map.edgeLength = options.edgeLength > 0.0 ? options.edgeLength
+                                            : (uvAreaSum > 0.0 ? std::sqrt(areaSum / uvAreaSum) : 1.0);
+  map.relativeGradientError = std::numeric_limits<double>::quiet_NaN();
+  {
+    ScratchReader reader(scratch, areaFile, "flips");
+    FaceArea area;
+    const double h2 = map.edgeLength * map.edgeLength;
+    while (reader.read(&area, sizeof area)) {
+      const double ratio = area.uv * h2 / area.area;
+      if (std::abs(ratio) < kCollapsedAreaFraction) {
+        ++map.collapsed;
+      } else if (ratio < 0.0) {
+        ++map.flipped;
+      }
+    }
+    map.flippedFraction = map.faces ? static_cast<double>(map.flipped) / map.faces : 0.0;
+  }
+  scratch.remove(areaFile);
+  result.traffic = scratch.traffic();
+  result.scratchPeakBytes = scratch.peakBytesOnDisk();
+  return result;
+}
+
+}  // namespace seamvox
