@@ -11,6 +11,8 @@
 #include <type_traits>
 #include <vector>
 
+#include <tbb/parallel_sort.h>
+
 #include "stream/scratch_folder.h"
 
 namespace seamvox {
@@ -74,7 +76,7 @@ class ExternalSorter {
   }
   /// Ends the input; next() then returns the records in order.
   void finish() {
-    std::sort(buffer_.begin(), buffer_.end(), Less{});
+    tbb::parallel_sort(buffer_.begin(), buffer_.end(), Less{});
     onDisk_ = merge_.runs() > 0;
     if (onDisk_) {
       if (!buffer_.empty()) merge_.writeRun(buffer_.data(), buffer_.size());
@@ -100,7 +102,7 @@ class ExternalSorter {
     return Less{}(x, y);
   }
   void spill() {
-    std::sort(buffer_.begin(), buffer_.end(), Less{});
+    tbb::parallel_sort(buffer_.begin(), buffer_.end(), Less{});
     merge_.writeRun(buffer_.data(), buffer_.size());
     buffer_.clear();
   }

@@ -14,7 +14,7 @@ namespace {
 
 // Records of the sorts and scratch files (plain arrays: written as bytes).
 struct FaceRecord {  // a face that is not degenerate, in input order
-  std::uint32_t v[3];
+  std::uint32_t v[3], inputFace;
   double uv[3][2];
 };
 struct DuplicateKey {  // its sorted vertex set; face = its rank among non-degenerate faces
@@ -75,37 +75,103 @@ Duplicates findDuplicateFaces(ExternalSorter<DuplicateKey>& keys, ScratchFolder&
   return out;
 }
 
-// Joins corner requests (sorted by vertex) with the positions file (in vertex order).
-void joinPositions(ExternalSorter<CornerRequest>& requests, ScratchFolder& scratch, const ScratchFile& positions,
-                   std::uint64_t numVertices, const std::string& name, ExternalSorter<CornerPosition>& out) {
-  requests.finish();
-  ScratchReader reader(scratch, positions, "positions");
-  std::uint64_t vertex = 0;
-  float p[3] = {0, 0, 0};
-  bool haveVertex = false;
-  CornerRequest r;
-  // Out of range: report the first face (input order) that refers to a missing vertex.
-  CornerRequest bad{0, 0, 0, kInvalidId};
-  while (requests.next(r)) {
-    if (r.vertex >= numVertices) {
-      if (r.inputFace < bad.inputFace || (r.inputFace == bad.inputFace && r.j < bad.j)) bad = r;
-      continue;
+// The positions of the corners, face by face in order: held in memory when the header declares
+// a vertex count whose positions fit the given share of memory (the common case), else corner
+// requests sorted by vertex, joined with the positions file and sorted back by corner.
+class CornerPositions {
+ public:
+  CornerPositions(const std::string& name, ScratchFolder& scratch, std::uint64_t declaredVertices,
+                  std::uint64_t memoryBytes, const ExternalSortOptions& sortOptions)
+      : name_(name), scratch_(scratch), sortOptions_(sortOptions) {
+    if (declaredVertices > 0 && declaredVertices * sizeof(Vec3f) <= memoryBytes) {
+      positions_.reserve(declaredVertices);
+    } else {
+      file_ = std::make_unique<ScratchWriter>(scratch, "read");
+      requests_ = std::make_unique<ExternalSorter<CornerRequest>>(scratch, sortOptions);
     }
-    while (!haveVertex || vertex < r.vertex) {
-      if (!reader.read(p, sizeof p)) throw IoError(positions.path + ": scratch positions end early");
-      vertex += haveVertex;
-      haveVertex = true;
+  }
+  bool inMemory() const { return !requests_ && !corners_; }
+  std::uint64_t vertices() const { return vertices_; }
+
+  void addVertex(const Vec3f& p) {
+    ++vertices_;
+    if (!file_) {
+      positions_.push_back(p);
+      return;
     }
-    CornerPosition c{3 * std::uint64_t(r.face) + r.j, {p[0], p[1], p[2]}};
-    out.add(c);
+    const float xyz[3] = {p.x(), p.y(), p.z()};
+    file_->write(xyz, sizeof xyz);
   }
-  if (bad.inputFace != kInvalidId) {
-    throw InputError(name + ": face " + std::to_string(bad.inputFace) + " refers to vertex " +
-                     std::to_string(bad.vertex) + " but there are only " + std::to_string(numVertices) +
-                     " vertices");
+  void addFace(std::uint32_t rank, const Triangle& t, std::uint32_t inputFace) {
+    if (!requests_) return;
+    for (std::uint32_t j = 0; j < 3; ++j) requests_->add({t[j], rank, j, inputFace});
   }
-  out.finish();
-}
+  /// After the last vertex and face: the join (InputError for a vertex out of range).
+  void finish() {
+    if (!requests_) return;
+    const ScratchFile positions = file_->finish();
+    file_.reset();
+    corners_ = std::make_unique<ExternalSorter<CornerPosition>>(scratch_, sortOptions_);
+    join(positions);
+    requests_.reset();
+    scratch_.remove(positions);
+  }
+  /// The positions of face `rank`'s corners; faces are asked for in increasing rank, each once.
+  void face(std::uint64_t rank, const FaceRecord& face, Vec3d (&p)[3]) {
+    for (int j = 0; j < 3; ++j) {
+      if (!corners_) {
+        if (face.v[j] >= positions_.size()) {
+          throw InputError(name_ + ": face " + std::to_string(face.inputFace) + " refers to vertex " +
+                           std::to_string(face.v[j]) + " but there are only " + std::to_string(positions_.size()) +
+                           " vertices");
+        }
+        p[j] = positions_[face.v[j]].cast<double>();
+        continue;
+      }
+      CornerPosition c;
+      if (!corners_->next(c) || c.corner != 3 * rank + j) throw IoError(scratch_.path() + ": corner positions out of step");
+      p[j] = Vec3f(c.p[0], c.p[1], c.p[2]).cast<double>();
+    }
+  }
+
+ private:
+  void join(const ScratchFile& positions) {
+    requests_->finish();
+    ScratchReader reader(scratch_, positions, "positions");
+    std::uint64_t vertex = 0;
+    float p[3] = {0, 0, 0};
+    bool haveVertex = false;
+    CornerRequest r;
+    // Out of range (the readers check first): the first face in input order that refers to one.
+    CornerRequest bad{0, 0, 0, kInvalidId};
+    while (requests_->next(r)) {
+      if (r.vertex >= vertices_) {
+        if (r.inputFace < bad.inputFace || (r.inputFace == bad.inputFace && r.j < bad.j)) bad = r;
+        continue;
+      }
+      while (!haveVertex || vertex < r.vertex) {
+        if (!reader.read(p, sizeof p)) throw IoError(positions.path + ": scratch positions end early");
+        vertex += haveVertex;
+        haveVertex = true;
+      }
+      corners_->add({3 * std::uint64_t(r.face) + r.j, {p[0], p[1], p[2]}});
+    }
+    if (bad.inputFace != kInvalidId) {
+      throw InputError(name_ + ": face " + std::to_string(bad.inputFace) + " refers to vertex " +
+                       std::to_string(bad.vertex) + " but there are only " + std::to_string(vertices_) + " vertices");
+    }
+    corners_->finish();
+  }
+
+  std::string name_;
+  ScratchFolder& scratch_;
+  ExternalSortOptions sortOptions_;
+  std::uint64_t vertices_ = 0;
+  std::vector<Vec3f> positions_;
+  std::unique_ptr<ScratchWriter> file_;
+  std::unique_ptr<ExternalSorter<CornerRequest>> requests_;
+  std::unique_ptr<ExternalSorter<CornerPosition>> corners_;
+};
 
 // Measures the seam between the glued sides c < o of an edge.
 void measureSeam(const EdgeRecord& c, const EdgeRecord& o, SeamQuality& seams, ExternalSorter<SeamLength>& lengths) {
@@ -157,17 +223,17 @@ bool measureEdge(const std::vector<EdgeRecord>& sides, SeamQuality& seams, Exter
   return true;
 }
 
-// Pass 1: the stream into the positions file, the non-degenerate faces file and the two sorts
-// that find duplicate faces and the positions of every corner.
+// Pass 1: the stream into the corner positions, the non-degenerate faces file and the sort that
+// finds duplicate faces.
 struct ReadPass {
-  ScratchFile positions, faces;
+  ScratchFile faces;
   std::uint64_t vertices = 0, inputFaces = 0, kept = 0;
 };
 ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<DuplicateKey>& duplicates,
-                    ExternalSorter<CornerRequest>& requests) {
+                    CornerPositions& positions) {
   const std::string& name = stream.name();
   ReadPass out;
-  ScratchWriter positions(scratch, "read"), faces(scratch, "read");
+  ScratchWriter faces(scratch, "read");
   MeshChunk chunk;
   bool uvDecided = false, withUV = false;
   std::uint64_t nonFinite = kInvalidId;
@@ -181,8 +247,7 @@ ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<D
     }
     for (const Vec3f& p : chunk.positions) {
       if (!p.allFinite() && nonFinite == kInvalidId) nonFinite = out.vertices;
-      const float xyz[3] = {p.x(), p.y(), p.z()};
-      positions.write(xyz, sizeof xyz);
+      positions.addVertex(p);
       ++out.vertices;
     }
     if (chunk.triangles.empty()) continue;
@@ -200,12 +265,11 @@ ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<D
     for (std::size_t f = 0; f < chunk.triangles.size(); ++f, ++out.inputFaces) {
       const Triangle& t = chunk.triangles[f];
       if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // degenerate: dropped
-      FaceRecord record{{t[0], t[1], t[2]}, {}};
+      FaceRecord record{{t[0], t[1], t[2]}, static_cast<std::uint32_t>(out.inputFaces), {}};
       for (int j = 0; j < 3; ++j) {
         if (withUV) record.uv[j][0] = chunk.cornerUV[3 * f + j].x(), record.uv[j][1] = chunk.cornerUV[3 * f + j].y();
-        requests.add({t[j], static_cast<std::uint32_t>(out.kept), static_cast<std::uint32_t>(j),
-                      static_cast<std::uint32_t>(out.inputFaces)});
       }
+      positions.addFace(static_cast<std::uint32_t>(out.kept), t, static_cast<std::uint32_t>(out.inputFaces));
       faces.write(&record, sizeof record);
       Triangle s = t;
       std::sort(s.begin(), s.end());
@@ -218,7 +282,7 @@ ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<D
   if (nonFinite != kInvalidId) {
     throw InputError(name + ": vertex " + std::to_string(nonFinite) + " has a non-finite coordinate (NaN or inf)");
   }
-  out.positions = positions.finish();
+  positions.finish();
   out.faces = faces.finish();
   return out;
 }
@@ -236,22 +300,21 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   ScratchFolder scratch(options.scratchParent,
                         mapCheckScratchBytes(stream.declaredVertices(), stream.expectedTriangles()));
   if (options.onScratch) options.onScratch(scratch);
+  std::uint64_t sortMemory = options.memoryBytes / 4;  // up to four sorts alive at a time
   auto sortOptions = [&](const char* stage) {
-    return ExternalSortOptions{std::max<std::uint64_t>(options.memoryBytes / 4, 4096), stage};
+    return ExternalSortOptions{std::max<std::uint64_t>(sortMemory, kMinimumSortBytes), stage};
   };
 
+  // Positions in memory when they take at most half the memory; the sorts share the rest.
+  CornerPositions positions(name, scratch, stream.declaredVertices(), options.memoryBytes / 2, sortOptions("corners"));
+  if (positions.inMemory()) sortMemory -= stream.declaredVertices() * sizeof(Vec3f) / 4;
   ExternalSorter<DuplicateKey> duplicateKeys(scratch, sortOptions("duplicates"));
-  auto requests = std::make_unique<ExternalSorter<CornerRequest>>(scratch, sortOptions("corners"));
-  const ReadPass read = readStream(stream, scratch, duplicateKeys, *requests);
+  const ReadPass read = readStream(stream, scratch, duplicateKeys, positions);
   Duplicates duplicates = findDuplicateFaces(duplicateKeys, scratch, sortOptions("duplicates"));
   if (read.kept == duplicates.count) {
     throw InputError(name + ": the mesh has no valid faces (" + std::to_string(read.inputFaces) +
                      " faces in the input, all degenerate or duplicates)");
   }
-  ExternalSorter<CornerPosition> corners(scratch, sortOptions("corners"));
-  joinPositions(*requests, scratch, read.positions, read.vertices, name, corners);
-  requests.reset();
-  scratch.remove(read.positions);
 
   // Pass over the faces in order: areas, and the sides of every edge.
   MapCheckResult result;
@@ -266,11 +329,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
     for (std::uint64_t k = 0; k < read.kept; ++k) {
       if (!faces.read(&face, sizeof face)) throw IoError(read.faces.path + ": scratch faces end early");
       Vec3d p[3];
-      for (int j = 0; j < 3; ++j) {
-        CornerPosition c;
-        if (!corners.next(c) || c.corner != 3 * k + j) throw IoError(scratch.path() + ": corner positions out of step");
-        p[j] = Vec3f(c.p[0], c.p[1], c.p[2]).cast<double>();
-      }
+      positions.face(k, face, p);
       if (moreDuplicates && nextDuplicate == k) {
         moreDuplicates = duplicates.ranks->next(nextDuplicate);
         continue;
@@ -343,6 +402,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
     map.flippedFraction = map.faces ? static_cast<double>(map.flipped) / map.faces : 0.0;
   }
   scratch.remove(areaFile);
+  result.positionsInMemory = positions.inMemory();
   result.traffic = scratch.traffic();
   result.scratchPeakBytes = scratch.peakBytesOnDisk();
   return result;

@@ -15,6 +15,9 @@
 
 namespace seamvox {
 
+/// Each sort gets at least this much, whatever memoryBytes says (smaller buffers only cost time).
+constexpr std::uint64_t kMinimumSortBytes = std::uint64_t(1) << 20;
+
 struct MapCheckOptions {
   double edgeLength = 0.0;  ///< grid spacing h; <= 0: fitted by least squares as measureMap fits it
   /// Memory of the sorts (the records buffered and merged at once); each of the up to four
@@ -31,6 +34,9 @@ struct MapCheckResult {
   MapQuality map;  ///< relativeGradientError NaN: no field
   std::vector<ScratchTraffic> traffic;  ///< scratch bytes read and written per stage
   std::uint64_t scratchPeakBytes = 0;
+  /// The vertex positions were held in memory (the header declared a count whose positions fit
+  /// half of memoryBytes) rather than joined with the corners through external sorts.
+  bool positionsInMemory = false;
 };
 
 /// Scratch bytes checkMapStream needs for faces and vertices (what a disk-full error quotes).

@@ -105,6 +105,7 @@ void printJson(const std::string& path, const CheckFigures& c, bool withField, d
   if (c.outOfCore) {
     j.key("scratch").beginObject();
     j.key("peakBytes").value(c.scratch.scratchPeakBytes);
+    j.key("positionsInMemory").value(c.scratch.positionsInMemory);
     j.key("stages").beginArray();
     for (const ScratchTraffic& t : c.scratch.traffic) {
       j.beginObject().key("stage").value(t.stage).key("bytesWritten").value(t.bytesWritten);
@@ -129,8 +130,9 @@ void printText(const std::string& path, const CheckFigures& c, bool withField, d
               100.0 * map.flippedFraction, static_cast<unsigned long long>(map.collapsed), map.edgeLength);
   if (withField) std::printf("relative gradient error %.6f\n", map.relativeGradientError);
   if (c.outOfCore) {
-    std::printf("path out of core: estimate %s above the budget %s; scratch peak %s (%s); peak memory %s\n",
+    std::printf("path out of core: estimate %s above the budget %s; positions %s; scratch peak %s (%s); peak memory %s\n",
                 formatByteSize(c.estimate).c_str(), formatByteSize(c.budget).c_str(),
+                c.scratch.positionsInMemory ? "in memory" : "joined by external sorts",
                 formatByteSize(c.scratch.scratchPeakBytes).c_str(), formatTraffic(c.scratch).c_str(),
                 formatByteSize(peakResidentBytes()).c_str());
   } else {
@@ -181,6 +183,10 @@ int runCheck(Args& args) {
     options.edgeLength = edgeLength;
     const std::uint64_t program = currentResidentBytes();
     options.memoryBytes = memory.budget > program ? memory.budget - program : 0;
+    if (options.memoryBytes < 4 * kMinimumSortBytes) {
+      std::fprintf(stderr, "seamvox check: the budget %s is below what the program holds (%s) and 4 MiB for the sorts: running with that minimum\n",
+                   formatByteSize(memory.budget).c_str(), formatByteSize(program).c_str());
+    }
     options.scratchParent = memory.scratch;
     figures.scratch = checkMapStream(*stream, options);
     figures.outOfCore = true;
