@@ -290,9 +290,11 @@ ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<D
 }  // namespace
 
 std::uint64_t mapCheckScratchBytes(std::uint64_t vertices, std::uint64_t faces) {
-  // Positions and faces files, then the largest sorts alive together: corner positions and
-  // edges (runs and one merge round).
-  return vertices * 12 + faces * (sizeof(FaceRecord) + 3 * 2 * (sizeof(CornerPosition) + sizeof(EdgeRecord)));
+  // Faces, areas and duplicate keys, the edge runs, and (positions not in memory) the positions
+  // file with the runs of the corner requests and positions: an upper bound of the peak.
+  return vertices * sizeof(Vec3f) +
+         faces * (sizeof(FaceRecord) + sizeof(FaceArea) + sizeof(DuplicateKey) + 3 * sizeof(EdgeRecord) +
+                  3 * (sizeof(CornerRequest) + sizeof(CornerPosition)));
 }
 
 MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options) {
@@ -308,9 +310,10 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   // Positions in memory when they take at most half the memory; the sorts share the rest.
   CornerPositions positions(name, scratch, stream.declaredVertices(), options.memoryBytes / 2, sortOptions("corners"));
   if (positions.inMemory()) sortMemory -= stream.declaredVertices() * sizeof(Vec3f) / 4;
-  ExternalSorter<DuplicateKey> duplicateKeys(scratch, sortOptions("duplicates"));
-  const ReadPass read = readStream(stream, scratch, duplicateKeys, positions);
-  Duplicates duplicates = findDuplicateFaces(duplicateKeys, scratch, sortOptions("duplicates"));
+  auto duplicateKeys = std::make_unique<ExternalSorter<DuplicateKey>>(scratch, sortOptions("duplicates"));
+  const ReadPass read = readStream(stream, scratch, *duplicateKeys, positions);
+  Duplicates duplicates = findDuplicateFaces(*duplicateKeys, scratch, sortOptions("duplicates"));
+  duplicateKeys.reset();
   if (read.kept == duplicates.count) {
     throw InputError(name + ": the mesh has no valid faces (" + std::to_string(read.inputFaces) +
                      " faces in the input, all degenerate or duplicates)");

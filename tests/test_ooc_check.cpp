@@ -271,6 +271,49 @@ TEST_F(OocCheck, FullScratchDiskNamesTheFolderAndLeavesNothing) {
   EXPECT_TRUE(fs::is_empty(scratch.dir()));
 }
 
+TEST_F(OocCheck, TruncatedMapsFailCleanlyOnBothPaths) {
+  const std::string whole = testing::readFile(path("sphere-map.ply"));
+  const std::size_t header = whole.find("end_header\n") + 11;
+  for (int i = 0; i < 8; ++i) {
+    const std::size_t size = header + (whole.size() - header) * i / 8 + 7;  // inside a record
+    testing::writeFile(path("cut.ply"), whole.substr(0, size));
+    for (const char* budget : {"64G", "1K"}) {
+      std::string log;
+      EXPECT_EQ(check(path("cut.ply"), budget, "", &log), 1) << size << " bytes, budget " << budget << ": " << log;
+      EXPECT_NE(log.find(path("cut.ply")), std::string::npos) << log;
+    }
+  }
+}
+
+// SIGTERM while the check waits for the rest of a map from a pipe: exit 143, scratch removed.
+TEST_F(OocCheck, TerminatedCheckRemovesItsScratch) {
+  testing::TempDir dir;
+  // A map larger than the reader's buffer (UV = x, y): the first 3 MB are sent, then a signal.
+  std::string log;
+  ASSERT_EQ(testing::runSeamvox("gen sphere --faces 100000 -o " + dir.path("big.ply") + " --quiet", &log), 0) << log;
+  TriangleMesh mesh = readMesh(dir.path("big.ply"));
+  std::vector<Vec2d> uv;
+  for (const Triangle& t : mesh.triangles) {
+    for (const VertexId v : t) uv.emplace_back(mesh.positions[v].x(), mesh.positions[v].y());
+  }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  writeMesh(dir.path("big-map.ply"), mesh);
+  ASSERT_GT(fs::file_size(dir.path("big-map.ply")), 4000000u);
+  fs::create_directory(dir.path("scratch"));
+  const std::string script =
+      "mkfifo " + dir.path("in.ply") + "\n" + testing::seamvoxBinary() + " check " + dir.path("in.ply") +
+      " --memory-budget 1K --scratch " + dir.path("scratch") + " > " + dir.path("log") + " 2>&1 & pid=$!\n" +
+      "exec 3>" + dir.path("in.ply") + "\n" + "(head -c 3000000 " + dir.path("big-map.ply") + " >&3 &)\n" +
+      "for i in $(seq 200); do [ -e " + dir.path("scratch") + "/seamvox-scratch-*/0 ] && break; sleep 0.05; done\n" +
+      "ls " + dir.path("scratch") + "/seamvox-scratch-*/ | wc -l > " + dir.path("files") + "\n" +
+      "sleep 0.2; kill -TERM $pid; wait $pid; echo $? > " + dir.path("code") + "\n";
+  testing::writeFile(dir.path("run.sh"), script);
+  ASSERT_EQ(std::system(("sh " + dir.path("run.sh")).c_str()), 0);
+  EXPECT_EQ(testing::readFile(dir.path("code")), "143\n") << testing::readFile(dir.path("log"));
+  EXPECT_GE(std::stoi(testing::readFile(dir.path("files"))), 1) << "scratch files were written before the signal";
+  EXPECT_TRUE(fs::is_empty(dir.path("scratch")));
+}
+
 TEST_F(OocCheck, ScratchDefaultsToTmpdir) {
   testing::TempDir tmp;
   const std::string command = "TMPDIR=" + tmp.dir() + " " + testing::seamvoxBinary() + " check " +
