@@ -7,6 +7,7 @@
 
 #include "core/system/errors.h"
 #include "core/system/memory.h"
+#include "core/system/stopwatch.h"
 #include "stream/external_sort.h"
 
 namespace seamvox {
@@ -31,15 +32,16 @@ struct CornerPosition {
   bool operator<(const CornerPosition& o) const { return corner < o.corner; }
 };
 struct EdgeRecord {  // corner c of the cleaned mesh: its edge runs from a = vertex(next c) to b = vertex(prev c)
-  std::uint32_t a, b;
-  std::uint64_t corner;
+  std::uint64_t edge;     // min(a, b) << 32 | max(a, b): the sort key
+  std::uint64_t corner2;  // 2 c + (a < b): by corner within an edge, with the direction
   double uvStart[2], uvEnd[2];  // UV at a, at b
   double length, normal[3];     // the edge's 3D length, the face's unit normal (0 when degenerate)
-  std::uint32_t lo() const { return std::min(a, b); }
-  std::uint32_t hi() const { return std::max(a, b); }
-  bool operator<(const EdgeRecord& o) const {
-    return std::make_tuple(lo(), hi(), corner) < std::make_tuple(o.lo(), o.hi(), o.corner);
-  }
+  EdgeRecord() = default;
+  EdgeRecord(std::uint32_t a, std::uint32_t b, std::uint64_t c)
+      : edge(std::uint64_t(std::min(a, b)) << 32 | std::max(a, b)), corner2(2 * c + (a < b)) {}
+  std::uint64_t corner() const { return corner2 >> 1; }
+  bool forward() const { return corner2 & 1; }
+  bool operator<(const EdgeRecord& o) const { return edge != o.edge ? edge < o.edge : corner2 < o.corner2; }
 };
 struct SeamLength {
   std::uint64_t corner;
@@ -178,11 +180,11 @@ void measureSeam(const EdgeRecord& c, const EdgeRecord& o, SeamQuality& seams, E
   const Vec2d leftA = vec2(c.uvStart), rightA = vec2(o.uvEnd), leftB = vec2(c.uvEnd), rightB = vec2(o.uvStart);
   if (leftA == rightA && leftB == rightB) return;
   const SeamEdgeFit fit = fitSeamEdge(leftA, rightA, leftB, rightB);
-  if (fit.residual > seams.maxResidual) seams.worstEdgeCorner = c.corner;
+  if (fit.residual > seams.maxResidual) seams.worstEdgeCorner = c.corner();
   seams.maxResidual = std::max(seams.maxResidual, fit.residual);
   seams.maxIntegerDistance = std::max(seams.maxIntegerDistance, fit.integerDistance);
   ++seams.seamEdges;
-  lengths.add({c.corner, c.length});
+  lengths.add({c.corner(), c.length});
 }
 
 // Glues the sides of one edge (sorted by corner) as cleanMesh glues them and measures the glued
@@ -191,9 +193,9 @@ void measureSeam(const EdgeRecord& c, const EdgeRecord& o, SeamQuality& seams, E
 // false for two sides in the same direction (an orientation clash: cleanMesh would reorient).
 bool measureEdge(const std::vector<EdgeRecord>& sides, SeamQuality& seams, ExternalSorter<SeamLength>& lengths) {
   if (sides.size() < 2) return true;  // boundary
-  const bool firstForward = sides[0].a < sides[0].b;
+  const bool firstForward = sides[0].forward();
   if (sides.size() == 2) {
-    if ((sides[1].a < sides[1].b) == firstForward) return false;
+    if (sides[1].forward() == firstForward) return false;
     measureSeam(sides[0], sides[1], seams, lengths);
     return true;
   }
@@ -203,9 +205,9 @@ bool measureEdge(const std::vector<EdgeRecord>& sides, SeamQuality& seams, Exter
   };
   std::vector<Pair> pairs;
   for (std::size_t x = 0; x < sides.size(); ++x) {
-    if ((sides[x].a < sides[x].b) != firstForward) continue;
+    if (sides[x].forward() != firstForward) continue;
     for (std::size_t y = 0; y < sides.size(); ++y) {
-      if ((sides[y].a < sides[y].b) == firstForward) continue;
+      if (sides[y].forward() == firstForward) continue;
       const double alignment = vec3(sides[x].normal).dot(vec3(sides[y].normal));  // as cleanMesh computes it
       pairs.push_back({std::isfinite(alignment) ? alignment : -2.0, x, y});
     }
@@ -217,7 +219,7 @@ bool measureEdge(const std::vector<EdgeRecord>& sides, SeamQuality& seams, Exter
   for (const Pair& pair : pairs) {
     if (glued[pair.x] || glued[pair.y]) continue;
     glued[pair.x] = glued[pair.y] = 1;
-    const bool xFirst = sides[pair.x].corner < sides[pair.y].corner;
+    const bool xFirst = sides[pair.x].corner() < sides[pair.y].corner();
     measureSeam(sides[xFirst ? pair.x : pair.y], sides[xFirst ? pair.y : pair.x], seams, lengths);
   }
   return true;
@@ -311,7 +313,14 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   CornerPositions positions(name, scratch, stream.declaredVertices(), options.memoryBytes / 2, sortOptions("corners"));
   if (positions.inMemory()) sortMemory -= stream.declaredVertices() * sizeof(Vec3f) / 4;
   auto duplicateKeys = std::make_unique<ExternalSorter<DuplicateKey>>(scratch, sortOptions("duplicates"));
+  MapCheckResult result;
+  SteadyClock::time_point start = SteadyClock::now();
+  auto finishStage = [&](const char* stage) {
+    result.stageSeconds.push_back({stage, secondsSince(start)});
+    start = SteadyClock::now();
+  };
   const ReadPass read = readStream(stream, scratch, *duplicateKeys, positions);
+  finishStage("read");
   Duplicates duplicates = findDuplicateFaces(*duplicateKeys, scratch, sortOptions("duplicates"));
   duplicateKeys.reset();
   if (read.kept == duplicates.count) {
@@ -319,8 +328,8 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
                      " faces in the input, all degenerate or duplicates)");
   }
 
+  finishStage("duplicates");
   // Pass over the faces in order: areas, and the sides of every edge.
-  MapCheckResult result;
   ExternalSorter<EdgeRecord> edges(scratch, sortOptions("edges"));
   ScratchWriter areas(scratch, "faces");
   double areaSum = 0.0, uvAreaSum = 0.0;
@@ -348,8 +357,10 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
       uvAreaSum += std::abs(area.uv);
       for (int j = 0; j < 3; ++j) {
         const int s = (j + 1) % 3, e = (j + 2) % 3;
-        EdgeRecord edge{face.v[s], face.v[e], 3 * f + j, {face.uv[s][0], face.uv[s][1]},
-                        {face.uv[e][0], face.uv[e][1]}, (p[s] - p[e]).norm(), {normal.x(), normal.y(), normal.z()}};
+        EdgeRecord edge(face.v[s], face.v[e], 3 * f + j);
+        for (int k = 0; k < 2; ++k) edge.uvStart[k] = face.uv[s][k], edge.uvEnd[k] = face.uv[e][k];
+        edge.length = (p[s] - p[e]).norm();
+        for (int k = 0; k < 3; ++k) edge.normal[k] = normal[k];
         edges.add(edge);
       }
     }
@@ -358,6 +369,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   scratch.remove(read.faces);
   const ScratchFile areaFile = areas.finish();
 
+  finishStage("faces");
   // Edges: glue the sides, measure the seams; their lengths summed in corner order.
   {
     ExternalSorter<SeamLength> lengths(scratch, sortOptions("seams"));
@@ -370,7 +382,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
       sides.clear();
     };
     while (edges.next(edge)) {
-      if (!sides.empty() && (sides[0].lo() != edge.lo() || sides[0].hi() != edge.hi())) flush();
+      if (!sides.empty() && sides[0].edge != edge.edge) flush();
       sides.push_back(edge);
     }
     flush();
@@ -384,6 +396,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
     while (lengths.next(seam)) result.seams.seamLength += seam.length;
   }
 
+  finishStage("edges");
   // Flips and collapses for the spacing h, given or fitted (measureMap without a field).
   MapQuality& map = result.map;
   map.faces = result.faces;
@@ -405,6 +418,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
     map.flippedFraction = map.faces ? static_cast<double>(map.flipped) / map.faces : 0.0;
   }
   scratch.remove(areaFile);
+  finishStage("flips");
   result.positionsInMemory = positions.inMemory();
   result.traffic = scratch.traffic();
   result.scratchPeakBytes = scratch.peakBytesOnDisk();

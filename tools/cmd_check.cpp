@@ -73,8 +73,15 @@ CheckFigures checkInMemory(const std::string& path, MeshStream& stream, const st
 
 std::string formatTraffic(const MapCheckResult& r) {
   std::string out;
+  for (const auto& [stage, seconds] : r.stageSeconds) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%s%s %.1f s", out.empty() ? "" : ", ", stage.c_str(), seconds);
+    out += text;
+  }
+  out += "; scratch: ";
+  const std::size_t scratchStart = out.size();
   for (const ScratchTraffic& t : r.traffic) {
-    out += (out.empty() ? "" : ", ") + t.stage + " " + formatByteSize(t.bytesWritten) + " written / " +
+    out += (out.size() == scratchStart ? "" : ", ") + t.stage + " " + formatByteSize(t.bytesWritten) + " written / " +
            formatByteSize(t.bytesRead) + " read";
   }
   return out;
@@ -106,6 +113,9 @@ void printJson(const std::string& path, const CheckFigures& c, bool withField, d
     j.key("scratch").beginObject();
     j.key("peakBytes").value(c.scratch.scratchPeakBytes);
     j.key("positionsInMemory").value(c.scratch.positionsInMemory);
+    j.key("seconds").beginObject();
+    for (const auto& [stage, seconds] : c.scratch.stageSeconds) j.key(stage).value(seconds);
+    j.endObject();
     j.key("stages").beginArray();
     for (const ScratchTraffic& t : c.scratch.traffic) {
       j.beginObject().key("stage").value(t.stage).key("bytesWritten").value(t.bytesWritten);
@@ -130,7 +140,7 @@ void printText(const std::string& path, const CheckFigures& c, bool withField, d
               100.0 * map.flippedFraction, static_cast<unsigned long long>(map.collapsed), map.edgeLength);
   if (withField) std::printf("relative gradient error %.6f\n", map.relativeGradientError);
   if (c.outOfCore) {
-    std::printf("path out of core: estimate %s above the budget %s; positions %s; scratch peak %s (%s); peak memory %s\n",
+    std::printf("path out of core: estimate %s above the budget %s; positions %s; scratch peak %s; %s; peak memory %s\n",
                 formatByteSize(c.estimate).c_str(), formatByteSize(c.budget).c_str(),
                 c.scratch.positionsInMemory ? "in memory" : "joined by external sorts",
                 formatByteSize(c.scratch.scratchPeakBytes).c_str(), formatTraffic(c.scratch).c_str(),
