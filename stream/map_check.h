@@ -34,8 +34,8 @@ struct MapCheckResult {
   SeamQuality seams;
   MapQuality map;  ///< relativeGradientError NaN: no field
   std::vector<ScratchTraffic> traffic;  ///< scratch bytes read and written per stage
-  /// Wall seconds of the passes: read, duplicates (with the join when positions are not in
-  /// memory), faces, edges, flips.
+  /// Wall seconds of the passes: read (with the join when positions are not in memory),
+  /// duplicates, faces, edges, flips.
   std::vector<std::pair<std::string, double>> stageSeconds;
   std::uint64_t scratchPeakBytes = 0;
   /// The vertex positions were held in memory (the header declared a count whose positions fit
