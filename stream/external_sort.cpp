@@ -12,9 +12,10 @@ struct ExternalMerge::Source {
 ExternalMerge::ExternalMerge(ScratchFolder& scratch, std::size_t recordBytes, Less less,
                              const ExternalSortOptions& options)
     : scratch_(scratch), recordBytes_(recordBytes), less_(less), options_(options) {
-  // Half the limit for read buffers of the runs merged at once (a 16th each, at most 1 MiB,
-  // at least a record), the other half for the output buffer and the sort buffer before.
-  readBuffer_ = std::clamp<std::size_t>(options.memoryBytes / 32, recordBytes, std::size_t(1) << 20);
+  // Half the limit for read buffers of the runs merged at once (a 128th of the limit each, so
+  // 64 runs merge in one round; at most 1 MiB, at least a record), the other half for the output
+  // buffer and the sort buffer before.
+  readBuffer_ = std::clamp<std::size_t>(options.memoryBytes / 128, recordBytes, std::size_t(1) << 20);
   fanIn_ = std::max<std::size_t>(2, options.memoryBytes / 2 / readBuffer_);
 }
 

@@ -35,7 +35,6 @@ struct EdgeRecord {  // corner c of the cleaned mesh: its edge runs from a = ver
   std::uint64_t edge;     // min(a, b) << 32 | max(a, b): the sort key
   std::uint64_t corner2;  // 2 c + (a < b): by corner within an edge, with the direction
   double uvStart[2], uvEnd[2];  // UV at a, at b
-  double length, normal[3];     // the edge's 3D length, the face's unit normal (0 when degenerate)
   EdgeRecord() = default;
   EdgeRecord(std::uint32_t a, std::uint32_t b, std::uint64_t c)
       : edge(std::uint64_t(std::min(a, b)) << 32 | std::max(a, b)), corner2(2 * c + (a < b)) {}
@@ -50,6 +49,9 @@ struct SeamLength {
 };
 struct FaceArea {  // signed parameter area and 3D area of a cleaned face
   double uv, area;
+};
+struct FaceGeometry {  // a cleaned face's unit normal (0 when degenerate) and edge lengths (of corner j's edge)
+  double normal[3], length[3];
 };
 
 Vec2d vec2(const double (&x)[2]) { return {x[0], x[1]}; }
@@ -175,8 +177,28 @@ class CornerPositions {
   std::unique_ptr<ExternalSorter<CornerPosition>> corners_;
 };
 
+// The geometry of the cleaned faces, read back for the few corners that need it (seam edges,
+// edges of more than two faces).
+class FaceGeometries {
+ public:
+  FaceGeometries(ScratchFolder& scratch, const ScratchFile& file) : reader_(scratch, file, "edges") {}
+  const FaceGeometry& at(std::uint64_t corner) {
+    if (corner / 3 != face_) {
+      face_ = corner / 3;
+      reader_.readAt(face_ * sizeof(FaceGeometry), &geometry_, sizeof geometry_);
+    }
+    return geometry_;
+  }
+
+ private:
+  ScratchRandomReader reader_;
+  std::uint64_t face_ = ~std::uint64_t(0);
+  FaceGeometry geometry_{};
+};
+
 // Measures the seam between the glued sides c < o of an edge.
-void measureSeam(const EdgeRecord& c, const EdgeRecord& o, SeamQuality& seams, ExternalSorter<SeamLength>& lengths) {
+void measureSeam(const EdgeRecord& c, const EdgeRecord& o, FaceGeometries& geometry, SeamQuality& seams,
+                 ExternalSorter<SeamLength>& lengths) {
   const Vec2d leftA = vec2(c.uvStart), rightA = vec2(o.uvEnd), leftB = vec2(c.uvEnd), rightB = vec2(o.uvStart);
   if (leftA == rightA && leftB == rightB) return;
   const SeamEdgeFit fit = fitSeamEdge(leftA, rightA, leftB, rightB);
@@ -184,31 +206,34 @@ void measureSeam(const EdgeRecord& c, const EdgeRecord& o, SeamQuality& seams, E
   seams.maxResidual = std::max(seams.maxResidual, fit.residual);
   seams.maxIntegerDistance = std::max(seams.maxIntegerDistance, fit.integerDistance);
   ++seams.seamEdges;
-  lengths.add({c.corner(), c.length});
+  lengths.add({c.corner(), geometry.at(c.corner()).length[c.corner() % 3]});
 }
 
 // Glues the sides of one edge (sorted by corner) as cleanMesh glues them and measures the glued
 // pairs: two sides in opposite directions are glued; on an edge of more than two sides, pairs of
 // opposite directions with the most aligned normals first (ties: smaller corners first). Returns
 // false for two sides in the same direction (an orientation clash: cleanMesh would reorient).
-bool measureEdge(const std::vector<EdgeRecord>& sides, SeamQuality& seams, ExternalSorter<SeamLength>& lengths) {
+bool measureEdge(const std::vector<EdgeRecord>& sides, FaceGeometries& geometry, SeamQuality& seams,
+                 ExternalSorter<SeamLength>& lengths) {
   if (sides.size() < 2) return true;  // boundary
   const bool firstForward = sides[0].forward();
   if (sides.size() == 2) {
     if (sides[1].forward() == firstForward) return false;
-    measureSeam(sides[0], sides[1], seams, lengths);
+    measureSeam(sides[0], sides[1], geometry, seams, lengths);
     return true;
   }
   struct Pair {
     double alignment;
     std::size_t x, y;  // same direction as the first side, reverse
   };
+  std::vector<Vec3d> normals;
+  for (const EdgeRecord& side : sides) normals.push_back(vec3(geometry.at(side.corner()).normal));
   std::vector<Pair> pairs;
   for (std::size_t x = 0; x < sides.size(); ++x) {
     if (sides[x].forward() != firstForward) continue;
     for (std::size_t y = 0; y < sides.size(); ++y) {
       if (sides[y].forward() == firstForward) continue;
-      const double alignment = vec3(sides[x].normal).dot(vec3(sides[y].normal));  // as cleanMesh computes it
+      const double alignment = normals[x].dot(normals[y]);  // as cleanMesh computes it
       pairs.push_back({std::isfinite(alignment) ? alignment : -2.0, x, y});
     }
   }
@@ -220,7 +245,7 @@ bool measureEdge(const std::vector<EdgeRecord>& sides, SeamQuality& seams, Exter
     if (glued[pair.x] || glued[pair.y]) continue;
     glued[pair.x] = glued[pair.y] = 1;
     const bool xFirst = sides[pair.x].corner() < sides[pair.y].corner();
-    measureSeam(sides[xFirst ? pair.x : pair.y], sides[xFirst ? pair.y : pair.x], seams, lengths);
+    measureSeam(sides[xFirst ? pair.x : pair.y], sides[xFirst ? pair.y : pair.x], geometry, seams, lengths);
   }
   return true;
 }
@@ -295,7 +320,7 @@ std::uint64_t mapCheckScratchBytes(std::uint64_t vertices, std::uint64_t faces) 
   // Faces, areas and duplicate keys, the edge runs, and (positions not in memory) the positions
   // file with the runs of the corner requests and positions: an upper bound of the peak.
   return vertices * sizeof(Vec3f) +
-         faces * (sizeof(FaceRecord) + sizeof(FaceArea) + sizeof(DuplicateKey) + 3 * sizeof(EdgeRecord) +
+         faces * (sizeof(FaceRecord) + sizeof(FaceArea) + sizeof(FaceGeometry) + sizeof(DuplicateKey) + 3 * sizeof(EdgeRecord) +
                   3 * (sizeof(CornerRequest) + sizeof(CornerPosition)));
 }
 
@@ -331,7 +356,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   finishStage("duplicates");
   // Pass over the faces in order: areas, and the sides of every edge.
   ExternalSorter<EdgeRecord> edges(scratch, sortOptions("edges"));
-  ScratchWriter areas(scratch, "faces");
+  ScratchWriter areas(scratch, "faces"), geometries(scratch, "faces");
   double areaSum = 0.0, uvAreaSum = 0.0;
   {
     ScratchReader faces(scratch, read.faces, "faces");
@@ -355,30 +380,32 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
       areas.write(&area, sizeof area);
       areaSum += area.area;
       uvAreaSum += std::abs(area.uv);
+      FaceGeometry geometry{{normal.x(), normal.y(), normal.z()}, {}};
       for (int j = 0; j < 3; ++j) {
         const int s = (j + 1) % 3, e = (j + 2) % 3;
         EdgeRecord edge(face.v[s], face.v[e], 3 * f + j);
         for (int k = 0; k < 2; ++k) edge.uvStart[k] = face.uv[s][k], edge.uvEnd[k] = face.uv[e][k];
-        edge.length = (p[s] - p[e]).norm();
-        for (int k = 0; k < 3; ++k) edge.normal[k] = normal[k];
         edges.add(edge);
+        geometry.length[j] = (p[s] - p[e]).norm();
       }
+      geometries.write(&geometry, sizeof geometry);
     }
   }
   duplicates.ranks.reset();
   scratch.remove(read.faces);
-  const ScratchFile areaFile = areas.finish();
+  const ScratchFile areaFile = areas.finish(), geometryFile = geometries.finish();
 
   finishStage("faces");
   // Edges: glue the sides, measure the seams; their lengths summed in corner order.
   {
     ExternalSorter<SeamLength> lengths(scratch, sortOptions("seams"));
+    FaceGeometries geometry(scratch, geometryFile);
     edges.finish();
     std::vector<EdgeRecord> sides;
     EdgeRecord edge;
     std::uint64_t clashes = 0;
     auto flush = [&] {
-      clashes += !measureEdge(sides, result.seams, lengths);
+      clashes += !measureEdge(sides, geometry, result.seams, lengths);
       sides.clear();
     };
     while (edges.next(edge)) {
@@ -395,6 +422,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
     SeamLength seam;
     while (lengths.next(seam)) result.seams.seamLength += seam.length;
   }
+  scratch.remove(geometryFile);
 
   finishStage("edges");
   // Flips and collapses for the spacing h, given or fitted (measureMap without a field).

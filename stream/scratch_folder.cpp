@@ -155,4 +155,27 @@ bool ScratchReader::read(void* out, std::size_t bytes) {
   return true;
 }
 
+ScratchRandomReader::ScratchRandomReader(ScratchFolder& folder, const ScratchFile& file, std::string stage)
+    : folder_(folder), stage_(std::move(stage)), path_(file.path) {
+  fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) throw IoError(path_ + ": cannot open a scratch file (" + std::strerror(errno) + ")");
+}
+
+ScratchRandomReader::~ScratchRandomReader() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void ScratchRandomReader::readAt(std::uint64_t offset, void* out, std::size_t bytes) {
+  char* to = static_cast<char*>(out);
+  std::size_t done = 0;
+  while (done < bytes) {
+    const ssize_t n = ::pread(fd_, to + done, bytes - done, static_cast<off_t>(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw IoError(path_ + ": cannot read a scratch file (" + std::strerror(errno) + ")");
+    if (n == 0) throw IoError(path_ + ": scratch file ends inside a record (it changed while it was read)");
+    done += static_cast<std::size_t>(n);
+  }
+  folder_.countRead(stage_, bytes);
+}
+
 }  // namespace seamvox

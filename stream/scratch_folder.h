@@ -108,4 +108,20 @@ class ScratchReader {
   std::size_t begin_ = 0, end_ = 0;
 };
 
+/// Reads records of a finished scratch file at given offsets (pread: for sparse lookups).
+class ScratchRandomReader {
+ public:
+  ScratchRandomReader(ScratchFolder& folder, const ScratchFile& file, std::string stage);
+  ~ScratchRandomReader();
+  ScratchRandomReader(const ScratchRandomReader&) = delete;
+  ScratchRandomReader& operator=(const ScratchRandomReader&) = delete;
+  /// Reads exactly `bytes` at offset into out (IoError when the file is shorter).
+  void readAt(std::uint64_t offset, void* out, std::size_t bytes);
+
+ private:
+  ScratchFolder& folder_;
+  std::string stage_, path_;
+  int fd_ = -1;
+};
+
 }  // namespace seamvox
