@@ -6,7 +6,8 @@
 
 namespace seamvox {
 
-std::string checkReportJson(const std::string& mesh, const CheckResult& r) {
+std::string checkReportJson(const std::string& mesh, const CheckResult& r,
+                            const std::function<void(JsonWriter&)>& extra) {
   JsonWriter j;
   j.beginObject();
   j.key("mesh").value(mesh);
@@ -24,6 +25,7 @@ std::string checkReportJson(const std::string& mesh, const CheckResult& r) {
   } else {
     j.null();
   }
+  if (extra) extra(j);
   j.endObject();
   return j.str();
 }

@@ -5,6 +5,9 @@
 /// (130, 143, 129). The handler only uses unlink, kill, waitpid, write and _exit.
 #include <sys/types.h>
 
+#include <atomic>
+#include <cstdint>
+
 namespace seamvox {
 
 /// Installs the handler for SIGINT, SIGTERM and SIGHUP. A signal ignored at start (nohup, a
@@ -17,6 +20,12 @@ void installInterruptCleanup();
 /// folders registered last first, so register a folder before the folders inside it).
 int registerTemporary(const char* path);
 void unregisterTemporary(int slot);
+
+/// Adds a scratch folder whose files are named 0, 1, 2, ... (decimal, no extension): on a
+/// signal, the files numbered below *fileCount (read then) are removed, then the folder. The
+/// counter must outlive the registration. Returns the slot, or -1 when the table (64) is full.
+int registerNumberedFolder(const char* path, const std::atomic<std::uint64_t>* fileCount);
+void unregisterNumberedFolder(int slot);
 
 /// Adds a child to stop (SIGTERM, then waited for) on a signal; returns its slot or -1.
 int registerChild(pid_t pid);

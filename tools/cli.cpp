@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <mutex>
@@ -14,6 +15,7 @@
 #include "core/field/cone_merge.h"
 #include "core/solve/param_solver.h"
 #include "core/system/errors.h"
+#include "core/system/memory_budget.h"
 #include "io/atomic_file.h"
 #include "io/output_set.h"
 
@@ -179,6 +181,27 @@ CleanResult cleanMeshOf(const std::string& path, TriangleMesh mesh, const CleanO
   } catch (const Error&) {
     rethrowWithContext(path);
   }
+}
+
+std::optional<std::uint64_t> parseSizeOption(Args& args, const std::string& name) {
+  const auto text = args.value(name);
+  if (!text) return std::nullopt;
+  const auto bytes = parseByteSize(*text);
+  if (!bytes) {
+    throw UsageError("--" + name + " must be a size such as 2G, 1500M, 800K or a number of bytes (K, M, G = 2^10, 2^20, 2^30), got '" + *text + "'");
+  }
+  return bytes;
+}
+
+MemoryOptions parseMemoryOptions(Args& args, const std::string& scratchFallback) {
+  MemoryOptions options;
+  const auto budget = parseSizeOption(args, "memory-budget");
+  options.budgetGiven = budget.has_value();
+  options.budget = budget.value_or(defaultMemoryBudget());
+  const char* tmp = std::getenv("TMPDIR");
+  options.scratch = args.value("scratch", tmp && *tmp ? std::string(tmp) : scratchFallback);
+  if (options.scratch.empty()) throw UsageError("--scratch needs a folder");
+  return options;
 }
 
 bool parseScanNoise(Args& args, ScanNoiseOptions& options) {

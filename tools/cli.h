@@ -88,6 +88,23 @@ void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& resu
   "  --spikes N  N outlier vertices pushed 2-6 edge lengths along their normal\n"            \
   "  --folds N   N small fold-overs (a vertex and its ring slid over their neighbours)\n"
 
+/// --memory-budget SIZE and --scratch DIR (every command that reads or writes meshes).
+struct MemoryOptions {
+  std::uint64_t budget = 0;  ///< bytes: the option's value or defaultMemoryBudget()
+  bool budgetGiven = false;
+  std::string scratch;  ///< folder for scratch files: --scratch, else $TMPDIR, else fallback
+};
+/// Parses both options (a SIZE as parseByteSize reads it; anything else is a UsageError naming
+/// the option and the accepted forms). scratchFallback: the folder used without --scratch and
+/// TMPDIR (e.g. the output's folder).
+MemoryOptions parseMemoryOptions(Args& args, const std::string& scratchFallback = "/tmp");
+/// A SIZE option as parseMemoryOptions reads --memory-budget (UsageError when malformed).
+std::optional<std::uint64_t> parseSizeOption(Args& args, const std::string& name);
+#define SEAMVOX_MEMORY_HELP                                                                       \
+  "  --memory-budget SIZE  memory the command may use (2G, 1500M, 800K or bytes; G = 2^30;\n"    \
+  "                        default 3/4 of the available memory)\n"                             \
+  "  --scratch DIR         folder for scratch files (default $TMPDIR, else /tmp)\n"
+
 /// Progress reporting on stderr: a one-line percentage per stage when stderr is a terminal and
 /// quiet is false; nothing otherwise.
 ProgressFn makeProgress(bool quiet);

@@ -34,6 +34,7 @@ int runConvert(Args& args) {
   options.binary = !args.flag("ascii");
   options.writeUV = !args.flag("no-uv");
   const bool ratio = args.flag("ratio");
+  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
   args.finish(2);
   checkOutputPaths({{"IN", input}}, {{"OUT", output}});
 
@@ -107,7 +108,8 @@ SEAMVOX_COMMAND({"convert", "convert a mesh between PLY, OBJ, OFF and Draco (UVs
                  "                     (default 0 = lossless float32)\n"
                  "  --no-uv            drop texture coordinates\n"
                  "  --ascii            PLY: write ascii instead of binary little endian\n"
-                 "  --ratio            also report the compression ratio against binary PLY\n",
+                 "  --ratio            also report the compression ratio against binary PLY\n"
+                 SEAMVOX_MEMORY_HELP,
                  {"ascii", "no-uv", "ratio"},
                  &runConvert});
 

@@ -32,6 +32,7 @@ int runGen(Args& args) {
   WriteOptions writeOptions;
   writeOptions.binary = !args.flag("ascii");
   options.progress = makeProgress(args.flag("quiet"));
+  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
   args.finish(1);
   if (formatFromPath(*output) == MeshFormat::Unknown) {
     throw UsageError("cannot tell the format of '" + *output + "' (use .ply .obj .off .drc)");
@@ -73,7 +74,8 @@ SEAMVOX_COMMAND({"gen", "generate a synthetic scan-like mesh (sphere, torus, gen
                  "  --seed S    random seed (default 1)\n"
                  "  --ascii     ascii PLY instead of binary\n"
                  SEAMVOX_SCAN_NOISE_HELP
-                 "  --quiet     no progress on stderr\n",
+                 "  --quiet     no progress on stderr\n"
+                 SEAMVOX_MEMORY_HELP,
                  {"ascii"},
                  &runGen});
 

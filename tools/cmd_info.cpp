@@ -18,6 +18,7 @@ int runInfo(Args& args) {
   const bool json = args.flag("json");
   const auto report = args.value("report");
   options.progress = makeProgress(args.flag("quiet"));
+  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
   args.finish(1);
   checkOutputPaths({{"MESH", path}}, {{"--report", report.value_or("")}});
 
@@ -41,7 +42,8 @@ SEAMVOX_COMMAND({"info", "read and clean a mesh; print its components, genus and
                  "  --report FILE        also write the JSON document to FILE\n"
                  "  --weld               weld coincident vertices before cleaning\n"
                  "  --weld-tolerance D   weld vertices closer than D (mesh units; default 0: equal)\n"
-                 "  --quiet              no progress on stderr\n",
+                 "  --quiet              no progress on stderr\n"
+                 SEAMVOX_MEMORY_HELP,
                  {"json", "weld"},
                  &runInfo});
 

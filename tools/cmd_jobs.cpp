@@ -3,6 +3,7 @@
 #include <glob.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include "io/mesh_io.h"
 #include "io/output_set.h"
 #include "core/batch/jobs.h"
+#include "core/system/memory_budget.h"
 #include "tools/cli.h"
 #include "tools/jobs.h"
 
@@ -40,11 +42,6 @@ std::string selfExecutable() {
   const fs::path self = fs::read_symlink("/proc/self/exe", error);
   if (error) throw IoError("cannot find the seamvox binary (/proc/self/exe): " + error.message());
   return self.string();
-}
-
-std::uint64_t physicalMemory() {
-  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && size > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(size) : 0;
 }
 
 /// Creates a folder and its parents; IoError naming it (read-only place, a file in the way, a
@@ -113,9 +110,15 @@ int runJobs(Args& args) {
   const std::string manifestPath = args.positional(0, "the manifest (seamvox jobs MANIFEST)");
   const std::int64_t workers = args.integer("workers", 1);
   if (workers < 1 || workers > 256) throw UsageError("--workers must be between 1 and 256");
-  const double budgetGB = args.number("memory-budget", 0.0);
-  if (args.value("memory-budget") && !(budgetGB > 0.0 && std::isfinite(budgetGB))) {
-    throw UsageError("--memory-budget must be a positive number of GB");
+  // The budget rule of every command (2G, 1500M, bytes; default defaultMemoryBudget()), but a
+  // plain number here still counts GB as it always did.
+  std::optional<std::uint64_t> budgetGiven;
+  if (const auto text = args.value("memory-budget"); text && !text->empty() && std::isdigit(static_cast<unsigned char>(text->back()))) {
+    const double gb = args.number("memory-budget", 0.0);
+    if (!(gb > 0.0 && std::isfinite(gb))) throw UsageError("--memory-budget must be a positive number of GB or a size such as 1500M");
+    budgetGiven = static_cast<std::uint64_t>(gb * 1073741824.0);
+  } else {
+    budgetGiven = parseSizeOption(args, "memory-budget");
   }
   const bool force = args.flag("force");
   const bool mpi = args.flag("mpi") || isStartedByMpirun();
@@ -135,8 +138,7 @@ int runJobs(Args& args) {
   text << in.rdbuf();
   const std::string baseDir = fs::absolute(manifestPath).parent_path().string();
   const Manifest manifest = parseManifest(text.str(), manifestPath, baseDir, expandPattern);
-  const std::uint64_t budget = budgetGB > 0.0 ? static_cast<std::uint64_t>(budgetGB * 1073741824.0)
-                                              : physicalMemory() / 10 * 8;
+  const std::uint64_t budget = budgetGiven.value_or(defaultMemoryBudget());
   options.executable = selfExecutable();
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   options.threadsPerJob = threads > 0 ? static_cast<std::uint32_t>(threads)
@@ -185,7 +187,7 @@ int runJobs(Args& args) {
 }  // namespace
 
 SEAMVOX_COMMAND({"jobs", "run a manifest of parameterization jobs (resumable, budgeted, MPI)",
-                 "usage: seamvox jobs MANIFEST [--workers N] [--memory-budget GB] [--force]\n"
+                 "usage: seamvox jobs MANIFEST [--workers N] [--memory-budget SIZE] [--force]\n"
                  "                    [--summary FILE.csv] [--mpi]\n"
                  "       mpirun -np K seamvox jobs MANIFEST ...\n"
                  "\n"
@@ -211,8 +213,9 @@ SEAMVOX_COMMAND({"jobs", "run a manifest of parameterization jobs (resumable, bu
                  "  tiles site site/tile_*.ply : --cells 200\n"
                  "\n"
                  "  --workers N          jobs at once on this machine (default 1)\n"
-                 "  --memory-budget GB   start a job only while the estimated peaks of the running\n"
-                 "                       jobs fit (default 80% of physical memory); a job larger\n"
+                 "  --memory-budget SIZE start a job only while the estimated peaks of the running\n"
+                 "                       jobs fit (2G, 1500M, 800K; a plain number is GB, as before;\n"
+                 "                       default 3/4 of the available memory); a job larger\n"
                  "                       than the whole budget fails without running\n"
                  "  --force              redo up-to-date jobs\n"
                  "  --summary FILE       CSV summary (default DIR/summary.csv)\n"

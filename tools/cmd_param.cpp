@@ -52,6 +52,7 @@ ParamCommand parseParamArgs(Args& args) {
   c.reportPath = args.value("report");
   c.renderPath = args.value("render");
   o.progress = makeProgress(args.flag("quiet"));
+  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
   args.finish(1);
   if (c.renderPath) requirePngPath("--render", *c.renderPath);
   const bool fieldFile = c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy";
@@ -212,7 +213,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      the output instead of writing them unmapped at (u, v) = 0\n"
                  "  --render OUT.png    also render the result (checkerboard, seams, cones; 1024x1024,\n"
                  "                      default view of seamvox render)\n"
-                 "  --quiet             no progress on stderr\n",
+                 "  --quiet             no progress on stderr\n"
+                 SEAMVOX_MEMORY_HELP,
                  {"greedy", "no-untangle", "weld", "drop-unsolved"},
                  &runParam});
 

@@ -61,6 +61,7 @@ int runRender(Args& args) {
   cleanOptions.weldVertices = args.flag("weld");
   const bool quiet = args.flag("quiet");
   const ProgressFn progress = makeProgress(quiet);
+  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
   args.finish(1);
   requirePngPath("-o", *output);
   checkOutputPaths({{"MESH_WITH_UV", path}}, {{"-o", *output}});
@@ -124,7 +125,8 @@ SEAMVOX_COMMAND({"render", "checkerboard picture (PNG) of a mesh's texture coord
                  "  --supersample N    N x N samples per pixel (default 2; 1 = no anti-aliasing)\n"
                  "  --weld             weld coincident vertices (files whose vertices are split\n"
                  "                     along seams: otherwise those seams show as open boundary)\n"
-                 "  --quiet            no progress on stderr\n",
+                 "  --quiet            no progress on stderr\n"
+                 SEAMVOX_MEMORY_HELP,
                  {"seams", "cones", "weld"},
                  &runRender});
 

@@ -32,6 +32,7 @@ int runSubdivide(Args& args) {
   WriteOptions writeOptions;
   writeOptions.binary = !args.flag("ascii");
   const ProgressFn progress = makeProgress(args.flag("quiet"));
+  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
   args.finish(1);
   if (formatFromPath(*output) == MeshFormat::Unknown) {
     throw UsageError("cannot tell the format of '" + *output + "' (use .ply .obj .off .drc)");
@@ -97,7 +98,8 @@ SEAMVOX_COMMAND({"subdivide", "1-to-4 midpoint subdivision (the scaling series),
                  "                    subdivision\n"
                  SEAMVOX_SCAN_NOISE_HELP
                  "  --ascii           ascii PLY instead of binary\n"
-                 "  --quiet           no progress on stderr\n",
+                 "  --quiet           no progress on stderr\n"
+                 SEAMVOX_MEMORY_HELP,
                  {"weld", "ascii"},
                  &runSubdivide});
 

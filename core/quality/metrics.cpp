@@ -88,6 +88,29 @@ SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, con
   return out;
 }
 
+namespace {
+
+SeamEdgeFit fitSeamEdge(const EdgeSides& s) {
+  SeamEdgeFit best{std::numeric_limits<double>::infinity(), 0.0};
+  for (int k = 0; k < 4; ++k) {
+    const Complex r = unitPower(k).toComplex();
+    const Complex t = s.rightA - r * s.leftA;
+    const double res = std::abs(s.rightB - (r * s.leftB + t));
+    const double dist = gaussianIntegerDistance(t);
+    if (res < best.residual - 1e-12 || (res <= best.residual + 1e-12 && dist < best.integerDistance)) {
+      best.residual = std::min(res, best.residual);
+      best.integerDistance = dist;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+SeamEdgeFit fitSeamEdge(const Vec2d& leftA, const Vec2d& rightA, const Vec2d& leftB, const Vec2d& rightB) {
+  return fitSeamEdge(EdgeSides{toComplex(leftA), toComplex(rightA), toComplex(leftB), toComplex(rightB)});
+}
+
 SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topology,
                                const WedgeMap& cornerUV) {
   checkSizes(mesh, cornerUV);
@@ -97,17 +120,8 @@ SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topolog
     if (o == kInvalidId || o < c) continue;
     const EdgeSides s = edgeSides(cornerUV, c, o);
     if (s.leftA == s.rightA && s.leftB == s.rightB) continue;
-    double bestResidual = std::numeric_limits<double>::infinity(), bestDistance = 0.0;
-    for (int k = 0; k < 4; ++k) {
-      const Complex r = unitPower(k).toComplex();
-      const Complex t = s.rightA - r * s.leftA;
-      const double res = std::abs(s.rightB - (r * s.leftB + t));
-      const double dist = gaussianIntegerDistance(t);
-      if (res < bestResidual - 1e-12 || (res <= bestResidual + 1e-12 && dist < bestDistance)) {
-        bestResidual = std::min(res, bestResidual);
-        bestDistance = dist;
-      }
-    }
+    const SeamEdgeFit fit = fitSeamEdge(s);
+    const double bestResidual = fit.residual, bestDistance = fit.integerDistance;
     if (bestResidual > out.maxResidual) out.worstEdgeCorner = c;
     out.maxResidual = std::max(out.maxResidual, bestResidual);
     out.maxIntegerDistance = std::max(out.maxIntegerDistance, bestDistance);

@@ -28,6 +28,14 @@ struct SeamQuality {
 SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                          const WedgeMap& cornerUV);
 
+/// The fit of one seam edge from its two sides' UVs at its ends A and B (q' on the right side):
+/// the r in {1, i, -1, -i} with the smallest residual |q'_B - (r q_B + t)| for t = q'_A - r q_A
+/// (ties: the t nearest to Z + iZ), that residual and t's distance from Z + iZ.
+struct SeamEdgeFit {
+  double residual = 0.0, integerDistance = 0.0;
+};
+SeamEdgeFit fitSeamEdge(const Vec2d& leftA, const Vec2d& rightA, const Vec2d& leftB, const Vec2d& rightB);
+
 /// Seams reconstructed from per-corner UVs alone: every interior edge whose two sides differ is a
 /// seam edge; r in {1, i, -1, -i} and t come from one endpoint (the r fitting best at the other),
 /// the residual from the other endpoint.

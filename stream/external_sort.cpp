@@ -1,0 +1,88 @@
+#include "stream/external_sort.h"
+
+namespace seamvox::detail {
+
+/// One run being merged: its reader and its current record.
+struct ExternalMerge::Source {
+  ScratchFile file;
+  ScratchReader reader;
+  std::vector<char> record;
+};
+
+ExternalMerge::ExternalMerge(ScratchFolder& scratch, std::size_t recordBytes, Less less,
+                             const ExternalSortOptions& options)
+    : scratch_(scratch), recordBytes_(recordBytes), less_(less), options_(options) {
+  // Half the limit for read buffers of the runs merged at once (a 128th of the limit each, so
+  // 64 runs merge in one round; at most 1 MiB, at least a record), the other half for the output
+  // buffer and the sort buffer before.
+  readBuffer_ = std::clamp<std::size_t>(options.memoryBytes / 128, recordBytes, std::size_t(1) << 20);
+  fanIn_ = std::max<std::size_t>(2, options.memoryBytes / 2 / readBuffer_);
+}
+
+ExternalMerge::~ExternalMerge() {
+  for (const auto& source : sources_) scratch_.remove(source->file);
+  for (const ScratchFile& run : runs_) scratch_.remove(run);
+}
+
+void ExternalMerge::writeRun(const void* records, std::size_t count) {
+  ScratchWriter writer(scratch_, options_.stage, std::min<std::size_t>(readBuffer_ * 4, count * recordBytes_ + 1));
+  writer.write(records, count * recordBytes_);
+  runs_.push_back(writer.finish());
+  ++written_;
+}
+
+ScratchFile ExternalMerge::mergeRuns(std::size_t first, std::size_t count) {
+  sources_.clear();
+  heap_.clear();
+  for (std::size_t i = first; i < first + count; ++i) {
+    sources_.push_back(std::make_unique<Source>(
+        Source{runs_[i], ScratchReader(scratch_, runs_[i], options_.stage, readBuffer_), std::vector<char>(recordBytes_)}));
+  }
+  for (std::size_t i = 0; i < sources_.size(); ++i) {
+    if (sources_[i]->reader.read(sources_[i]->record.data(), recordBytes_)) {
+      heap_.push_back(i);
+      std::push_heap(heap_.begin(), heap_.end(), [&](std::size_t a, std::size_t b) {
+        return less_(sources_[b]->record.data(), sources_[a]->record.data());
+      });
+    }
+  }
+  if (count == runs_.size() && first == 0) return {};  // the final pass: next() pops it
+  ScratchWriter writer(scratch_, options_.stage, readBuffer_ * 4);
+  std::vector<char> record(recordBytes_);
+  while (pop(record.data())) writer.write(record.data(), recordBytes_);
+  for (const auto& source : sources_) scratch_.remove(source->file);
+  sources_.clear();
+  return writer.finish();
+}
+
+void ExternalMerge::startMerge() {
+  // Rounds: merge the first fanIn runs into one appended at the end until one pass is left.
+  while (runs_.size() > fanIn_) {
+    ScratchFile merged = mergeRuns(0, fanIn_);
+    runs_.erase(runs_.begin(), runs_.begin() + static_cast<std::ptrdiff_t>(fanIn_));
+    runs_.push_back(merged);
+  }
+  mergeRuns(0, runs_.size());
+  runs_.clear();  // now owned by sources_
+}
+
+bool ExternalMerge::pop(void* out) {
+  if (heap_.empty()) return false;
+  auto greater = [&](std::size_t a, std::size_t b) {
+    return less_(sources_[b]->record.data(), sources_[a]->record.data());
+  };
+  std::pop_heap(heap_.begin(), heap_.end(), greater);
+  const std::size_t i = heap_.back();
+  Source& source = *sources_[i];
+  std::memcpy(out, source.record.data(), recordBytes_);
+  if (source.reader.read(source.record.data(), recordBytes_)) {
+    std::push_heap(heap_.begin(), heap_.end(), greater);
+  } else {
+    heap_.pop_back();
+  }
+  return true;
+}
+
+bool ExternalMerge::next(void* out) { return pop(out); }
+
+}  // namespace seamvox::detail

@@ -1,0 +1,127 @@
+#pragma once
+/// Scratch files of the out-of-core passes: one folder per run, created under a parent folder
+/// with a unique name and removed with everything in it on success, on failure (the destructor
+/// runs while an exception unwinds) and on SIGINT/SIGTERM (io/interrupt_cleanup). Plain read and
+/// write calls through fixed buffers (no mmap: resident memory stays what the buffers hold);
+/// bytes read and written are counted per stage. A full disk (ENOSPC, EDQUOT, a short write) is
+/// an IoError naming the folder and the bytes the run needs.
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace seamvox {
+
+/// Scratch traffic of one stage.
+struct ScratchTraffic {
+  std::string stage;
+  std::uint64_t bytesRead = 0, bytesWritten = 0;
+};
+
+/// A finished scratch file.
+struct ScratchFile {
+  std::string path;
+  std::uint64_t bytes = 0;
+};
+
+class ScratchFolder {
+ public:
+  /// Creates PARENT/seamvox-scratch-PID-N (IoError naming parent when it cannot). neededBytes:
+  /// the run's estimate of its scratch, quoted when the disk fills (0: unknown).
+  explicit ScratchFolder(const std::string& parent, std::uint64_t neededBytes = 0);
+  ~ScratchFolder();
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+
+  const std::string& path() const { return path_; }
+  /// The path of a new file in the folder (named by number, so a signal handler can find it).
+  std::string newFilePath();
+  /// Removes a finished file now (its bytes leave bytesOnDisk).
+  void remove(const ScratchFile& file);
+
+  /// Per stage, in the order the stages first read or wrote.
+  const std::vector<ScratchTraffic>& traffic() const { return traffic_; }
+  std::uint64_t bytesOnDisk() const { return onDisk_; }
+  std::uint64_t peakBytesOnDisk() const { return peakOnDisk_; }
+  std::uint64_t bytesWritten() const { return written_; }
+
+  /// Test hook: writes fail as on a full disk once this many bytes are written in all.
+  void setWriteLimit(std::uint64_t bytes) { writeLimit_ = bytes; }
+
+  // Bookkeeping of ScratchWriter / ScratchReader.
+  void countRead(const std::string& stage, std::uint64_t bytes);
+  /// Counts a write about to happen; throws the disk-full IoError when the test limit is reached.
+  void countWrite(const std::string& stage, std::uint64_t bytes);
+  [[noreturn]] void throwDiskFull(const std::string& file, std::uint64_t failedBytes, const char* reason) const;
+
+ private:
+  ScratchTraffic& stage(const std::string& name);
+
+  std::string path_;
+  std::uint64_t neededBytes_ = 0;
+  std::atomic<std::uint64_t> files_{0};
+  int cleanupSlot_ = -1;
+  std::vector<ScratchTraffic> traffic_;
+  std::uint64_t onDisk_ = 0, peakOnDisk_ = 0, written_ = 0;
+  std::uint64_t writeLimit_ = ~std::uint64_t(0);
+};
+
+/// Writes one new scratch file through a buffer.
+class ScratchWriter {
+ public:
+  ScratchWriter(ScratchFolder& folder, std::string stage, std::size_t bufferBytes = std::size_t(1) << 20);
+  ~ScratchWriter();
+  ScratchWriter(const ScratchWriter&) = delete;
+  ScratchWriter& operator=(const ScratchWriter&) = delete;
+  void write(const void* data, std::size_t bytes);
+  /// Flushes and closes the file.
+  ScratchFile finish();
+
+ private:
+  void flush();
+  ScratchFolder& folder_;
+  std::string stage_, path_;
+  int fd_ = -1;
+  std::vector<char> buffer_;
+  std::size_t used_ = 0;
+  std::uint64_t bytes_ = 0;
+};
+
+/// Reads a finished scratch file through a buffer.
+class ScratchReader {
+ public:
+  ScratchReader(ScratchFolder& folder, const ScratchFile& file, std::string stage,
+                std::size_t bufferBytes = std::size_t(1) << 20);
+  ~ScratchReader();
+  ScratchReader(ScratchReader&& other) noexcept;
+  ScratchReader(const ScratchReader&) = delete;
+  ScratchReader& operator=(const ScratchReader&) = delete;
+  /// Reads exactly `bytes` into out; false at the end of the file (IoError for a partial read).
+  bool read(void* out, std::size_t bytes);
+
+ private:
+  bool refill();
+  ScratchFolder* folder_;
+  std::string stage_, path_;
+  int fd_ = -1;
+  std::vector<char> buffer_;
+  std::size_t begin_ = 0, end_ = 0;
+};
+
+/// Reads records of a finished scratch file at given offsets (pread: for sparse lookups).
+class ScratchRandomReader {
+ public:
+  ScratchRandomReader(ScratchFolder& folder, const ScratchFile& file, std::string stage);
+  ~ScratchRandomReader();
+  ScratchRandomReader(const ScratchRandomReader&) = delete;
+  ScratchRandomReader& operator=(const ScratchRandomReader&) = delete;
+  /// Reads exactly `bytes` at offset into out (IoError when the file is shorter).
+  void readAt(std::uint64_t offset, void* out, std::size_t bytes);
+
+ private:
+  ScratchFolder& folder_;
+  std::string stage_, path_;
+  int fd_ = -1;
+};
+
+}  // namespace seamvox

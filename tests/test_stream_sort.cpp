@@ -1,0 +1,205 @@
+// Scratch folders (stream/scratch_folder) and the external sort (stream/external_sort): the
+// sort against std::sort with many runs and merge rounds, the disk-full path, and the folder
+// removed on success, on an exception and on SIGINT.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <random>
+#include <tuple>
+
+#include "core/system/errors.h"
+#include "io/interrupt_cleanup.h"
+#include "stream/external_sort.h"
+#include "stream/scratch_folder.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Record {
+  std::uint64_t key;
+  std::uint32_t id, payload;
+};
+struct ByKeyThenId {
+  bool operator()(const Record& a, const Record& b) const { return std::tie(a.key, a.id) < std::tie(b.key, b.id); }
+};
+
+std::vector<Record> randomRecords(std::size_t n, std::uint64_t keys, std::uint32_t seed) {
+  std::mt19937_64 random(seed);
+  std::vector<Record> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = {random() % keys, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(random())};
+  }
+  return out;
+}
+
+std::size_t filesIn(const std::string& dir) {
+  return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+// Sorts records with an external sorter of the given memory limit; returns what next() gave.
+std::vector<Record> externalSort(ScratchFolder& scratch, const std::vector<Record>& records,
+                                 std::uint64_t memoryBytes, std::size_t* runs = nullptr) {
+  ExternalSorter<Record, ByKeyThenId> sorter(scratch, {memoryBytes, "test"});
+  for (const Record& r : records) sorter.add(r);
+  sorter.finish();
+  EXPECT_EQ(sorter.size(), records.size());
+  std::vector<Record> out;
+  Record r;
+  while (sorter.next(r)) out.push_back(r);
+  if (runs) *runs = sorter.runs();
+  return out;
+}
+
+void expectSameRecords(const std::vector<Record>& a, const std::vector<Record>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_TRUE(a[i].key == b[i].key && a[i].id == b[i].id && a[i].payload == b[i].payload) << "record " << i;
+  }
+}
+
+TEST(ExternalSort, TinyLimitManyRunsAndMergeRoundsEqualsStdSort) {
+  testing::TempDir dir;
+  for (const std::uint64_t keys : {std::uint64_t(7), std::uint64_t(1) << 40}) {  // many ties, few ties
+    std::vector<Record> records = randomRecords(60000, keys, 17);
+    std::vector<Record> expected = records;
+    std::sort(expected.begin(), expected.end(), ByKeyThenId{});
+    ScratchFolder scratch(dir.dir());
+    std::size_t runs = 0;
+    const std::vector<Record> sorted = externalSort(scratch, records, 4096, &runs);
+    expectSameRecords(sorted, expected);
+    // 4 KiB holds 128 records per run and merges 64 runs at once: several merge rounds.
+    EXPECT_GE(runs, 400u);
+    EXPECT_GT(scratch.traffic().at(0).bytesWritten, 3 * records.size() * sizeof(Record) / 2)
+        << "runs and intermediate rounds (64 runs each) are written";
+    EXPECT_EQ(scratch.bytesOnDisk(), 0u) << "every run is removed once merged";
+    EXPECT_EQ(filesIn(scratch.path()), 0u);
+  }
+}
+
+TEST(ExternalSort, InputWithinTheLimitNeverTouchesTheDisk) {
+  testing::TempDir dir;
+  ScratchFolder scratch(dir.dir());
+  std::vector<Record> records = randomRecords(1000, 100, 3), expected = records;
+  std::sort(expected.begin(), expected.end(), ByKeyThenId{});
+  std::size_t runs = 1;
+  expectSameRecords(externalSort(scratch, records, 1 << 20, &runs), expected);
+  EXPECT_EQ(runs, 0u);
+  EXPECT_EQ(scratch.bytesWritten(), 0u);
+}
+
+TEST(ExternalSort, EmptyAndSingleRecordInputs) {
+  testing::TempDir dir;
+  ScratchFolder scratch(dir.dir());
+  EXPECT_TRUE(externalSort(scratch, {}, 64).empty());
+  const std::vector<Record> one = {{5, 1, 2}};
+  expectSameRecords(externalSort(scratch, one, 16), one);
+}
+
+TEST(ExternalSort, DiskFullNamesTheFolderAndTheBytesNeededAndLeavesNothing) {
+  testing::TempDir dir;
+  std::string folder;
+  try {
+    ScratchFolder scratch(dir.dir(), 123456789);
+    folder = scratch.path();
+    scratch.setWriteLimit(20000);
+    externalSort(scratch, randomRecords(50000, 1000, 5), 4096);
+    FAIL() << "the write limit was never reached";
+  } catch (const IoError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(folder), std::string::npos) << message;
+    EXPECT_NE(message.find("is full"), std::string::npos) << message;
+    EXPECT_NE(message.find("117.7 MiB"), std::string::npos) << "the bytes the run needs: " << message;
+    EXPECT_NE(message.find("--scratch"), std::string::npos) << message;
+  }
+  EXPECT_FALSE(folder.empty());
+  EXPECT_FALSE(fs::exists(folder)) << "the scratch folder is removed when the error unwinds";
+  EXPECT_EQ(filesIn(dir.dir()), 0u);
+}
+
+TEST(ScratchFolder, FilesRoundTripAndTrafficIsCountedPerStage) {
+  testing::TempDir dir;
+  ScratchFolder scratch(dir.dir());
+  EXPECT_EQ(fs::path(scratch.path()).parent_path(), fs::path(dir.dir()));
+  ScratchWriter writer(scratch, "write", 4096);
+  for (std::uint32_t i = 0; i < 10000; ++i) writer.write(&i, sizeof i);
+  const ScratchFile file = writer.finish();
+  EXPECT_EQ(file.bytes, 40000u);
+  EXPECT_EQ(fs::file_size(file.path), 40000u);
+  ScratchReader reader(scratch, file, "read", 100);
+  std::uint32_t x = 0;
+  for (std::uint32_t i = 0; i < 10000; ++i) {
+    ASSERT_TRUE(reader.read(&x, sizeof x));
+    ASSERT_EQ(x, i);
+  }
+  EXPECT_FALSE(reader.read(&x, sizeof x));
+  ASSERT_EQ(scratch.traffic().size(), 2u);
+  EXPECT_EQ(scratch.traffic()[0].stage, "write");
+  EXPECT_EQ(scratch.traffic()[0].bytesWritten, 40000u);
+  EXPECT_EQ(scratch.traffic()[1].bytesRead, 40000u);
+  EXPECT_EQ(scratch.peakBytesOnDisk(), 40000u);
+}
+
+TEST(ScratchFolder, ARecordCutShortIsAnError) {
+  testing::TempDir dir;
+  ScratchFolder scratch(dir.dir());
+  ScratchWriter writer(scratch, "write");
+  writer.write("abcdef", 6);
+  ScratchReader reader(scratch, writer.finish(), "read");
+  char record[4];
+  EXPECT_TRUE(reader.read(record, 4));
+  EXPECT_THROW(reader.read(record, 4), IoError);
+}
+
+TEST(ScratchFolder, RemovedOnSuccessAndAMissingParentIsAnError) {
+  testing::TempDir dir;
+  std::string folder;
+  {
+    ScratchFolder scratch(dir.dir());
+    folder = scratch.path();
+    ScratchWriter writer(scratch, "w");
+    writer.write("x", 1);
+    writer.finish();
+    EXPECT_EQ(filesIn(folder), 1u);
+  }
+  EXPECT_FALSE(fs::exists(folder));
+  try {
+    ScratchFolder scratch(dir.path("missing/deeper"));
+    FAIL() << "a scratch folder under a missing folder";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing/deeper"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScratchFolder, RemovedOnSigint) {
+  testing::TempDir dir;
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    installInterruptCleanup();
+    ScratchFolder scratch(dir.dir());
+    for (int i = 0; i < 3; ++i) {
+      ScratchWriter writer(scratch, "w");
+      writer.write("abc", 3);
+      writer.finish();
+    }
+    ScratchWriter open(scratch, "w");  // a file still being written
+    open.write("abc", 3);
+    raise(SIGINT);
+    _exit(0);  // not reached: the handler exits with 130
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_EQ(filesIn(dir.dir()), 0u) << "the scratch folder and its files are gone";
+}
+
+}  // namespace
+}  // namespace seamvox
