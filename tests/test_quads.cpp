@@ -11,6 +11,7 @@
 #include "core/quads/extract.h"
 #include "core/quads/validate.h"
 #include "core/system/errors.h"
+#include "io/mesh_io.h"
 #include "test_meshes.h"
 #include "testing.h"
 
@@ -78,16 +79,202 @@ void print(const Extracted& e) {
   }
 }
 
-TEST(Quads, TorusClosedAllQuads) {
-  const Extracted e = extract(mapOf(testing::generatedMesh(MeshKind::Torus, 20000), 40));
-  print(e);
-  EXPECT_TRUE(e.check.isValid());
+// A flat torus map: vertex (i, j) of torusMesh(n, m) at (u, v) = (i, j) * cell, the wrap-around
+// faces on the other side of the seams (translations n * cell and m * cell, integers).
+testing::Surface flatTorus(int n, int m, double cell, Vec2d offset = Vec2d::Zero()) {
+  TriangleMesh mesh = testing::torusMesh(n, m);
+  std::vector<Vec2d> uv;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < m; ++j) {
+      for (const auto& [di, dj] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 0}, {1, 1}, {0, 1}}) {
+        uv.push_back(offset + cell * Vec2d(i + di, j + dj));
+      }
+    }
+  }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  return testing::makeSurface(std::move(mesh));
 }
 
-TEST(Quads, SphereCones) {
-  const Extracted e = extract(mapOf(testing::generatedMesh(MeshKind::Sphere, 20000), 40));
+// A flat n x n grid of unit squares mapped by q = s p + offset (a disk, no seams).
+testing::Surface flatDisk(int n, double s, Vec2d offset) {
+  TriangleMesh mesh = testing::gridMesh(n, n);
+  std::vector<Vec2d> uv;
+  for (const Triangle& t : mesh.triangles) {
+    for (VertexId v : t) uv.push_back(offset + s * Vec2d(mesh.positions[v].x(), mesh.positions[v].y()));
+  }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  return testing::makeSurface(std::move(mesh));
+}
+
+QuadValidation checkOf(const testing::Surface& s, const QuadResult& q) {
+  return validateQuads(q, computeComponents(s.topology));
+}
+
+TEST(Quads, FlatTorusIsTheGrid) {
+  // 24 x 12 segments of half a unit: 12 x 6 unit cells, each one quad; offsets put the integer
+  // points inside faces, on edges and on vertices.
+  for (const Vec2d& offset : {Vec2d(0.1, 0.2), Vec2d(0.25, 0.0), Vec2d(0.0, 0.0)}) {
+    const testing::Surface s = flatTorus(24, 12, 0.5, offset);
+    const QuadResult q = extractQuads(s.mesh, s.topology);
+    const QuadValidation v = checkOf(s, q);
+    EXPECT_TRUE(v.isValid()) << offset.transpose();
+    EXPECT_EQ(v.faces, 72u);
+    EXPECT_EQ(v.quads, 72u);
+    EXPECT_EQ(v.vertices, 72u);
+    EXPECT_EQ(v.edges, 144u);
+    EXPECT_EQ(v.boundaryEdges, 0u);
+    EXPECT_EQ(q.stats.untracedEdges + q.stats.unpairedEdges + q.stats.openFaces, 0u);
+  }
+}
+
+TEST(Quads, ScaleCoarsensTheGrid) {
+  const testing::Surface s = flatTorus(24, 12, 0.5, Vec2d(0.1, 0.3));
+  QuadOptions options;
+  options.scale = 2;
+  const QuadResult q = extractQuads(s.mesh, s.topology, options);
+  const QuadValidation v = checkOf(s, q);
+  EXPECT_TRUE(v.isValid());
+  EXPECT_EQ(v.quads, 18u);  // 12 x 6 units in cells of 2 x 2
+  EXPECT_EQ(v.faces, 18u);
+  EXPECT_EQ(q.stats.seamEdgesOffScale, 0u);
+  options.scale = 5;  // 12 and 6 are no multiples of 5: the seams say so
+  EXPECT_GT(extractQuads(s.mesh, s.topology, options).stats.seamEdgesOffScale, 0u);
+}
+
+TEST(Quads, FlatDiskBoundaryStaysBoundary) {
+  // u, v in [0.3, 12.3]: 11 x 11 whole cells inside, cut cells along the boundary; and the case
+  // where the boundary runs along iso-lines.
+  for (const Vec2d& offset : {Vec2d(0.3, 0.3), Vec2d(0.0, 0.0), Vec2d(0.5, 0.0)}) {
+    const testing::Surface s = flatDisk(8, 1.5, offset);
+    const QuadResult q = extractQuads(s.mesh, s.topology);
+    const QuadValidation v = checkOf(s, q);
+    EXPECT_TRUE(v.isValid()) << offset.transpose();
+    EXPECT_EQ(v.boundaryLoops, 1u);
+    const int columns = 12 + (offset.x() != std::floor(offset.x()) ? 1 : 0);
+    const int rows = 12 + (offset.y() != std::floor(offset.y()) ? 1 : 0);
+    EXPECT_EQ(v.faces, std::uint64_t(columns * rows)) << offset.transpose();
+    EXPECT_GE(v.quads, 11u * 11u);
+    EXPECT_EQ(v.interiorNonQuads, 0u);
+  }
+}
+
+// The invariants every extraction of a clean seamless map meets.
+void expectValid(const Extracted& e) {
   print(e);
-  EXPECT_TRUE(e.check.isValid());
+  const QuadValidation& v = e.check;
+  EXPECT_TRUE(v.isValid());
+  EXPECT_EQ(v.nonManifoldEdges, 0u);
+  EXPECT_EQ(v.componentsDiffering, 0u);
+  EXPECT_EQ(v.irregularVertices, 0u);
+  EXPECT_EQ(v.conesWithWrongValence, 0u);
+  EXPECT_EQ(v.conesOnVertices, e.quads.conesOnGridVertices);
+  // A cone off the integer points lies inside one cell, which has 4 - k sides.
+  EXPECT_LE(v.interiorNonQuads, e.quads.cones - e.quads.conesOnGridVertices);
+  EXPECT_EQ(e.quads.stats.untracedEdges + e.quads.stats.unpairedEdges + e.quads.stats.openFaces, 0u);
+  // About one face per unit of parameter area (cells cut by boundaries and cones aside).
+  const double area = parameterArea(e.map.mesh);
+  EXPECT_NEAR(double(v.faces), area, 0.1 * area + 2.0 * double(v.boundaryEdges));
+  EXPECT_GE(v.quadFraction, 0.9);
+}
+
+TEST(Quads, TorusSphereGenus2Closed) {
+  for (const MeshKind kind : {MeshKind::Torus, MeshKind::Sphere, MeshKind::Genus2}) {
+    SCOPED_TRACE(meshKindName(kind));
+    const Extracted e = extract(mapOf(testing::generatedMesh(kind, 20000), 40));
+    expectValid(e);
+    EXPECT_EQ(e.check.boundaryEdges, 0u);
+    ASSERT_EQ(e.check.components.size(), 1u);
+    EXPECT_EQ(e.check.components[0].genus, kind == MeshKind::Sphere ? 0 : kind == MeshKind::Torus ? 1 : 2);
+  }
+}
+
+TEST(Quads, ScanWithHolesAndIslands) {
+  const Extracted e = extract(mapOf(testing::generatedMesh(MeshKind::Scan, 30000), 40));
+  expectValid(e);
+  EXPECT_GT(e.check.boundaryLoops, 0u);
+  EXPECT_GT(e.check.components.size(), 1u);
+}
+
+TEST(Quads, CoarseGridReportsIslands) {
+  // At 6 cells on the diagonal the scan's floating islands are smaller than a cell.
+  const Extracted e = extract(mapOf(testing::generatedMesh(MeshKind::Scan, 30000), 6));
+  print(e);
+  EXPECT_GT(e.quads.stats.islands, 0u);
+  EXPECT_GT(e.quads.stats.islandFaces, 0u);
+  EXPECT_EQ(e.check.nonManifoldEdges, 0u);
+}
+
+TEST(Quads, InjectedFlipsStillExtract) {
+  PipelineResult map = mapOf(testing::generatedMesh(MeshKind::Torus, 20000), 40);
+  // Move a few vertices off seams far in (u, v): their fans fold over.
+  std::vector<std::uint32_t> wedgesOf(map.mesh.numVertices(), 0);
+  std::vector<std::uint32_t> wedgeCount(map.mesh.numVertices(), 0);
+  std::vector<std::uint8_t> seen(map.mesh.cornerUV.numWedges(), 0);
+  for (CornerId c = 0; c < map.mesh.cornerUV.size(); ++c) {
+    const std::uint32_t w = map.mesh.cornerUV.wedge(c);
+    if (!seen[w]) seen[w] = 1, ++wedgeCount[map.topology.vertex(c)];
+  }
+  int moved = 0;
+  for (VertexId v = 0; v < map.mesh.numVertices() && moved < 10; v += 997) {
+    if (wedgeCount[v] != 1) continue;
+    const std::uint32_t w = map.mesh.cornerUV.wedge(map.topology.vertexCorner(v));
+    map.mesh.cornerUV.setWedgeValue(w, map.mesh.cornerUV.wedgeValue(w) + Vec2d(1.3, 0.7));
+    ++moved;
+  }
+  ASSERT_GT(moved, 3);
+  const Extracted e = extract(std::move(map));
+  print(e);
+  const QuadStats& s = e.quads.stats;
+  EXPECT_GT(s.flippedFaces, 0u);
+  EXPECT_GE(e.check.quadFraction, 0.9);
+  // Whatever is wrong with the result is reported by the extraction.
+  if (!e.check.isValid()) {
+    EXPECT_GT(s.untracedEdges + s.unpairedEdges + s.openFaces + s.pointsInFlippedFaces, 0u);
+  }
+}
+
+TEST(Quads, MalformedMapsAreRefusedOrReported) {
+  testing::Surface s = flatTorus(24, 12, 0.5, Vec2d(0.1, 0.2));
+  TriangleMesh noUV = s.mesh;
+  noUV.cornerUV.clear();
+  EXPECT_THROW(extractQuads(noUV, s.topology), InputError);
+  TriangleMesh far = s.mesh;
+  far.cornerUV.setWedgeValue(0, Vec2d(std::nan(""), 0.0));
+  EXPECT_THROW(extractQuads(far, s.topology), InputError);
+  far.cornerUV.setWedgeValue(0, Vec2d(1e12, 0.0));
+  EXPECT_THROW(extractQuads(far, s.topology), InputError);
+  QuadOptions zero;
+  zero.scale = 0;
+  EXPECT_THROW(extractQuads(s.mesh, s.topology, zero), InputError);
+  // Not seamless: one side of a seam shifted by a third of a unit.
+  TriangleMesh shifted = s.mesh;
+  std::vector<Vec2d> uv = testing::cornerValues(shifted.cornerUV);
+  for (CornerId c = 0; c < uv.size(); ++c) {
+    if (uv[c].x() > 11.9) uv[c].x() += 0.34;  // the wrap-around side of the u seam
+  }
+  shifted.cornerUV = WedgeMap::fromCorners(shifted.triangles, uv);
+  // Extraction rounds the translations and closes the seams; how far it had to move the map says
+  // it was not seamless (the tools refuse such maps before, measureSeamsFromUV).
+  const QuadResult q = extractQuads(shifted, s.topology);
+  EXPECT_GT(q.stats.maxSnap, 0.3);
+  EXPECT_LT(extractQuads(s.mesh, s.topology).stats.maxSnap, 1e-6);
+}
+
+TEST(Quads, SharedMeshesNinetyPercentQuads) {
+  for (const char* name : {"bumpy.off", "3holes.off", "spot.obj"}) {
+    const std::string path = testing::sharedMesh(name);
+    if (path.empty()) {
+      std::printf("skipping %s: %s\n", name, testing::missingSharedMessage(name).c_str());
+      continue;
+    }
+    SCOPED_TRACE(name);
+    const Extracted e = extract(mapOf(readMesh(path), 0.0));
+    print(e);
+    EXPECT_GE(e.check.quadFraction, 0.9);
+    EXPECT_EQ(e.check.nonManifoldEdges, 0u);
+    EXPECT_EQ(e.check.componentsDiffering, 0u);
+    EXPECT_EQ(e.check.conesWithWrongValence, 0u);
+  }
 }
 
 }  // namespace

@@ -581,6 +581,10 @@ class Extractor {
         ++out.stats.openFaces;
         continue;
       }
+      if (face.size() <= 2) {  // two edges between the same points: one edge once this goes
+        ++out.stats.digons;
+        continue;
+      }
       for (const std::uint32_t v : face) {
         if (newIndex[v] == kNone) {
           newIndex[v] = pm.numVertices();

@@ -40,6 +40,9 @@ struct QuadStats {
   std::uint64_t untracedEdges = 0;     ///< iso-line directions whose trace failed (flips, cones)
   std::uint64_t unpairedEdges = 0;     ///< traced half-edges whose reverse trace went elsewhere
   std::uint64_t openFaces = 0;         ///< face walks that met a missing edge (no face made)
+  /// Faces of two edges (an iso-line and a boundary piece or another iso-line between the same two
+  /// points, around no integer point): left out, which joins their two edges into one.
+  std::uint64_t digons = 0;
   std::uint64_t flippedFaces = 0;      ///< triangles of negative area in (u, v)
   std::uint64_t degenerateFaces = 0;   ///< triangles of zero area in (u, v)
   std::uint64_t pointsInFlippedFaces = 0;  ///< integer points inside flipped triangles (unused)

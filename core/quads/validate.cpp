@@ -33,6 +33,7 @@ QuadValidation validateQuads(const QuadResult& quads, const ComponentsResult& ma
   auto has = [&](std::uint64_t key) { return std::binary_search(directed.begin(), directed.end(), key); };
   std::vector<std::uint32_t> valence(pm.numVertices(), 0), boundaryOut(pm.numVertices(), kNone);
   std::vector<std::uint8_t> onBoundary(pm.numVertices(), 0);
+  std::vector<std::uint32_t> boundaryIn(pm.numVertices(), 0);
   std::vector<std::uint64_t> compEdges(map.components.size(), 0);
   for (std::size_t i = 0; i < directed.size(); ++i) {
     if (i > 0 && directed[i] == directed[i - 1]) {
@@ -51,15 +52,21 @@ QuadValidation validateQuads(const QuadResult& quads, const ComponentsResult& ma
     onBoundary[a] = onBoundary[b] = 1;
     if (boundaryOut[a] != kNone) ++out.nonManifoldVertices;
     boundaryOut[a] = b;
+    ++boundaryIn[b];
+  }
+  for (std::uint32_t v = 0; v < pm.numVertices(); ++v) {
+    out.nonManifoldVertices += boundaryIn[v] != (boundaryOut[v] != kNone ? 1u : 0u);
   }
   // Boundary loops, per component.
   std::vector<std::uint32_t> compLoops(map.components.size(), 0);
   std::vector<std::uint8_t> seen(pm.numVertices(), 0);
   for (std::uint32_t v = 0; v < pm.numVertices(); ++v) {
     if (boundaryOut[v] == kNone || seen[v]) continue;
+    std::uint32_t w = v;
+    while (w != kNone && !seen[w]) seen[w] = 1, w = boundaryOut[w];
+    if (w != v) continue;  // not a loop: an open chain (counted as non-manifold vertices)
     ++out.boundaryLoops;
     ++compLoops[quads.vertexComponent[v]];
-    for (std::uint32_t w = v; w != kNone && !seen[w]; w = boundaryOut[w]) seen[w] = 1;
   }
   for (std::uint32_t v = 0; v < pm.numVertices(); ++v) {
     if (onBoundary[v]) continue;

@@ -29,7 +29,7 @@ struct QuadValidation {
   /// Directed edges in more than one face (two faces of opposite orientation, or an edge in
   /// three or more faces): 0 for an oriented 2-manifold.
   std::uint64_t nonManifoldEdges = 0;
-  std::uint64_t nonManifoldVertices = 0;  ///< vertices with more than one boundary edge leaving
+  std::uint64_t nonManifoldVertices = 0;  ///< vertices with boundary edges in != out or > 1
   std::uint64_t degenerateFaces = 0;      ///< faces that visit a vertex twice
   std::uint64_t irregularVertices = 0;    ///< interior vertices off cones with valence != 4
   std::uint64_t conesOnVertices = 0;      ///< interior vertices on a cone
