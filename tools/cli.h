@@ -11,6 +11,8 @@
 
 #include "core/mesh/clean.h"
 #include "core/pipeline/grid_spacing.h"
+#include "core/quads/extract.h"
+#include "core/quads/validate.h"
 #include "core/synth/generate.h"
 #include "core/system/progress.h"
 
@@ -87,6 +89,19 @@ void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& resu
   "              and up to A tangentially (deterministic for a seed)\n"                       \
   "  --spikes N  N outlier vertices pushed 2-6 edge lengths along their normal\n"            \
   "  --folds N   N small fold-overs (a vertex and its ring slid over their neighbours)\n"
+
+/// Quad mesh of a map (`seamvox quads`, `param --quads`): extraction and its validation.
+struct QuadRun {
+  QuadResult quads;
+  QuadValidation check;
+};
+/// Extracts and validates the quad mesh of a cleaned map read from (or made for) `name`. Throws
+/// InputError naming it when the map is not seamless, or when --scale K does not divide its
+/// seam translations.
+QuadRun extractCheckedQuads(const std::string& name, const TriangleMesh& mesh, const Topology& topology,
+                            std::int64_t scale, const ProgressFn& progress);
+/// Lines on stdout: the quad mesh's figures, what extraction could not do, the validation.
+void printQuadSummary(const std::string& output, const QuadRun& run);
 
 /// Progress reporting on stderr: a one-line percentage per stage when stderr is a terminal and
 /// quiet is false; nothing otherwise.

@@ -24,6 +24,10 @@ struct PolygonMesh {
   std::uint32_t degree(std::uint32_t f) const { return faceStart[f + 1] - faceStart[f]; }
 };
 
+/// Seam residual and distance of translations from integers (grid units) up to which a map counts
+/// as seamless for extraction (files may hold UVs rounded to float); snapping moves it that much.
+constexpr double kQuadSeamTolerance = 1e-4;
+
 struct QuadOptions {
   /// Iso-lines every `scale` units of u and v (>= 1). Needs seam translations that are multiples
   /// of scale (QuadStats::seamEdgesOffScale counts the others).
