@@ -6,12 +6,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 
 #include "core/pipeline/parameterize.h"
 #include "core/quads/extract.h"
 #include "core/quads/validate.h"
 #include "core/system/errors.h"
 #include "io/mesh_io.h"
+#include "io/polygon_io.h"
 #include "test_meshes.h"
 #include "testing.h"
 
@@ -275,6 +277,96 @@ TEST(Quads, SharedMeshesNinetyPercentQuads) {
     EXPECT_EQ(e.check.componentsDiffering, 0u);
     EXPECT_EQ(e.check.conesWithWrongValence, 0u);
   }
+}
+
+// ---- the commands ----
+
+// A small map written by param (and its quad mesh by --quads), shared by the command tests.
+class QuadsCommand : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    ASSERT_EQ(testing::runSeamvox("gen scan --faces 20000 -o " + dir_->path("scan.ply") + " --quiet"), 0);
+    std::string out;
+    ASSERT_EQ(testing::runSeamvox("param " + dir_->path("scan.ply") + " -o " + dir_->path("map.obj") +
+                                  " --cells 40 --quads " + dir_->path("param-quads.obj") + " --quiet", &out), 0)
+        << out;
+    EXPECT_NE(out.find("validation: valid"), std::string::npos) << out;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string path(const std::string& name) { return dir_->path(name); }
+  static testing::TempDir* dir_;
+};
+testing::TempDir* QuadsCommand::dir_ = nullptr;
+
+TEST_F(QuadsCommand, WritesAValidQuadMeshAndReport) {
+  std::string out;
+  ASSERT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("q.ply") + " --report " +
+                                path("q.json") + " --quiet", &out), 0) << out;
+  EXPECT_NE(out.find("validation: valid"), std::string::npos) << out;
+  const std::string report = testing::readFile(path("q.json"));
+  EXPECT_NE(report.find("\"valid\": true"), std::string::npos) << report;
+  EXPECT_NE(report.find("\"nonManifoldEdges\": 0"), std::string::npos);
+  // The OBJ of param --quads reads back as the same polygon mesh quads makes.
+  const PolygonMesh fromParam = readPolygonObj(path("param-quads.obj"));
+  ASSERT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("q.obj") + " --quiet"), 0);
+  const PolygonMesh fromQuads = readPolygonObj(path("q.obj"));
+  EXPECT_EQ(fromParam.numFaces(), fromQuads.numFaces());
+  EXPECT_EQ(fromParam.faceVertices, fromQuads.faceVertices);
+  // render draws its edges.
+  ASSERT_EQ(testing::runSeamvox("render " + path("map.obj") + " -o " + path("q.png") + " --size 200x200 --quads " +
+                                path("q.obj") + " --quiet", &out), 0) << out;
+  EXPECT_NE(out.find("quad-mesh edges drawn"), std::string::npos) << out;
+}
+
+TEST_F(QuadsCommand, MalformedMapsFailNamingTheFile) {
+  std::string out;
+  // No texture coordinates.
+  EXPECT_EQ(testing::runSeamvox("quads " + path("scan.ply") + " -o " + path("x.obj"), &out), 1);
+  EXPECT_NE(out.find(path("scan.ply") + ": has no texture coordinates"), std::string::npos) << out;
+  // Not seamless: every vt line's u moved by a different amount.
+  std::string text = testing::readFile(path("map.obj")), shifted;
+  std::size_t at = 0, count = 0;
+  while (at < text.size()) {
+    std::size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(at, end - at);
+    if (line.rfind("vt ", 0) == 0 && ++count % 7 == 0) line = "vt 0.123 0.456";
+    shifted += line + "\n";
+    at = end + 1;
+  }
+  testing::writeFile(path("bad.obj"), shifted);
+  EXPECT_EQ(testing::runSeamvox("quads " + path("bad.obj") + " -o " + path("x.obj"), &out), 1);
+  EXPECT_NE(out.find(path("bad.obj") + ": the map is not seamless"), std::string::npos) << out;
+  // A scale that does not divide the seam translations.
+  EXPECT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("x.obj") + " --scale 7", &out), 1);
+  EXPECT_NE(out.find("no multiples of --scale 7"), std::string::npos) << out;
+  // Usage errors.
+  EXPECT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("x.off"), &out), 2);
+  EXPECT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("x.obj") + " --scale 0", &out), 2);
+  EXPECT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("map.obj"), &out), 2);
+  // Nothing written by the failed runs.
+  EXPECT_FALSE(std::ifstream(path("x.obj")).good());
+  EXPECT_TRUE(testing::temporaryFilesIn(dir_->dir()).empty());
+}
+
+TEST_F(QuadsCommand, EveryTruncatedQuadObjReadsOrFailsCleanly) {
+  ASSERT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("t.obj") + " --quiet"), 0);
+  const std::string text = testing::readFile(path("t.obj")).substr(0, 4000);
+  for (std::size_t n = 0; n < text.size(); n += 7) {
+    testing::writeFile(path("cut.obj"), text.substr(0, n));
+    try {
+      const PolygonMesh m = readPolygonObj(path("cut.obj"));
+      for (std::uint32_t v : m.faceVertices) ASSERT_LT(v, m.numVertices());
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path("cut.obj")), std::string::npos) << e.what();
+    }
+  }
+  testing::writeFile(path("cut.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
+  EXPECT_THROW(readPolygonObj(path("cut.obj")), InputError);
+  testing::writeFile(path("cut.obj"), "v 0 0 0\nv 1 0 0\nf 1 2\n");
+  EXPECT_THROW(readPolygonObj(path("cut.obj")), InputError);
+  EXPECT_THROW(readPolygonObj(path("absent.obj")), IoError);
 }
 
 }  // namespace

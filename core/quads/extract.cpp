@@ -53,7 +53,16 @@ constexpr std::uint8_t kOut = 4, kIn = 5;
 struct Port {
   FaceId face;
   std::uint8_t dir;
+  std::int32_t turn = 0;  // at a mesh vertex: direction in quarter turns around its unfolded fan
 };
+
+// Signed angle from a to b.
+double angleBetween(Point a, Point b) { return std::atan2(double(cross(a, b)), double(dot(a, b))); }
+// Whether axis direction v lies in the half-open sector [a, b) turning counter-clockwise (< pi).
+bool inSector(Point a, Point b, Point v) {
+  const __int128 ca = cross(a, v);
+  return (ca > 0 || (ca == 0 && dot(a, v) > 0)) && cross(v, b) > 0;
+}
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 constexpr int kMaxTraceSteps = 1 << 16;
@@ -215,18 +224,62 @@ class Extractor {
       if (boundary) out.push_back({cornerFace(e), kIn});
       return;
     }
-    const VertexId w = v.id;
+    vertexPorts(v.id, out);
+  }
+
+  // A direction d of corner c's face at a mesh vertex, seen around the vertex's fan unfolded into
+  // one plane (transitions composed, angles added from the first corner): the unfolded angle of d
+  // in quarter turns. Every corner's sector covers the quarter turns from its first edge to its
+  // second, counted negatively in a flipped triangle, so each direction out of the vertex is
+  // covered once net, folds or not, and a cone of index k has 4 - k of them (QEx's approach).
+  template <class F>
+  void forEachSectorDirection(VertexId w, F&& visit) const {
+    double turned = 0.0;
+    bool firstCorner = true;
     const bool boundary = topo_.isBoundaryVertex(w);
-    const CornerId first = topo_.vertexCorner(w);
-    CornerId last = first;
-    if (boundary) out.push_back({cornerFace(first), kOut});
     topo_.forEachCornerAround(w, [&](CornerId c) {
-      last = c;
-      if (!isPositive(cornerFace(c))) return;
-      const Point q = map_.at(c);
-      sectorDirections(map_.at(nextCorner(c)) - q, map_.at(prevCorner(c)) - q, false,
-                       boundary && c == first, onGrid(q.x), onGrid(q.y), cornerFace(c), out);
+      const Point q = map_.at(c), a = map_.at(nextCorner(c)) - q, b = map_.at(prevCorner(c)) - q;
+      if (firstCorner) turned = std::atan2(double(a.y), double(a.x));
+      const int orientation = sign(cross(a, b));
+      for (std::uint8_t d = 0; d < 4; ++d) {
+        const Point v = direction(d);
+        if (!(d % 2 == 0 ? onGrid(q.y) : onGrid(q.x))) continue;  // its iso-line is off the grid
+        int weight = 0;
+        if (orientation > 0 && inSector(a, b, v)) weight = 1;
+        if (orientation < 0 && inSector(b, a, v)) weight = -1;
+        if (weight == 0 || (boundary && firstCorner && cross(a, v) == 0)) continue;
+        const double angle = turned + angleBetween(a, v);
+        visit(c, d, static_cast<std::int32_t>(std::lround(angle / (0.5 * M_PI))), weight);
+      }
+      turned += angleBetween(a, b);
+      firstCorner = false;
     });
+  }
+
+  void vertexPorts(VertexId w, std::vector<Port>& out) const {
+    const bool boundary = topo_.isBoundaryVertex(w);
+    CornerId last = topo_.vertexCorner(w);
+    if (boundary) out.push_back({cornerFace(last), kOut});
+    const std::size_t begin = out.size();
+    std::vector<std::pair<std::int32_t, int>> net;  // (turn, weight)
+    forEachSectorDirection(w, [&](CornerId c, std::uint8_t d, std::int32_t turn, int weight) {
+      net.emplace_back(turn, weight);
+      if (weight > 0) out.push_back({cornerFace(c), d, turn});
+    });
+    topo_.forEachCornerAround(w, [&](CornerId c) { last = c; });
+    // Keep the first positive occurrence of each direction covered net once.
+    std::sort(out.begin() + begin, out.end(), [](const Port& p, const Port& q) { return p.turn < q.turn; });
+    auto netOf = [&](std::int32_t turn) {
+      int sum = 0;
+      for (const auto& [t, w] : net) sum += t == turn ? w : 0;
+      return sum;
+    };
+    std::size_t kept = begin;
+    for (std::size_t i = begin; i < out.size(); ++i) {
+      if (kept > begin && out[kept - 1].turn == out[i].turn) continue;
+      if (netOf(out[i].turn) > 0) out[kept++] = out[i];
+    }
+    out.resize(kept);
     if (boundary) out.push_back({cornerFace(last), kIn});
   }
 
@@ -271,16 +324,37 @@ class Extractor {
       return findPort(v, cornerFace(topo_.opposite(s)), rotateDir(d, map_.transition(s).r));
     }
     if (g.where != Where::Vertex) return kNone;
-    const CornerId c = cornerAt(f, g.id);
-    const Point q = map_.at(c);
-    const Point a = map_.at(nextCorner(c)) - q, b = map_.at(prevCorner(c)) - q;
-    if (cross(b, dv) == 0 && dot(b, dv) > 0 && topo_.ccw(c) != kInvalidId) {
-      return findPort(v, cornerFace(topo_.ccw(c)), rotateDir(d, map_.transition(nextCorner(c)).r));
-    }
-    if (cross(a, dv) == 0 && dot(a, dv) > 0 && topo_.cw(c) != kInvalidId) {
-      return findPort(v, cornerFace(topo_.cw(c)), rotateDir(d, map_.transition(prevCorner(c)).r));
+    // Any corner's direction: the port of the same unfolded direction.
+    std::int32_t turn = 0, period = 0;  // around an interior vertex, turns repeat after the fan's
+    bool found = false;
+    unfoldedTurn(g.id, f, d, turn, period, found);
+    if (!found) return kNone;
+    for (std::uint32_t q = portStart_[v]; q < portStart_[v + 1]; ++q) {
+      if (ports_[q].dir >= 4) continue;
+      const std::int32_t diff = ports_[q].turn - turn;
+      if (diff == 0 || (period > 0 && diff % period == 0)) return q;
     }
     return kNone;
+  }
+
+  // The unfolded direction (forEachSectorDirection) of direction d in face f at vertex w, whether
+  // or not f's sector holds it.
+  void unfoldedTurn(VertexId w, FaceId f, std::uint8_t d, std::int32_t& turn, std::int32_t& period,
+                    bool& found) const {
+    double turned = 0.0, start = 0.0;
+    bool firstCorner = true;
+    found = false;
+    topo_.forEachCornerAround(w, [&](CornerId c) {
+      const Point q = map_.at(c), a = map_.at(nextCorner(c)) - q, b = map_.at(prevCorner(c)) - q;
+      if (firstCorner) start = turned = std::atan2(double(a.y), double(a.x));
+      if (cornerFace(c) == f && !found) {
+        found = true;
+        turn = static_cast<std::int32_t>(std::lround((turned + angleBetween(a, direction(d))) / (0.5 * M_PI)));
+      }
+      turned += angleBetween(a, b);
+      firstCorner = false;
+    });
+    period = topo_.isBoundaryVertex(w) ? 0 : static_cast<std::int32_t>(std::lround((turned - start) / (0.5 * M_PI)));
   }
 
   // ---- tracing ----
@@ -400,10 +474,12 @@ class Extractor {
     if (!startOf(v, port, target)) return kNone;
     FaceId f = port.face;
     std::uint8_t d = port.dir;
+    int entry = -1;  // local corner of the edge the line came in by (-1: unknown)
     for (int step = 0; step < kMaxTraceSteps; ++step) {
-      if (!isPositive(f)) return kNone;
       const Point q[3] = {map_.at(3 * f), map_.at(3 * f + 1), map_.at(3 * f + 2)};
-      if (orient(q[0], q[1], target) >= 0 && orient(q[1], q[2], target) >= 0 &&
+      const int orientation = sign(orient(q[0], q[1], q[2]));
+      if (orientation == 0) return kNone;
+      if (orientation > 0 && orient(q[0], q[1], target) >= 0 && orient(q[1], q[2], target) >= 0 &&
           orient(q[2], q[0], target) >= 0) {
         const auto it = index_.find(locate(f, target));
         if (it == index_.end()) return kNone;
@@ -413,7 +489,14 @@ class Extractor {
       int zeros = 0, zero = -1, nonzero = -1;
       for (int k = 0; k < 3; ++k) (s[k] == 0 ? (++zeros, zero = k) : nonzero = k);
       int exitEdge = -1, exitVertex = -1;  // local corner naming the exit edge, or the vertex
-      if (zeros == 0) {
+      if (orientation < 0 || (entry >= 0 && zeros == 0)) {
+        // A flipped triangle (a fold), or one entered by an edge: out by the other edge the line
+        // crosses, which keeps the walk going through folds (QEx's local tracing).
+        if (entry < 0 || zeros > 0) return kNone;
+        for (int k = 0; k < 3; ++k) {
+          if (k != entry && (s[(k + 1) % 3] < 0) != (s[(k + 2) % 3] < 0)) exitEdge = k;
+        }
+      } else if (zeros == 0) {
         for (int k = 0; k < 3; ++k) {
           if (s[k] < 0 && s[(k + 1) % 3] > 0) exitEdge = (k + 2) % 3;
         }
@@ -426,12 +509,14 @@ class Extractor {
         const Point dv = direction(d);
         exitVertex = dot(dv, q[k1]) > dot(dv, q[k2]) ? k1 : k2;
       }
+      entry = -1;
       if (exitEdge >= 0) {
         const CornerId c = 3 * f + exitEdge;
         if (topo_.opposite(c) == kInvalidId) {
           return boundaryArrival(c, f, d, target);
         }
         crossEdge(c, f, d, target);
+        entry = static_cast<int>(topo_.opposite(c) % 3);
       } else if (exitVertex >= 0) {
         const CornerId c = 3 * f + exitVertex;
         const VertexId w = topo_.vertex(c);
@@ -556,16 +641,19 @@ class Extractor {
 
   void buildFaces(QuadResult& out) {
     std::vector<std::uint8_t> visited(ports_.size(), 0);
-    std::vector<std::uint32_t> newIndex(points_.size(), kNone), face;
+    std::vector<std::uint32_t> newIndex(points_.size(), kNone), face, facePorts;
+    std::vector<std::uint8_t> digonsAt(points_.size(), 0);
     PolygonMesh& pm = out.mesh;
     for (std::uint32_t h = 0; h < ports_.size(); ++h) {
       if (visited[h] || !leaves(h)) continue;
       face.clear();
+      facePorts.clear();
       std::uint32_t cur = h;
       bool closed = false;
       while (true) {
         visited[cur] = 1;
         face.push_back(portVertex_[cur]);
+        facePorts.push_back(cur);
         const std::uint32_t arrive = portTarget_[cur], v = portVertex_[arrive];
         const std::uint32_t first = portStart_[v], count = portStart_[v + 1] - first;
         if (ports_[first].dir == kOut && arrive == first) break;  // arrived from outside
@@ -583,6 +671,12 @@ class Extractor {
       }
       if (face.size() <= 2) {  // two edges between the same points: one edge once this goes
         ++out.stats.digons;
+        if (face.size() == 2 && ports_[h].dir < 4 &&
+            facePorts.size() == 2 && ports_[facePorts[1]].dir < 4) {
+          // Between two iso-lines: a cone of index 2 in a cell. Its two corners lose an edge.
+          ++digonsAt[face[0]];
+          ++digonsAt[face[1]];
+        }
         continue;
       }
       for (const std::uint32_t v : face) {
@@ -598,6 +692,10 @@ class Extractor {
         pm.faceVertices.push_back(newIndex[v]);
       }
       pm.faceStart.push_back(static_cast<std::uint32_t>(pm.faceVertices.size()));
+    }
+    out.vertexDigons.assign(pm.numVertices(), 0);
+    for (std::uint32_t v = 0; v < points_.size(); ++v) {
+      if (newIndex[v] != kNone) out.vertexDigons[newIndex[v]] = digonsAt[v];
     }
     // Components of the map: per vertex, and those that got no face (islands).
     const ComponentsResult comps = computeComponents(topo_);

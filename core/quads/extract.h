@@ -62,6 +62,9 @@ struct QuadResult {
   PolygonMesh mesh;
   std::vector<std::uint32_t> vertexComponent;  ///< #V: component of the map (computeComponents)
   std::vector<std::int8_t> vertexConeIndex;    ///< #V: index of the cone there (quarter turns), or 0
+  /// #V: two-edge faces left out at the vertex (QuadStats::digons) between two iso-lines, around a
+  /// cone of index 2 in a cell: each takes one edge from each of its two corners.
+  std::vector<std::uint8_t> vertexDigons;
   std::uint32_t cones = 0;                     ///< cones of the map
   std::uint32_t conesOnGridVertices = 0;       ///< of them, those at an integer point
   QuadStats stats;

@@ -71,11 +71,12 @@ QuadValidation validateQuads(const QuadResult& quads, const ComponentsResult& ma
   for (std::uint32_t v = 0; v < pm.numVertices(); ++v) {
     if (onBoundary[v]) continue;
     const int cone = quads.vertexConeIndex[v];
+    const bool wrong = std::int64_t(valence[v]) != 4 - cone - quads.vertexDigons[v];
     if (cone != 0) {
       ++out.conesOnVertices;
-      out.conesWithWrongValence += std::int64_t(valence[v]) != 4 - cone;
+      out.conesWithWrongValence += wrong;
     } else {
-      out.irregularVertices += valence[v] != 4;
+      out.irregularVertices += wrong;
     }
   }
   for (std::uint32_t f = 0; f < pm.numFaces(); ++f) {
