@@ -227,19 +227,36 @@ class Extractor {
     vertexPorts(v.id, out);
   }
 
-  // A direction d of corner c's face at a mesh vertex, seen around the vertex's fan unfolded into
-  // one plane (transitions composed, angles added from the first corner): the unfolded angle of d
-  // in quarter turns. Every corner's sector covers the quarter turns from its first edge to its
-  // second, counted negatively in a flipped triangle, so each direction out of the vertex is
-  // covered once net, folds or not, and a cone of index k has 4 - k of them (QEx's approach).
+  // The fan of vertex w unfolded into one plane (transitions composed, angles added from the
+  // first corner): visit(c, a, b, turned) for every corner c with its two edges a, b in its own
+  // chart and the unfolded angle of a. Returns the fan's total angle.
   template <class F>
-  void forEachSectorDirection(VertexId w, F&& visit) const {
-    double turned = 0.0;
+  double walkUnfoldedFan(VertexId w, F&& visit) const {
+    double turned = 0.0, start = 0.0;
     bool firstCorner = true;
-    const bool boundary = topo_.isBoundaryVertex(w);
     topo_.forEachCornerAround(w, [&](CornerId c) {
       const Point q = map_.at(c), a = map_.at(nextCorner(c)) - q, b = map_.at(prevCorner(c)) - q;
-      if (firstCorner) turned = std::atan2(double(a.y), double(a.x));
+      if (firstCorner) start = turned = std::atan2(double(a.y), double(a.x));
+      visit(c, a, b, turned);
+      turned += angleBetween(a, b);
+      firstCorner = false;
+    });
+    return turned - start;
+  }
+  static std::int32_t quarterTurns(double angle) {
+    return static_cast<std::int32_t>(std::lround(angle / (0.5 * M_PI)));
+  }
+
+  // The directions out of a mesh vertex, by their unfolded angle in quarter turns. Every corner's
+  // sector covers the quarter turns from its first edge to its second, counted negatively in a
+  // flipped triangle, so each direction out of the vertex is covered once net, folds or not, and
+  // a cone of index k has 4 - k of them (QEx's approach).
+  template <class F>
+  void forEachSectorDirection(VertexId w, F&& visit) const {
+    const bool boundary = topo_.isBoundaryVertex(w);
+    const CornerId first = topo_.vertexCorner(w);
+    walkUnfoldedFan(w, [&](CornerId c, Point a, Point b, double turned) {
+      const Point q = map_.at(c);
       const int orientation = sign(cross(a, b));
       for (std::uint8_t d = 0; d < 4; ++d) {
         const Point v = direction(d);
@@ -247,12 +264,9 @@ class Extractor {
         int weight = 0;
         if (orientation > 0 && inSector(a, b, v)) weight = 1;
         if (orientation < 0 && inSector(b, a, v)) weight = -1;
-        if (weight == 0 || (boundary && firstCorner && cross(a, v) == 0)) continue;
-        const double angle = turned + angleBetween(a, v);
-        visit(c, d, static_cast<std::int32_t>(std::lround(angle / (0.5 * M_PI))), weight);
+        if (weight == 0 || (boundary && c == first && cross(a, v) == 0)) continue;
+        visit(c, d, quarterTurns(turned + angleBetween(a, v)), weight);
       }
-      turned += angleBetween(a, b);
-      firstCorner = false;
     });
   }
 
@@ -338,23 +352,16 @@ class Extractor {
   }
 
   // The unfolded direction (forEachSectorDirection) of direction d in face f at vertex w, whether
-  // or not f's sector holds it.
+  // or not f's sector holds it; period: the fan's quarter turns around an interior vertex, or 0.
   void unfoldedTurn(VertexId w, FaceId f, std::uint8_t d, std::int32_t& turn, std::int32_t& period,
                     bool& found) const {
-    double turned = 0.0, start = 0.0;
-    bool firstCorner = true;
     found = false;
-    topo_.forEachCornerAround(w, [&](CornerId c) {
-      const Point q = map_.at(c), a = map_.at(nextCorner(c)) - q, b = map_.at(prevCorner(c)) - q;
-      if (firstCorner) start = turned = std::atan2(double(a.y), double(a.x));
-      if (cornerFace(c) == f && !found) {
-        found = true;
-        turn = static_cast<std::int32_t>(std::lround((turned + angleBetween(a, direction(d))) / (0.5 * M_PI)));
-      }
-      turned += angleBetween(a, b);
-      firstCorner = false;
+    const double total = walkUnfoldedFan(w, [&](CornerId c, Point a, Point, double turned) {
+      if (cornerFace(c) != f || found) return;
+      found = true;
+      turn = quarterTurns(turned + angleBetween(a, direction(d)));
     });
-    period = topo_.isBoundaryVertex(w) ? 0 : static_cast<std::int32_t>(std::lround((turned - start) / (0.5 * M_PI)));
+    period = topo_.isBoundaryVertex(w) ? 0 : quarterTurns(total);
   }
 
   // ---- tracing ----
