@@ -26,11 +26,14 @@ struct PointKey {
   bool operator==(const PointKey& o) const { return head == o.head && a == o.a && b == o.b; }
 };
 struct PointKeyHash {
+  static std::uint64_t mix(std::uint64_t x) {  // splitmix64's finalizer
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+  }
   std::size_t operator()(const PointKey& k) const {
-    std::uint64_t h = k.head * 0x9E3779B97F4A7C15ull;
-    h ^= static_cast<std::uint64_t>(k.a) + 0x7F4A7C159E3779B9ull + (h << 6) + (h >> 2);
-    h ^= static_cast<std::uint64_t>(k.b) + 0x94D049BB133111EBull + (h << 6) + (h >> 2);
-    return static_cast<std::size_t>(h ^ (h >> 31));
+    return static_cast<std::size_t>(
+        mix(k.head ^ mix(static_cast<std::uint64_t>(k.a) ^ mix(static_cast<std::uint64_t>(k.b)))));
   }
 };
 PointKey vertexKey(VertexId v) { return {(std::uint64_t(Where::Vertex) << 62) | v, 0, 0}; }
@@ -170,6 +173,14 @@ class Extractor {
   }
 
   void findPoints() {
+    // About one integer point per unit of parameter area, plus those on the boundary.
+    double area = 0.0;
+    for (FaceId f = 0; f < topo_.numFaces(); ++f) {
+      area += std::abs(double(orient(map_.at(3 * f), map_.at(3 * f + 1), map_.at(3 * f + 2))));
+    }
+    const double cells = 0.5 * area / (double(G_) * double(G_));
+    index_.reserve(static_cast<std::size_t>(1.1 * cells) + topo_.numFaces() / 64 + 16);
+    points_.reserve(index_.bucket_count());
     findVertexPoints();
     findEdgePoints();
     findFacePoints();

@@ -55,10 +55,7 @@ LatticeMap::LatticeMap(const TriangleMesh& mesh, const Topology& topology, std::
     for (std::uint64_t c = r.begin(); c < r.end(); ++c) {
       const CornerId o = topo_.opposite(CornerId(c));
       if (o == kInvalidId || o < c) continue;
-      if (map_.wedge(nextCorner(CornerId(c))) == map_.wedge(prevCorner(o)) &&
-          map_.wedge(prevCorner(CornerId(c))) == map_.wedge(nextCorner(o))) {
-        continue;  // the same wedges on both sides: no seam
-      }
+      if (!isSeam(CornerId(c))) continue;  // the same wedges on both sides
       const int k = fitRotation(map_, CornerId(c), o);
       rot_[c] = static_cast<std::uint8_t>(k);
       rot_[o] = static_cast<std::uint8_t>((4 - k) & 3);
@@ -90,10 +87,17 @@ LatticeMap::LatticeMap(const TriangleMesh& mesh, const Topology& topology, std::
   }
 }
 
+bool LatticeMap::isSeam(CornerId c) const {
+  const CornerId o = topo_.opposite(c);
+  return map_.wedge(nextCorner(c)) != map_.wedge(prevCorner(o)) ||
+         map_.wedge(prevCorner(c)) != map_.wedge(nextCorner(o));
+}
+
 Transition LatticeMap::seedTransition(CornerId c) const {
   const CornerId o = topo_.opposite(c);
   const CornerId e = std::min(c, o), f = std::max(c, o);
   Transition t;
+  if (!isSeam(e)) return t;  // the identity
   t.r = rot_[e];
   const Vec2d a = map_[nextCorner(e)], a2 = map_[prevCorner(f)];
   const Point turned = rotate(snap(a), t.r);
@@ -116,6 +120,11 @@ Transition LatticeMap::transition(CornerId c) const {
 void LatticeMap::closeFan(VertexId v, std::uint64_t& open) {
   const CornerId first = topo_.vertexCorner(v);
   if (first == kInvalidId) return;
+  bool seams = false;  // no seam at v: nothing to close
+  topo_.forEachCornerAround(v, [&](CornerId c) {
+    seams |= topo_.opposite(nextCorner(c)) != kInvalidId && isSeam(nextCorner(c));
+  });
+  if (!seams) return;
   const bool interior = !topo_.isBoundaryVertex(v);
   auto propagate = [&](Point start, bool write) {
     Transition total;  // chart of `first` -> chart of the current corner
@@ -149,14 +158,12 @@ void LatticeMap::closeFan(VertexId v, std::uint64_t& open) {
   // A corner whose wedge got two values (wedges shared across a seam) leaves the fan open.
   double angle = 0.0;
   bool consistent = true;
-  Point previous = at(first);
   CornerId c = first;
   do {
     const Point q = at(c), a = at(nextCorner(c)) - q, b = at(prevCorner(c)) - q;
     angle += std::atan2(double(cross(a, b)), double(dot(a, b)));
     const CornerId next = topo_.ccw(c);
     if (seedTransition(nextCorner(c)).apply(q) != at(next)) consistent = false;
-    previous = q;
     c = next;
   } while (c != first);
   if (!consistent) ++open;

@@ -78,6 +78,8 @@ class LatticeMap {
   const QuadStats& stats() const { return stats_; }
 
  private:
+  /// Whether the two sides of c's (interior) edge have different wedges.
+  bool isSeam(CornerId c) const;
   Transition seedTransition(CornerId c) const;
   void closeFan(VertexId v, std::uint64_t& open);
 
