@@ -414,7 +414,8 @@ RenderResult renderCheckerboard(const TriangleMesh& mesh, const Topology& topolo
       const Vec2d xy = result.camera.project(p) * double(ss);
       return Vec3d(xy.x(), xy.y(), result.camera.depth(p));
     };
-    drawSegment(toScreen(from), toScreen(to), 0.5 * options.lineWidth * ss, tolerance, options.lineColor, canvas);
+    drawSegment(toScreen(from), toScreen(to), 0.5 * options.lineWidth * ss,
+                options.lineDepthTolerance / result.camera.pixelsPerUnit, options.lineColor, canvas);
   }
   if (options.drawCones) {
     MapCones found = findMapCones(mesh, topology);

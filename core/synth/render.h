@@ -61,6 +61,9 @@ struct RenderOptions {
   std::vector<std::array<Vec3d, 2>> lines;
   Rgb lineColor{25, 25, 25};
   double lineWidth = 1.2;
+  /// Depth (output pixels) a line may lie behind the surface and still show: a straight edge
+  /// between two surface points cuts under a curved surface.
+  double lineDepthTolerance = 8.0;
   double coneRadius = 0.0;   ///< output pixels; 0 = from the image size
   ProgressFn progress;
 };
