@@ -220,6 +220,23 @@ double stageSeconds(const std::vector<StageFigures>& stages, const std::string& 
   return seconds;
 }
 
+ParamReportContext paramReportContext(const PipelineOptions& options, const StageMeter& meter,
+                                      std::string input, std::string output,
+                                      std::string solverAsked, std::string fieldSource) {
+  ParamReportContext c;
+  c.input = std::move(input);
+  c.output = std::move(output);
+  c.solverAsked = std::move(solverAsked);
+  c.fieldSource = std::move(fieldSource);
+  c.gridResolution = options.solver.gridResolution;
+  c.rings = options.solver.refine.rings;
+  c.maxRounds = options.solver.refine.maxRounds;
+  c.stages = meter.stages();
+  c.totalSeconds = meter.totalSeconds();
+  c.peakBytes = meter.peakBytes();
+  return c;
+}
+
 std::string paramReportJson(const PipelineResult& r, const ParamReportContext& c) {
   JsonWriter j;
   j.beginObject();

@@ -11,6 +11,7 @@ namespace seamvox {
 
 class JsonWriter;
 struct FieldSolveStats;
+struct PipelineOptions;
 struct PipelineResult;
 
 /// What the report says beyond the pipeline's result: the caller's names and settings and the
@@ -25,6 +26,12 @@ struct ParamReportContext {
   double totalSeconds = 0.0;
   std::uint64_t peakBytes = 0;
 };
+
+/// The context of a run with these options measured by meter (its stages so far): the settings,
+/// stages, total time and peak filled in, the names as given.
+ParamReportContext paramReportContext(const PipelineOptions& options, const StageMeter& meter,
+                                      std::string input, std::string output,
+                                      std::string solverAsked, std::string fieldSource);
 
 /// The report as pretty-printed JSON.
 std::string paramReportJson(const PipelineResult& result, const ParamReportContext& context);

@@ -24,7 +24,7 @@ std::string quadReportJson(const QuadResult& quads, const QuadValidation& v, con
   j.key("gridVertices").value(s.gridVertices).key("boundaryVertices").value(s.boundaryVertices);
   j.key("tracedEdges").value(s.tracedEdges).key("boundaryEdges").value(s.boundaryEdges);
   j.key("untracedEdges").value(s.untracedEdges).key("unpairedEdges").value(s.unpairedEdges);
-  j.key("openFaces").value(s.openFaces).key("digons").value(s.digons);
+  j.key("openFaces").value(s.openFaces).key("digons").value(s.digons).key("deadEnds").value(s.deadEnds);
   j.key("pointsInFlippedFaces").value(s.pointsInFlippedFaces);
   j.key("holesWithoutVertex").value(s.holesWithoutVertex);
   j.key("islands").value(s.islands).key("islandFaces").value(s.islandFaces);

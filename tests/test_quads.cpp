@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <array>
 #include <cstdio>
 #include <fstream>
 
@@ -177,6 +178,64 @@ void expectValid(const Extracted& e) {
   const double area = parameterArea(e.map.mesh);
   EXPECT_NEAR(double(v.faces), area, 0.1 * area + 2.0 * double(v.boundaryEdges));
   EXPECT_GE(v.quadFraction, 0.9);
+}
+
+// A pillowcase: two n x m grids of half units (a rectangle of 0.5 n x 0.5 m in (u, v)) glued
+// along their borders, the back one mapped to (2a - u, v): its four corners are cones of index 2
+// (angle pi) at (0, 0) (an integer point), (a, 0) and (0, b) (halfway along iso-lines when a and b
+// are odd halves) and (a, b) (inside a cell).
+testing::Surface pillowcase(int n, int m) {
+  TriangleMesh mesh;
+  const double a = 0.5 * n;
+  auto id = [&](int i, int j) { return VertexId(j * (n + 1) + i); };
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const bool border = i == 0 || j == 0 || i == n || j == m;
+      mesh.positions.emplace_back(float(0.5 * i), float(0.5 * j), border ? 0.f : 0.4f);
+    }
+  std::vector<VertexId> back((n + 1) * (m + 1));
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const bool border = i == 0 || j == 0 || i == n || j == m;
+      back[j * (n + 1) + i] = border ? id(i, j) : VertexId(mesh.positions.size());
+      if (!border) mesh.positions.emplace_back(float(0.5 * i), float(0.5 * j), -0.4f);
+    }
+  std::vector<Vec2d> uv;
+  auto add = [&](std::array<std::pair<int, int>, 3> corners, bool front) {
+    Triangle t;
+    for (int k = 0; k < 3; ++k) {
+      const auto [i, j] = corners[k];
+      t[k] = front ? id(i, j) : back[j * (n + 1) + i];
+      uv.push_back(front ? Vec2d(0.5 * i, 0.5 * j) : Vec2d(2 * a - 0.5 * i, 0.5 * j));
+    }
+    mesh.triangles.push_back(t);
+  };
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      add({{{i, j}, {i + 1, j}, {i + 1, j + 1}}}, true);
+      add({{{i, j}, {i + 1, j + 1}, {i, j + 1}}}, true);
+      add({{{i, j}, {i, j + 1}, {i + 1, j}}}, false);  // the other diagonal: no two corner
+      add({{{i + 1, j}, {i, j + 1}, {i + 1, j + 1}}}, false);  // cells share an edge
+    }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  return testing::makeSurface(std::move(mesh));
+}
+
+TEST(Quads, ConesOfIndexTwoOnPointsLinesAndCells) {
+  const testing::Surface s = pillowcase(5, 3);  // a = 2.5, b = 1.5
+  const QuadResult q = extractQuads(s.mesh, s.topology);
+  const QuadValidation v = checkOf(s, q);
+  EXPECT_EQ(q.cones, 4u);
+  EXPECT_EQ(q.conesOnGridVertices, 1u);
+  EXPECT_TRUE(v.isValid());
+  EXPECT_EQ(v.conesOnVertices, 1u);  // (0, 0): valence 4 - 2
+  EXPECT_EQ(v.conesWithWrongValence, 0u);
+  EXPECT_GT(q.stats.deadEnds, 0u);  // the iso-lines through (a, 0) and (0, b) end there
+  EXPECT_EQ(q.stats.untracedEdges + q.stats.unpairedEdges + q.stats.openFaces, 0u);
+  EXPECT_EQ(v.boundaryEdges, 0u);
+  ASSERT_EQ(v.components.size(), 1u);
+  EXPECT_EQ(v.components[0].eulerCharacteristic, 2);
+  EXPECT_LE(v.interiorNonQuads, 3u);
 }
 
 TEST(Quads, TorusSphereGenus2Closed) {

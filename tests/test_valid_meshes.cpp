@@ -97,7 +97,7 @@ TEST(ValidMeshes, ClosedComponentsWhoseEveryVertexIsAConeAreSolved) {
       {"tetrahedron", tetrahedron(Vec3d(0, 0, 0), 1.0)}, {"octahedron", octahedron()},
       {"40 tiny tetrahedra", many}, {"two tetrahedra sharing a vertex", shared}};
   for (const auto& [name, mesh] : meshes) {
-    for (ParamSolver solver : {ParamSolver::Hat, ParamSolver::VoxLoc}) {
+    for (ParamSolver solver : {ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc}) {
       const std::string what = std::string(name) + " " + paramSolverName(solver);
       const Solved s = solve(mesh, solver);
       expectSeamless(s, what);
@@ -123,6 +123,7 @@ TEST(ValidMeshes, ComponentsWithoutInteriorEdgesTakeTheirFirstEdge) {
       EXPECT_NEAR(field.at(f).dot(edge), 1.0, 1e-6) << "face " << f;
     }
     expectSeamless(solve(TriangleMesh(input), ParamSolver::Hat), "lone triangles hat");
+    expectSeamless(solve(TriangleMesh(input), ParamSolver::Vox), "lone triangles vox");
     expectSeamless(solve(TriangleMesh(input), ParamSolver::VoxLoc), "lone triangles voxloc");
   }
 }
@@ -135,7 +136,7 @@ TEST(ValidMeshes, ASpikeIsReportedAndTheMapAwayFromItStaysValid) {
   ASSERT_EQ(clean.spikes.size(), 1u);
   EXPECT_EQ(clean.spikes[0], 7u);
   EXPECT_LT(clean.report.diagonalWithoutSpikes, 4.0);  // the unit sphere's own extent
-  for (ParamSolver solver : {ParamSolver::Hat, ParamSolver::VoxLoc}) {
+  for (ParamSolver solver : {ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc}) {
     const Solved s = solve(sphere, solver, 30.0);
     expectSeamless(s, std::string("spiked sphere ") + paramSolverName(solver));
     const MapQuality map = measureMap(sphere, s.result.param.cornerUV, nullptr, 0.0);
@@ -507,11 +508,7 @@ TEST(ValidMeshes, ParamVerdictIsCheckVerdictForEverySolverAndFormat) {
   for (const auto& [name, mesh] : awkwardMeshes()) {
     for (ParamSolver solver : {ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc}) {
       const PipelineResult r = parameterize(TriangleMesh(mesh), smallRun(solver));
-      // vox alone leaves the basis functions it cannot make consistent (tiny islands sharing a
-      // voxel, a spike) to voxloc's refinement: its verdict must still be check's.
-      if (solver != ParamSolver::Vox) {
-        EXPECT_TRUE(r.isSeamless()) << name << " " << paramSolverName(solver) << ": residual " << r.seamQuality.maxResidual;
-      }
+      EXPECT_TRUE(r.isSeamless()) << name << " " << paramSolverName(solver) << ": residual " << r.seamQuality.maxResidual;
       EXPECT_EQ(r.mesh.numVertices(), r.cleanReport.outputVertices) << name;
       for (const Format& format : formats) {
         const std::string what = name + " " + paramSolverName(solver) + " " + format.name;

@@ -210,6 +210,39 @@ TEST(VoxelClip, FragmentIntegralsMatchTheTangentialGradientsPairByPair) {
   }
 }
 
+TEST(VoxelClip, AnElementsSumsEqualOneIntegralPerFragment) {
+  // integrateFragments sums an element's fragments (each with its own normal and field) and
+  // assembles the pairs once: the same as adding each fragment's integrals.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 50; ++trial) {
+    const VoxelCoord voxel{3, 1, 4};
+    const double normalWeight = trial % 3 ? 0.0 : unit(rng);
+    VoxelIntegrals each, once;
+    double normalEach[36] = {}, normalOnce[36] = {};
+    FragmentSums sums;
+    for (int f = 0; f < 1 + trial % 7; ++f) {
+      std::array<Vec3d, 3> g;
+      for (auto& p : g) p = Vec3d(3, 1, 4) + Vec3d(unit(rng), unit(rng), unit(rng));
+      const Vec3d n = (g[1] - g[0]).cross(g[2] - g[0]).normalized();
+      const Vec3d u = n.cross(Vec3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5)).normalized();
+      const ClipPolygon piece = clipTriangleToVoxel(g, voxel);
+      addFragmentIntegrals(piece, voxel, 0.3, n, u, 1.7, each, normalWeight, normalEach);
+      accumulateFragment(piece, voxel, 0.3, n, u, 1.7, sums);
+    }
+    finishElement(sums, once, normalWeight, normalOnce);
+    double scale = 1e-300;
+    for (double x : each.stiffness) scale = std::max(scale, std::abs(x));
+    ASSERT_GT(each.area, 0.0);
+    EXPECT_NEAR(once.area, each.area, 1e-13 * each.area);
+    for (int i = 0; i < 36; ++i) {
+      ASSERT_NEAR(once.stiffness[i], each.stiffness[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
+      ASSERT_NEAR(normalOnce[i], normalEach[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
+    }
+    for (int k = 0; k < 8; ++k) ASSERT_NEAR(std::abs(once.rhs[k] - each.rhs[k]), 0.0, 1e-12 * (1.0 + scale));
+  }
+}
+
 TEST(VoxelClip, FragmentIntegralsAreExactUnderSubdivision) {
   // A degree-4 exact rule gives the same integrals on a triangle and on its 16 sub-triangles.
   std::mt19937 rng(3);

@@ -2,12 +2,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include "core/mesh/clean.h"
+#include "core/quality/check.h"
 #include "core/system/errors.h"
-#include "core/field/field.h"
-#include "core/quality/metrics.h"
+#include "io/check_report.h"
 #include "io/field_io.h"
-#include "io/json.h"
 #include "io/mesh_io.h"
 #include "tools/cli.h"
 
@@ -28,53 +26,33 @@ int runCheck(Args& args) {
   ReadOptions readOptions;
   readOptions.readUV = true;
   TriangleMesh raw = readMesh(path, readOptions);
-  if (!raw.hasUV()) throw InputError(path + ": the mesh has no per-corner texture coordinates");
-  const std::uint32_t inputFaces = raw.numFaces();
-  CleanResult clean = cleanMeshOf(path, std::move(raw));
-  const TriangleMesh& mesh = clean.mesh;
-  CrossField field;
-  if (fieldPath) {
-    const std::vector<Vec3d> vectors = readFieldVectors(*fieldPath, inputFaces);
-    std::vector<Vec3d> perFace(mesh.numFaces());
-    for (FaceId f = 0; f < mesh.numFaces(); ++f) perFace[f] = vectors[clean.faceOrigin[f]];
-    field = projectToTangent(mesh, std::move(perFace));
+  CheckOptions options;
+  options.edgeLength = edgeLength;
+  options.tolerance = tolerance;
+  if (fieldPath) options.fieldPerInputFace = readFieldVectors(*fieldPath, raw.numFaces());
+  CheckResult r;
+  try {
+    r = checkParameterization(std::move(raw), options);
+  } catch (...) {
+    rethrowWithContext(path);
   }
-  const SeamQuality seams = measureSeamsFromUV(mesh, clean.topology, mesh.cornerUV);
-  const MapQuality map = measureMap(mesh, mesh.cornerUV, fieldPath ? &field : nullptr, edgeLength);
-  const bool seamless = seams.isSeamless(tolerance);
+  const SeamQuality& seams = r.seams;
+  const MapQuality& map = r.map;
 
   if (json) {
-    JsonWriter j;
-    j.beginObject();
-    j.key("mesh").value(path);
-    j.key("faces").value(static_cast<std::uint64_t>(mesh.numFaces()));
-    j.key("seamless").value(seamless).key("tolerance").value(tolerance);
-    j.key("seamEdges").value(seams.seamEdges).key("seamLength").value(seams.seamLength);
-    j.key("maxSeamResidual").value(seams.maxResidual);
-    j.key("maxIntegerDistance").value(seams.maxIntegerDistance);
-    j.key("flipped").value(map.flipped).key("flippedFraction").value(map.flippedFraction);
-    j.key("collapsed").value(map.collapsed);
-    j.key("edgeLength").value(map.edgeLength);
-    j.key("relativeGradientError");
-    if (fieldPath) {
-      j.value(map.relativeGradientError);
-    } else {
-      j.null();
-    }
-    j.endObject();
-    std::printf("%s\n", j.str().c_str());
+    std::printf("%s\n", checkReportJson(path, r).c_str());
   } else {
-    std::printf("%s: %u faces, %llu seam edges (length %.6g)\n", path.c_str(), mesh.numFaces(),
+    std::printf("%s: %u faces, %llu seam edges (length %.6g)\n", path.c_str(), r.faces,
                 static_cast<unsigned long long>(seams.seamEdges), seams.seamLength);
     std::printf("seam residual %.3g, integer distance %.3g (tolerance %.3g)\n", seams.maxResidual,
                 seams.maxIntegerDistance, tolerance);
     std::printf("flipped %llu (%.4f%%), collapsed %llu, h %.6g\n",
                 static_cast<unsigned long long>(map.flipped), 100.0 * map.flippedFraction,
                 static_cast<unsigned long long>(map.collapsed), map.edgeLength);
-    if (fieldPath) std::printf("relative gradient error %.6f\n", map.relativeGradientError);
-    std::printf("%s\n", seamless ? "seamless" : "NOT seamless");
+    if (r.hasField) std::printf("relative gradient error %.6f\n", map.relativeGradientError);
+    std::printf("%s\n", r.isSeamless ? "seamless" : "NOT seamless");
   }
-  return seamless ? 0 : kNotSeamless;
+  return r.isSeamless ? 0 : kNotSeamless;
 }
 
 }  // namespace

@@ -291,7 +291,7 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "  --import FILE     use the field in FILE (.crossfield `2 F` or plain) instead\n"
                  "  --curvature W     align with principal curvature, weight W > 0 (0: smoothest)\n"
                  "  --merge-cones F   merge cones at most F * H apart along edges, as param does\n"
-                 "                    (default 0.5; 0 shows every cone of the field)\n"
+                 "                    (default 1; 0 shows every cone of the field)\n"
                  "  --edge-length H   grid spacing for --merge-cones (as in param)\n"
                  "  --cells N         H = bounding-box diagonal / N (default N = 100)\n"
                  "  --cones OUT.obj   cones as OBJ points (red: positive index, blue: negative)\n"

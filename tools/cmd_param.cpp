@@ -172,17 +172,8 @@ int runParam(Args& args) {
   printSummary(c, r, meter);
   if (quads) printQuadSummary(*c.quadsPath, *quads);
   if (c.reportPath) {
-    ParamReportContext context;
-    context.input = c.input;
-    context.output = c.output;
-    context.solverAsked = c.solverName;
-    context.fieldSource = c.fieldSource;
-    context.gridResolution = c.options.solver.gridResolution;
-    context.rings = c.options.solver.refine.rings;
-    context.maxRounds = c.options.solver.refine.maxRounds;
-    context.stages = meter.stages();
-    context.totalSeconds = meter.totalSeconds();
-    context.peakBytes = meter.peakBytes();
+    const ParamReportContext context =
+        paramReportContext(c.options, meter, c.input, c.output, c.solverName, c.fieldSource);
     if (reportFile) {
       reportFile->write(paramReportJson(r, context));
     } else {
@@ -224,7 +215,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --cells N           H = bounding-box diagonal / N (default N = 100)\n"
                  "  --merge-cones F     move the index of cones at most F * H apart (along edges) onto\n"
                  "                      one of them: closer than the grid resolves, they would collapse\n"
-                 "                      the faces between them; default 0.5, 0 keeps every cone\n"
+                 "                      the faces between them; default 1, 0 keeps every cone\n"
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
                  "                      re-solved with stiffening; seams and translations kept)\n"

@@ -7,9 +7,11 @@ cd "$(dirname "$0")/.."
 
 # libopenblas0-pthread is not linked directly: it replaces Debian's reference BLAS/LAPACK behind
 # CHOLMOD's supernodal factorization (about 2x faster factorizations measured here).
+# pybind11-dev, python3-dev, python3-numpy: the Python module (tools/python); python3-pytest runs
+# its tests (tests/python) under ctest.
 packages=(cmake make g++ libopenvdb-dev libboost-iostreams-dev zlib1g-dev libtbb-dev
   libeigen3-dev libsuitesparse-dev libdraco-dev libgtest-dev libopenblas0-pthread
-  libopenmpi-dev openmpi-bin)
+  libopenmpi-dev openmpi-bin pybind11-dev python3-dev python3-numpy python3-pytest)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -225,7 +225,17 @@ void integrateFragments(const BasisInput& in, const VoxelFragmentIndex& byVoxel,
                         std::vector<std::array<double, 36>>& normalStiffness) {
   const std::uint32_t nv = static_cast<std::uint32_t>(in.voxelCoords.size());
   parallelFor(nv, 16, [&](const IndexRange& range) {
+    // A voxel's elements are numbered contiguously: their sums are kept while its fragments are
+    // added, and assembled once per element.
+    std::vector<FragmentSums> sums;
     for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
+      std::uint32_t first = kInvalidId, last = 0;
+      for (std::uint32_t k = byVoxel.start[v]; k < byVoxel.start[v + 1]; ++k) {
+        const std::uint32_t e = fragmentElement[byVoxel.fragments[k]];
+        first = std::min(first, e), last = std::max(last, e);
+      }
+      if (first == kInvalidId) continue;
+      sums.assign(last - first + 1, FragmentSums{});
       for (std::uint32_t k = byVoxel.start[v]; k < byVoxel.start[v + 1]; ++k) {
         const std::uint32_t i = byVoxel.fragments[k];
         const FaceId f = in.fragments[i].face;
@@ -234,9 +244,11 @@ void integrateFragments(const BasisInput& in, const VoxelFragmentIndex& byVoxel,
         if (n.squaredNorm() == 0.0) continue;  // zero-area face: nothing to integrate
         const ClipPolygon piece =
             clipTriangleToVoxel(faceGridCoords(in.mesh, in.grid, f), in.voxelCoords[v]);
-        const std::uint32_t e = fragmentElement[i];
-        addFragmentIntegrals(piece, in.voxelCoords[v], in.grid.voxelSize, n, u, edgeLength,
-                             records[e], 0.0, normalStiffness[e].data());
+        accumulateFragment(piece, in.voxelCoords[v], in.grid.voxelSize, n, u, edgeLength,
+                           sums[fragmentElement[i] - first]);
+      }
+      for (std::uint32_t e = first; e <= last; ++e) {
+        finishElement(sums[e - first], records[e], 0.0, normalStiffness[e].data());
       }
     }
   });

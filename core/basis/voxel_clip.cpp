@@ -213,19 +213,49 @@ void trilinearWeights(const Vec3d& t, double weights[8]) {
   }
 }
 
-void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
-                          const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc,
-                          double normalWeight, double* normalAcc) {
+namespace {
+
+// Index of (a, b), a <= b < 4, in the 10 packed pairs of FragmentSums::yz/xz/xy.
+constexpr int packed4(int a, int b) { return a * 4 - a * (a - 1) / 2 + (b - a); }
+
+// The 36 pairs (a, b) of B-splines as the three bilinear-weight pairs (one per axis, into
+// FragmentSums::yz, xz and xy) and the sign s_a s_b of each axis: a table built once.
+struct PairTable {
+  int yz[36], xz[36], xy[36];
+  double syz[36], sxz[36], sxy[36];
+  constexpr PairTable() : yz(), xz(), xy(), syz(), sxz(), sxy() {
+    int idx = 0;
+    for (int a = 0; a < 8; ++a) {
+      const int ia = a & 1, ja = a >> 1 & 1, la = a >> 2 & 1;
+      for (int b = a; b < 8; ++b, ++idx) {
+        const int ib = b & 1, jb = b >> 1 & 1, lb = b >> 2 & 1;
+        const int p = ja + 2 * la, q = jb + 2 * lb, r = ia + 2 * la, t = ib + 2 * lb;
+        const int x = ia + 2 * ja, y = ib + 2 * jb;
+        yz[idx] = p <= q ? packed4(p, q) : packed4(q, p);
+        xz[idx] = r <= t ? packed4(r, t) : packed4(t, r);
+        xy[idx] = x <= y ? packed4(x, y) : packed4(y, x);
+        syz[idx] = ia == ib ? 1.0 : -1.0;
+        sxz[idx] = ja == jb ? 1.0 : -1.0;
+        sxy[idx] = la == lb ? 1.0 : -1.0;
+      }
+    }
+  }
+};
+constexpr PairTable kPairs;
+
+}  // namespace
+
+void accumulateFragment(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
+                        const Vec3d& n, const Vec3d& u, double edgeLength, FragmentSums& sums) {
   if (fragment.size < 3) return;
   // B-spline k = (i, j, l) (bits 0, 1, 2 of k) has the 3D gradient
   //   g_k = (s_i Y_j Z_l, X_i s_j Z_l, X_i Y_j s_l),  X_0 = 1 - x, X_1 = x, s_0 = -1, s_1 = +1,
-  // so <g_a, g_b> = s s' (YZ)(YZ)' + s s' (XZ)(XZ)' + s s' (XY)(XY)': over the fragment only the
-  // integrals of the 10 distinct products of each pair of bilinear weights are needed (30 in
-  // all), and the 36 pairs are assembled once per fragment. The normal part (n . g_a)(n . g_b)
-  // has no such structure and is integrated pair by pair.
+  // so <g_a, g_b> needs only the integrals of the 10 distinct products of each axis pair's
+  // bilinear weights (30 in all), and the integral of g_k only those of the 12 weights. The
+  // normal part (n . g_a)(n . g_b) has no such structure and is integrated pair by pair.
+  double weights[12] = {};  // integrals of byz, bxz, bxy (this fragment: its field is its own)
+  // Local sums (no aliasing with the inputs: they stay in registers and cache lines of the stack).
   double yz[10] = {}, xz[10] = {}, xy[10] = {}, normal[36] = {};
-  Vec3d gradientSum[8];  // integrals of g_k (dotted with u and v at the end)
-  for (Vec3d& g : gradientSum) g = Vec3d::Zero();
   const Vec3d base(voxel[0], voxel[1], voxel[2]);
   const Vec3d p0 = fragment.point[0] - base;
   bool any = false;
@@ -234,7 +264,7 @@ void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, 
     const double area = 0.5 * (p1 - p0).cross(p2 - p0).norm();
     if (!(area > 0.0)) continue;
     any = true;
-    acc.area += area * voxelSize * voxelSize;
+    sums.area += area * voxelSize * voxelSize;
     for (const TrianglePoint& q : kRule) {
       const Vec3d t = q.a * p0 + q.b * p1 + q.c * p2;
       const double w = q.w * area;
@@ -246,19 +276,22 @@ void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, 
       int idx = 0;
       for (int a = 0; a < 4; ++a) {
         const double wyz = w * byz[a], wxz = w * bxz[a], wxy = w * bxy[a];
+        weights[a] += wyz;
+        weights[4 + a] += wxz;
+        weights[8 + a] += wxy;
         for (int b = a; b < 4; ++b, ++idx) {
           yz[idx] += wyz * byz[b];
           xz[idx] += wxz * bxz[b];
           xy[idx] += wxy * bxy[b];
         }
       }
-      double nk[8];
+      // n . g_k = s_i n_x byz[j + 2l] + s_j n_y bxz[i + 2l] + s_l n_z bxy[i + 2j].
+      double nyz[4], nxz[4], nxy[4], nk[8];
+      for (int a = 0; a < 4; ++a) nyz[a] = n[0] * byz[a], nxz[a] = n[1] * bxz[a], nxy[a] = n[2] * bxy[a];
       for (int k = 0; k < 8; ++k) {
         const int i = k & 1, j = k >> 1 & 1, l = k >> 2 & 1;
-        const double sx = i ? 1.0 : -1.0, sy = j ? 1.0 : -1.0, sz = l ? 1.0 : -1.0;
-        const Vec3d g(sx * byz[j + 2 * l], sy * bxz[i + 2 * l], sz * bxy[i + 2 * j]);
-        nk[k] = n.dot(g);
-        gradientSum[k] += w * g;
+        nk[k] = (i ? nyz[j + 2 * l] : -nyz[j + 2 * l]) + (j ? nxz[i + 2 * l] : -nxz[i + 2 * l]) +
+                (l ? nxy[i + 2 * j] : -nxy[i + 2 * j]);
       }
       idx = 0;
       for (int a = 0; a < 8; ++a) {
@@ -268,31 +301,40 @@ void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, 
     }
   }
   if (!any) return;
-  // Pair (a, b): the bilinear-weight pair of each axis and the sign s_a s_b of that axis.
-  auto packed4 = [](int a, int b) {
-    if (a > b) std::swap(a, b);
-    return a * 4 - a * (a - 1) / 2 + (b - a);
-  };
-  int idx = 0;
-  for (int a = 0; a < 8; ++a) {
-    const int ia = a & 1, ja = a >> 1 & 1, la = a >> 2 & 1;
-    for (int b = a; b < 8; ++b, ++idx) {
-      const int ib = b & 1, jb = b >> 1 & 1, lb = b >> 2 & 1;
-      const double full = (ia == ib ? 1.0 : -1.0) * yz[packed4(ja + 2 * la, jb + 2 * lb)] +
-                          (ja == jb ? 1.0 : -1.0) * xz[packed4(ia + 2 * la, ib + 2 * lb)] +
-                          (la == lb ? 1.0 : -1.0) * xy[packed4(ia + 2 * ja, ib + 2 * jb)];
-      // Tangential gradients: <g_a, g_b> - (n . g_a)(n . g_b).
-      acc.stiffness[idx] += full + (normalWeight - 1.0) * normal[idx];
-      if (normalAcc) normalAcc[idx] += normal[idx];
-    }
-  }
+  sums.any = true;
+  for (int i = 0; i < 10; ++i) sums.yz[i] += yz[i], sums.xz[i] += xz[i], sums.xy[i] += xy[i];
+  for (int i = 0; i < 36; ++i) sums.normal[i] += normal[i];
   // <grad_M g_k, u> = <g_k, u - (n . u) n>, the same with v = n x u; the integrals are linear in g.
   const Vec3d v = n.cross(u);
   const Vec3d ut = u - n.dot(u) * n, vt = v - n.dot(v) * n;
   const double rhsScale = voxelSize / edgeLength;
   for (int k = 0; k < 8; ++k) {
-    acc.rhs[k] += rhsScale * std::complex<double>(gradientSum[k].dot(ut), gradientSum[k].dot(vt));
+    const int i = k & 1, j = k >> 1 & 1, l = k >> 2 & 1;
+    const Vec3d g((i ? 1.0 : -1.0) * weights[j + 2 * l], (j ? 1.0 : -1.0) * weights[4 + i + 2 * l],
+                  (l ? 1.0 : -1.0) * weights[8 + i + 2 * j]);
+    sums.rhs[k] += rhsScale * std::complex<double>(g.dot(ut), g.dot(vt));
   }
+}
+
+void finishElement(const FragmentSums& sums, VoxelIntegrals& acc, double normalWeight, double* normalAcc) {
+  if (!sums.any) return;
+  acc.area += sums.area;
+  for (int k = 0; k < 8; ++k) acc.rhs[k] += sums.rhs[k];
+  for (int idx = 0; idx < 36; ++idx) {
+    const double full = kPairs.syz[idx] * sums.yz[kPairs.yz[idx]] + kPairs.sxz[idx] * sums.xz[kPairs.xz[idx]] +
+                        kPairs.sxy[idx] * sums.xy[kPairs.xy[idx]];
+    // Tangential gradients: <g_a, g_b> - (n . g_a)(n . g_b).
+    acc.stiffness[idx] += full + (normalWeight - 1.0) * sums.normal[idx];
+    if (normalAcc) normalAcc[idx] += sums.normal[idx];
+  }
+}
+
+void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
+                          const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc,
+                          double normalWeight, double* normalAcc) {
+  FragmentSums sums;
+  accumulateFragment(fragment, voxel, voxelSize, n, u, edgeLength, sums);
+  finishElement(sums, acc, normalWeight, normalAcc);
 }
 
 }  // namespace seamvox

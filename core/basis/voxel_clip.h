@@ -95,4 +95,20 @@ void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, 
                           const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc,
                           double normalWeight = 0.0, double* normalAcc = nullptr);
 
+/// addFragmentIntegrals in two steps, for the many fragments of one element: accumulateFragment
+/// adds a fragment's per-axis weight products, normal-derivative pairs, area and right-hand side
+/// to sums; finishElement assembles the 36 pairs once and adds them to acc. The same figures as
+/// one addFragmentIntegrals per fragment, up to rounding.
+struct FragmentSums {
+  double yz[10] = {}, xz[10] = {}, xy[10] = {};  ///< per-axis bilinear weight products
+  double normal[36] = {};                        ///< (n . g_a)(n . g_b), packedIndex order
+  std::array<std::complex<double>, 8> rhs{};
+  double area = 0.0;
+  bool any = false;  ///< a fragment of positive area was added
+};
+void accumulateFragment(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
+                        const Vec3d& n, const Vec3d& u, double edgeLength, FragmentSums& sums);
+void finishElement(const FragmentSums& sums, VoxelIntegrals& acc, double normalWeight = 0.0,
+                   double* normalAcc = nullptr);
+
 }  // namespace seamvox

@@ -219,6 +219,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   out.determinedBasis = static_cast<std::uint32_t>(reduction.determinedBasis.size());
   out.inconsistentBasis = static_cast<std::uint32_t>(reduction.inconsistentBasis.size());
   out.markedFaces = basis.markedFaces(reduction);
+  out.inconsistentFaces = basis.supportFaces(reduction.inconsistentBasis);
   out.invisibleTranslations = reduction.invisibleTranslations;
 
   RoundOptions roundOptions;

@@ -66,6 +66,8 @@ VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topol
 struct VoxelParamResult {
   ParamResult param;
   std::vector<FaceId> markedFaces;
+  /// The triangles of inconsistent basis functions alone: where the voxel map is not seamless.
+  std::vector<FaceId> inconsistentFaces;
   VoxelBasisStats basisStats;
   std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
   /// Normal-derivative regularization the solve succeeded with (VoxelBasisOptions), and how many

@@ -68,6 +68,10 @@ bool inSector(Point a, Point b, Point v) {
 }
 
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+// A port whose iso-line ends at a cone of index 2 halfway to the next integer point: past the
+// cone the line comes back onto itself (the point one step ahead is the start turned by pi about
+// the cone), so the port has no edge, and the cell around the cone is a triangle.
+constexpr std::uint32_t kDeadEnd = 0xFFFFFFFEu;
 constexpr int kMaxTraceSteps = 1 << 16;
 constexpr std::uint32_t kMaxFaceDegree = 1024;
 
@@ -538,7 +542,11 @@ class Extractor {
       } else if (exitVertex >= 0) {
         const CornerId c = 3 * f + exitVertex;
         const VertexId w = topo_.vertex(c);
-        if (map_.coneIndex(w) != 0) return kNone;
+        if (map_.coneIndex(w) == 2) {
+          const Point half = target - map_.at(c);
+          if (std::abs(half.x) + std::abs(half.y) == G_ / 2) return kDeadEnd;
+        }
+        if (map_.coneIndex(w) != 0) return kNone;  // through another cone: not followed
         if (!passVertex(c, f, d, target)) {
           if (!topo_.isBoundaryVertex(w)) return kNone;
           const auto it = index_.find(vertexKey(w));
@@ -581,7 +589,8 @@ class Extractor {
     });
     stats.untracedEdges = untraced;
     for (std::uint32_t p = 0; p < ports_.size(); ++p) {
-      if (ports_[p].dir >= 4 || portTarget_[p] == kNone) continue;
+      if (ports_[p].dir < 4 && portTarget_[p] == kDeadEnd) ++stats.deadEnds;
+      if (ports_[p].dir >= 4 || portTarget_[p] >= kDeadEnd) continue;
       ++stats.tracedEdges;
       const std::uint32_t back = portTarget_[p];
       if (ports_[back].dir >= 4 || portTarget_[back] != p) ++stats.unpairedEdges;
@@ -655,12 +664,13 @@ class Extractor {
     return g.where == Where::Edge ? cornerFace(g.id) : g.id;
   }
 
-  bool leaves(std::uint32_t p) const { return ports_[p].dir != kIn && portTarget_[p] != kNone; }
+  bool leaves(std::uint32_t p) const { return ports_[p].dir != kIn && portTarget_[p] < kDeadEnd; }
 
   void buildFaces(QuadResult& out) {
     std::vector<std::uint8_t> visited(ports_.size(), 0);
     std::vector<std::uint32_t> newIndex(points_.size(), kNone), face, facePorts;
-    std::vector<std::uint8_t> digonsAt(points_.size(), 0);
+    std::vector<std::uint8_t> lostAt(points_.size(), 0);
+    for (std::uint32_t p = 0; p < ports_.size(); ++p) lostAt[portVertex_[p]] += portTarget_[p] == kDeadEnd;
     PolygonMesh& pm = out.mesh;
     for (std::uint32_t h = 0; h < ports_.size(); ++h) {
       if (visited[h] || !leaves(h)) continue;
@@ -675,7 +685,10 @@ class Extractor {
         const std::uint32_t arrive = portTarget_[cur], v = portVertex_[arrive];
         const std::uint32_t first = portStart_[v], count = portStart_[v + 1] - first;
         if (ports_[first].dir == kOut && arrive == first) break;  // arrived from outside
-        const std::uint32_t next = first + (arrive - first + count - 1) % count;
+        std::uint32_t next = arrive;  // the port before, skipping iso-lines that end at cones
+        do {
+          next = first + (next - first + count - 1) % count;
+        } while (portTarget_[next] == kDeadEnd && next != arrive);
         if (next == h) {
           closed = true;
           break;
@@ -692,8 +705,8 @@ class Extractor {
         if (face.size() == 2 && ports_[h].dir < 4 &&
             facePorts.size() == 2 && ports_[facePorts[1]].dir < 4) {
           // Between two iso-lines: a cone of index 2 in a cell. Its two corners lose an edge.
-          ++digonsAt[face[0]];
-          ++digonsAt[face[1]];
+          ++lostAt[face[0]];
+          ++lostAt[face[1]];
         }
         continue;
       }
@@ -711,9 +724,9 @@ class Extractor {
       }
       pm.faceStart.push_back(static_cast<std::uint32_t>(pm.faceVertices.size()));
     }
-    out.vertexDigons.assign(pm.numVertices(), 0);
+    out.vertexLostEdges.assign(pm.numVertices(), 0);
     for (std::uint32_t v = 0; v < points_.size(); ++v) {
-      if (newIndex[v] != kNone) out.vertexDigons[newIndex[v]] = digonsAt[v];
+      if (newIndex[v] != kNone) out.vertexLostEdges[newIndex[v]] = lostAt[v];
     }
     // Components of the map: per vertex, and those that got no face (islands).
     const ComponentsResult comps = computeComponents(topo_);

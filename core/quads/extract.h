@@ -42,6 +42,7 @@ struct QuadStats {
   std::uint64_t tracedEdges = 0;       ///< half-edges traced along iso-lines
   std::uint64_t boundaryEdges = 0;     ///< half-edges along the boundary
   std::uint64_t untracedEdges = 0;     ///< iso-line directions whose trace failed (flips, cones)
+  std::uint64_t deadEnds = 0;          ///< iso-line directions that end at a cone of index 2
   std::uint64_t unpairedEdges = 0;     ///< traced half-edges whose reverse trace went elsewhere
   std::uint64_t openFaces = 0;         ///< face walks that met a missing edge (no face made)
   /// Faces of two edges (an iso-line and a boundary piece or another iso-line between the same two
@@ -62,9 +63,10 @@ struct QuadResult {
   PolygonMesh mesh;
   std::vector<std::uint32_t> vertexComponent;  ///< #V: component of the map (computeComponents)
   std::vector<std::int8_t> vertexConeIndex;    ///< #V: index of the cone there (quarter turns), or 0
-  /// #V: two-edge faces left out at the vertex (QuadStats::digons) between two iso-lines, around a
-  /// cone of index 2 in a cell: each takes one edge from each of its two corners.
-  std::vector<std::uint8_t> vertexDigons;
+  /// #V: edges the vertex loses to cones of index 2: two-edge faces left out between two iso-lines
+  /// (QuadStats::digons; one from each corner) and iso-lines that end at a cone halfway to the
+  /// next integer point (QuadStats::deadEnds).
+  std::vector<std::uint8_t> vertexLostEdges;
   std::uint32_t cones = 0;                     ///< cones of the map
   std::uint32_t conesOnGridVertices = 0;       ///< of them, those at an integer point
   QuadStats stats;

@@ -71,7 +71,7 @@ QuadValidation validateQuads(const QuadResult& quads, const ComponentsResult& ma
   for (std::uint32_t v = 0; v < pm.numVertices(); ++v) {
     if (onBoundary[v]) continue;
     const int cone = quads.vertexConeIndex[v];
-    const bool wrong = std::int64_t(valence[v]) != 4 - cone - quads.vertexDigons[v];
+    const bool wrong = std::int64_t(valence[v]) != 4 - cone - quads.vertexLostEdges[v];
     if (cone != 0) {
       ++out.conesOnVertices;
       out.conesWithWrongValence += wrong;

@@ -31,7 +31,7 @@ struct QuadValidation {
   std::uint64_t nonManifoldEdges = 0;
   std::uint64_t nonManifoldVertices = 0;  ///< vertices with boundary edges in != out or > 1
   std::uint64_t degenerateFaces = 0;      ///< faces that visit a vertex twice
-  /// Interior vertices off cones with valence != 4 (4 - 1 per cone digon, QuadResult::vertexDigons)
+  /// Interior vertices off cones with valence != 4 (less QuadResult::vertexLostEdges)
   std::uint64_t irregularVertices = 0;
   std::uint64_t conesOnVertices = 0;      ///< interior vertices on a cone
   std::uint64_t conesWithWrongValence = 0;  ///< of them, valence != 4 - index

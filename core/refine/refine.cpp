@@ -93,7 +93,7 @@ std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topo
     }
     flag[f] = kMarked;
   }
-  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+  if (options.seedFromMap) parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       if (flag[f] != kOutside) continue;
       flag[f] = classifyFace(mesh, cornerUV, f, options.collapseThreshold, options.edgeLength);

@@ -40,6 +40,9 @@ struct RefineOptions {
   /// A face whose signed parameter-space area is below this fraction of its expected area
   /// A_T / h^2 is added to the region (collapsed; negative area = flipped is always added).
   double collapseThreshold = 0.1;
+  /// Collapsed and flipped faces of the map seed the region too (voxloc). false: markedFaces
+  /// alone (vox repairs only where its basis could not keep the seams).
+  bool seedFromMap = true;
   /// Rings of neighbouring faces (sharing a vertex) added around the region, and around the
   /// faces that grow it in later rounds (at least one ring there).
   std::uint32_t rings = 1;

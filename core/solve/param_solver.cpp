@@ -90,10 +90,15 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   out.determinedBasis = vox.determinedBasis;
   out.inconsistentBasis = vox.inconsistentBasis;
   out.markedFaces = vox.markedFaces.size();
-  if (choice.solver == ParamSolver::VoxLoc) {
+  // voxloc refines near cones and wherever the map collapses or flips; vox only where its
+  // reduction left basis functions inconsistent, the one place the voxel map is not seamless.
+  const bool voxLoc = choice.solver == ParamSolver::VoxLoc;
+  if (voxLoc || !vox.inconsistentFaces.empty()) {
     RefineOptions refineOptions = solverOptions.refine;
     refineOptions.edgeLength = options.edgeLength;
-    refineOptions.markedFaces = std::move(vox.markedFaces);
+    refineOptions.markedFaces = std::move(voxLoc ? vox.markedFaces : vox.inconsistentFaces);
+    refineOptions.seedFromMap = voxLoc;
+    if (!voxLoc) refineOptions.maxRounds = 1;
     if (!refineOptions.progress) refineOptions.progress = options.progress;
     const RefineResult refinement = refineNearCones(mesh, topology, field, cut, out.param.cornerUV,
                                                     out.param.translations, refineOptions);

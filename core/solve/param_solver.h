@@ -63,13 +63,13 @@ struct SolverOptions {
 };
 
 struct SolverResult {
-  ParamResult param;  ///< the final map (refined for voxloc)
+  ParamResult param;  ///< the final map (refined for voxloc, and for vox where it was inconsistent)
   ParamSolver solver = ParamSolver::Hat;  ///< the solver that made the map (never Auto)
   std::string solverReason;              ///< why that one (chooseParamSolver, or the fallback)
   VoxelBasisStats basisStats;  ///< vox, voxloc
   std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
   std::uint64_t markedFaces = 0;  ///< faces of marked voxel basis functions
-  bool refined = false;           ///< voxloc ran the local refinement
+  bool refined = false;  ///< the local refinement ran (voxloc; vox on inconsistent basis functions)
   RefineStats refine;
   /// vox/voxloc: regularization the voxel solve succeeded with and failed factorizations before.
   double regularization = 0.0;

@@ -1,0 +1,152 @@
+"""seamvox.parameterize, check, cross_field, read_mesh and write_mesh on meshes generated with numpy:
+the map is seamless with integer translations, obeys Poincare-Hopf, and is the command's map."""
+import json
+
+import numpy as np
+import pytest
+
+import seamvox
+from conftest import bumpy_patch, euler_characteristic, sphere, torus
+
+MESHES = {"torus": torus, "sphere": sphere, "patch": bumpy_patch}
+
+
+def flatten(d, prefix=""):
+    """Keys of a nested report as dotted paths (list items by position)."""
+    out = {}
+    items = d.items() if isinstance(d, dict) else enumerate(d)
+    for k, v in items:
+        key = f"{prefix}{k}"
+        if isinstance(v, (dict, list)) and v:
+            out.update(flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+@pytest.mark.parametrize("name", MESHES)
+def test_round_trip_from_arrays_is_seamless(name):
+    V, F = MESHES[name]()
+    r = seamvox.parameterize(V, F)
+    # A clean input is its own cleaned mesh: same faces, positions at float32 precision.
+    np.testing.assert_array_equal(r.F, F)
+    np.testing.assert_allclose(r.V, V.astype(np.float32), rtol=0, atol=0)
+    assert r.uv.shape == (len(F), 3, 2) and r.uv.dtype == np.float64
+    assert r.quality["seamless"] and r.quality["flipped"] == 0
+    assert r.quality["maxSeamResidual"] <= 1e-6 and r.quality["maxIntegerDistance"] <= 1e-6
+    # The check finds the seams from the uv alone: seamless, integer translations, no flips.
+    verdict = seamvox.check(r.V, r.F, r.uv)
+    assert verdict["seamless"] and verdict["seamEdges"] > 0
+    assert verdict["maxSeamResidual"] <= 1e-6 and verdict["maxIntegerDistance"] <= 1e-6
+    assert verdict["flipped"] == 0 and verdict["faces"] == len(F)
+    # Poincare-Hopf on closed meshes: cone indices (quarter turns) sum to 4 chi.
+    chi = euler_characteristic(V, F)
+    assert r.cones.shape[1] == 2 and np.all(r.cones[:, 1] != 0)
+    assert np.all((r.cones[:, 0] >= 0) & (r.cones[:, 0] < len(r.V)))
+    if name != "patch":
+        assert r.cones[:, 1].sum() == 4 * chi
+    # The report says the same as the result.
+    assert r.report["faces"] == len(F) and r.report["cones"] == len(r.cones)
+    assert r.report["seams"] == r.seams and r.report["quality"] == r.quality
+    assert r.report["input"] == "<arrays>"
+
+
+def test_a_moved_map_is_not_seamless():
+    V, F = torus()
+    r = seamvox.parameterize(V, F)
+    uv = r.uv.copy()
+    uv[0, 0] += 0.25  # one corner off: its edges no longer match across their seams or neighbours
+    verdict = seamvox.check(r.V, r.F, uv)
+    assert not verdict["seamless"] and verdict["maxSeamResidual"] > 0.1
+
+
+def test_same_map_as_the_command(tmp_path, seamvox_command):
+    V, F = torus(30, 14)
+    mesh, out, report = tmp_path / "in.ply", tmp_path / "out.ply", tmp_path / "report.json"
+    seamvox.write_mesh(str(mesh), V, F)
+    seamvox_command("param", str(mesh), "-o", str(out), "--report", str(report), "--quiet")
+    V2, F2, uv2 = seamvox.read_mesh(str(out), uv=True)
+    r = seamvox.parameterize(*seamvox.read_mesh(str(mesh)))
+    np.testing.assert_array_equal(r.F, F2)
+    np.testing.assert_array_equal(r.V, V2)
+    np.testing.assert_allclose(r.uv, uv2, rtol=0, atol=1e-9)
+    command = json.loads(report.read_text())
+    for key in ("cones", "seams", "faces", "vertices", "conesBeforeMerge", "conePasses", "solverUsed",
+                "edgeLength", "wedges", "quality"):
+        assert r.report[key] == command[key], key
+    # Same keys (the command's stages add read and write; the file names differ).
+    mine, theirs = flatten(r.report), flatten(command)
+    assert {k for k in theirs if not k.startswith(("stages.", "seconds."))} <= set(mine)
+
+
+def test_cross_field_is_the_field_commands(tmp_path, seamvox_command):
+    V, F = sphere(3)
+    mesh, field, cones = tmp_path / "in.off", tmp_path / "f.field", tmp_path / "cones.obj"
+    seamvox.write_mesh(str(mesh), V, F)
+    seamvox_command("field", str(mesh), "-o", str(field), "--cones", str(cones), "--quiet")
+    fr = seamvox.cross_field(V, F)
+    rows = [w for w in (line.split() for line in field.read_text().splitlines() if not line.startswith("#"))
+            if len(w) == 3]
+    np.testing.assert_allclose(fr.field, np.array(rows, float), rtol=0, atol=1e-6)
+    listed = [line.split() for line in cones.read_text().splitlines() if line.startswith("# cone vertex")]
+    np.testing.assert_array_equal(fr.cones, [[int(w[3]), int(w[5])] for w in listed])
+    assert fr.cones[:, 1].sum() == 4 * euler_characteristic(V, F)
+    assert np.allclose(np.linalg.norm(fr.field, axis=1), 1.0, atol=1e-6)
+    # Tangent: each direction lies in its face's plane.
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    assert np.abs(np.einsum("ij,ij->i", n, fr.field)).max() < 1e-5
+
+
+def test_a_given_field_drives_the_map():
+    V, F = torus()
+    fr = seamvox.cross_field(V, F)
+    r = seamvox.parameterize(V, F, field=fr.field)
+    assert r.report["field"] == "array" and r.report["fieldMethod"] == "file"
+    assert r.quality["seamless"]
+    np.testing.assert_allclose(r.uv, seamvox.parameterize(V, F).uv, rtol=0, atol=1e-6)
+    verdict = seamvox.check(r.V, r.F, r.uv, field=fr.field, edge_length=r.report["edgeLength"])
+    assert verdict["relativeGradientError"] == pytest.approx(r.quality["relativeGradientError"], abs=1e-6)
+
+
+@pytest.mark.parametrize("solver", ["hat", "vox", "voxloc"])
+def test_every_solver_is_seamless(solver):
+    V, F = sphere(3)
+    r = seamvox.parameterize(V, F, solver=solver, grid=32, cells=20, threads=1)
+    assert r.report["solverUsed"] == solver and r.report["solver"] == solver
+    assert r.quality["seamless"] and seamvox.check(r.V, r.F, r.uv)["seamless"]
+
+
+def test_grid_spacing_follows_cells_and_edge_length():
+    V, F = sphere(3)
+    diagonal = np.linalg.norm(V.max(0) - V.min(0))
+    assert seamvox.parameterize(V, F, cells=10).report["edgeLength"] == pytest.approx(diagonal / 10, rel=1e-6)
+    assert seamvox.parameterize(V, F, edge_length=0.5).report["edgeLength"] == 0.5
+
+
+@pytest.mark.parametrize("suffix", ["ply", "obj", "drc"])
+def test_write_and_read_keep_the_mesh_and_map(tmp_path, suffix):
+    V, F = sphere(2)
+    r = seamvox.parameterize(V, F)
+    path = str(tmp_path / f"m.{suffix}")
+    seamvox.write_mesh(path, r.V, r.F, r.uv)
+    V2, F2, uv2 = seamvox.read_mesh(path, uv=True)
+    assert F2.shape == r.F.shape and uv2.shape == r.uv.shape
+    if suffix != "drc":  # Draco orders vertices and faces its own way
+        np.testing.assert_array_equal(F2, r.F)
+        np.testing.assert_array_equal(V2, r.V)
+        np.testing.assert_allclose(uv2, r.uv, rtol=0, atol=1e-12)
+    # Draco keeps UVs on a 2^-14 lattice, so integer translations and the seams stay exact.
+    assert seamvox.check(V2, F2, uv2)["seamless"]
+    V3, F3 = seamvox.read_mesh(path)
+    np.testing.assert_array_equal(F3, F2)
+    assert seamvox.read_mesh(str(tmp_path / f"m.{suffix}"), uv=True)[2] is not None
+    seamvox.write_mesh(str(tmp_path / "plain.ply"), V, F)
+    assert seamvox.read_mesh(str(tmp_path / "plain.ply"), uv=True)[2] is None
+
+
+def test_version_is_the_projects():
+    import pathlib
+    import re
+    cmake = (pathlib.Path(__file__).resolve().parents[2] / "CMakeLists.txt").read_text()
+    assert seamvox.__version__ == re.search(r"project\(seamvox VERSION ([0-9.]+)", cmake).group(1)
