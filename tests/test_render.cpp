@@ -362,6 +362,24 @@ TEST(Render, HiddenSeamsAreNotDrawn) {
   for (double y = 0.25; y < 4.0; y += 0.5) EXPECT_FALSE(isSeamColored(pixelAt(r, Vec3d(2.0, y, 0))));
 }
 
+TEST(Render, LinesAppearWhereDrawnAndHideUnderNearerSurfaces) {
+  // A seamless grid at z = 0 seen from above, a line across it at y = 1.5 (drawn) and one under
+  // it at z = -1 (hidden, deeper than the line tolerance).
+  TriangleMesh mesh = gridMesh(4, 4);
+  setPlanarUV(mesh);
+  RenderOptions options = topView(200, 200);
+  options.lineColor = {0, 255, 0};
+  options.lineWidth = 2.0;
+  options.lines.push_back({Vec3d(0.0, 1.5, 0.0), Vec3d(4.0, 1.5, 0.0)});
+  options.lines.push_back({Vec3d(0.0, 2.5, -1.0), Vec3d(4.0, 2.5, -1.0)});
+  const RenderResult r = renderCheckerboard(mesh, topologyOf(mesh), options);
+  for (double x = 0.25; x < 4.0; x += 0.5) {
+    EXPECT_TRUE(isSeamColored(pixelAt(r, Vec3d(x, 1.5, 0)))) << "no line at x " << x;
+    EXPECT_FALSE(isSeamColored(pixelAt(r, Vec3d(x, 2.5, 0)))) << "hidden line drawn at x " << x;
+    EXPECT_FALSE(isSeamColored(pixelAt(r, Vec3d(x, 0.75, 0)))) << "line colour away from lines";
+  }
+}
+
 TEST(Render, ConesAreSingularAngleSumsColouredBySign) {
   for (const int n : {3, 4, 5, 6}) {
     const TriangleMesh mesh = quarterFan(n);

@@ -10,6 +10,7 @@
 #include "io/output_set.h"
 #include "io/param_report.h"
 #include "io/png_io.h"
+#include "io/polygon_io.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
@@ -18,7 +19,7 @@ namespace {
 struct ParamCommand {
   std::string input, output;
   std::string solverName, fieldSource;
-  std::optional<std::string> reportPath, renderPath;
+  std::optional<std::string> reportPath, renderPath, quadsPath;
   PipelineOptions options;
 };
 
@@ -51,13 +52,18 @@ ParamCommand parseParamArgs(Args& args) {
   o.dropUnsolved = args.flag("drop-unsolved");
   c.reportPath = args.value("report");
   c.renderPath = args.value("render");
+  c.quadsPath = args.value("quads");
   o.progress = makeProgress(args.flag("quiet"));
   parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
   args.finish(1);
   if (c.renderPath) requirePngPath("--render", *c.renderPath);
+  if (c.quadsPath && formatFromPath(*c.quadsPath) != MeshFormat::Obj && formatFromPath(*c.quadsPath) != MeshFormat::Ply) {
+    throw UsageError("--quads: the quad mesh is written as .obj or .ply: " + *c.quadsPath);
+  }
   const bool fieldFile = c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy";
   checkOutputPaths({{"MESH", c.input}, {"--field", fieldFile ? c.fieldSource : ""}},
-                   {{"-o", c.output}, {"--report", c.reportPath.value_or("")}, {"--render", c.renderPath.value_or("")}});
+                   {{"-o", c.output}, {"--report", c.reportPath.value_or("")}, {"--render", c.renderPath.value_or("")},
+                    {"--quads", c.quadsPath.value_or("")}});
   return c;
 }
 
@@ -128,6 +134,7 @@ int runParam(Args& args) {
   AtomicFile& meshFile = outputs.add(c.output);
   AtomicFile* reportFile = c.reportPath && *c.reportPath != "-" ? &outputs.add(*c.reportPath) : nullptr;
   AtomicFile* renderFile = c.renderPath ? &outputs.add(*c.renderPath) : nullptr;
+  AtomicFile* quadsFile = c.quadsPath ? &outputs.add(*c.quadsPath) : nullptr;
   StageMeter meter;
   c.options.meter = &meter;
   TriangleMesh raw = readMesh(c.input);
@@ -151,12 +158,20 @@ int runParam(Args& args) {
     writePng(*renderFile, renderCheckerboard(r.mesh, r.topology, renderOptions).image);
     meter.finish("render");
   }
+  std::optional<QuadRun> quads;
+  if (quadsFile) {
+    quads = extractCheckedQuads(c.input, r.mesh, r.topology, 1, c.options.progress);
+    writePolygonMesh(*quadsFile, quads->quads.mesh);
+    quads->quads.mesh = PolygonMesh();
+    meter.finish("quads");
+  }
   // The writer takes the mesh and its map (r.size keeps their figures): the corner table goes
   // first, and a Draco write frees the mesh as its own copy takes it.
   r.topology = Topology();
   writeMesh(meshFile, std::move(r.mesh));
   meter.finish("write");
   printSummary(c, r, meter);
+  if (quads) printQuadSummary(*c.quadsPath, *quads);
   if (c.reportPath) {
     const ParamReportContext context =
         paramReportContext(c.options, meter, c.input, c.output, c.solverName, c.fieldSource);
@@ -178,6 +193,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--no-untangle] [--weld] [--report R.json]\n"
                  "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
+                 "                     [--quads Q.obj|.ply]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
@@ -213,6 +229,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      the output instead of writing them unmapped at (u, v) = 0\n"
                  "  --render OUT.png    also render the result (checkerboard, seams, cones; 1024x1024,\n"
                  "                      default view of seamvox render)\n"
+                 "  --quads Q.obj|.ply  also write the map's quad mesh (seamvox quads) and print its\n"
+                 "                      validation\n"
                  "  --quiet             no progress on stderr\n"
                  SEAMVOX_MEMORY_HELP,
                  {"greedy", "no-untangle", "weld", "drop-unsolved"},

@@ -10,6 +10,7 @@
 #include "core/synth/render.h"
 #include "io/mesh_io.h"
 #include "io/png_io.h"
+#include "io/polygon_io.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
@@ -57,6 +58,7 @@ int runRender(Args& args) {
   options.supersample = static_cast<std::uint32_t>(supersample);
   options.drawSeams = args.flag("seams");
   options.drawCones = args.flag("cones");
+  const auto quadsPath = args.value("quads");
   CleanOptions cleanOptions;
   cleanOptions.weldVertices = args.flag("weld");
   const bool quiet = args.flag("quiet");
@@ -64,7 +66,10 @@ int runRender(Args& args) {
   parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
   args.finish(1);
   requirePngPath("-o", *output);
-  checkOutputPaths({{"MESH_WITH_UV", path}}, {{"-o", *output}});
+  checkOutputPaths({{"MESH_WITH_UV", path}, {"--quads", quadsPath.value_or("")}}, {{"-o", *output}});
+  if (quadsPath && formatFromPath(*quadsPath) != MeshFormat::Obj) {
+    throw UsageError("--quads reads an OBJ polygon mesh (seamvox quads MAP -o Q.obj): " + *quadsPath);
+  }
 
   const auto start = std::chrono::steady_clock::now();
   ReadOptions readOptions;
@@ -75,6 +80,16 @@ int runRender(Args& args) {
   }
   cleanOptions.progress = progress;
   const CleanResult cleaned = cleanMeshOf(path, std::move(mesh), cleanOptions);
+  if (quadsPath) {  // the quad mesh's edges over a plain surface
+    const PolygonMesh quads = readPolygonObj(*quadsPath);
+    for (std::uint32_t f = 0; f < quads.numFaces(); ++f) {
+      for (std::uint32_t i = quads.faceStart[f]; i < quads.faceStart[f + 1]; ++i) {
+        const std::uint32_t j = i + 1 < quads.faceStart[f + 1] ? i + 1 : quads.faceStart[f];
+        options.lines.push_back({quads.positions[quads.faceVertices[i]], quads.positions[quads.faceVertices[j]]});
+      }
+    }
+    options.dark = options.light;
+  }
   const double secondsRead =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   options.progress = progress;
@@ -87,6 +102,7 @@ int runRender(Args& args) {
   std::printf("wrote %s: %ux%u, %u faces, %.1f%% of the picture covered",
               output->c_str(), result.image.width, result.image.height, cleaned.mesh.numFaces(),
               100.0 * double(result.coveredPixels) / (double(result.image.width) * result.image.height));
+  if (quadsPath) std::printf(", %zu quad-mesh edges drawn", options.lines.size() / 2);
   if (options.drawSeams) std::printf(", %llu seam edges", static_cast<unsigned long long>(result.seamEdges));
   if (options.drawCones) {
     std::size_t positive = 0;
@@ -108,6 +124,7 @@ int runRender(Args& args) {
 SEAMVOX_COMMAND({"render", "checkerboard picture (PNG) of a mesh's texture coordinates",
                  "usage: seamvox render MESH_WITH_UV -o OUT.png [--size WxH] [--view AZ,EL]\n"
                  "                      [--checker K] [--seams] [--cones] [--up x|y|z]\n"
+                 "                      [--quads Q.obj]\n"
                  "\n"
                  "Reads MESH (.ply .obj .off .drc with per-corner texture coordinates, e.g. written\n"
                  "by seamvox param), cleans it and renders it headless: a shaded checkerboard in\n"
@@ -122,6 +139,8 @@ SEAMVOX_COMMAND({"render", "checkerboard picture (PNG) of a mesh's texture coord
                  "  --seams            draw seams (edges whose sides have different (u, v)) in orange\n"
                  "  --cones            draw cones (vertices where the map turns by a multiple of 90\n"
                  "                     degrees): red positive index, blue negative\n"
+                 "  --quads Q.obj      draw the edges of a quad mesh of the map (seamvox quads) over\n"
+                 "                     the plain shaded surface instead of the checkerboard\n"
                  "  --supersample N    N x N samples per pixel (default 2; 1 = no anti-aliasing)\n"
                  "  --weld             weld coincident vertices (files whose vertices are split\n"
                  "                     along seams: otherwise those seams show as open boundary)\n"

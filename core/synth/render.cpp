@@ -245,21 +245,27 @@ void shadeSamples(const TriangleMesh& mesh, const std::vector<Vec3d>& screen, co
   });
 }
 
+/// A thick line between two screen points (x, y, depth), drawn where not hidden behind other
+/// surfaces.
+void drawSegment(const Vec3d& a, const Vec3d& b, double radius, double tolerance, const Rgb& rgb,
+                 SampleCanvas& canvas) {
+  const double length = Vec2d(b.x() - a.x(), b.y() - a.y()).norm();
+  if (!std::isfinite(length)) return;
+  const int steps = 1 + static_cast<int>(std::ceil(2.0 * length));
+  for (int s = 0; s <= steps; ++s) {
+    const Vec3d p = a + (b - a) * (double(s) / steps);
+    const Vec2d q(p.x(), p.y());
+    if (canvas.isVisible(q, p.z(), tolerance)) canvas.stampDisk(q, radius, rgb);
+  }
+}
+
 /// Thick seam lines, drawn where the edge is not hidden behind other surfaces.
 void drawSeams(const Topology& topology, const std::vector<CornerId>& seams,
                const std::vector<Vec3d>& screen, double radius, double tolerance, const Rgb& rgb,
                SampleCanvas& canvas) {
   for (const CornerId c : seams) {
-    const Vec3d& a = screen[topology.vertex(nextCorner(c))];
-    const Vec3d& b = screen[topology.vertex(prevCorner(c))];
-    const double length = Vec2d(b.x() - a.x(), b.y() - a.y()).norm();
-    if (!std::isfinite(length)) continue;
-    const int steps = 1 + static_cast<int>(std::ceil(2.0 * length));
-    for (int s = 0; s <= steps; ++s) {
-      const Vec3d p = a + (b - a) * (double(s) / steps);
-      const Vec2d q(p.x(), p.y());
-      if (canvas.isVisible(q, p.z(), tolerance)) canvas.stampDisk(q, radius, rgb);
-    }
+    drawSegment(screen[topology.vertex(nextCorner(c))], screen[topology.vertex(prevCorner(c))], radius,
+                tolerance, rgb, canvas);
   }
 }
 
@@ -402,6 +408,14 @@ RenderResult renderCheckerboard(const TriangleMesh& mesh, const Topology& topolo
     result.seamEdges = seams.size();
     drawSeams(topology, seams, screen, 0.5 * options.seamWidth * ss, tolerance, options.seamColor,
               canvas);
+  }
+  for (const auto& [from, to] : options.lines) {
+    auto toScreen = [&](const Vec3d& p) {
+      const Vec2d xy = result.camera.project(p) * double(ss);
+      return Vec3d(xy.x(), xy.y(), result.camera.depth(p));
+    };
+    drawSegment(toScreen(from), toScreen(to), 0.5 * options.lineWidth * ss,
+                options.lineDepthTolerance / result.camera.pixelsPerUnit, options.lineColor, canvas);
   }
   if (options.drawCones) {
     MapCones found = findMapCones(mesh, topology);

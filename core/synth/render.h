@@ -56,6 +56,14 @@ struct RenderOptions {
   Rgb seamColor{255, 170, 0}, background{255, 255, 255};
   Rgb positiveCone{220, 30, 30}, negativeCone{30, 70, 235};
   double seamWidth = 1.5;    ///< output pixels
+  /// Segments drawn over the surface where not hidden (e.g. a quad mesh's edges; its vertices lie
+  /// on the surface), in lineColor, lineWidth output pixels wide.
+  std::vector<std::array<Vec3d, 2>> lines;
+  Rgb lineColor{25, 25, 25};
+  double lineWidth = 1.2;
+  /// Depth (output pixels) a line may lie behind the surface and still show: a straight edge
+  /// between two surface points cuts under a curved surface.
+  double lineDepthTolerance = 8.0;
   double coneRadius = 0.0;   ///< output pixels; 0 = from the image size
   ProgressFn progress;
 };

@@ -1,0 +1,28 @@
+#pragma once
+/// The JSON report of a quad extraction (`seamvox quads --report`): what was found, what could
+/// not be traced, and the validation figures.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/quads/extract.h"
+#include "core/quads/validate.h"
+#include "core/system/memory.h"
+
+namespace seamvox {
+
+struct QuadReportContext {
+  std::string input, output;
+  std::int64_t scale = 1;
+  std::uint32_t mapFaces = 0;
+  double seamResidual = 0.0, integerDistance = 0.0;  ///< of the map (measureSeamsFromUV)
+  std::vector<StageFigures> stages;
+  double totalSeconds = 0.0;
+  std::uint64_t peakBytes = 0;
+};
+
+/// The report as pretty-printed JSON.
+std::string quadReportJson(const QuadResult& quads, const QuadValidation& check,
+                           const QuadReportContext& context);
+
+}  // namespace seamvox

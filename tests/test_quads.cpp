@@ -1,0 +1,432 @@
+// Quad extraction (core/quads): the quad mesh of a seamless map is an oriented 2-manifold with
+// the map's Euler characteristic and boundary loops per component, valence 4 away from cones and
+// 4 - k on a cone of index k, about one face per unit of parameter area; damaged maps still
+// extract or say what failed; malformed maps are refused.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <array>
+#include <cstdio>
+#include <fstream>
+
+#include "core/pipeline/parameterize.h"
+#include "core/quads/extract.h"
+#include "core/quads/validate.h"
+#include "core/system/errors.h"
+#include "io/mesh_io.h"
+#include "io/polygon_io.h"
+#include "test_meshes.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+struct Extracted {
+  PipelineResult map;
+  QuadResult quads;
+  QuadValidation check;
+};
+
+PipelineResult mapOf(TriangleMesh mesh, double cells) {
+  PipelineOptions options;
+  options.spacing.cells = cells;
+  return parameterize(std::move(mesh), options);
+}
+
+Extracted extract(PipelineResult map, std::int64_t scale = 1) {
+  Extracted e{std::move(map), {}, {}};
+  QuadOptions options;
+  options.scale = scale;
+  e.quads = extractQuads(e.map.mesh, e.map.topology, options);
+  e.check = validateQuads(e.quads, computeComponents(e.map.topology));
+  return e;
+}
+
+// Total |parameter area| of the map (grid units squared).
+double parameterArea(const TriangleMesh& mesh) {
+  double area = 0.0;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    const Vec2d a = mesh.cornerUV[3 * f + 1] - mesh.cornerUV[3 * f], b = mesh.cornerUV[3 * f + 2] - mesh.cornerUV[3 * f];
+    area += 0.5 * std::abs(a.x() * b.y() - a.y() * b.x());
+  }
+  return area;
+}
+
+void print(const Extracted& e) {
+  const QuadStats& s = e.quads.stats;
+  const QuadValidation& v = e.check;
+  std::printf("map %u faces, %u cones; grid %llu, boundary %llu, traced %llu, untraced %llu, unpaired %llu, "
+              "open faces %llu, flipped %llu, open fans %llu, holes %llu, islands %llu, snap %.2g\n",
+              e.map.mesh.numFaces(), e.quads.cones, (unsigned long long)s.gridVertices,
+              (unsigned long long)s.boundaryVertices, (unsigned long long)s.tracedEdges,
+              (unsigned long long)s.untracedEdges, (unsigned long long)s.unpairedEdges,
+              (unsigned long long)s.openFaces, (unsigned long long)s.flippedFaces,
+              (unsigned long long)s.openVertexFans, (unsigned long long)s.holesWithoutVertex,
+              (unsigned long long)s.islands, s.maxSnap);
+  std::printf("quads V %llu E %llu F %llu, quads %llu tri %llu pent %llu other %llu (%.3f), nonmanifold %llu/%llu, "
+              "degenerate %llu, irregular %llu, cones on vertices %llu wrong %llu, interior non-quads %llu, "
+              "components differing %llu\n",
+              (unsigned long long)v.vertices, (unsigned long long)v.edges, (unsigned long long)v.faces,
+              (unsigned long long)v.quads, (unsigned long long)v.triangles, (unsigned long long)v.pentagons,
+              (unsigned long long)v.otherFaces, v.quadFraction, (unsigned long long)v.nonManifoldEdges,
+              (unsigned long long)v.nonManifoldVertices, (unsigned long long)v.degenerateFaces,
+              (unsigned long long)v.irregularVertices, (unsigned long long)v.conesOnVertices,
+              (unsigned long long)v.conesWithWrongValence, (unsigned long long)v.interiorNonQuads,
+              (unsigned long long)v.componentsDiffering);
+  for (const QuadComponentCheck& c : v.components) {
+    if (!c.matches()) {
+      std::printf("  component %u: chi %lld (map %lld), loops %u (map %u)\n", c.component,
+                  (long long)c.eulerCharacteristic, (long long)c.mapEulerCharacteristic, c.boundaryLoops,
+                  c.mapBoundaryLoops);
+    }
+  }
+}
+
+// A flat torus map: vertex (i, j) of torusMesh(n, m) at (u, v) = (i, j) * cell, the wrap-around
+// faces on the other side of the seams (translations n * cell and m * cell, integers).
+testing::Surface flatTorus(int n, int m, double cell, Vec2d offset = Vec2d::Zero()) {
+  TriangleMesh mesh = testing::torusMesh(n, m);
+  std::vector<Vec2d> uv;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < m; ++j) {
+      for (const auto& [di, dj] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 0}, {1, 1}, {0, 1}}) {
+        uv.push_back(offset + cell * Vec2d(i + di, j + dj));
+      }
+    }
+  }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  return testing::makeSurface(std::move(mesh));
+}
+
+// A flat n x n grid of unit squares mapped by q = s p + offset (a disk, no seams).
+testing::Surface flatDisk(int n, double s, Vec2d offset) {
+  TriangleMesh mesh = testing::gridMesh(n, n);
+  std::vector<Vec2d> uv;
+  for (const Triangle& t : mesh.triangles) {
+    for (VertexId v : t) uv.push_back(offset + s * Vec2d(mesh.positions[v].x(), mesh.positions[v].y()));
+  }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  return testing::makeSurface(std::move(mesh));
+}
+
+QuadValidation checkOf(const testing::Surface& s, const QuadResult& q) {
+  return validateQuads(q, computeComponents(s.topology));
+}
+
+TEST(Quads, FlatTorusIsTheGrid) {
+  // 24 x 12 segments of half a unit: 12 x 6 unit cells, each one quad; offsets put the integer
+  // points inside faces, on edges and on vertices.
+  for (const Vec2d& offset : {Vec2d(0.1, 0.2), Vec2d(0.25, 0.0), Vec2d(0.0, 0.0)}) {
+    const testing::Surface s = flatTorus(24, 12, 0.5, offset);
+    const QuadResult q = extractQuads(s.mesh, s.topology);
+    const QuadValidation v = checkOf(s, q);
+    EXPECT_TRUE(v.isValid()) << offset.transpose();
+    EXPECT_EQ(v.faces, 72u);
+    EXPECT_EQ(v.quads, 72u);
+    EXPECT_EQ(v.vertices, 72u);
+    EXPECT_EQ(v.edges, 144u);
+    EXPECT_EQ(v.boundaryEdges, 0u);
+    EXPECT_EQ(q.stats.untracedEdges + q.stats.unpairedEdges + q.stats.openFaces, 0u);
+  }
+}
+
+TEST(Quads, ScaleCoarsensTheGrid) {
+  const testing::Surface s = flatTorus(24, 12, 0.5, Vec2d(0.1, 0.3));
+  QuadOptions options;
+  options.scale = 2;
+  const QuadResult q = extractQuads(s.mesh, s.topology, options);
+  const QuadValidation v = checkOf(s, q);
+  EXPECT_TRUE(v.isValid());
+  EXPECT_EQ(v.quads, 18u);  // 12 x 6 units in cells of 2 x 2
+  EXPECT_EQ(v.faces, 18u);
+  EXPECT_EQ(q.stats.seamEdgesOffScale, 0u);
+  options.scale = 5;  // 12 and 6 are no multiples of 5: the seams say so
+  EXPECT_GT(extractQuads(s.mesh, s.topology, options).stats.seamEdgesOffScale, 0u);
+}
+
+TEST(Quads, FlatDiskBoundaryStaysBoundary) {
+  // u, v in [0.3, 12.3]: 11 x 11 whole cells inside, cut cells along the boundary; and the case
+  // where the boundary runs along iso-lines.
+  for (const Vec2d& offset : {Vec2d(0.3, 0.3), Vec2d(0.0, 0.0), Vec2d(0.5, 0.0)}) {
+    const testing::Surface s = flatDisk(8, 1.5, offset);
+    const QuadResult q = extractQuads(s.mesh, s.topology);
+    const QuadValidation v = checkOf(s, q);
+    EXPECT_TRUE(v.isValid()) << offset.transpose();
+    EXPECT_EQ(v.boundaryLoops, 1u);
+    const int columns = 12 + (offset.x() != std::floor(offset.x()) ? 1 : 0);
+    const int rows = 12 + (offset.y() != std::floor(offset.y()) ? 1 : 0);
+    EXPECT_EQ(v.faces, std::uint64_t(columns * rows)) << offset.transpose();
+    EXPECT_GE(v.quads, 11u * 11u);
+    EXPECT_EQ(v.interiorNonQuads, 0u);
+  }
+}
+
+// The invariants every extraction of a clean seamless map meets.
+void expectValid(const Extracted& e) {
+  print(e);
+  const QuadValidation& v = e.check;
+  EXPECT_TRUE(v.isValid());
+  EXPECT_EQ(v.nonManifoldEdges, 0u);
+  EXPECT_EQ(v.componentsDiffering, 0u);
+  EXPECT_EQ(v.irregularVertices, 0u);
+  EXPECT_EQ(v.conesWithWrongValence, 0u);
+  EXPECT_EQ(v.conesOnVertices, e.quads.conesOnGridVertices);
+  // A cone off the integer points lies inside one cell, which has 4 - k sides.
+  EXPECT_LE(v.interiorNonQuads, e.quads.cones - e.quads.conesOnGridVertices);
+  EXPECT_EQ(e.quads.stats.untracedEdges + e.quads.stats.unpairedEdges + e.quads.stats.openFaces, 0u);
+  // About one face per unit of parameter area (cells cut by boundaries and cones aside).
+  const double area = parameterArea(e.map.mesh);
+  EXPECT_NEAR(double(v.faces), area, 0.1 * area + 2.0 * double(v.boundaryEdges));
+  EXPECT_GE(v.quadFraction, 0.9);
+}
+
+// A pillowcase: two n x m grids of half units (a rectangle of 0.5 n x 0.5 m in (u, v)) glued
+// along their borders, the back one mapped to (2a - u, v): its four corners are cones of index 2
+// (angle pi) at (0, 0) (an integer point), (a, 0) and (0, b) (halfway along iso-lines when a and b
+// are odd halves) and (a, b) (inside a cell).
+testing::Surface pillowcase(int n, int m) {
+  TriangleMesh mesh;
+  const double a = 0.5 * n;
+  auto id = [&](int i, int j) { return VertexId(j * (n + 1) + i); };
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const bool border = i == 0 || j == 0 || i == n || j == m;
+      mesh.positions.emplace_back(float(0.5 * i), float(0.5 * j), border ? 0.f : 0.4f);
+    }
+  std::vector<VertexId> back((n + 1) * (m + 1));
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const bool border = i == 0 || j == 0 || i == n || j == m;
+      back[j * (n + 1) + i] = border ? id(i, j) : VertexId(mesh.positions.size());
+      if (!border) mesh.positions.emplace_back(float(0.5 * i), float(0.5 * j), -0.4f);
+    }
+  std::vector<Vec2d> uv;
+  auto add = [&](std::array<std::pair<int, int>, 3> corners, bool front) {
+    Triangle t;
+    for (int k = 0; k < 3; ++k) {
+      const auto [i, j] = corners[k];
+      t[k] = front ? id(i, j) : back[j * (n + 1) + i];
+      uv.push_back(front ? Vec2d(0.5 * i, 0.5 * j) : Vec2d(2 * a - 0.5 * i, 0.5 * j));
+    }
+    mesh.triangles.push_back(t);
+  };
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      add({{{i, j}, {i + 1, j}, {i + 1, j + 1}}}, true);
+      add({{{i, j}, {i + 1, j + 1}, {i, j + 1}}}, true);
+      add({{{i, j}, {i, j + 1}, {i + 1, j}}}, false);  // the other diagonal: no two corner
+      add({{{i + 1, j}, {i, j + 1}, {i + 1, j + 1}}}, false);  // cells share an edge
+    }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  return testing::makeSurface(std::move(mesh));
+}
+
+TEST(Quads, ConesOfIndexTwoOnPointsLinesAndCells) {
+  const testing::Surface s = pillowcase(5, 3);  // a = 2.5, b = 1.5
+  const QuadResult q = extractQuads(s.mesh, s.topology);
+  const QuadValidation v = checkOf(s, q);
+  EXPECT_EQ(q.cones, 4u);
+  EXPECT_EQ(q.conesOnGridVertices, 1u);
+  EXPECT_TRUE(v.isValid());
+  EXPECT_EQ(v.conesOnVertices, 1u);  // (0, 0): valence 4 - 2
+  EXPECT_EQ(v.conesWithWrongValence, 0u);
+  EXPECT_GT(q.stats.deadEnds, 0u);  // the iso-lines through (a, 0) and (0, b) end there
+  EXPECT_EQ(q.stats.untracedEdges + q.stats.unpairedEdges + q.stats.openFaces, 0u);
+  EXPECT_EQ(v.boundaryEdges, 0u);
+  ASSERT_EQ(v.components.size(), 1u);
+  EXPECT_EQ(v.components[0].eulerCharacteristic, 2);
+  EXPECT_LE(v.interiorNonQuads, 3u);
+}
+
+TEST(Quads, TorusSphereGenus2Closed) {
+  for (const MeshKind kind : {MeshKind::Torus, MeshKind::Sphere, MeshKind::Genus2}) {
+    SCOPED_TRACE(meshKindName(kind));
+    const Extracted e = extract(mapOf(testing::generatedMesh(kind, 20000), 40));
+    expectValid(e);
+    EXPECT_EQ(e.check.boundaryEdges, 0u);
+    ASSERT_EQ(e.check.components.size(), 1u);
+    EXPECT_EQ(e.check.components[0].genus, kind == MeshKind::Sphere ? 0 : kind == MeshKind::Torus ? 1 : 2);
+  }
+}
+
+TEST(Quads, ScanWithHolesAndIslands) {
+  const Extracted e = extract(mapOf(testing::generatedMesh(MeshKind::Scan, 30000), 40));
+  expectValid(e);
+  EXPECT_GT(e.check.boundaryLoops, 0u);
+  EXPECT_GT(e.check.components.size(), 1u);
+}
+
+TEST(Quads, CoarseGridReportsIslands) {
+  // At 6 cells on the diagonal the scan's floating islands are smaller than a cell.
+  const Extracted e = extract(mapOf(testing::generatedMesh(MeshKind::Scan, 30000), 6));
+  print(e);
+  EXPECT_GT(e.quads.stats.islands, 0u);
+  EXPECT_GT(e.quads.stats.islandFaces, 0u);
+  EXPECT_EQ(e.check.nonManifoldEdges, 0u);
+}
+
+TEST(Quads, InjectedFlipsStillExtract) {
+  PipelineResult map = mapOf(testing::generatedMesh(MeshKind::Torus, 20000), 40);
+  // Move a few vertices off seams far in (u, v): their fans fold over.
+  std::vector<std::uint32_t> wedgesOf(map.mesh.numVertices(), 0);
+  std::vector<std::uint32_t> wedgeCount(map.mesh.numVertices(), 0);
+  std::vector<std::uint8_t> seen(map.mesh.cornerUV.numWedges(), 0);
+  for (CornerId c = 0; c < map.mesh.cornerUV.size(); ++c) {
+    const std::uint32_t w = map.mesh.cornerUV.wedge(c);
+    if (!seen[w]) seen[w] = 1, ++wedgeCount[map.topology.vertex(c)];
+  }
+  int moved = 0;
+  for (VertexId v = 0; v < map.mesh.numVertices() && moved < 10; v += 997) {
+    if (wedgeCount[v] != 1) continue;
+    const std::uint32_t w = map.mesh.cornerUV.wedge(map.topology.vertexCorner(v));
+    map.mesh.cornerUV.setWedgeValue(w, map.mesh.cornerUV.wedgeValue(w) + Vec2d(1.3, 0.7));
+    ++moved;
+  }
+  ASSERT_GT(moved, 3);
+  const Extracted e = extract(std::move(map));
+  print(e);
+  const QuadStats& s = e.quads.stats;
+  EXPECT_GT(s.flippedFaces, 0u);
+  EXPECT_GE(e.check.quadFraction, 0.9);
+  // Whatever is wrong with the result is reported by the extraction.
+  if (!e.check.isValid()) {
+    EXPECT_GT(s.untracedEdges + s.unpairedEdges + s.openFaces + s.pointsInFlippedFaces, 0u);
+  }
+}
+
+TEST(Quads, MalformedMapsAreRefusedOrReported) {
+  testing::Surface s = flatTorus(24, 12, 0.5, Vec2d(0.1, 0.2));
+  TriangleMesh noUV = s.mesh;
+  noUV.cornerUV.clear();
+  EXPECT_THROW(extractQuads(noUV, s.topology), InputError);
+  TriangleMesh far = s.mesh;
+  far.cornerUV.setWedgeValue(0, Vec2d(std::nan(""), 0.0));
+  EXPECT_THROW(extractQuads(far, s.topology), InputError);
+  far.cornerUV.setWedgeValue(0, Vec2d(1e12, 0.0));
+  EXPECT_THROW(extractQuads(far, s.topology), InputError);
+  QuadOptions zero;
+  zero.scale = 0;
+  EXPECT_THROW(extractQuads(s.mesh, s.topology, zero), InputError);
+  // Not seamless: one side of a seam shifted by a third of a unit.
+  TriangleMesh shifted = s.mesh;
+  std::vector<Vec2d> uv = testing::cornerValues(shifted.cornerUV);
+  for (CornerId c = 0; c < uv.size(); ++c) {
+    if (uv[c].x() > 11.9) uv[c].x() += 0.34;  // the wrap-around side of the u seam
+  }
+  shifted.cornerUV = WedgeMap::fromCorners(shifted.triangles, uv);
+  // Extraction rounds the translations and closes the seams; how far it had to move the map says
+  // it was not seamless (the tools refuse such maps before, measureSeamsFromUV).
+  const QuadResult q = extractQuads(shifted, s.topology);
+  EXPECT_GT(q.stats.maxSnap, 0.3);
+  EXPECT_LT(extractQuads(s.mesh, s.topology).stats.maxSnap, 1e-6);
+}
+
+TEST(Quads, SharedMeshesNinetyPercentQuads) {
+  for (const char* name : {"bumpy.off", "3holes.off", "spot.obj"}) {
+    const std::string path = testing::sharedMesh(name);
+    if (path.empty()) {
+      std::printf("skipping %s: %s\n", name, testing::missingSharedMessage(name).c_str());
+      continue;
+    }
+    SCOPED_TRACE(name);
+    const Extracted e = extract(mapOf(readMesh(path), 0.0));
+    print(e);
+    EXPECT_GE(e.check.quadFraction, 0.9);
+    EXPECT_EQ(e.check.nonManifoldEdges, 0u);
+    EXPECT_EQ(e.check.componentsDiffering, 0u);
+    EXPECT_EQ(e.check.conesWithWrongValence, 0u);
+  }
+}
+
+// ---- the commands ----
+
+// A small map written by param (and its quad mesh by --quads), shared by the command tests.
+class QuadsCommand : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    ASSERT_EQ(testing::runSeamvox("gen scan --faces 20000 -o " + dir_->path("scan.ply") + " --quiet"), 0);
+    std::string out;
+    ASSERT_EQ(testing::runSeamvox("param " + dir_->path("scan.ply") + " -o " + dir_->path("map.obj") +
+                                  " --cells 40 --quads " + dir_->path("param-quads.obj") + " --quiet", &out), 0)
+        << out;
+    EXPECT_NE(out.find("validation: valid"), std::string::npos) << out;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string path(const std::string& name) { return dir_->path(name); }
+  static testing::TempDir* dir_;
+};
+testing::TempDir* QuadsCommand::dir_ = nullptr;
+
+TEST_F(QuadsCommand, WritesAValidQuadMeshAndReport) {
+  std::string out;
+  ASSERT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("q.ply") + " --report " +
+                                path("q.json") + " --quiet", &out), 0) << out;
+  EXPECT_NE(out.find("validation: valid"), std::string::npos) << out;
+  const std::string report = testing::readFile(path("q.json"));
+  EXPECT_NE(report.find("\"valid\": true"), std::string::npos) << report;
+  EXPECT_NE(report.find("\"nonManifoldEdges\": 0"), std::string::npos);
+  // The OBJ of param --quads reads back as the same polygon mesh quads makes.
+  const PolygonMesh fromParam = readPolygonObj(path("param-quads.obj"));
+  ASSERT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("q.obj") + " --quiet"), 0);
+  const PolygonMesh fromQuads = readPolygonObj(path("q.obj"));
+  EXPECT_EQ(fromParam.numFaces(), fromQuads.numFaces());
+  EXPECT_EQ(fromParam.faceVertices, fromQuads.faceVertices);
+  // render draws its edges.
+  ASSERT_EQ(testing::runSeamvox("render " + path("map.obj") + " -o " + path("q.png") + " --size 200x200 --quads " +
+                                path("q.obj") + " --quiet", &out), 0) << out;
+  EXPECT_NE(out.find("quad-mesh edges drawn"), std::string::npos) << out;
+}
+
+TEST_F(QuadsCommand, MalformedMapsFailNamingTheFile) {
+  std::string out;
+  // No texture coordinates.
+  EXPECT_EQ(testing::runSeamvox("quads " + path("scan.ply") + " -o " + path("x.obj"), &out), 1);
+  EXPECT_NE(out.find(path("scan.ply") + ": has no texture coordinates"), std::string::npos) << out;
+  // Not seamless: every vt line's u moved by a different amount.
+  std::string text = testing::readFile(path("map.obj")), shifted;
+  std::size_t at = 0, count = 0;
+  while (at < text.size()) {
+    std::size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(at, end - at);
+    if (line.rfind("vt ", 0) == 0 && ++count % 7 == 0) line = "vt 0.123 0.456";
+    shifted += line + "\n";
+    at = end + 1;
+  }
+  testing::writeFile(path("bad.obj"), shifted);
+  EXPECT_EQ(testing::runSeamvox("quads " + path("bad.obj") + " -o " + path("x.obj"), &out), 1);
+  EXPECT_NE(out.find(path("bad.obj") + ": the map is not seamless"), std::string::npos) << out;
+  // A scale that does not divide the seam translations.
+  EXPECT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("x.obj") + " --scale 7", &out), 1);
+  EXPECT_NE(out.find("no multiples of --scale 7"), std::string::npos) << out;
+  // Usage errors.
+  EXPECT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("x.off"), &out), 2);
+  EXPECT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("x.obj") + " --scale 0", &out), 2);
+  EXPECT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("map.obj"), &out), 2);
+  // Nothing written by the failed runs.
+  EXPECT_FALSE(std::ifstream(path("x.obj")).good());
+  EXPECT_TRUE(testing::temporaryFilesIn(dir_->dir()).empty());
+}
+
+TEST_F(QuadsCommand, EveryTruncatedQuadObjReadsOrFailsCleanly) {
+  ASSERT_EQ(testing::runSeamvox("quads " + path("map.obj") + " -o " + path("t.obj") + " --quiet"), 0);
+  const std::string text = testing::readFile(path("t.obj")).substr(0, 4000);
+  for (std::size_t n = 0; n < text.size(); n += 7) {
+    testing::writeFile(path("cut.obj"), text.substr(0, n));
+    try {
+      const PolygonMesh m = readPolygonObj(path("cut.obj"));
+      for (std::uint32_t v : m.faceVertices) ASSERT_LT(v, m.numVertices());
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path("cut.obj")), std::string::npos) << e.what();
+    }
+  }
+  testing::writeFile(path("cut.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
+  EXPECT_THROW(readPolygonObj(path("cut.obj")), InputError);
+  testing::writeFile(path("cut.obj"), "v 0 0 0\nv 1 0 0\nf 1 2\n");
+  EXPECT_THROW(readPolygonObj(path("cut.obj")), InputError);
+  EXPECT_THROW(readPolygonObj(path("absent.obj")), IoError);
+}
+
+}  // namespace
+}  // namespace seamvox
