@@ -169,6 +169,48 @@ TEST(Untangle, RepairsFlipsKeepsSeamlessAndMovesOnlyPatches) {
   EXPECT_EQ(stats.freeVertices > 0, true);
 }
 
+TEST(Untangle, RelocationAloneUnfoldsMovedVerticesAndMovesNothingElse) {
+  // Without re-solves, each damaged vertex (one wedge, off the cut) moves into the kernel of its
+  // fan: no flip left, seams untouched, and no other corner changes.
+  for (std::uint32_t passes : {0u, 8u}) {
+    DamagedMap d = damagedSphereMap();
+    const TriangleMesh& mesh = d.cs.s.mesh;
+    const double h = 0.15;
+    const WedgeMap before = d.map.cornerUV;
+    const std::uint64_t flipped = measureMap(mesh, before, &d.cs.field, h).flipped;
+    UntangleOptions options;
+    options.edgeLength = h;
+    options.maxRounds = 0;
+    options.relocationPasses = passes;
+    std::vector<std::complex<double>> t = d.map.translations;
+    const UntangleStats stats = untangleFlips(mesh, d.cs.s.topology, d.cs.field, d.cs.cut, d.map.cornerUV, t, options);
+    EXPECT_EQ(stats.solves, 0u);
+    EXPECT_EQ(stats.flippedBefore, flipped);
+    const MapQuality after = measureMap(mesh, d.map.cornerUV, &d.cs.field, h);
+    EXPECT_EQ(after.flipped, stats.flippedAfter);
+    EXPECT_EQ(after.collapsed, 0u);
+    EXPECT_TRUE(measureSeams(mesh, d.cs.s.topology, d.cs.cut, d.map.cornerUV).isSeamless());
+    EXPECT_EQ(t, d.map.translations);
+    // Vertices of flipped faces move: the damaged ones and their neighbours.
+    std::vector<std::uint8_t> mayMove(mesh.numVertices(), 0);
+    for (VertexId v : d.damaged) {
+      d.cs.s.topology.forEachCornerAround(v, [&](CornerId c) {
+        for (VertexId w : mesh.triangles[c / 3]) mayMove[w] = 1;
+      });
+    }
+    for (CornerId c = 0; c < before.size(); ++c) {
+      if (passes == 0 || !mayMove[d.cs.s.topology.vertex(c)]) EXPECT_EQ(d.map.cornerUV[c], before[c]) << "corner " << c;
+    }
+    if (passes == 0) {
+      EXPECT_EQ(stats.flippedAfter, flipped);
+      EXPECT_EQ(stats.relocatedVertices, 0u);
+    } else {
+      EXPECT_EQ(stats.flippedAfter, 0u);
+      EXPECT_GE(stats.relocatedVertices, d.damaged.size());
+    }
+  }
+}
+
 TEST(Untangle, NothingToDoLeavesTheMapAsItIs) {
   testing::CutSurface cs = testing::makeCutSurface(testing::torusMesh(40, 20));
   ParamOptions param;

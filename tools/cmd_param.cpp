@@ -96,11 +96,13 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
   if (r.untangled) {
-    std::printf("foldover repair: flipped %llu -> %llu (%llu folded in 3D), %llu patch faces, %u solves, %.2f s\n",
+    std::printf("foldover repair: flipped %llu -> %llu (%llu folded in 3D), %llu patch faces, %u solves, "
+                "%u vertices moved into their fan's kernel, %.2f s\n",
                 static_cast<unsigned long long>(r.untangle.flippedBefore),
                 static_cast<unsigned long long>(r.untangle.flippedAfter),
                 static_cast<unsigned long long>(r.untangle.foldedIn3D),
-                static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves, r.untangle.seconds);
+                static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves,
+                r.untangle.relocatedVertices, r.untangle.seconds);
   }
   const ComponentSummary& parts = r.components;
   if (!parts.droppedIds.empty()) {

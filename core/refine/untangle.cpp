@@ -6,6 +6,8 @@
 #include <cmath>
 #include <string>
 
+#include <Eigen/LU>
+
 #include "core/quality/metrics.h"
 #include "core/refine/refine.h"
 #include "core/system/errors.h"
@@ -133,6 +135,110 @@ std::uint32_t patchRings(const TriangleMesh& mesh, const std::vector<FaceId>& se
   return static_cast<std::uint32_t>(std::clamp(rings, 2.0, 64.0));
 }
 
+// The point of the fan kernel farthest inside: p maximizing min_i (n_i . p + c_i) / |n_i| over
+// the half-planes n_i . p + c_i > 0 (2D linear programme, solved by its vertices: the fans are
+// small). Returns that margin (<= 0: empty kernel).
+double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>& offset, Vec2d& centre) {
+  const std::size_t n = normal.size();
+  double best = -1e300;
+  // Each candidate is where three constraints (n_i . p + c_i = t |n_i|) meet, or two with a
+  // bounded t when the fan is open (boundary vertex): the three-constraint vertices suffice for
+  // a bounded region; an unbounded kernel (fewer than 3 directions) is left alone.
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = a + 1; b < n; ++b) {
+      for (std::size_t c = b + 1; c < n; ++c) {
+        Eigen::Matrix3d m;
+        Eigen::Vector3d r;
+        for (int k = 0; k < 3; ++k) {
+          const std::size_t i = k == 0 ? a : (k == 1 ? b : c);
+          m.row(k) << normal[i].x(), normal[i].y(), -normal[i].norm();
+          r[k] = -offset[i];
+        }
+        if (std::abs(m.determinant()) < 1e-300) continue;
+        const Eigen::Vector3d x = m.partialPivLu().solve(r);
+        if (!x.allFinite() || x[2] <= best) continue;
+        bool feasible = true;
+        for (std::size_t i = 0; i < n && feasible; ++i) {
+          feasible = normal[i].dot(x.head<2>()) + offset[i] >= x[2] * normal[i].norm() * (1.0 - 1e-9) - 1e-300;
+        }
+        if (feasible) best = x[2], centre = x.head<2>();
+      }
+    }
+  }
+  return best;
+}
+
+// One vertex: moves its single wedge toward the kernel centre of its fan, just far enough that
+// every fan triangle not folded in 3D keeps a quarter of the best margin. False when it cannot.
+bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, const std::vector<std::uint8_t>& skip) {
+  std::vector<Vec2d> normal;
+  std::vector<double> offset;
+  std::uint32_t wedge = kInvalidId;
+  bool single = true;
+  topology.forEachCornerAround(v, [&](CornerId c) {
+    if (wedge == kInvalidId) wedge = cornerUV.wedge(c);
+    single = single && cornerUV.wedge(c) == wedge;
+    if (skip[c / 3]) return;
+    // Triangle (p, a, b) positive: (b - a) x p + a x b > 0.
+    const Vec2d a = cornerUV[nextCorner(c)], b = cornerUV[prevCorner(c)];
+    const Vec2d d = b - a;
+    normal.emplace_back(-d.y(), d.x());
+    offset.push_back(a.x() * b.y() - a.y() * b.x());
+  });
+  if (!single || wedge == kInvalidId || normal.size() < 3) return false;
+  Vec2d centre;
+  const double margin = kernelCentre(normal, offset, centre);
+  if (!(margin > 0.0)) return false;
+  // Along the segment from the current point to the centre, the first point where every
+  // constraint has a quarter of the margin (each is linear along it; all hold at the centre).
+  const Vec2d p0 = cornerUV.wedgeValue(wedge);
+  double s = 0.0;
+  for (std::size_t i = 0; i < normal.size(); ++i) {
+    const double need = 0.25 * margin * normal[i].norm();
+    const double d0 = normal[i].dot(p0) + offset[i], d1 = normal[i].dot(centre) + offset[i];
+    if (d0 < need) s = std::max(s, d1 > d0 ? (need - d0) / (d1 - d0) : 1.0);
+  }
+  if (s <= 0.0) return false;
+  cornerUV.setWedgeValue(wedge, p0 + std::min(1.0, s) * (centre - p0));
+  return true;
+}
+
+// The last step: vertices of faces still flipped (not folded in 3D) that have one wedge, lie on
+// no seam and are not cones move into their fan's kernel, pass after pass. Moving one vertex
+// leaves every triangle outside its fan as it was and every fan triangle positive (except those
+// folded in 3D, which are not constrained), so flips never increase and seams never change.
+std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
+                                      WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
+                                      std::uint32_t passes) {
+  std::vector<std::uint8_t> fixed(topology.numVertices(), 0);
+  for (VertexId c : cut.cones) fixed[c] = 1;
+  for (const SeamCurve& seam : cut.seams) {
+    for (CornerId c : seam.corners) fixed[topology.vertex(nextCorner(c))] = fixed[topology.vertex(prevCorner(c))] = 1;
+  }
+  std::vector<std::uint8_t> folded(state.size(), 0);
+  for (std::size_t f = 0; f < state.size(); ++f) folded[f] = state[f] == kFolded;
+  std::uint32_t moves = 0;
+  for (std::uint32_t pass = 0; pass < passes; ++pass) {
+    std::vector<VertexId> candidates;
+    for (FaceId f = 0; f < state.size(); ++f) {
+      if (state[f] != kFlipped) continue;
+      for (VertexId v : mesh.triangles[f]) {
+        if (!fixed[v]) candidates.push_back(v);
+      }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::uint32_t moved = 0;
+    for (VertexId v : candidates) moved += relocateVertex(topology, cornerUV, v, folded);
+    moves += moved;
+    if (moved == 0) break;
+    for (FaceId f = 0; f < state.size(); ++f) {
+      if (state[f] == kFlipped) state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
+    }
+  }
+  return moves;
+}
+
 }  // namespace
 
 UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
@@ -161,7 +267,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   for (FaceId f = 0; f < nf; ++f) stats.flippedBefore += state[f] != kFine;
 
   std::vector<VertexId> moved;
-  for (std::uint32_t round = 0; round < std::max(1u, options.maxRounds); ++round) {
+  for (std::uint32_t round = 0; round < options.maxRounds; ++round) {
     std::vector<FaceId> seeds;
     for (FaceId f = 0; f < nf; ++f) {
       if (state[f] == kFlipped) seeds.push_back(f);
@@ -208,6 +314,10 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     }
     classifyAll();
     reportProgress(options.progress, "untangle", double(round + 1) / options.maxRounds);
+  }
+  if (options.relocationPasses > 0) {
+    stats.relocatedVertices =
+        relocateFlippedVertices(mesh, topology, cut, cornerUV, state, h, options.relocationPasses);
   }
   std::sort(moved.begin(), moved.end());
   stats.freeVertices = static_cast<std::uint32_t>(std::unique(moved.begin(), moved.end()) - moved.begin());

@@ -27,7 +27,7 @@ struct UntangleOptions {
   /// Patch radius around the flipped faces in the first round, in grid spacings h (as vertex
   /// rings at the seeds' mean edge length, at least 2); each further round doubles it.
   double patchRadius = 0.5;
-  std::uint32_t maxRounds = 3;    ///< patch rounds (>= 1)
+  std::uint32_t maxRounds = 3;    ///< patch rounds (0: only the relocation step below)
   std::uint32_t maxSolves = 6;    ///< stiffening re-solves per round (>= 1)
   /// A round's patches hold at most max(minPatchFaces, maxPatchFraction * #F) faces: the radius
   /// shrinks to fit. Unbounded, a 22M-face scan with 9154 flips re-solved 1.7M faces 24 times
@@ -36,6 +36,9 @@ struct UntangleOptions {
   std::uint64_t minPatchFaces = 20000;
   double stiffening = 2.0;        ///< energy factor per re-solve of a face still flipped (> 1)
   double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
+  /// Gauss-Seidel passes of the last step: a vertex of a face still flipped, off the cut and not
+  /// a cone, moves into the kernel of its fan (every fan triangle positive) when it has one.
+  std::uint32_t relocationPasses = 8;
   ProgressFn progress;
 };
 
@@ -47,6 +50,7 @@ struct UntangleStats {
   std::uint64_t patchFaces = 0;     ///< faces re-solved, summed over rounds
   std::uint32_t freeVertices = 0;   ///< vertices moved in some round (counted once per round)
   std::uint32_t largestUnknowns = 0;
+  std::uint32_t relocatedVertices = 0;  ///< moves of the last step (a vertex counted per move)
   double seconds = 0.0;
 };
 
