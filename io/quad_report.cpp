@@ -1,9 +1,26 @@
 // The JSON report of a quad extraction.
 #include "io/quad_report.h"
 
+#include <utility>
+
 #include "io/json.h"
 
 namespace seamvox {
+
+QuadReportContext quadReportContext(const QuadRun& run, std::uint32_t mapFaces, std::int64_t scale,
+                                    const StageMeter& meter, std::string input, std::string output) {
+  QuadReportContext context;
+  context.input = std::move(input);
+  context.output = std::move(output);
+  context.scale = scale;
+  context.mapFaces = mapFaces;
+  context.seamResidual = run.seams.maxResidual;
+  context.integerDistance = run.seams.maxIntegerDistance;
+  context.stages = meter.stages();
+  context.totalSeconds = meter.totalSeconds();
+  context.peakBytes = meter.peakBytes();
+  return context;
+}
 
 std::string quadReportJson(const QuadResult& quads, const QuadValidation& v, const QuadReportContext& context) {
   using U64 = std::uint64_t;

@@ -5,8 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "core/quads/extract.h"
-#include "core/quads/validate.h"
+#include "core/quads/checked.h"
 #include "core/system/memory.h"
 
 namespace seamvox {
@@ -20,6 +19,11 @@ struct QuadReportContext {
   double totalSeconds = 0.0;
   std::uint64_t peakBytes = 0;
 };
+
+/// The context of `run` (extractCheckedQuads at `scale` on a map of mapFaces faces) measured by
+/// meter (its stages so far): the map's seam figures, stages, total time and peak filled in.
+QuadReportContext quadReportContext(const QuadRun& run, std::uint32_t mapFaces, std::int64_t scale,
+                                    const StageMeter& meter, std::string input, std::string output);
 
 /// The report as pretty-printed JSON.
 std::string quadReportJson(const QuadResult& quads, const QuadValidation& check,

@@ -11,8 +11,7 @@
 
 #include "core/mesh/clean.h"
 #include "core/pipeline/grid_spacing.h"
-#include "core/quads/extract.h"
-#include "core/quads/validate.h"
+#include "core/quads/checked.h"
 #include "core/synth/generate.h"
 #include "core/system/progress.h"
 
@@ -106,16 +105,6 @@ std::optional<std::uint64_t> parseSizeOption(Args& args, const std::string& name
   "  --memory-budget SIZE  memory the command may use (2G, 1500M, 800K or bytes; G = 2^30;\n"    \
   "                        default 3/4 of the available memory)\n"                             \
   "  --scratch DIR         folder for scratch files (default $TMPDIR, else /tmp)\n"
-/// Quad mesh of a map (`seamvox quads`, `param --quads`): extraction and its validation.
-struct QuadRun {
-  QuadResult quads;
-  QuadValidation check;
-};
-/// Extracts and validates the quad mesh of a cleaned map read from (or made for) `name`. Throws
-/// InputError naming it when the map is not seamless, or when --scale K does not divide its
-/// seam translations.
-QuadRun extractCheckedQuads(const std::string& name, const TriangleMesh& mesh, const Topology& topology,
-                            std::int64_t scale, const ProgressFn& progress);
 /// Lines on stdout: the quad mesh's figures, what extraction could not do, the validation.
 void printQuadSummary(const std::string& output, const QuadRun& run);
 

@@ -2,7 +2,6 @@
 #include <cstdio>
 
 #include "core/mesh/clean.h"
-#include "core/quality/metrics.h"
 #include "core/system/errors.h"
 #include "core/system/memory.h"
 #include "io/mesh_io.h"
@@ -12,35 +11,6 @@
 #include "tools/cli.h"
 
 namespace seamvox::cli {
-
-QuadRun extractCheckedQuads(const std::string& name, const TriangleMesh& mesh, const Topology& topology,
-                            std::int64_t scale, const ProgressFn& progress) {
-  if (!mesh.hasUV()) throw InputError(name + ": has no texture coordinates; run seamvox param first");
-  const SeamQuality seams = measureSeamsFromUV(mesh, topology, mesh.cornerUV);
-  if (!seams.isSeamless(kQuadSeamTolerance)) {
-    throw InputError(name + ": the map is not seamless (seam residual " + std::to_string(seams.maxResidual) +
-                     ", translations " + std::to_string(seams.maxIntegerDistance) +
-                     " from integers, at the edge of corner " + std::to_string(seams.worstEdgeCorner) +
-                     "); quads needs the integer-grid map of seamvox param");
-  }
-  QuadRun run;
-  QuadOptions options;
-  options.scale = scale;
-  options.progress = progress;
-  try {
-    run.quads = extractQuads(mesh, topology, options);
-  } catch (...) {
-    rethrowWithContext(name);
-  }
-  if (run.quads.stats.seamEdgesOffScale > 0) {
-    throw InputError(name + ": " + std::to_string(run.quads.stats.seamEdgesOffScale) +
-                     " seam translations are no multiples of --scale " + std::to_string(scale) +
-                     ", so its iso-lines would not continue across seams; map with an edge length " +
-                     std::to_string(scale) + " times larger instead");
-  }
-  run.check = validateQuads(run.quads, computeComponents(topology));
-  return run;
-}
 
 void printQuadSummary(const std::string& output, const QuadRun& run) {
   using U = unsigned long long;
@@ -107,17 +77,8 @@ int runQuads(Args& args) {
               meter.stages()[0].seconds, meter.stages()[1].seconds, meter.stages()[2].seconds,
               meter.peakBytes() / 1048576.0);
   if (reportPath) {
-    QuadReportContext context;
-    context.input = input;
-    context.output = *output;
-    context.scale = scale;
-    context.mapFaces = cleaned.mesh.numFaces();
-    const SeamQuality seams = measureSeamsFromUV(cleaned.mesh, cleaned.topology, cleaned.mesh.cornerUV);
-    context.seamResidual = seams.maxResidual;
-    context.integerDistance = seams.maxIntegerDistance;
-    context.stages = meter.stages();
-    context.totalSeconds = meter.totalSeconds();
-    context.peakBytes = meter.peakBytes();
+    const QuadReportContext context =
+        quadReportContext(run, cleaned.mesh.numFaces(), scale, meter, input, *output);
     const std::string json = quadReportJson(run.quads, run.check, context);
     if (reportFile) reportFile->write(json);
     else writeTextOutput("-", json);

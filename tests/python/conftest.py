@@ -65,14 +65,15 @@ def euler_characteristic(V, F):
 
 @pytest.fixture
 def seamvox_command():
-    """Runs the seamvox binary of this build (SEAMVOX_BINARY, set by ctest)."""
+    """Runs the seamvox binary of this build (SEAMVOX_BINARY, set by ctest): its stdout, or with
+    fails=True the CompletedProcess of a run that must fail."""
     binary = os.environ.get("SEAMVOX_BINARY")
     if not binary or not os.path.exists(binary):
         pytest.skip("SEAMVOX_BINARY does not name the seamvox command (ctest sets it)")
 
-    def run(*args):
+    def run(*args, fails=False):
         done = subprocess.run([binary, *args], capture_output=True, text=True, timeout=120)
-        assert done.returncode == 0, done.stdout + done.stderr
-        return done.stdout
+        assert (done.returncode != 0) == fails, done.stdout + done.stderr
+        return done if fails else done.stdout
 
     return run

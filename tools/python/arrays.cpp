@@ -217,4 +217,26 @@ py::array_t<std::int64_t> conesArray(const std::vector<VertexId>& cones, const s
   return out;
 }
 
+std::pair<py::array_t<std::int64_t>, py::list> polygonFacesArrays(const PolygonMesh& mesh) {
+  std::size_t quads = 0;
+  for (std::uint32_t f = 0; f < mesh.numFaces(); ++f) quads += mesh.degree(f) == 4;
+  py::array_t<std::int64_t> quadArray({static_cast<py::ssize_t>(quads), py::ssize_t{4}});
+  auto q = quadArray.mutable_unchecked<2>();
+  py::list polygons;
+  py::ssize_t row = 0;
+  for (std::uint32_t f = 0; f < mesh.numFaces(); ++f) {
+    const std::uint32_t* corners = mesh.faceVertices.data() + mesh.faceStart[f];
+    if (mesh.degree(f) == 4) {
+      for (int k = 0; k < 4; ++k) q(row, k) = corners[k];
+      ++row;
+      continue;
+    }
+    py::array_t<std::int64_t> polygon(static_cast<py::ssize_t>(mesh.degree(f)));
+    auto p = polygon.mutable_unchecked<1>();
+    for (py::ssize_t k = 0; k < p.shape(0); ++k) p(k) = corners[k];
+    polygons.append(std::move(polygon));
+  }
+  return {std::move(quadArray), std::move(polygons)};
+}
+
 }  // namespace seamvox::python

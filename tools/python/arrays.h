@@ -5,9 +5,11 @@
 #include <pybind11/numpy.h>
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/mesh/mesh.h"
+#include "core/quads/extract.h"
 
 namespace seamvox::python {
 
@@ -27,6 +29,9 @@ py::array_t<std::int64_t> facesArray(const TriangleMesh& mesh);
 py::array_t<double> cornerUVArray(const TriangleMesh& mesh);
 /// Rows of 3D vectors as an n x 3 float64 array.
 py::array_t<double> vectorsArray(const std::vector<Vec3d>& vectors);
+/// A polygon mesh's faces in its order: the quads as a q x 4 int64 array, every other face as a
+/// 1-D int64 array in a list.
+std::pair<py::array_t<std::int64_t>, py::list> polygonFacesArrays(const PolygonMesh& mesh);
 /// Cones as a k x 2 int64 array of rows (vertex id, index in quarter turns).
 py::array_t<std::int64_t> conesArray(const std::vector<VertexId>& cones, const std::vector<std::int32_t>& index4);
 

@@ -1,6 +1,6 @@
 // The seamvox Python module: numpy arrays in and out of the library pipeline (parameterize),
-// the mesh readers and writers, the check verdict and the cross field. Errors map to the
-// exception classes made in makeExceptions, with the library's messages.
+// the mesh readers and writers, the check verdict, the cross field and the quad mesh. Errors map
+// to the exception classes made in makeExceptions, with the library's messages.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -8,12 +8,14 @@
 #include <string>
 
 #include "core/pipeline/parameterize.h"
+#include "core/quads/checked.h"
 #include "core/quality/check.h"
 #include "core/system/blas_threads.h"
 #include "core/system/errors.h"
 #include "io/check_report.h"
 #include "io/mesh_io.h"
 #include "io/param_report.h"
+#include "io/quad_report.h"
 #include "tools/python/arrays.h"
 #include "tools/python/interruptible.h"
 
@@ -36,6 +38,13 @@ struct FieldOutcome {
   std::string method;
 };
 
+/// The outcome of quads(): the quad mesh, its validation and report.
+struct QuadsOutcome {
+  py::object V, faces, polygons, report;
+  bool valid = false;
+  double quadFraction = 0.0;
+};
+
 py::object parseJson(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
 
 /// A path given as str or os.PathLike.
@@ -43,17 +52,26 @@ std::string pathArg(const py::object& path) {
   return py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>();
 }
 
+/// An argument that must be a whole number (int or numpy integer, not bool) from min to max.
+long wholeNumberArg(const py::object& x, const char* name, long min, long max) {
+  long n = min - 1;
+  if (PyIndex_Check(x.ptr()) && !py::isinstance<py::bool_>(x)) {  // int, numpy integers
+    n = PyLong_AsLong(py::int_(x).ptr());
+    if (n == -1 && PyErr_Occurred()) {
+      PyErr_Clear();
+      n = min - 1;
+    }
+  }
+  if (n < min || n > max) {
+    throw InputError(std::string(name) + " must be a whole number from " + std::to_string(min) + " to " +
+                     std::to_string(max) + ", got " + std::string(py::repr(x)));
+  }
+  return n;
+}
+
 int threadCount(const py::object& threads) {
   if (threads.is_none()) return 0;
-  long n = 0;
-  if (PyIndex_Check(threads.ptr()) && !py::isinstance<py::bool_>(threads)) {  // int, numpy integers
-    n = PyLong_AsLong(py::int_(threads).ptr());
-    if (n == -1 && PyErr_Occurred()) PyErr_Clear();
-  }
-  if (n < 1 || n > 4096) {
-    throw InputError("threads must be a whole number from 1 to 4096, got " + std::string(py::repr(threads)));
-  }
-  return static_cast<int>(n);
+  return static_cast<int>(wholeNumberArg(threads, "threads", 1, 4096));
 }
 
 /// edge_length= of parameterize, cross_field and check: None (0) or a positive finite number.
@@ -199,6 +217,38 @@ py::dict checkArrays(const py::object& V, const py::object& F, const py::object&
   return parseJson(checkReportJson(kArraysName, r));
 }
 
+QuadsOutcome quadsArrays(const py::object& V, const py::object& F, const py::object& uv, const py::object& scale,
+                         bool weld, const py::object& threads, const py::object& progress) {
+  TriangleMesh raw = meshFromArrays(V, F, uv);
+  const std::int64_t k = wholeNumberArg(scale, "scale", 1, 1 << 20);  // as `seamvox quads --scale`
+  Interruptible interruptible(progress, threadCount(threads));
+  const ProgressFn progressFn = interruptible.progressFn();
+  StageMeter meter;
+  QuadRun run;
+  std::uint32_t mapFaces = 0;
+  interruptible.run([&] {
+    CleanOptions cleanOptions;
+    cleanOptions.weldVertices = weld;
+    cleanOptions.progress = progressFn;
+    const CleanResult cleaned = cleanMesh(std::move(raw), cleanOptions);
+    mapFaces = cleaned.mesh.numFaces();
+    meter.finish("clean");
+    run = extractCheckedQuads(kArraysName, cleaned.mesh, cleaned.topology, k, progressFn);
+    meter.finish("quads");
+  });
+  QuadsOutcome out;
+  out.V = vectorsArray(run.quads.mesh.positions);
+  auto [quads, polygons] = polygonFacesArrays(run.quads.mesh);
+  out.faces = std::move(quads);
+  out.polygons = std::move(polygons);
+  out.valid = run.check.isValid();
+  out.quadFraction = run.check.quadFraction;
+  // The command's report, from the same writer.
+  out.report = parseJson(
+      quadReportJson(run.quads, run.check, quadReportContext(run, mapFaces, k, meter, kArraysName, "")));
+  return out;
+}
+
 py::tuple readMeshArrays(const py::object& pathLike, bool uv) {
   const std::string path = pathArg(pathLike);
   ReadOptions options;
@@ -315,6 +365,19 @@ PYBIND11_MODULE(seamvox, m) {
                      "parameterize(V, F, field=...) takes it")
       .def_readonly("method", &FieldOutcome::method, "\"direct\" or \"proxy\"");
 
+  py::class_<QuadsOutcome> quadResult(m, "QuadResult", "The quad mesh of a seamless map (seamvox.quads).");
+  quadResult.def_readonly("V", &QuadsOutcome::V, "(k, 3) float64 vertex positions")
+      .def_readonly("faces", &QuadsOutcome::faces, "(q, 4) int64 quad faces (rows into V, counter-clockwise)")
+      .def_readonly("polygons", &QuadsOutcome::polygons,
+                    "list of 1-D int64 arrays: the faces that are not quads (at cones and the boundary)")
+      .def_readonly("valid", &QuadsOutcome::valid, "every check of the validation holds (report['validation'])")
+      .def_readonly("quad_fraction", &QuadsOutcome::quadFraction, "quads / faces")
+      .def_readonly("report", &QuadsOutcome::report, "dict: the report of `seamvox quads --report`")
+      .def("__repr__", [](const QuadsOutcome& q) {
+        return "<seamvox.QuadResult: " + std::to_string(py::len(q.faces)) + " quads, " +
+               std::to_string(py::len(q.polygons)) + " other faces, " + (q.valid ? "valid>" : "NOT valid>");
+      });
+
   m.def("read_mesh", &readMeshArrays, py::arg("path"), py::kw_only(), py::arg("uv") = false,
         "read_mesh(path, *, uv=False) -> (V, F) or, with uv=True, (V, F, uv or None)\n\n"
         "PLY, OBJ, OFF or Draco (.drc). V is (n, 3) float64, F (m, 3) int64, uv (m, 3, 2) float64.");
@@ -349,4 +412,14 @@ PYBIND11_MODULE(seamvox, m) {
         "The verdict of `seamvox check --json` on per-corner uv (m, 3, 2): seams found from the uv\n"
         "alone, residual, integer distance, flips, collapses and, with a field (m, 3), the relative\n"
         "gradient error; 'seamless' is True when both seam figures are <= tolerance.");
+  m.def("quads", &quadsArrays, py::arg("V"), py::arg("F"), py::arg("uv"), py::kw_only(), py::arg("scale") = 1,
+        py::arg("weld") = false, py::arg("threads") = py::none(), py::arg("progress") = py::none(),
+        "quads(V, F, uv, *, scale=1, weld=False, threads=None, progress=None) -> QuadResult\n\n"
+        "The quad mesh of `seamvox quads` from per-corner uv (m, 3, 2) in grid units, which must be\n"
+        "seamless (as parameterize makes it): a vertex at every integer point, edges along the integer\n"
+        "iso-lines (every `scale` units), validated against the map's topology. Q.faces holds the quads\n"
+        "as a (q, 4) array and Q.polygons the other faces (where iso-lines meet cones or the boundary),\n"
+        "each in the order of the command's file. A map that is not seamless, uv=None or a scale that\n"
+        "does not divide the seam translations raises seamvox.InputError with the command's message.\n"
+        "progress and Ctrl-C as in parameterize.");
 }
