@@ -200,6 +200,14 @@ TEST(Untangle, RelocationAloneUnfoldsMovedVerticesAndMovesNothingElse) {
     }
     for (CornerId c = 0; c < before.size(); ++c) {
       if (passes == 0 || !mayMove[d.cs.s.topology.vertex(c)]) EXPECT_EQ(d.map.cornerUV[c], before[c]) << "corner " << c;
+      if (d.map.cornerUV[c] == before[c]) continue;
+      // A moved vertex lands inside its fan: within the box of its neighbours' (u, v).
+      Vec2d lo = Vec2d::Constant(1e300), hi = Vec2d::Constant(-1e300);
+      d.cs.s.topology.forEachCornerAround(d.cs.s.topology.vertex(c), [&](CornerId a) {
+        for (CornerId b : {nextCorner(a), prevCorner(a)}) lo = lo.cwiseMin(d.map.cornerUV[b]), hi = hi.cwiseMax(d.map.cornerUV[b]);
+      });
+      EXPECT_TRUE((d.map.cornerUV[c].array() >= lo.array()).all() && (d.map.cornerUV[c].array() <= hi.array()).all())
+          << "corner " << c << " moved out of its fan";
     }
     if (passes == 0) {
       EXPECT_EQ(stats.flippedAfter, flipped);

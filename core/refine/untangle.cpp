@@ -169,23 +169,26 @@ double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>&
 }
 
 // One vertex: moves its single wedge toward the kernel centre of its fan, just far enough that
-// every fan triangle not folded in 3D keeps a quarter of the best margin. False when it cannot.
-bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, const std::vector<std::uint8_t>& skip) {
+// every fan triangle keeps a quarter of the best margin. Only interior vertices whose fan has no
+// face folded in 3D: their kernel lies inside the fan's polygon, so a move stays local (an open
+// or partly unconstrained fan could send the vertex far away). False when it cannot move.
+bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, const std::vector<std::uint8_t>& folded) {
+  if (topology.isBoundaryVertex(v) || topology.isIsolatedVertex(v)) return false;
   std::vector<Vec2d> normal;
   std::vector<double> offset;
   std::uint32_t wedge = kInvalidId;
-  bool single = true;
+  bool single = true, anyFolded = false;
   topology.forEachCornerAround(v, [&](CornerId c) {
     if (wedge == kInvalidId) wedge = cornerUV.wedge(c);
     single = single && cornerUV.wedge(c) == wedge;
-    if (skip[c / 3]) return;
+    anyFolded = anyFolded || folded[c / 3];
     // Triangle (p, a, b) positive: (b - a) x p + a x b > 0.
     const Vec2d a = cornerUV[nextCorner(c)], b = cornerUV[prevCorner(c)];
     const Vec2d d = b - a;
     normal.emplace_back(-d.y(), d.x());
     offset.push_back(a.x() * b.y() - a.y() * b.x());
   });
-  if (!single || wedge == kInvalidId || normal.size() < 3) return false;
+  if (!single || anyFolded || wedge == kInvalidId || normal.size() < 3) return false;
   Vec2d centre;
   const double margin = kernelCentre(normal, offset, centre);
   if (!(margin > 0.0)) return false;
@@ -203,10 +206,10 @@ bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, co
   return true;
 }
 
-// The last step: vertices of faces still flipped (not folded in 3D) that have one wedge, lie on
-// no seam and are not cones move into their fan's kernel, pass after pass. Moving one vertex
-// leaves every triangle outside its fan as it was and every fan triangle positive (except those
-// folded in 3D, which are not constrained), so flips never increase and seams never change.
+// The last step: interior vertices of faces still flipped that have one wedge, lie on no seam,
+// are not cones and touch no face folded in 3D move into their fan's kernel, pass after pass.
+// Moving one vertex leaves every triangle outside its fan as it was and makes every fan
+// triangle positive, so flips never increase and seams never change.
 std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                       WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
                                       std::uint32_t passes) {
