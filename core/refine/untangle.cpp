@@ -141,9 +141,8 @@ std::uint32_t patchRings(const TriangleMesh& mesh, const std::vector<FaceId>& se
 double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>& offset, Vec2d& centre) {
   const std::size_t n = normal.size();
   double best = -1e300;
-  // Each candidate is where three constraints (n_i . p + c_i = t |n_i|) meet, or two with a
-  // bounded t when the fan is open (boundary vertex): the three-constraint vertices suffice for
-  // a bounded region; an unbounded kernel (fewer than 3 directions) is left alone.
+  // Each candidate is where three constraints (n_i . p + c_i = t |n_i|) meet: the optimum of a
+  // bounded region is one of them (callers pass closed fans, whose kernel lies in the fan).
   for (std::size_t a = 0; a < n; ++a) {
     for (std::size_t b = a + 1; b < n; ++b) {
       for (std::size_t c = b + 1; c < n; ++c) {
