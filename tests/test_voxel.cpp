@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <map>
 #include <random>
 #include <set>
@@ -146,20 +147,63 @@ TEST(VoxelClip, PiecesPartitionTheTriangleAndStayInTheirVoxels) {
   }
 }
 
-TEST(VoxelClip, FragmentIntegralsMatchTheTangentialGradientsPairByPair) {
-  // The kernel integrates products of bilinear weights per axis; compare with the definition:
-  // projected gradients of the 8 B-splines at the points of a degree-4 rule, pair by pair.
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
+/// The integrals addFragmentIntegrals computes, from their definition: projected gradients of
+/// the 8 B-splines at the points of a degree-4 rule (exact for the quartic integrands), pair by pair.
+struct ReferenceIntegrals {
+  std::array<double, 36> stiffness{}, normal{};
+  std::array<std::complex<double>, 8> rhs{};
+  double scale() const {
+    double m = 0.0;
+    for (double x : stiffness) m = std::max(m, std::abs(x));
+    return m;
+  }
+};
+
+ReferenceIntegrals referenceIntegrals(const ClipPolygon& poly, const VoxelCoord& voxel, double voxelSize,
+                                      const Vec3d& n, const Vec3d& u, double h, double normalWeight) {
   const double w1 = 0.223381589678011, a1 = 0.445948490915965, b1 = 0.108103018168070;
   const double w2 = 0.109951743655322, a2 = 0.091576213509771, b2 = 0.816847572980459;
   const double rule[6][4] = {{a1, a1, b1, w1}, {a1, b1, a1, w1}, {b1, a1, a1, w1},
                              {a2, a2, b2, w2}, {a2, b2, a2, w2}, {b2, a2, a2, w2}};
+  const Vec3d v = n.cross(u);
+  ReferenceIntegrals out;
+  const Vec3d base(voxel[0], voxel[1], voxel[2]);
+  for (int i = 1; i + 1 < poly.size; ++i) {
+    const Vec3d p0 = poly.point[0] - base, p1 = poly.point[i] - base, p2 = poly.point[i + 1] - base;
+    const double area = 0.5 * (p1 - p0).cross(p2 - p0).norm();
+    for (const auto& q : rule) {
+      const Vec3d t = q[0] * p0 + q[1] * p1 + q[2] * p2;
+      Vec3d grad[8];
+      double dn[8];
+      for (int k = 0; k < 8; ++k) {
+        const double f[3] = {k & 1 ? t[0] : 1 - t[0], k & 2 ? t[1] : 1 - t[1], k & 4 ? t[2] : 1 - t[2]};
+        const double d[3] = {k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0};
+        const Vec3d g(d[0] * f[1] * f[2], f[0] * d[1] * f[2], f[0] * f[1] * d[2]);
+        dn[k] = n.dot(g);
+        grad[k] = g - dn[k] * n;
+      }
+      for (int a = 0; a < 8; ++a) {
+        for (int b = a; b < 8; ++b) {
+          const int idx = packedIndex(a, b);
+          out.stiffness[idx] += q[3] * area * (grad[a].dot(grad[b]) + normalWeight * dn[a] * dn[b]);
+          out.normal[idx] += q[3] * area * dn[a] * dn[b];
+        }
+        out.rhs[a] += q[3] * area * voxelSize / h * std::complex<double>(grad[a].dot(u), grad[a].dot(v));
+      }
+    }
+  }
+  return out;
+}
+
+TEST(VoxelClip, FragmentIntegralsMatchTheTangentialGradientsPairByPair) {
+  // The kernel integrates products of bilinear weights per axis; compare with the definition.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int trial = 0; trial < 200; ++trial) {
     const Vec3d n = Vec3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
     const Vec3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
     const double angle = 6.2831853 * unit(rng);
-    const Vec3d u = std::cos(angle) * e1 + std::sin(angle) * e2, v = n.cross(u);
+    const Vec3d u = std::cos(angle) * e1 + std::sin(angle) * e2;
     const VoxelCoord voxel{5, 6, 7};
     const Vec3d centre = Vec3d(5.2, 6.2, 7.2) + 0.6 * Vec3d(unit(rng), unit(rng), unit(rng));
     ClipPolygon poly;
@@ -172,84 +216,57 @@ TEST(VoxelClip, FragmentIntegralsMatchTheTangentialGradientsPairByPair) {
     VoxelIntegrals acc;
     double normalAcc[36] = {};
     addFragmentIntegrals(poly, voxel, voxelSize, n, u, h, acc, normalWeight, normalAcc);
-
-    std::array<double, 36> stiffness{}, normal{};
-    std::array<std::complex<double>, 8> rhs{};
-    const Vec3d base(voxel[0], voxel[1], voxel[2]);
-    for (int i = 1; i + 1 < poly.size; ++i) {
-      const Vec3d p0 = poly.point[0] - base, p1 = poly.point[i] - base, p2 = poly.point[i + 1] - base;
-      const double area = 0.5 * (p1 - p0).cross(p2 - p0).norm();
-      for (const auto& q : rule) {
-        const Vec3d t = q[0] * p0 + q[1] * p1 + q[2] * p2;
-        Vec3d grad[8];
-        double dn[8];
-        for (int k = 0; k < 8; ++k) {
-          const double f[3] = {k & 1 ? t[0] : 1 - t[0], k & 2 ? t[1] : 1 - t[1], k & 4 ? t[2] : 1 - t[2]};
-          const double d[3] = {k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0};
-          const Vec3d g(d[0] * f[1] * f[2], f[0] * d[1] * f[2], f[0] * f[1] * d[2]);
-          dn[k] = n.dot(g);
-          grad[k] = g - dn[k] * n;
-        }
-        for (int a = 0; a < 8; ++a) {
-          for (int b = a; b < 8; ++b) {
-            const int idx = packedIndex(a, b);
-            stiffness[idx] += q[3] * area * (grad[a].dot(grad[b]) + normalWeight * dn[a] * dn[b]);
-            normal[idx] += q[3] * area * dn[a] * dn[b];
-          }
-          rhs[a] += q[3] * area * voxelSize / h * std::complex<double>(grad[a].dot(u), grad[a].dot(v));
-        }
-      }
-    }
-    double scale = 0.0;
-    for (double x : stiffness) scale = std::max(scale, std::abs(x));
+    const ReferenceIntegrals ref = referenceIntegrals(poly, voxel, voxelSize, n, u, h, normalWeight);
+    const double scale = ref.scale();
     for (int i = 0; i < 36; ++i) {
-      ASSERT_NEAR(acc.stiffness[i], stiffness[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
-      ASSERT_NEAR(normalAcc[i], normal[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
+      ASSERT_NEAR(acc.stiffness[i], ref.stiffness[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
+      ASSERT_NEAR(normalAcc[i], ref.normal[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
     }
-    for (int a = 0; a < 8; ++a) ASSERT_NEAR(std::abs(acc.rhs[a] - rhs[a]), 0.0, 1e-12 * (1.0 + scale));
+    for (int a = 0; a < 8; ++a) ASSERT_NEAR(std::abs(acc.rhs[a] - ref.rhs[a]), 0.0, 1e-12 * (1.0 + scale));
   }
 }
 
-TEST(VoxelClip, AnElementsSumsEqualOneIntegralPerFragment) {
-  // integrateFragments sums an element's fragments (each with its own normal and field) and
-  // assembles the pairs once: the same as adding each fragment's integrals.
+TEST(VoxelClip, SmallPiecesAreIntegratedWithinATenThousandth) {
+  // Triangles under a quarter of a voxel across take the degree-2 rule: every integral within 1e-4
+  // of the exact one (relative to the largest entry), anywhere in the voxel, and no longer exact
+  // (else the cheaper rule would not be in use).
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  for (int trial = 0; trial < 50; ++trial) {
-    const VoxelCoord voxel{3, 1, 4};
-    const double normalWeight = trial % 3 ? 0.0 : unit(rng);
-    VoxelIntegrals each, once;
-    double normalEach[36] = {}, normalOnce[36] = {};
-    FragmentSums sums;
-    for (int f = 0; f < 1 + trial % 7; ++f) {
-      std::array<Vec3d, 3> g;
-      for (auto& p : g) p = Vec3d(3, 1, 4) + Vec3d(unit(rng), unit(rng), unit(rng));
-      const Vec3d n = (g[1] - g[0]).cross(g[2] - g[0]).normalized();
-      const Vec3d u = n.cross(Vec3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5)).normalized();
-      const ClipPolygon piece = clipTriangleToVoxel(g, voxel);
-      addFragmentIntegrals(piece, voxel, 0.3, n, u, 1.7, each, normalWeight, normalEach);
-      accumulateFragment(piece, voxel, 0.3, n, u, 1.7, sums);
-    }
-    finishElement(sums, once, normalWeight, normalOnce);
-    double scale = 1e-300;
-    for (double x : each.stiffness) scale = std::max(scale, std::abs(x));
-    ASSERT_GT(each.area, 0.0);
-    EXPECT_NEAR(once.area, each.area, 1e-13 * each.area);
+  double worst = 0.0;
+  for (int trial = 0; trial < 500; ++trial) {
+    const VoxelCoord voxel{1, 2, 3};
+    const Vec3d corner = Vec3d(1, 2, 3) + 0.85 * Vec3d(unit(rng), unit(rng), unit(rng));
+    ClipPolygon poly;
+    poly.size = 3;
+    for (int i = 0; i < 3; ++i) poly.point[i] = corner + 0.144 * Vec3d(unit(rng), unit(rng), unit(rng));
+    const Vec3d n = (poly.point[1] - poly.point[0]).cross(poly.point[2] - poly.point[0]).normalized();
+    const Vec3d u = n.cross(Vec3d(0.3, -0.2, 0.9)).normalized();
+    VoxelIntegrals acc;
+    double normalAcc[36] = {};
+    addFragmentIntegrals(poly, voxel, 0.5, n, u, 2.0, acc, 0.0, normalAcc);
+    const ReferenceIntegrals ref = referenceIntegrals(poly, voxel, 0.5, n, u, 2.0, 0.0);
+    const double scale = ref.scale();
     for (int i = 0; i < 36; ++i) {
-      ASSERT_NEAR(once.stiffness[i], each.stiffness[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
-      ASSERT_NEAR(normalOnce[i], normalEach[i], 1e-12 * scale) << "trial " << trial << " entry " << i;
+      ASSERT_NEAR(acc.stiffness[i], ref.stiffness[i], 1e-4 * scale) << "trial " << trial << " entry " << i;
+      ASSERT_NEAR(normalAcc[i], ref.normal[i], 1e-4 * scale) << "trial " << trial << " entry " << i;
+      worst = std::max(worst, std::abs(acc.stiffness[i] - ref.stiffness[i]) / scale);
     }
-    for (int k = 0; k < 8; ++k) ASSERT_NEAR(std::abs(once.rhs[k] - each.rhs[k]), 0.0, 1e-12 * (1.0 + scale));
+    for (int a = 0; a < 8; ++a) ASSERT_NEAR(std::abs(acc.rhs[a] - ref.rhs[a]), 0.0, 1e-4 * (1.0 + scale));
   }
+  EXPECT_GT(worst, 1e-12);
+  std::printf("worst relative error of the small-piece rule: %.2e\n", worst);
 }
 
 TEST(VoxelClip, FragmentIntegralsAreExactUnderSubdivision) {
-  // A degree-4 exact rule gives the same integrals on a triangle and on its 16 sub-triangles.
+  // The degree-4 exact rule (pieces a quarter of a voxel across or more) gives the same integrals
+  // on a triangle and on its 4 sub-triangles.
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int trial = 0; trial < 20; ++trial) {
     std::array<Vec3d, 3> t;
-    for (auto& p : t) p = Vec3d(unit(rng), unit(rng), unit(rng)) + Vec3d(2, 3, 4);
+    do {  // edges of 0.6 voxel or more, so that the halves stay above a quarter
+      for (auto& p : t) p = Vec3d(unit(rng), unit(rng), unit(rng)) + Vec3d(2, 3, 4);
+    } while (std::min({(t[1] - t[0]).norm(), (t[2] - t[1]).norm(), (t[0] - t[2]).norm()}) < 0.6);
     const Vec3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
     const Vec3d u = n.cross(Vec3d(0.3, -0.2, 0.9)).normalized();
     const VoxelCoord voxel{2, 3, 4};
@@ -264,7 +281,7 @@ TEST(VoxelClip, FragmentIntegralsAreExactUnderSubdivision) {
     };
     std::vector<std::array<Vec3d, 3>> tris{t};
     const VoxelIntegrals coarse = integrate(tris);
-    for (int level = 0; level < 2; ++level) {
+    for (int level = 0; level < 1; ++level) {
       std::vector<std::array<Vec3d, 3>> finer;
       for (const auto& x : tris) {
         const Vec3d m01 = 0.5 * (x[0] + x[1]), m12 = 0.5 * (x[1] + x[2]), m20 = 0.5 * (x[2] + x[0]);

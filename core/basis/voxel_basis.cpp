@@ -150,6 +150,20 @@ VoxelFragmentIndex indexFragmentsByVoxel(const std::vector<VoxelFragment>& fragm
 
 // Elements of voxel v: its fragments joined through shared non-cut edges (union-find). Writes
 // each fragment's element label local to v; returns the number of elements of v.
+/// Position of key in the increasing list, kInvalidId when absent. Branch-free halving (the
+/// compiler emits conditional moves): the searches of element labelling hit unpredictable keys.
+std::uint32_t findSorted(const std::vector<FaceId>& sorted, FaceId key) {
+  if (sorted.empty()) return kInvalidId;
+  const FaceId* base = sorted.data();
+  std::size_t n = sorted.size();
+  while (n > 1) {
+    const std::size_t half = n / 2;
+    base = base[half] <= key ? base + half : base;
+    n -= half;
+  }
+  return *base == key ? static_cast<std::uint32_t>(base - sorted.data()) : kInvalidId;
+}
+
 std::uint32_t labelVoxelElements(const BasisInput& in, const VoxelFragmentIndex& byVoxel,
                                  std::uint32_t v, std::vector<FaceId>& faces,
                                  std::vector<std::uint32_t>& fragmentElement) {
@@ -165,9 +179,8 @@ std::uint32_t labelVoxelElements(const BasisInput& in, const VoxelFragmentIndex&
       if (!(fr.edgeMask >> j & 1) || in.cut.corners.isCut(c)) continue;
       const CornerId o = in.topology.opposite(c);
       if (o == kInvalidId) continue;
-      const auto it = std::lower_bound(faces.begin(), faces.end(), cornerFace(o));
-      if (it == faces.end() || *it != cornerFace(o)) continue;
-      const std::uint32_t i2 = static_cast<std::uint32_t>(it - faces.begin());
+      const std::uint32_t i2 = findSorted(faces, cornerFace(o));
+      if (i2 == kInvalidId) continue;
       if (fragments[byVoxel.fragments[begin + i2]].edgeMask >> (o % 3) & 1) uf.unite(i, i2);
     }
   }

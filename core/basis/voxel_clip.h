@@ -90,7 +90,8 @@ inline int packedIndex(int a, int b) {
 /// removes the null space of B-splines restricted to a surface (they are linearly dependent on
 /// planes) without touching maps whose 3D gradient is tangent (linear maps on planes stay exact).
 /// normalAcc (36 packed entries, optional) receives the unweighted normal-derivative integrals.
-/// Fan triangulation with a degree-4 exact triangle rule (the integrands have degree <= 4).
+/// Fan triangulation with a degree-4 exact triangle rule (the integrands have degree <= 4);
+/// pieces under a quarter of a voxel across take a degree-2 rule (relative error below 1e-4).
 void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
                           const Vec3d& n, const Vec3d& u, double edgeLength, VoxelIntegrals& acc,
                           double normalWeight = 0.0, double* normalAcc = nullptr);
