@@ -90,5 +90,25 @@ TEST(ParamSolver, VoxelSolveRunsWhenItCanBeFactored) {
   EXPECT_TRUE(measureSeams(t.s.mesh, t.s.topology, t.cut, result.param.cornerUV).isSeamless(1e-6));
 }
 
+TEST(ParamSolver, VoxelSolversCloseABasisStageBeforeTheSolve) {
+  const FieldTorus t;
+  for (ParamSolver chosen : {ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc}) {
+    SolverOptions solverOptions;
+    solverOptions.solver = chosen;
+    solverOptions.gridResolution = 16;
+    StageMeter meter;
+    solverOptions.meter = &meter;
+    const SolverResult result =
+        parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, t.options(), solverOptions);
+    std::vector<std::string> names;
+    for (const StageFigures& stage : meter.stages()) names.push_back(stage.name);
+    std::vector<std::string> expected{"solve"};
+    if (chosen != ParamSolver::Hat) expected.insert(expected.begin(), "basis");
+    if (result.refined) expected.push_back("refine");
+    EXPECT_EQ(names, expected) << paramSolverName(chosen);
+    EXPECT_EQ(result.refined, chosen == ParamSolver::VoxLoc) << paramSolverName(chosen);
+  }
+}
+
 }  // namespace
 }  // namespace seamvox

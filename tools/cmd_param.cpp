@@ -121,7 +121,7 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   const auto& stages = meter.stages();
   std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", meter.totalSeconds(),
               stageSeconds(stages, "field"), stageSeconds(stages, "cut"),
-              stageSeconds(stages, "solve") + stageSeconds(stages, "refine"));
+              stageSeconds(stages, "basis") + stageSeconds(stages, "solve") + stageSeconds(stages, "refine"));
   std::printf("stages (s / peak MB):");
   for (const StageFigures& stage : stages) {
     std::printf(" %s %.1f / %.0f;", stage.name.c_str(), stage.seconds, stage.peakBytes / 1048576.0);

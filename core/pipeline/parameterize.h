@@ -75,8 +75,8 @@ struct PipelineOptions {
   double coneWeightRadius = kConeWeightRadius;
   UntangleOptions untangleOptions;  ///< edgeLength and progress are set from below
   ProgressFn progress;  ///< every stage reports and may cancel (CancelledError) through it
-  /// Stages are closed on this meter when given ("clean", "field", "cut", "solve", "refine",
-  /// "metrics"), so a caller can add its own ("read", "write") on the same one.
+  /// Stages are closed on this meter when given ("clean", "field", "cut", "basis" for the voxel
+  /// solvers, "solve", "refine", "untangle", "metrics"), so a caller can add its own ("read", "write") on the same one.
   StageMeter* meter = nullptr;
   /// Components listed one by one in PipelineResult::components (the largest; the rest summed).
   std::uint32_t listComponents = 1000;

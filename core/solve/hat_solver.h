@@ -23,6 +23,8 @@ struct ParamOptions {
   double coneWeightRadius = kConeWeightRadius;
   ProgressFn progress;
   std::function<bool(std::uint32_t unknowns)> failsToFactor;  ///< test hook (RoundOptions)
+  /// Called by the voxel solver once its basis is built (the pipeline closes a "basis" stage).
+  std::function<void()> basisBuilt;
 };
 
 struct ParamResult {

@@ -68,7 +68,9 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   VoxelParamResult vox;
   try {
     if (solverOptions.beforeVoxelSolve) solverOptions.beforeVoxelSolve();
-    vox = parameterizeMeshVoxel(mesh, topology, field, cut, options, solverOptions.gridResolution);
+    ParamOptions voxOptions = options;
+    if (solverOptions.meter) voxOptions.basisBuilt = [&] { solverOptions.meter->finish("basis"); };
+    vox = parameterizeMeshVoxel(mesh, topology, field, cut, voxOptions, solverOptions.gridResolution);
   } catch (const SolverError& e) {
     // The voxel system could not be factored: the hat solver gives the same kind of map, if it
     // fits in memory (on a massive mesh it would not, and swapping or being killed is worse

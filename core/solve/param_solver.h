@@ -54,8 +54,9 @@ struct SolverOptions {
   std::int32_t gridResolution = kDefaultGridResolution;  ///< voxels per axis (vox, voxloc)
   /// Region and rings of the local refinement (voxloc); markedFaces and edgeLength are filled in.
   RefineOptions refine;
-  /// When set, the solve closes its stages on it: "solve" (the hat or voxel solve, with the
-  /// fallback if any) and, for voxloc, "refine".
+  /// When set, the solve closes its stages on it: for vox and voxloc "basis" (the voxel basis
+  /// built), then "solve" (the hat or voxel solve, with the fallback if any) and, for voxloc,
+  /// "refine".
   StageMeter* meter = nullptr;
   /// Test hook, run just before the voxel solve: a SolverError it throws takes the path of a
   /// voxel system that cannot be factored (the hat fallback).
