@@ -63,10 +63,21 @@ struct CholmodFactor::Impl {
     if (L) cholmod_l_free_factor(&L, &common);
     L = nullptr;
   }
-  // Factors A; returns false (and frees the factor) when it is not positive definite.
-  bool tryFactor(cholmod_sparse* A, std::string* why) {
+  // Factors A (in the given order when not null); returns false (and frees the factor) when it
+  // is not positive definite.
+  bool tryFactor(cholmod_sparse* A, std::string* why, const std::vector<std::int64_t>* order = nullptr) {
     clear();
-    L = cholmod_l_analyze(A, &common);
+    if (order) {
+      const int methods = common.nmethods, ordering = common.method[0].ordering;
+      common.nmethods = 1;
+      common.method[0].ordering = CHOLMOD_GIVEN;
+      std::vector<SuiteSparse_long> perm(order->begin(), order->end());
+      L = cholmod_l_analyze_p(A, perm.data(), nullptr, 0, &common);
+      common.nmethods = methods;
+      common.method[0].ordering = ordering;
+    } else {
+      L = cholmod_l_analyze(A, &common);
+    }
     if (!L || common.status < CHOLMOD_OK) {
       *why = "analysis failed (status " + std::to_string(common.status) + ")";
       clear();
@@ -96,7 +107,16 @@ CholmodFactor::~CholmodFactor() = default;
 CholmodFactor::CholmodFactor(CholmodFactor&&) noexcept = default;
 CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
 
-void CholmodFactor::factor(const ComplexSparse& lowerIn) {
+void CholmodFactor::factor(const ComplexSparse& lowerIn) { factor(lowerIn, {}); }
+
+std::vector<std::int64_t> CholmodFactor::permutation() const {
+  const Impl& m = *impl_;
+  if (!m.L || m.realForm || !m.L->Perm) return {};
+  const auto* perm = static_cast<const SuiteSparse_long*>(m.L->Perm);
+  return std::vector<std::int64_t>(perm, perm + m.n);
+}
+
+void CholmodFactor::factor(const ComplexSparse& lowerIn, const std::vector<std::int64_t>& order) {
   ComplexSparse lower = lowerIn;
   lower.makeCompressed();
   Impl& m = *impl_;
@@ -121,7 +141,12 @@ void CholmodFactor::factor(const ComplexSparse& lowerIn) {
       x[2 * k] = lower.valuePtr()[k].real();
       x[2 * k + 1] = lower.valuePtr()[k].imag();
     }
-    const bool ok = m.tryFactor(A, &why);
+    if (!order.empty() && static_cast<std::int64_t>(order.size()) != n) {
+      cholmod_l_free_sparse(&A, &m.common);
+      throw SolverError("CHOLMOD: a given order of " + std::to_string(order.size()) + " entries for " +
+                        std::to_string(n) + " unknowns");
+    }
+    const bool ok = m.tryFactor(A, &why, order.empty() ? nullptr : &order);
     cholmod_l_free_sparse(&A, &m.common);
     if (ok) {
       m.factorBytes = m.common.memory_inuse;

@@ -3,6 +3,7 @@
 /// section 8). CHOLMOD's headers stay in solve.cpp.
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "core/solve/assemble.h"
 
@@ -22,6 +23,12 @@ class CholmodFactor {
   /// Analyses and factors the matrix given by its lower triangle. Throws SolverError (not
   /// positive definite, out of memory) naming the column where it failed.
   void factor(const ComplexSparse& lower);
+  /// The same with a fill-reducing order given (a permutation of 0..n-1, e.g. a restriction of
+  /// a similar system's permutation()): the analysis skips AMD and METIS, about half the time
+  /// of factoring a grid-sized system. An empty order analyses as factor(lower) does.
+  void factor(const ComplexSparse& lower, const std::vector<std::int64_t>& order);
+  /// The fill-reducing order of the last complex factorization (empty for the real form).
+  std::vector<std::int64_t> permutation() const;
   /// Solves K x = rhs with the last factor.
   ComplexVector solve(const ComplexVector& rhs) const;
 
