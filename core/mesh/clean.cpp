@@ -266,13 +266,15 @@ void forEachEdgeLength(const TriangleMesh& mesh, const Topology& topology, Verte
 
 std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology& topology) {
   const std::uint32_t nv = topology.numVertices();
-  std::vector<double> typical(nv, 0.0);  // median edge length at each vertex
+  std::vector<double> typical(nv, 0.0);   // median edge length at each vertex
+  std::vector<double> shortest(nv, 0.0);  // shortest edge at each vertex
   parallelFor(nv, kGrain, [&](const IndexRange& r) {
     std::vector<double> lengths;
     for (VertexId v = r.begin(); v != r.end(); ++v) {
       if (topology.isIsolatedVertex(v)) continue;
       lengths.clear();
       forEachEdgeLength(mesh, topology, v, [&](double length) { lengths.push_back(length); });
+      shortest[v] = *std::min_element(lengths.begin(), lengths.end());
       typical[v] = median(lengths);
     }
   });
@@ -282,13 +284,17 @@ std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology
     for (VertexId v = r.begin(); v != r.end(); ++v) {
       if (topology.isIsolatedVertex(v)) continue;
       around.clear();
-      double shortest = std::numeric_limits<double>::infinity();
-      forEachEdgeLength(mesh, topology, v, [&](double length) { shortest = std::min(shortest, length); });
+      double least = std::numeric_limits<double>::infinity();
       topology.forEachCornerAround(v, [&](CornerId c) {
-        for (CornerId other : {nextCorner(c), prevCorner(c)}) around.push_back(typical[topology.vertex(other)]);
+        for (CornerId other : {nextCorner(c), prevCorner(c)}) {
+          around.push_back(typical[topology.vertex(other)]);
+          least = std::min(least, around.back());
+        }
       });
+      // The median is at least the least value: most vertices are decided without it.
+      if (!(shortest[v] > kSpikeRatio * least)) continue;
       const double scale = median(around);
-      spike[v] = scale > 0.0 && shortest > kSpikeRatio * scale;
+      spike[v] = scale > 0.0 && shortest[v] > kSpikeRatio * scale;
     }
   });
   std::vector<VertexId> out;
