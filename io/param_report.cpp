@@ -102,6 +102,23 @@ void writeUntangle(JsonWriter& j, const UntangleStats& u) {
   j.endObject();
 }
 
+void writeFeatures(JsonWriter& j, const PipelineResult& r, double featureAngle) {
+  j.key("featureCurves").beginObject();
+  j.key("total").value(U64{r.featureCurves.total});
+  j.key("aligned").value(U64{r.featureCurves.aligned});
+  j.key("notAligned").value(U64{r.featureCurves.notAligned});
+  j.key("boundaryEdges").value(U64{r.features.boundaryEdges});
+  j.key("creaseEdges").value(U64{r.features.creaseEdges});
+  j.key("featureAngle").value(featureAngle);
+  j.key("fieldAligned").value(r.featureFieldAligned);
+  j.key("constraints").value(U64{r.featureLines.constraints});
+  j.key("constraintsApplied").value(U64{r.featureLines.applied});
+  j.key("constraintsConflicting").value(U64{r.featureLines.conflicting});
+  j.key("constraintsUnsupported").value(U64{r.featureLines.unsupported});
+  j.key("largestResidual").value(r.featureCurves.largestResidual);
+  j.endObject();
+}
+
 void writeQuality(JsonWriter& j, const PipelineResult& r) {
   j.key("quality").beginObject();
   j.key("seamless").value(r.isSeamless());
@@ -230,6 +247,7 @@ ParamReportContext paramReportContext(const PipelineOptions& options, const Stag
   c.solverAsked = std::move(solverAsked);
   c.fieldSource = std::move(fieldSource);
   c.gridResolution = options.solver.gridResolution;
+  c.featureAngle = options.features.featureAngle;
   c.rings = options.solver.refine.rings;
   c.maxRounds = options.solver.refine.maxRounds;
   c.stages = meter.stages();
@@ -247,6 +265,7 @@ std::string paramReportJson(const PipelineResult& r, const ParamReportContext& c
   if (r.solved.solver != ParamSolver::Hat) writeVoxel(j, r.solved, c.gridResolution);
   if (r.solved.refined) writeRefine(j, r.solved.refine, c);
   if (r.untangled) writeUntangle(j, r.untangle);
+  writeFeatures(j, r, c.featureAngle);
   writeQuality(j, r);
   writeComponents(j, r.components);
   writeSeconds(j, r, c);

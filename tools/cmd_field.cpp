@@ -69,6 +69,7 @@ struct FieldCommand {
   double mergeCones = 0.0;
   GridSpacing spacing;
   bool json = false, weld = false;
+  FeatureOptions features;  ///< the curves the field follows, as in param
   ProgressFn progress;
 };
 
@@ -93,6 +94,8 @@ FieldCommand parseFieldArgs(Args& args) {
   c.seamsPath = args.value("seams");
   c.json = args.flag("json");
   c.weld = args.flag("weld");
+  c.features.alignBoundary = args.flag("align-boundary");
+  c.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
   c.progress = makeProgress(args.flag("quiet"));
   args.finish(1);
   checkOutputPaths({{"MESH", c.input}, {"--import", c.importPath.value_or("")}},
@@ -135,8 +138,10 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
     throw UsageError("--curvature needs the direct field (--field smooth): the proxy field is the smoothest field only");
   }
   try {
-    run.field = computeFieldFromSource(mesh, topology, run.clean.faceOrigin, run.inputFaces, source, c.progress,
-                                       &run.fieldSolve);
+    const std::optional<FieldSource> aligned =
+        alignedFieldSource(topology, findFeatures(mesh, topology, c.features), source, mesh.numFaces());
+    run.field = computeFieldFromSource(mesh, topology, run.clean.faceOrigin, run.inputFaces,
+                                       aligned ? *aligned : source, c.progress, &run.fieldSolve);
   } catch (...) {
     rethrowWithContext(c.importPath ? *c.importPath : c.input);
   }
@@ -278,6 +283,7 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "                     [--curvature W] [--cones OUT.obj]\n"
                  "                     [--merge-cones F] [--edge-length H | --cells N]\n"
                  "                     [--seams OUT.obj] [--json] [--weld]\n"
+                 "                     [--align-boundary] [--feature-angle DEG]\n"
                  "\n"
                  "Cleans MESH, computes the smoothest cross field (or imports one), its cones and the\n"
                  "cut to a disk per component, and writes the field in the plain per-face format\n"
@@ -297,9 +303,11 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "  --cones OUT.obj   cones as OBJ points (red: positive index, blue: negative)\n"
                  "  --seams OUT.obj   seam curves as OBJ polylines\n"
                  "  --json            print a JSON report (cones, index sum, seams, times, memory)\n"
+                 "  --align-boundary, --feature-angle DEG  the curves the field follows, as in\n"
+                 "                    param (boundaries; creases above DEG degrees; default none)\n"
                  "  --weld            weld coincident vertices before cleaning\n"
                  "  --quiet           no progress on stderr\n",
-                 {"json", "weld"},
+                 {"json", "weld", "align-boundary"},
                  &runField});
 
 }  // namespace seamvox::cli

@@ -47,6 +47,8 @@ ParamCommand parseParamArgs(Args& args) {
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
   o.untangle = !args.flag("no-untangle");
+  o.features.alignBoundary = args.flag("align-boundary");
+  o.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
   o.clean.weldVertices = args.flag("weld");
   o.listComponents = static_cast<std::uint32_t>(args.integer("report-components", o.listComponents, 0, 100000000));
   o.dropUnsolved = args.flag("drop-unsolved");
@@ -103,6 +105,14 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(r.untangle.foldedIn3D),
                 static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves,
                 r.untangle.relocatedVertices, r.untangle.seconds);
+  }
+  if (r.featureCurves.total > 0) {
+    std::printf("feature curves: %u (%u boundary, %u crease edges; feature angle %g): %u aligned on integer "
+                "iso-lines, %u not aligned%s\n",
+                r.featureCurves.total, r.features.boundaryEdges, r.features.creaseEdges, c.options.features.featureAngle,
+                r.featureCurves.aligned, r.featureCurves.notAligned,
+                !r.featureFieldAligned ? " (the proxy or an imported field does not follow them)"
+                : r.solved.solver != ParamSolver::Hat ? " (only the hat solver holds them)" : "");
   }
   const ComponentSummary& parts = r.components;
   if (!parts.droppedIds.empty()) {
@@ -195,7 +205,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--no-untangle] [--weld] [--report R.json]\n"
                  "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
-                 "                     [--quads Q.obj|.ply]\n"
+                 "                     [--quads Q.obj|.ply] [--align-boundary] [--feature-angle DEG]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
@@ -222,6 +232,13 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
                  "                      re-solved with stiffening; seams and translations kept)\n"
+                 "  --align-boundary    the field follows boundary curves and the map puts them on\n"
+                 "                      integer iso-lines, so quads end cleanly there (direct field\n"
+                 "                      and hat solver only; the report counts curves aligned and\n"
+                 "                      not); off by default: it costs gradient error on smooth outlines\n"
+                 "  --feature-angle DEG also align interior edges whose faces turn by more than DEG\n"
+                 "                      degrees (creases), for CAD-like meshes; off by default: on a\n"
+                 "                      scan every noisy fold would become a crease\n"
                  "  --weld              weld coincident vertices before cleaning\n"
                  "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"
                  "                      stage timings, peak memory, components\n"
@@ -235,7 +252,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      validation\n"
                  "  --quiet             no progress on stderr\n"
                  SEAMVOX_MEMORY_HELP,
-                 {"greedy", "no-untangle", "weld", "drop-unsolved"},
+                 {"greedy", "no-untangle", "weld", "drop-unsolved", "align-boundary"},
                  &runParam});
 
 }  // namespace seamvox::cli

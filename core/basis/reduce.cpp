@@ -208,8 +208,13 @@ DomainTrees spanDomainTrees(const Basis& basis, const DomainIndex& index) {
 
 // Cycles: (R_b - r R_a) c_0 = (r T_a + e_seam - T_b) . t for every non-tree adjacency. The first
 // with alpha != 0 determines its group's c_0; the others become (basis, row) constraints on t.
+// A cone flagged in integerPoints gets a point unknown g (numbered after the seams, recorded in
+// pointRoot by its group's root domain): alpha c_0 = beta . t becomes c_0 = g with the constraint
+// alpha g - beta . t = 0.
 std::vector<std::pair<std::uint32_t, GaussVector>> closeCycles(const Basis& basis,
-                                                               DomainTrees& trees) {
+                                                               DomainTrees& trees,
+                                                               const std::vector<std::uint8_t>* integerPoints,
+                                                               std::vector<std::uint32_t>& pointRoot) {
   const auto& adjacency = basis.adjacencies();
   const auto& rotation = basis.seamRotation();
   std::vector<std::pair<std::uint32_t, GaussVector>> ownConstraints;
@@ -228,6 +233,15 @@ std::vector<std::pair<std::uint32_t, GaussVector>> closeCycles(const Basis& basi
       group.determined = true;
       group.alpha = alpha;
       group.beta = std::move(beta);
+      if (integerPoints && (*integerPoints)[group.basis]) {
+        const std::uint32_t point = basis.numSeams() + static_cast<std::uint32_t>(pointRoot.size());
+        pointRoot.push_back(group.root);
+        GaussVector row = scaled(unitVector(point), group.alpha);
+        addScaled(row, GaussInt(-1), group.beta);
+        ownConstraints.emplace_back(group.basis, std::move(row));
+        group.alpha = GaussInt(1);
+        group.beta = unitVector(point);
+      }
     } else {
       // alpha1 c0 = beta1 t and alpha c0 = beta t: alpha1 beta - alpha beta1 = 0.
       GaussVector row = scaled(beta, group.alpha);
@@ -335,7 +349,8 @@ void buildReducedMap(const DomainTrees& trees, const std::vector<std::uint32_t>&
 // Components through elements and seams: the component of every unknown and whether a
 // component has a seam with a rotation.
 void assignComponents(const Basis& basis, const DomainTrees& trees,
-                      const std::vector<std::uint32_t>& groupPositional, Reduction& out) {
+                      const std::vector<std::uint32_t>& groupPositional,
+                      const std::vector<std::uint32_t>& pointRoot, Reduction& out) {
   const std::uint32_t nd = basis.numDomains(), ns = basis.numSeams();
   const std::vector<Group>& groups = trees.groups;
   UnionFind uf(nd);
@@ -373,6 +388,11 @@ void assignComponents(const Basis& basis, const DomainTrees& trees,
       out.unknownComponent[out.numPositional + j] = seamComponent[s];
     }
   }
+  for (std::uint32_t p = 0; p < pointRoot.size(); ++p) {  // a cone's point unknown: its component
+    for (const auto& [j, x] : out.seamTranslation[ns + p]) {
+      out.unknownComponent[out.numPositional + j] = componentOf[pointRoot[p]];
+    }
+  }
 }
 
 }  // namespace
@@ -382,15 +402,23 @@ Reduction reduceBasis(const Basis& basis, const ReduceOptions& options) {
   const DomainIndex index = indexDomains(basis);
   DomainTrees trees = spanDomainTrees(basis, index);
   reportProgress(options.progress, "reduce", 0.3);
-  std::vector<std::pair<std::uint32_t, GaussVector>> ownConstraints = closeCycles(basis, trees);
+  if (options.integerPoints && options.integerPoints->size() != basis.numBasisFunctions()) {
+    throw InputError("reduceBasis: " + std::to_string(options.integerPoints->size()) +
+                     " integer-point flags for " + std::to_string(basis.numBasisFunctions()) + " basis functions");
+  }
+  std::vector<std::uint32_t> pointRoot;
+  std::vector<std::pair<std::uint32_t, GaussVector>> ownConstraints =
+      closeCycles(basis, trees, options.integerPoints, pointRoot);
   Reduction out;
-  eliminateTranslations(basis.numSeams(), options, std::move(ownConstraints), out);
+  eliminateTranslations(basis.numSeams() + static_cast<std::uint32_t>(pointRoot.size()), options,
+                        std::move(ownConstraints), out);
   reportProgress(options.progress, "reduce", 0.6);
   const std::vector<std::uint32_t> groupPositional =
       numberPositionalUnknowns(trees.groups, index, basis.numBasisFunctions(), out);
   buildReducedMap(trees, groupPositional, out);
   reportProgress(options.progress, "reduce", 0.8);
-  assignComponents(basis, trees, groupPositional, out);
+  assignComponents(basis, trees, groupPositional, pointRoot, out);
+  out.seamTranslation.resize(basis.numSeams());  // the point unknowns are no seams
   dropInvisibleTranslations(out);
   reportProgress(options.progress, "reduce", 1.0);
   return out;

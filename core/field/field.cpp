@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "core/field/field_numerics.h"
+#include "core/solve/assemble.h"
 #include "core/solve/cholmod_solver.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
@@ -137,18 +138,35 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
     }
   });
 
-  // Index: walk counter-clockwise around each interior vertex; crossing from face(c) to the next
-  // face ccw goes through the edge of next(c).
+  // Index: walk counter-clockwise around each vertex; crossing from face(c) to the next face ccw
+  // goes through the edge of next(c) (a boundary edge, eps 0, after the last face of a boundary
+  // fan). A boundary fan turns by pi less, and the field's angle from the first and the last
+  // boundary edge modulo quarter turns enters its boundaryIndex4 (field.h).
+  out.boundaryIndex4.assign(numVertices, 0);
+  const auto offQuarterTurn = [](double a) { return a - std::round(a / (0.5 * M_PI)) * (0.5 * M_PI); };
   parallelFor(numVertices, 4096, [&](const IndexRange& range) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
-      if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) continue;
-      double sum = 2.0 * M_PI;
+      if (topology.isIsolatedVertex(v)) continue;
+      const bool boundary = topology.isBoundaryVertex(v);
+      double sum = boundary ? M_PI : 2.0 * M_PI;
+      CornerId last = kInvalidId;
       topology.forEachCornerAround(v, [&](CornerId c) {
         double corner[3];
         cornerAngles(faceData[cornerFace(c)].edge, corner);
         sum += eps[nextCorner(c)] - corner[c % 3];
+        last = c;
       });
-      out.index4[v] = static_cast<std::int32_t>(std::lround(4.0 * sum / (2.0 * M_PI)));
+      const auto index = [&](double turn) { return static_cast<std::int32_t>(std::lround(4.0 * turn / (2.0 * M_PI))); };
+      if (!boundary) {
+        out.index4[v] = index(sum);
+        continue;
+      }
+      const CornerId first = topology.vertexCorner(v);
+      const FaceData& a = faceData[cornerFace(first)];
+      const FaceData& b = faceData[cornerFace(last)];
+      const double deltaFirst = offQuarterTurn(double(a.theta) - a.edge[prevCorner(first) % 3]);
+      const double deltaLast = offQuarterTurn(double(b.theta) - b.edge[nextCorner(last) % 3]);
+      out.boundaryIndex4[v] = index(sum + deltaFirst - deltaLast);
     }
   });
   for (VertexId v = 0; v < numVertices; ++v) {
@@ -298,6 +316,56 @@ void shiftDiagonal(SparseMatrixC& a, const std::vector<double>& baseDiagonal,
   }
 }
 
+/// Per face, the sum of exp(4 i angle) over its aligned edges (corners sorted), angles in the
+/// face frame; 0 for faces without one.
+std::vector<Complex> alignmentTargets(const TriangleMesh& mesh, const std::vector<CornerId>& corners) {
+  std::vector<Complex> target(mesh.numFaces(), 0.0);
+  for (CornerId c : corners) {
+    if (cornerFace(c) >= mesh.numFaces()) {
+      throw InputError("field alignment: corner " + std::to_string(c) + " out of range");
+    }
+    target[cornerFace(c)] += std::polar(1.0, 4.0 * faceAngles(mesh, cornerFace(c)).edge[c % 3]);
+  }
+  return target;
+}
+
+/// Whether the aligned edges of a face agree (their 4th powers sum to their count).
+bool edgesAgree(const Complex& target, std::uint32_t count) { return std::abs(target) > count - 1e-6; }
+
+/// The field x (4th powers) with the faces of `corners` fixed along their edges and the other faces
+/// of their components solving A z = 0 (a harmonic extension: the smoothest field with the
+/// constraint); components without a constrained face keep x. A face whose edges cancel (e.g. at
+/// 45 degrees) is left free.
+void constrainToEdges(const TriangleMesh& mesh, const SparseMatrixC& lower, const std::vector<CornerId>& corners,
+                      const std::vector<std::uint32_t>& comp, std::size_t numComp, VectorC& x,
+                      FieldSolveStats* stats) {
+  const std::uint32_t numFaces = mesh.numFaces();
+  const std::vector<Complex> target = alignmentTargets(mesh, corners);
+  std::vector<std::uint8_t> constrained(numComp, 0), fixed(numFaces, 0);
+  std::vector<Complex> values(x.data(), x.data() + x.size());
+  for (FaceId f = 0; f < numFaces; ++f) {
+    if (std::abs(target[f]) < 1e-6) continue;
+    fixed[f] = 1;
+    values[f] = target[f] / std::abs(target[f]);
+    constrained[comp[f]] = 1;
+  }
+  for (FaceId f = 0; f < numFaces; ++f) {
+    if (!constrained[comp[f]]) fixed[f] = 1;
+  }
+  LinearSystem system;
+  system.lower = lower;
+  system.rhs = VectorC::Zero(numFaces);
+  const RestrictedSystem restricted = restrictSystem(system, fixed, values);
+  if (!restricted.freeUnknowns.empty()) {
+    CholmodFactor factor;
+    detail::factorFieldMatrix(factor, restricted.lower, "aligned field", "faces", stats);
+    const VectorC y = factor.solve(restricted.rhs);
+    if (!y.allFinite()) throw SolverError("aligned field: the constrained solve produced NaN");
+    for (std::size_t k = 0; k < restricted.freeUnknowns.size(); ++k) values[restricted.freeUnknowns[k]] = y[k];
+  }
+  for (FaceId f = 0; f < numFaces; ++f) x[f] = values[f];
+}
+
 }  // namespace
 
 CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topology,
@@ -380,6 +448,10 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
     }
   }
 
+  if (!options.alignCorners.empty()) {
+    reportProgress(options.progress, "field: align", 0.92);
+    constrainToEdges(mesh, a, options.alignCorners, comp, numComp, x, options.stats);
+  }
   for (std::uint32_t f = 0; f < numFaces; ++f) {
     if (loneFace[f]) x[f] = 1.0;
   }
@@ -394,6 +466,27 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
   });
   reportProgress(options.progress, "field: directions", 1.0);
   return field;
+}
+
+void snapToFeatureEdges(const TriangleMesh& mesh, const std::vector<CornerId>& corners, CrossField& field) {
+  if (field.direction.size() != mesh.numFaces()) {
+    throw InputError("snapToFeatureEdges: field has " + std::to_string(field.direction.size()) +
+                     " directions for " + std::to_string(mesh.numFaces()) + " faces");
+  }
+  const std::vector<Complex> target = alignmentTargets(mesh, corners);
+  std::vector<std::uint32_t> count(mesh.numFaces(), 0);
+  for (CornerId c : corners) ++count[cornerFace(c)];
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const CornerId c = corners[i];
+    const FaceId f = cornerFace(c);
+    if (i > 0 && cornerFace(corners[i - 1]) == f) continue;  // once per face, along its first edge
+    if (!edgesAgree(target[f], count[f])) continue;
+    const FaceAngles a = faceAngles(mesh, f);
+    const double theta = frameAngle(a.frame, field.at(f));
+    const double edge = a.edge[c % 3];
+    const double snapped = edge + std::round(wrapAngle(theta - edge) / (0.5 * M_PI)) * (0.5 * M_PI);
+    field.set(f, std::cos(snapped) * a.frame.e1 + std::sin(snapped) * a.frame.e2);
+  }
 }
 
 Vec3d rotateBetween(const Vec3d& from, const Vec3d& to, const Vec3d& v) {

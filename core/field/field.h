@@ -11,7 +11,8 @@
 /// * singularity index of a vertex in quarter turns: index4(v) = round(4 (K_v + sum eps) / 2 pi)
 ///   walking counter-clockwise around v (DESIGN section 4); a flat fan whose field turns by +phi/4
 ///   around the vertex has index4 = +1. On a closed mesh sum index4 = 4 chi (Poincare-Hopf).
-///   Boundary vertices get index 0 (the boundary is free).
+///   Boundary vertices get index 0 (the boundary is free); their turning relative to the
+///   boundary is boundaryIndex4 (below).
 #include <cstdint>
 #include <vector>
 
@@ -42,6 +43,13 @@ struct FieldSingularities {
   std::vector<std::uint8_t> matching;  ///< 3 #F, per corner, in {0,1,2,3}
   std::vector<std::int32_t> index4;    ///< #V, singularity index in quarter turns
   std::vector<VertexId> cones;         ///< vertices with index4 != 0, increasing
+  /// #V, 0 at interior vertices. At a boundary vertex, in quarter turns, the rotation of the field
+  /// walking counter-clockwise from the first boundary edge to the last, against the boundary's
+  /// own turn: round(4 (pi - sum of angles + sum eps + delta_first - delta_last) / 2 pi), delta the
+  /// field's angle from its boundary edge modulo quarter turns (0 when aligned). The deltas cancel
+  /// along each boundary edge, so sum index4 + sum boundaryIndex4 = 4 chi on every component;
+  /// with the field aligned to the boundary a 90-degree corner has +1, a straight vertex 0.
+  std::vector<std::int32_t> boundaryIndex4;
   std::int64_t indexSum4() const;      ///< sum of index4 (== 4 chi on closed meshes)
 };
 
@@ -64,6 +72,10 @@ struct SmoothFieldOptions {
   /// (w > 0 solves (A - lambda M) z = M q per component, q the principal directions as 4th
   /// powers, lambda = lambda_1 / 2 - w 4 pi^2 / area: w = 1 already follows curvature closely.)
   double curvatureWeight = 0.0;
+  /// Corners whose face's field is fixed along the corner's edge (feature curves, features.h):
+  /// a hard constraint, the other faces of their components solve A z = 0 around them (one more
+  /// factorization). A face whose constrained edges disagree takes the mean of their 4th powers.
+  std::vector<CornerId> alignCorners;
   ProgressFn progress;
   FieldSolveStats* stats = nullptr;  ///< filled when set
 };
@@ -71,6 +83,11 @@ struct SmoothFieldOptions {
 /// edges, one sparse Hermitian CHOLMOD solve. Exact; practical up to a few million faces.
 CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topology,
                                  const SmoothFieldOptions& options = {});
+
+/// Turns the direction of every face whose corners in `corners` (sorted) name edges that agree
+/// (parallel or perpendicular) onto the nearest of those edges' four directions, exactly on the
+/// mesh's own face. Other faces are left unchanged.
+void snapToFeatureEdges(const TriangleMesh& mesh, const std::vector<CornerId>& corners, CrossField& field);
 
 /// v rotated by the smallest rotation taking unit vector `from` to unit vector `to` (for two faces
 /// of an edge: the rotation about the edge, the discrete parallel transport). Opposite vectors: a

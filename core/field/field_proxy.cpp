@@ -453,11 +453,21 @@ CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology,
     throw InputError("curvature alignment needs the direct field: the proxy field (used above " +
                      std::to_string(kDirectFieldMaxFaces) + " faces) is the smoothest field only");
   }
+  if (!direct && !smooth.alignCorners.empty()) {
+    throw InputError("feature alignment needs the direct field: the proxy field (used above " +
+                     std::to_string(kDirectFieldMaxFaces) + " faces) cannot follow feature curves");
+  }
   const auto compute = [&](const TriangleMesh& surface) {
     return direct ? computeSmoothestField(surface, topology, smooth)
                   : computeProxyField(surface, topology, proxy).field;
   };
-  if (geometry.smoothingIterations == 0) return compute(mesh);
+  // The direct solve aligns the field with smooth.alignCorners on the surface it solves on; the
+  // directions are then turned exactly onto those edges of the mesh's own faces.
+  const auto snap = [&](CrossField field) {
+    if (direct && !smooth.alignCorners.empty()) snapToFeatureEdges(mesh, smooth.alignCorners, field);
+    return field;
+  };
+  if (geometry.smoothingIterations == 0) return snap(compute(mesh));
   TriangleMesh smoothed;
   smoothed.positions = smoothPositions(mesh, topology, geometry.smoothingIterations);
   smoothed.triangles = mesh.triangles;
@@ -471,6 +481,7 @@ CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology,
     }
   });
   std::vector<Triangle>().swap(smoothed.triangles);
+  field = snap(std::move(field));
   field.framePositions = std::move(smoothed.positions);
   field.frameSmoothing = geometry.smoothingIterations;
   return field;

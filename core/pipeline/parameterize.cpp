@@ -26,12 +26,26 @@ CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topo
   }
   SmoothFieldOptions smooth;
   smooth.curvatureWeight = source.curvatureWeight;
+  smooth.alignCorners = source.alignCorners;
   smooth.progress = progress;
   smooth.stats = stats;
   ProxyFieldOptions proxy;
   proxy.progress = progress;
   proxy.stats = stats;
   return computeCrossField(mesh, topology, resolveFieldMethod(source.method, mesh.numFaces()), smooth, proxy);
+}
+
+std::optional<FieldSource> alignedFieldSource(const Topology& topology, const FeatureSet& features,
+                                              const FieldSource& source, std::uint32_t numFaces) {
+  if (features.empty() || !source.importedPerInputFace.empty() ||
+      resolveFieldMethod(source.method, numFaces) != FieldMethod::Direct) {
+    return std::nullopt;
+  }
+  FieldSource aligned;
+  aligned.method = source.method;
+  aligned.curvatureWeight = source.curvatureWeight;
+  aligned.alignCorners = featureSideCorners(topology, features);
+  return aligned;
 }
 
 ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
@@ -73,6 +87,8 @@ std::vector<std::pair<VertexId, VertexId>> mergeableCoincidentCones(
 void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions& options,
                      StageMeter& meter) {
   ParamOptions param;
+  const std::vector<CornerId> featureCorners = featureSideCorners(r.topology, r.features);
+  if (r.featureFieldAligned) param.featureCorners = &featureCorners;
   param.edgeLength = r.edgeLength;
   param.greedyRounding = options.greedyRounding;
   param.coneWeightRadius = options.coneWeightRadius;
@@ -123,6 +139,8 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
         meter.finish("untangle");
       }
       r.seamQuality = measureSeams(r.mesh, r.topology, coneCut.cut, r.solved.param.cornerUV);
+      r.featureLines = r.solved.param.lines;
+      r.featureCurves = measureFeatureAlignment(r.topology, r.features, r.solved.param.cornerUV);
       return;
     }
     r.solved = SolverResult{};  // free the map before the next pass
@@ -172,8 +190,12 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   r.cleanReport = clean.report;
   meter.finish("clean");
 
+  r.features = findFeatures(r.mesh, r.topology, options.features);
+  std::optional<FieldSource> aligned = alignedFieldSource(r.topology, r.features, options.field, r.mesh.numFaces());
+  r.featureFieldAligned = aligned.has_value();
   CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces,
-                                            options.field, options.progress, &r.fieldSolve);
+                                            aligned ? *aligned : options.field, options.progress, &r.fieldSolve);
+  aligned.reset();
   r.fieldMethod = options.field.importedPerInputFace.empty()
                       ? fieldMethodName(resolveFieldMethod(options.field.method, r.mesh.numFaces()))
                       : "file";

@@ -6,11 +6,13 @@
 /// it gets back. `seamvox param`, `seamvox field` and the benchmarks call these stages.
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/cut/cut.h"
 #include "core/field/cone_merge.h"
+#include "core/field/features.h"
 #include "core/field/field.h"
 #include "core/field/field_proxy.h"
 #include "core/mesh/clean.h"
@@ -31,6 +33,9 @@ struct FieldSource {
   /// When not empty: an imported field, one vector per input face (before cleaning), projected
   /// on the cleaned faces; method and curvatureWeight are then unused.
   std::vector<Vec3d> importedPerInputFace;
+  /// Corners of the cleaned mesh whose faces the direct field is held along (featureSideCorners);
+  /// unused by the proxy field and an imported one.
+  std::vector<CornerId> alignCorners;
 };
 
 /// The cross field of a cleaned mesh from its source; faceOrigin maps cleaned faces to input
@@ -40,6 +45,11 @@ CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topo
                                   const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces,
                                   const FieldSource& source, const ProgressFn& progress = {},
                                   FieldSolveStats* stats = nullptr);
+
+/// The source of a field that follows the feature curves: `source` with their side corners to align
+/// to, when its field can (the direct field, not the proxy nor an imported one, and some curve).
+std::optional<FieldSource> alignedFieldSource(const Topology& topology, const FeatureSet& features,
+                                              const FieldSource& source, std::uint32_t numFaces);
 
 /// Singularities of a field with close cones merged, and the cut through them.
 struct ConeCut {
@@ -66,6 +76,11 @@ struct PipelineOptions {
   double mergeCones = kConeMergeFraction;
   /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
   std::uint32_t maxConePasses = 3;
+  /// Feature curves (boundaries; creases above featureAngle) the field follows and the map holds
+  /// on integer iso-lines. Only the direct field follows them and only the hat solves hold them:
+  /// with the proxy field no curve is aligned, with vox and voxloc those the map keeps by chance
+  /// (PipelineResult::featureCurves counts them in the map either way).
+  FeatureOptions features;
   SolverOptions solver;  ///< solver, grid resolution, refinement (its meter is set from below)
   bool greedyRounding = false;
   /// Foldover repair after the solve (core/refine/untangle): stiffening re-solves of patches
@@ -115,6 +130,10 @@ struct PipelineResult {
   SolverResult solved;           ///< figures of the last solve (its map moved to mesh.cornerUV)
   bool untangled = false;        ///< the foldover repair ran
   UntangleStats untangle;
+  FeatureSet features;              ///< of the cleaned mesh (before any drop)
+  bool featureFieldAligned = false;  ///< the field was held along them (direct field)
+  LineConstraintStats featureLines;  ///< the map's constraints (last hat solve; zero otherwise)
+  FeatureAlignment featureCurves;    ///< curves the final map keeps on integer iso-lines
   SeamQuality seamQuality;
   MapQuality mapQuality;
   ComponentSummary components;  ///< per component, of the mesh before any drop

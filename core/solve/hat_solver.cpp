@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "core/basis/basis.h"
 #include "core/solve/evaluate.h"
@@ -27,16 +28,66 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
   start = std::chrono::steady_clock::now();
   ReduceOptions reduceOptions;
   reduceOptions.progress = options.progress;
+  std::vector<std::uint8_t> integerPoints;
+  if (options.featureCorners) {
+    integerPoints = conesOnFeatures(topology, cut, basis, *options.featureCorners);
+    reduceOptions.integerPoints = &integerPoints;
+  }
   const Reduction reduction = reduceBasis(basis, reduceOptions);
   out.translationConstraints = static_cast<std::uint32_t>(reduction.cycleConstraints.size());
   out.secondsReduce = secondsSince(start);
 
   RoundOptions roundOptions;
+  std::vector<LineConstraint> lines;
+  if (options.featureCorners) {
+    lines = featureLineConstraints(mesh, field, cut, basis, *options.featureCorners);
+    roundOptions.lines = &lines;
+    roundOptions.lineStats = &out.lines;
+  }
   roundOptions.greedy = options.greedyRounding;
   roundOptions.progress = options.progress;
   roundOptions.failsToFactor = options.failsToFactor;
   storeSeamlessSolution(basis, reduction, solveSeamless(basis, reduction, roundOptions), topology, cut, out);
   return out;
+}
+
+std::vector<std::uint8_t> conesOnFeatures(const Topology& topology, const CutResult& cut, const HatBasis& basis,
+                                          const std::vector<CornerId>& sideCorners) {
+  std::vector<std::uint8_t> onFeature(topology.numVertices(), 0), isCone(topology.numVertices(), 0);
+  for (CornerId c : sideCorners) onFeature[topology.vertex(nextCorner(c))] = onFeature[topology.vertex(prevCorner(c))] = 1;
+  for (VertexId v : cut.cones) isCone[v] = 1;
+  std::vector<std::uint8_t> flags(basis.numBasisFunctions(), 0);
+  for (std::uint32_t b = 0; b < flags.size(); ++b) {
+    const VertexId v = basis.basisVertex()[b];
+    flags[b] = onFeature[v] && isCone[v];
+  }
+  return flags;
+}
+
+std::vector<LineConstraint> featureLineConstraints(const TriangleMesh& mesh, const CrossField& field,
+                                                   const CutResult& cut, const HatBasis& basis,
+                                                   const std::vector<CornerId>& sideCorners) {
+  const double minCosine = std::cos(kFeatureAxisDegrees * M_PI / 180.0);
+  std::vector<LineConstraint> lines;
+  for (std::uint32_t g = 0; g < sideCorners.size(); ++g) {
+    const CornerId s = sideCorners[g];
+    const FaceId f = cornerFace(s);
+    const Triangle& t = mesh.triangles[f];
+    const Vec3d edge = mesh.position(t[(s + 2) % 3]) - mesh.position(t[(s + 1) % 3]);
+    const Vec3d n = faceNormal(mesh, f);
+    if (edge.norm() == 0.0 || n.squaredNorm() == 0.0) continue;
+    Vec3d u = field.at(f);  // combed direction, as HatBasis::elementIntegrals
+    for (int k = 0; k < cut.faceRotation[f] % 4; ++k) u = n.cross(u);
+    const double alongU = std::abs(edge.normalized().dot(u));
+    const double alongV = std::abs(edge.normalized().dot(n.cross(u)));
+    if (std::max(alongU, alongV) < minCosine) continue;
+    const std::uint8_t axis = alongU >= alongV ? 1 : 0;  // along u: v is constant on the edge
+    for (CornerId end : {nextCorner(s), prevCorner(s)}) {
+      const std::uint32_t domain = basis.cornerDomain()[end];
+      if (domain != kInvalidId) lines.push_back({domain, axis, g});
+    }
+  }
+  return lines;
 }
 
 namespace {

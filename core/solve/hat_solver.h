@@ -25,6 +25,9 @@ struct ParamOptions {
   std::function<bool(std::uint32_t unknowns)> failsToFactor;  ///< test hook (RoundOptions)
   /// Called by the voxel solver once its basis is built (the pipeline closes a "basis" stage).
   std::function<void()> basisBuilt;
+  /// When set: corners on either side of feature edges (featureSideCorners, features.h) whose
+  /// normal coordinate the map holds on an integer (featureLineConstraints).
+  const std::vector<CornerId>* featureCorners = nullptr;
 };
 
 struct ParamResult {
@@ -37,6 +40,7 @@ struct ParamResult {
   /// those it anchored through a translation (SeamlessSolution).
   std::vector<FaceId> unsolvedFaces, anchoredFaces;
   double secondsBasis = 0.0, secondsReduce = 0.0, secondsEvaluate = 0.0;
+  LineConstraintStats lines;  ///< the feature constraints (ParamOptions::featureCorners)
 };
 
 /// Seamless map of a mesh cut to a disk per component (cutToDisk), following the combed field.
@@ -44,6 +48,24 @@ struct ParamResult {
 ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,
                              const ParamOptions& options = {});
+
+/// Largest angle (degrees) between a feature edge and the nearest combed axis of its face for
+/// which the map holds the edge on an iso-line (the aligned field is within float precision).
+constexpr double kFeatureAxisDegrees = 10.0;
+
+/// The line constraints of feature edges in the hat basis: per side corner s (group = its index),
+/// at both ends of its edge in face(s), the coordinate normal to the edge (v when the edge runs
+/// along the combed direction, u when along its quarter turn). Edges farther than
+/// kFeatureAxisDegrees from both axes are left out.
+std::vector<LineConstraint> featureLineConstraints(const TriangleMesh& mesh, const CrossField& field,
+                                                   const CutResult& cut, const HatBasis& basis,
+                                                   const std::vector<CornerId>& sideCorners);
+
+/// Per basis function of a hat basis: whether its vertex is a cone on a feature edge (sideCorners),
+/// which the map puts on an integer point (ReduceOptions::integerPoints): else the curves through
+/// it could only pass where its seams put it, a half-integer point for many cones.
+std::vector<std::uint8_t> conesOnFeatures(const Topology& topology, const CutResult& cut, const HatBasis& basis,
+                                          const std::vector<CornerId>& sideCorners);
 
 /// Stores a solved seamless system in out: its stats and translations, and the map evaluated
 /// once per wedge of the cut (timed as secondsEvaluate). Shared by the hat and voxel solvers.

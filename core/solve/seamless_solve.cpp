@@ -263,8 +263,12 @@ void solveRounded(const LinearSystem& system, const Reduction& reduction,
     stats.pinnedFirst += stats.anchoredComponents;
   }
   stats.secondsFirstSolve = secondsSince(start);
+  const bool lines = options.lines && !options.lines->empty();
+  LineConstraintStats ownLineStats;
+  LineConstraintStats& lineStats = options.lineStats ? *options.lineStats : ownLineStats;
   if (reduction.numTranslational == 0) {
     stats.pinnedSecond = stats.pinnedFirst;
+    if (lines) solveWithLineConstraints(system, reduction, fixed, x, *options.lines, lineStats);
     return;
   }
   start = std::chrono::steady_clock::now();
@@ -305,7 +309,11 @@ void solveRounded(const LinearSystem& system, const Reduction& reduction,
     ++stats.pinnedSecond;
   }
   reportProgress(options.progress, "solve", 0.5);
-  solveWithFixed(system, fixed, x, "second solve", stats, order);
+  if (lines) {
+    solveWithLineConstraints(system, reduction, fixed, x, *options.lines, lineStats);
+  } else {
+    solveWithFixed(system, fixed, x, "second solve", stats, order);
+  }
   stats.secondsSecondSolve = secondsSince(start);
 }
 

@@ -11,6 +11,7 @@
 #include "core/basis/basis.h"
 #include "core/system/progress.h"
 #include "core/basis/reduce.h"
+#include "core/solve/line_constraints.h"
 
 namespace seamvox {
 
@@ -26,6 +27,10 @@ struct RoundOptions {
   /// Test hook: a component (not the largest) for which it returns true, given its number of
   /// unknowns, is left unsolved as if it could not be factored (dropUnsolvable's path).
   std::function<bool(std::uint32_t unknowns)> failsToFactor;
+  /// Coordinates held on integer iso-lines in the last solve (line_constraints.h; feature curves),
+  /// when set and not empty; their figures go to lineStats.
+  const std::vector<LineConstraint>* lines = nullptr;
+  LineConstraintStats* lineStats = nullptr;
   ProgressFn progress;
 };
 
