@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "stream/mesh_stream.h"
 #include "stream/scratch_folder.h"
 
 namespace seamvox {
@@ -22,6 +23,18 @@ struct MemoryPath {
   /// Takes the traffic and peak of a finished scratch folder.
   void recordScratch(const ScratchFolder& scratch);
 };
+
+/// Faces and vertices of an input as its header declares them, else guessed from the file size
+/// (OBJ: a face line and its share of v and vt lines take at least 20 bytes; Draco: 1 byte).
+struct MeshCounts {
+  std::uint64_t faces = 0, vertices = 0;
+};
+MeshCounts guessMeshCounts(const std::string& path, const MeshStream& stream);
+
+/// A Draco input is decoded whole when opened: refused (InputError ending with alternative) when
+/// programBytes + bytesPerFace per byte of the file exceeds the budget.
+void refuseDracoInputAboveBudget(const std::string& path, std::uint64_t budget, std::uint64_t programBytes,
+                                 std::uint64_t bytesPerFace, const std::string& alternative);
 
 /// "path in memory: estimate 1.2 GiB within the budget 2.00 GiB; peak memory 900 MiB" or
 /// "path out of core: estimate ... above the budget ...; scratch peak ...; stage W written / R read, ...; peak memory ...".
