@@ -2,24 +2,25 @@
 # gen, convert and info above the memory budget (issue 17): time, peak resident memory and scratch
 # traffic per size, one run at a time, each also in memory when the machine holds it.
 #
-#   bash bench/ooc_stream.sh [--faces 10000000,50000000,100000000] [--budget 1G] [--dir /tmp/ooc2-bench]
+#   bash bench/ooc_stream.sh [--faces 10000000,50000000,100000000] [--budgets 1G] [--dir /tmp/ooc2-bench]
 #                            [--build build] [--in-memory]
 #
 # Per size: gen scan (out of core), convert PLY -> OBJ and OBJ -> PLY (out of core), info --weld
-# (out of core); with --in-memory the same with --memory-budget 16G. Prints one markdown row per
+# (out of core where the estimate exceeds the budget), once per budget of --budgets (e.g. 1G,64M);
+# with --in-memory also with --memory-budget 16G. Prints one markdown row per
 # run (command, wall s, peak MiB from /usr/bin/time, the command's own path line) and removes the
 # meshes of a size before the next.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 faces=10000000,50000000,100000000
-budget=1G
+budgets=1G
 dir=${TMPDIR:-/tmp}/ooc2-bench
 build=build
 in_memory=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --faces) faces=$2; shift 2 ;;
-    --budget) budget=$2; shift 2 ;;
+    --budgets) budgets=$2; shift 2 ;;
     --dir) dir=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
     --in-memory) in_memory=1; shift ;;
@@ -45,7 +46,7 @@ echo "|---|---|---|---|"
 IFS=, read -ra sizes <<< "$faces"
 for n in "${sizes[@]}"; do
   ply=$dir/scan$n.ply obj=$dir/scan$n.obj back=$dir/back$n.ply
-  for b in "$budget" $([ "$in_memory" = 1 ] && echo 16G); do
+  for b in ${budgets//,/ } $([ "$in_memory" = 1 ] && echo 16G); do
     run "$b" gen scan --faces "$n" -o "$ply" --quiet
     run "$b" convert "$ply" "$obj"
     run "$b" convert "$obj" "$back"

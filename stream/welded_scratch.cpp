@@ -1,6 +1,7 @@
 #include "stream/welded_scratch.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <unordered_map>
 
@@ -30,8 +31,9 @@ struct PositionLess {
 /// A welded face for the duplicate sort: faces with the same vertex set sort together, the
 /// lowest input index (the one cleanMesh keeps) first.
 struct FaceRecord {
-  Triangle triangle;
+  std::array<VertexId, 3> vertices;  ///< sorted
   std::uint32_t face;
+  Triangle triangle;
 };
 std::array<VertexId, 3> sortedVertices(const Triangle& t) {
   std::array<VertexId, 3> s{t[0], t[1], t[2]};
@@ -40,8 +42,7 @@ std::array<VertexId, 3> sortedVertices(const Triangle& t) {
 }
 struct SameVerticesLess {
   bool operator()(const FaceRecord& a, const FaceRecord& b) const {
-    const auto x = sortedVertices(a.triangle), y = sortedVertices(b.triangle);
-    return x != y ? x < y : a.face < b.face;
+    return a.vertices != b.vertices ? a.vertices < b.vertices : a.face < b.face;
   }
 };
 
@@ -115,14 +116,17 @@ class WeldPass {
   }
 
   WeldStreamResult run() {
-    readStream();
-    weldVertices();
-    renumberFaces();
-    dropDuplicateFaces();
-    countEdges();
-    placeCorners();
-    sortByMorton();
-    countComponents();
+    const std::pair<const char*, void (WeldPass::*)()> passes[] = {
+        {"read", &WeldPass::readStream},       {"weld", &WeldPass::weldVertices},
+        {"faces", &WeldPass::renumberFaces},   {"duplicates", &WeldPass::dropDuplicateFaces},
+        {"edges", &WeldPass::countEdges},      {"positions", &WeldPass::placeCorners},
+        {"morton", &WeldPass::sortByMorton},   {"components", &WeldPass::countComponents}};
+    for (const auto& [name, pass] : passes) {
+      const auto start = std::chrono::steady_clock::now();
+      (this->*pass)();
+      result_.census.stageSeconds.emplace_back(
+          name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
     result_.scratch.numVertices = welded_;
     return std::move(result_);
   }
@@ -219,7 +223,7 @@ class WeldPass {
         ++result_.census.degenerateFaces;
         continue;
       }
-      faceSort_->add({t, f});
+      faceSort_->add({sortedVertices(t), f, t});
     }
     std::vector<std::uint32_t>().swap(weldId_);
     folder_.remove(inputTriangles_);
@@ -231,11 +235,19 @@ class WeldPass {
     faceSort_->finish();
     components_ = std::make_unique<detail::UnionFind>(welded_);
     edgeSort_ = std::make_unique<ExternalSorter<EdgeRecord, EdgeLess>>(folder_, sortOptions("edges"));
-    cornerSort_ = std::make_unique<ExternalSorter<CornerRecord, ByVertexLess>>(folder_, sortOptions("positions"));
+    // Positions that fit half the memory (besides the union-find) are read whole later and the
+    // kept faces wait in a file; otherwise the corners are joined with them by two sorts.
+    const std::uint64_t unionFind = std::uint64_t(welded_) * sizeof(std::uint32_t);
+    positionsInMemory_ = !options_.joinPositions && unionFind + welded_ * sizeof(Vec3f) <= options_.memoryBytes / 2;
+    if (positionsInMemory_) {
+      keptFaces_ = std::make_unique<ScratchWriter>(folder_, "positions");
+    } else {
+      cornerSort_ = std::make_unique<ExternalSorter<CornerRecord, ByVertexLess>>(folder_, sortOptions("positions"));
+    }
     FaceRecord r{};
     std::array<VertexId, 3> last{kInvalidId, kInvalidId, kInvalidId};
     while (faceSort_->next(r)) {
-      const auto key = sortedVertices(r.triangle);
+      const auto& key = r.vertices;
       if (key == last) {
         ++result_.census.duplicateFaces;
         continue;
@@ -247,7 +259,11 @@ class WeldPass {
       for (std::uint32_t k = 0; k < 3; ++k) {
         const VertexId a = t[k], b = t[(k + 1) % 3];
         edgeSort_->add({std::min(a, b), std::max(a, b), a < b ? 1u : 0u});
-        cornerSort_->add({t[k], r.face, k});
+        if (cornerSort_) cornerSort_->add({t[k], r.face, k});
+      }
+      if (keptFaces_) {
+        keptFaces_->write(&r.face, sizeof r.face);
+        keptFaces_->write(&t, sizeof t);
       }
       ++result_.census.faces;
     }
@@ -263,10 +279,12 @@ class WeldPass {
     edgeSort_->finish();
     WeldCensus& c = result_.census;
     std::unordered_map<std::uint32_t, std::uint32_t> loop;  // boundary vertex -> parent
-    auto findLoop = [&](std::uint32_t v) {
+    auto findLoop = [&](std::uint32_t v) {  // with path halving
       auto it = loop.emplace(v, v).first;
       while (it->second != v) {
-        v = it->second;
+        const std::uint32_t grandparent = loop.find(it->second)->second;
+        it->second = grandparent;
+        v = grandparent;
         it = loop.find(v);
       }
       return v;
@@ -305,9 +323,54 @@ class WeldPass {
     }
   }
 
-  /// Pass 6: corners joined with the welded positions (sorted by vertex, read along the
-  /// positions file), then regrouped by face; the bounding box of the referenced vertices.
+  /// Pass 6: the kept faces with their corner positions, in a file; the bounding box of the
+  /// referenced vertices.
   void placeCorners() {
+    ScratchWriter out(folder_, "positions");
+    BoundingBox& box = result_.census.box;
+    auto add = [&](WeldedFace& face) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3d p = face.corner(k).cast<double>();
+        box.min = box.min.cwiseMin(p);
+        box.max = box.max.cwiseMax(p);
+      }
+      out.write(&face, sizeof face);
+    };
+    if (positionsInMemory_) {
+      placeCornersFromMemory(add);
+    } else {
+      joinCornersWithPositions(add);
+    }
+    placedFaces_ = out.finish();
+  }
+
+  template <class Add>
+  void placeCornersFromMemory(Add&& add) {
+    std::vector<Vec3f> positions(welded_);
+    {
+      ScratchReader in(folder_, result_.scratch.positions, "positions");
+      if (welded_ > 0 && !in.read(positions.data(), positions.size() * sizeof(Vec3f))) {
+        throw IoError(result_.scratch.positions.path + ": welded positions end early");
+      }
+    }
+    const ScratchFile kept = keptFaces_->finish();
+    keptFaces_.reset();
+    ScratchReader in(folder_, kept, "positions");
+    WeldedFace face;
+    while (in.read(&face.face, sizeof face.face) && in.read(&face.triangle, sizeof face.triangle)) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3f& p = positions[face.triangle[k]];
+        face.corners[k] = {p.x(), p.y(), p.z()};
+      }
+      add(face);
+    }
+    folder_.remove(kept);
+  }
+
+  /// Corners sorted by vertex, joined with the positions read along their file, then regrouped
+  /// by face.
+  template <class Add>
+  void joinCornersWithPositions(Add&& add) {
     cornerSort_->finish();
     auto placed = std::make_unique<ExternalSorter<PlacedCorner, ByCornerLess>>(folder_, sortOptions("positions"));
     {
@@ -325,22 +388,16 @@ class WeldPass {
     }
     cornerSort_.reset();
     placed->finish();
-    ScratchWriter out(folder_, "positions");
     PlacedCorner c[3];
-    BoundingBox& box = result_.census.box;
     while (placed->next(c[0]) && placed->next(c[1]) && placed->next(c[2])) {
       WeldedFace face;
       face.face = c[0].face;
       for (int k = 0; k < 3; ++k) {
         face.triangle[k] = c[k].vertex;
         face.corners[k] = c[k].position;
-        const Vec3d p = face.corner(k).cast<double>();
-        box.min = box.min.cwiseMin(p);
-        box.max = box.max.cwiseMax(p);
       }
-      out.write(&face, sizeof face);
+      add(face);
     }
-    placedFaces_ = out.finish();
   }
 
   /// Pass 7: Morton codes of the centroids, zero-area faces and faces per component; the
@@ -410,6 +467,8 @@ class WeldPass {
   std::unique_ptr<ExternalSorter<FaceRecord, SameVerticesLess>> faceSort_;
   std::unique_ptr<ExternalSorter<EdgeRecord, EdgeLess>> edgeSort_;
   std::unique_ptr<ExternalSorter<CornerRecord, ByVertexLess>> cornerSort_;
+  std::unique_ptr<ScratchWriter> keptFaces_;  ///< face and triangle, when positionsInMemory_
+  bool positionsInMemory_ = false;
   std::unique_ptr<detail::UnionFind> components_;
   std::unordered_map<std::uint32_t, ComponentCount> counts_;  ///< by union-find root
 };

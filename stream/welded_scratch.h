@@ -7,11 +7,13 @@
 /// spatially coherent order) and the welded positions, stays in the scratch folder for the next
 /// streamed stage (WeldedFaceReader). Memory: the sorts' limit, plus 4 bytes per vertex for the
 /// weld map (while faces are renumbered) and then for the union-find of the components, plus
-/// about 40 bytes per component and per boundary vertex.
+/// about 40 bytes per component and per boundary vertex; the welded positions (12 bytes per
+/// vertex) are read whole when they fit half the limit, else joined with the corners by sorts.
 #include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/mesh/mesh.h"
@@ -35,7 +37,10 @@ constexpr int kMortonBits = 21;
 
 struct WeldStreamOptions {
   bool weld = false;  ///< join vertices at exactly equal positions (the lowest input id keeps its place first)
-  std::uint64_t memoryBytes = std::uint64_t(256) << 20;  ///< for the sorts (each of the up to three alive: a third)
+  /// For the sorts (each of the up to three alive: a third) and the positions when they fit half.
+  std::uint64_t memoryBytes = std::uint64_t(256) << 20;
+  /// Tests: join the positions by sorts even when they fit.
+  bool joinPositions = false;
 };
 
 /// What the weld pass found: the figures `seamvox info` prints, out of core.
@@ -53,6 +58,8 @@ struct WeldCensus {
   std::vector<ComponentInfo> components;
   BoundingBox box;
   VertexAttributes properties;  ///< names and types of the vertex properties read
+  /// Wall seconds of the passes: read, weld, faces, duplicates, edges, positions, morton, components.
+  std::vector<std::pair<std::string, double>> stageSeconds;
 };
 
 /// The weld pass's output files in the scratch folder.

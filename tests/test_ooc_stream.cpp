@@ -301,12 +301,16 @@ TEST(WeldedScratch, FacesInMortonOrderAreTheFacesCleanMeshKeepsOnWeldedVertices)
   cleanOptions.weldVertices = true;
   const CleanResult cleaned = cleanMesh(*mesh, cleanOptions);
 
+  // Positions joined with the corners by sorts (the smallest sorts), and read whole (8 MiB).
+  for (const bool join : {true, false}) {
+  SCOPED_TRACE(join ? "positions joined" : "positions in memory");
   testing::TempDir dir;
   ScratchFolder folder(dir.dir());
   const std::unique_ptr<MeshStream> stream = makeMemoryStream("scan", mesh, 5000);
   WeldStreamOptions weld;
   weld.weld = true;
-  weld.memoryBytes = 1;  // the smallest sorts
+  weld.memoryBytes = join ? 1 : std::uint64_t(8) << 20;
+  weld.joinPositions = join;
   const WeldStreamResult result = weldMeshStream(*stream, folder, weld);
   EXPECT_EQ(result.census.weldedVertices, cleaned.report.weldedVertices);
   EXPECT_EQ(result.census.faces, cleaned.mesh.numFaces());
@@ -341,6 +345,7 @@ TEST(WeldedScratch, FacesInMortonOrderAreTheFacesCleanMeshKeepsOnWeldedVertices)
   EXPECT_EQ(count, cleaned.mesh.numFaces());
   std::set<FaceId> expected(cleaned.faceOrigin.begin(), cleaned.faceOrigin.end());
   EXPECT_TRUE(faces == expected);
+}
 }
 
 TEST(WeldedScratch, AFullScratchDiskIsAnErrorNamingTheFolder) {

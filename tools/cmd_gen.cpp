@@ -17,7 +17,7 @@ namespace {
 // Measured peak of the in-memory path: 120 MB for a 4M-face scan (about 26 B per face over the
 // program), 175 MB with --noise; rounded up.
 constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20, kBytesPerFace = 28, kNoiseBytesPerFace = 16;
-constexpr std::size_t kChunk = std::size_t(1) << 20;
+constexpr std::size_t kChunk = std::size_t(1) << 18;
 
 /// Writes the generated mesh chunk by chunk (no scratch: the counts are known up front).
 void writeGenerated(MeshGenerator& generator, const std::string& output, const WriteOptions& options) {

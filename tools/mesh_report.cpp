@@ -94,6 +94,7 @@ MeshSummary summarizeCensus(const std::string& path, const WeldCensus& census, d
   s.manifoldEdges = census.manifoldEdges;
   s.clashEdges = census.clashEdges;
   s.edgesOfMoreFaces = census.nonManifoldEdges;
+  s.stageSeconds = census.stageSeconds;
   s.peakResidentBytes = peakResidentBytes();
   return s;
 }
@@ -146,7 +147,9 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
                   s.box.diagonal());
   }
   if (s.outOfCore) {
-    out += format("time            read, weld, clean and measure %.3f s\n", s.readSeconds);
+    out += format("time            %.3f s:", s.readSeconds);
+    for (const auto& [stage, seconds] : s.stageSeconds) out += format(" %s %.2f", stage.c_str(), seconds);
+    out += "\n";
   } else {
     out += format("time            read %.3f s, clean %.3f s, components %.3f s\n", s.readSeconds,
                   s.cleanSeconds, s.componentsSeconds);
@@ -217,6 +220,11 @@ std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
   j.key("diagonal").value(s.box.diagonal());
   j.endObject();
   j.key("timings").beginObject();
+  if (s.outOfCore) {
+    j.key("passSeconds").beginObject();
+    for (const auto& [stage, seconds] : s.stageSeconds) j.key(stage).value(seconds);
+    j.endObject();
+  }
   j.key("readSeconds").value(s.readSeconds);
   j.key("cleanSeconds").value(s.cleanSeconds);
   j.key("componentsSeconds").value(s.componentsSeconds);

@@ -35,6 +35,7 @@ struct MeshSummary {
   /// vertices, orientation clashes counted (in clean.nonManifoldEdges too) but not reoriented.
   bool outOfCore = false;
   std::uint64_t edges = 0, boundaryEdges = 0, manifoldEdges = 0, clashEdges = 0, edgesOfMoreFaces = 0;
+  std::vector<std::pair<std::string, double>> stageSeconds;  ///< the weld pass's
   MemoryPath memoryPath;  ///< which path ran (printed last)
 };
 
