@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -136,12 +137,15 @@ inline bool parseNumber(std::string_view token, T& value) {
   return false;
 }
 
-/// Buffered output into an AtomicFile: numbers are formatted with std::to_chars (shortest
-/// round-trip form for float and double) into one large block.
+/// Buffered output into an AtomicFile (or any sink of bytes): numbers are formatted with
+/// std::to_chars (shortest round-trip form for float and double) into one large block.
 class OutputBuffer {
  public:
+  using Sink = std::function<void(const char*, std::size_t)>;
   explicit OutputBuffer(AtomicFile& file, std::size_t capacity = std::size_t(1) << 22)
-      : file_(file), buffer_(capacity) {}
+      : OutputBuffer([&file](const char* data, std::size_t n) { file.write(data, n); }, capacity) {}
+  explicit OutputBuffer(Sink sink, std::size_t capacity = std::size_t(1) << 22)
+      : sink_(std::move(sink)), buffer_(capacity) {}
   ~OutputBuffer() = default;  // call flush(); an exception path must not write
 
   /// Makes room for n more bytes (n at most the capacity).
@@ -155,7 +159,7 @@ class OutputBuffer {
   void put(std::string_view text) {
     if (text.size() > buffer_.size()) {
       flush();
-      file_.write(text.data(), text.size());
+      sink_(text.data(), text.size());
       return;
     }
     reserve(text.size());
@@ -191,12 +195,12 @@ class OutputBuffer {
     used_ += sizeof(T);
   }
   void flush() {
-    file_.write(buffer_.data(), used_);
+    if (used_ > 0) sink_(buffer_.data(), used_);
     used_ = 0;
   }
 
  private:
-  AtomicFile& file_;
+  Sink sink_;
   std::vector<char> buffer_;
   std::size_t used_ = 0;
 };
@@ -217,6 +221,26 @@ std::unique_ptr<MeshStream> openPlyStream(std::unique_ptr<InputFile> in, const R
 std::unique_ptr<MeshStream> openObjStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
 std::unique_ptr<MeshStream> openOffStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
 void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
+// Pieces of the PLY, OFF and OBJ writers, shared with ChunkedMeshWriter (the same bytes).
+void putPlyHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces, const VertexAttributes& attributes,
+                  bool withUV, bool binary);
+/// Vertices [begin, end) of positions, with their values in attributes (indexed alike).
+void putPlyVertices(OutputBuffer& out, const std::vector<Vec3f>& positions, const VertexAttributes& attributes,
+                    std::size_t begin, std::size_t end, bool binary);
+/// count triangles; uv: 3 (u, v) per triangle, or null for none.
+void putPlyFaces(OutputBuffer& out, const Triangle* triangles, const Vec2d* uv, std::size_t count, bool binary);
+void putOffHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces);
+void putOffVertices(OutputBuffer& out, const Vec3f* positions, std::size_t count);
+void putOffFaces(OutputBuffer& out, const Triangle* triangles, std::size_t count);
+/// `v x y z [r g b]` lines of vertices [begin, end) (colors when attributes has them).
+void putObjVertices(OutputBuffer& out, const std::vector<Vec3f>& positions, const VertexAttributes& attributes,
+                    std::size_t begin, std::size_t end);
+/// `f a b c` lines without texture coordinates.
+void putObjFaces(OutputBuffer& out, const Triangle* triangles, std::size_t count);
+/// A `vt u v` line.
+void putObjTexcoord(OutputBuffer& out, const Vec2d& uv);
+/// An `f a/ta b/tb c/tc` line (texcoord: 0-based vt numbers), or `f a b c` when texcoord is null.
+void putObjFace(OutputBuffer& out, const Triangle& t, const std::uint32_t* texcoord);
 void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
 void writeOff(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
 /// Draco decodes whole files (no streaming in the library); readDraco returns the mesh.

@@ -215,35 +215,67 @@ std::unique_ptr<MeshStream> openObjStream(std::unique_ptr<InputFile> in, const R
   return std::make_unique<ObjReader>(std::move(in), options);
 }
 
+void putObjVertices(OutputBuffer& out, const std::vector<Vec3f>& positions, const VertexAttributes& attributes,
+                    std::size_t begin, std::size_t end) {
+  // Colors as the common `v x y z r g b` extension, in [0, 1] (other properties: writeMesh warns).
+  std::vector<std::size_t> color = colorProperties(attributes);
+  color.resize(std::min<std::size_t>(color.size(), 3));
+  for (std::size_t v = begin; v < end; ++v) {
+    out.put("v ");
+    out.putRow(positions[v].data(), 3, color.empty() ? '\n' : ' ');
+    if (color.empty()) continue;
+    float rgb[3];
+    for (int k = 0; k < 3; ++k) {
+      rgb[k] = static_cast<float>(normalizedColor(attributes.properties[color[k]], static_cast<VertexId>(v)));
+    }
+    out.putRow(rgb, 3);
+  }
+}
+
+void putObjFaces(OutputBuffer& out, const Triangle* triangles, std::size_t count) {
+  for (std::size_t f = 0; f < count; ++f) putObjFace(out, triangles[f], nullptr);
+}
+
+void putObjTexcoord(OutputBuffer& out, const Vec2d& uv) {
+  out.put("vt ");
+  out.putRow(uv.data(), 2);
+}
+
+void putObjFace(OutputBuffer& out, const Triangle& t, const std::uint32_t* texcoord) {
+  out.put('f');
+  for (int k = 0; k < 3; ++k) {
+    out.put(' ');
+    out.putNumber(std::uint64_t(t[k]) + 1);
+    if (texcoord) {
+      out.put('/');
+      out.putNumber(std::uint64_t(texcoord[k]) + 1);
+    }
+  }
+  out.put('\n');
+}
+
 void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
   const bool withUV = options.writeUV && mesh.hasUV();
   OutputBuffer out(file);
   out.put("# written by seamvox\n");
-  // Colors as the common `v x y z r g b` extension, in [0, 1] (other properties: writeMesh warns).
-  std::vector<std::size_t> color = colorProperties(mesh.attributes);
-  color.resize(std::min<std::size_t>(color.size(), 3));
-  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    out.put("v ");
-    out.putRow(mesh.positions[v].data(), 3, color.empty() ? '\n' : ' ');
-    if (color.empty()) continue;
-    float rgb[3];
-    for (int k = 0; k < 3; ++k) {
-      rgb[k] = static_cast<float>(normalizedColor(mesh.attributes.properties[color[k]], static_cast<VertexId>(v)));
-    }
-    out.putRow(rgb, 3);
+  putObjVertices(out, mesh.positions, mesh.attributes, 0, mesh.positions.size());
+  if (!withUV) {
+    putObjFaces(out, mesh.triangles.data(), mesh.triangles.size());
+    out.flush();
+    return;
   }
   // Texture coordinates: the first corner of each vertex (in corner order) gets a vt line that
   // every later corner of the vertex with the same (u, v) shares; a corner with another value (the
   // other side of a seam) gets its own. A seamless map thus writes about one vt per vertex instead
   // of one per corner. Both passes walk the corners in the same order, so they number alike.
   const std::size_t numCorners = 3 * mesh.triangles.size();
-  std::vector<CornerId> firstCorner(withUV ? mesh.positions.size() : 0, kInvalidId);
+  std::vector<CornerId> firstCorner(mesh.positions.size(), kInvalidId);
   std::vector<std::uint32_t> firstTexcoord(firstCorner.size(), 0);
   auto ownsTexcoord = [&](std::size_t c) {  // does corner c write (and number) a vt line?
     const CornerId first = firstCorner[mesh.triangles[c / 3][c % 3]];
     return first == c || mesh.cornerUV[c] != mesh.cornerUV[first];
   };
-  if (withUV) {
+  {
     std::uint32_t count = 0;
     for (std::size_t c = 0; c < numCorners; ++c) {
       const VertexId v = mesh.triangles[c / 3][c % 3];
@@ -252,26 +284,16 @@ void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
         firstTexcoord[v] = count;
       }
       if (ownsTexcoord(c)) {
-        out.put("vt ");
-        const Vec2d uv = mesh.cornerUV[c];
-        out.putRow(uv.data(), 2);
+        putObjTexcoord(out, mesh.cornerUV[c]);
         ++count;
       }
     }
   }
   std::uint32_t next = 0;
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    out.put('f');
-    for (int k = 0; k < 3; ++k) {
-      const VertexId v = mesh.triangles[f][k];
-      out.put(' ');
-      out.putNumber(std::uint64_t(v) + 1);
-      if (withUV) {
-        out.put('/');
-        out.putNumber(std::uint64_t(ownsTexcoord(3 * f + k) ? next++ : firstTexcoord[v]) + 1);
-      }
-    }
-    out.put('\n');
+    std::uint32_t texcoord[3];
+    for (int k = 0; k < 3; ++k) texcoord[k] = ownsTexcoord(3 * f + k) ? next++ : firstTexcoord[mesh.triangles[f][k]];
+    putObjFace(out, mesh.triangles[f], texcoord);
   }
   out.flush();
 }

@@ -164,18 +164,30 @@ std::unique_ptr<MeshStream> openOffStream(std::unique_ptr<InputFile> in, const R
   return std::make_unique<OffReader>(std::move(in), options);
 }
 
+void putOffHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces) {
+  out.put("OFF\n");
+  out.putNumber(vertices);
+  out.put(' ');
+  out.putNumber(faces);
+  out.put(" 0\n");
+}
+
+void putOffVertices(OutputBuffer& out, const Vec3f* positions, std::size_t count) {
+  for (std::size_t v = 0; v < count; ++v) out.putRow(positions[v].data(), 3);
+}
+
+void putOffFaces(OutputBuffer& out, const Triangle* triangles, std::size_t count) {
+  for (std::size_t f = 0; f < count; ++f) {
+    out.put("3 ");
+    out.putRow(triangles[f].data(), 3);
+  }
+}
+
 void writeOff(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions&) {
   OutputBuffer out(file);
-  out.put("OFF\n");
-  out.putNumber(mesh.positions.size());
-  out.put(' ');
-  out.putNumber(mesh.triangles.size());
-  out.put(" 0\n");
-  for (const Vec3f& p : mesh.positions) out.putRow(p.data(), 3);
-  for (const Triangle& t : mesh.triangles) {
-    out.put("3 ");
-    out.putRow(t.data(), 3);
-  }
+  putOffHeader(out, mesh.positions.size(), mesh.triangles.size());
+  putOffVertices(out, mesh.positions.data(), mesh.positions.size());
+  putOffFaces(out, mesh.triangles.data(), mesh.triangles.size());
   out.flush();
 }
 

@@ -681,17 +681,15 @@ void putTextValue(OutputBuffer& out, const VertexProperty& p, std::size_t v) {
 
 }  // namespace
 
-void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
-  const bool withUV = options.writeUV && mesh.hasUV();
-  const bool wideIndices = mesh.positions.size() > std::size_t(std::numeric_limits<std::int32_t>::max());
-  OutputBuffer out(file);
+void putPlyHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces, const VertexAttributes& attributes,
+                  bool withUV, bool binary) {
+  const bool wideIndices = vertices > std::uint64_t(std::numeric_limits<std::int32_t>::max());
   out.put("ply\nformat ");
-  out.put(options.binary ? "binary_little_endian" : "ascii");
+  out.put(binary ? "binary_little_endian" : "ascii");
   out.put(" 1.0\ncomment written by seamvox\nelement vertex ");
-  out.putNumber(mesh.positions.size());
+  out.putNumber(vertices);
   out.put("\nproperty float x\nproperty float y\nproperty float z\n");
-  const std::vector<VertexProperty>& properties = mesh.attributes.properties;
-  for (const VertexProperty& p : properties) {
+  for (const VertexProperty& p : attributes.properties) {
     out.put("property ");
     out.put(scalarTypeName(p.type));
     out.put(' ');
@@ -699,49 +697,71 @@ void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
     out.put('\n');
   }
   out.put("element face ");
-  out.putNumber(mesh.triangles.size());
+  out.putNumber(faces);
   out.put(wideIndices ? "\nproperty list uchar uint vertex_indices\n"
                       : "\nproperty list uchar int vertex_indices\n");
   if (withUV) out.put("property list uchar double texcoord\n");
   out.put("end_header\n");
+}
 
-  if (options.binary) {
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-      const Vec3f& p = mesh.positions[v];
+void putPlyVertices(OutputBuffer& out, const std::vector<Vec3f>& positions, const VertexAttributes& attributes,
+                    std::size_t begin, std::size_t end, bool binary) {
+  const std::vector<VertexProperty>& properties = attributes.properties;
+  if (binary) {
+    for (std::size_t v = begin; v < end; ++v) {
+      const Vec3f& p = positions[v];
       out.putLittle(p[0]);
       out.putLittle(p[1]);
       out.putLittle(p[2]);
       for (const VertexProperty& property : properties) putLittleValue(out, property, v);
     }
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    return;
+  }
+  for (std::size_t v = begin; v < end; ++v) {
+    out.putRow(positions[v].data(), 3, properties.empty() ? '\n' : ' ');
+    for (std::size_t k = 0; k < properties.size(); ++k) {
+      putTextValue(out, properties[k], v);
+      out.put(k + 1 < properties.size() ? ' ' : '\n');
+    }
+  }
+}
+
+void putPlyFaces(OutputBuffer& out, const Triangle* triangles, const Vec2d* uv, std::size_t count, bool binary) {
+  for (std::size_t f = 0; f < count; ++f) {
+    if (binary) {
       out.putLittle(std::uint8_t(3));
-      for (const VertexId v : mesh.triangles[f]) out.putLittle(v);
-      if (!withUV) continue;
+      for (const VertexId v : triangles[f]) out.putLittle(v);
+      if (!uv) continue;
       out.putLittle(std::uint8_t(6));
       for (int k = 0; k < 3; ++k) {
-        const Vec2d uv = mesh.cornerUV[3 * f + k];
-        out.putLittle(uv[0]);
-        out.putLittle(uv[1]);
+        out.putLittle(uv[3 * f + k][0]);
+        out.putLittle(uv[3 * f + k][1]);
       }
-    }
-  } else {
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-      out.putRow(mesh.positions[v].data(), 3, properties.empty() ? '\n' : ' ');
-      for (std::size_t k = 0; k < properties.size(); ++k) {
-        putTextValue(out, properties[k], v);
-        out.put(k + 1 < properties.size() ? ' ' : '\n');
-      }
-    }
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    } else {
       out.put("3 ");
-      out.putRow(mesh.triangles[f].data(), 3, withUV ? ' ' : '\n');
-      if (!withUV) continue;
+      out.putRow(triangles[f].data(), 3, uv ? ' ' : '\n');
+      if (!uv) continue;
       out.put("6 ");
-      for (int k = 0; k < 3; ++k) {
-        const Vec2d uv = mesh.cornerUV[3 * f + k];
-        out.putRow(uv.data(), 2, k < 2 ? ' ' : '\n');
-      }
+      for (int k = 0; k < 3; ++k) out.putRow(uv[3 * f + k].data(), 2, k < 2 ? ' ' : '\n');
     }
+  }
+}
+
+void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
+  const bool withUV = options.writeUV && mesh.hasUV();
+  OutputBuffer out(file);
+  putPlyHeader(out, mesh.positions.size(), mesh.triangles.size(), mesh.attributes, withUV, options.binary);
+  putPlyVertices(out, mesh.positions, mesh.attributes, 0, mesh.positions.size(), options.binary);
+  // Faces in blocks whose corner UVs are gathered from the wedge map.
+  constexpr std::size_t kBlock = 1 << 14;
+  std::vector<Vec2d> uv;
+  for (std::size_t first = 0; first < mesh.triangles.size(); first += kBlock) {
+    const std::size_t count = std::min(kBlock, mesh.triangles.size() - first);
+    if (withUV) {
+      uv.resize(3 * count);
+      for (std::size_t c = 0; c < 3 * count; ++c) uv[c] = mesh.cornerUV[3 * first + c];
+    }
+    putPlyFaces(out, mesh.triangles.data() + first, withUV ? uv.data() : nullptr, count, options.binary);
   }
   out.flush();
 }

@@ -7,52 +7,84 @@
 
 namespace seamvox {
 
+void StreamChecker::check(const MeshChunk& chunk) {
+  constexpr std::uint64_t kMaxIds = std::numeric_limits<std::uint32_t>::max();
+  if (chunk.firstVertex != vertices_) {
+    throw InputError(name_ + ": stream chunk starts at vertex " + std::to_string(chunk.firstVertex) + " but " +
+                     std::to_string(vertices_) + " vertices came before it");
+  }
+  if (vertices_ + chunk.positions.size() >= kMaxIds || faces_ + chunk.triangles.size() >= kMaxIds) {
+    throw InputError(name_ + ": more than 2^32 - 1 vertices or faces (ids are 32-bit)");
+  }
+  if (!chunk.positions.empty()) {
+    try {
+      chunk.attributes.checkSize(chunk.positions.size());
+    } catch (const InputError& e) {
+      throw InputError(name_ + ": " + e.what());
+    }
+  }
+  vertices_ += chunk.positions.size();
+  if (chunk.triangles.empty()) return;
+  const bool chunkUV = !chunk.cornerUV.empty();
+  if (chunkUV && chunk.cornerUV.size() != 3 * chunk.triangles.size()) {
+    throw InputError(name_ + ": stream chunk has " + std::to_string(chunk.cornerUV.size()) + " corner UVs for " +
+                     std::to_string(chunk.triangles.size()) + " triangles");
+  }
+  if (!uvDecided_) {
+    withUV_ = chunkUV;
+    uvDecided_ = true;
+  } else if (withUV_ != chunkUV) {
+    throw InputError(name_ + ": some triangles have texture coordinates and others do not");
+  }
+  for (std::size_t f = 0; f < chunk.triangles.size(); ++f) {
+    const Triangle& t = chunk.triangles[f];
+    const VertexId largest = std::max({t[0], t[1], t[2]});
+    if (largest >= vertices_ && (records_.empty() || largest > records_.back().largest)) {
+      records_.push_back({faces_ + f, t, largest});
+    }
+  }
+  faces_ += chunk.triangles.size();
+}
+
+void StreamChecker::finish() const {
+  // The first face whose largest id is out of range is the first record that is.
+  for (const Record& r : records_) {
+    if (r.largest < vertices_) continue;
+    for (const VertexId v : r.triangle) {
+      if (v >= vertices_) {
+        throw InputError(name_ + ": face " + std::to_string(r.face) + " refers to vertex " + std::to_string(v) +
+                         " but there are only " + std::to_string(vertices_) + " vertices");
+      }
+    }
+  }
+}
+
 TriangleMesh collectMesh(MeshStream& stream) {
   constexpr std::uint64_t kMaxIds = std::numeric_limits<std::uint32_t>::max();
-  const std::string& name = stream.name();
   TriangleMesh mesh;
   // Readers check declared counts against the file size, so these hints are safe to reserve.
   mesh.positions.reserve(static_cast<std::size_t>(std::min(stream.declaredVertices(), kMaxIds)));
   mesh.triangles.reserve(static_cast<std::size_t>(std::min(stream.expectedTriangles(), kMaxIds)));
 
+  StreamChecker checker(stream.name());
   MeshChunk chunk;
   WedgeMapBuilder uv;
-  bool uvDecided = false, withUV = false;
   while (stream.next(chunk)) {
-    if (chunk.firstVertex != mesh.positions.size()) {
-      throw InputError(name + ": stream chunk starts at vertex " + std::to_string(chunk.firstVertex) +
-                       " but " + std::to_string(mesh.positions.size()) + " vertices came before it");
-    }
-    if (mesh.positions.size() + chunk.positions.size() >= kMaxIds ||
-        mesh.triangles.size() + chunk.triangles.size() >= kMaxIds) {
-      throw InputError(name + ": more than 2^32 - 1 vertices or faces (ids are 32-bit)");
-    }
+    checker.check(chunk);
     if (!chunk.positions.empty()) {
       if (mesh.positions.empty()) {
         mesh.attributes = chunk.attributes.emptyCopy();
         for (VertexProperty& p : mesh.attributes.properties) p.bytes.reserve(mesh.positions.capacity() * scalarSize(p.type));
       }
       try {
-        chunk.attributes.checkSize(chunk.positions.size());
         mesh.attributes.append(chunk.attributes);
       } catch (const InputError& e) {
-        throw InputError(name + ": " + e.what());
+        throw InputError(stream.name() + ": " + e.what());
       }
     }
     mesh.positions.insert(mesh.positions.end(), chunk.positions.begin(), chunk.positions.end());
     if (chunk.triangles.empty()) continue;
-    const bool chunkUV = !chunk.cornerUV.empty();
-    if (chunkUV && chunk.cornerUV.size() != 3 * chunk.triangles.size()) {
-      throw InputError(name + ": stream chunk has " + std::to_string(chunk.cornerUV.size()) +
-                       " corner UVs for " + std::to_string(chunk.triangles.size()) + " triangles");
-    }
-    if (!uvDecided) {
-      withUV = chunkUV;
-      uvDecided = true;
-      if (withUV) uv.reserve(3 * std::max<std::size_t>(mesh.triangles.capacity(), 1));
-    } else if (withUV != chunkUV) {
-      throw InputError(name + ": some triangles have texture coordinates and others do not");
-    }
+    if (checker.hasUV() && mesh.triangles.empty()) uv.reserve(3 * std::max<std::size_t>(mesh.triangles.capacity(), 1));
     mesh.triangles.insert(mesh.triangles.end(), chunk.triangles.begin(), chunk.triangles.end());
     // Corners at a vertex not read yet (validated below) get wedges of their own.
     for (std::size_t c = 0; c < chunk.cornerUV.size(); ++c) {
@@ -60,18 +92,8 @@ TriangleMesh collectMesh(MeshStream& stream) {
       uv.add(v < mesh.positions.size() ? v : kInvalidId, chunk.cornerUV[c]);
     }
   }
-  if (withUV) mesh.cornerUV = uv.finish();
-
-  const std::uint32_t numVertices = mesh.numVertices();
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    for (const VertexId v : mesh.triangles[f]) {
-      if (v >= numVertices) {
-        throw InputError(name + ": face " + std::to_string(f) + " refers to vertex " +
-                         std::to_string(v) + " but there are only " + std::to_string(numVertices) +
-                         " vertices");
-      }
-    }
-  }
+  if (checker.hasUV()) mesh.cornerUV = uv.finish();
+  checker.finish();
   return mesh;
 }
 

@@ -49,6 +49,33 @@ class MeshStream {
   virtual std::uint64_t expectedTriangles() const { return declaredFaces(); }
 };
 
+/// The checks collectMesh makes, for passes that consume a stream chunk by chunk without
+/// collecting it: chunks continue the vertex numbering, ids fit 32 bits, UVs on all triangles or
+/// none, and (finish) every face's vertices exist. Memory: the faces whose largest vertex id
+/// exceeds every earlier face's (a few), so the first bad face is named as collectMesh names it.
+class StreamChecker {
+ public:
+  explicit StreamChecker(std::string name) : name_(std::move(name)) {}
+  /// Throws InputError naming the stream.
+  void check(const MeshChunk& chunk);
+  /// After the last chunk: throws InputError naming the first face with a vertex that does not exist.
+  void finish() const;
+  std::uint64_t vertices() const { return vertices_; }
+  std::uint64_t faces() const { return faces_; }
+  bool hasUV() const { return withUV_; }
+
+ private:
+  struct Record {
+    std::uint64_t face;
+    Triangle triangle;
+    VertexId largest;
+  };
+  std::string name_;
+  std::uint64_t vertices_ = 0, faces_ = 0;
+  bool uvDecided_ = false, withUV_ = false;
+  std::vector<Record> records_;  ///< increasing largest ids
+};
+
 /// Drains a stream into one TriangleMesh (validating every index against the final vertex
 /// count), vertex attributes concatenated. Only the chunk buffer is held besides the result.
 TriangleMesh collectMesh(MeshStream& stream);

@@ -155,6 +155,14 @@ bool ScratchReader::read(void* out, std::size_t bytes) {
   return true;
 }
 
+std::size_t ScratchReader::readUpTo(void* out, std::size_t bytes) {
+  if (begin_ == end_ && !refill()) return 0;
+  const std::size_t n = std::min(bytes, end_ - begin_);
+  std::memcpy(out, buffer_.data() + begin_, n);
+  begin_ += n;
+  return n;
+}
+
 ScratchRandomReader::ScratchRandomReader(ScratchFolder& folder, const ScratchFile& file, std::string stage)
     : folder_(folder), stage_(std::move(stage)), path_(file.path) {
   fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);

@@ -98,6 +98,8 @@ class ScratchReader {
   ScratchReader& operator=(const ScratchReader&) = delete;
   /// Reads exactly `bytes` into out; false at the end of the file (IoError for a partial read).
   bool read(void* out, std::size_t bytes);
+  /// Reads at most `bytes` into out; the bytes read, 0 at the end of the file.
+  std::size_t readUpTo(void* out, std::size_t bytes);
 
  private:
   bool refill();

@@ -258,6 +258,45 @@ TEST(Generate, SameSeedSameBytesOtherSeedOtherMesh) {
   }
 }
 
+/// The mesh a MeshGenerator hands out in chunks of `chunk` vertices and triangles.
+TriangleMesh drainGenerator(MeshGenerator& generator, std::size_t chunk) {
+  TriangleMesh mesh;
+  while (generator.nextPositions(chunk, mesh.positions)) {
+  }
+  while (generator.nextTriangles(chunk, mesh.triangles)) {
+  }
+  return mesh;
+}
+
+TEST(Generate, PieceByPieceGivesTheSameBitsAsTheWholeMesh) {
+  for (MeshKind kind : {MeshKind::Sphere, MeshKind::Torus, MeshKind::Genus2, MeshKind::Scan}) {
+    for (std::uint64_t faces : {minimumFaces(kind), std::uint64_t(2500), std::uint64_t(47000)}) {
+      for (std::uint64_t seed : {1u, 7u}) {
+        GenerateOptions options;
+        options.kind = kind;
+        options.faces = faces;
+        options.seed = seed;
+        const GenerateResult whole = generateMesh(options);
+        for (std::size_t chunk : {std::size_t(1), std::size_t(777), std::size_t(1) << 20}) {
+          if (chunk == 1 && faces > 2500) continue;
+          MeshGenerator generator(options);
+          EXPECT_EQ(generator.numVertices(), whole.mesh.numVertices());
+          EXPECT_EQ(generator.numFaces(), whole.mesh.numFaces());
+          const TriangleMesh pieces = drainGenerator(generator, chunk);
+          EXPECT_TRUE(sameMesh(pieces, whole.mesh)) << meshKindName(kind) << " " << faces << " seed " << seed
+                                                    << " chunk " << chunk;
+          const ScanDefects& a = generator.defects();
+          const ScanDefects& b = whole.defects;
+          EXPECT_EQ(std::tie(a.holes, a.openIslands, a.closedIslands, a.seamDuplicates, a.degenerateFaces,
+                             a.duplicateFaces),
+                    std::tie(b.holes, b.openIslands, b.closedIslands, b.seamDuplicates, b.degenerateFaces,
+                             b.duplicateFaces));
+        }
+      }
+    }
+  }
+}
+
 TEST(Generate, KindNamesAndLimits) {
   for (MeshKind kind : {MeshKind::Sphere, MeshKind::Torus, MeshKind::Genus2, MeshKind::Scan}) {
     EXPECT_EQ(parseMeshKind(meshKindName(kind)), kind);

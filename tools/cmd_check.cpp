@@ -1,6 +1,4 @@
 // seamvox check: is a parameterized mesh seamless? Seams are reconstructed from the UVs alone.
-#include <sys/stat.h>
-
 #include <cmath>
 #include <cstdio>
 
@@ -14,6 +12,7 @@
 #include "io/mesh_io.h"
 #include "stream/map_check.h"
 #include "tools/cli.h"
+#include "tools/memory_path.h"
 
 namespace seamvox::cli {
 namespace {
@@ -33,17 +32,9 @@ struct CheckFigures {
   MapCheckResult scratch;  ///< traffic and peak of the out-of-core path
 };
 
-/// Faces and vertices of the input as its header declares them, else guessed from the file size
-/// (OBJ: a face line and its share of v and vt lines take at least 20 bytes; Draco: 1 byte).
 std::uint64_t estimateInMemoryBytes(const std::string& path, const MeshStream& stream) {
-  std::uint64_t faces = stream.declaredFaces() ? stream.declaredFaces() : stream.expectedTriangles();
-  std::uint64_t vertices = stream.declaredVertices();
-  struct stat info {};
-  if (faces == 0 && ::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode)) {
-    faces = static_cast<std::uint64_t>(info.st_size) / (formatFromPath(path) == MeshFormat::Draco ? 1 : 20);
-  }
-  if (vertices == 0) vertices = faces / 2;
-  return kProgramBytes + faces * kBytesPerFace + vertices * kBytesPerVertex;
+  const MeshCounts counts = guessMeshCounts(path, stream);
+  return kProgramBytes + counts.faces * kBytesPerFace + counts.vertices * kBytesPerVertex;
 }
 
 CheckResult checkInMemory(const std::string& path, MeshStream& stream, const std::optional<std::string>& fieldPath,
@@ -140,18 +131,9 @@ int runCheck(Args& args) {
   readOptions.readUV = true;
   CheckFigures figures;
   figures.budget = memory.budget;
-  if (formatFromPath(path) == MeshFormat::Draco) {
-    // Draco decodes a whole mesh at once: no stream to check out of core.
-    struct stat info {};
-    const std::uint64_t estimate =
-        kProgramBytes + (::stat(path.c_str(), &info) == 0 ? static_cast<std::uint64_t>(info.st_size) : 0) *
-                            (kBytesPerFace + kBytesPerVertex);
-    if (estimate > memory.budget) {
-      throw InputError(path + ": a Draco file is decoded whole, about " + formatByteSize(estimate) +
-                       " in memory, above the --memory-budget of " + formatByteSize(memory.budget) +
-                       "; convert it to PLY (seamvox convert " + path + " OUT.ply) or raise --memory-budget");
-    }
-  }
+  // Draco decodes a whole mesh at once: no stream to check out of core.
+  refuseDracoInputAboveBudget(path, memory.budget, kProgramBytes, kBytesPerFace + kBytesPerVertex,
+                              "convert it to PLY (seamvox convert " + path + " OUT.ply) or raise --memory-budget");
   const std::unique_ptr<MeshStream> stream = openMeshStream(path, readOptions);
   figures.estimate = estimateInMemoryBytes(path, *stream);
   if (figures.estimate <= memory.budget) {

@@ -5,10 +5,12 @@
 #include <cstdarg>
 #include <cstdio>
 
+#include "core/system/errors.h"
 #include "io/json.h"
 #include "io/mesh_io.h"
 #include "core/system/memory.h"
 #include "core/system/stopwatch.h"
+#include "stream/welded_scratch.h"
 #include "tools/cli.h"
 
 namespace seamvox::cli {
@@ -29,10 +31,17 @@ unsigned long long ull(std::uint64_t x) { return static_cast<unsigned long long>
 }  // namespace
 
 MeshSummary summarizeMeshFile(const std::string& path, const SummarizeOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::unique_ptr<MeshStream> stream = openMeshStream(path);
+  return summarizeMeshStream(path, *stream, options, start);
+}
+
+MeshSummary summarizeMeshStream(const std::string& path, MeshStream& stream, const SummarizeOptions& options,
+                                std::chrono::steady_clock::time_point start) {
   MeshSummary summary;
   summary.path = path;
-  auto start = std::chrono::steady_clock::now();
-  TriangleMesh mesh = readMesh(path);
+  TriangleMesh mesh = collectMesh(stream);
+  if (mesh.triangles.empty()) throw InputError(path + ": the mesh has no faces");
   summary.readSeconds = secondsSince(start);
 
   start = std::chrono::steady_clock::now();
@@ -58,6 +67,38 @@ MeshSummary summarizeMeshFile(const std::string& path, const SummarizeOptions& o
   return summary;
 }
 
+MeshSummary summarizeCensus(const std::string& path, const WeldCensus& census, double seconds) {
+  MeshSummary s;
+  s.path = path;
+  s.outOfCore = true;
+  s.vertices = census.vertices;
+  s.faces = census.faces;
+  CleanReport& c = s.clean;
+  c.inputVertices = census.inputVertices;
+  c.inputFaces = census.inputFaces;
+  c.weldedVertices = census.weldedVertices;
+  c.degenerateFaces = census.degenerateFaces;
+  c.duplicateFaces = census.duplicateFaces;
+  c.zeroAreaFaces = census.zeroAreaFaces;
+  c.unreferencedVertices = census.unreferencedVertices;
+  c.nonManifoldEdges = census.nonManifoldEdges + census.clashEdges;
+  c.outputVertices = census.vertices;
+  c.outputFaces = census.faces;
+  s.properties = census.properties.emptyCopy();
+  s.components = census.components;
+  s.boundaryLoops = census.boundaryLoops;
+  s.box = census.box;
+  s.readSeconds = seconds;
+  s.edges = census.edges;
+  s.boundaryEdges = census.boundaryEdges;
+  s.manifoldEdges = census.manifoldEdges;
+  s.clashEdges = census.clashEdges;
+  s.edgesOfMoreFaces = census.nonManifoldEdges;
+  s.stageSeconds = census.stageSeconds;
+  s.peakResidentBytes = peakResidentBytes();
+  return s;
+}
+
 std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
   const CleanReport& c = s.clean;
   std::string out;
@@ -81,6 +122,17 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
     }
   }
   out += format("boundary loops  %u\n", s.boundaryLoops);
+  if (s.outOfCore) {
+    out += format("edges           %llu: boundary %llu, two faces %llu, two faces in one direction %llu,\n"
+                  "                more than two faces %llu\n",
+                  ull(s.edges), ull(s.boundaryEdges), ull(s.manifoldEdges), ull(s.clashEdges), ull(s.edgesOfMoreFaces));
+    out += format("cleaning        welded vertices %llu, degenerate faces %llu, duplicate faces %llu,\n"
+                  "                zero-area faces %llu (kept), unreferenced vertices %llu,\n"
+                  "                non-manifold edges %llu; out of core: non-manifold vertices, flipped\n"
+                  "                faces and spikes not computed, components joined through vertices\n",
+                  ull(c.weldedVertices), ull(c.degenerateFaces), ull(c.duplicateFaces), ull(c.zeroAreaFaces),
+                  ull(c.unreferencedVertices), ull(c.nonManifoldEdges));
+  } else {
   out += format("cleaning        welded vertices %llu, degenerate faces %llu, duplicate faces %llu,\n"
                 "                zero-area faces %llu (kept), unreferenced vertices %llu,\n"
                 "                non-manifold edges %llu (split), non-manifold vertices %llu (split),\n"
@@ -88,14 +140,22 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
                 ull(c.weldedVertices), ull(c.degenerateFaces), ull(c.duplicateFaces),
                 ull(c.zeroAreaFaces), ull(c.unreferencedVertices), ull(c.nonManifoldEdges),
                 ull(c.nonManifoldVertices), ull(c.flippedFaces), ull(c.spikeVertices));
+  }
   if (!s.box.isEmpty()) {
     out += format("bounding box    (%g, %g, %g) - (%g, %g, %g), diagonal %g\n", s.box.min.x(),
                   s.box.min.y(), s.box.min.z(), s.box.max.x(), s.box.max.y(), s.box.max.z(),
                   s.box.diagonal());
   }
-  out += format("time            read %.3f s, clean %.3f s, components %.3f s\n", s.readSeconds,
-                s.cleanSeconds, s.componentsSeconds);
+  if (s.outOfCore) {
+    out += format("time            %.3f s:", s.readSeconds);
+    for (const auto& [stage, seconds] : s.stageSeconds) out += format(" %s %.2f", stage.c_str(), seconds);
+    out += "\n";
+  } else {
+    out += format("time            read %.3f s, clean %.3f s, components %.3f s\n", s.readSeconds,
+                  s.cleanSeconds, s.componentsSeconds);
+  }
   out += format("peak memory     %.1f MiB\n", s.peakResidentBytes / 1048576.0);
+  if (s.memoryPath.budget > 0) out += describeMemoryPath(s.memoryPath) + "\n";
   return out;
 }
 
@@ -140,21 +200,40 @@ std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
   j.key("zeroAreaFaces").value(c.zeroAreaFaces);
   j.key("unreferencedVertices").value(c.unreferencedVertices);
   j.key("nonManifoldEdges").value(c.nonManifoldEdges);
-  j.key("nonManifoldVertices").value(c.nonManifoldVertices);
-  j.key("flippedFaces").value(c.flippedFaces);
-  j.key("spikeVertices").value(c.spikeVertices);
+  if (s.outOfCore) {
+    for (const char* key : {"nonManifoldVertices", "flippedFaces", "spikeVertices"}) j.key(key).null();
+  } else {
+    j.key("nonManifoldVertices").value(c.nonManifoldVertices);
+    j.key("flippedFaces").value(c.flippedFaces);
+    j.key("spikeVertices").value(c.spikeVertices);
+  }
   j.endObject();
+  if (s.outOfCore) {
+    j.key("edges").beginObject();
+    j.key("count").value(s.edges).key("boundary").value(s.boundaryEdges).key("twoFaces").value(s.manifoldEdges);
+    j.key("orientationClashes").value(s.clashEdges).key("moreThanTwoFaces").value(s.edgesOfMoreFaces);
+    j.endObject();
+  }
   j.key("boundingBox").beginObject();
   j.key("min").beginArray().value(s.box.min.x()).value(s.box.min.y()).value(s.box.min.z()).endArray();
   j.key("max").beginArray().value(s.box.max.x()).value(s.box.max.y()).value(s.box.max.z()).endArray();
   j.key("diagonal").value(s.box.diagonal());
   j.endObject();
   j.key("timings").beginObject();
+  if (s.outOfCore) {
+    j.key("passSeconds").beginObject();
+    for (const auto& [stage, seconds] : s.stageSeconds) j.key(stage).value(seconds);
+    j.endObject();
+  }
   j.key("readSeconds").value(s.readSeconds);
   j.key("cleanSeconds").value(s.cleanSeconds);
   j.key("componentsSeconds").value(s.componentsSeconds);
   j.endObject();
-  j.key("peakResidentBytes").value(s.peakResidentBytes);
+  if (s.memoryPath.budget > 0) {
+    writeMemoryPathJson(j, s.memoryPath);
+  } else {
+    j.key("peakResidentBytes").value(s.peakResidentBytes);
+  }
   j.endObject();
   return j.str() + "\n";
 }

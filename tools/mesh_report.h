@@ -1,14 +1,21 @@
 #pragma once
 /// The mesh summary shared by `seamvox info` and `seamvox demo`: read, clean, components,
 /// bounding box, timings and memory, printed as text or JSON.
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "core/mesh/clean.h"
 #include "core/mesh/mesh.h"
+#include "stream/mesh_stream.h"
 #include "core/system/progress.h"
 #include "core/mesh/topology.h"
+#include "tools/memory_path.h"
+
+namespace seamvox {
+struct WeldCensus;
+}
 
 namespace seamvox::cli {
 
@@ -23,6 +30,13 @@ struct MeshSummary {
   BoundingBox box;
   double readSeconds = 0, cleanSeconds = 0, componentsSeconds = 0;
   std::uint64_t peakResidentBytes = 0;
+  /// Measured out of core (stream/welded_scratch): edges counted by their faces; non-manifold
+  /// vertices, flipped faces and spikes not computed (null in JSON), components joined through
+  /// vertices, orientation clashes counted (in clean.nonManifoldEdges too) but not reoriented.
+  bool outOfCore = false;
+  std::uint64_t edges = 0, boundaryEdges = 0, manifoldEdges = 0, clashEdges = 0, edgesOfMoreFaces = 0;
+  std::vector<std::pair<std::string, double>> stageSeconds;  ///< the weld pass's
+  MemoryPath memoryPath;  ///< which path ran (printed last)
 };
 
 struct SummarizeOptions {
@@ -33,6 +47,11 @@ struct SummarizeOptions {
 
 /// Reads, cleans and measures a mesh file. Throws IoError / InputError from the reader.
 MeshSummary summarizeMeshFile(const std::string& path, const SummarizeOptions& options);
+/// The same from a stream opened on path (read time counted from start).
+MeshSummary summarizeMeshStream(const std::string& path, MeshStream& stream, const SummarizeOptions& options,
+                                std::chrono::steady_clock::time_point start);
+/// The same from the weld pass's census (out of core).
+MeshSummary summarizeCensus(const std::string& path, const WeldCensus& census, double seconds);
 /// Human-readable report; lists the `largest` biggest components.
 std::string formatSummaryText(const MeshSummary& summary, std::size_t largest = 5);
 /// The same as a JSON document.

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <string>
@@ -225,58 +226,76 @@ BoxLattice chooseBox(std::uint64_t faces) {
   return best;
 }
 
-/// Appends a bumpy sphere made from the box lattice projected radially (with an equal-angle
-/// warp). jitter adds per-vertex radial noise of that relative size (scan noise).
+/// A bumpy sphere made from the box lattice projected radially (with an equal-angle warp).
+/// jitter adds per-vertex radial noise of that relative size (scan noise).
+struct BoxSphere {
+  BoxLattice box;
+  Vec3d center = Vec3d::Zero();
+  double radius = 1.0;
+  Bumps bumps;
+  double jitter = 0.0;
+  std::uint64_t seed = 0;
+  std::vector<double> warp[3];  ///< per axis: lattice i -> tan(pi/4 (2 i / n - 1))
+
+  BoxSphere(const BoxLattice& lattice, const Vec3d& c, double r, const Bumps& b, double j, std::uint64_t s)
+      : box(lattice), center(c), radius(r), bumps(b), jitter(j), seed(s) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (std::uint32_t i = 0; i <= box.n[axis]; ++i) {
+        double sine, cosine;
+        sinCosTurns((2.0 * i / box.n[axis] - 1.0) / 8.0, sine, cosine);
+        warp[axis].push_back(sine / cosine);
+      }
+    }
+  }
+
+  /// Position of lattice vertex v.
+  Vec3f position(std::uint64_t v) const {
+    std::uint32_t ijk[3];
+    box.point(v, ijk[0], ijk[1], ijk[2]);
+    Vec3d d(warp[0][ijk[0]], warp[1][ijk[1]], warp[2][ijk[2]]);
+    d /= d.norm();
+    double r = radius * (1.0 + bumps(d));
+    if (jitter != 0.0) r *= 1.0 + jitter * (2.0 * unitFromBits(mix64(seed ^ mix64(v))) - 1.0);
+    return toFloat(center + r * d);
+  }
+
+  /// The two triangles of quad (x, y) of side s, outward oriented, vertex ids offset by v0.
+  void quad(std::uint64_t v0, int s, std::uint32_t x, std::uint32_t y, Triangle& t0, Triangle& t1) const {
+    const auto p00 = static_cast<VertexId>(v0 + box.sideVertex(s, x, y));
+    const auto p10 = static_cast<VertexId>(v0 + box.sideVertex(s, x + 1, y));
+    const auto p11 = static_cast<VertexId>(v0 + box.sideVertex(s, x + 1, y + 1));
+    const auto p01 = static_cast<VertexId>(v0 + box.sideVertex(s, x, y + 1));
+    if ((x + y) & 1) {
+      t0 = {p00, p10, p01};
+      t1 = {p10, p11, p01};
+    } else {
+      t0 = {p00, p10, p11};
+      t1 = {p00, p11, p01};
+    }
+    if (!(s & 1)) {
+      std::swap(t0[1], t0[2]);
+      std::swap(t1[1], t1[2]);
+    }
+  }
+};
+
+/// Appends a box sphere's vertices and faces.
 void appendBoxSphere(TriangleMesh& mesh, const BoxLattice& box, const Vec3d& center, double radius,
                      const Bumps& bumps, double jitter, std::uint64_t seed) {
+  const BoxSphere sphere(box, center, radius, bumps, jitter, seed);
   const std::uint64_t v0 = mesh.positions.size(), f0 = mesh.triangles.size();
   mesh.positions.resize(v0 + box.numVertices());
   mesh.triangles.resize(f0 + box.numFaces());
-  // Equal-angle warp of each axis: lattice i -> tan(pi/4 (2 i / n - 1)).
-  std::vector<double> warp[3];
-  for (int axis = 0; axis < 3; ++axis) {
-    for (std::uint32_t i = 0; i <= box.n[axis]; ++i) {
-      double s, c;
-      sinCosTurns((2.0 * i / box.n[axis] - 1.0) / 8.0, s, c);
-      warp[axis].push_back(s / c);
-    }
-  }
   parallelRange(box.numVertices(), [&](std::uint64_t begin, std::uint64_t end) {
-    for (std::uint64_t v = begin; v < end; ++v) {
-      std::uint32_t ijk[3];
-      box.point(v, ijk[0], ijk[1], ijk[2]);
-      Vec3d d(warp[0][ijk[0]], warp[1][ijk[1]], warp[2][ijk[2]]);
-      d /= d.norm();
-      double r = radius * (1.0 + bumps(d));
-      if (jitter != 0.0) r *= 1.0 + jitter * (2.0 * unitFromBits(mix64(seed ^ mix64(v))) - 1.0);
-      mesh.positions[v0 + v] = toFloat(center + r * d);
-    }
+    for (std::uint64_t v = begin; v < end; ++v) mesh.positions[v0 + v] = sphere.position(v);
   });
   for (int s = 0; s < 6; ++s) {
     const std::uint32_t w = box.sideWidth(s), h = box.sideHeight(s);
-    const bool high = s & 1;
     parallelRange(h, [&](std::uint64_t yBegin, std::uint64_t yEnd) {
       for (auto y = static_cast<std::uint32_t>(yBegin); y < yEnd; ++y) {
         for (std::uint32_t x = 0; x < w; ++x) {
-          const auto p00 = static_cast<VertexId>(v0 + box.sideVertex(s, x, y));
-          const auto p10 = static_cast<VertexId>(v0 + box.sideVertex(s, x + 1, y));
-          const auto p11 = static_cast<VertexId>(v0 + box.sideVertex(s, x + 1, y + 1));
-          const auto p01 = static_cast<VertexId>(v0 + box.sideVertex(s, x, y + 1));
-          Triangle t0, t1;
-          if ((x + y) & 1) {
-            t0 = {p00, p10, p01};
-            t1 = {p10, p11, p01};
-          } else {
-            t0 = {p00, p10, p11};
-            t1 = {p00, p11, p01};
-          }
-          if (!high) {
-            std::swap(t0[1], t0[2]);
-            std::swap(t1[1], t1[2]);
-          }
           const std::uint64_t f = f0 + box.quadFace(s, x, y);
-          mesh.triangles[f] = t0;
-          mesh.triangles[f + 1] = t1;
+          sphere.quad(v0, s, x, y, mesh.triangles[f], mesh.triangles[f + 1]);
         }
       }
     });
@@ -309,6 +328,27 @@ struct TorusGrid {
   }
 };
 
+/// Position of torus vertex (i, j) displaced by the bumps along the normal.
+Vec3f torusPosition(const TorusGrid& torus, const Bumps& bumps, std::int64_t i, std::int64_t j) {
+  Vec3d p, nrm;
+  torus.point(i, j, p, nrm);
+  return toFloat(p + bumps(p) * nrm);
+}
+
+/// The two triangles of torus quad (i, j), outward oriented, vertex ids offset by v0.
+void torusQuad(const TorusGrid& torus, std::uint64_t v0, std::int64_t i, std::int64_t j, Triangle& t0, Triangle& t1) {
+  const auto p00 = static_cast<VertexId>(v0 + torus.id(i, j));
+  const auto p10 = static_cast<VertexId>(v0 + torus.id(i + 1, j));
+  const auto p11 = static_cast<VertexId>(v0 + torus.id(i + 1, j + 1));
+  const auto p01 = static_cast<VertexId>(v0 + torus.id(i, j + 1));
+  t0 = {p00, p10, p11};
+  t1 = {p00, p11, p01};
+  if (torus.mirrored) {
+    std::swap(t0[1], t0[2]);
+    std::swap(t1[1], t1[2]);
+  }
+}
+
 /// Appends a bumpy torus; quads with skip(i, j) are left out (their vertices stay, unreferenced).
 template <class Skip>
 void appendTorus(TriangleMesh& mesh, const TorusGrid& torus, const Bumps& bumps, Skip&& skip) {
@@ -317,9 +357,8 @@ void appendTorus(TriangleMesh& mesh, const TorusGrid& torus, const Bumps& bumps,
   parallelRange(torus.m, [&](std::uint64_t begin, std::uint64_t end) {
     for (std::uint64_t i = begin; i < end; ++i) {
       for (std::uint32_t j = 0; j < torus.n; ++j) {
-        Vec3d p, nrm;
-        torus.point(static_cast<std::int64_t>(i), j, p, nrm);
-        mesh.positions[v0 + torus.id(static_cast<std::int64_t>(i), j)] = toFloat(p + bumps(p) * nrm);
+        mesh.positions[v0 + torus.id(static_cast<std::int64_t>(i), j)] =
+            torusPosition(torus, bumps, static_cast<std::int64_t>(i), j);
       }
     }
   });
@@ -335,20 +374,10 @@ void appendTorus(TriangleMesh& mesh, const TorusGrid& torus, const Bumps& bumps,
   parallelRange(torus.m, [&](std::uint64_t begin, std::uint64_t end) {
     for (std::uint64_t i = begin; i < end; ++i) {
       std::uint64_t f = f0 + rowStart[i];
-      const auto ii = static_cast<std::int64_t>(i);
       for (std::uint32_t j = 0; j < torus.n; ++j) {
         if (skip(static_cast<std::uint32_t>(i), j)) continue;
-        const auto p00 = static_cast<VertexId>(v0 + torus.id(ii, j));
-        const auto p10 = static_cast<VertexId>(v0 + torus.id(ii + 1, j));
-        const auto p11 = static_cast<VertexId>(v0 + torus.id(ii + 1, j + 1));
-        const auto p01 = static_cast<VertexId>(v0 + torus.id(ii, j + 1));
-        Triangle t0 = {p00, p10, p11}, t1 = {p00, p11, p01};
-        if (torus.mirrored) {
-          std::swap(t0[1], t0[2]);
-          std::swap(t1[1], t1[2]);
-        }
-        mesh.triangles[f++] = t0;
-        mesh.triangles[f++] = t1;
+        torusQuad(torus, v0, static_cast<std::int64_t>(i), j, mesh.triangles[f], mesh.triangles[f + 1]);
+        f += 2;
       }
     }
   });
@@ -456,61 +485,102 @@ Genus2Layout chooseGenus2(std::uint64_t faces) {
   return best;
 }
 
+/// The genus-2 shape before its unreferenced vertices (inside the tori's holes) are dropped:
+/// the left torus's m n vertices, the right torus's, then the tube's inner rings.
+struct Genus2Shape {
+  Genus2Layout layout;
+  TorusGrid left, right;
+  Bumps bumps;
+  std::vector<std::pair<std::int64_t, std::int64_t>> loop;  ///< the hole's boundary in (i, j)
+  std::uint64_t torusVertices = 0;
+
+  explicit Genus2Shape(const GenerateOptions& options)
+      : layout(chooseGenus2(options.faces)), bumps{0.03, 2.5, 4, options.seed} {
+    const std::int64_t ha = layout.ha, hb = layout.hb;
+    left = layout.torus;
+    left.centerX = -(left.major + left.minor + 0.5 * kGenus2Gap);
+    right = left;
+    right.mirrored = true;
+    torusVertices = std::uint64_t(left.m) * left.n;
+    // Counter-clockwise in the (i, j) grid. The left torus's faces run it clockwise, the mirrored
+    // right torus's counter-clockwise; the tube's faces run it the other way.
+    for (std::int64_t i = -ha; i < ha; ++i) loop.emplace_back(i, -hb);
+    for (std::int64_t j = -hb; j < hb; ++j) loop.emplace_back(ha, j);
+    for (std::int64_t i = ha; i > -ha; --i) loop.emplace_back(i, hb);
+    for (std::int64_t j = hb; j > -hb; --j) loop.emplace_back(-ha, j);
+  }
+  std::uint32_t loopSize() const { return static_cast<std::uint32_t>(loop.size()); }
+  std::uint64_t numVertices() const { return 2 * torusVertices + std::uint64_t(layout.rings - 1) * loopSize(); }
+  bool inHole(std::int64_t i, std::int64_t j) const {
+    return (i + layout.ha) % left.m < 2 * layout.ha && (j + layout.hb) % left.n < 2 * layout.hb;
+  }
+  VertexId ringVertex(std::uint32_t s, std::uint32_t l) const {
+    const std::uint32_t L = loopSize();
+    const auto& [i, j] = loop[l % L];
+    if (s == 0) return left.id(i, j);
+    if (s == layout.rings) return static_cast<VertexId>(torusVertices + right.id(i, j));
+    return static_cast<VertexId>(2 * torusVertices + std::uint64_t(s - 1) * L + l % L);
+  }
+  Vec3f position(std::uint64_t v) const {
+    if (v < 2 * torusVertices) {
+      const TorusGrid& torus = v < torusVertices ? left : right;
+      const std::uint64_t local = v % torusVertices;
+      return torusPosition(torus, bumps, static_cast<std::int64_t>(local / torus.n),
+                           static_cast<std::int64_t>(local % torus.n));
+    }
+    const std::uint64_t k = v - 2 * torusVertices;
+    const auto s = static_cast<std::uint32_t>(k / loopSize() + 1), l = static_cast<std::uint32_t>(k % loopSize());
+    const double t = static_cast<double>(s) / layout.rings;
+    Vec3d pl, nl, pr, nr;
+    left.point(loop[l].first, loop[l].second, pl, nl);
+    right.point(loop[l].first, loop[l].second, pr, nr);
+    const Vec3d a = position(ringVertex(0, l)).cast<double>();
+    const Vec3d b = position(ringVertex(layout.rings, l)).cast<double>();
+    const Vec3d p = a + t * (b - a);
+    Vec3d nrm = nl + t * (nr - nl);
+    nrm /= nrm.norm();
+    return toFloat(p + (4.0 * t * (1.0 - t)) * bumps(p) * nrm);
+  }
+  /// The two triangles of tube quad (s, l).
+  void tubeQuad(std::uint32_t s, std::uint32_t l, Triangle& t0, Triangle& t1) const {
+    const VertexId a = ringVertex(s, l), b = ringVertex(s, l + 1);
+    const VertexId c = ringVertex(s + 1, l + 1), d = ringVertex(s + 1, l);
+    t0 = {a, b, c};
+    t1 = {a, c, d};
+  }
+  /// The vertices inside the holes (no quad left around them), increasing.
+  std::vector<std::uint32_t> unreferenced() const {
+    std::vector<std::uint32_t> out;
+    for (std::uint64_t offset : {std::uint64_t(0), torusVertices}) {
+      for (std::int64_t i = 1 - layout.ha; i < layout.ha; ++i) {
+        for (std::int64_t j = 1 - layout.hb; j < layout.hb; ++j) {
+          out.push_back(static_cast<std::uint32_t>(offset + left.id(i, j)));
+        }
+      }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+};
+
 GenerateResult generateGenus2(const GenerateOptions& options) {
   GenerateResult result;
   TriangleMesh& mesh = result.mesh;
-  const Genus2Layout layout = chooseGenus2(options.faces);
-  const std::int64_t ha = layout.ha, hb = layout.hb;
-  TorusGrid left = layout.torus;
-  left.centerX = -(left.major + left.minor + 0.5 * kGenus2Gap);
-  TorusGrid right = left;
-  right.mirrored = true;
-  const Bumps bumps{0.03, 2.5, 4, options.seed};
-  const auto inHole = [&](std::int64_t i, std::int64_t j) {
-    return (i + ha) % left.m < 2 * ha && (j + hb) % left.n < 2 * hb;
-  };
-  mesh.positions.reserve(2 * std::uint64_t(left.m) * left.n + 4 * std::uint64_t(ha + hb) * layout.rings);
-  mesh.triangles.reserve(layout.faces());
-  appendTorus(mesh, left, bumps, inHole);
-  const VertexId rightOffset = mesh.numVertices();
-  appendTorus(mesh, right, bumps, inHole);
-
-  // The hole's boundary, counter-clockwise in the (i, j) grid. The left torus's faces run it
-  // clockwise, the mirrored right torus's counter-clockwise; the tube's faces run it the other way.
-  std::vector<std::pair<std::int64_t, std::int64_t>> loop;
-  for (std::int64_t i = -ha; i < ha; ++i) loop.emplace_back(i, -hb);
-  for (std::int64_t j = -hb; j < hb; ++j) loop.emplace_back(ha, j);
-  for (std::int64_t i = ha; i > -ha; --i) loop.emplace_back(i, hb);
-  for (std::int64_t j = hb; j > -hb; --j) loop.emplace_back(-ha, j);
-  const auto L = static_cast<std::uint32_t>(loop.size());
-  const std::uint32_t rings = layout.rings;
-  const VertexId tubeOffset = mesh.numVertices();
-  const auto ringVertex = [&](std::uint32_t s, std::uint32_t l) -> VertexId {
-    const auto& [i, j] = loop[l % L];
-    if (s == 0) return left.id(i, j);
-    if (s == rings) return rightOffset + right.id(i, j);
-    return tubeOffset + (s - 1) * L + l % L;
-  };
-  for (std::uint32_t s = 1; s < rings; ++s) {
-    const double t = static_cast<double>(s) / rings;
-    for (std::uint32_t l = 0; l < L; ++l) {
-      Vec3d pl, nl, pr, nr;
-      left.point(loop[l].first, loop[l].second, pl, nl);
-      right.point(loop[l].first, loop[l].second, pr, nr);
-      const Vec3d a = mesh.positions[ringVertex(0, l)].cast<double>();
-      const Vec3d b = mesh.positions[ringVertex(rings, l)].cast<double>();
-      const Vec3d p = a + t * (b - a);
-      Vec3d nrm = nl + t * (nr - nl);
-      nrm /= nrm.norm();
-      mesh.positions.push_back(toFloat(p + (4.0 * t * (1.0 - t)) * bumps(p) * nrm));
-    }
+  const Genus2Shape shape(options);
+  const auto inHole = [&](std::int64_t i, std::int64_t j) { return shape.inHole(i, j); };
+  mesh.positions.reserve(shape.numVertices());
+  mesh.triangles.reserve(shape.layout.faces());
+  appendTorus(mesh, shape.left, shape.bumps, inHole);
+  appendTorus(mesh, shape.right, shape.bumps, inHole);
+  for (std::uint64_t v = mesh.positions.size(); v < shape.numVertices(); ++v) {
+    mesh.positions.push_back(shape.position(v));
   }
-  for (std::uint32_t s = 0; s < rings; ++s) {
-    for (std::uint32_t l = 0; l < L; ++l) {
-      const VertexId a = ringVertex(s, l), b = ringVertex(s, l + 1);
-      const VertexId c = ringVertex(s + 1, l + 1), d = ringVertex(s + 1, l);
-      mesh.triangles.push_back({a, b, c});
-      mesh.triangles.push_back({a, c, d});
+  for (std::uint32_t s = 0; s < shape.layout.rings; ++s) {
+    for (std::uint32_t l = 0; l < shape.loopSize(); ++l) {
+      Triangle t0, t1;
+      shape.tubeQuad(s, l, t0, t1);
+      mesh.triangles.push_back(t0);
+      mesh.triangles.push_back(t1);
     }
   }
   compactVertices(mesh);
@@ -644,19 +714,25 @@ std::pair<BoxLattice, ScanPlan> chooseScanBox(const GenerateOptions& options) {
   return {box, plan};
 }
 
-/// An unwelded seam on side 5: the quads just above the middle grid line use copies of the
-/// line's inner vertices (same positions), as when a scanner stitches two sweeps.
+/// The unwelded seam on side 5: the quads just above grid line y0 use copies of the line's inner
+/// vertices x0 < x < x1 (same positions), as when a scanner stitches two sweeps.
+struct SeamLine {
+  std::uint32_t y0 = 0, x0 = 0, x1 = 0;
+  explicit SeamLine(const BoxLattice& box)
+      : y0(box.sideHeight(5) / 2), x0(box.sideWidth(5) / 4), x1(box.sideWidth(5) - box.sideWidth(5) / 4) {}
+  std::uint32_t copies() const { return x1 - x0 - 1; }
+};
+
 void addUnweldedSeam(TriangleMesh& mesh, const BoxLattice& box, ScanDefects& defects) {
   const int s = 5;
-  const std::uint32_t sw = box.sideWidth(s), y0 = box.sideHeight(s) / 2;
-  const std::uint32_t x0 = sw / 4, x1 = sw - sw / 4;
-  for (std::uint32_t x = x0 + 1; x < x1; ++x) {
-    const auto original = static_cast<VertexId>(box.sideVertex(s, x, y0));
+  const SeamLine seam(box);
+  for (std::uint32_t x = seam.x0 + 1; x < seam.x1; ++x) {
+    const auto original = static_cast<VertexId>(box.sideVertex(s, x, seam.y0));
     const VertexId copy = mesh.numVertices();
     mesh.positions.push_back(mesh.positions[original]);
     ++defects.seamDuplicates;
     for (std::uint32_t qx = x - 1; qx <= x; ++qx) {
-      const std::uint64_t f = box.quadFace(s, qx, y0);
+      const std::uint64_t f = box.quadFace(s, qx, seam.y0);
       for (std::uint64_t g = f; g < f + 2; ++g) {
         for (VertexId& v : mesh.triangles[g]) v = v == original ? copy : v;
       }
@@ -702,22 +778,31 @@ void appendIslands(TriangleMesh& mesh, const ScanPlan& plan, double spacing, std
 }
 
 /// Bad faces, as scanners and converters leave them: repeated vertices and duplicates, copied
-/// from faces spread over the main surface (the first sphereFaces faces).
-void appendBadFaces(TriangleMesh& mesh, std::uint32_t sphereFaces, std::uint64_t seed, ScanDefects& defects) {
+/// from faces spread over the main surface. badFaceSources: the faces copied, as indices into
+/// the first sphereFaces faces (all main surface once the holes are cut), in order.
+std::vector<std::uint64_t> badFaceSources(std::uint32_t sphereFaces, std::uint64_t seed) {
   Rng rng(mix64(seed));
-  for (std::uint32_t k = 0; k < kScanDegenerateFaces; ++k) {
-    const std::uint32_t stride = sphereFaces / kScanDegenerateFaces;
-    const Triangle t = mesh.triangles[k * stride + rng.below(stride)];
-    mesh.triangles.push_back({t[0], t[1], t[1]});
-    ++defects.degenerateFaces;
+  std::vector<std::uint64_t> sources;
+  for (const std::uint32_t count : {kScanDegenerateFaces, kScanDuplicateFaces}) {
+    const std::uint32_t stride = sphereFaces / count;
+    for (std::uint32_t k = 0; k < count; ++k) sources.push_back(k * stride + rng.below(stride));
   }
-  for (std::uint32_t k = 0; k < kScanDuplicateFaces; ++k) {
-    const std::uint32_t stride = sphereFaces / kScanDuplicateFaces;
-    const Triangle t = mesh.triangles[k * stride + rng.below(stride)];
-    if (k + 1 == kScanDuplicateFaces) mesh.triangles.push_back({t[0], t[2], t[1]});  // reversed copy
-    else mesh.triangles.push_back({t[1], t[2], t[0]});
-    ++defects.duplicateFaces;
-  }
+  return sources;
+}
+
+/// Bad face k made from its source face t: degenerate ones first, then duplicates (the last one
+/// reversed).
+Triangle badFace(std::size_t k, const Triangle& t) {
+  if (k < kScanDegenerateFaces) return {t[0], t[1], t[1]};
+  if (k + 1 == kScanBadFaces) return {t[0], t[2], t[1]};
+  return {t[1], t[2], t[0]};
+}
+
+void appendBadFaces(TriangleMesh& mesh, std::uint32_t sphereFaces, std::uint64_t seed, ScanDefects& defects) {
+  const std::vector<std::uint64_t> sources = badFaceSources(sphereFaces, seed);
+  for (std::size_t k = 0; k < sources.size(); ++k) mesh.triangles.push_back(badFace(k, mesh.triangles[sources[k]]));
+  defects.degenerateFaces += kScanDegenerateFaces;
+  defects.duplicateFaces += kScanDuplicateFaces;
 }
 
 GenerateResult generateScan(const GenerateOptions& options) {
@@ -948,7 +1033,9 @@ ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options
   return result;
 }
 
-GenerateResult generateMesh(const GenerateOptions& options) {
+namespace {
+
+void checkGenerateOptions(const GenerateOptions& options) {
   if (options.faces < minimumFaces(options.kind)) {
     throw InputError(std::string("cannot generate a ") + meshKindName(options.kind) + " with " +
                      std::to_string(options.faces) + " faces: use at least " +
@@ -958,6 +1045,12 @@ GenerateResult generateMesh(const GenerateOptions& options) {
     throw InputError("cannot generate " + std::to_string(options.faces) +
                      " faces: 32-bit indices allow fewer than 2^31");
   }
+}
+
+}  // namespace
+
+GenerateResult generateMesh(const GenerateOptions& options) {
+  checkGenerateOptions(options);
   reportProgress(options.progress, "generate", 0.0);
   GenerateResult result;
   switch (options.kind) {
@@ -968,6 +1061,259 @@ GenerateResult generateMesh(const GenerateOptions& options) {
   }
   reportProgress(options.progress, "generate", 1.0);
   return result;
+}
+
+// ---- the same meshes piece by piece -------------------------------------------------------------
+
+namespace detail {
+
+/// A generated mesh as a sequence of vertices (by their id before the unreferenced ones are
+/// dropped, "pre" ids) and of face units (a quad: two triangles, or one triangle) in segments.
+struct GeneratedSequence {
+  struct Segment {
+    std::uint64_t units = 0;
+    /// Appends the triangles of unit u (pre ids, or final ids when finalIds).
+    std::function<void(std::uint64_t u, std::vector<Triangle>& out)> emit;
+    bool finalIds = false;
+  };
+
+  std::uint64_t preVertices = 0, faces = 0;
+  std::vector<std::uint32_t> dropped;  ///< pre ids no face uses, increasing
+  std::function<Vec3f(std::uint64_t pre)> position;
+  std::vector<Segment> segments;
+  ScanDefects defects;
+  // The scan's bad faces copy faces of its first segment, at these output indices.
+  std::vector<std::uint64_t> badSources;
+  std::vector<Triangle> badCopied;
+
+  std::uint64_t nextPre = 0, positionsGiven = 0, facesGiven = 0;
+  std::size_t droppedSeen = 0, segment = 0;
+  std::uint64_t unit = 0;
+  std::vector<std::uint64_t> preIds;
+  std::vector<Triangle> pending;
+
+  VertexId finalId(VertexId pre) const {
+    return pre - static_cast<VertexId>(std::lower_bound(dropped.begin(), dropped.end(), pre) - dropped.begin());
+  }
+};
+
+}  // namespace detail
+
+using detail::GeneratedSequence;
+
+namespace {
+
+/// Quad q of a box lattice in face order: side, then row, then column.
+void boxQuadAt(const BoxLattice& box, std::uint64_t q, int& s, std::uint32_t& x, std::uint32_t& y) {
+  for (s = 0; s < 5; ++s) {
+    const std::uint64_t quads = std::uint64_t(box.sideWidth(s)) * box.sideHeight(s);
+    if (q < quads) break;
+    q -= quads;
+  }
+  x = static_cast<std::uint32_t>(q % box.sideWidth(s));
+  y = static_cast<std::uint32_t>(q / box.sideWidth(s));
+}
+
+std::uint64_t boxQuads(const BoxLattice& box) { return box.numFaces() / 2; }
+
+void sequenceSphere(GeneratedSequence& g, const GenerateOptions& options) {
+  Bumps bumps = kSphereBumps;
+  bumps.seed = options.seed;
+  auto sphere = std::make_shared<BoxSphere>(chooseBox(options.faces), Vec3d::Zero(), 1.0, bumps, 0.0, 0);
+  g.preVertices = sphere->box.numVertices();
+  g.faces = sphere->box.numFaces();
+  g.position = [sphere](std::uint64_t v) { return sphere->position(v); };
+  g.segments.push_back({boxQuads(sphere->box), [sphere](std::uint64_t q, std::vector<Triangle>& out) {
+                          int s;
+                          std::uint32_t x, y;
+                          boxQuadAt(sphere->box, q, s, x, y);
+                          Triangle t0, t1;
+                          sphere->quad(0, s, x, y, t0, t1);
+                          out.push_back(t0);
+                          out.push_back(t1);
+                        }});
+}
+
+/// Quads of a torus grid row by row, those with skip(i, j) left out; vertex ids offset by v0.
+template <class Skip>
+GeneratedSequence::Segment torusSegment(const TorusGrid& torus, std::uint64_t v0, Skip skip) {
+  return {std::uint64_t(torus.m) * torus.n, [torus, v0, skip](std::uint64_t q, std::vector<Triangle>& out) {
+            const auto i = static_cast<std::int64_t>(q / torus.n), j = static_cast<std::int64_t>(q % torus.n);
+            if (skip(i, j)) return;
+            Triangle t0, t1;
+            torusQuad(torus, v0, i, j, t0, t1);
+            out.push_back(t0);
+            out.push_back(t1);
+          }};
+}
+
+void sequenceTorus(GeneratedSequence& g, const GenerateOptions& options) {
+  const TorusGrid torus = chooseTorus(options.faces, 2.5);
+  const Bumps bumps{0.04, 2.5, 4, options.seed};
+  g.preVertices = std::uint64_t(torus.m) * torus.n;
+  g.faces = 2 * g.preVertices;
+  g.position = [torus, bumps](std::uint64_t v) {
+    return torusPosition(torus, bumps, static_cast<std::int64_t>(v / torus.n), static_cast<std::int64_t>(v % torus.n));
+  };
+  g.segments.push_back(torusSegment(torus, 0, [](std::int64_t, std::int64_t) { return false; }));
+}
+
+void sequenceGenus2(GeneratedSequence& g, const GenerateOptions& options) {
+  auto shape = std::make_shared<const Genus2Shape>(options);
+  g.preVertices = shape->numVertices();
+  g.dropped = shape->unreferenced();
+  g.faces = shape->layout.faces();
+  g.position = [shape](std::uint64_t v) { return shape->position(v); };
+  const auto inHole = [shape](std::int64_t i, std::int64_t j) { return shape->inHole(i, j); };
+  g.segments.push_back(torusSegment(shape->left, 0, inHole));
+  g.segments.push_back(torusSegment(shape->right, shape->torusVertices, inHole));
+  g.segments.push_back({std::uint64_t(shape->layout.rings) * shape->loopSize(),
+                        [shape](std::uint64_t q, std::vector<Triangle>& out) {
+                          Triangle t0, t1;
+                          shape->tubeQuad(static_cast<std::uint32_t>(q / shape->loopSize()),
+                                          static_cast<std::uint32_t>(q % shape->loopSize()), t0, t1);
+                          out.push_back(t0);
+                          out.push_back(t1);
+                        }});
+}
+
+/// The scan: the box sphere with the seam's copies and without the holes' faces, the islands,
+/// then the bad faces (copies of first-segment faces taken as they pass).
+void sequenceScan(GeneratedSequence& g, const GenerateOptions& options) {
+  const std::pair<BoxLattice, ScanPlan> chosen = chooseScanBox(options);
+  const BoxLattice& box = chosen.first;
+  const ScanPlan& plan = chosen.second;
+  const double spacing = 1.5707963267948966 / box.n[0];
+  Bumps bumps = kSphereBumps;
+  bumps.seed = options.seed;
+  auto sphere = std::make_shared<BoxSphere>(box, Vec3d::Zero(), 1.0, bumps, 0.1 * spacing, options.seed);
+  auto islands = std::make_shared<TriangleMesh>();
+  appendIslands(*islands, plan, spacing, options.seed, g.defects);
+  const SeamLine seam(box);
+  const std::uint64_t seamBase = box.numVertices(), islandBase = seamBase + seam.copies();
+  g.defects.seamDuplicates = seam.copies();
+  g.defects.holes = static_cast<std::uint32_t>(plan.holes.size());
+  g.defects.degenerateFaces = kScanDegenerateFaces;
+  g.defects.duplicateFaces = kScanDuplicateFaces;
+  g.preVertices = islandBase + islands->positions.size();
+  g.position = [sphere, islands, seam, seamBase, islandBase](std::uint64_t v) {
+    if (v < seamBase) return sphere->position(v);
+    if (v < islandBase) return sphere->position(sphere->box.sideVertex(5, seam.x0 + 1 + static_cast<std::uint32_t>(v - seamBase), seam.y0));
+    return islands->positions[v - islandBase];
+  };
+  // A vertex inside a hole has all four quads around it removed.
+  for (const ScanPlan::Hole& h : plan.holes) {
+    ScanPlan::forEachQuad(h, [&](std::uint32_t x, std::uint32_t y) {
+      if (ScanPlan::inHole(h, x + 1, y) && ScanPlan::inHole(h, x, y + 1) && ScanPlan::inHole(h, x + 1, y + 1)) {
+        g.dropped.push_back(static_cast<std::uint32_t>(box.sideVertex(h.side, x + 1, y + 1)));
+      }
+    });
+  }
+  std::sort(g.dropped.begin(), g.dropped.end());
+  auto holes = std::make_shared<const std::vector<ScanPlan::Hole>>(plan.holes);
+  g.segments.push_back({boxQuads(box), [sphere, holes, seam, seamBase](std::uint64_t q, std::vector<Triangle>& out) {
+                          int s;
+                          std::uint32_t x, y;
+                          boxQuadAt(sphere->box, q, s, x, y);
+                          for (const ScanPlan::Hole& h : *holes) {
+                            if (h.side == s && ScanPlan::inHole(h, x, y)) return;
+                          }
+                          Triangle t[2];
+                          sphere->quad(0, s, x, y, t[0], t[1]);
+                          if (s == 5 && y == seam.y0) {
+                            for (std::uint32_t lx = x; lx <= x + 1; ++lx) {
+                              if (lx <= seam.x0 || lx >= seam.x1) continue;
+                              const auto original = static_cast<VertexId>(sphere->box.sideVertex(5, lx, seam.y0));
+                              const auto copy = static_cast<VertexId>(seamBase + (lx - seam.x0 - 1));
+                              for (Triangle& tri : t) {
+                                for (VertexId& v : tri) v = v == original ? copy : v;
+                              }
+                            }
+                          }
+                          out.push_back(t[0]);
+                          out.push_back(t[1]);
+                        }});
+  g.segments.push_back({islands->triangles.size(), [islands, islandBase](std::uint64_t f, std::vector<Triangle>& out) {
+                          Triangle t = islands->triangles[f];
+                          for (VertexId& v : t) v += static_cast<VertexId>(islandBase);
+                          out.push_back(t);
+                        }});
+  g.badSources = badFaceSources(static_cast<std::uint32_t>(box.numFaces() / 2), options.seed);
+  g.badCopied.resize(g.badSources.size());
+  GeneratedSequence* self = &g;
+  g.segments.push_back({kScanBadFaces, [self](std::uint64_t k, std::vector<Triangle>& out) {
+                          out.push_back(badFace(k, self->badCopied[k]));
+                        }, true});
+  g.faces = box.numFaces() - plan.removedFaces + plan.islandFaces + kScanBadFaces;
+}
+
+}  // namespace
+
+MeshGenerator::MeshGenerator(const GenerateOptions& options) : impl_(std::make_unique<detail::GeneratedSequence>()) {
+  checkGenerateOptions(options);
+  GeneratedSequence& g = *impl_;
+  switch (options.kind) {
+    case MeshKind::Sphere: sequenceSphere(g, options); break;
+    case MeshKind::Torus: sequenceTorus(g, options); break;
+    case MeshKind::Genus2: sequenceGenus2(g, options); break;
+    case MeshKind::Scan: sequenceScan(g, options); break;
+  }
+}
+
+MeshGenerator::~MeshGenerator() = default;
+
+std::uint64_t MeshGenerator::numVertices() const { return impl_->preVertices - impl_->dropped.size(); }
+std::uint64_t MeshGenerator::numFaces() const { return impl_->faces; }
+const ScanDefects& MeshGenerator::defects() const { return impl_->defects; }
+
+bool MeshGenerator::nextPositions(std::size_t count, std::vector<Vec3f>& out) {
+  GeneratedSequence& g = *impl_;
+  g.preIds.clear();
+  while (g.preIds.size() < count && g.nextPre < g.preVertices) {
+    if (g.droppedSeen < g.dropped.size() && g.dropped[g.droppedSeen] == g.nextPre) {
+      ++g.droppedSeen;
+    } else {
+      g.preIds.push_back(g.nextPre);
+    }
+    ++g.nextPre;
+  }
+  if (g.preIds.empty()) return false;
+  const std::size_t first = out.size();
+  out.resize(first + g.preIds.size());
+  parallelRange(g.preIds.size(), [&](std::uint64_t begin, std::uint64_t end) {
+    for (std::uint64_t i = begin; i < end; ++i) out[first + i] = g.position(g.preIds[i]);
+  });
+  g.positionsGiven += g.preIds.size();
+  return true;
+}
+
+bool MeshGenerator::nextTriangles(std::size_t count, std::vector<Triangle>& out) {
+  GeneratedSequence& g = *impl_;
+  const std::size_t first = out.size();
+  while (out.size() - first < count && g.segment < g.segments.size()) {
+    const GeneratedSequence::Segment& s = g.segments[g.segment];
+    if (g.unit == s.units) {
+      ++g.segment;
+      g.unit = 0;
+      continue;
+    }
+    const std::size_t before = out.size();
+    s.emit(g.unit++, out);
+    for (std::size_t i = before; i < out.size(); ++i) {
+      if (!s.finalIds) {
+        for (VertexId& v : out[i]) v = g.finalId(v);
+      }
+      if (g.segment == 0) {
+        // The scan's bad faces copy first-segment faces (at most a few per index).
+        const std::uint64_t index = g.facesGiven + (i - first);
+        for (std::size_t k = 0; k < g.badSources.size(); ++k) {
+          if (g.badSources[k] == index) g.badCopied[k] = out[i];
+        }
+      }
+    }
+  }
+  g.facesGiven += out.size() - first;
+  return out.size() > first;
 }
 
 }  // namespace seamvox

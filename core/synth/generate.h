@@ -3,12 +3,17 @@
 /// positions and triangles on every machine (own integer RNG and value noise, only IEEE
 /// +, -, *, /, sqrt in the geometry). Linear time and memory, parallel over rows.
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "core/mesh/mesh.h"
 #include "core/system/progress.h"
 
 namespace seamvox {
+namespace detail {
+struct GeneratedSequence;
+}
 
 enum class MeshKind {
   Sphere,  ///< bumpy cube-sphere, closed, genus 0
@@ -48,6 +53,30 @@ struct GenerateResult {
 /// Generates a mesh of the given kind with about options.faces faces, outward oriented.
 /// Throws InputError when faces < minimumFaces(kind) or faces >= 2^31.
 GenerateResult generateMesh(const GenerateOptions& options);
+
+/// The mesh generateMesh makes, handed out piece by piece in its order (vertices by id, then
+/// triangles by id) with the same bits, for writing meshes larger than memory. Memory: the
+/// kind's parameters and a list of the vertices the scan's holes drop (about 1% of the
+/// vertices, 4 bytes each), whatever the face count. Positions are computed in parallel.
+class MeshGenerator {
+ public:
+  /// Throws InputError as generateMesh does.
+  explicit MeshGenerator(const GenerateOptions& options);
+  ~MeshGenerator();
+  MeshGenerator(const MeshGenerator&) = delete;
+  MeshGenerator& operator=(const MeshGenerator&) = delete;
+
+  std::uint64_t numVertices() const;
+  std::uint64_t numFaces() const;
+  const ScanDefects& defects() const;
+  /// Appends the positions of the next (at most count) vertices to out; false once all were given.
+  bool nextPositions(std::size_t count, std::vector<Vec3f>& out);
+  /// Appends the next triangles (about count; after all positions) to out; false once all were given.
+  bool nextTriangles(std::size_t count, std::vector<Triangle>& out);
+
+ private:
+  std::unique_ptr<detail::GeneratedSequence> impl_;
+};
 
 /// Scanner defects added to an existing mesh: per-vertex noise, outlier spikes and small folds.
 /// Lengths are in units of the mean edge length L (over the triangles' edges).

@@ -1,0 +1,492 @@
+#include "stream/welded_scratch.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include "core/mesh/detail_union_find.h"
+#include "core/system/errors.h"
+#include "stream/external_sort.h"
+
+namespace seamvox {
+namespace {
+
+constexpr std::uint64_t kMinimumSortBytes = std::uint64_t(1) << 20;
+
+/// A vertex for the weld sort: its position (-0 as +0, so equal floats sort together) and id.
+struct PositionRecord {
+  float x, y, z;
+  std::uint32_t id;
+};
+struct PositionLess {
+  bool operator()(const PositionRecord& a, const PositionRecord& b) const {
+    if (a.x != b.x) return a.x < b.x;
+    if (a.y != b.y) return a.y < b.y;
+    if (a.z != b.z) return a.z < b.z;
+    return a.id < b.id;
+  }
+};
+
+/// A welded face for the duplicate sort: faces with the same vertex set sort together, the
+/// lowest input index (the one cleanMesh keeps) first.
+struct FaceRecord {
+  std::array<VertexId, 3> vertices;  ///< sorted
+  std::uint32_t face;
+  Triangle triangle;
+};
+std::array<VertexId, 3> sortedVertices(const Triangle& t) {
+  std::array<VertexId, 3> s{t[0], t[1], t[2]};
+  std::sort(s.begin(), s.end());
+  return s;
+}
+struct SameVerticesLess {
+  bool operator()(const FaceRecord& a, const FaceRecord& b) const {
+    return a.vertices != b.vertices ? a.vertices < b.vertices : a.face < b.face;
+  }
+};
+
+/// One side of an edge: its vertices (lo < hi) and whether the face runs lo -> hi.
+struct EdgeRecord {
+  std::uint32_t lo, hi, forward;
+};
+struct EdgeLess {
+  bool operator()(const EdgeRecord& a, const EdgeRecord& b) const {
+    return a.lo != b.lo ? a.lo < b.lo : a.hi < b.hi;
+  }
+};
+
+/// A corner waiting for its position (sorted by vertex), then with it (sorted by face, corner).
+struct CornerRecord {
+  std::uint32_t vertex, face, slot;
+};
+struct ByVertexLess {
+  bool operator()(const CornerRecord& a, const CornerRecord& b) const { return a.vertex < b.vertex; }
+};
+struct PlacedCorner {
+  std::uint32_t face, slot, vertex;
+  std::array<float, 3> position;
+};
+struct ByCornerLess {
+  bool operator()(const PlacedCorner& a, const PlacedCorner& b) const {
+    return a.face != b.face ? a.face < b.face : a.slot < b.slot;
+  }
+};
+
+struct MortonLess {
+  bool operator()(const WeldedFace& a, const WeldedFace& b) const {
+    return a.morton != b.morton ? a.morton < b.morton : a.face < b.face;
+  }
+};
+
+/// The bits of x spread to every third bit (21 bits in, 63 out).
+std::uint64_t spreadBits(std::uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
+std::uint64_t mortonCode(const Vec3d& p, const BoundingBox& box) {
+  std::uint64_t code = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double extent = box.max[axis] - box.min[axis];
+    const double t = extent > 0.0 ? (p[axis] - box.min[axis]) / extent : 0.0;
+    const double cells = static_cast<double>(1u << kMortonBits);
+    const auto q = static_cast<std::uint64_t>(std::clamp(t * cells, 0.0, cells - 1.0));
+    code |= spreadBits(q) << axis;
+  }
+  return code;
+}
+
+/// Per component (by union-find root) what the passes count.
+struct ComponentCount {
+  std::uint64_t faces = 0, vertices = 0, edges = 0, loops = 0;
+};
+
+/// The passes of weldMeshStream, in order; each reads what the one before wrote.
+class WeldPass {
+ public:
+  WeldPass(MeshStream& stream, ScratchFolder& folder, const WeldStreamOptions& options)
+      : stream_(stream), folder_(folder), options_(options), name_(stream.name()) {
+    sort_.memoryBytes = std::max(kMinimumSortBytes, options.memoryBytes / 3);
+  }
+
+  WeldStreamResult run() {
+    const std::pair<const char*, void (WeldPass::*)()> passes[] = {
+        {"read", &WeldPass::readStream},       {"weld", &WeldPass::weldVertices},
+        {"faces", &WeldPass::renumberFaces},   {"duplicates", &WeldPass::dropDuplicateFaces},
+        {"edges", &WeldPass::countEdges},      {"positions", &WeldPass::placeCorners},
+        {"morton", &WeldPass::sortByMorton},   {"components", &WeldPass::countComponents}};
+    for (const auto& [name, pass] : passes) {
+      const auto start = std::chrono::steady_clock::now();
+      (this->*pass)();
+      result_.census.stageSeconds.emplace_back(
+          name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+    result_.scratch.numVertices = welded_;
+    return std::move(result_);
+  }
+
+ private:
+  ExternalSortOptions sortOptions(const char* stage) const {
+    ExternalSortOptions o = sort_;
+    o.stage = stage;
+    return o;
+  }
+
+  /// Pass 1: positions and triangles to scratch as read; the weld sort fed.
+  void readStream() {
+    StreamChecker checker(name_);
+    ScratchWriter positions(folder_, "read"), triangles(folder_, "read");
+    if (options_.weld) weldSort_ = std::make_unique<ExternalSorter<PositionRecord, PositionLess>>(folder_, sortOptions("weld"));
+    MeshChunk chunk;
+    bool first = true;
+    while (stream_.next(chunk)) {
+      checker.check(chunk);
+      if (first && !chunk.positions.empty()) {
+        result_.census.properties = chunk.attributes.emptyCopy();
+        first = false;
+      }
+      for (std::size_t i = 0; i < chunk.positions.size(); ++i) {
+        const Vec3f& p = chunk.positions[i];
+        const std::uint32_t v = chunk.firstVertex + static_cast<std::uint32_t>(i);
+        if (!p.allFinite()) {
+          throw InputError(name_ + ": vertex " + std::to_string(v) + " has a non-finite coordinate (NaN or inf)");
+        }
+        if (weldSort_) weldSort_->add({p.x() + 0.0f, p.y() + 0.0f, p.z() + 0.0f, v});
+      }
+      positions.write(chunk.positions.data(), chunk.positions.size() * sizeof(Vec3f));
+      triangles.write(chunk.triangles.data(), chunk.triangles.size() * sizeof(Triangle));
+    }
+    checker.finish();
+    result_.census.inputVertices = checker.vertices();
+    result_.census.inputFaces = checker.faces();
+    if (checker.faces() == 0) throw InputError(name_ + ": the mesh has no faces");
+    inputPositions_ = positions.finish();
+    inputTriangles_ = triangles.finish();
+  }
+
+  /// Pass 2: welded id per input vertex (clusters numbered by their lowest input id) and the
+  /// welded positions (the lowest input id's).
+  void weldVertices() {
+    const std::uint64_t n = result_.census.inputVertices;
+    if (!weldSort_) {
+      welded_ = n;
+      result_.scratch.positions = inputPositions_;
+      return;
+    }
+    weldId_.resize(n);
+    weldSort_->finish();
+    PositionRecord r{}, first{};
+    bool any = false;
+    while (weldSort_->next(r)) {
+      if (!any || r.x != first.x || r.y != first.y || r.z != first.z) first = r;
+      any = true;
+      weldId_[r.id] = first.id;
+    }
+    weldSort_.reset();
+    std::uint32_t next = 0;
+    for (std::uint32_t v = 0; v < n; ++v) {
+      weldId_[v] = weldId_[v] == v ? next++ : weldId_[weldId_[v]];
+    }
+    welded_ = next;
+    result_.census.weldedVertices = n - next;
+    // A vertex keeps its place when it is its cluster's first: its welded id is the count so far.
+    ScratchReader in(folder_, inputPositions_, "weld");
+    ScratchWriter out(folder_, "weld");
+    Vec3f p;
+    std::uint32_t written = 0;
+    for (std::uint32_t v = 0; in.read(&p, sizeof p); ++v) {
+      if (weldId_[v] == written) {
+        out.write(&p, sizeof p);
+        ++written;
+      }
+    }
+    folder_.remove(inputPositions_);
+    result_.scratch.positions = out.finish();
+  }
+
+  /// Pass 3: triangles on welded ids; degenerate ones dropped, the others to the duplicate sort.
+  void renumberFaces() {
+    faceSort_ = std::make_unique<ExternalSorter<FaceRecord, SameVerticesLess>>(folder_, sortOptions("duplicates"));
+    ScratchReader in(folder_, inputTriangles_, "faces");
+    Triangle t;
+    for (std::uint32_t f = 0; in.read(&t, sizeof t); ++f) {
+      if (!weldId_.empty()) {
+        for (VertexId& v : t) v = weldId_[v];
+      }
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+        ++result_.census.degenerateFaces;
+        continue;
+      }
+      faceSort_->add({sortedVertices(t), f, t});
+    }
+    std::vector<std::uint32_t>().swap(weldId_);
+    folder_.remove(inputTriangles_);
+  }
+
+  /// Pass 4: the first face of each vertex set kept; its vertices united, its edges and corners
+  /// to their sorts.
+  void dropDuplicateFaces() {
+    faceSort_->finish();
+    components_ = std::make_unique<detail::UnionFind>(welded_);
+    edgeSort_ = std::make_unique<ExternalSorter<EdgeRecord, EdgeLess>>(folder_, sortOptions("edges"));
+    // Positions that fit half the memory (besides the union-find) are read whole later and the
+    // kept faces wait in a file; otherwise the corners are joined with them by two sorts.
+    const std::uint64_t unionFind = std::uint64_t(welded_) * sizeof(std::uint32_t);
+    positionsInMemory_ = !options_.joinPositions && unionFind + welded_ * sizeof(Vec3f) <= options_.memoryBytes / 2;
+    if (positionsInMemory_) {
+      keptFaces_ = std::make_unique<ScratchWriter>(folder_, "positions");
+    } else {
+      cornerSort_ = std::make_unique<ExternalSorter<CornerRecord, ByVertexLess>>(folder_, sortOptions("positions"));
+    }
+    FaceRecord r{};
+    std::array<VertexId, 3> last{kInvalidId, kInvalidId, kInvalidId};
+    while (faceSort_->next(r)) {
+      const auto& key = r.vertices;
+      if (key == last) {
+        ++result_.census.duplicateFaces;
+        continue;
+      }
+      last = key;
+      const Triangle& t = r.triangle;
+      components_->unite(t[0], t[1]);
+      components_->unite(t[1], t[2]);
+      for (std::uint32_t k = 0; k < 3; ++k) {
+        const VertexId a = t[k], b = t[(k + 1) % 3];
+        edgeSort_->add({std::min(a, b), std::max(a, b), a < b ? 1u : 0u});
+        if (cornerSort_) cornerSort_->add({t[k], r.face, k});
+      }
+      if (keptFaces_) {
+        keptFaces_->write(&r.face, sizeof r.face);
+        keptFaces_->write(&t, sizeof t);
+      }
+      ++result_.census.faces;
+    }
+    faceSort_.reset();
+    if (result_.census.faces == 0) {
+      throw InputError(name_ + ": the mesh has no valid faces (" + std::to_string(result_.census.inputFaces) +
+                       " faces in the input, all degenerate or duplicates)");
+    }
+  }
+
+  /// Pass 5: edges grouped by their two vertices; boundary edges join their vertices' loops.
+  void countEdges() {
+    edgeSort_->finish();
+    WeldCensus& c = result_.census;
+    std::unordered_map<std::uint32_t, std::uint32_t> loop;  // boundary vertex -> parent
+    auto findLoop = [&](std::uint32_t v) {  // with path halving
+      auto it = loop.emplace(v, v).first;
+      while (it->second != v) {
+        const std::uint32_t grandparent = loop.find(it->second)->second;
+        it->second = grandparent;
+        v = grandparent;
+        it = loop.find(v);
+      }
+      return v;
+    };
+    EdgeRecord r{}, group{};
+    std::uint32_t faces = 0, forward = 0;
+    auto close = [&] {
+      if (faces == 0) return;
+      ++c.edges;
+      ++counts_[components_->find(group.lo)].edges;
+      if (faces == 1) {
+        ++c.boundaryEdges;
+        const std::uint32_t a = findLoop(group.lo), b = findLoop(group.hi);
+        if (a != b) loop[std::max(a, b)] = std::min(a, b);
+      } else if (faces == 2) {
+        ++(forward == 1 ? c.manifoldEdges : c.clashEdges);
+      } else {
+        ++c.nonManifoldEdges;
+      }
+    };
+    while (edgeSort_->next(r)) {
+      if (faces > 0 && (r.lo != group.lo || r.hi != group.hi)) {
+        close();
+        faces = forward = 0;
+      }
+      group = r;
+      ++faces;
+      forward += r.forward;
+    }
+    close();
+    edgeSort_.reset();
+    for (const auto& entry : loop) {
+      if (findLoop(entry.first) != entry.first) continue;
+      ++c.boundaryLoops;
+      ++counts_[components_->find(entry.first)].loops;
+    }
+  }
+
+  /// Pass 6: the kept faces with their corner positions, in a file; the bounding box of the
+  /// referenced vertices.
+  void placeCorners() {
+    ScratchWriter out(folder_, "positions");
+    BoundingBox& box = result_.census.box;
+    auto add = [&](WeldedFace& face) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3d p = face.corner(k).cast<double>();
+        box.min = box.min.cwiseMin(p);
+        box.max = box.max.cwiseMax(p);
+      }
+      out.write(&face, sizeof face);
+    };
+    if (positionsInMemory_) {
+      placeCornersFromMemory(add);
+    } else {
+      joinCornersWithPositions(add);
+    }
+    placedFaces_ = out.finish();
+  }
+
+  template <class Add>
+  void placeCornersFromMemory(Add&& add) {
+    std::vector<Vec3f> positions(welded_);
+    {
+      ScratchReader in(folder_, result_.scratch.positions, "positions");
+      if (welded_ > 0 && !in.read(positions.data(), positions.size() * sizeof(Vec3f))) {
+        throw IoError(result_.scratch.positions.path + ": welded positions end early");
+      }
+    }
+    const ScratchFile kept = keptFaces_->finish();
+    keptFaces_.reset();
+    ScratchReader in(folder_, kept, "positions");
+    WeldedFace face;
+    while (in.read(&face.face, sizeof face.face) && in.read(&face.triangle, sizeof face.triangle)) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3f& p = positions[face.triangle[k]];
+        face.corners[k] = {p.x(), p.y(), p.z()};
+      }
+      add(face);
+    }
+    folder_.remove(kept);
+  }
+
+  /// Corners sorted by vertex, joined with the positions read along their file, then regrouped
+  /// by face.
+  template <class Add>
+  void joinCornersWithPositions(Add&& add) {
+    cornerSort_->finish();
+    auto placed = std::make_unique<ExternalSorter<PlacedCorner, ByCornerLess>>(folder_, sortOptions("positions"));
+    {
+      ScratchReader positions(folder_, result_.scratch.positions, "positions");
+      CornerRecord r{};
+      Vec3f p = Vec3f::Zero();
+      std::int64_t at = -1;
+      while (cornerSort_->next(r)) {
+        while (at < static_cast<std::int64_t>(r.vertex)) {
+          if (!positions.read(&p, sizeof p)) throw IoError(result_.scratch.positions.path + ": welded positions end early");
+          ++at;
+        }
+        placed->add({r.face, r.slot, r.vertex, {p.x(), p.y(), p.z()}});
+      }
+    }
+    cornerSort_.reset();
+    placed->finish();
+    PlacedCorner c[3];
+    while (placed->next(c[0]) && placed->next(c[1]) && placed->next(c[2])) {
+      WeldedFace face;
+      face.face = c[0].face;
+      for (int k = 0; k < 3; ++k) {
+        face.triangle[k] = c[k].vertex;
+        face.corners[k] = c[k].position;
+      }
+      add(face);
+    }
+  }
+
+  /// Pass 7: Morton codes of the centroids, zero-area faces and faces per component; the
+  /// faces written in Morton order.
+  void sortByMorton() {
+    WeldCensus& c = result_.census;
+    const double diagonal = c.box.diagonal(), tiny = 1e-14 * diagonal * diagonal;
+    ExternalSorter<WeldedFace, MortonLess> sorter(folder_, sortOptions("morton"));
+    {
+      ScratchReader in(folder_, placedFaces_, "morton");
+      WeldedFace face;
+      while (in.read(&face, sizeof face)) {
+        const Vec3d a = face.corner(0).cast<double>(), b = face.corner(1).cast<double>(),
+                    d = face.corner(2).cast<double>();
+        c.zeroAreaFaces += 0.5 * (b - a).cross(d - a).norm() <= tiny;
+        face.morton = mortonCode((a + b + d) / 3.0, c.box);
+        ++counts_[components_->find(face.triangle[0])].faces;
+        sorter.add(face);
+      }
+    }
+    folder_.remove(placedFaces_);
+    sorter.finish();
+    ScratchWriter out(folder_, "morton");
+    WeldedFace face;
+    while (sorter.next(face)) out.write(&face, sizeof face);
+    result_.scratch.faces = out.finish();
+    result_.scratch.numFaces = c.faces;
+  }
+
+  /// Vertices per component (the union-find's last use), then the components' figures.
+  void countComponents() {
+    WeldCensus& c = result_.census;
+    for (std::uint32_t v = 0; v < welded_; ++v) {
+      const auto it = counts_.find(components_->find(v));
+      if (it == counts_.end()) continue;  // a vertex no face uses
+      ++it->second.vertices;
+      ++c.vertices;
+    }
+    components_.reset();
+    c.unreferencedVertices = c.inputVertices - c.vertices - c.weldedVertices;
+    for (const auto& entry : counts_) {
+      const ComponentCount& k = entry.second;
+      ComponentInfo info;
+      info.faces = static_cast<std::uint32_t>(k.faces);
+      info.vertices = static_cast<std::uint32_t>(k.vertices);
+      info.edges = k.edges;
+      info.boundaryLoops = static_cast<std::uint32_t>(k.loops);
+      info.eulerCharacteristic = std::int64_t(info.vertices) - std::int64_t(info.edges) + info.faces;
+      info.genus = (2 - info.eulerCharacteristic - info.boundaryLoops) / 2;
+      c.components.push_back(info);
+    }
+    std::sort(c.components.begin(), c.components.end(), [](const ComponentInfo& a, const ComponentInfo& b) {
+      return std::tie(b.faces, b.vertices, b.edges, b.boundaryLoops) < std::tie(a.faces, a.vertices, a.edges, a.boundaryLoops);
+    });
+  }
+
+  MeshStream& stream_;
+  ScratchFolder& folder_;
+  WeldStreamOptions options_;
+  std::string name_;
+  ExternalSortOptions sort_;
+  WeldStreamResult result_;
+  std::uint64_t welded_ = 0;
+  ScratchFile inputPositions_, inputTriangles_, placedFaces_;
+  std::vector<std::uint32_t> weldId_;  ///< input vertex -> welded id (empty: no welding)
+  std::unique_ptr<ExternalSorter<PositionRecord, PositionLess>> weldSort_;
+  std::unique_ptr<ExternalSorter<FaceRecord, SameVerticesLess>> faceSort_;
+  std::unique_ptr<ExternalSorter<EdgeRecord, EdgeLess>> edgeSort_;
+  std::unique_ptr<ExternalSorter<CornerRecord, ByVertexLess>> cornerSort_;
+  std::unique_ptr<ScratchWriter> keptFaces_;  ///< face and triangle, when positionsInMemory_
+  bool positionsInMemory_ = false;
+  std::unique_ptr<detail::UnionFind> components_;
+  std::unordered_map<std::uint32_t, ComponentCount> counts_;  ///< by union-find root
+};
+
+}  // namespace
+
+WeldStreamResult weldMeshStream(MeshStream& stream, ScratchFolder& folder, const WeldStreamOptions& options) {
+  return WeldPass(stream, folder, options).run();
+}
+
+WeldedFaceReader::WeldedFaceReader(ScratchFolder& folder, const WeldedScratch& scratch, std::string stage)
+    : reader_(folder, scratch.faces, std::move(stage)) {}
+
+bool WeldedFaceReader::next(std::vector<WeldedFace>& chunk, std::size_t count) {
+  chunk.clear();
+  WeldedFace face;
+  while (chunk.size() < count && reader_.read(&face, sizeof face)) chunk.push_back(face);
+  return !chunk.empty();
+}
+
+}  // namespace seamvox
