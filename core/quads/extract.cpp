@@ -222,6 +222,12 @@ class Extractor {
     return orient(map_.at(3 * f), map_.at(3 * f + 1), map_.at(3 * f + 2)) > 0;
   }
 
+  bool isPositiveFan(VertexId w) const {
+    bool positive = true;
+    topo_.forEachCornerAround(w, [&](CornerId c) { positive = positive && isPositive(cornerFace(c)); });
+    return positive;
+  }
+
   void portsOf(const GridVertex& v, std::vector<Port>& out) const {
     if (v.where == Where::Face) {
       for (std::uint8_t d = 0; d < 4; ++d) out.push_back({v.id, d});
@@ -544,8 +550,9 @@ class Extractor {
         const CornerId c = 3 * f + exitVertex;
         const VertexId w = topo_.vertex(c);
         // A vertex on the line that is a grid vertex itself (a boundary vertex, or a cone between
-        // integer points) ends the edge there: its own ports carry the line on.
-        if (const auto it = index_.find(vertexKey(w)); it != index_.end()) {
+        // integer points) ends the edge there: its own ports carry the line on. Not through a
+        // fold: directions into a fan with flipped triangles do not name one port.
+        if (const auto it = index_.find(vertexKey(w)); it != index_.end() && isPositiveFan(w)) {
           return arrivalPort(it->second, f, rotateDir(d, 2));
         }
         if (map_.coneIndex(w) == 2) {
@@ -553,7 +560,12 @@ class Extractor {
           if (std::abs(half.x) + std::abs(half.y) == G_ / 2) return kDeadEnd;
         }
         if (map_.coneIndex(w) != 0) return kNone;  // through another cone: not followed
-        if (!passVertex(c, f, d, target)) return kNone;
+        if (!passVertex(c, f, d, target)) {
+          if (!topo_.isBoundaryVertex(w)) return kNone;
+          const auto it = index_.find(vertexKey(w));
+          if (it == index_.end()) return kNone;
+          return arrivalPort(it->second, f, rotateDir(d, 2));
+        }
       } else {
         return kNone;
       }
