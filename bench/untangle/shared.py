@@ -37,8 +37,14 @@ def main():
             q, u = rep["quality"], rep["untangle"]
             quads = next((l for l in text.splitlines() if l.startswith("quads ->")), "")
             valid = next((l for l in text.splitlines() if l.startswith("validation:")), "")
+            extraction = next((l for l in text.splitlines() if l.startswith("extraction:")), "")
             share = quads.split("(")[1].split(" quads")[0] if "(" in quads else "?"
-            ok = "yes" if valid.startswith("validation: valid") else "no: " + valid.split(";", 1)[1].strip()[:90]
+            figures = {k: extraction.split(k + " ")[1].split(",")[0].split(";")[0] for k in ("untraced", "open faces")}
+            if "twice" in valid:
+                figures["faces through a vertex twice"] = valid.split("twice ")[1].split(";")[0]
+            figures["non-manifold edges"] = valid.split("non-manifold edges ")[1].split(",")[0]
+            ok = "yes" if valid.startswith("validation: valid") else "no (" + ", ".join(
+                f"{k} {n}" for k, n in figures.items() if n != "0") + ")"
             l2a, l2b = raw["relativeGradientError"], q["relativeGradientError"]
             print(f"| {name} | {rep['solverUsed']} | {raw['flipped']} / {q['flipped']} ({q['flippedFolded']}) | "
                   f"{u['relocatedVertices']} | {l2a:.4f} / {l2b:.4f} ({l2b / l2a:.3f}) | {share} | {ok} |", flush=True)

@@ -679,6 +679,31 @@ class Extractor {
     return g.where == Where::Edge ? cornerFace(g.id) : g.id;
   }
 
+  // Drops edges a -> b -> a that a face walk takes out and back to a vertex b with no other way
+  // on: an integer point whose other lines all end at cones of index 2 halfway (a cluster of them
+  // around it) or fold back in flipped triangles. Both ends lose the edge (QuadStats::spikes);
+  // b, when in no other face, is left out.
+  void removeSpikes(std::vector<std::uint32_t>& face, std::vector<std::uint32_t>& facePorts,
+                    std::vector<std::uint8_t>& lostAt, QuadStats& stats) const {
+    for (std::size_t k = 0; face.size() > 2 && k < face.size();) {
+      const std::size_t n = face.size(), before = (k + n - 1) % n, after = (k + 1) % n;
+      if (face[before] != face[after]) {
+        ++k;
+        continue;
+      }
+      ++lostAt[face[k]];
+      ++lostAt[face[after]];
+      ++stats.spikes;
+      // Keep `before`, drop k and `after` (the same vertex as `before`).
+      const std::size_t first = std::min(k, after);
+      for (std::size_t i : {std::max(k, after), first}) {
+        face.erase(face.begin() + i);
+        facePorts.erase(facePorts.begin() + i);
+      }
+      k = first > 0 ? first - 1 : 0;
+    }
+  }
+
   bool leaves(std::uint32_t p) const { return ports_[p].dir != kIn && portTarget_[p] < kDeadEnd; }
 
   void buildFaces(QuadResult& out) {
@@ -721,6 +746,7 @@ class Extractor {
         ++out.stats.openFaces;
         continue;
       }
+      removeSpikes(face, facePorts, lostAt, out.stats);
       if (face.size() <= 2) {  // two edges between the same points: one edge once this goes
         ++out.stats.digons;
         if (face.size() == 2 && ports_[h].dir < 4 &&

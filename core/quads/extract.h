@@ -30,7 +30,9 @@ constexpr double kQuadSeamTolerance = 1e-4;
 
 struct QuadOptions {
   /// Iso-lines every `scale` units of u and v (>= 1). Needs seam translations that are multiples
-  /// of scale (QuadStats::seamEdgesOffScale counts the others).
+  /// of scale (QuadStats::seamEdgesOffScale counts the others): a seam maps u = K m onto
+  /// +-K m + t, so the coarse lines continue only where K divides t. A map rounded to any
+  /// integers (seamvox param's) has them only at scale 1; map with a K times larger edge instead.
   std::int64_t scale = 1;
   ProgressFn progress;  ///< stage "quads"
 };
@@ -46,6 +48,10 @@ struct QuadStats {
   /// Cones of negative index halfway between integer points on an iso-line: vertices of the quad
   /// mesh with (4 - k) / 2 edges (the lines through them), between pentagons.
   std::uint64_t halfwayCones = 0;
+  /// Edges a face walk took out and back to an integer point whose other lines all end at cones
+  /// of index 2 or fold back in flipped triangles (left out, with the point when it has no other
+  /// edge; both ends lose the edge in QuadResult::vertexLostEdges).
+  std::uint64_t spikes = 0;
   std::uint64_t unpairedEdges = 0;     ///< traced half-edges whose reverse trace went elsewhere
   std::uint64_t openFaces = 0;         ///< face walks that met a missing edge (no face made)
   /// Faces of two edges (an iso-line and a boundary piece or another iso-line between the same two
