@@ -314,8 +314,9 @@ bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, co
 // folded in 3D move toward their fan's kernel (seam vertices with all their wedges), pass after
 // pass; when none can, their neighbours move halfway into their own kernels to make room. A move
 // changes only the moved vertex's fan and turns none of its positive triangles negative, so
-// flips never increase, and the seams keep their rotations and translations. All moves are
-// undone when they leave as many flips as before (they would only cost gradient error).
+// flips never increase, and the seams keep their rotations and translations; a move that
+// collapses a fan triangle is undone. All moves are undone when they leave as many flips as
+// before (they would only cost gradient error).
 std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                       WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
                                       std::uint32_t passes) {
@@ -328,6 +329,22 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
   const std::vector<std::uint8_t> stateBefore = state;
   const auto flips = [&] { return std::count(state.begin(), state.end(), std::uint8_t(kFlipped)); };
   const auto flipsBefore = flips();
+  // A move is undone when it collapses a fan triangle (parameter area below the collapse
+  // fraction) that was not collapsed before.
+  const auto collapsed = [&](FaceId f) { return std::abs(parameterAreaRatio(mesh, cornerUV, f, h)) < kCollapsedAreaFraction; };
+  std::vector<std::uint8_t> wasCollapsed;
+  const auto tryMove = [&](VertexId v, Move mode) {
+    wasCollapsed.clear();
+    topology.forEachCornerAround(v, [&](CornerId c) { wasCollapsed.push_back(collapsed(c / 3)); });
+    const std::size_t mark = log.size();
+    if (!relocateVertex(topology, cornerUV, v, folded, log, mode)) return false;
+    std::size_t i = 0;
+    bool worse = false;
+    topology.forEachCornerAround(v, [&](CornerId c) { worse = worse || (!wasCollapsed[i++] && collapsed(c / 3)); });
+    if (!worse) return true;
+    while (log.size() > mark) cornerUV.setWedgeValue(log.back().first, log.back().second), log.pop_back();
+    return false;
+  };
   for (std::uint32_t pass = 0; pass < passes; ++pass) {
     std::vector<VertexId> candidates;
     for (FaceId f = 0; f < state.size(); ++f) {
@@ -340,9 +357,9 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
     // Kernel moves first; steps toward a better worst margin only when none is possible.
     std::uint32_t moved = 0;
-    for (VertexId v : candidates) moved += relocateVertex(topology, cornerUV, v, folded, log, Move::Kernel);
+    for (VertexId v : candidates) moved += tryMove(v, Move::Kernel);
     if (moved == 0) {
-      for (VertexId v : candidates) moved += relocateVertex(topology, cornerUV, v, folded, log, Move::Gain);
+      for (VertexId v : candidates) moved += tryMove(v, Move::Gain);
     }
     if (moved == 0) {  // stalled: neighbours of the flipped faces' vertices make room
       std::vector<VertexId> ring;
@@ -357,7 +374,7 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
       ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
       for (VertexId v : ring) {
         if (std::binary_search(candidates.begin(), candidates.end(), v)) continue;
-        moved += relocateVertex(topology, cornerUV, v, folded, log, Move::Room);
+        moved += tryMove(v, Move::Room);
       }
     }
     moves += moved;
