@@ -3,6 +3,7 @@
 // flips move, and the weights are what they say.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -217,6 +218,144 @@ TEST(Untangle, RelocationAloneUnfoldsMovedVerticesAndMovesNothingElse) {
       EXPECT_GE(stats.relocatedVertices, d.damaged.size());
     }
   }
+}
+
+// e turned by k quarter turns counter-clockwise.
+Vec2d turned(Vec2d e, int k) {
+  for (int j = 0; j < (k & 3); ++j) e = Vec2d(-e.y(), e.x());
+  return e;
+}
+
+// Quarter turns from corner c's chart to its ccw neighbour's, from the edge they share (-1: none).
+int turnToNext(const Topology& topology, const WedgeMap& uv, CornerId c) {
+  const CornerId next = topology.ccw(c);
+  const Vec2d e = uv[prevCorner(c)] - uv[c], e2 = uv[nextCorner(next)] - uv[next];
+  for (int k = 0; k < 4; ++k) {
+    if ((turned(e, k) - e2).norm() < 1e-9) return k;
+  }
+  return -1;
+}
+
+// Expects every corner the edit moved to lie inside the box of its fan's neighbours, all seen in
+// the corner's own chart (turned across seams); returns the vertices that moved.
+std::vector<VertexId> expectMovesInsideTheirFans(const Topology& topology, const WedgeMap& before, const WedgeMap& after) {
+  std::vector<VertexId> moved;
+  for (CornerId c = 0; c < before.size(); ++c) {
+    if (after[c] == before[c]) continue;
+    moved.push_back(topology.vertex(c));
+    Vec2d lo = Vec2d::Constant(1e300), hi = Vec2d::Constant(-1e300);
+    CornerId a = c;
+    int k = 0;  // quarter turns from c's chart to a's
+    do {
+      for (CornerId b : {nextCorner(a), prevCorner(a)}) {
+        const Vec2d q = after[c] + turned(after[b] - after[a], -k);
+        lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+      }
+      const int step = turnToNext(topology, after, a);
+      EXPECT_GE(step, 0) << "corner " << a << ": no quarter turn maps its edge onto the next face's";
+      k = (k + std::max(step, 0)) & 3;
+      a = topology.ccw(a);
+    } while (a != c);
+    EXPECT_TRUE((after[c].array() >= lo.array()).all() && (after[c].array() <= hi.array()).all())
+        << "corner " << c << " moved out of its fan";
+  }
+  std::sort(moved.begin(), moved.end());
+  moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
+  return moved;
+}
+
+TEST(Untangle, RelocationLeavesFansWithFacesFoldedIn3DAndNeverAddsFlips) {
+  // Damaged vertices fold their fans in (u, v); the first one's smoothed 3D position is pushed
+  // far aside, so faces of its fan are also folded in 3D (flipped under any smooth map): it must
+  // not move, its neighbours may, and the flips never increase.
+  DamagedMap d = damagedSphereMap();
+  const TriangleMesh& mesh = d.cs.s.mesh;
+  const Topology& topology = d.cs.s.topology;
+  const double h = 0.15;
+  d.cs.field.framePositions = mesh.positions;
+  const VertexId v = d.damaged.front();
+  const VertexId neighbour = topology.vertex(nextCorner(topology.vertexCorner(v)));
+  d.cs.field.framePositions[v] = mesh.positions[v] + 4.0f * (mesh.positions[neighbour] - mesh.positions[v]);
+  const WedgeMap before = d.map.cornerUV;
+  const MapQuality damaged = measureMap(mesh, before, &d.cs.field, h);
+  ASSERT_GT(damaged.flippedFolded, 0u) << "no fan face folded in 3D: the test tests nothing";
+  UntangleOptions options;
+  options.edgeLength = h;
+  options.maxRounds = 0;
+  std::vector<std::complex<double>> t = d.map.translations;
+  const UntangleStats stats = untangleFlips(mesh, topology, d.cs.field, d.cs.cut, d.map.cornerUV, t, options);
+  const MapQuality after = measureMap(mesh, d.map.cornerUV, &d.cs.field, h);
+  EXPECT_LE(after.flipped, damaged.flipped);
+  EXPECT_EQ(after.flipped, stats.flippedAfter);
+  EXPECT_GT(stats.relocatedVertices, 0u);
+  EXPECT_LT(after.flipped - after.flippedFolded, damaged.flipped - damaged.flippedFolded);
+  EXPECT_TRUE(measureSeams(mesh, topology, d.cs.cut, d.map.cornerUV).isSeamless());
+  const std::vector<VertexId> moved = expectMovesInsideTheirFans(topology, before, d.map.cornerUV);
+  EXPECT_FALSE(std::binary_search(moved.begin(), moved.end(), v)) << "a vertex next to a face folded in 3D moved";
+}
+
+TEST(Untangle, SeamVerticesMoveThroughTheTransitions) {
+  // Vertices inside seam curves, moved by one displacement turned into each of their wedges'
+  // charts (the map stays seamless), fold their fans; relocation alone moves them back into
+  // their kernels, all wedges together: no flip left, seams exact, translations as they were.
+  testing::CutSurface cs = testing::makeCutSurface(sphere(6000));
+  ParamOptions param;
+  param.edgeLength = 0.15;
+  ParamResult map = parameterizeMesh(cs.s.mesh, cs.s.topology, cs.field, cs.cut, param);
+  const TriangleMesh& mesh = cs.s.mesh;
+  const Topology& topology = cs.s.topology;
+  const double h = 0.15;
+  ASSERT_EQ(measureMap(mesh, map.cornerUV, &cs.field, h).flipped, 0u);
+  std::vector<std::uint8_t> cone(mesh.numVertices(), 0);
+  for (VertexId c : cs.cut.cones) cone[c] = 1;
+  std::vector<VertexId> damaged;
+  for (const SeamCurve& seam : cs.cut.seams) {
+    if (seam.corners.size() < 8 || damaged.size() >= 4) continue;
+    const VertexId v = topology.vertex(nextCorner(seam.corners[seam.corners.size() / 2]));
+    if (cone[v]) continue;
+    bool clear = true;
+    for (VertexId w : damaged) clear = clear && (mesh.position(v) - mesh.position(w)).norm() > 0.5;
+    if (!clear) continue;
+    // Turns per corner, then every wedge moved by the displacement turned into its chart.
+    std::vector<std::pair<CornerId, int>> fan;
+    int turn = 0;
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      fan.emplace_back(c, turn);
+      const int k = turnToNext(topology, map.cornerUV, c);
+      turn = k < 0 ? -100 : (turn + k) & 3;
+    });
+    if (turn != 0) continue;
+    std::vector<std::uint32_t> wedges;
+    for (const auto& [c, k] : fan) {
+      const std::uint32_t w = map.cornerUV.wedge(c);
+      if (std::find(wedges.begin(), wedges.end(), w) != wedges.end()) continue;
+      wedges.push_back(w);
+      map.cornerUV.setWedgeValue(w, map.cornerUV.wedgeValue(w) + turned(Vec2d(0.9, -0.6), k));
+    }
+    if (wedges.size() > 1) damaged.push_back(v);
+  }
+  ASSERT_GE(damaged.size(), 2u) << "too few seam vertices to damage";
+  const SeamQuality seamsBefore = measureSeams(mesh, topology, cs.cut, map.cornerUV);
+  ASSERT_LT(seamsBefore.maxResidual, 1e-10);
+  const MapQuality broken = measureMap(mesh, map.cornerUV, &cs.field, h);
+  ASSERT_GT(broken.flipped, 0u);
+  const WedgeMap before = map.cornerUV;
+  UntangleOptions options;
+  options.edgeLength = h;
+  options.maxRounds = 0;
+  std::vector<std::complex<double>> t = map.translations;
+  const UntangleStats stats = untangleFlips(mesh, topology, cs.field, cs.cut, map.cornerUV, t, options);
+  EXPECT_EQ(stats.flippedBefore, broken.flipped);
+  EXPECT_LT(stats.flippedAfter, broken.flipped);
+  EXPECT_EQ(measureMap(mesh, map.cornerUV, &cs.field, h).flipped, stats.flippedAfter);
+  const SeamQuality seams = measureSeams(mesh, topology, cs.cut, map.cornerUV);
+  EXPECT_LT(seams.maxResidual, 1e-10);
+  EXPECT_LT(seams.maxIntegerDistance, 1e-10);
+  EXPECT_EQ(t, map.translations);
+  const std::vector<VertexId> moved = expectMovesInsideTheirFans(topology, before, map.cornerUV);
+  std::size_t seamMoved = 0;
+  for (VertexId v : damaged) seamMoved += std::binary_search(moved.begin(), moved.end(), v);
+  EXPECT_GT(seamMoved, 0u) << "no seam vertex moved";
 }
 
 TEST(Untangle, NothingToDoLeavesTheMapAsItIs) {

@@ -24,15 +24,16 @@ void printQuadSummary(const std::string& output, const QuadRun& run) {
               "snapped by at most %.2g\n", run.quads.cones, run.quads.conesOnGridVertices,
               U(s.flippedFaces), U(s.degenerateFaces), s.maxSnap);
   std::printf("extraction: %llu integer points, %llu boundary points, %llu traced edges; untraced %llu, "
-              "unpaired %llu, open faces %llu, two-edge faces %llu, ends at cones %llu; islands %llu (%llu triangles), "
+              "unpaired %llu, open faces %llu, two-edge faces %llu, ends at cones %llu, cones halfway %llu, spikes %llu; islands %llu (%llu triangles), "
               "holes without a point %llu\n",
               U(s.gridVertices), U(s.boundaryVertices), U(s.tracedEdges), U(s.untracedEdges),
-              U(s.unpairedEdges), U(s.openFaces), U(s.digons), U(s.deadEnds), U(s.islands), U(s.islandFaces),
+              U(s.unpairedEdges), U(s.openFaces), U(s.digons), U(s.deadEnds), U(s.halfwayCones), U(s.spikes), U(s.islands), U(s.islandFaces),
               U(s.holesWithoutVertex));
-  std::printf("validation: %s; non-manifold edges %llu, vertices %llu; %llu/%zu components with the "
-              "map's Euler characteristic and boundary loops; irregular vertices off cones %llu, "
-              "cones with valence != 4 - k %llu of %llu, interior non-quads %llu\n",
+  std::printf("validation: %s; non-manifold edges %llu, vertices %llu; faces through a vertex twice %llu; "
+              "%llu/%zu components with the map's Euler characteristic and boundary loops; irregular vertices "
+              "off cones %llu, cones with valence != 4 - k %llu of %llu, interior non-quads %llu\n",
               v.isValid() ? "valid" : "NOT valid", U(v.nonManifoldEdges), U(v.nonManifoldVertices),
+              U(v.degenerateFaces),
               U(v.components.size() - v.componentsDiffering), v.components.size(), U(v.irregularVertices),
               U(v.conesWithWrongValence), U(v.conesOnVertices), U(v.interiorNonQuads));
 }
@@ -101,8 +102,10 @@ SEAMVOX_COMMAND({"quads", "quad mesh of a seamless map (its integer points and i
                  "loops per component, valences, and what could not be traced (flipped triangles).\n"
                  "\n"
                  "  -o OUT             the quad mesh (.obj or binary .ply; polygons)\n"
-                 "  --scale K          iso-lines every K units (K x K cells; needs seam translations\n"
-                 "                     that are multiples of K)\n"
+                 "  --scale K          iso-lines every K units (K x K cells); only for maps whose seam\n"
+                 "                     translations are all multiples of K, which param's maps (rounded\n"
+                 "                     to any integers) are not: for a coarser mesh, map with a K times\n"
+                 "                     larger --edge-length (or K times fewer --cells) instead\n"
                  "  --report FILE      JSON report (- for stdout)\n"
                  "  --weld             weld coincident vertices first (maps split along seams)\n"
                  "  --quiet            no progress on stderr\n",

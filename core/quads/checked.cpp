@@ -25,10 +25,14 @@ QuadRun extractCheckedQuads(const std::string& name, const TriangleMesh& mesh, c
     rethrowWithContext(name);
   }
   if (run.quads.stats.seamEdgesOffScale > 0) {
+    // A seam maps u = K m onto u' = +-K m + t: the coarse lines continue only when K divides t.
+    // Rounding makes t any integer, so this holds only for maps rounded to multiples of K.
     throw InputError(name + ": " + std::to_string(run.quads.stats.seamEdgesOffScale) +
                      " seam translations are no multiples of --scale " + std::to_string(scale) +
-                     ", so its iso-lines would not continue across seams; map with an edge length " +
-                     std::to_string(scale) + " times larger instead");
+                     " (seam edges), so iso-lines every " + std::to_string(scale) +
+                     " units would not continue across the seams: seamvox param rounds translations to "
+                     "any integers; for a coarser quad mesh, map with an edge length " + std::to_string(scale) +
+                     " times larger (--edge-length, --cells) and extract without --scale");
   }
   run.check = validateQuads(run.quads, computeComponents(topology));
   return run;

@@ -107,15 +107,17 @@ class Extractor {
 
   bool onGrid(std::int64_t x) const { return x % G_ == 0; }
 
-  // Integer points on mesh vertices (both coordinates on the grid), and boundary vertices where
-  // one iso-line meets the boundary.
+  // Integer points on mesh vertices (both coordinates on the grid), boundary vertices where one
+  // iso-line meets the boundary, and cones of negative index halfway between two integer points
+  // on an iso-line: rounding puts a cone of index -2 at t / 2, and the lines through it fan out
+  // to 3 integer points, so the cone is a vertex of valence (4 - k) / 2 between pentagons.
   void findVertexPoints() {
     for (VertexId v = 0; v < topo_.numVertices(); ++v) {
       const CornerId c = topo_.vertexCorner(v);
       if (c == kInvalidId) continue;
       const Point q = map_.at(c);
       const bool x = onGrid(q.x), y = onGrid(q.y);
-      if ((x && y) || ((x || y) && topo_.isBoundaryVertex(v))) {
+      if ((x && y) || ((x || y) && (topo_.isBoundaryVertex(v) || map_.coneIndex(v) < 0))) {
         addPoint(vertexKey(v), {Where::Vertex, x, y, v, 0, 0});
       }
     }
@@ -218,6 +220,12 @@ class Extractor {
 
   bool isPositive(FaceId f) const {
     return orient(map_.at(3 * f), map_.at(3 * f + 1), map_.at(3 * f + 2)) > 0;
+  }
+
+  bool isPositiveFan(VertexId w) const {
+    bool positive = true;
+    topo_.forEachCornerAround(w, [&](CornerId c) { positive = positive && isPositive(cornerFace(c)); });
+    return positive;
   }
 
   void portsOf(const GridVertex& v, std::vector<Port>& out) const {
@@ -345,7 +353,6 @@ class Extractor {
     std::uint32_t p = findPort(v, f, d);
     if (p != kNone) return p;
     const GridVertex& g = points_[v];
-    const Point dv = direction(d);
     if (g.where == Where::Edge) {
       const CornerId e = g.id, o = topo_.opposite(e);
       if (o == kInvalidId) return kNone;
@@ -542,6 +549,12 @@ class Extractor {
       } else if (exitVertex >= 0) {
         const CornerId c = 3 * f + exitVertex;
         const VertexId w = topo_.vertex(c);
+        // A vertex on the line that is a grid vertex itself (a boundary vertex, or a cone between
+        // integer points) ends the edge there: its own ports carry the line on. Not through a
+        // fold: directions into a fan with flipped triangles do not name one port.
+        if (const auto it = index_.find(vertexKey(w)); it != index_.end() && isPositiveFan(w)) {
+          return arrivalPort(it->second, f, rotateDir(d, 2));
+        }
         if (map_.coneIndex(w) == 2) {
           const Point half = target - map_.at(c);
           if (std::abs(half.x) + std::abs(half.y) == G_ / 2) return kDeadEnd;
@@ -597,7 +610,9 @@ class Extractor {
     }
     stats.pointsInFlippedFaces = pointsInFlipped_;
     for (const GridVertex& g : points_) {
-      (g.xOnGrid && g.yOnGrid ? stats.gridVertices : stats.boundaryVertices)++;
+      if (g.xOnGrid && g.yOnGrid) ++stats.gridVertices;
+      else if (g.where == Where::Vertex && !topo_.isBoundaryVertex(g.id)) ++stats.halfwayCones;
+      else ++stats.boundaryVertices;
     }
   }
 
@@ -664,6 +679,31 @@ class Extractor {
     return g.where == Where::Edge ? cornerFace(g.id) : g.id;
   }
 
+  // Drops edges a -> b -> a that a face walk takes out and back to a vertex b with no other way
+  // on: an integer point whose other lines all end at cones of index 2 halfway (a cluster of them
+  // around it) or fold back in flipped triangles. Both ends lose the edge (QuadStats::spikes);
+  // b, when in no other face, is left out.
+  void removeSpikes(std::vector<std::uint32_t>& face, std::vector<std::uint32_t>& facePorts,
+                    std::vector<std::uint8_t>& lostAt, QuadStats& stats) const {
+    for (std::size_t k = 0; face.size() > 2 && k < face.size();) {
+      const std::size_t n = face.size(), before = (k + n - 1) % n, after = (k + 1) % n;
+      if (face[before] != face[after]) {
+        ++k;
+        continue;
+      }
+      ++lostAt[face[k]];
+      ++lostAt[face[after]];
+      ++stats.spikes;
+      // Keep `before`, drop k and `after` (the same vertex as `before`).
+      const std::size_t first = std::min(k, after);
+      for (std::size_t i : {std::max(k, after), first}) {
+        face.erase(face.begin() + i);
+        facePorts.erase(facePorts.begin() + i);
+      }
+      k = first > 0 ? first - 1 : 0;
+    }
+  }
+
   bool leaves(std::uint32_t p) const { return ports_[p].dir != kIn && portTarget_[p] < kDeadEnd; }
 
   void buildFaces(QuadResult& out) {
@@ -671,6 +711,12 @@ class Extractor {
     std::vector<std::uint32_t> newIndex(points_.size(), kNone), face, facePorts;
     std::vector<std::uint8_t> lostAt(points_.size(), 0);
     for (std::uint32_t p = 0; p < ports_.size(); ++p) lostAt[portVertex_[p]] += portTarget_[p] == kDeadEnd;
+    for (std::uint32_t v = 0; v < points_.size(); ++v) {  // a cone between integer points
+      const GridVertex& g = points_[v];
+      if (g.where != Where::Vertex || (g.xOnGrid && g.yOnGrid) || topo_.isBoundaryVertex(g.id)) continue;
+      const int directions = 4 - map_.coneIndex(g.id), ports = int(portStart_[v + 1] - portStart_[v]);
+      lostAt[v] = static_cast<std::uint8_t>(std::clamp(directions - ports, 0, 255));
+    }
     PolygonMesh& pm = out.mesh;
     for (std::uint32_t h = 0; h < ports_.size(); ++h) {
       if (visited[h] || !leaves(h)) continue;
@@ -700,6 +746,7 @@ class Extractor {
         ++out.stats.openFaces;
         continue;
       }
+      removeSpikes(face, facePorts, lostAt, out.stats);
       if (face.size() <= 2) {  // two edges between the same points: one edge once this goes
         ++out.stats.digons;
         if (face.size() == 2 && ports_[h].dir < 4 &&
@@ -718,7 +765,7 @@ class Extractor {
           out.vertexComponent.push_back(ownerFace(g));  // a face for now; components below
           const int cone = g.where == Where::Vertex ? map_.coneIndex(g.id) : 0;
           out.vertexConeIndex.push_back(static_cast<std::int8_t>(cone));
-          out.conesOnGridVertices += cone != 0;
+          out.conesOnGridVertices += cone != 0 && g.xOnGrid && g.yOnGrid;
         }
         pm.faceVertices.push_back(newIndex[v]);
       }

@@ -30,7 +30,9 @@ constexpr double kQuadSeamTolerance = 1e-4;
 
 struct QuadOptions {
   /// Iso-lines every `scale` units of u and v (>= 1). Needs seam translations that are multiples
-  /// of scale (QuadStats::seamEdgesOffScale counts the others).
+  /// of scale (QuadStats::seamEdgesOffScale counts the others): a seam maps u = K m onto
+  /// +-K m + t, so the coarse lines continue only where K divides t. A map rounded to any
+  /// integers (seamvox param's) has them only at scale 1; map with a K times larger edge instead.
   std::int64_t scale = 1;
   ProgressFn progress;  ///< stage "quads"
 };
@@ -43,6 +45,13 @@ struct QuadStats {
   std::uint64_t boundaryEdges = 0;     ///< half-edges along the boundary
   std::uint64_t untracedEdges = 0;     ///< iso-line directions whose trace failed (flips, cones)
   std::uint64_t deadEnds = 0;          ///< iso-line directions that end at a cone of index 2
+  /// Cones of negative index halfway between integer points on an iso-line: vertices of the quad
+  /// mesh with (4 - k) / 2 edges (the lines through them), between pentagons.
+  std::uint64_t halfwayCones = 0;
+  /// Edges a face walk took out and back to an integer point whose other lines all end at cones
+  /// of index 2 or fold back in flipped triangles (left out, with the point when it has no other
+  /// edge; both ends lose the edge in QuadResult::vertexLostEdges).
+  std::uint64_t spikes = 0;
   std::uint64_t unpairedEdges = 0;     ///< traced half-edges whose reverse trace went elsewhere
   std::uint64_t openFaces = 0;         ///< face walks that met a missing edge (no face made)
   /// Faces of two edges (an iso-line and a boundary piece or another iso-line between the same two
@@ -65,7 +74,8 @@ struct QuadResult {
   std::vector<std::int8_t> vertexConeIndex;    ///< #V: index of the cone there (quarter turns), or 0
   /// #V: edges the vertex loses to cones of index 2: two-edge faces left out between two iso-lines
   /// (QuadStats::digons; one from each corner) and iso-lines that end at a cone halfway to the
-  /// next integer point (QuadStats::deadEnds).
+  /// next integer point (QuadStats::deadEnds); at a cone halfway between integer points
+  /// (QuadStats::halfwayCones), the (4 - k) / 2 directions whose iso-lines are off the grid.
   std::vector<std::uint8_t> vertexLostEdges;
   std::uint32_t cones = 0;                     ///< cones of the map
   std::uint32_t conesOnGridVertices = 0;       ///< of them, those at an integer point

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <Eigen/LU>
@@ -135,14 +136,16 @@ std::uint32_t patchRings(const TriangleMesh& mesh, const std::vector<FaceId>& se
   return static_cast<std::uint32_t>(std::clamp(rings, 2.0, 64.0));
 }
 
-// The point of the fan kernel farthest inside: p maximizing min_i (n_i . p + c_i) / |n_i| over
-// the half-planes n_i . p + c_i > 0 (2D linear programme, solved by its vertices: the fans are
-// small). Returns that margin (<= 0: empty kernel).
-double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>& offset, Vec2d& centre) {
+// The point p maximizing min_i (n_i . p + c_i) / w_i over the half-planes n_i . p + c_i >= 0
+// with weight w_i > 0, subject also to those with weight 0 (a bounding box): a 2D linear
+// programme solved by its vertices (the fans are small). Returns that margin (<= 0: the
+// weighted half-planes have no common interior), or -inf when no vertex is feasible.
+double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>& offset,
+                    const std::vector<double>& weight, Vec2d& centre) {
   const std::size_t n = normal.size();
-  double best = -1e300;
-  // Each candidate is where three constraints (n_i . p + c_i = t |n_i|) meet: the optimum of a
-  // bounded region is one of them (callers pass closed fans, whose kernel lies in the fan).
+  double best = -std::numeric_limits<double>::infinity();
+  // Each candidate is where three constraints (n_i . p + c_i = t w_i) meet: the optimum of a
+  // bounded region is one of them (the box bounds it).
   for (std::size_t a = 0; a < n; ++a) {
     for (std::size_t b = a + 1; b < n; ++b) {
       for (std::size_t c = b + 1; c < n; ++c) {
@@ -150,7 +153,7 @@ double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>&
         Eigen::Vector3d r;
         for (int k = 0; k < 3; ++k) {
           const std::size_t i = k == 0 ? a : (k == 1 ? b : c);
-          m.row(k) << normal[i].x(), normal[i].y(), -normal[i].norm();
+          m.row(k) << normal[i].x(), normal[i].y(), -weight[i];
           r[k] = -offset[i];
         }
         if (std::abs(m.determinant()) < 1e-300) continue;
@@ -158,7 +161,8 @@ double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>&
         if (!x.allFinite() || x[2] <= best) continue;
         bool feasible = true;
         for (std::size_t i = 0; i < n && feasible; ++i) {
-          feasible = normal[i].dot(x.head<2>()) + offset[i] >= x[2] * normal[i].norm() * (1.0 - 1e-9) - 1e-300;
+          const double need = x[2] * weight[i];
+          feasible = normal[i].dot(x.head<2>()) + offset[i] >= need - 1e-9 * (std::abs(need) + normal[i].norm()) - 1e-300;
         }
         if (feasible) best = x[2], centre = x.head<2>();
       }
@@ -167,59 +171,180 @@ double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>&
   return best;
 }
 
-// One vertex: moves its single wedge toward the kernel centre of its fan, just far enough that
-// every fan triangle keeps a quarter of the best margin. Only interior vertices whose fan has no
-// face folded in 3D: their kernel lies inside the fan's polygon, so a move stays local (an open
-// or partly unconstrained fan could send the vertex far away). False when it cannot move.
-bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, const std::vector<std::uint8_t>& folded) {
-  if (topology.isBoundaryVertex(v) || topology.isIsolatedVertex(v)) return false;
-  std::vector<Vec2d> normal;
-  std::vector<double> offset;
-  std::uint32_t wedge = kInvalidId;
-  bool single = true, anyFolded = false;
-  topology.forEachCornerAround(v, [&](CornerId c) {
-    if (wedge == kInvalidId) wedge = cornerUV.wedge(c);
-    single = single && cornerUV.wedge(c) == wedge;
-    anyFolded = anyFolded || folded[c / 3];
-    // Triangle (p, a, b) positive: (b - a) x p + a x b > 0.
-    const Vec2d a = cornerUV[nextCorner(c)], b = cornerUV[prevCorner(c)];
-    const Vec2d d = b - a;
-    normal.emplace_back(-d.y(), d.x());
-    offset.push_back(a.x() * b.y() - a.y() * b.x());
-  });
-  if (!single || anyFolded || wedge == kInvalidId || normal.size() < 3) return false;
-  Vec2d centre;
-  const double margin = kernelCentre(normal, offset, centre);
-  if (!(margin > 0.0)) return false;
-  // Along the segment from the current point to the centre, the first point where every
-  // constraint has a quarter of the margin (each is linear along it; all hold at the centre).
-  const Vec2d p0 = cornerUV.wedgeValue(wedge);
-  double s = 0.0;
-  for (std::size_t i = 0; i < normal.size(); ++i) {
-    const double need = 0.25 * margin * normal[i].norm();
-    const double d0 = normal[i].dot(p0) + offset[i], d1 = normal[i].dot(centre) + offset[i];
-    if (d0 < need) s = std::max(s, d1 > d0 ? (need - d0) / (d1 - d0) : 1.0);
+constexpr double kMaxRelocation = 0.25;
+
+Vec2d quarterTurns(const Vec2d& p, int k) {
+  switch (k & 3) {
+    case 0: return p;
+    case 1: return {-p.y(), p.x()};
+    case 2: return {-p.x(), -p.y()};
+    default: return {p.y(), -p.x()};
   }
-  if (s <= 0.0) return false;
-  cornerUV.setWedgeValue(wedge, p0 + std::min(1.0, s) * (centre - p0));
+}
+
+// The fan of interior vertex v with, per corner, the quarter turns from the chart of the first
+// corner into the corner's own (composed across the seams, from the edge both faces share). False
+// for a cone (the turns do not close), an edge too short in (u, v) to tell the turn, or a wedge
+// whose corners disagree.
+bool fanTurns(const Topology& topology, const WedgeMap& uv, VertexId v, std::vector<CornerId>& corners,
+              std::vector<int>& turns) {
+  corners.clear();
+  turns.clear();
+  topology.forEachCornerAround(v, [&](CornerId c) { corners.push_back(c); });
+  int turn = 0;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    turns.push_back(turn);
+    // The edge (v, vertex(prev c)) in both charts: i^k e = e' (a cone's corners may share one
+    // value across its seams, so the wedges of v alone do not tell a seam).
+    const CornerId c = corners[i], next = topology.ccw(c);
+    const Vec2d e = uv[prevCorner(c)] - uv[c], e2 = uv[nextCorner(next)] - uv[next];
+    if (e == e2) continue;
+    int k = 0;
+    double residual = std::numeric_limits<double>::infinity();
+    for (int j = 0; j < 4; ++j) {
+      const double r = (quarterTurns(e, j) - e2).norm();
+      if (r < residual) residual = r, k = j;
+    }
+    if (!(residual <= 1e-6 * e.norm())) return false;
+    turn = (turn + k) & 3;
+  }
+  if (turn != 0) return false;  // around a cone the seams' turns add up
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (uv.wedge(corners[j]) == uv.wedge(corners[i]) && turns[j] != turns[i]) return false;
+    }
+  }
   return true;
 }
 
-// The last step: interior vertices of faces still flipped that have one wedge, lie on no seam,
-// are not cones and touch no face folded in 3D move into their fan's kernel, pass after pass.
-// Moving one vertex leaves every triangle outside its fan as it was and makes every fan
-// triangle positive, so flips never increase and seams never change.
+// One interior vertex, on a seam or not: its wedges move together by one displacement d in the
+// chart of its first corner, turned into each wedge's chart, so every seam transition keeps its
+// rotation and integer translation. d goes toward the kernel centre of the fan, just far enough
+// that every fan triangle keeps `share` of the best margin. When the kernel is empty, d goes
+// toward the point that most raises the worst negative fan triangle while every positive one
+// keeps half its distance to its edge (so a neighbour may find a kernel next). d stays inside the
+// box of the neighbours and within kMaxRelocation grid units. Only vertices whose fan has no face
+// folded in 3D. False when it cannot move.
+using MoveLog = std::vector<std::pair<std::uint32_t, Vec2d>>;  // wedge, value before the move
+
+// How a vertex may move: into its fan's kernel to a quarter of the margin (any distance), toward
+// a larger worst margin when the kernel is empty, or (a neighbour making room) halfway into it.
+enum class Move { Kernel, Gain, Room };
+
+bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, const std::vector<std::uint8_t>& folded,
+                    MoveLog& log, Move mode) {
+  if (topology.isBoundaryVertex(v) || topology.isIsolatedVertex(v)) return false;
+  std::vector<CornerId> corners;
+  std::vector<int> turns;
+  if (!fanTurns(topology, cornerUV, v, corners, turns) || corners.size() < 3) return false;
+  std::vector<Vec2d> normal;
+  std::vector<double> offset, weight;
+  Vec2d lo = Vec2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const CornerId c = corners[i];
+    if (folded[c / 3]) return false;
+    // Triangle (p + i^k d, a, b) positive: (b - a) x (p + i^k d) + a x b > 0.
+    const Vec2d p = cornerUV[c], a = cornerUV[nextCorner(c)], b = cornerUV[prevCorner(c)];
+    const Vec2d n(a.y() - b.y(), b.x() - a.x());
+    normal.push_back(quarterTurns(n, -turns[i]));
+    offset.push_back(n.dot(p) + a.x() * b.y() - a.y() * b.x());
+    weight.push_back(n.norm());
+    for (const Vec2d& q : {a, b}) {
+      const Vec2d d = quarterTurns(q - p, -turns[i]);
+      lo = lo.cwiseMin(d), hi = hi.cwiseMax(d);
+    }
+  }
+  const std::size_t fan = normal.size();
+  for (int axis = 0; axis < 2; ++axis) {  // d inside the neighbours' box
+    for (const double sign : {1.0, -1.0}) {
+      normal.push_back(axis == 0 ? Vec2d(sign, 0.0) : Vec2d(0.0, sign));
+      offset.push_back(sign > 0 ? -lo[axis] : hi[axis]);
+      weight.push_back(0.0);
+    }
+  }
+  Vec2d centre;
+  const double margin = kernelCentre(normal, offset, weight, centre);
+  if (!std::isfinite(margin)) return false;
+  double s = 1.0;
+  if ((margin > 0.0) != (mode != Move::Gain)) return false;
+  const double share = mode == Move::Room ? 0.5 : 0.25;
+  if (margin > 0.0) {
+    // Along the segment from d = 0 to the centre, the first point where every fan constraint
+    // has a quarter of the margin (each is linear along it; all hold at the centre).
+    s = 0.0;
+    for (std::size_t i = 0; i < fan; ++i) {
+      const double need = share * margin * weight[i];
+      const double d0 = offset[i], d1 = normal[i].dot(centre) + offset[i];
+      if (d0 < need) s = std::max(s, d1 > d0 ? (need - d0) / (d1 - d0) : 1.0);
+    }
+    if (s <= 0.0) return false;
+  } else {
+    // No kernel: the point where the worst negative fan triangle gains most while every positive
+    // one keeps half its distance (positives as unweighted half-planes), kept when it gains.
+    double worst = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < fan; ++i) {
+      if (offset[i] > 0.0) {
+        offset[i] *= 0.5;
+        weight[i] = 0.0;
+      } else {
+        worst = std::min(worst, offset[i] / weight[i]);
+      }
+    }
+    const double gained = kernelCentre(normal, offset, weight, centre);
+    if (!std::isfinite(gained) || !(gained > worst + 1e-3 * (hi - lo).norm())) return false;
+  }
+  // Steps toward a kernel that is not there yet, or that only makes room, take at most
+  // kMaxRelocation grid units: far moves cost gradient error on coarse meshes.
+  const double length = std::min(1.0, s) * centre.norm();
+  if (!(length > 0.0)) return false;
+  const double cap = mode == Move::Kernel ? length : kMaxRelocation;
+  const Vec2d d = std::min(length, cap) / centre.norm() * centre;
+  std::vector<std::uint32_t> done;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const std::uint32_t w = cornerUV.wedge(corners[i]);
+    if (std::find(done.begin(), done.end(), w) != done.end()) continue;
+    done.push_back(w);
+    log.emplace_back(w, cornerUV.wedgeValue(w));
+    cornerUV.setWedgeValue(w, cornerUV.wedgeValue(w) + quarterTurns(d, turns[i]));
+  }
+  return true;
+}
+
+// The last step: interior vertices of faces still flipped that are not cones and touch no face
+// folded in 3D move toward their fan's kernel (seam vertices with all their wedges), pass after
+// pass; when none can, their neighbours move halfway into their own kernels to make room. A move
+// changes only the moved vertex's fan and turns none of its positive triangles negative, so
+// flips never increase, and the seams keep their rotations and translations; a move that
+// collapses a fan triangle is undone. All moves are undone when they leave as many flips as
+// before (they would only cost gradient error).
 std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                       WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
                                       std::uint32_t passes) {
   std::vector<std::uint8_t> fixed(topology.numVertices(), 0);
   for (VertexId c : cut.cones) fixed[c] = 1;
-  for (const SeamCurve& seam : cut.seams) {
-    for (CornerId c : seam.corners) fixed[topology.vertex(nextCorner(c))] = fixed[topology.vertex(prevCorner(c))] = 1;
-  }
   std::vector<std::uint8_t> folded(state.size(), 0);
   for (std::size_t f = 0; f < state.size(); ++f) folded[f] = state[f] == kFolded;
   std::uint32_t moves = 0;
+  MoveLog log;
+  const std::vector<std::uint8_t> stateBefore = state;
+  const auto flips = [&] { return std::count(state.begin(), state.end(), std::uint8_t(kFlipped)); };
+  const auto flipsBefore = flips();
+  // A move is undone when it collapses a fan triangle (parameter area below the collapse
+  // fraction) that was not collapsed before.
+  const auto collapsed = [&](FaceId f) { return std::abs(parameterAreaRatio(mesh, cornerUV, f, h)) < kCollapsedAreaFraction; };
+  std::vector<std::uint8_t> wasCollapsed;
+  const auto tryMove = [&](VertexId v, Move mode) {
+    wasCollapsed.clear();
+    topology.forEachCornerAround(v, [&](CornerId c) { wasCollapsed.push_back(collapsed(c / 3)); });
+    const std::size_t mark = log.size();
+    if (!relocateVertex(topology, cornerUV, v, folded, log, mode)) return false;
+    std::size_t i = 0;
+    bool worse = false;
+    topology.forEachCornerAround(v, [&](CornerId c) { worse = worse || (!wasCollapsed[i++] && collapsed(c / 3)); });
+    if (!worse) return true;
+    while (log.size() > mark) cornerUV.setWedgeValue(log.back().first, log.back().second), log.pop_back();
+    return false;
+  };
   for (std::uint32_t pass = 0; pass < passes; ++pass) {
     std::vector<VertexId> candidates;
     for (FaceId f = 0; f < state.size(); ++f) {
@@ -230,13 +355,38 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
     }
     std::sort(candidates.begin(), candidates.end());
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    // Kernel moves first; steps toward a better worst margin only when none is possible.
     std::uint32_t moved = 0;
-    for (VertexId v : candidates) moved += relocateVertex(topology, cornerUV, v, folded);
+    for (VertexId v : candidates) moved += tryMove(v, Move::Kernel);
+    if (moved == 0) {
+      for (VertexId v : candidates) moved += tryMove(v, Move::Gain);
+    }
+    if (moved == 0) {  // stalled: neighbours of the flipped faces' vertices make room
+      std::vector<VertexId> ring;
+      for (VertexId v : candidates) {
+        topology.forEachCornerAround(v, [&](CornerId c) {
+          for (VertexId w : mesh.triangles[c / 3]) {
+            if (!fixed[w]) ring.push_back(w);
+          }
+        });
+      }
+      std::sort(ring.begin(), ring.end());
+      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      for (VertexId v : ring) {
+        if (std::binary_search(candidates.begin(), candidates.end(), v)) continue;
+        moved += tryMove(v, Move::Room);
+      }
+    }
     moves += moved;
     if (moved == 0) break;
     for (FaceId f = 0; f < state.size(); ++f) {
       if (state[f] == kFlipped) state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
     }
+  }
+  if (moves > 0 && flips() >= flipsBefore) {  // no gain: the moves would only cost gradient error
+    for (auto it = log.rbegin(); it != log.rend(); ++it) cornerUV.setWedgeValue(it->first, it->second);
+    state = stateBefore;
+    return 0;
   }
   return moves;
 }

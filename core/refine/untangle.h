@@ -36,9 +36,12 @@ struct UntangleOptions {
   std::uint64_t minPatchFaces = 20000;
   double stiffening = 2.0;        ///< energy factor per re-solve of a face still flipped (> 1)
   double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
-  /// Gauss-Seidel passes of the last step: a vertex of a face still flipped, off the cut and not
-  /// a cone, moves into the kernel of its fan (every fan triangle positive) when it has one.
-  std::uint32_t relocationPasses = 8;
+  /// Gauss-Seidel passes of the last step: an interior vertex of a face still flipped, not a cone
+  /// and next to no face folded in 3D, moves into the kernel of its fan (every fan triangle
+  /// positive) when it has one, else a step toward a larger worst margin; neighbours make room
+  /// when nothing moves; no move collapses a triangle, and all are undone if flips did not drop.
+  /// A seam vertex moves all its wedges by one displacement turned through the seams' rotations.
+  std::uint32_t relocationPasses = 32;
   ProgressFn progress;
 };
 
