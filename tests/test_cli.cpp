@@ -337,7 +337,7 @@ int interruptedExitCode(const std::vector<std::string>& arguments, const TempDir
 TEST(Cli, SigtermAndSigintRemoveUnfinishedOutputs) {
   TempDir dir;
   const std::string mesh = dir.path("big.ply");
-  run("gen sphere --faces 60000 -o " + mesh, 0);
+  run("gen sphere --faces 200000 -o " + mesh, 0);  // about 3 s of param, 1.5 s of field: the signals land mid-run
   const std::string out = dir.path("big_uv.obj"), report = dir.path("big.json"), picture = dir.path("big.png");
   const std::vector<std::string> param = {"param", mesh, "-o", out, "--report", report, "--render", picture, "--quiet"};
   EXPECT_EQ(interruptedExitCode(param, dir, SIGTERM, std::chrono::milliseconds(500)), 143);
