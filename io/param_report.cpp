@@ -98,7 +98,8 @@ void writeUntangle(JsonWriter& j, const UntangleStats& u) {
   j.key("rounds").value(U64{u.rounds}).key("solves").value(U64{u.solves});
   j.key("patchFaces").value(u.patchFaces).key("freeVertices").value(U64{u.freeVertices});
   j.key("largestUnknowns").value(U64{u.largestUnknowns});
-  j.key("relocatedVertices").value(U64{u.relocatedVertices}).key("seconds").value(u.seconds);
+  j.key("relocatedVertices").value(U64{u.relocatedVertices}).key("jointVertices").value(U64{u.jointVertices});
+  j.key("seconds").value(u.seconds);
   j.endObject();
 }
 

@@ -99,12 +99,12 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   }
   if (r.untangled) {
     std::printf("foldover repair: flipped %llu -> %llu (%llu folded in 3D), %llu patch faces, %u solves, "
-                "%u vertices moved into their fan's kernel, %.2f s\n",
+                "%u vertices moved into their fan's kernel, %u moved jointly, %.2f s\n",
                 static_cast<unsigned long long>(r.untangle.flippedBefore),
                 static_cast<unsigned long long>(r.untangle.flippedAfter),
                 static_cast<unsigned long long>(r.untangle.foldedIn3D),
                 static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves,
-                r.untangle.relocatedVertices, r.untangle.seconds);
+                r.untangle.relocatedVertices, r.untangle.jointVertices, r.untangle.seconds);
   }
   if (r.featureCurves.total > 0) {
     std::printf("feature curves: %u (%u boundary, %u crease edges; feature angle %g): %u aligned on integer "

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 #include <Eigen/LU>
 
@@ -391,6 +392,258 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
   return moves;
 }
 
+// ---- Joint untangling: whole patches of vertices move together ----
+
+// The regularised denominator of the untangling energy (Garanzha et al. 2021): chi(D, eps) =
+// (D + sqrt(eps^2 + D^2)) / 2, positive for every D, written without cancellation for D < 0.
+double regularisedDet(double det, double eps) {
+  const double root = std::sqrt(eps * eps + det * det);
+  return det >= 0.0 ? 0.5 * (det + root) : 0.5 * eps * eps / (root - det);
+}
+
+// A face's 3D shape in its own plane, in grid units (edges / h), as the inverse of its edge
+// matrix: J = (uv edges) * inverse is the map's Jacobian, a rotation for an ideal map.
+struct ReferenceShape {
+  Eigen::Matrix2d inverse;
+  double area = 0.0;
+};
+
+ReferenceShape referenceShape(const TriangleMesh& mesh, FaceId f, double h) {
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d a = mesh.position(t[0]);
+  const Vec3d e1 = (mesh.position(t[1]) - a) / h, e2 = (mesh.position(t[2]) - a) / h;
+  ReferenceShape shape;
+  const double l1 = e1.norm(), y2 = l1 > 0.0 ? e1.cross(e2).norm() / l1 : 0.0;
+  shape.area = 0.5 * l1 * y2;
+  if (!(shape.area > 0.0)) return shape;
+  Eigen::Matrix2d edges;
+  edges << l1, e1.dot(e2) / l1, 0.0, y2;
+  shape.inverse = edges.inverse();
+  return shape;
+}
+
+// Untangling energy of one face with corner values q: conformal term |J|^2 / chi plus area term
+// (det^2 + 1) / chi, times the reference area. Finite for folded faces while eps > 0; as eps
+// falls, a fold costs ever more, so minimising under a falling eps unfolds where it can.
+double untanglingEnergy(const ReferenceShape& shape, const Vec2d& q0, const Vec2d& q1, const Vec2d& q2, double eps) {
+  Eigen::Matrix2d edges;
+  edges.col(0) = q1 - q0;
+  edges.col(1) = q2 - q0;
+  const Eigen::Matrix2d j = edges * shape.inverse;
+  const double det = j.determinant(), chi = regularisedDet(det, eps);
+  return shape.area * (j.squaredNorm() + det * det + 1.0) / chi;
+}
+
+// A vertex that moves in a joint patch: its fan's corners with their quarter turns (fanTurns).
+struct JointVertex {
+  VertexId v = kInvalidId;
+  std::vector<CornerId> corners;
+  std::vector<int> turns;
+};
+
+class JointPatch {
+ public:
+  JointPatch(const TriangleMesh& mesh, const Topology& topology, WedgeMap& uv, double h)
+      : mesh_(mesh), topology_(topology), uv_(uv), h_(h) {}
+
+  // v joins when it can move: interior, not fixed (cones), a fan whose turns close, no fan face
+  // folded in 3D or degenerate in 3D.
+  bool add(VertexId v, const std::vector<std::uint8_t>& fixed, const std::vector<std::uint8_t>& state) {
+    if (fixed[v] || topology_.isBoundaryVertex(v) || topology_.isIsolatedVertex(v)) return false;
+    JointVertex jv;
+    jv.v = v;
+    if (!fanTurns(topology_, uv_, v, jv.corners, jv.turns) || jv.corners.size() < 3) return false;
+    for (CornerId c : jv.corners) {
+      if (state[c / 3] == kFolded || !(shapeOf(c / 3).area > 0.0)) return false;
+    }
+    vertices_.push_back(std::move(jv));
+    return true;
+  }
+  std::size_t size() const { return vertices_.size(); }
+
+  // Faces whose map the patch changes.
+  std::vector<FaceId> faces() const {
+    std::vector<FaceId> out;
+    for (const JointVertex& jv : vertices_) {
+      for (CornerId c : jv.corners) out.push_back(c / 3);
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+
+  // Sweeps of per-vertex Newton steps on the untangling energy under a falling eps, until the
+  // patch's faces are all positive or the schedule ends.
+  void minimise(const std::vector<FaceId>& faces) {
+    double eps = std::max(0.1, -minDet(faces));
+    for (int stage = 0; stage < 12; ++stage) {
+      for (int sweep = 0; sweep < 30; ++sweep) {
+        double moved = 0.0;
+        for (const JointVertex& jv : vertices_) moved = std::max(moved, newtonStep(jv, eps));
+        if (moved < 1e-9) break;
+      }
+      const double worst = minDet(faces);
+      if (worst > 0.0 && stage > 0) break;
+      eps = worst > 0.0 ? 0.5 * eps : std::max(1e-9, 0.2 * eps);
+    }
+  }
+
+ private:
+  const ReferenceShape& shapeOf(FaceId f) {
+    auto it = shapes_.find(f);
+    if (it == shapes_.end()) it = shapes_.emplace(f, referenceShape(mesh_, f, h_)).first;
+    return it->second;
+  }
+
+  double minDet(const std::vector<FaceId>& faces) {
+    double worst = std::numeric_limits<double>::infinity();
+    for (FaceId f : faces) {
+      Eigen::Matrix2d edges;
+      edges.col(0) = uv_[3 * f + 1] - uv_[3 * f];
+      edges.col(1) = uv_[3 * f + 2] - uv_[3 * f];
+      worst = std::min(worst, (edges * shapeOf(f).inverse).determinant());
+    }
+    return worst;
+  }
+
+  // Energy of jv's fan with jv moved by d (turned into each corner's chart).
+  double fanEnergy(const JointVertex& jv, const Vec2d& d, double eps) {
+    double e = 0.0;
+    for (std::size_t i = 0; i < jv.corners.size(); ++i) {
+      const CornerId c = jv.corners[i];
+      const FaceId f = c / 3;
+      Vec2d q[3] = {uv_[3 * f], uv_[3 * f + 1], uv_[3 * f + 2]};
+      q[c % 3] += quarterTurns(d, jv.turns[i]);
+      e += untanglingEnergy(shapeOf(f), q[0], q[1], q[2], eps);
+    }
+    return e;
+  }
+
+  // One damped Newton step (finite-difference gradient and Hessian: the fans are small) that
+  // lowers the fan's energy; returns the length moved (0: no step lowered it).
+  double newtonStep(const JointVertex& jv, double eps) {
+    double scale = 0.0;
+    for (CornerId c : jv.corners) scale += (uv_[nextCorner(c)] - uv_[c]).norm();
+    scale /= jv.corners.size();
+    if (!(scale > 0.0)) return 0.0;
+    const double delta = 1e-4 * scale;
+    const double e0 = fanEnergy(jv, Vec2d::Zero(), eps);
+    const double ex1 = fanEnergy(jv, Vec2d(delta, 0), eps), ex0 = fanEnergy(jv, Vec2d(-delta, 0), eps);
+    const double ey1 = fanEnergy(jv, Vec2d(0, delta), eps), ey0 = fanEnergy(jv, Vec2d(0, -delta), eps);
+    const double exy = fanEnergy(jv, Vec2d(delta, delta), eps) - fanEnergy(jv, Vec2d(delta, -delta), eps) -
+                       fanEnergy(jv, Vec2d(-delta, delta), eps) + fanEnergy(jv, Vec2d(-delta, -delta), eps);
+    const Vec2d g((ex1 - ex0) / (2 * delta), (ey1 - ey0) / (2 * delta));
+    Eigen::Matrix2d hessian;
+    hessian << (ex1 - 2 * e0 + ex0) / (delta * delta), exy / (4 * delta * delta), exy / (4 * delta * delta),
+        (ey1 - 2 * e0 + ey0) / (delta * delta);
+    if (!g.allFinite() || !(g.norm() > 0.0)) return 0.0;
+    Vec2d step = -g.normalized() * (0.25 * scale);
+    if (hessian.allFinite() && hessian(0, 0) > 0.0 && hessian.determinant() > 0.0) {
+      step = -hessian.ldlt().solve(g);
+      if (step.norm() > scale) step *= scale / step.norm();
+    }
+    for (int halving = 0; halving < 30; ++halving, step *= 0.5) {
+      if (!(fanEnergy(jv, step, eps) < e0)) continue;
+      std::vector<std::uint32_t> done;
+      for (std::size_t i = 0; i < jv.corners.size(); ++i) {
+        const std::uint32_t w = uv_.wedge(jv.corners[i]);
+        if (std::find(done.begin(), done.end(), w) != done.end()) continue;
+        done.push_back(w);
+        uv_.setWedgeValue(w, uv_.wedgeValue(w) + quarterTurns(step, jv.turns[i]));
+      }
+      return step.norm();
+    }
+    return 0.0;
+  }
+
+  const TriangleMesh& mesh_;
+  const Topology& topology_;
+  WedgeMap& uv_;
+  double h_;
+  std::vector<JointVertex> vertices_;
+  std::unordered_map<FaceId, ReferenceShape> shapes_;
+};
+
+// Vertices within `rings` vertex rings of the seeds (the seeds are ring 0).
+std::vector<VertexId> vertexRings(const TriangleMesh& mesh, const Topology& topology,
+                                  std::vector<VertexId> seeds, std::uint32_t rings) {
+  std::sort(seeds.begin(), seeds.end());
+  seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
+  std::vector<VertexId> all = seeds, front = seeds;
+  for (std::uint32_t r = 0; r < rings && !front.empty(); ++r) {
+    std::vector<VertexId> next;
+    for (VertexId v : front) {
+      topology.forEachCornerAround(v, [&](CornerId c) {
+        for (VertexId w : mesh.triangles[c / 3]) {
+          if (!std::binary_search(all.begin(), all.end(), w)) next.push_back(w);
+        }
+      });
+    }
+    std::sort(next.begin(), next.end());
+    next.erase(std::unique(next.begin(), next.end()), next.end());
+    std::vector<VertexId> merged;
+    std::merge(all.begin(), all.end(), next.begin(), next.end(), std::back_inserter(merged));
+    all.swap(merged);
+    front.swap(next);
+  }
+  return all;
+}
+
+// After the relocation: around each face still flipped, the vertices within k rings (k = 2, 3,
+// 4, 6 until it unfolds) move jointly, seam vertices with all their wedges through the seams'
+// turns (seams and translations exact), cones and the patch's border fixed. A patch is kept
+// only when it has fewer flipped faces, no face that was fine flips and none collapses; else
+// its wedges are restored. Returns the vertices of kept patches.
+std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
+                              WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
+                              std::uint32_t maxRings) {
+  std::vector<std::uint8_t> fixed(topology.numVertices(), 0);
+  for (VertexId c : cut.cones) fixed[c] = 1;
+  const auto badness = [&](FaceId f) {
+    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
+    return std::abs(ratio) < kCollapsedAreaFraction ? 2 : (ratio < 0.0 ? 1 : 0);
+  };
+  std::uint32_t movedVertices = 0;
+  for (const std::uint32_t rings : {2u, 3u, 4u, 6u}) {
+    if (rings > maxRings) break;
+    std::vector<FaceId> seeds;
+    for (FaceId f = 0; f < state.size(); ++f) {
+      if (state[f] == kFlipped) seeds.push_back(f);
+    }
+    for (FaceId seed : seeds) {
+      if (state[seed] != kFlipped) continue;  // unfolded by an earlier patch of this round
+      const Triangle& t = mesh.triangles[seed];
+      JointPatch patch(mesh, topology, cornerUV, h);
+      for (VertexId v : vertexRings(mesh, topology, {t[0], t[1], t[2]}, rings - 1)) patch.add(v, fixed, state);
+      if (patch.size() == 0) continue;
+      const std::vector<FaceId> faces = patch.faces();
+      std::vector<std::pair<CornerId, Vec2d>> saved;
+      std::vector<int> before;
+      std::uint32_t flipsBefore = 0;
+      for (FaceId f : faces) {
+        before.push_back(badness(f));
+        flipsBefore += state[f] == kFlipped;
+        for (int k = 0; k < 3; ++k) saved.emplace_back(3 * f + k, cornerUV[3 * f + k]);
+      }
+      patch.minimise(faces);
+      std::uint32_t flipsAfter = 0;
+      bool worse = false;
+      for (std::size_t i = 0; i < faces.size(); ++i) {
+        const int now = badness(faces[i]);
+        flipsAfter += now == 1;
+        worse = worse || (now != 0 && before[i] == 0) || (now == 2 && before[i] != 2);
+      }
+      if (worse || flipsAfter >= flipsBefore) {
+        for (const auto& [c, q] : saved) cornerUV.setWedgeValue(cornerUV.wedge(c), q);
+        continue;
+      }
+      for (FaceId f : faces) state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
+      movedVertices += static_cast<std::uint32_t>(patch.size());
+    }
+  }
+  return movedVertices;
+}
+
 }  // namespace
 
 UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
@@ -470,6 +723,9 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   if (options.relocationPasses > 0) {
     stats.relocatedVertices =
         relocateFlippedVertices(mesh, topology, cut, cornerUV, state, h, options.relocationPasses);
+  }
+  if (options.jointRings >= 2) {
+    stats.jointVertices = untangleJointly(mesh, topology, cut, cornerUV, state, h, options.jointRings);
   }
   std::sort(moved.begin(), moved.end());
   stats.freeVertices = static_cast<std::uint32_t>(std::unique(moved.begin(), moved.end()) - moved.begin());

@@ -42,6 +42,12 @@ struct UntangleOptions {
   /// when nothing moves; no move collapses a triangle, and all are undone if flips did not drop.
   /// A seam vertex moves all its wedges by one displacement turned through the seams' rotations.
   std::uint32_t relocationPasses = 32;
+  /// Last: around each face still flipped, the vertices within 2, 3, 4, then 6 rings (up to
+  /// this many; below 2: off) move jointly by minimising an untangling energy (regularised
+  /// |J|^2/det plus an area term against the faces' 3D shapes, Garanzha et al. 2021), seam
+  /// vertices through the seams' rotations, cones and the patch border fixed; a patch is kept
+  /// only when its flips drop and no face flips or collapses that did not before.
+  std::uint32_t jointRings = 6;
   ProgressFn progress;
 };
 
@@ -53,7 +59,8 @@ struct UntangleStats {
   std::uint64_t patchFaces = 0;     ///< faces re-solved, summed over rounds
   std::uint32_t freeVertices = 0;   ///< vertices moved in some round (counted once per round)
   std::uint32_t largestUnknowns = 0;
-  std::uint32_t relocatedVertices = 0;  ///< moves of the last step (a vertex counted per move)
+  std::uint32_t relocatedVertices = 0;  ///< moves of the relocation step (a vertex counted per move)
+  std::uint32_t jointVertices = 0;      ///< vertices of the kept joint patches (summed over patches)
   double seconds = 0.0;
 };
 
