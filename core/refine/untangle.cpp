@@ -228,6 +228,20 @@ bool fanTurns(const Topology& topology, const WedgeMap& uv, VertexId v, std::vec
 // folded in 3D. False when it cannot move.
 using MoveLog = std::vector<std::pair<std::uint32_t, Vec2d>>;  // wedge, value before the move
 
+// Moves every wedge of a vertex's fan (corners with their quarter turns, fanTurns) by d turned
+// into the wedge's chart, so the seams keep their transitions; logs the values before.
+void moveFanWedges(WedgeMap& uv, const std::vector<CornerId>& corners, const std::vector<int>& turns,
+                   const Vec2d& d, MoveLog* log) {
+  std::vector<std::uint32_t> done;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const std::uint32_t w = uv.wedge(corners[i]);
+    if (std::find(done.begin(), done.end(), w) != done.end()) continue;
+    done.push_back(w);
+    if (log) log->emplace_back(w, uv.wedgeValue(w));
+    uv.setWedgeValue(w, uv.wedgeValue(w) + quarterTurns(d, turns[i]));
+  }
+}
+
 // How a vertex may move: into its fan's kernel to a quarter of the margin (any distance), toward
 // a larger worst margin when the kernel is empty, or (a neighbour making room) halfway into it.
 enum class Move { Kernel, Gain, Room };
@@ -300,14 +314,7 @@ bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, co
   if (!(length > 0.0)) return false;
   const double cap = mode == Move::Kernel ? length : kMaxRelocation;
   const Vec2d d = std::min(length, cap) / centre.norm() * centre;
-  std::vector<std::uint32_t> done;
-  for (std::size_t i = 0; i < corners.size(); ++i) {
-    const std::uint32_t w = cornerUV.wedge(corners[i]);
-    if (std::find(done.begin(), done.end(), w) != done.end()) continue;
-    done.push_back(w);
-    log.emplace_back(w, cornerUV.wedgeValue(w));
-    cornerUV.setWedgeValue(w, cornerUV.wedgeValue(w) + quarterTurns(d, turns[i]));
-  }
+  moveFanWedges(cornerUV, corners, turns, d, &log);
   return true;
 }
 
@@ -544,13 +551,7 @@ class JointPatch {
     }
     for (int halving = 0; halving < 30; ++halving, step *= 0.5) {
       if (!(fanEnergy(jv, step, eps) < e0)) continue;
-      std::vector<std::uint32_t> done;
-      for (std::size_t i = 0; i < jv.corners.size(); ++i) {
-        const std::uint32_t w = uv_.wedge(jv.corners[i]);
-        if (std::find(done.begin(), done.end(), w) != done.end()) continue;
-        done.push_back(w);
-        uv_.setWedgeValue(w, uv_.wedgeValue(w) + quarterTurns(step, jv.turns[i]));
-      }
+      moveFanWedges(uv_, jv.corners, jv.turns, step, nullptr);
       return step.norm();
     }
     return 0.0;
