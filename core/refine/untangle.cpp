@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 
 #include <Eigen/LU>
@@ -446,6 +447,7 @@ struct JointVertex {
   VertexId v = kInvalidId;
   std::vector<CornerId> corners;
   std::vector<int> turns;
+  std::vector<const ReferenceShape*> shapes;  // per corner: its face's
 };
 
 class JointPatch {
@@ -461,7 +463,9 @@ class JointPatch {
     jv.v = v;
     if (!fanTurns(topology_, uv_, v, jv.corners, jv.turns) || jv.corners.size() < 3) return false;
     for (CornerId c : jv.corners) {
-      if (state[c / 3] == kFolded || !(shapeOf(c / 3).area > 0.0)) return false;
+      const ReferenceShape& shape = shapeOf(c / 3);  // unordered_map: stable references
+      if (state[c / 3] == kFolded || !(shape.area > 0.0)) return false;
+      jv.shapes.push_back(&shape);
     }
     vertices_.push_back(std::move(jv));
     return true;
@@ -480,19 +484,26 @@ class JointPatch {
   }
 
   // Sweeps of per-vertex Newton steps on the untangling energy under a falling eps, until the
-  // patch's faces are all positive or the schedule ends.
-  void minimise(const std::vector<FaceId>& faces) {
-    double eps = std::max(0.1, -minDet(faces));
-    for (int stage = 0; stage < 12; ++stage) {
-      for (int sweep = 0; sweep < 30; ++sweep) {
-        double moved = 0.0;
-        for (const JointVertex& jv : vertices_) moved = std::max(moved, newtonStep(jv, eps));
-        if (moved < 1e-9) break;
+  // patch's faces are all positive, the count of folded faces stops falling for three eps
+  // stages, or the schedule ends. Returns the fan energies evaluated (the work done).
+  std::uint64_t minimise(const std::vector<FaceId>& faces) {
+    evaluations_ = 0;
+    auto [worst, folded] = foldedFaces(faces);
+    double eps = std::max(0.1, -worst);
+    std::size_t fewest = folded;
+    for (int stage = 0, stalled = 0; stage < 10 && stalled < 3; ++stage) {
+      for (int sweep = 0; sweep < 20; ++sweep) {
+        double total = 0.0, gained = 0.0;
+        for (const JointVertex& jv : vertices_) newtonStep(jv, eps, total, gained);
+        if (!(gained > 1e-4 * total)) break;
       }
-      const double worst = minDet(faces);
-      if (worst > 0.0 && stage > 0) break;
+      std::tie(worst, folded) = foldedFaces(faces);
+      if (folded == 0 && stage > 0) break;
+      stalled = folded < fewest ? 0 : stalled + 1;
+      fewest = std::min(fewest, folded);
       eps = worst > 0.0 ? 0.5 * eps : std::max(1e-9, 0.2 * eps);
     }
+    return evaluations_;
   }
 
  private:
@@ -502,39 +513,45 @@ class JointPatch {
     return it->second;
   }
 
-  double minDet(const std::vector<FaceId>& faces) {
+  // The least Jacobian determinant over the faces, and how many are not positive.
+  std::pair<double, std::size_t> foldedFaces(const std::vector<FaceId>& faces) {
     double worst = std::numeric_limits<double>::infinity();
+    std::size_t folded = 0;
     for (FaceId f : faces) {
       Eigen::Matrix2d edges;
       edges.col(0) = uv_[3 * f + 1] - uv_[3 * f];
       edges.col(1) = uv_[3 * f + 2] - uv_[3 * f];
-      worst = std::min(worst, (edges * shapeOf(f).inverse).determinant());
+      const double det = (edges * shapeOf(f).inverse).determinant();
+      worst = std::min(worst, det);
+      folded += !(det > 0.0);
     }
-    return worst;
+    return {worst, folded};
   }
 
   // Energy of jv's fan with jv moved by d (turned into each corner's chart).
   double fanEnergy(const JointVertex& jv, const Vec2d& d, double eps) {
+    ++evaluations_;
     double e = 0.0;
     for (std::size_t i = 0; i < jv.corners.size(); ++i) {
       const CornerId c = jv.corners[i];
       const FaceId f = c / 3;
       Vec2d q[3] = {uv_[3 * f], uv_[3 * f + 1], uv_[3 * f + 2]};
       q[c % 3] += quarterTurns(d, jv.turns[i]);
-      e += untanglingEnergy(shapeOf(f), q[0], q[1], q[2], eps);
+      e += untanglingEnergy(*jv.shapes[i], q[0], q[1], q[2], eps);
     }
     return e;
   }
 
   // One damped Newton step (finite-difference gradient and Hessian: the fans are small) that
-  // lowers the fan's energy; returns the length moved (0: no step lowered it).
-  double newtonStep(const JointVertex& jv, double eps) {
+  // lowers the fan's energy; adds the fan's energy to total and what the step gained to gained.
+  void newtonStep(const JointVertex& jv, double eps, double& total, double& gained) {
     double scale = 0.0;
     for (CornerId c : jv.corners) scale += (uv_[nextCorner(c)] - uv_[c]).norm();
     scale /= jv.corners.size();
-    if (!(scale > 0.0)) return 0.0;
+    if (!(scale > 0.0)) return;
     const double delta = 1e-4 * scale;
     const double e0 = fanEnergy(jv, Vec2d::Zero(), eps);
+    total += e0;
     const double ex1 = fanEnergy(jv, Vec2d(delta, 0), eps), ex0 = fanEnergy(jv, Vec2d(-delta, 0), eps);
     const double ey1 = fanEnergy(jv, Vec2d(0, delta), eps), ey0 = fanEnergy(jv, Vec2d(0, -delta), eps);
     const double exy = fanEnergy(jv, Vec2d(delta, delta), eps) - fanEnergy(jv, Vec2d(delta, -delta), eps) -
@@ -543,18 +560,19 @@ class JointPatch {
     Eigen::Matrix2d hessian;
     hessian << (ex1 - 2 * e0 + ex0) / (delta * delta), exy / (4 * delta * delta), exy / (4 * delta * delta),
         (ey1 - 2 * e0 + ey0) / (delta * delta);
-    if (!g.allFinite() || !(g.norm() > 0.0)) return 0.0;
+    if (!g.allFinite() || !(g.norm() > 0.0)) return;
     Vec2d step = -g.normalized() * (0.25 * scale);
     if (hessian.allFinite() && hessian(0, 0) > 0.0 && hessian.determinant() > 0.0) {
       step = -hessian.ldlt().solve(g);
       if (step.norm() > scale) step *= scale / step.norm();
     }
     for (int halving = 0; halving < 30; ++halving, step *= 0.5) {
-      if (!(fanEnergy(jv, step, eps) < e0)) continue;
+      const double e = fanEnergy(jv, step, eps);
+      if (!(e < e0)) continue;
       moveFanWedges(uv_, jv.corners, jv.turns, step, nullptr);
-      return step.norm();
+      gained += e0 - e;
+      return;
     }
-    return 0.0;
   }
 
   const TriangleMesh& mesh_;
@@ -563,6 +581,7 @@ class JointPatch {
   double h_;
   std::vector<JointVertex> vertices_;
   std::unordered_map<FaceId, ReferenceShape> shapes_;
+  std::uint64_t evaluations_ = 0;
 };
 
 // Vertices within `rings` vertex rings of the seeds (the seeds are ring 0).
@@ -590,6 +609,10 @@ std::vector<VertexId> vertexRings(const TriangleMesh& mesh, const Topology& topo
   return all;
 }
 
+// Fan energies the joint patches may evaluate in one run, about 5 s of work: clusters of folds
+// that no patch unfolds (a 22M-face map had hundreds around its cones) must not cost minutes.
+constexpr std::uint64_t kJointEvaluations = 100'000'000;
+
 // After the relocation: around each face still flipped, the vertices within k rings (k = 2, 3,
 // 4, 6 until it unfolds) move jointly, seam vertices with all their wedges through the seams'
 // turns (seams and translations exact), cones and the patch's border fixed. A patch is kept
@@ -605,14 +628,17 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
     return std::abs(ratio) < kCollapsedAreaFraction ? 2 : (ratio < 0.0 ? 1 : 0);
   };
   std::uint32_t movedVertices = 0;
+  std::uint64_t work = 0;
   for (const std::uint32_t rings : {2u, 3u, 4u, 6u}) {
     if (rings > maxRings) break;
     std::vector<FaceId> seeds;
     for (FaceId f = 0; f < state.size(); ++f) {
       if (state[f] == kFlipped) seeds.push_back(f);
     }
+    std::vector<std::uint8_t> tried(state.size(), 0);  // in a patch of this many rings already
     for (FaceId seed : seeds) {
-      if (state[seed] != kFlipped) continue;  // unfolded by an earlier patch of this round
+      if (state[seed] != kFlipped || tried[seed]) continue;
+      if (work > kJointEvaluations) return movedVertices;
       const Triangle& t = mesh.triangles[seed];
       JointPatch patch(mesh, topology, cornerUV, h);
       for (VertexId v : vertexRings(mesh, topology, {t[0], t[1], t[2]}, rings - 1)) patch.add(v, fixed, state);
@@ -626,7 +652,8 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
         flipsBefore += state[f] == kFlipped;
         for (int k = 0; k < 3; ++k) saved.emplace_back(3 * f + k, cornerUV[3 * f + k]);
       }
-      patch.minimise(faces);
+      for (FaceId f : faces) tried[f] = 1;
+      work += patch.minimise(faces);
       std::uint32_t flipsAfter = 0;
       bool worse = false;
       for (std::size_t i = 0; i < faces.size(); ++i) {
