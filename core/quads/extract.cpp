@@ -704,6 +704,26 @@ class Extractor {
     }
   }
 
+  // Drops the loop edges of a face walk (the same vertex twice in a row, cyclically): an
+  // iso-line from an integer point back to itself around a cone of index 1 in a cell. The inside
+  // of the loop is a one-edge face, left out as a digon; the face outside closes without the loop.
+  // The point loses both ends of the loop (QuadStats::loops).
+  static void removeLoops(std::vector<std::uint32_t>& face, std::vector<std::uint32_t>& facePorts,
+                          std::vector<std::uint8_t>& lostAt, QuadStats& stats) {
+    for (std::size_t k = 0; face.size() > 1 && k < face.size();) {
+      const std::size_t after = (k + 1) % face.size();
+      if (face[k] != face[after]) {
+        ++k;
+        continue;
+      }
+      lostAt[face[k]] += 2;
+      ++stats.loops;
+      face.erase(face.begin() + after);
+      facePorts.erase(facePorts.begin() + after);
+      if (after < k) k = k - 1;
+    }
+  }
+
   bool leaves(std::uint32_t p) const { return ports_[p].dir != kIn && portTarget_[p] < kDeadEnd; }
 
   void buildFaces(QuadResult& out) {
@@ -746,6 +766,7 @@ class Extractor {
         ++out.stats.openFaces;
         continue;
       }
+      if (face.size() > 1) removeLoops(face, facePorts, lostAt, out.stats);
       removeSpikes(face, facePorts, lostAt, out.stats);
       if (face.size() <= 2) {  // two edges between the same points: one edge once this goes
         ++out.stats.digons;

@@ -52,6 +52,10 @@ struct QuadStats {
   /// of index 2 or fold back in flipped triangles (left out, with the point when it has no other
   /// edge; both ends lose the edge in QuadResult::vertexLostEdges).
   std::uint64_t spikes = 0;
+  /// Iso-lines from an integer point back to itself (around a cone of index 1 in a cell, whose
+  /// rotation identifies the cell's corners): zipped out of the face beside them, the point loses
+  /// both ends of the loop.
+  std::uint64_t loops = 0;
   std::uint64_t unpairedEdges = 0;     ///< traced half-edges whose reverse trace went elsewhere
   std::uint64_t openFaces = 0;         ///< face walks that met a missing edge (no face made)
   /// Faces of two edges (an iso-line and a boundary piece or another iso-line between the same two
