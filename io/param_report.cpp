@@ -73,6 +73,8 @@ void writeRefine(JsonWriter& j, const RefineStats& refine, const ParamReportCont
   j.key("collapsedFaces").value(refine.collapsedFaces);
   j.key("flippedFaces").value(refine.flippedFaces);
   j.key("rings").value(U64{c.rings});
+  j.key("localSolves").value(U64{refine.solves});
+  j.key("localUnknownsTotal").value(refine.totalUnknowns);
   j.key("localUnknowns").value(U64{refine.unknowns});
   j.key("localTranslations").value(U64{refine.freeTranslations});
   j.key("localNonzeros").value(refine.systemNonzeros);

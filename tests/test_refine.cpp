@@ -184,6 +184,50 @@ TEST_F(RefineSphere, MarkedDamageAroundConesIsRepairedToTheHatMap) {
               1e-12);
 }
 
+TEST_F(RefineSphere, RegionGroupsAreWholeComponentsAndTheMapDoesNotDependOnThem) {
+  const Scene& s = *scene_;
+  WedgeMap damaged;
+  RefineOptions options;
+  options.edgeLength = s.options.edgeLength;
+  options.markedFaces = damageAroundCones(s, 2, damaged);
+  options.rings = 1;
+  // One component per cone neighbourhood: groups of at least one face hold one component each
+  // (or more where neighbourhoods touch); groups never share a vertex and cover the region.
+  const std::vector<FaceId> region = growFaces(s.topology(), options.markedFaces, 1);
+  const std::vector<std::vector<FaceId>> single = splitRegion(s.topology(), region, 1);
+  ASSERT_GE(single.size(), 2u) << "the cones' neighbourhoods are apart";
+  std::vector<int> owner(s.mesh().numVertices(), -1);
+  std::vector<FaceId> covered;
+  for (std::size_t g = 0; g < single.size(); ++g) {
+    EXPECT_TRUE(std::is_sorted(single[g].begin(), single[g].end()));
+    for (FaceId f : single[g]) {
+      covered.push_back(f);
+      for (VertexId v : s.mesh().triangles[f]) {
+        EXPECT_TRUE(owner[v] == -1 || owner[v] == int(g)) << "vertex " << v << " in two groups";
+        owner[v] = int(g);
+      }
+    }
+  }
+  std::sort(covered.begin(), covered.end());
+  EXPECT_EQ(covered, region);
+  // A group closes once it holds groupFaces faces: two components per group at twice the
+  // smallest one's size, and one group for the whole region at its size.
+  EXPECT_EQ(splitRegion(s.topology(), region, region.size()).size(), 1u);
+  EXPECT_LT(splitRegion(s.topology(), region, 2 * region.size() / single.size()).size(), single.size());
+
+  // Solving the groups one by one (in parallel) or all at once gives the same map.
+  options.groupFaces = 1;
+  RefineStats apart;
+  const WedgeMap byComponent = refineAndCheck(damaged, options, &apart);
+  options.groupFaces = region.size();
+  RefineStats together;
+  const WedgeMap whole = refineAndCheck(damaged, options, &together);
+  EXPECT_LT(maxCornerDistance(byComponent, whole), 1e-9);
+  EXPECT_GT(apart.solves, together.solves);
+  EXPECT_EQ(apart.totalUnknowns, together.totalUnknowns);
+  EXPECT_LT(apart.unknowns, together.unknowns) << "the largest group solve is smaller";
+}
+
 TEST_F(RefineSphere, CollapsedTrianglesAreFoundWithoutMarksAndRoundsGrowTheRegion) {
   const Scene& s = *scene_;
   WedgeMap damaged;

@@ -91,10 +91,11 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
               r.isSeamless() ? "seamless" : "NOT seamless");
   const RefineStats& refine = r.solved.refine;
   if (r.solved.refined) {
-    std::printf("refined %u vertices (%.3f%%) in %llu faces: %u local unknowns (%u translations), "
-                "factor %.1f MB, %.2f s\n",
+    std::printf("refined %u vertices (%.3f%%) in %llu faces: %llu local unknowns in %u solves "
+                "(largest %u unknowns, %u translations, factor %.1f MB), %.2f s\n",
                 refine.freeVertices, 100.0 * refine.refinedVertexFraction,
-                static_cast<unsigned long long>(refine.regionFaces), refine.unknowns,
+                static_cast<unsigned long long>(refine.regionFaces),
+                static_cast<unsigned long long>(refine.totalUnknowns), refine.solves, refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
   }
   if (r.untangled) {

@@ -38,27 +38,33 @@ EdgeSides edgeSides(const WedgeMap& uv, CornerId c, CornerId o) {
 
 }  // namespace
 
-double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
-                          double edgeLength) {
+double parameterAreaRatio(const TriangleMesh& mesh, FaceId f, const std::array<Vec2d, 3>& q, double edgeLength) {
   const Triangle& t = mesh.triangles[f];
   const Vec3d p0 = mesh.position(t[0]);
   const double area = 0.5 * (mesh.position(t[1]) - p0).cross(mesh.position(t[2]) - p0).norm();
-  const Vec2d a = cornerUV[3 * f + 1] - cornerUV[3 * f], b = cornerUV[3 * f + 2] - cornerUV[3 * f];
+  const Vec2d a = q[1] - q[0], b = q[2] - q[0];
   const double uvArea = 0.5 * (a.x() * b.y() - a.y() * b.x());
   return uvArea * (edgeLength * edgeLength) / area;
 }
 
-bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
+double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
+                          double edgeLength) {
+  return parameterAreaRatio(mesh, f, {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]}, edgeLength);
+}
+
+bool collapsesBetweenCones(const TriangleMesh& mesh, FaceId f, const std::array<Vec2d, 3>& q,
                            const std::vector<std::uint8_t>& isCone) {
   const Triangle& t = mesh.triangles[f];
   for (int k = 0; k < 3; ++k) {
     const int l = (k + 1) % 3;
-    if (isCone[t[k]] && isCone[t[l]] &&
-        (cornerUV[3 * f + k] - cornerUV[3 * f + l]).norm() <= kCoincidentConeDistance) {
-      return true;
-    }
+    if (isCone[t[k]] && isCone[t[l]] && (q[k] - q[l]).norm() <= kCoincidentConeDistance) return true;
   }
   return false;
+}
+
+bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
+                           const std::vector<std::uint8_t>& isCone) {
+  return collapsesBetweenCones(mesh, f, {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]}, isCone);
 }
 
 SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,

@@ -1,5 +1,6 @@
 #pragma once
 /// Quality figures of a parameterization (DESIGN section 11).
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -50,6 +51,8 @@ constexpr double kCollapsedAreaFraction = 1e-6;
 /// NaN for a face of zero 3D area.
 double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
                           double edgeLength);
+/// The same with face f's corner values given (q[k] at corner 3 f + k).
+double parameterAreaRatio(const TriangleMesh& mesh, FaceId f, const std::array<Vec2d, 3>& q, double edgeLength);
 
 /// Two cones whose corners are this close in (u, v) (grid units) coincide.
 constexpr double kCoincidentConeDistance = 1e-9;
@@ -63,6 +66,9 @@ constexpr double kCoincidentConeDistance = 1e-9;
 /// price of a large distortion. This collapse belongs to the field and the rounding, not to the
 /// basis, so it is counted apart (MapQuality::collapsedAtCones).
 bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f,
+                           const std::vector<std::uint8_t>& isCone);
+/// The same with face f's corner values given (q[k] at corner 3 f + k).
+bool collapsesBetweenCones(const TriangleMesh& mesh, FaceId f, const std::array<Vec2d, 3>& q,
                            const std::vector<std::uint8_t>& isCone);
 
 /// True when face f's normal points away from the same face's normal on a smoothed copy of the

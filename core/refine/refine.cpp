@@ -5,6 +5,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <iterator>
@@ -20,6 +21,7 @@
 #include "core/solve/seamless_solve.h"
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"
+#include "core/mesh/detail_union_find.h"
 
 namespace seamvox {
 
@@ -126,9 +128,13 @@ struct FaceCounts {
   std::uint64_t collapsed = 0, collapsedAtCones = 0, flipped = 0;
   void add(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f, double ratio,
            const std::vector<std::uint8_t>& isCone) {
+    add(mesh, f, {uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]}, ratio, isCone);
+  }
+  void add(const TriangleMesh& mesh, FaceId f, const std::array<Vec2d, 3>& q, double ratio,
+           const std::vector<std::uint8_t>& isCone) {
     if (std::abs(ratio) < kCollapsedAreaFraction) {
       ++collapsed;
-      collapsedAtCones += collapsesBetweenCones(mesh, uv, f, isCone);
+      collapsedAtCones += collapsesBetweenCones(mesh, f, q, isCone);
     } else if (ratio < 0.0) {
       ++flipped;
     }
@@ -137,9 +143,9 @@ struct FaceCounts {
 
 /// A whole-mesh corner solved by some refinement round; free: its vertex was free in a solve.
 struct SolvedCorner {
-  CornerId corner;
   Vec2d uv;
-  bool free;
+  CornerId corner;
+  bool free;  // 24 bytes with the value first
 };
 
 /// The input of a region solve: the corners solved so far where there are any, else the map.
@@ -158,28 +164,36 @@ WedgeMap regionInput(const RegionMesh& region, const WedgeMap& cornerUV,
   return WedgeMap::fromCorners(region.mesh.triangles, values);
 }
 
-/// Records a region's solution in `current` (sorted by corner; these values replace older ones,
-/// a corner stays free once freed).
-void mergeSolved(const RegionMesh& region, const RegionSolution& solved,
-                 std::vector<SolvedCorner>& current) {
+/// A region's solved corners under whole-mesh ids, sorted by corner.
+std::vector<SolvedCorner> solvedCorners(const RegionMesh& region, const RegionSolution& solved) {
   std::vector<SolvedCorner> fresh;
   fresh.reserve(solved.cornerUV.size());
   for (CornerId c = 0; c < solved.cornerUV.size(); ++c) {
-    fresh.push_back({3 * region.faceOrigin[c / 3] + c % 3, solved.cornerUV[c],
+    fresh.push_back({solved.cornerUV[c], 3 * region.faceOrigin[c / 3] + c % 3,
                      region.vertexFree[region.mesh.triangles[c / 3][c % 3]] != 0});
   }
-  const auto byCorner = [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; };
-  std::sort(fresh.begin(), fresh.end(), byCorner);
+  std::sort(fresh.begin(), fresh.end(), [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; });
+  return fresh;
+}
+
+/// Records solved corners (sorted by corner) in `current` (sorted by corner; these values replace
+/// older ones, a corner stays free once freed).
+void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& current) {
+  if (current.empty()) {
+    current = std::move(fresh);
+    return;
+  }
   std::vector<SolvedCorner> merged;
   merged.reserve(current.size() + fresh.size());
-  auto i = current.begin(), j = fresh.begin();
+  auto i = current.begin();
+  auto j = fresh.begin();
   while (i != current.end() || j != fresh.end()) {
     if (j == fresh.end() || (i != current.end() && i->corner < j->corner)) {
       merged.push_back(*i++);
     } else if (i == current.end() || j->corner < i->corner) {
       merged.push_back(*j++);
     } else {
-      merged.push_back({j->corner, j->uv, j->free || i->free});
+      merged.push_back({j->uv, j->corner, j->free || i->free});
       ++i, ++j;
     }
   }
@@ -203,32 +217,69 @@ std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> fron
   std::vector<FaceId> patch = frontier;
   std::sort(patch.begin(), patch.end());
   patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
-  std::vector<VertexId> seen;  // vertices expanded (sorted per ring)
+  std::vector<VertexId> seen;  // vertices expanded, sorted
   for (std::uint32_t ring = 0; ring < rings && !frontier.empty(); ++ring) {
+    // The frontier's vertices not expanded yet, each once (a vertex has about six frontier faces).
+    std::vector<VertexId> fresh;
+    fresh.reserve(3 * frontier.size());
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) fresh.push_back(topology.vertex(3 * f + k));
+    }
+    std::sort(fresh.begin(), fresh.end());
+    fresh.erase(std::unique(fresh.begin(), fresh.end()), fresh.end());
+    std::vector<VertexId> unseen;
+    std::set_difference(fresh.begin(), fresh.end(), seen.begin(), seen.end(), std::back_inserter(unseen));
     std::vector<FaceId> added;
-    for (FaceId f : frontier) {
-      for (int k = 0; k < 3; ++k) {
-        const VertexId v = topology.vertex(3 * f + k);
-        if (std::binary_search(seen.begin(), seen.end(), v)) continue;
-        topology.forEachCornerAround(v, [&](CornerId c) {
-          const FaceId g = cornerFace(c);
-          if (!std::binary_search(patch.begin(), patch.end(), g)) added.push_back(g);
-        });
-      }
+    for (VertexId v : unseen) {
+      topology.forEachCornerAround(v, [&](CornerId c) {
+        const FaceId g = cornerFace(c);
+        if (!std::binary_search(patch.begin(), patch.end(), g)) added.push_back(g);
+      });
     }
-    for (FaceId f : frontier) {
-      for (int k = 0; k < 3; ++k) seen.push_back(topology.vertex(3 * f + k));
-    }
-    std::sort(seen.begin(), seen.end());
-    seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+    std::vector<VertexId> expanded;
+    expanded.reserve(seen.size() + unseen.size());
+    std::merge(seen.begin(), seen.end(), unseen.begin(), unseen.end(), std::back_inserter(expanded));
+    seen = std::move(expanded);
     std::sort(added.begin(), added.end());
     added.erase(std::unique(added.begin(), added.end()), added.end());
     std::vector<FaceId> grown;
+    grown.reserve(patch.size() + added.size());
     std::merge(patch.begin(), patch.end(), added.begin(), added.end(), std::back_inserter(grown));
     patch = std::move(grown);
     frontier = std::move(added);
   }
   return patch;
+}
+
+std::vector<std::vector<FaceId>> splitRegion(const Topology& topology, const std::vector<FaceId>& faces,
+                                             std::size_t groupFaces) {
+  if (!isSortedUnique(faces)) throw InputError("refine: region faces must be sorted and unique");
+  const std::uint32_t n = static_cast<std::uint32_t>(faces.size());
+  std::vector<std::pair<VertexId, std::uint32_t>> byVertex;
+  byVertex.reserve(3u * static_cast<std::size_t>(n));
+  for (std::uint32_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) byVertex.push_back({topology.vertex(3 * faces[i] + k), i});
+  }
+  std::sort(byVertex.begin(), byVertex.end());
+  detail::UnionFind sets(n);
+  for (std::size_t j = 1; j < byVertex.size(); ++j) {
+    if (byVertex[j].first == byVertex[j - 1].first) sets.unite(byVertex[j - 1].second, byVertex[j].second);
+  }
+  // A component's root is its first face (unite keeps the smaller id): groups in face order.
+  std::vector<std::uint32_t> size(n, 0);
+  for (std::uint32_t i = 0; i < n; ++i) ++size[sets.find(i)];
+  std::vector<std::uint32_t> groupOf(n, 0);
+  std::size_t filled = 0;
+  std::uint32_t groups = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (sets.find(i) != i) continue;
+    if (groups == 0 || filled >= groupFaces) ++groups, filled = 0;
+    groupOf[i] = groups - 1;
+    filled += size[i];
+  }
+  std::vector<std::vector<FaceId>> out(groups);
+  for (std::uint32_t i = 0; i < n; ++i) out[groupOf[sets.find(i)]].push_back(faces[i]);
+  return out;
 }
 
 std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,
@@ -758,40 +809,49 @@ std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSo
 }
 
 /// Whole-map counts into stats: every face ever solved (flag set) with the refined values, every
-/// other face as in the input. The refined faces are measured as one region of their own and
-/// returned.
-std::vector<FaceId> measureRefinedMap(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
-                                      const CutResult& cut, const WedgeMap& cornerUV,
+/// other face as in the input. Returns the refined faces, sorted.
+std::vector<FaceId> measureRefinedMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                                       const std::vector<SolvedCorner>& current, const std::vector<std::uint8_t>& flag,
-                                      const std::vector<std::uint8_t>& isCone, double h, RefineStats& stats) {
+                                      const std::vector<std::uint8_t>& isCone, const RefineOptions& options,
+                                      RefineStats& stats) {
+  const double h = options.edgeLength;
   std::vector<FaceId> touched;
   for (FaceId f = 0; f < mesh.numFaces(); ++f) {
     if (flag[f] != kOutside) touched.push_back(f);
   }
+  stats.regionFaces = touched.size();
+  // Every corner of a solved face is in `current` (a solve records all its region's corners), and
+  // both are sorted: one walk pairs them.
   FaceCounts inside;
-  if (!touched.empty()) {
-    const RegionMesh all = extractRegion(mesh, topology, field, cut, touched);
-    const WedgeMap allUV = regionInput(all, cornerUV, current);
-    std::vector<std::uint8_t> subCone(all.mesh.numVertices(), 0);
-    for (VertexId v : all.cut.cones) subCone[v] = 1;
-    for (std::uint32_t i = 0; i < all.topology.numFaces(); ++i) {
-      inside.add(all.mesh, allUV, i, parameterAreaRatio(all.mesh, allUV, i, h), subCone);
+  auto it = current.begin();
+  for (FaceId f : touched) {
+    std::array<Vec2d, 3> q;
+    for (int k = 0; k < 3; ++k) {
+      const CornerId c = 3 * f + k;
+      while (it != current.end() && it->corner < c) ++it;
+      q[k] = it != current.end() && it->corner == c ? it->uv : cornerUV[c];
     }
-    stats.regionFaces = touched.size();
+    inside.add(mesh, f, q, parameterAreaRatio(mesh, f, q, h), isCone);
   }
-  const FaceCounts outside = tbb::parallel_reduce(
-      tbb::blocked_range<FaceId>(0, mesh.numFaces(), 1u << 14), FaceCounts(),
-      [&](const tbb::blocked_range<FaceId>& range, FaceCounts counts) {
-        for (FaceId f = range.begin(); f != range.end(); ++f) {
-          if (flag[f] != kOutside) continue;
-          counts.add(mesh, cornerUV, f, parameterAreaRatio(mesh, cornerUV, f, h), isCone);
-        }
-        return counts;
-      },
-      [](FaceCounts a, const FaceCounts& b) {
-        a.collapsed += b.collapsed, a.collapsedAtCones += b.collapsedAtCones, a.flipped += b.flipped;
-        return a;
-      });
+  // Faces never solved keep the input map. With the map's own faces seeded (voxloc), selectFlagged
+  // put every face below the collapse threshold in the region: none outside is collapsed or
+  // flipped.
+  FaceCounts outside;
+  if (!options.seedFromMap || options.collapseThreshold < kCollapsedAreaFraction) {
+    outside = tbb::parallel_reduce(
+        tbb::blocked_range<FaceId>(0, mesh.numFaces(), 1u << 14), FaceCounts(),
+        [&](const tbb::blocked_range<FaceId>& range, FaceCounts counts) {
+          for (FaceId f = range.begin(); f != range.end(); ++f) {
+            if (flag[f] != kOutside) continue;
+            counts.add(mesh, cornerUV, f, parameterAreaRatio(mesh, cornerUV, f, h), isCone);
+          }
+          return counts;
+        },
+        [](FaceCounts a, const FaceCounts& b) {
+          a.collapsed += b.collapsed, a.collapsedAtCones += b.collapsedAtCones, a.flipped += b.flipped;
+          return a;
+        });
+  }
   stats.collapsedAfter = outside.collapsed + inside.collapsed;
   stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
   stats.flippedAfter = outside.flipped + inside.flipped;
@@ -830,6 +890,82 @@ void collectRefinement(const Topology& topology, std::uint32_t numVertices, cons
   }
 }
 
+/// One round: the region's groups of components extracted, solved and measured on their own, in
+/// parallel; their corners merged into `current` and their translations into currentT. Returns
+/// the bad faces touching a locked vertex (the next round's seeds), sorted. `largest` keeps the
+/// system figures of the largest group solved so far; figures sums the groups.
+std::vector<FaceId> solveRound(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                               const CutResult& cut, const WedgeMap& cornerUV, const std::vector<FaceId>& faces,
+                               const RefineOptions& options, std::vector<SolvedCorner>& current,
+                               std::vector<Complex>& currentT, RefineRound& figures, bool& collapsedAtBorder,
+                               RefineStats& largest, RefineStats& stats) {
+  struct GroupResult {
+    std::vector<SolvedCorner> fresh;
+    std::vector<std::pair<std::uint32_t, Complex>> seams;
+    std::vector<FaceId> border;
+    RefineRound figures;
+    RefineStats system;
+    bool collapsedAtBorder = false;
+    double secondsExtract = 0.0, secondsSolve = 0.0;
+  };
+  const std::vector<std::vector<FaceId>> groups = splitRegion(topology, faces, std::max<std::size_t>(1, options.groupFaces));
+  std::vector<GroupResult> results(groups.size());
+  const double h = options.edgeLength;
+  parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
+    GroupResult& r = results[g];
+    auto lap = std::chrono::steady_clock::now();
+    const RegionMesh region = extractRegion(mesh, topology, field, cut, groups[g]);
+    WedgeMap regionUV = regionInput(region, cornerUV, current);
+    std::vector<Complex> regionT(region.seamOrigin.size());
+    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
+    const std::uint32_t numFree = static_cast<std::uint32_t>(
+        std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
+    r.figures.freeVertices = numFree;
+    r.secondsExtract = secondsSince(lap);
+    lap = std::chrono::steady_clock::now();
+    RegionSolution solved;
+    if (numFree > 0) {
+      solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
+    } else {
+      solved.cornerUV = std::move(regionUV);
+      solved.seamT = std::move(regionT);
+    }
+    r.secondsSolve = secondsSince(lap);
+    r.fresh = solvedCorners(region, solved);
+    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
+    r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
+  });
+  // Groups are disjoint in faces, corners and (seams among free vertices) translations: merging
+  // them in any order gives the same map.
+  std::vector<SolvedCorner> fresh;
+  std::vector<FaceId> border;
+  for (GroupResult& r : results) {
+    if (fresh.empty()) {
+      fresh = std::move(r.fresh);
+    } else {
+      fresh.insert(fresh.end(), r.fresh.begin(), r.fresh.end());
+    }
+    r.fresh = {};
+    for (const auto& [seam, t] : r.seams) currentT[seam] = t;
+    border.insert(border.end(), r.border.begin(), r.border.end());
+    figures.freeVertices += r.figures.freeVertices;
+    figures.unknowns += r.system.unknowns;
+    figures.collapsed += r.figures.collapsed;
+    figures.collapsedAtCones += r.figures.collapsedAtCones;
+    figures.flipped += r.figures.flipped;
+    collapsedAtBorder = collapsedAtBorder || r.collapsedAtBorder;
+    stats.secondsExtract += r.secondsExtract;
+    stats.secondsSolve += r.secondsSolve;
+    if (r.system.unknowns > 0 && r.system.unknowns >= largest.unknowns) largest = r.system;
+    stats.solves += r.system.unknowns > 0;
+  }
+  std::sort(fresh.begin(), fresh.end(), [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; });
+  mergeSolved(std::move(fresh), current);
+  std::sort(border.begin(), border.end());
+  figures.borderFaces = border.size();
+  return border;
+}
+
 /// stats takes the system figures of the largest solve.
 void keepLargestSolve(const RefineStats& largest, RefineStats& stats) {
   stats.unknowns = largest.unknowns;
@@ -858,7 +994,6 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
   std::vector<std::uint8_t> flag;
   std::vector<FaceId> faces = selectFlagged(mesh, topology, cornerUV, options, flag, &stats);
   stats.secondsRegion = secondsSince(lap);
-  const double h = options.edgeLength;
   const std::vector<std::uint8_t> isCone = coneFlags(mesh, cut);
 
   // Rounds: solve the region from the input map; then, while faces stay bad at the locked border,
@@ -874,35 +1009,11 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     RefineRound figures;
     figures.seedFaces = seeds;
     figures.regionFaces = faces.size();
-    lap = roundStart;
-    const RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
-    WedgeMap regionUV = regionInput(region, cornerUV, current);
-    std::vector<Complex> regionT(region.seamOrigin.size());
-    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
-    const std::uint32_t numFree = static_cast<std::uint32_t>(
-        std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
-    figures.freeVertices = numFree;
-    stats.secondsExtract += secondsSince(lap);
-
-    lap = std::chrono::steady_clock::now();
-    RegionSolution solved;
-    if (numFree > 0) {
-      solved = solveRegion(region, regionUV, regionT, h, &stats, {}, options.coneWeightRadius);
-      figures.unknowns = stats.unknowns;
-      if (stats.unknowns >= largest.unknowns) largest = stats;
-    } else {
-      solved.cornerUV = std::move(regionUV);
-      solved.seamT = std::move(regionT);
-    }
-    stats.secondsSolve += secondsSince(lap);
-    mergeSolved(region, solved, current);
-    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) currentT[region.seamOrigin[j]] = solved.seamT[j];
-
-    // Measure the region again; bad faces touching a locked vertex seed the next round.
     bool collapsedAtBorder = false;  // a border face below the threshold but not flipped
-    std::vector<FaceId> border =
-        measureSolvedRegion(region, solved, h, options.collapseThreshold, figures, collapsedAtBorder);
+    std::vector<FaceId> border = solveRound(mesh, topology, field, cut, cornerUV, faces, options, current,
+                                            currentT, figures, collapsedAtBorder, largest, stats);
     figures.seconds = secondsSince(roundStart);
+    stats.totalUnknowns = std::max<std::uint64_t>(stats.totalUnknowns, figures.unknowns);
     stats.rounds.push_back(figures);
     reportProgress(options.progress, "refine", double(round + 1) / maxRounds);
     if (border.empty() || round + 1 >= maxRounds) break;
@@ -919,7 +1030,7 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
   if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
   if (largest.unknowns > 0) keepLargestSolve(largest, stats);
   const std::vector<FaceId> touched =
-      measureRefinedMap(mesh, topology, field, cut, cornerUV, current, flag, isCone, h, stats);
+      measureRefinedMap(mesh, cornerUV, current, flag, isCone, options, stats);
   collectRefinement(topology, mesh.numVertices(), current, touched, currentT, seamT, out);
   reportProgress(options.progress, "refine", 1.0);
   stats.secondsTotal = secondsSince(start);

@@ -49,6 +49,9 @@ struct RefineOptions {
   /// Solves at most (>= 1; 1: no re-detection).
   std::uint32_t maxRounds = 6;
   double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
+  /// A round's region is solved in groups of whole components of at least this many faces
+  /// (splitRegion), in parallel: a group's factor stays near 60 MB at the default.
+  std::size_t groupFaces = std::size_t(1) << 16;
   ProgressFn progress;
 };
 
@@ -75,7 +78,10 @@ struct RefineStats {
   std::uint32_t freeVertices = 0;  ///< vertices re-solved in some round (all their faces in it)
   std::uint32_t lockedVertices = 0;  ///< other vertices of those faces, kept at the input values
   double refinedVertexFraction = 0.0;  ///< freeVertices / #V
-  /// System figures (unknowns to factorPeakBytes) of the largest solve.
+  /// Each round solves its region in groups of whole components (splitRegion), each on its own.
+  std::uint32_t solves = 0;          ///< group solves over all rounds
+  std::uint64_t totalUnknowns = 0;   ///< unknowns summed over the groups of the largest round
+  /// System figures (unknowns to factorPeakBytes) of the largest group solve.
   std::uint32_t unknowns = 0;  ///< size of the local system
   /// Translation unknowns solved locally: seams among free vertices only, e.g. between two cones
   /// (their input t is not trusted; rounded to Gaussian integers and solved again).
@@ -123,6 +129,13 @@ struct RegionMesh {
 /// Faces within `rings` vertex rings of the seeds (the seeds included). Sorted, unique. Cost: the
 /// patch's size times the valence.
 std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> seeds, std::uint32_t rings);
+
+/// The faces (sorted, unique) as groups of whole components (faces sharing a vertex belong to one
+/// component): a group closes once it holds groupFaces faces, so each is solved on its own with
+/// bounded memory and the groups run in parallel. Groups in the order of their first face, each
+/// sorted. Cost: a sort of 3 ids per face.
+std::vector<std::vector<FaceId>> splitRegion(const Topology& topology, const std::vector<FaceId>& faces,
+                                             std::size_t groupFaces);
 
 /// Faces to refine: marked faces, faces whose input parameter area is below the collapse
 /// threshold or negative, then options.rings rings of neighbours. Sorted, unique. Linear in #F

@@ -354,9 +354,15 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
     while (log.size() > mark) cornerUV.setWedgeValue(log.back().first, log.back().second), log.pop_back();
     return false;
   };
+  // Only the faces flipped at the start are re-measured (as before), so a pass walks them alone,
+  // not every face of the mesh.
+  std::vector<FaceId> flippedFaces;
+  for (FaceId f = 0; f < state.size(); ++f) {
+    if (state[f] == kFlipped) flippedFaces.push_back(f);
+  }
   for (std::uint32_t pass = 0; pass < passes; ++pass) {
     std::vector<VertexId> candidates;
-    for (FaceId f = 0; f < state.size(); ++f) {
+    for (FaceId f : flippedFaces) {
       if (state[f] != kFlipped) continue;
       for (VertexId v : mesh.triangles[f]) {
         if (!fixed[v]) candidates.push_back(v);
@@ -388,7 +394,7 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
     }
     moves += moved;
     if (moved == 0) break;
-    for (FaceId f = 0; f < state.size(); ++f) {
+    for (FaceId f : flippedFaces) {
       if (state[f] == kFlipped) state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
     }
   }
@@ -674,6 +680,55 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
 
 }  // namespace
 
+namespace {
+
+/// Smallest group of a round's patch solved on its own (splitRegion).
+constexpr std::size_t kMinGroupFaces = 8192;
+
+/// What one group of a round's patch changes: the free corners of its improved components, their
+/// vertices, and the translations of seams inside them.
+struct GroupRepair {
+  std::vector<CornerId> corners;
+  std::vector<Vec2d> uv;
+  std::vector<VertexId> moved;
+  std::vector<std::pair<std::uint32_t, Complex>> seams;
+  std::uint32_t solves = 0, unknowns = 0;
+};
+
+/// Cuts a group out of the map (read only) and stiffens it (stiffenRegion).
+GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                        const CutResult& cut, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
+                        const std::vector<FaceId>& faces, const UntangleOptions& options) {
+  const RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
+  std::vector<Vec2d> values(3 * faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    for (int k = 0; k < 3; ++k) values[3 * i + k] = cornerUV[3 * faces[i] + k];
+  }
+  const WedgeMap regionUV = WedgeMap::fromCorners(region.mesh.triangles, values);
+  std::vector<Complex> regionT(region.seamOrigin.size());
+  for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
+  const RoundSolution solved = stiffenRegion(region, regionUV, regionT, mesh, topology, field, options);
+  GroupRepair out;
+  out.solves = solved.solves;
+  out.unknowns = solved.unknowns;
+  // Free corners of the improved components go back into the whole map.
+  const ComponentsResult& components = solved.components;
+  for (std::uint32_t c = 0; c < 3 * region.topology.numFaces(); ++c) {
+    const VertexId v = region.mesh.triangles[c / 3][c % 3];
+    if (!region.vertexFree[v] || !solved.componentImproved[components.faceComponent[c / 3]]) continue;
+    out.corners.push_back(3 * region.faceOrigin[c / 3] + c % 3);
+    out.uv.push_back(solved.solution.cornerUV[c]);
+    out.moved.push_back(region.vertexOrigin[v]);
+  }
+  for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) {
+    const std::uint32_t c = components.faceComponent[region.cut.seams[j].corners.front() / 3];
+    if (solved.componentImproved[c]) out.seams.push_back({region.seamOrigin[j], solved.solution.seamT[j]});
+  }
+  return out;
+}
+
+}  // namespace
+
 UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                             const CutResult& cut, WedgeMap& cornerUV, std::vector<Complex>& seamT,
                             const UntangleOptions& options) {
@@ -715,36 +770,29 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
       rings = std::max(2u, rings / 2);
       patch = growFaces(topology, seeds, rings);
     }
-    const RegionMesh region = extractRegion(mesh, topology, field, cut, patch);
-    std::vector<Vec2d> values(3 * patch.size());
-    for (std::size_t i = 0; i < patch.size(); ++i) {
-      for (int k = 0; k < 3; ++k) values[3 * i + k] = cornerUV[3 * patch[i] + k];
-    }
-    const WedgeMap regionUV = WedgeMap::fromCorners(region.mesh.triangles, values);
-    std::vector<Complex> regionT(region.seamOrigin.size());
-    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
     ++stats.rounds;
     stats.patchFaces += patch.size();
-    const RoundSolution solved = stiffenRegion(region, regionUV, regionT, mesh, topology, field, options);
-    stats.solves += solved.solves;
-    stats.largestUnknowns = std::max(stats.largestUnknowns, solved.unknowns);
-
-    // Free corners of the improved components go back into the whole map.
-    const ComponentsResult& components = solved.components;
+    // The patch's components are independent (everything around them is locked): groups of them
+    // are re-solved in parallel, and a group's factor stays small.
+    const std::vector<std::vector<FaceId>> groups =
+        splitRegion(topology, patch, std::max<std::size_t>(kMinGroupFaces, patch.size() / 8));
+    std::vector<GroupRepair> repairs(groups.size());
+    parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
+      repairs[g] = repairGroup(mesh, topology, field, cut, cornerUV, seamT, groups[g], options);
+    });
+    // One assignment per round: WedgeMap::assign walks every corner of the map.
     std::vector<CornerId> corners;
     std::vector<Vec2d> uv;
-    for (std::uint32_t c = 0; c < 3 * region.topology.numFaces(); ++c) {
-      const VertexId v = region.mesh.triangles[c / 3][c % 3];
-      if (!region.vertexFree[v] || !solved.componentImproved[components.faceComponent[c / 3]]) continue;
-      corners.push_back(3 * region.faceOrigin[c / 3] + c % 3);
-      uv.push_back(solved.solution.cornerUV[c]);
-      moved.push_back(region.vertexOrigin[v]);
+    for (GroupRepair& repair : repairs) {
+      stats.solves += repair.solves;
+      stats.largestUnknowns = std::max(stats.largestUnknowns, repair.unknowns);
+      corners.insert(corners.end(), repair.corners.begin(), repair.corners.end());
+      uv.insert(uv.end(), repair.uv.begin(), repair.uv.end());
+      moved.insert(moved.end(), repair.moved.begin(), repair.moved.end());
+      for (const auto& [seam, t] : repair.seams) seamT[seam] = t;
+      repair = GroupRepair();
     }
     cornerUV.assign(corners, uv);
-    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) {
-      const std::uint32_t c = components.faceComponent[region.cut.seams[j].corners.front() / 3];
-      if (solved.componentImproved[c]) seamT[region.seamOrigin[j]] = solved.solution.seamT[j];
-    }
     classifyAll();
     reportProgress(options.progress, "untangle", double(round + 1) / options.maxRounds);
   }

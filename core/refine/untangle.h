@@ -55,7 +55,8 @@ struct UntangleStats {
   std::uint64_t flippedBefore = 0, flippedAfter = 0;  ///< whole map, collapsed faces excluded
   /// Of flippedAfter: folded in 3D against the field's smoothed surface (0 without one).
   std::uint64_t foldedIn3D = 0;
-  std::uint32_t rounds = 0, solves = 0;
+  std::uint32_t rounds = 0;
+  std::uint32_t solves = 0;  ///< stiffening re-solves, summed over the groups of components of each round
   std::uint64_t patchFaces = 0;     ///< faces re-solved, summed over rounds
   std::uint32_t freeVertices = 0;   ///< vertices moved in some round (counted once per round)
   std::uint32_t largestUnknowns = 0;
