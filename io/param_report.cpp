@@ -110,6 +110,7 @@ void writeFeatures(JsonWriter& j, const PipelineResult& r, double featureAngle) 
   j.key("total").value(U64{r.featureCurves.total});
   j.key("aligned").value(U64{r.featureCurves.aligned});
   j.key("notAligned").value(U64{r.featureCurves.notAligned});
+  j.key("released").value(U64{r.featureCurvesReleased});
   j.key("boundaryEdges").value(U64{r.features.boundaryEdges});
   j.key("creaseEdges").value(U64{r.features.creaseEdges});
   j.key("featureAngle").value(featureAngle);

@@ -273,6 +273,35 @@ TEST(Features, BoxCornersOnIntegerPointsAndCreasesOnIntegerLines) {
   EXPECT_EQ(quads.conesOnGridVertices, 8u);  // the box's corners are quad vertices
 }
 
+TEST(Features, CreasesCloserThanACellAreReleasedInsteadOfCollapsingTheFacesBetween) {
+  // A plate with a narrow ridge: three parallel creases two rows apart, about a fifth of a cell.
+  // Held on integer lines they round onto one line and squeeze the ridge flat; the pipeline
+  // releases curves at the collapsed faces and solves again until nothing collapses.
+  TriangleMesh mesh = testing::gridMesh(30, 30);
+  for (VertexId v = 0; v < mesh.numVertices(); ++v) {
+    if (mesh.positions[v].y() == 15.0f) mesh.positions[v].z() = 1.0f;
+  }
+  PipelineOptions options = featureOptions(4.0, 30.0);
+  const PipelineResult r = parameterize(mesh, options);
+  EXPECT_EQ(r.features.creaseEdges, 3u * 30u);
+  EXPECT_GT(r.featureCurvesReleased, 0u);
+  EXPECT_LE(r.featureCurvesReleased, r.featureCurves.notAligned);
+  EXPECT_GT(r.featureCurves.aligned, 0u) << "the plate's sides stay aligned";
+  EXPECT_EQ(r.mapQuality.collapsed, 0u);
+  EXPECT_EQ(r.mapQuality.flipped, 0u);
+  EXPECT_TRUE(r.isSeamless());
+  EXPECT_LT(r.featureCurves.largestResidual, 1e-9);
+  const QuadResult quads = extractQuads(r.mesh, r.topology);
+  EXPECT_TRUE(validateQuads(quads, computeComponents(r.topology)).isValid());
+
+  // Without the release the same constraints collapse the ridge (what the test guards against).
+  options.features.featureAngle = 30.0;
+  options.maxFeatureReleaseRounds = 0;
+  const PipelineResult held = parameterize(mesh, options);
+  EXPECT_EQ(held.featureCurvesReleased, 0u);
+  EXPECT_GT(held.mapQuality.collapsed, 0u);
+}
+
 TEST(Features, ParamPrintsAndReportsTheCurves) {
   testing::TempDir dir;
   writeMesh(dir.path("plate.obj"), testing::gridMesh(10, 7));

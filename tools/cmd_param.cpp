@@ -109,9 +109,9 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   }
   if (r.featureCurves.total > 0) {
     std::printf("feature curves: %u (%u boundary, %u crease edges; feature angle %g): %u aligned on integer "
-                "iso-lines, %u not aligned%s\n",
+                "iso-lines, %u not aligned (%u released: the map collapsed faces next to them)%s\n",
                 r.featureCurves.total, r.features.boundaryEdges, r.features.creaseEdges, c.options.features.featureAngle,
-                r.featureCurves.aligned, r.featureCurves.notAligned,
+                r.featureCurves.aligned, r.featureCurves.notAligned, r.featureCurvesReleased,
                 !r.featureFieldAligned ? " (the proxy or an imported field does not follow them)"
                 : r.solved.solver != ParamSolver::Hat ? " (only the hat solver holds them)" : "");
   }

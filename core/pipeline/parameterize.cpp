@@ -7,6 +7,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
 
 namespace seamvox {
@@ -82,13 +83,78 @@ std::vector<std::pair<VertexId, VertexId>> mergeableCoincidentCones(
   return pairs;
 }
 
+/// Curves of `features` the map could not hold on integer iso-lines without squeezing faces (two
+/// curves rounded onto one line, a curve forced through a cone's point): per cluster of collapsed
+/// faces (|parameter area| below kCollapsedAreaFraction, not between coincident cones; faces
+/// sharing a vertex cluster), the shortest curve with an edge at one of its vertices, or with
+/// `all` every such curve. Returns the features without them; `released` counts them.
+FeatureSet releaseCollapsingCurves(const TriangleMesh& mesh, const Topology& topology,
+                                   const FeatureSet& features, const WedgeMap& cornerUV, double h,
+                                   const std::vector<VertexId>& cones, bool all, std::uint32_t& released) {
+  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
+  for (VertexId v : cones) isCone[v] = 1;
+  // Collapsed faces' vertices with their cluster (union-find over faces sharing a vertex).
+  std::vector<std::pair<VertexId, std::uint32_t>> squeezed;
+  std::uint32_t collapsed = 0;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
+    if (!(std::abs(ratio) < kCollapsedAreaFraction) || collapsesBetweenCones(mesh, cornerUV, f, isCone)) continue;
+    for (VertexId v : mesh.triangles[f]) squeezed.push_back({v, collapsed});
+    ++collapsed;
+  }
+  std::sort(squeezed.begin(), squeezed.end());
+  detail::UnionFind clusters(collapsed);
+  for (std::size_t k = 1; k < squeezed.size(); ++k) {
+    if (squeezed[k].first == squeezed[k - 1].first) clusters.unite(squeezed[k - 1].second, squeezed[k].second);
+  }
+  const auto clusterAt = [&](VertexId v) -> std::uint32_t {
+    const auto it = std::lower_bound(squeezed.begin(), squeezed.end(), std::make_pair(v, 0u));
+    return it != squeezed.end() && it->first == v ? clusters.find(it->second) : kInvalidId;
+  };
+  // Per cluster the shortest curve touching it (or every one).
+  std::vector<std::uint32_t> chosen(collapsed, kInvalidId);
+  std::vector<std::uint8_t> release(features.numCurves(), 0);
+  const auto length = [&](std::uint32_t k) { return features.curveStart[k + 1] - features.curveStart[k]; };
+  for (std::uint32_t k = 0; k < features.numCurves(); ++k) {
+    for (std::uint32_t i = features.curveStart[k]; i < features.curveStart[k + 1]; ++i) {
+      const CornerId c = features.curveEdges[i];
+      for (VertexId v : {topology.vertex(nextCorner(c)), topology.vertex(prevCorner(c))}) {
+        const std::uint32_t cluster = clusterAt(v);
+        if (cluster == kInvalidId) continue;
+        if (all) release[k] = 1;
+        std::uint32_t& best = chosen[cluster];
+        if (best == kInvalidId || length(k) < length(best)) best = k;
+      }
+    }
+  }
+  for (std::uint32_t k : chosen) {
+    if (k != kInvalidId) release[k] = 1;
+  }
+  FeatureSet kept;
+  kept.boundaryEdges = features.boundaryEdges;
+  kept.creaseEdges = features.creaseEdges;
+  kept.curveStart.push_back(0);
+  released = 0;
+  for (std::uint32_t k = 0; k < features.numCurves(); ++k) {
+    if (release[k]) {
+      ++released;
+      continue;
+    }
+    kept.curveEdges.insert(kept.curveEdges.end(), features.curveEdges.begin() + features.curveStart[k],
+                           features.curveEdges.begin() + features.curveStart[k + 1]);
+    kept.curveStart.push_back(static_cast<std::uint32_t>(kept.curveEdges.size()));
+  }
+  return kept;
+}
+
 /// The cone passes: merge and cut, solve; again with the pairs a solve put on one point merged,
 /// while there are such pairs (at most options.maxConePasses passes).
 void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions& options,
                      StageMeter& meter) {
   ParamOptions param;
-  const std::vector<CornerId> featureCorners = featureSideCorners(r.topology, r.features);
+  std::vector<CornerId> featureCorners = featureSideCorners(r.topology, r.features);
   if (r.featureFieldAligned) param.featureCorners = &featureCorners;
+  FeatureSet held = r.features;  // the curves the solve holds on iso-lines
   param.edgeLength = r.edgeLength;
   param.greedyRounding = options.greedyRounding;
   param.coneWeightRadius = options.coneWeightRadius;
@@ -116,6 +182,21 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
     coneCut.singularities = FieldSingularities();  // the cut keeps the combed matchings and cones
     meter.finish("cut");
     r.solved = parameterizeMeshWithSolver(r.mesh, r.topology, field, coneCut.cut, param, solverOptions);
+    // Curves at faces the map collapsed are released (the shortest per cluster, the last round
+    // every one) and the map solved again.
+    const std::uint32_t releaseRounds = options.maxFeatureReleaseRounds;
+    for (std::uint32_t round = 0; releaseRounds > 0 && round <= releaseRounds && param.featureCorners &&
+                                  r.solved.param.lines.applied > 0;
+         ++round) {
+      std::uint32_t released = 0;
+      held = releaseCollapsingCurves(r.mesh, r.topology, held, r.solved.param.cornerUV, r.edgeLength,
+                                     coneCut.cut.cones, round == releaseRounds, released);
+      if (released == 0) break;
+      r.featureCurvesReleased += released;
+      featureCorners = featureSideCorners(r.topology, held);
+      r.solved = SolverResult{};
+      r.solved = parameterizeMeshWithSolver(r.mesh, r.topology, field, coneCut.cut, param, solverOptions);
+    }
     bool again = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
     if (again) {
       const auto pairs = mergeableCoincidentCones(r.topology, coneCut.cut.cones, coneIndex, r.solved.param.cornerUV);

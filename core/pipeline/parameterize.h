@@ -76,6 +76,10 @@ struct PipelineOptions {
   double mergeCones = kConeMergeFraction;
   /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
   std::uint32_t maxConePasses = 3;
+  /// Feature curves at faces the map collapses are released and the map solved again: the
+  /// shortest curve per cluster of collapsed faces, at most this many times, then every curve at
+  /// one once more (0: the constraints are kept whatever they collapse).
+  std::uint32_t maxFeatureReleaseRounds = 8;
   /// Feature curves (boundaries; creases above featureAngle) the field follows and the map holds
   /// on integer iso-lines. Only the direct field follows them and only the hat solves hold them:
   /// with the proxy field no curve is aligned, with vox and voxloc those the map keeps by chance
@@ -134,6 +138,9 @@ struct PipelineResult {
   bool featureFieldAligned = false;  ///< the field was held along them (direct field)
   LineConstraintStats featureLines;  ///< the map's constraints (last hat solve; zero otherwise)
   FeatureAlignment featureCurves;    ///< curves the final map keeps on integer iso-lines
+  /// Curves left out of the map's constraints because the map collapsed triangles next to them
+  /// (two curves rounded onto one iso-line squeeze the faces between them); counted in notAligned.
+  std::uint32_t featureCurvesReleased = 0;
   SeamQuality seamQuality;
   MapQuality mapQuality;
   ComponentSummary components;  ///< per component, of the mesh before any drop
