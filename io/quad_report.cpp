@@ -42,7 +42,7 @@ std::string quadReportJson(const QuadResult& quads, const QuadValidation& v, con
   j.key("tracedEdges").value(s.tracedEdges).key("boundaryEdges").value(s.boundaryEdges);
   j.key("untracedEdges").value(s.untracedEdges).key("unpairedEdges").value(s.unpairedEdges);
   j.key("openFaces").value(s.openFaces).key("digons").value(s.digons).key("deadEnds").value(s.deadEnds);
-  j.key("halfwayCones").value(s.halfwayCones).key("spikes").value(s.spikes).key("loops").value(s.loops);
+  j.key("halfwayCones").value(s.halfwayCones).key("spikes").value(s.spikes).key("loops").value(s.loops).key("pillows").value(s.pillows);
   j.key("pointsInFlippedFaces").value(s.pointsInFlippedFaces);
   j.key("holesWithoutVertex").value(s.holesWithoutVertex);
   j.key("islands").value(s.islands).key("islandFaces").value(s.islandFaces);

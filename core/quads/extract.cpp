@@ -1,6 +1,8 @@
 #include "core/quads/extract.h"
 
 #include <algorithm>
+#include <map>
+#include <set>
 #include <atomic>
 #include <cmath>
 #include <numeric>
@@ -724,6 +726,99 @@ class Extractor {
     }
   }
 
+  // Removes pairs of faces on the same cycle of vertices in opposite orders (QuadStats::pillows)
+  // and the vertices only they used; a remaining vertex loses each pillow edge no face keeps.
+  // Faces are given by their point ids (face vertices of pm map back through pointOf).
+  static void removePillows(PolygonMesh& pm, std::vector<std::uint32_t>& pointOf, std::vector<std::uint8_t>& lostAt,
+                            QuadResult& out) {
+    const std::uint32_t nf = pm.numFaces();
+    // A face's cycle from its smallest vertex, forwards; its reverse likewise.
+    const auto canonical = [&](std::uint32_t f, bool reversed) {
+      std::vector<std::uint32_t> cycle(pm.faceVertices.begin() + pm.faceStart[f], pm.faceVertices.begin() + pm.faceStart[f + 1]);
+      if (reversed) std::reverse(cycle.begin(), cycle.end());
+      std::rotate(cycle.begin(), std::min_element(cycle.begin(), cycle.end()), cycle.end());
+      return cycle;
+    };
+    std::map<std::vector<std::uint32_t>, std::uint32_t> open;  // cycles not yet paired
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    for (std::uint32_t f = 0; f < nf; ++f) {
+      const auto twin = open.find(canonical(f, true));
+      if (twin != open.end()) {
+        pairs.push_back({twin->second, f});
+        open.erase(twin);
+      } else {
+        open.emplace(canonical(f, false), f);
+      }
+    }
+    if (pairs.empty()) return;
+    // A pair is a fold only when it hangs on the rest of the mesh (an edge of it in a third face);
+    // a pair alone is a whole closed component of two faces, and stays.
+    // The edge from face f's vertex at i to the next one, as a sorted pair.
+    const auto edgeOf = [&](std::uint32_t f, std::uint32_t i) {
+      const std::uint32_t a = pm.faceVertices[i];
+      const std::uint32_t b = pm.faceVertices[i + 1 < pm.faceStart[f + 1] ? i + 1 : pm.faceStart[f]];
+      return std::make_pair(std::min(a, b), std::max(a, b));
+    };
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> uses;
+    for (const auto& [f, g] : pairs) {
+      for (std::uint32_t i = pm.faceStart[f]; i < pm.faceStart[f + 1]; ++i) {
+        uses[edgeOf(f, i)] = 0;
+      }
+    }
+    for (std::uint32_t f = 0; f < nf; ++f) {
+      for (std::uint32_t i = pm.faceStart[f]; i < pm.faceStart[f + 1]; ++i) {
+        const auto it = uses.find(edgeOf(f, i));
+        if (it != uses.end()) ++it->second;
+      }
+    }
+    std::vector<std::uint8_t> removed(nf, 0);
+    for (const auto& [f, g] : pairs) {
+      bool attached = false;
+      for (std::uint32_t i = pm.faceStart[f]; i < pm.faceStart[f + 1] && !attached; ++i) {
+        attached = uses[edgeOf(f, i)] > 2;
+      }
+      if (!attached) continue;
+      removed[f] = removed[g] = 1;
+      ++out.stats.pillows;
+    }
+    if (out.stats.pillows == 0) return;
+    std::set<std::pair<std::uint32_t, std::uint32_t>> kept, lost;
+    PolygonMesh faces;
+    faces.faceStart = {0};
+    for (std::uint32_t f = 0; f < nf; ++f) {
+      const std::uint32_t b = pm.faceStart[f], e = pm.faceStart[f + 1];
+      for (std::uint32_t i = b; i < e; ++i) (removed[f] ? lost : kept).insert(edgeOf(f, i));
+      if (removed[f]) continue;
+      faces.faceVertices.insert(faces.faceVertices.end(), pm.faceVertices.begin() + b, pm.faceVertices.begin() + e);
+      faces.faceStart.push_back(static_cast<std::uint32_t>(faces.faceVertices.size()));
+    }
+    // Vertices still used, renumbered in order.
+    std::vector<std::uint32_t> renumber(pm.numVertices(), kNone);
+    for (std::uint32_t v : faces.faceVertices) renumber[v] = 0;
+    std::uint32_t next = 0;
+    for (std::uint32_t v = 0; v < pm.numVertices(); ++v) {
+      if (renumber[v] == kNone) continue;
+      renumber[v] = next++;
+      pm.positions[renumber[v]] = pm.positions[v];
+      out.vertexComponent[renumber[v]] = out.vertexComponent[v];
+      out.vertexConeIndex[renumber[v]] = out.vertexConeIndex[v];
+      pointOf[renumber[v]] = pointOf[v];
+    }
+    for (const auto& [a, b] : lost) {
+      if (kept.count({a, b})) continue;
+      for (std::uint32_t v : {a, b}) {
+        if (renumber[v] != kNone) ++lostAt[pointOf[v]];
+      }
+    }
+    pm.positions.resize(next);
+    out.vertexComponent.resize(next);
+    out.vertexConeIndex.resize(next);
+    pointOf.resize(next);
+    for (std::uint32_t& v : faces.faceVertices) v = renumber[v];
+    pm.faceVertices = std::move(faces.faceVertices);
+    pm.faceStart = std::move(faces.faceStart);
+  }
+
   bool leaves(std::uint32_t p) const { return ports_[p].dir != kIn && portTarget_[p] < kDeadEnd; }
 
   void buildFaces(QuadResult& out) {
@@ -792,10 +887,13 @@ class Extractor {
       }
       pm.faceStart.push_back(static_cast<std::uint32_t>(pm.faceVertices.size()));
     }
-    out.vertexLostEdges.assign(pm.numVertices(), 0);
+    std::vector<std::uint32_t> pointOf(pm.numVertices());
     for (std::uint32_t v = 0; v < points_.size(); ++v) {
-      if (newIndex[v] != kNone) out.vertexLostEdges[newIndex[v]] = lostAt[v];
+      if (newIndex[v] != kNone) pointOf[newIndex[v]] = v;
     }
+    removePillows(pm, pointOf, lostAt, out);
+    out.vertexLostEdges.assign(pm.numVertices(), 0);
+    for (std::uint32_t v = 0; v < pm.numVertices(); ++v) out.vertexLostEdges[v] = lostAt[pointOf[v]];
     // Components of the map: per vertex, and those that got no face (islands).
     const ComponentsResult comps = computeComponents(topo_);
     std::vector<std::uint8_t> hasFace(comps.components.size(), 0);

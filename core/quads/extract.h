@@ -56,6 +56,9 @@ struct QuadStats {
   /// rotation identifies the cell's corners): zipped out of the face beside them, the point loses
   /// both ends of the loop.
   std::uint64_t loops = 0;
+  /// Pairs of faces on the same cycle of points in opposite orders (a cell the map covers twice,
+  /// folded over itself where a triangle is folded in 3D): both left out, they enclose nothing.
+  std::uint64_t pillows = 0;
   std::uint64_t unpairedEdges = 0;     ///< traced half-edges whose reverse trace went elsewhere
   std::uint64_t openFaces = 0;         ///< face walks that met a missing edge (no face made)
   /// Faces of two edges (an iso-line and a boundary piece or another iso-line between the same two
