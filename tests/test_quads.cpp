@@ -431,18 +431,26 @@ TEST(Quads, MalformedMapsAreRefusedOrReported) {
   EXPECT_LT(extractQuads(s.mesh, s.topology).stats.maxSnap, 1e-6);
 }
 
-TEST(Quads, SharedMeshesRepairedAndExtracted) {
-  // param's defaults (hat solver at these sizes, repair on) on every shared mesh: no flips left
-  // but faces folded in 3D, gradient error within 1.05x of the unrepaired map, and a valid quad
-  // mesh (fertility's map has an iso-line from an integer point back to itself: a loop zipped out).
-  for (const char* name : {"bumpy.off", "3holes.off", "spot.obj", "lilium.obj", "camelhead.off", "rocker-arm.obj",
-                           "cheburashka.off", "fertility.off", "armadillo.obj", "bunny.off"}) {
+// Calls check(path) for each shared mesh present (a scoped trace names it); says which are skipped.
+template <class Check>
+void forSharedMeshes(std::initializer_list<const char*> names, const Check& check) {
+  for (const char* name : names) {
     const std::string path = testing::sharedMesh(name);
     if (path.empty()) {
       std::printf("skipping %s: %s\n", name, testing::missingSharedMessage(name).c_str());
       continue;
     }
     SCOPED_TRACE(name);
+    check(path);
+  }
+}
+
+TEST(Quads, SharedMeshesRepairedAndExtracted) {
+  // param's defaults (hat solver at these sizes, repair on) on every shared mesh: no flips left
+  // but faces folded in 3D, gradient error within 1.05x of the unrepaired map, and a valid quad
+  // mesh (fertility's map has an iso-line from an integer point back to itself: a loop zipped out).
+  forSharedMeshes({"bumpy.off", "3holes.off", "spot.obj", "lilium.obj", "camelhead.off", "rocker-arm.obj",
+                   "cheburashka.off", "fertility.off", "armadillo.obj", "bunny.off"}, [](const std::string& path) {
     PipelineOptions options;
     options.untangle = false;
     const double unrepaired = parameterize(readMesh(path), options).mapQuality.relativeGradientError;
@@ -457,7 +465,7 @@ TEST(Quads, SharedMeshesRepairedAndExtracted) {
     EXPECT_EQ(q.flipped, q.flippedFolded);
     EXPECT_TRUE(e.check.isValid());
     EXPECT_EQ(e.quads.stats.untracedEdges + e.quads.stats.unpairedEdges + e.quads.stats.openFaces, 0u);
-  }
+  });
 }
 
 TEST(Quads, SharedMeshesWithCreasesAlignedGiveManifoldQuads) {
@@ -465,13 +473,7 @@ TEST(Quads, SharedMeshesWithCreasesAlignedGiveManifoldQuads) {
   // collapse faces are released, so nothing collapses and every iso-line traces; a cell the map
   // covers twice where a face is folded in 3D (cheburashka) is left out as a pillow instead of
   // making its edges non-manifold.
-  for (const char* name : {"rocker-arm.obj", "fertility.off", "camelhead.off", "cheburashka.off"}) {
-    const std::string path = testing::sharedMesh(name);
-    if (path.empty()) {
-      std::printf("skipping %s: %s\n", name, testing::missingSharedMessage(name).c_str());
-      continue;
-    }
-    SCOPED_TRACE(name);
+  forSharedMeshes({"rocker-arm.obj", "fertility.off", "camelhead.off", "cheburashka.off"}, [](const std::string& path) {
     PipelineOptions options;
     options.solver.solver = ParamSolver::Hat;
     options.features.alignBoundary = true;
@@ -487,7 +489,7 @@ TEST(Quads, SharedMeshesWithCreasesAlignedGiveManifoldQuads) {
     EXPECT_EQ(e.check.nonManifoldVertices, 0u);
     EXPECT_EQ(e.check.componentsDiffering, 0u);
     EXPECT_GE(e.check.quadFraction, 0.9);
-  }
+  });
 }
 
 // ---- the commands ----
