@@ -79,29 +79,6 @@ struct MortonLess {
   }
 };
 
-/// The bits of x spread to every third bit (21 bits in, 63 out).
-std::uint64_t spreadBits(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
-
-std::uint64_t mortonCode(const Vec3d& p, const BoundingBox& box) {
-  std::uint64_t code = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double extent = box.max[axis] - box.min[axis];
-    const double t = extent > 0.0 ? (p[axis] - box.min[axis]) / extent : 0.0;
-    const double cells = static_cast<double>(1u << kMortonBits);
-    const auto q = static_cast<std::uint64_t>(std::clamp(t * cells, 0.0, cells - 1.0));
-    code |= spreadBits(q) << axis;
-  }
-  return code;
-}
-
 /// Per component (by union-find root) what the passes count.
 struct ComponentCount {
   std::uint64_t faces = 0, vertices = 0, edges = 0, loops = 0;

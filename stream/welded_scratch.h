@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/mesh/morton.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/topology.h"
 #include "stream/mesh_stream.h"
@@ -31,9 +32,6 @@ struct WeldedFace {
   std::array<float, 3> corners[3]{};  ///< positions of the three vertices (plain floats: written as bytes)
   Vec3f corner(int k) const { return Vec3f(corners[k][0], corners[k][1], corners[k][2]); }
 };
-
-/// Grid of the Morton codes: 2^21 cells along each axis of the bounding box.
-constexpr int kMortonBits = 21;
 
 struct WeldStreamOptions {
   bool weld = false;  ///< join vertices at exactly equal positions (the lowest input id keeps its place first)

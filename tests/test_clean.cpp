@@ -304,5 +304,79 @@ TEST(Clean, CountsZeroAreaFacesAndKeepsThem) {
   EXPECT_EQ(r.mesh.numFaces(), 5u);
 }
 
+/// The mesh with its vertices and faces in a random order (the same surface).
+TriangleMesh shuffled(const TriangleMesh& mesh, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<VertexId> vertexPerm(mesh.numVertices());
+  std::iota(vertexPerm.begin(), vertexPerm.end(), 0u);
+  std::shuffle(vertexPerm.begin(), vertexPerm.end(), rng);
+  std::vector<FaceId> facePerm(mesh.numFaces());
+  std::iota(facePerm.begin(), facePerm.end(), 0u);
+  std::shuffle(facePerm.begin(), facePerm.end(), rng);
+  TriangleMesh out;
+  out.positions.resize(mesh.numVertices());
+  for (VertexId v = 0; v < mesh.numVertices(); ++v) out.positions[vertexPerm[v]] = mesh.positions[v];
+  for (FaceId f : facePerm) {
+    const Triangle& t = mesh.triangles[f];
+    out.triangles.push_back({vertexPerm[t[0]], vertexPerm[t[1]], vertexPerm[t[2]]});
+  }
+  return out;
+}
+
+/// Faces whose vertex ids span more than 1% of the vertices.
+double scatteredFraction(const TriangleMesh& mesh) {
+  std::uint64_t scattered = 0;
+  for (const Triangle& t : mesh.triangles) {
+    scattered += 100u * std::uint64_t(*std::max_element(t.begin(), t.end()) - *std::min_element(t.begin(), t.end())) >
+                 mesh.numVertices();
+  }
+  return double(scattered) / mesh.numFaces();
+}
+
+TEST(Clean, ScatteredMeshIsPutInSpatialOrderWithItsOriginsKept) {
+  const TriangleMesh input = shuffled(testing::generatedMesh(MeshKind::Scan, 40000), 7);
+  ASSERT_GT(scatteredFraction(input), 0.5);
+  CleanOptions options;
+  options.reorderMinFaces = 1000;
+  const CleanResult r = cleanMesh(input, options);
+  EXPECT_TRUE(r.report.reordered);
+  EXPECT_LT(scatteredFraction(r.mesh), 0.25);
+  options.reorderMinFaces = std::numeric_limits<std::uint32_t>::max();
+  const CleanResult kept = cleanMesh(input, options);
+  EXPECT_FALSE(kept.report.reordered);
+  ASSERT_EQ(r.mesh.numFaces(), kept.mesh.numFaces());
+  ASSERT_EQ(r.mesh.numVertices(), kept.mesh.numVertices());
+  // Every output vertex and face leads back to the input's, corners in the same order.
+  std::vector<std::uint8_t> faceSeen(input.numFaces(), 0);
+  for (VertexId v = 0; v < r.mesh.numVertices(); ++v) {
+    ASSERT_EQ(r.mesh.positions[v], input.positions[r.vertexOrigin[v]]);
+  }
+  for (FaceId f = 0; f < r.mesh.numFaces(); ++f) {
+    const Triangle& in = input.triangles[r.faceOrigin[f]];
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(r.vertexOrigin[r.mesh.triangles[f][k]], in[k]) << "face " << f;
+    faceSeen[r.faceOrigin[f]] = 1;
+  }
+  EXPECT_EQ(std::count(faceSeen.begin(), faceSeen.end(), std::uint8_t(1)), std::ptrdiff_t(r.mesh.numFaces()));
+  r.topology.validate();
+  // The same counts as cleaning in the input's order.
+  EXPECT_EQ(kept.report.duplicateFaces, r.report.duplicateFaces);
+  EXPECT_EQ(kept.report.nonManifoldEdges, r.report.nonManifoldEdges);
+  EXPECT_EQ(kept.report.spikeVertices, r.report.spikeVertices);
+  EXPECT_EQ(kept.report.zeroAreaFaces, r.report.zeroAreaFaces);
+}
+
+TEST(Clean, CoherentOrSmallMeshesKeepTheirOrder) {
+  // A grid in row order is coherent: nothing moves, whatever the size threshold.
+  const TriangleMesh ordered = gridMesh(100, 200);
+  CleanOptions options;
+  options.reorderMinFaces = 1000;
+  const CleanResult a = cleanMesh(ordered, options);
+  EXPECT_FALSE(a.report.reordered);
+  for (FaceId f = 0; f < a.mesh.numFaces(); ++f) ASSERT_EQ(a.faceOrigin[f], f);
+  // Below the default size a shuffled mesh keeps its order too.
+  const CleanResult b = cleanMesh(shuffled(ordered, 3));
+  EXPECT_FALSE(b.report.reordered);
+}
+
 }  // namespace
 }  // namespace seamvox

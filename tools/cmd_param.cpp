@@ -75,6 +75,9 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   std::printf("%s -> %s: %u faces, %zu cones, %u seams, h = %.6g (%.1f cells on the diagonal)\n",
               c.input.c_str(), c.output.c_str(), r.size.faces, r.cones.size(), r.seams,
               r.edgeLength, r.diagonal / r.edgeLength);
+  if (r.cleanReport.reordered) {
+    std::printf("the input's order was scattered: vertices and faces were put in spatial order (so are the output's)\n");
+  }
   std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
               st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
               meter.peakBytes() / 1048576.0);

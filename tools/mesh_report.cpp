@@ -136,10 +136,11 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
   out += format("cleaning        welded vertices %llu, degenerate faces %llu, duplicate faces %llu,\n"
                 "                zero-area faces %llu (kept), unreferenced vertices %llu,\n"
                 "                non-manifold edges %llu (split), non-manifold vertices %llu (split),\n"
-                "                flipped faces %llu, spike vertices %llu (kept)\n",
+                "                flipped faces %llu, spike vertices %llu (kept)%s\n",
                 ull(c.weldedVertices), ull(c.degenerateFaces), ull(c.duplicateFaces),
                 ull(c.zeroAreaFaces), ull(c.unreferencedVertices), ull(c.nonManifoldEdges),
-                ull(c.nonManifoldVertices), ull(c.flippedFaces), ull(c.spikeVertices));
+                ull(c.nonManifoldVertices), ull(c.flippedFaces), ull(c.spikeVertices),
+                c.reordered ? ";\n                vertices and faces put in spatial order (the input's was scattered)" : "");
   }
   if (!s.box.isEmpty()) {
     out += format("bounding box    (%g, %g, %g) - (%g, %g, %g), diagonal %g\n", s.box.min.x(),
@@ -206,6 +207,7 @@ std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
     j.key("nonManifoldVertices").value(c.nonManifoldVertices);
     j.key("flippedFaces").value(c.flippedFaces);
     j.key("spikeVertices").value(c.spikeVertices);
+    j.key("reorderedForLocality").value(c.reordered);
   }
   j.endObject();
   if (s.outOfCore) {

@@ -13,6 +13,7 @@
 
 #include "core/mesh/detail_corner_table.h"
 #include "core/mesh/detail_union_find.h"
+#include "core/mesh/morton.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 
@@ -349,6 +350,69 @@ void dropUnreferencedVertices(TriangleMesh& mesh, std::vector<VertexId>& vertexO
   });
 }
 
+/// True when the faces' vertex ids are scattered over the vertex array: more than a tenth of the
+/// faces span over 1% of it (a coherent scan: well under 1%; a shuffled or naively merged one: most).
+bool scatteredOrder(const TriangleMesh& mesh) {
+  const std::uint64_t nv = mesh.numVertices();
+  const std::uint64_t scattered = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), kGrain), std::uint64_t(0),
+      [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t n) {
+        for (std::size_t f = r.begin(); f != r.end(); ++f) {
+          const Triangle& t = mesh.triangles[f];
+          n += 100u * std::uint64_t(std::max({t[0], t[1], t[2]}) - std::min({t[0], t[1], t[2]})) > nv;
+        }
+        return n;
+      },
+      std::plus<>());
+  return 10u * scattered > mesh.triangles.size();
+}
+
+/// 1b. A large mesh whose order is scattered (scatteredOrder) is put in spatial order: vertices by
+///     the Morton code of their position, faces by their first vertex in that order. Every later
+///     stage walks neighbours through these arrays; a shuffled 5M-face scan ran 3.4 times slower
+///     than the same scan in order. A mesh with (u, v) keeps its order. vertexOrigin (empty: the
+///     identity) follows the vertices. Returns whether it moved.
+bool reorderForLocality(TriangleMesh& mesh, std::uint32_t minFaces, std::vector<VertexId>& vertexOrigin,
+                        std::vector<FaceId>& faceOrigin) {
+  if (mesh.numFaces() < minFaces || mesh.hasUV() || !scatteredOrder(mesh)) return false;
+  const std::uint32_t nv = mesh.numVertices(), nf = mesh.numFaces();
+  const BoundingBox box = computeBoundingBox(mesh.positions);
+  std::vector<std::pair<std::uint64_t, VertexId>> byCode(nv);
+  parallelForEach(nv, kGrain, [&](std::uint64_t v) { byCode[v] = {mortonCode(mesh.positions[v].cast<double>(), box), VertexId(v)}; });
+  tbb::parallel_sort(byCode.begin(), byCode.end());
+  std::vector<VertexId> newId(nv);
+  std::vector<Vec3f> positions(nv);
+  std::vector<VertexId> origin(nv);
+  parallelForEach(nv, kGrain, [&](std::uint64_t i) {
+    const VertexId v = byCode[i].second;
+    newId[v] = VertexId(i);
+    positions[i] = mesh.positions[v];
+    origin[i] = vertexOrigin.empty() ? v : vertexOrigin[v];
+  });
+  std::vector<std::pair<std::uint64_t, VertexId>>().swap(byCode);
+  mesh.positions = std::move(positions);
+  vertexOrigin = std::move(origin);
+  // Faces by their smallest new vertex id, ties in input order (a counting sort).
+  parallelForEach(nf, kGrain, [&](std::uint64_t f) {
+    for (VertexId& v : mesh.triangles[f]) v = newId[v];
+  });
+  std::vector<VertexId>().swap(newId);
+  std::vector<std::uint32_t> start(std::size_t(nv) + 1, 0);
+  for (const Triangle& t : mesh.triangles) ++start[std::min({t[0], t[1], t[2]}) + 1];
+  for (std::uint32_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<Triangle> triangles(nf);
+  std::vector<FaceId> faces(nf);
+  for (FaceId f = 0; f < nf; ++f) {
+    const Triangle& t = mesh.triangles[f];
+    const std::uint32_t i = start[std::min({t[0], t[1], t[2]})]++;
+    triangles[i] = t;
+    faces[i] = faceOrigin[f];
+  }
+  mesh.triangles = std::move(triangles);
+  faceOrigin = std::move(faces);
+  return true;
+}
+
 /// 4. Orientation and edge gluing: every edge shared by exactly two opposite faces is glued,
 ///    every other edge becomes boundary (this splits non-manifold edges). Returns opposite.
 std::vector<CornerId> orientAndGlueEdges(TriangleMesh& mesh, CleanReport& report) {
@@ -443,6 +507,9 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   weldAndDropDegenerateFaces(mesh, options, faceOrigin, report);
   reportProgress(options.progress, "cleaning", 0.15);
 
+  std::vector<VertexId> inputOrder;  // vertex origins through the reorder, if any
+  report.reordered = reorderForLocality(mesh, options.reorderMinFaces, inputOrder, faceOrigin);
+
   // 2. Duplicate faces.
   {
     const std::vector<std::uint8_t> keep = findUniqueFaces(mesh.triangles, mesh.numVertices(), report.duplicateFaces);
@@ -455,6 +522,10 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   reportProgress(options.progress, "cleaning", 0.3);
 
   dropUnreferencedVertices(mesh, result.vertexOrigin, report);
+  if (report.reordered) {
+    for (VertexId& v : result.vertexOrigin) v = inputOrder[v];
+    std::vector<VertexId>().swap(inputOrder);
+  }
   reportProgress(options.progress, "cleaning", 0.4);
   std::vector<CornerId> opposite = orientAndGlueEdges(mesh, report);
   reportProgress(options.progress, "cleaning", 0.75);

@@ -9,10 +9,17 @@
 
 namespace seamvox {
 
+/// Smallest mesh cleanMesh puts in spatial order by default: below it the arrays mostly stay in
+/// cache anyway.
+constexpr std::uint32_t kReorderMinFaces = 1u << 19;
+
 struct CleanOptions {
   /// Weld vertices whose positions coincide within this distance (0 = exactly equal positions).
   bool weldVertices = false;
   double weldTolerance = 0.0;
+  /// A mesh of at least this many faces whose order is scattered is put in spatial order
+  /// (CleanReport::reordered); UINT32_MAX keeps every input's order.
+  std::uint32_t reorderMinFaces = kReorderMinFaces;
   ProgressFn progress;
 };
 
@@ -33,7 +40,11 @@ struct CleanReport {
   /// Bounding-box diagonal of the output without its spike vertices (the mesh's own extent).
   double diagonalWithoutSpikes = 0.0;
   std::uint64_t outputVertices = 0, outputFaces = 0;
+  /// Vertices and faces were put in spatial order (the input's was scattered): the output's order
+  /// differs from the input's (vertexOrigin and faceOrigin map back).
+  bool reordered = false;
 };
+
 
 /// A vertex is a spike when its shortest edge is this many times the median, over its
 /// neighbours, of their median edge length.
