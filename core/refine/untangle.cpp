@@ -620,7 +620,7 @@ std::vector<VertexId> vertexRings(const TriangleMesh& mesh, const Topology& topo
 constexpr std::uint64_t kJointEvaluations = 100'000'000;
 
 // After the relocation: around each face still flipped, the vertices within k rings (k = 2, 3,
-// 4, 6 until it unfolds) move jointly, seam vertices with all their wedges through the seams'
+// 4, 6, 9, 12 until it unfolds) move jointly, seam vertices with all their wedges through the seams'
 // turns (seams and translations exact), cones and the patch's border fixed. A patch is kept
 // only when it has fewer flipped faces, no face that was fine flips and none collapses; else
 // its wedges are restored. Returns the vertices of kept patches.
@@ -635,7 +635,7 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
   };
   std::uint32_t movedVertices = 0;
   std::uint64_t work = 0;
-  for (const std::uint32_t rings : {2u, 3u, 4u, 6u}) {
+  for (const std::uint32_t rings : {2u, 3u, 4u, 6u, 9u, 12u}) {
     if (rings > maxRings) break;
     std::vector<FaceId> seeds;
     for (FaceId f = 0; f < state.size(); ++f) {
