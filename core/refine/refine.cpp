@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
@@ -19,6 +20,7 @@
 #include "core/basis/reduce.h"
 #include "core/solve/assemble.h"
 #include "core/solve/seamless_solve.h"
+#include "core/system/memory.h"
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"
 #include "core/mesh/detail_union_find.h"
@@ -141,12 +143,7 @@ struct FaceCounts {
   }
 };
 
-/// A whole-mesh corner solved by some refinement round; free: its vertex was free in a solve.
-struct SolvedCorner {
-  Vec2d uv;
-  CornerId corner;
-  bool free;  // 24 bytes with the value first
-};
+using SolvedCorner = RefinedCorner;  // a whole-mesh corner solved by some round
 
 /// The input of a region solve: the corners solved so far where there are any, else the map.
 WedgeMap regionInput(const RegionMesh& region, const WedgeMap& cornerUV,
@@ -164,40 +161,37 @@ WedgeMap regionInput(const RegionMesh& region, const WedgeMap& cornerUV,
   return WedgeMap::fromCorners(region.mesh.triangles, values);
 }
 
-/// A region's solved corners under whole-mesh ids, sorted by corner.
-std::vector<SolvedCorner> solvedCorners(const RegionMesh& region, const RegionSolution& solved) {
-  std::vector<SolvedCorner> fresh;
-  fresh.reserve(solved.cornerUV.size());
+/// A region's solved corners under whole-mesh ids, in increasing corner order (sub faces follow
+/// the whole mesh's order), written from `out` on.
+void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, SolvedCorner* out) {
   for (CornerId c = 0; c < solved.cornerUV.size(); ++c) {
-    fresh.push_back({solved.cornerUV[c], 3 * region.faceOrigin[c / 3] + c % 3,
-                     region.vertexFree[region.mesh.triangles[c / 3][c % 3]] != 0});
+    out[c] = {solved.cornerUV[c], 3 * region.faceOrigin[c / 3] + c % 3,
+              region.vertexFree[region.mesh.triangles[c / 3][c % 3]] != 0};
   }
-  std::sort(fresh.begin(), fresh.end(), [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; });
-  return fresh;
 }
 
 /// Records solved corners (sorted by corner) in `current` (sorted by corner; these values replace
-/// older ones, a corner stays free once freed).
+/// older ones, a corner stays free once freed). Corners seen before are updated in place and new
+/// ones merged in within the spare capacity where it suffices: no second copy of `current`,
+/// which holds every corner of a region of millions of faces.
 void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& current) {
   if (current.empty()) {
     current = std::move(fresh);
     return;
   }
-  std::vector<SolvedCorner> merged;
-  merged.reserve(current.size() + fresh.size());
-  auto i = current.begin();
-  auto j = fresh.begin();
-  while (i != current.end() || j != fresh.end()) {
-    if (j == fresh.end() || (i != current.end() && i->corner < j->corner)) {
-      merged.push_back(*i++);
-    } else if (i == current.end() || j->corner < i->corner) {
-      merged.push_back(*j++);
+  const auto byCorner = [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; };
+  std::vector<SolvedCorner> added;
+  for (const SolvedCorner& s : fresh) {
+    const auto it = std::lower_bound(current.begin(), current.end(), s, byCorner);
+    if (it != current.end() && it->corner == s.corner) {
+      *it = {s.uv, s.corner, s.free || it->free};
     } else {
-      merged.push_back({j->uv, j->corner, j->free || i->free});
-      ++i, ++j;
+      added.push_back(s);
     }
   }
-  current = std::move(merged);
+  const std::size_t old = current.size();
+  current.insert(current.end(), added.begin(), added.end());
+  std::inplace_merge(current.begin(), current.begin() + old, current.end(), byCorner);
 }
 
 /// growFaces, with the faces outside the region so far flagged kRing.
@@ -860,17 +854,17 @@ std::vector<FaceId> measureRefinedMap(const TriangleMesh& mesh, const WedgeMap& 
 
 /// The result: the corners of every vertex freed in some solve with their latest values, the
 /// seams whose translation changed, and the freed and locked vertex counts.
-void collectRefinement(const Topology& topology, std::uint32_t numVertices, const std::vector<SolvedCorner>& current,
+void collectRefinement(const Topology& topology, std::uint32_t numVertices, std::vector<SolvedCorner> current,
                        const std::vector<FaceId>& touched, const std::vector<Complex>& currentT,
                        const std::vector<Complex>& seamT, RefineResult& out) {
   RefineStats& stats = out.stats;
+  // The free corners, kept in place: the result takes the array itself.
+  current.erase(std::remove_if(current.begin(), current.end(), [](const SolvedCorner& s) { return !s.free; }),
+                current.end());
+  out.corners = std::move(current);
   std::vector<VertexId> freed;
-  for (const SolvedCorner& s : current) {
-    if (!s.free) continue;
-    out.corners.push_back(s.corner);
-    out.cornerUV.push_back(s.uv);
-    freed.push_back(topology.vertex(s.corner));
-  }
+  freed.reserve(out.corners.size());
+  for (const SolvedCorner& s : out.corners) freed.push_back(topology.vertex(s.corner));
   std::sort(freed.begin(), freed.end());
   freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
   stats.freeVertices = static_cast<std::uint32_t>(freed.size());
@@ -900,7 +894,6 @@ std::vector<FaceId> solveRound(const TriangleMesh& mesh, const Topology& topolog
                                std::vector<Complex>& currentT, RefineRound& figures, bool& collapsedAtBorder,
                                RefineStats& largest, RefineStats& stats) {
   struct GroupResult {
-    std::vector<SolvedCorner> fresh;
     std::vector<std::pair<std::uint32_t, Complex>> seams;
     std::vector<FaceId> border;
     RefineRound figures;
@@ -910,6 +903,14 @@ std::vector<FaceId> solveRound(const TriangleMesh& mesh, const Topology& topolog
   };
   const std::vector<std::vector<FaceId>> groups = splitRegion(topology, faces, std::max<std::size_t>(1, options.groupFaces));
   std::vector<GroupResult> results(groups.size());
+  // Every group's corners go straight into one array (group g from 3 x its first face's rank),
+  // with room for a quarter more: the later rounds' patches merge their new corners into that
+  // spare capacity, which is not resident until written.
+  std::vector<std::size_t> offset(groups.size() + 1, 0);
+  for (std::size_t g = 0; g < groups.size(); ++g) offset[g + 1] = offset[g] + 3 * groups[g].size();
+  std::vector<SolvedCorner> fresh;
+  fresh.reserve(offset.back() + offset.back() / 4);
+  fresh.resize(offset.back());
   const double h = options.edgeLength;
   parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
     GroupResult& r = results[g];
@@ -931,21 +932,14 @@ std::vector<FaceId> solveRound(const TriangleMesh& mesh, const Topology& topolog
       solved.seamT = std::move(regionT);
     }
     r.secondsSolve = secondsSince(lap);
-    r.fresh = solvedCorners(region, solved);
+    writeSolvedCorners(region, solved, fresh.data() + offset[g]);
     for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
     r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
   });
   // Groups are disjoint in faces, corners and (seams among free vertices) translations: merging
   // them in any order gives the same map.
-  std::vector<SolvedCorner> fresh;
   std::vector<FaceId> border;
   for (GroupResult& r : results) {
-    if (fresh.empty()) {
-      fresh = std::move(r.fresh);
-    } else {
-      fresh.insert(fresh.end(), r.fresh.begin(), r.fresh.end());
-    }
-    r.fresh = {};
     for (const auto& [seam, t] : r.seams) currentT[seam] = t;
     border.insert(border.end(), r.border.begin(), r.border.end());
     figures.freeVertices += r.figures.freeVertices;
@@ -959,7 +953,7 @@ std::vector<FaceId> solveRound(const TriangleMesh& mesh, const Topology& topolog
     if (r.system.unknowns > 0 && r.system.unknowns >= largest.unknowns) largest = r.system;
     stats.solves += r.system.unknowns > 0;
   }
-  std::sort(fresh.begin(), fresh.end(), [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; });
+  tbb::parallel_sort(fresh.begin(), fresh.end(), [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; });
   mergeSolved(std::move(fresh), current);
   std::sort(border.begin(), border.end());
   figures.borderFaces = border.size();
@@ -1027,11 +1021,12 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
     // patch is solved on its own, the rest of the map (refined or not) locked around it.
     faces = growPatch(topology, std::move(border), std::max(1u, options.rings) << std::min(round, 4u), flag);
   }
+  releaseFreedMemory();  // the groups' regions and factors, before the results are gathered
   if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
   if (largest.unknowns > 0) keepLargestSolve(largest, stats);
   const std::vector<FaceId> touched =
       measureRefinedMap(mesh, cornerUV, current, flag, isCone, options, stats);
-  collectRefinement(topology, mesh.numVertices(), current, touched, currentT, seamT, out);
+  collectRefinement(topology, mesh.numVertices(), std::move(current), touched, currentT, seamT, out);
   reportProgress(options.progress, "refine", 1.0);
   stats.secondsTotal = secondsSince(start);
   return out;
@@ -1048,8 +1043,25 @@ void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
       (*translations)[refinement.seams[k]] = refinement.seamT[k];
     }
   }
-  // The corners of each free vertex's wedge all change together: the wedges keep their ids.
-  cornerUV.assign(refinement.corners, refinement.cornerUV);
+  // Every corner of a free vertex is in the refinement (all its faces were solved), with one value
+  // per wedge (the region's cut keeps every seam around a free vertex): each wedge changes whole
+  // and keeps its id, so the values go in place, without WedgeMap::assign's pass over the whole
+  // map. Should two corners of a wedge disagree, assign splits it.
+  for (const RefinedCorner& r : refinement.corners) {
+    if (r.corner >= cornerUV.size()) {
+      throw InputError("refine: corner " + std::to_string(r.corner) + " out of range (" +
+                       std::to_string(cornerUV.size()) + " corners)");
+    }
+    cornerUV.setWedgeValue(cornerUV.wedge(r.corner), r.uv);
+  }
+  for (const RefinedCorner& r : refinement.corners) {
+    if (cornerUV[r.corner] == r.uv) continue;
+    std::vector<CornerId> corners;
+    std::vector<Vec2d> values;
+    for (const RefinedCorner& x : refinement.corners) corners.push_back(x.corner), values.push_back(x.uv);
+    cornerUV.assign(corners, values);
+    return;
+  }
 }
 
 }  // namespace seamvox

@@ -50,8 +50,8 @@ struct RefineOptions {
   std::uint32_t maxRounds = 6;
   double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
   /// A round's region is solved in groups of whole components of at least this many faces
-  /// (splitRegion), in parallel: a group's factor stays near 60 MB at the default.
-  std::size_t groupFaces = std::size_t(1) << 16;
+  /// (splitRegion), in parallel: a group's factor stays near 40 MB at the default.
+  std::size_t groupFaces = std::size_t(1) << 15;
   ProgressFn progress;
 };
 
@@ -98,12 +98,19 @@ struct RefineStats {
   std::uint64_t unresolvedFaces = 0;
 };
 
-/// New (u, v) of the corners of the free vertices: cornerUV[k] belongs to corner corners[k].
-/// Every other corner keeps the input value exactly. Seams whose translation was re-solved
-/// (all their edges among free vertices) get seamT[k] for seam seams[k].
+/// A corner a refinement solved: its whole-mesh id and value; free when its vertex was free in
+/// some solve (a RefineResult holds only those).
+struct RefinedCorner {
+  Vec2d uv = Vec2d::Zero();
+  CornerId corner = 0;
+  bool free = false;  // 24 bytes with the value first
+};
+
+/// New (u, v) of the corners of the free vertices, sorted by corner. Every other corner keeps the
+/// input value exactly. Seams whose translation was re-solved (all their edges among free
+/// vertices) get seamT[k] for seam seams[k].
 struct RefineResult {
-  std::vector<CornerId> corners;
-  std::vector<Vec2d> cornerUV;
+  std::vector<RefinedCorner> corners;
   std::vector<std::uint32_t> seams;
   std::vector<std::complex<double>> seamT;
   RefineStats stats;
@@ -178,8 +185,8 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const RefineOptions& options = {});
 
 /// Writes a refinement's corner values into a whole-mesh map (3 #F; a free vertex's wedges
-/// change whole, in place: WedgeMap::assign) and, when given, its re-solved translations into
-/// the per-seam translations.
+/// change whole and keep their ids) and, when given, its re-solved translations into the per-seam
+/// translations.
 void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
                      std::vector<std::complex<double>>* translations = nullptr);
 

@@ -1,5 +1,9 @@
 #include "core/system/memory.h"
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <cstdio>
 #include <cstring>
 
@@ -43,7 +47,14 @@ StageMeter::StageMeter() : start_(Clock::now()), mark_(start_) {
   perStage_ = resetPeakResidentBytes();
 }
 
+void releaseFreedMemory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
+
 const StageFigures& StageMeter::finish(const std::string& name) {
+  releaseFreedMemory();
   const Clock::time_point now = Clock::now();
   StageFigures figures;
   figures.name = name;

@@ -15,6 +15,10 @@ std::uint64_t currentResidentBytes();
 /// Memory the system can give without swapping (MemAvailable of /proc/meminfo), in bytes; 0 when
 /// unknown.
 std::uint64_t availableMemoryBytes();
+/// Hands memory the allocator keeps after frees back to the system (glibc's malloc_trim; nothing
+/// elsewhere). Many mid-sized blocks freed at once (a stage's per-group vectors) otherwise stay
+/// resident and add to the next stage's peak.
+void releaseFreedMemory();
 /// Resets the kernel's peak (VmHWM) to the current resident size, so the next peakResidentBytes
 /// is the peak since now. Returns false where unsupported (the peak then keeps growing).
 bool resetPeakResidentBytes();
@@ -28,7 +32,7 @@ struct StageFigures {
 };
 
 /// Measures consecutive stages: finish(name) closes the stage that began at the previous finish
-/// (or at construction). Resets the kernel's peak at every stage boundary, so whole-process
+/// (or at construction), after releasing freed memory (releaseFreedMemory). Resets the kernel's peak at every stage boundary, so whole-process
 /// peaks must be read from peakBytes(), not peakResidentBytes().
 class StageMeter {
  public:
