@@ -1,6 +1,7 @@
 // seamvox param: seamless parameterization of a mesh (hat, vox or vox + local hat refinement).
 // Parses the options, reads, calls the library pipeline (core/pipeline), prints, writes.
 #include <cstdio>
+#include <limits>
 
 #include "core/pipeline/parameterize.h"
 #include "core/synth/render.h"
@@ -50,6 +51,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.features.alignBoundary = args.flag("align-boundary");
   o.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
   o.clean.weldVertices = args.flag("weld");
+  if (args.flag("keep-order")) o.clean.reorderMinFaces = std::numeric_limits<std::uint32_t>::max();
   o.listComponents = static_cast<std::uint32_t>(args.integer("report-components", o.listComponents, 0, 100000000));
   o.dropUnsolved = args.flag("drop-unsolved");
   c.reportPath = args.value("report");
@@ -207,7 +209,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
-                 "                     [--greedy] [--no-untangle] [--weld] [--report R.json]\n"
+                 "                     [--greedy] [--no-untangle] [--weld] [--keep-order] [--report R.json]\n"
                  "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
                  "                     [--quads Q.obj|.ply] [--align-boundary] [--feature-angle DEG]\n"
                  "\n"
@@ -244,6 +246,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      degrees (creases), for CAD-like meshes; off by default: on a\n"
                  "                      scan every noisy fold would become a crease\n"
                  "  --weld              weld coincident vertices before cleaning\n"
+                 "  --keep-order        keep the input's vertex and face order in the output even when\n"
+                 "                      it is scattered (by default an input of 512K+ faces in a\n"
+                 "                      scattered order is put in spatial order: several times faster)\n"
                  "  --report FILE       JSON report: quality, counts, system sizes, factor memory,\n"
                  "                      stage timings, peak memory, components\n"
                  "  --report-components N  components listed one by one in the report, the largest\n"
@@ -256,7 +261,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      validation\n"
                  "  --quiet             no progress on stderr\n"
                  SEAMVOX_MEMORY_HELP,
-                 {"greedy", "no-untangle", "weld", "drop-unsolved", "align-boundary"},
+                 {"greedy", "no-untangle", "weld", "keep-order", "drop-unsolved", "align-boundary"},
                  &runParam});
 
 }  // namespace seamvox::cli
