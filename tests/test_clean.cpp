@@ -304,25 +304,6 @@ TEST(Clean, CountsZeroAreaFacesAndKeepsThem) {
   EXPECT_EQ(r.mesh.numFaces(), 5u);
 }
 
-/// The mesh with its vertices and faces in a random order (the same surface).
-TriangleMesh shuffled(const TriangleMesh& mesh, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::vector<VertexId> vertexPerm(mesh.numVertices());
-  std::iota(vertexPerm.begin(), vertexPerm.end(), 0u);
-  std::shuffle(vertexPerm.begin(), vertexPerm.end(), rng);
-  std::vector<FaceId> facePerm(mesh.numFaces());
-  std::iota(facePerm.begin(), facePerm.end(), 0u);
-  std::shuffle(facePerm.begin(), facePerm.end(), rng);
-  TriangleMesh out;
-  out.positions.resize(mesh.numVertices());
-  for (VertexId v = 0; v < mesh.numVertices(); ++v) out.positions[vertexPerm[v]] = mesh.positions[v];
-  for (FaceId f : facePerm) {
-    const Triangle& t = mesh.triangles[f];
-    out.triangles.push_back({vertexPerm[t[0]], vertexPerm[t[1]], vertexPerm[t[2]]});
-  }
-  return out;
-}
-
 /// Faces whose vertex ids span more than 1% of the vertices.
 double scatteredFraction(const TriangleMesh& mesh) {
   std::uint64_t scattered = 0;
@@ -334,7 +315,7 @@ double scatteredFraction(const TriangleMesh& mesh) {
 }
 
 TEST(Clean, ScatteredMeshIsPutInSpatialOrderWithItsOriginsKept) {
-  const TriangleMesh input = shuffled(testing::generatedMesh(MeshKind::Scan, 40000), 7);
+  const TriangleMesh input = testing::shuffledMesh(testing::generatedMesh(MeshKind::Scan, 40000), 7);
   ASSERT_GT(scatteredFraction(input), 0.5);
   CleanOptions options;
   options.reorderMinFaces = 1000;
@@ -374,7 +355,7 @@ TEST(Clean, CoherentOrSmallMeshesKeepTheirOrder) {
   EXPECT_FALSE(a.report.reordered);
   for (FaceId f = 0; f < a.mesh.numFaces(); ++f) ASSERT_EQ(a.faceOrigin[f], f);
   // Below the default size a shuffled mesh keeps its order too.
-  const CleanResult b = cleanMesh(shuffled(ordered, 3));
+  const CleanResult b = cleanMesh(testing::shuffledMesh(ordered, 3));
   EXPECT_FALSE(b.report.reordered);
 }
 

@@ -1,7 +1,10 @@
 #include "test_meshes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
+#include <random>
 #include <utility>
 
 #include "core/mesh/clean.h"
@@ -152,6 +155,24 @@ CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed) {
     }
   }
   return projectToTangent(mesh, std::move(v));
+}
+
+TriangleMesh shuffledMesh(const TriangleMesh& mesh, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<VertexId> vertexPerm(mesh.numVertices());
+  std::iota(vertexPerm.begin(), vertexPerm.end(), 0u);
+  std::shuffle(vertexPerm.begin(), vertexPerm.end(), rng);
+  std::vector<FaceId> facePerm(mesh.numFaces());
+  std::iota(facePerm.begin(), facePerm.end(), 0u);
+  std::shuffle(facePerm.begin(), facePerm.end(), rng);
+  TriangleMesh out;
+  out.positions.resize(mesh.numVertices());
+  for (VertexId v = 0; v < mesh.numVertices(); ++v) out.positions[vertexPerm[v]] = mesh.positions[v];
+  for (FaceId f : facePerm) {
+    const Triangle& t = mesh.triangles[f];
+    out.triangles.push_back({vertexPerm[t[0]], vertexPerm[t[1]], vertexPerm[t[2]]});
+  }
+  return out;
 }
 
 }  // namespace seamvox::testing

@@ -22,6 +22,8 @@ TriangleMesh cylinderMesh(int n, int m, double radius = 1.0, double height = 2.0
 TriangleMesh generatedMesh(MeshKind kind, std::uint64_t faces);
 /// Concatenates meshes into one with several components.
 TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts);
+/// The same surface with its vertices and faces in a random order (seeded).
+TriangleMesh shuffledMesh(const TriangleMesh& mesh, std::uint32_t seed);
 
 /// A mesh with its corner table (the table views mesh.triangles, whose buffer moves with it).
 struct Surface {

@@ -115,6 +115,38 @@ TEST(Pipeline, ImportedFieldFollowsCleanedFaces) {
   EXPECT_TRUE(r.isSeamless());
 }
 
+TEST(Pipeline, ScatteredInputIsSolvedInSpatialOrderWithTheFieldFollowingItsFaces) {
+  // A shuffled sphere put in spatial order by cleaning: an imported per-input-face field (a
+  // function of each face's centroid) must follow the faces, so the cones are those of the same
+  // field on the mesh in its own order.
+  const auto fieldOf = [](const TriangleMesh& mesh) {
+    std::vector<Vec3d> v(mesh.numFaces());
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
+      v[f] = Vec3d(std::cos(7.0 * c.x()), std::sin(5.0 * c.y()), 0.3 + c.z());
+    }
+    return v;
+  };
+  const TriangleMesh ordered = sphere(12000);
+  const TriangleMesh scattered = testing::shuffledMesh(ordered, 11);
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::Hat;
+  options.clean.reorderMinFaces = 1000;
+  options.field.importedPerInputFace = fieldOf(ordered);
+  const PipelineResult a = parameterize(ordered, options);
+  options.field.importedPerInputFace = fieldOf(scattered);
+  const PipelineResult b = parameterize(scattered, options);
+  EXPECT_FALSE(a.cleanReport.reordered);
+  EXPECT_TRUE(b.cleanReport.reordered);
+  EXPECT_TRUE(a.isSeamless());
+  EXPECT_TRUE(b.isSeamless());
+  EXPECT_GT(a.conesBeforeMerge, 8u) << "a field with cones of its own";
+  EXPECT_EQ(a.conesBeforeMerge, b.conesBeforeMerge);
+  EXPECT_NEAR(a.mapQuality.relativeGradientError, b.mapQuality.relativeGradientError,
+              0.05 * a.mapQuality.relativeGradientError);
+}
+
 // The real 2n x 2n form [Re -Im; Im Re] solves the same Hermitian systems: with every
 // factorization forced into it (field, seamless solves, refinement) the pipeline reports the
 // fallback and gives the same cones and, up to rounding, the same map.
