@@ -23,6 +23,8 @@
 #include <vector>
 
 #include "io/json_reader.h"
+#include "test_meshes.h"
+#include "io/mesh_io.h"
 #include "testing.h"
 
 extern char** environ;
@@ -95,6 +97,27 @@ TEST(Cli, InfoOnAScanShowsWhatCleaningFixed) {
   const Json welded = parseJson(testing::readFile(report));
   EXPECT_GT(welded["clean"]["weldedVertices"].number, 0);
   EXPECT_EQ(welded["boundaryLoops"].number, raw["boundaryLoops"].number - 1);
+}
+
+TEST(Cli, ParamPutsAScatteredInputInSpatialOrderUnlessToldToKeepIt) {
+  // 600K faces (above the reorder threshold) in a shuffled order.
+  TempDir dir;
+  const std::string input = dir.path("shuffled.ply");
+  writeMesh(input, testing::shuffledMesh(testing::generatedMesh(MeshKind::Sphere, 600000), 5));
+  std::string out;
+  for (const bool keep : {false, true}) {
+    SCOPED_TRACE(keep ? "--keep-order" : "default");
+    const std::string report = dir.path(keep ? "keep.json" : "spatial.json");
+    ASSERT_EQ(runSeamvox("param " + input + " -o " + dir.path(keep ? "keep.ply" : "spatial.ply") + " --cells 10 --field proxy --solver vox --grid 32 --no-untangle --quiet" +
+                             (keep ? " --keep-order" : "") + " --report " + report,
+                         &out),
+              0)
+        << out;
+    EXPECT_EQ(out.find("put in spatial order") != std::string::npos, !keep) << out;
+    const Json r = parseJson(testing::readFile(report));
+    EXPECT_EQ(r.numberAt("reorderedForLocality"), keep ? 0.0 : 1.0);
+    EXPECT_NE(out.find(": seamless"), std::string::npos) << out;
+  }
 }
 
 TEST(Cli, GenIsByteIdenticalForTheSameSeed) {
