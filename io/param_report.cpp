@@ -105,7 +105,7 @@ void writeUntangle(JsonWriter& j, const UntangleStats& u) {
   j.endObject();
 }
 
-void writeFeatures(JsonWriter& j, const PipelineResult& r, double featureAngle) {
+void writeFeatures(JsonWriter& j, const PipelineResult& r) {
   j.key("featureCurves").beginObject();
   j.key("total").value(U64{r.featureCurves.total});
   j.key("aligned").value(U64{r.featureCurves.aligned});
@@ -113,7 +113,8 @@ void writeFeatures(JsonWriter& j, const PipelineResult& r, double featureAngle) 
   j.key("released").value(U64{r.featureCurvesReleased});
   j.key("boundaryEdges").value(U64{r.features.boundaryEdges});
   j.key("creaseEdges").value(U64{r.features.creaseEdges});
-  j.key("featureAngle").value(featureAngle);
+  j.key("featureAngle").value(r.featureAngle);
+  j.key("featureAngleAuto").value(r.featureAngleAuto);
   j.key("fieldAligned").value(r.featureFieldAligned);
   j.key("constraints").value(U64{r.featureLines.constraints});
   j.key("constraintsApplied").value(U64{r.featureLines.applied});
@@ -252,7 +253,6 @@ ParamReportContext paramReportContext(const PipelineOptions& options, const Stag
   c.solverAsked = std::move(solverAsked);
   c.fieldSource = std::move(fieldSource);
   c.gridResolution = options.solver.gridResolution;
-  c.featureAngle = options.features.featureAngle;
   c.rings = options.solver.refine.rings;
   c.maxRounds = options.solver.refine.maxRounds;
   c.stages = meter.stages();
@@ -270,7 +270,7 @@ std::string paramReportJson(const PipelineResult& r, const ParamReportContext& c
   if (r.solved.solver != ParamSolver::Hat) writeVoxel(j, r.solved, c.gridResolution);
   if (r.solved.refined) writeRefine(j, r.solved.refine, c);
   if (r.untangled) writeUntangle(j, r.untangle);
-  writeFeatures(j, r, c.featureAngle);
+  writeFeatures(j, r);
   writeQuality(j, r);
   writeComponents(j, r.components);
   writeSeconds(j, r, c);

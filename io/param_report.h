@@ -22,7 +22,6 @@ struct ParamReportContext {
   std::string fieldSource;  ///< "auto", "smooth", "proxy" or the field file
   std::int32_t gridResolution = 0;
   std::uint32_t rings = 0, maxRounds = 0;
-  double featureAngle = 0.0;  ///< degrees; 0: creases not aligned
   std::vector<StageFigures> stages;
   double totalSeconds = 0.0;
   std::uint64_t peakBytes = 0;

@@ -302,6 +302,39 @@ TEST(Features, CreasesCloserThanACellAreReleasedInsteadOfCollapsingTheFacesBetwe
   EXPECT_GT(held.mapQuality.collapsed, 0u);
 }
 
+TEST(Features, AutoFeatureAngleTurnsCreasesOnForACadModelOnly) {
+  // A box: creases in long straight curves, so the automatic choice aligns them; a scan's folds
+  // and a smooth sphere give no such curves and nothing is chosen.
+  PipelineOptions options = featureOptions(std::sqrt(3.0) * 4.0, 0.0);
+  options.features.alignBoundary = false;
+  options.features.autoFeatureAngle = true;
+  const PipelineResult box = parameterize(boxMesh(8, 1.0), options);
+  EXPECT_TRUE(box.featureAngleAuto);
+  EXPECT_EQ(box.featureAngle, kAutoFeatureAngle);
+  EXPECT_EQ(box.featureCurves.total, 12u);
+  EXPECT_GT(box.featureCurves.aligned, 0u);
+  EXPECT_TRUE(box.isSeamless());
+  for (const MeshKind kind : {MeshKind::Scan, MeshKind::Sphere}) {
+    const PipelineResult r = parameterize(testing::generatedMesh(kind, 20000), options);
+    EXPECT_FALSE(r.featureAngleAuto);
+    EXPECT_EQ(r.featureAngle, 0.0);
+    EXPECT_EQ(r.features.creaseEdges, 0u);
+  }
+  // Given explicitly (even 0), the angle is used as it is.
+  options.features.autoFeatureAngle = false;
+  const PipelineResult off = parameterize(boxMesh(8, 1.0), options);
+  EXPECT_FALSE(off.featureAngleAuto);
+  EXPECT_EQ(off.features.creaseEdges, 0u);
+  // The rule itself: long curves are CAD, curves of one or two edges are a scan's folds.
+  FeatureSet creases;
+  creases.creaseEdges = 96;
+  creases.curveStart = {0, 48, 96};
+  EXPECT_TRUE(looksLikeCad(creases));
+  creases.curveStart.assign(49, 0);
+  for (std::uint32_t k = 0; k < 49; ++k) creases.curveStart[k] = 2 * k;
+  EXPECT_FALSE(looksLikeCad(creases));
+}
+
 TEST(Features, ParamPrintsAndReportsTheCurves) {
   testing::TempDir dir;
   writeMesh(dir.path("plate.obj"), testing::gridMesh(10, 7));
@@ -331,6 +364,19 @@ TEST(Features, ParamPrintsAndReportsTheCurves) {
                                 &out),
             2)
       << out;
+  // Without --feature-angle a box's creases are chosen (and said so); --feature-angle 0 keeps none.
+  writeMesh(dir.path("box.obj"), boxMesh(8, 1.0));
+  for (const bool given : {false, true}) {
+    ASSERT_EQ(testing::runSeamvox("param " + dir.path("box.obj") + " -o " + dir.path("box_uv.obj") + " --cells 7 --quiet" +
+                                      (given ? " --feature-angle 0" : "") + " --report " + dir.path("b.json"),
+                                  &out),
+              0)
+        << out;
+    const JsonValue box = parseJson(testing::readFile(dir.path("b.json")));
+    EXPECT_EQ(box.numberAt("featureCurves.featureAngleAuto"), given ? 0.0 : 1.0);
+    EXPECT_EQ(box.numberAt("featureCurves.featureAngle"), given ? 0.0 : kAutoFeatureAngle);
+    EXPECT_EQ(out.find("look like a CAD model") != std::string::npos, !given) << out;
+  }
 }
 
 }  // namespace

@@ -50,6 +50,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.untangle = !args.flag("no-untangle");
   o.features.alignBoundary = args.flag("align-boundary");
   o.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
+  o.features.autoFeatureAngle = !args.value("feature-angle");  // given, even as 0: exactly that
   o.clean.weldVertices = args.flag("weld");
   if (args.flag("keep-order")) o.clean.reorderMinFaces = std::numeric_limits<std::uint32_t>::max();
   o.listComponents = static_cast<std::uint32_t>(args.integer("report-components", o.listComponents, 0, 100000000));
@@ -113,9 +114,10 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 r.untangle.relocatedVertices, r.untangle.jointVertices, r.untangle.seconds);
   }
   if (r.featureCurves.total > 0) {
-    std::printf("feature curves: %u (%u boundary, %u crease edges; feature angle %g): %u aligned on integer "
+    std::printf("feature curves: %u (%u boundary, %u crease edges; feature angle %g%s): %u aligned on integer "
                 "iso-lines, %u not aligned (%u released: the map collapsed faces next to them)%s\n",
-                r.featureCurves.total, r.features.boundaryEdges, r.features.creaseEdges, c.options.features.featureAngle,
+                r.featureCurves.total, r.features.boundaryEdges, r.features.creaseEdges, r.featureAngle,
+                r.featureAngleAuto ? ", chosen: the creases look like a CAD model's" : "",
                 r.featureCurves.aligned, r.featureCurves.notAligned, r.featureCurvesReleased,
                 !r.featureFieldAligned ? " (the proxy or an imported field does not follow them)"
                 : r.solved.solver != ParamSolver::Hat ? " (only the hat solver holds them)" : "");
@@ -243,8 +245,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      and hat solver only; the report counts curves aligned and\n"
                  "                      not); off by default: it costs gradient error on smooth outlines\n"
                  "  --feature-angle DEG also align interior edges whose faces turn by more than DEG\n"
-                 "                      degrees (creases), for CAD-like meshes; off by default: on a\n"
-                 "                      scan every noisy fold would become a crease\n"
+                 "                      degrees (creases); 0: none. Default: 30 on a CAD-like mesh\n"
+                 "                      (its creases at 30 degrees form curves of 6+ edges on\n"
+                 "                      average), none on a scan, whose noisy folds would all be creases\n"
                  "  --weld              weld coincident vertices before cleaning\n"
                  "  --keep-order        keep the input's vertex and face order in the output even when\n"
                  "                      it is scattered (by default an input of 512K+ faces in a\n"

@@ -149,4 +149,20 @@ FeatureAlignment measureFeatureAlignment(const Topology& topology, const Feature
   return out;
 }
 
+bool looksLikeCad(const FeatureSet& creases) {
+  return creases.creaseEdges >= 24 && creases.numCurves() > 0 && creases.creaseEdges >= 6u * creases.numCurves();
+}
+
+FeatureOptions resolveFeatureAngle(const TriangleMesh& mesh, const Topology& topology, FeatureOptions options,
+                                   bool& chosen) {
+  chosen = false;
+  if (!options.autoFeatureAngle || options.featureAngle > 0.0) return options;
+  FeatureOptions probe;
+  probe.featureAngle = kAutoFeatureAngle;
+  probe.cornerAngle = options.cornerAngle;
+  chosen = looksLikeCad(findFeatures(mesh, topology, probe));
+  if (chosen) options.featureAngle = kAutoFeatureAngle;
+  return options;
+}
+
 }  // namespace seamvox

@@ -271,7 +271,9 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   r.cleanReport = clean.report;
   meter.finish("clean");
 
-  r.features = findFeatures(r.mesh, r.topology, options.features);
+  const FeatureOptions featureOptions = resolveFeatureAngle(r.mesh, r.topology, options.features, r.featureAngleAuto);
+  r.featureAngle = featureOptions.featureAngle;
+  r.features = findFeatures(r.mesh, r.topology, featureOptions);
   std::optional<FieldSource> aligned = alignedFieldSource(r.topology, r.features, options.field, r.mesh.numFaces());
   r.featureFieldAligned = aligned.has_value();
   CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces,

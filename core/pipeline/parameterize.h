@@ -135,6 +135,8 @@ struct PipelineResult {
   bool untangled = false;        ///< the foldover repair ran
   UntangleStats untangle;
   FeatureSet features;              ///< of the cleaned mesh (before any drop)
+  double featureAngle = 0.0;         ///< the crease angle used (0: none)
+  bool featureAngleAuto = false;     ///< chosen by FeatureOptions::autoFeatureAngle (a CAD-like mesh)
   bool featureFieldAligned = false;  ///< the field was held along them (direct field)
   LineConstraintStats featureLines;  ///< the map's constraints (last hat solve; zero otherwise)
   FeatureAlignment featureCurves;    ///< curves the final map keeps on integer iso-lines
