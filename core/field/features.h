@@ -24,7 +24,8 @@ struct FeatureOptions {
   /// For CAD-like meshes: on a scan every noisy fold would become a crease.
   double featureAngle = 0.0;
   /// With featureAngle 0: creases at kAutoFeatureAngle when the mesh looks like a CAD model's
-  /// (looksLikeCad), none on a scan. param's default; the library's is off.
+  /// (looksLikeCad), none on a scan. param's default; the library's is off. The pipeline decides
+  /// only where the direct field follows creases (up to kDirectFieldMaxFaces, no imported field).
   bool autoFeatureAngle = false;
   double cornerAngle = kFeatureCornerDegrees;  ///< turn (degrees) that splits a curve
   bool any() const { return alignBoundary || featureAngle > 0.0; }

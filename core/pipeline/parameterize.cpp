@@ -271,7 +271,12 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   r.cleanReport = clean.report;
   meter.finish("clean");
 
-  const FeatureOptions featureOptions = resolveFeatureAngle(r.mesh, r.topology, options.features, r.featureAngleAuto);
+  // Only the direct field follows creases: above its size (or with an imported field) the
+  // automatic choice would cost a pass over every edge for curves nothing aligns.
+  FeatureOptions asked = options.features;
+  asked.autoFeatureAngle = asked.autoFeatureAngle && options.field.importedPerInputFace.empty() &&
+                           resolveFieldMethod(options.field.method, r.mesh.numFaces()) == FieldMethod::Direct;
+  const FeatureOptions featureOptions = resolveFeatureAngle(r.mesh, r.topology, asked, r.featureAngleAuto);
   r.featureAngle = featureOptions.featureAngle;
   r.features = findFeatures(r.mesh, r.topology, featureOptions);
   std::optional<FieldSource> aligned = alignedFieldSource(r.topology, r.features, options.field, r.mesh.numFaces());
