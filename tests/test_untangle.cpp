@@ -295,17 +295,33 @@ TEST(Untangle, RelocationLeavesFansWithFacesFoldedIn3DAndNeverAddsFlips) {
   EXPECT_FALSE(std::binary_search(moved.begin(), moved.end(), v)) << "a vertex next to a face folded in 3D moved";
 }
 
+/// Grid spacing of flipFreeSphereMap.
+constexpr double kSphereMapH = 0.15;
+
+/// A 6000-face sphere with its hat map at h = kSphereMapH (no flips: the tests fold it themselves).
+struct SphereMap {
+  testing::CutSurface cs;
+  ParamResult map;
+};
+SphereMap flipFreeSphereMap() {
+  SphereMap out;
+  out.cs = testing::makeCutSurface(sphere(6000));
+  ParamOptions param;
+  param.edgeLength = kSphereMapH;
+  out.map = parameterizeMesh(out.cs.s.mesh, out.cs.s.topology, out.cs.field, out.cs.cut, param);
+  return out;
+}
+
 TEST(Untangle, SeamVerticesMoveThroughTheTransitions) {
   // Vertices inside seam curves, moved by one displacement turned into each of their wedges'
   // charts (the map stays seamless), fold their fans; relocation alone moves them back into
   // their kernels, all wedges together: no flip left, seams exact, translations as they were.
-  testing::CutSurface cs = testing::makeCutSurface(sphere(6000));
-  ParamOptions param;
-  param.edgeLength = 0.15;
-  ParamResult map = parameterizeMesh(cs.s.mesh, cs.s.topology, cs.field, cs.cut, param);
+  SphereMap sphereMap = flipFreeSphereMap();
+  testing::CutSurface& cs = sphereMap.cs;
+  ParamResult& map = sphereMap.map;
   const TriangleMesh& mesh = cs.s.mesh;
   const Topology& topology = cs.s.topology;
-  const double h = 0.15;
+  const double h = kSphereMapH;
   ASSERT_EQ(measureMap(mesh, map.cornerUV, &cs.field, h).flipped, 0u);
   std::vector<std::uint8_t> cone(mesh.numVertices(), 0);
   for (VertexId c : cs.cut.cones) cone[c] = 1;
@@ -382,13 +398,12 @@ TEST(Untangle, JointPatchesUnfoldAMirroredDiskThatRelocationCannot) {
   // A disk of two rings mirrored in (u, v): its inner fans are reversed, so no vertex alone has a
   // kernel to move into. Relocation alone leaves flips; the joint patches move the disk's
   // vertices together and unfold it, seams and translations exact, cones and the rest unmoved.
-  testing::CutSurface cs = testing::makeCutSurface(sphere(6000));
-  ParamOptions param;
-  param.edgeLength = 0.15;
-  const ParamResult clean = parameterizeMesh(cs.s.mesh, cs.s.topology, cs.field, cs.cut, param);
+  SphereMap sphereMap = flipFreeSphereMap();
+  testing::CutSurface& cs = sphereMap.cs;
+  const ParamResult& clean = sphereMap.map;
   const TriangleMesh& mesh = cs.s.mesh;
   const Topology& topology = cs.s.topology;
-  const double h = 0.15;
+  const double h = kSphereMapH;
   ASSERT_EQ(measureMap(mesh, clean.cornerUV, &cs.field, h).flipped, 0u);
   std::vector<std::uint8_t> onCut(mesh.numVertices(), 0);
   for (VertexId c : cs.cut.cones) onCut[c] = 1;

@@ -374,10 +374,11 @@ bool scatteredOrder(const TriangleMesh& mesh) {
 /// 1b. A large mesh whose order is scattered (scatteredOrder) is put in spatial order: vertices by
 ///     the Morton code of their position, faces by their first vertex in that order. Every later
 ///     stage walks neighbours through these arrays; a shuffled 5M-face scan ran 3.4 times slower
-///     than the same scan in order. (Only a scattered face order: on a subdivided scan, whose
-///     vertex ids are scattered but faces are not, spatial order gained 5% and the map's flips
-///     depended on the order by several times, so such meshes keep theirs.) A mesh with (u, v) keeps its order. vertexOrigin (empty: the
-///     identity) follows the vertices. Returns whether it moved.
+///     than the same scan in order. Only a scattered face order counts: on a subdivided scan,
+///     whose vertex ids are scattered but faces are not, spatial order gained 5% and the map's
+///     flips changed several times over with it, so such meshes keep their order. A mesh with
+///     (u, v) keeps its order too. vertexOrigin (empty: the identity) follows the vertices.
+///     Returns whether it moved.
 bool reorderForLocality(TriangleMesh& mesh, std::uint32_t minFaces, std::vector<VertexId>& vertexOrigin,
                         std::vector<FaceId>& faceOrigin) {
   if (mesh.numFaces() < minFaces || mesh.hasUV() || !scatteredOrder(mesh)) return false;

@@ -7,7 +7,6 @@
 #include <string>
 #include <unordered_map>
 
-#include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
 
 namespace seamvox {
@@ -93,26 +92,28 @@ FeatureSet releaseCollapsingCurves(const TriangleMesh& mesh, const Topology& top
                                    const std::vector<VertexId>& cones, bool all, std::uint32_t& released) {
   std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
   for (VertexId v : cones) isCone[v] = 1;
-  // Collapsed faces' vertices with their cluster (union-find over faces sharing a vertex).
-  std::vector<std::pair<VertexId, std::uint32_t>> squeezed;
-  std::uint32_t collapsed = 0;
+  std::vector<FaceId> squeezedFaces;
   for (FaceId f = 0; f < mesh.numFaces(); ++f) {
     const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
-    if (!(std::abs(ratio) < kCollapsedAreaFraction) || collapsesBetweenCones(mesh, cornerUV, f, isCone)) continue;
-    for (VertexId v : mesh.triangles[f]) squeezed.push_back({v, collapsed});
-    ++collapsed;
+    if (std::abs(ratio) < kCollapsedAreaFraction && !collapsesBetweenCones(mesh, cornerUV, f, isCone)) {
+      squeezedFaces.push_back(f);
+    }
+  }
+  // Clusters: components of the collapsed faces (groups of one component each), per vertex.
+  const std::vector<std::vector<FaceId>> clusters = splitRegion(topology, squeezedFaces, 1);
+  std::vector<std::pair<VertexId, std::uint32_t>> squeezed;
+  for (std::uint32_t k = 0; k < clusters.size(); ++k) {
+    for (FaceId f : clusters[k]) {
+      for (VertexId v : mesh.triangles[f]) squeezed.push_back({v, k});
+    }
   }
   std::sort(squeezed.begin(), squeezed.end());
-  detail::UnionFind clusters(collapsed);
-  for (std::size_t k = 1; k < squeezed.size(); ++k) {
-    if (squeezed[k].first == squeezed[k - 1].first) clusters.unite(squeezed[k - 1].second, squeezed[k].second);
-  }
   const auto clusterAt = [&](VertexId v) -> std::uint32_t {
     const auto it = std::lower_bound(squeezed.begin(), squeezed.end(), std::make_pair(v, 0u));
-    return it != squeezed.end() && it->first == v ? clusters.find(it->second) : kInvalidId;
+    return it != squeezed.end() && it->first == v ? it->second : kInvalidId;
   };
   // Per cluster the shortest curve touching it (or every one).
-  std::vector<std::uint32_t> chosen(collapsed, kInvalidId);
+  std::vector<std::uint32_t> chosen(clusters.size(), kInvalidId);
   std::vector<std::uint8_t> release(features.numCurves(), 0);
   const auto length = [&](std::uint32_t k) { return features.curveStart[k + 1] - features.curveStart[k]; };
   for (std::uint32_t k = 0; k < features.numCurves(); ++k) {
