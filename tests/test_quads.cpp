@@ -447,7 +447,7 @@ void forSharedMeshes(std::initializer_list<const char*> names, const Check& chec
 
 TEST(Quads, SharedMeshesRepairedAndExtracted) {
   // param's defaults (hat solver at these sizes, repair on) on every shared mesh: no flips left
-  // but faces folded in 3D, gradient error within 1.05x of the unrepaired map, and a valid quad
+  // (cheburashka's face folded in 3D included), gradient error within 1.05x of the unrepaired map, and a valid quad
   // mesh (fertility's map has an iso-line from an integer point back to itself: a loop zipped out).
   forSharedMeshes({"bumpy.off", "3holes.off", "spot.obj", "lilium.obj", "camelhead.off", "rocker-arm.obj",
                    "cheburashka.off", "fertility.off", "armadillo.obj", "bunny.off"}, [](const std::string& path) {
@@ -462,7 +462,7 @@ TEST(Quads, SharedMeshesRepairedAndExtracted) {
     EXPECT_LE(e.map.untangle.flippedAfter, e.map.untangle.flippedBefore);
     EXPECT_GE(e.check.quadFraction, 0.9);
     EXPECT_EQ(e.check.conesWithWrongValence, 0u);
-    EXPECT_EQ(q.flipped, q.flippedFolded);
+    EXPECT_EQ(q.flipped, 0u);
     EXPECT_TRUE(e.check.isValid());
     EXPECT_EQ(e.quads.stats.untracedEdges + e.quads.stats.unpairedEdges + e.quads.stats.openFaces, 0u);
   });

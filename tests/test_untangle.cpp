@@ -265,10 +265,12 @@ std::vector<VertexId> expectMovesInsideTheirFans(const Topology& topology, const
   return moved;
 }
 
-TEST(Untangle, RelocationLeavesFansWithFacesFoldedIn3DAndNeverAddsFlips) {
+TEST(Untangle, RelocationLeavesFansWithFacesFoldedIn3DJointPatchesUnfoldThem) {
   // Damaged vertices fold their fans in (u, v); the first one's smoothed 3D position is pushed
-  // far aside, so faces of its fan are also folded in 3D (flipped under any smooth map): it must
-  // not move, its neighbours may, and the flips never increase.
+  // far aside, so faces of its fan are also folded in 3D (flipped under any map that follows the
+  // smooth surface): relocation must not move it, its neighbours may, and the flips never
+  // increase. The joint patches then unfold those faces too (measured against their own 3D
+  // shapes), seams and translations exact.
   DamagedMap d = damagedSphereMap();
   const TriangleMesh& mesh = d.cs.s.mesh;
   const Topology& topology = d.cs.s.topology;
@@ -283,16 +285,33 @@ TEST(Untangle, RelocationLeavesFansWithFacesFoldedIn3DAndNeverAddsFlips) {
   UntangleOptions options;
   options.edgeLength = h;
   options.maxRounds = 0;
+  options.jointRings = 0;
   std::vector<std::complex<double>> t = d.map.translations;
   const UntangleStats stats = untangleFlips(mesh, topology, d.cs.field, d.cs.cut, d.map.cornerUV, t, options);
   const MapQuality after = measureMap(mesh, d.map.cornerUV, &d.cs.field, h);
   EXPECT_LE(after.flipped, damaged.flipped);
   EXPECT_EQ(after.flipped, stats.flippedAfter);
+  EXPECT_EQ(after.flippedFolded, stats.foldedIn3D);
   EXPECT_GT(stats.relocatedVertices, 0u);
   EXPECT_LT(after.flipped - after.flippedFolded, damaged.flipped - damaged.flippedFolded);
+  ASSERT_GT(after.flippedFolded, 0u) << "relocation alone unfolded the faces folded in 3D";
   EXPECT_TRUE(measureSeams(mesh, topology, d.cs.cut, d.map.cornerUV).isSeamless());
   const std::vector<VertexId> moved = expectMovesInsideTheirFans(topology, before, d.map.cornerUV);
   EXPECT_FALSE(std::binary_search(moved.begin(), moved.end(), v)) << "a vertex next to a face folded in 3D moved";
+
+  options.jointRings = UntangleOptions().jointRings;
+  const UntangleStats joint = untangleFlips(mesh, topology, d.cs.field, d.cs.cut, d.map.cornerUV, t, options);
+  const MapQuality unfolded = measureMap(mesh, d.map.cornerUV, &d.cs.field, h);
+  EXPECT_EQ(joint.flippedBefore, after.flipped);
+  EXPECT_GT(joint.jointVertices, 0u);
+  EXPECT_EQ(unfolded.flipped, 0u);
+  EXPECT_EQ(unfolded.collapsed, 0u);
+  EXPECT_EQ(joint.flippedAfter, 0u);
+  EXPECT_EQ(joint.foldedIn3D, 0u);
+  const SeamQuality seams = measureSeams(mesh, topology, d.cs.cut, d.map.cornerUV);
+  EXPECT_LT(seams.maxResidual, 1e-10);
+  EXPECT_LT(seams.maxIntegerDistance, 1e-10);
+  EXPECT_EQ(t, d.map.translations);
 }
 
 /// Grid spacing of flipFreeSphereMap.
@@ -514,6 +533,29 @@ TEST(Untangle, PipelineStageLowersFlips) {
   bool stage = false;
   for (const StageFigures& s : meter.stages()) stage = stage || s.name == "untangle";
   EXPECT_TRUE(stage);
+}
+
+// Scan noise folds faces in 3D, which flip under the least-squares map; the repair unfolds them
+// too (against their own 3D shapes), so a noisy scan's map has no flips left, stays seamless and
+// keeps its gradient error within 1.05x.
+TEST(Untangle, NoisyScanMapHasNoFlipsLeftFoldedFacesIncluded) {
+  ScanNoiseOptions noise;
+  noise.amplitude = 0.5;
+  noise.seed = 7;
+  TriangleMesh raw = generatedMesh(MeshKind::Scan, 60000);
+  addScanNoise(raw, noise);
+  PipelineOptions options;
+  options.untangle = false;
+  const PipelineResult off = parameterize(TriangleMesh(raw), options);
+  ASSERT_GT(off.mapQuality.flippedFolded, 0u) << "the noise folds no flipped face: the test tests nothing";
+  options.untangle = true;
+  const PipelineResult on = parameterize(std::move(raw), options);
+  EXPECT_TRUE(on.isSeamless());
+  EXPECT_EQ(on.untangle.flippedBefore, off.mapQuality.flipped);
+  EXPECT_EQ(on.mapQuality.flipped, 0u);
+  EXPECT_EQ(on.untangle.flippedAfter, 0u);
+  EXPECT_EQ(on.mapQuality.collapsed, 0u);
+  EXPECT_LE(on.mapQuality.relativeGradientError, 1.05 * off.mapQuality.relativeGradientError);
 }
 
 }  // namespace

@@ -462,15 +462,15 @@ class JointPatch {
       : mesh_(mesh), topology_(topology), uv_(uv), h_(h) {}
 
   // v joins when it can move: interior, not fixed (cones), a fan whose turns close, no fan face
-  // folded in 3D or degenerate in 3D.
-  bool add(VertexId v, const std::vector<std::uint8_t>& fixed, const std::vector<std::uint8_t>& state) {
+  // degenerate in 3D. A face folded in 3D may join: its energy is against its own 3D shape.
+  bool add(VertexId v, const std::vector<std::uint8_t>& fixed) {
     if (fixed[v] || topology_.isBoundaryVertex(v) || topology_.isIsolatedVertex(v)) return false;
     JointVertex jv;
     jv.v = v;
     if (!fanTurns(topology_, uv_, v, jv.corners, jv.turns) || jv.corners.size() < 3) return false;
     for (CornerId c : jv.corners) {
       const ReferenceShape& shape = shapeOf(c / 3);  // unordered_map: stable references
-      if (state[c / 3] == kFolded || !(shape.area > 0.0)) return false;
+      if (!(shape.area > 0.0)) return false;
       jv.shapes.push_back(&shape);
     }
     vertices_.push_back(std::move(jv));
@@ -619,11 +619,11 @@ std::vector<VertexId> vertexRings(const TriangleMesh& mesh, const Topology& topo
 // that no patch unfolds (a 22M-face map had hundreds around its cones) must not cost minutes.
 constexpr std::uint64_t kJointEvaluations = 100'000'000;
 
-// After the relocation: around each face still flipped, the vertices within k rings (k = 2, 3,
-// 4, 6, 9, 12 until it unfolds) move jointly, seam vertices with all their wedges through the seams'
-// turns (seams and translations exact), cones and the patch's border fixed. A patch is kept
-// only when it has fewer flipped faces, no face that was fine flips and none collapses; else
-// its wedges are restored. Returns the vertices of kept patches.
+// After the relocation: around each face still flipped (folded in 3D too), the vertices within
+// k rings (k = 2, 3, 4, 6, 9, 12 until it unfolds) move jointly, seam vertices with all their
+// wedges through the seams' turns (seams and translations exact), cones and the patch's border
+// fixed. A patch is kept only when it has fewer flipped faces, no face that was fine flips and
+// none collapses; else its wedges are restored. Returns the vertices of kept patches.
 std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                               WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
                               std::uint32_t maxRings) {
@@ -639,15 +639,15 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
     if (rings > maxRings) break;
     std::vector<FaceId> seeds;
     for (FaceId f = 0; f < state.size(); ++f) {
-      if (state[f] == kFlipped) seeds.push_back(f);
+      if (state[f] != kFine) seeds.push_back(f);
     }
     std::vector<std::uint8_t> tried(state.size(), 0);  // in a patch of this many rings already
     for (FaceId seed : seeds) {
-      if (state[seed] != kFlipped || tried[seed]) continue;
+      if (state[seed] == kFine || tried[seed]) continue;
       if (work > kJointEvaluations) return movedVertices;
       const Triangle& t = mesh.triangles[seed];
       JointPatch patch(mesh, topology, cornerUV, h);
-      for (VertexId v : vertexRings(mesh, topology, {t[0], t[1], t[2]}, rings - 1)) patch.add(v, fixed, state);
+      for (VertexId v : vertexRings(mesh, topology, {t[0], t[1], t[2]}, rings - 1)) patch.add(v, fixed);
       if (patch.size() == 0) continue;
       const std::vector<FaceId> faces = patch.faces();
       std::vector<std::pair<CornerId, Vec2d>> saved;
@@ -655,7 +655,7 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
       std::uint32_t flipsBefore = 0;
       for (FaceId f : faces) {
         before.push_back(badness(f));
-        flipsBefore += state[f] == kFlipped;
+        flipsBefore += before.back() == 1;
         for (int k = 0; k < 3; ++k) saved.emplace_back(3 * f + k, cornerUV[3 * f + k]);
       }
       for (FaceId f : faces) tried[f] = 1;
@@ -671,7 +671,10 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
         for (const auto& [c, q] : saved) cornerUV.setWedgeValue(cornerUV.wedge(c), q);
         continue;
       }
-      for (FaceId f : faces) state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
+      for (FaceId f : faces) {
+        const std::uint8_t now = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
+        state[f] = now == kFlipped && state[f] == kFolded ? std::uint8_t(kFolded) : now;
+      }
       movedVertices += static_cast<std::uint32_t>(patch.size());
     }
   }

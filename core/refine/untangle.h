@@ -8,7 +8,8 @@
 /// still flipped by a stiffening factor, which pulls their gradients towards the field's
 /// orientation-preserving target and spreads the distortion over the unflipped neighbours.
 /// Faces folded in 3D (their normal opposite to the field's smoothed surface) flip under any map
-/// that follows the smooth surface: they are neither seeds nor stiffened, only counted.
+/// that follows the smooth surface: the stiffening and relocation steps leave them; only the
+/// joint patches, which measure each face against its own 3D shape, unfold them.
 #include <complex>
 #include <cstdint>
 #include <vector>
@@ -42,7 +43,7 @@ struct UntangleOptions {
   /// when nothing moves; no move collapses a triangle, and all are undone if flips did not drop.
   /// A seam vertex moves all its wedges by one displacement turned through the seams' rotations.
   std::uint32_t relocationPasses = 32;
-  /// Last: around each face still flipped, the vertices within 2, 3, 4, 6, 9, then 12 rings (up to
+  /// Last: around each face still flipped (folded in 3D or not), the vertices within 2, 3, 4, 6, 9, then 12 rings (up to
   /// this many; below 2: off) move jointly by minimising an untangling energy (regularised
   /// |J|^2/det plus an area term against the faces' 3D shapes, Garanzha et al. 2021), seam
   /// vertices through the seams' rotations, cones and the patch border fixed; a patch is kept
