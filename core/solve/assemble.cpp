@@ -1,8 +1,6 @@
 #include "core/solve/assemble.h"
 #include "core/system/parallel.h"
 
-#include <tbb/enumerable_thread_specific.h>
-
 #include <algorithm>
 #include <atomic>
 #include <mutex>
@@ -13,7 +11,7 @@ namespace {
 
 using Triplet = Eigen::Triplet<std::complex<double>, int>;
 
-// Per-thread accumulation: triplets, compressed into a sparse matrix when the buffer fills.
+// Per-chunk accumulation: triplets, compressed into a sparse matrix when the buffer fills.
 struct Accumulator {
   std::vector<Triplet> triplets;
   ComplexSparse sum;
@@ -33,6 +31,11 @@ struct Accumulator {
 };
 
 constexpr std::size_t kFlushTriplets = 1u << 21;
+/// Elements per range when the basis has no blocks of its own.
+constexpr std::uint64_t kRangeElements = 4096;
+/// Chunks the assembly is split into, whatever the thread count: enough to keep 2-8 cores busy,
+/// few enough that their right-hand sides (one vector of unknowns each) cost little.
+constexpr std::uint64_t kChunks = 32;
 
 }  // namespace
 
@@ -41,20 +44,24 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
   const int n = static_cast<int>(reduction.numUnknowns());
   const ReducedMap& P = reduction.map;
   const bool hasOffset = !P.offset.empty();
-  tbb::enumerable_thread_specific<Accumulator> locals([n] {
-    Accumulator a;
-    a.rhs = ComplexVector::Zero(n);
-    return a;
-  });
   const std::uint64_t ne = basis.numElements();
   std::atomic<std::uint64_t> done{0};
   std::mutex progressMutex;
   reportProgress(options.progress, "assemble", 0.0);
-  // One task per range of elements: the basis' own blocks (e.g. OpenVDB leaf nodes) when it has
-  // them, else fixed-size ranges. Each thread accumulates into its own triplets; one merge.
-  const std::vector<std::uint64_t> blocks = basis.elementBlocks();
-  const auto assembleRange = [&](std::uint64_t begin, std::uint64_t end) {
-    Accumulator& acc = locals.local();
+  // The elements are split at the basis' own blocks (e.g. OpenVDB leaf nodes) when it has them,
+  // else into fixed-size ranges, and the ranges into kChunks chunks of consecutive ranges. Each
+  // chunk sums into its own accumulator and the chunks are merged in order: the sums do not
+  // depend on how the threads were scheduled, so the system (and the map) is the same every run.
+  std::vector<std::uint64_t> blocks = basis.elementBlocks();
+  if (!(blocks.size() >= 2 && blocks.front() == 0 && blocks.back() == ne)) {
+    blocks.clear();
+    for (std::uint64_t e = 0; e < ne; e += kRangeElements) blocks.push_back(e);
+    blocks.push_back(ne);
+  }
+  const std::uint64_t ranges = blocks.size() - 1;
+  const std::uint64_t chunks = std::min<std::uint64_t>(kChunks, ranges);
+  std::vector<Accumulator> parts(chunks);
+  const auto assembleRange = [&](Accumulator& acc, std::uint64_t begin, std::uint64_t end) {
     ElementIntegrals el;
     for (std::uint64_t e = begin; e != end; ++e) {
       basis.elementIntegrals(e, el);
@@ -95,17 +102,16 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
       reportProgress(options.progress, "assemble", static_cast<double>(total) / ne);
     }
   };
-  if (blocks.size() >= 2 && blocks.front() == 0 && blocks.back() == ne) {
-    parallelFor(blocks.size() - 1, 8, [&](const IndexRange& range) {
-      assembleRange(blocks[range.begin()], blocks[range.end()]);
-    });
-  } else {
-    parallelFor(ne, 4096, [&](const IndexRange& range) { assembleRange(range.begin(), range.end()); });
-  }
+  parallelForEach(chunks, 1, [&](std::uint64_t k) {
+    Accumulator& acc = parts[k];
+    acc.rhs = ComplexVector::Zero(n);
+    const std::uint64_t first = ranges * k / chunks, last = ranges * (k + 1) / chunks;
+    for (std::uint64_t r = first; r < last; ++r) assembleRange(acc, blocks[r], blocks[r + 1]);
+  });
   LinearSystem out;
   out.lower.resize(n, n);
   out.rhs = ComplexVector::Zero(n);
-  for (Accumulator& acc : locals) {
+  for (Accumulator& acc : parts) {
     acc.flush(n);
     if (acc.sum.rows() != 0) out.lower += acc.sum;
     acc.sum = ComplexSparse();
