@@ -43,12 +43,14 @@ struct UntangleOptions {
   /// when nothing moves; no move collapses a triangle, and all are undone if flips did not drop.
   /// A seam vertex moves all its wedges by one displacement turned through the seams' rotations.
   std::uint32_t relocationPasses = 32;
-  /// Last: around each face still flipped (folded in 3D or not), the vertices within 2, 3, 4, 6, 9, then 12 rings (up to
-  /// this many; below 2: off) move jointly by minimising an untangling energy (regularised
-  /// |J|^2/det plus an area term against the faces' 3D shapes, Garanzha et al. 2021), seam
-  /// vertices through the seams' rotations, cones and the patch border fixed; a patch is kept
-  /// only when its flips drop and no face flips or collapses that did not before.
-  std::uint32_t jointRings = 12;
+  /// Last: around each face still flipped (folded in 3D or not), the vertices within 2, 3, 4, 6,
+  /// 9, 12, 18, 27, then 36 rings (up to this many; below 2: off) move jointly by minimising an
+  /// untangling energy (regularised |J|^2/det plus an area term against the faces' 3D shapes,
+  /// Garanzha et al. 2021), seam vertices through the seams' rotations, cones and the patch
+  /// border fixed; a patch is kept only when its flips drop and no face flips or collapses that
+  /// did not before. The wide patches matter on fine meshes: at 36 edges per h, a cone's
+  /// distorted neighbourhood spans more than 12 rings.
+  std::uint32_t jointRings = 36;
   ProgressFn progress;
 };
 
