@@ -319,6 +319,13 @@ bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, co
   return true;
 }
 
+// A face's change under a move, as 0 fine, 1 flipped, 2 collapsed (|parameter area ratio| below
+// kCollapsedAreaFraction): worse when a fine face flips or collapses, a flipped one collapses or
+// a collapsed one flips (a collapsed face's state says fine: its flip would go unseen).
+bool becameWorse(int before, int now) {
+  return (now != 0 && before == 0) || (now == 2 && before != 2) || (now == 1 && before == 2);
+}
+
 // The last step: interior vertices of faces still flipped that are not cones and touch no face
 // folded in 3D move toward their fan's kernel (seam vertices with all their wedges), pass after
 // pass; when none can, their neighbours move halfway into their own kernels to make room. A move
@@ -339,17 +346,24 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
   const auto flips = [&] { return std::count(state.begin(), state.end(), std::uint8_t(kFlipped)); };
   const auto flipsBefore = flips();
   // A move is undone when it collapses a fan triangle (parameter area below the collapse
-  // fraction) that was not collapsed before.
-  const auto collapsed = [&](FaceId f) { return std::abs(parameterAreaRatio(mesh, cornerUV, f, h)) < kCollapsedAreaFraction; };
-  std::vector<std::uint8_t> wasCollapsed;
+  // fraction) that was not collapsed before, or flips one that was positive (the steps are
+  // built not to, but a step at the edge of a kernel can, by rounding).
+  const auto badness = [&](FaceId f) {
+    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
+    return std::abs(ratio) < kCollapsedAreaFraction ? 2 : (ratio < 0.0 ? 1 : 0);
+  };
+  std::vector<int> was;
   const auto tryMove = [&](VertexId v, Move mode) {
-    wasCollapsed.clear();
-    topology.forEachCornerAround(v, [&](CornerId c) { wasCollapsed.push_back(collapsed(c / 3)); });
+    was.clear();
+    topology.forEachCornerAround(v, [&](CornerId c) { was.push_back(badness(c / 3)); });
     const std::size_t mark = log.size();
     if (!relocateVertex(topology, cornerUV, v, folded, log, mode)) return false;
     std::size_t i = 0;
     bool worse = false;
-    topology.forEachCornerAround(v, [&](CornerId c) { worse = worse || (!wasCollapsed[i++] && collapsed(c / 3)); });
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      const int now = badness(c / 3), before = was[i++];
+      worse = worse || becameWorse(before, now);
+    });
     if (!worse) return true;
     while (log.size() > mark) cornerUV.setWedgeValue(log.back().first, log.back().second), log.pop_back();
     return false;
@@ -697,7 +711,7 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
       for (std::size_t i = 0; i < faces.size(); ++i) {
         const int now = badness(faces[i]);
         flipsAfter += now == 1;
-        worse = worse || (now != 0 && before[i] == 0) || (now == 2 && before[i] != 2);
+        worse = worse || becameWorse(before[i], now);
       }
       if (worse || flipsAfter >= flipsBefore) {
         for (const auto& [c, q] : saved) cornerUV.setWedgeValue(cornerUV.wedge(c), q);
@@ -838,6 +852,9 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   if (options.jointRings >= 2) {
     stats.jointVertices = untangleJointly(mesh, topology, cut, cornerUV, state, h, options.jointRings);
   }
+  // The last steps re-measure only the faces they watch: the figures come from the whole map, as
+  // the quality measure's do.
+  if (stats.relocatedVertices > 0 || stats.jointVertices > 0) classifyAll();
   std::sort(moved.begin(), moved.end());
   stats.freeVertices = static_cast<std::uint32_t>(std::unique(moved.begin(), moved.end()) - moved.begin());
   for (FaceId f = 0; f < nf; ++f) {
