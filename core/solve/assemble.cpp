@@ -28,14 +28,28 @@ struct Accumulator {
     }
     triplets.clear();
   }
+  // Adds other (flushed) into this (flushed).
+  void merge(Accumulator&& other) {
+    if (other.sum.rows() != 0) {
+      if (sum.rows() == 0) {
+        sum = std::move(other.sum);
+      } else {
+        sum += other.sum;
+      }
+    }
+    rhs += other.rhs;
+    area += other.area;
+    target += other.target;
+    other = Accumulator();
+  }
 };
 
 constexpr std::size_t kFlushTriplets = 1u << 21;
 /// Elements per range when the basis has no blocks of its own.
 constexpr std::uint64_t kRangeElements = 4096;
-/// Chunks the assembly is split into, whatever the thread count: enough to keep 2-8 cores busy,
-/// few enough that their right-hand sides (one vector of unknowns each) cost little.
-constexpr std::uint64_t kChunks = 32;
+/// Chunks the assembly is split into, whatever the thread count: each level of their merge is a
+/// pass over all nonzeros, so few, enough for a few cores.
+constexpr std::uint64_t kChunks = 8;
 
 }  // namespace
 
@@ -107,17 +121,24 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
     acc.rhs = ComplexVector::Zero(n);
     const std::uint64_t first = ranges * k / chunks, last = ranges * (k + 1) / chunks;
     for (std::uint64_t r = first; r < last; ++r) assembleRange(acc, blocks[r], blocks[r + 1]);
-  });
-  LinearSystem out;
-  out.lower.resize(n, n);
-  out.rhs = ComplexVector::Zero(n);
-  for (Accumulator& acc : parts) {
     acc.flush(n);
-    if (acc.sum.rows() != 0) out.lower += acc.sum;
-    acc.sum = ComplexSparse();
-    out.rhs += acc.rhs;
-    out.totalArea += acc.area;
+  });
+  // Pairwise merges in a fixed tree (each level in parallel): log2(chunks) passes over the
+  // nonzeros instead of one per chunk.
+  for (std::size_t step = 1; step < parts.size(); step *= 2) {
+    parallelForEach((parts.size() + 2 * step - 1) / (2 * step), 1, [&](std::uint64_t i) {
+      const std::size_t a = 2 * step * i, b = a + step;
+      if (b < parts.size()) parts[a].merge(std::move(parts[b]));
+    });
   }
+  LinearSystem out;
+  if (!parts.empty()) {
+    out.lower = std::move(parts.front().sum);
+    out.rhs = std::move(parts.front().rhs);
+    out.totalArea = parts.front().area;
+  }
+  if (out.lower.rows() == 0) out.lower.resize(n, n);
+  if (out.rhs.size() == 0) out.rhs = ComplexVector::Zero(n);
   out.lower.makeCompressed();
   return out;
 }
