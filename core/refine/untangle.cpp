@@ -462,6 +462,25 @@ double untanglingEnergy(const ReferenceShape& shape, const Vec2d& q0, const Vec2
   return shape.area * (j.squaredNorm() + det * det + 1.0) / chi;
 }
 
+// The gradient of untanglingEnergy with respect to corner k's value (k = 0, 1, 2). With
+// J = [q1 - q0, q2 - q0] S, moving corner k by d adds d w^T to J (w = S^T c_k, c_0 = (-1, -1),
+// c_1 = (1, 0), c_2 = (0, 1)); dE/dJ = A ((2 J + 2 det cof J) chi - f chi' cof J) / chi^2.
+Vec2d untanglingGradient(const ReferenceShape& shape, const Vec2d& q0, const Vec2d& q1, const Vec2d& q2, int k,
+                         double eps) {
+  Eigen::Matrix2d edges;
+  edges.col(0) = q1 - q0;
+  edges.col(1) = q2 - q0;
+  const Eigen::Matrix2d j = edges * shape.inverse;
+  const double det = j.determinant(), root = std::sqrt(eps * eps + det * det);
+  const double chi = regularisedDet(det, eps), dchi = 0.5 * (1.0 + det / root);
+  const double f = j.squaredNorm() + det * det + 1.0;
+  Eigen::Matrix2d cof;
+  cof << j(1, 1), -j(1, 0), -j(0, 1), j(0, 0);
+  const Eigen::Matrix2d dj = shape.area * ((2.0 * j + 2.0 * det * cof) * chi - f * dchi * cof) / (chi * chi);
+  const Vec2d c = k == 0 ? Vec2d(-1.0, -1.0) : (k == 1 ? Vec2d(1.0, 0.0) : Vec2d(0.0, 1.0));
+  return dj * (shape.inverse.transpose() * c);
+}
+
 // A vertex that moves in a joint patch: its fan's corners with their quarter turns (fanTurns).
 struct JointVertex {
   VertexId v = kInvalidId;
@@ -591,9 +610,23 @@ class JointPatch {
     return e;
   }
 
-  // One damped Newton step (finite-difference gradient and Hessian: the fans are small) that
-  // lowers the fan's energy; adds the fan's energy to total and what the step gained to gained.
-  // False when the vertex did not move.
+  // Gradient of jv's fan energy with jv moved by d (in jv's first corner's chart).
+  Vec2d fanGradient(const JointVertex& jv, const Vec2d& d, double eps) {
+    ++evaluations_;
+    Vec2d g = Vec2d::Zero();
+    for (std::size_t i = 0; i < jv.corners.size(); ++i) {
+      const CornerId c = jv.corners[i];
+      const FaceId f = c / 3;
+      Vec2d q[3] = {uv_[3 * f], uv_[3 * f + 1], uv_[3 * f + 2]};
+      q[c % 3] += quarterTurns(d, jv.turns[i]);
+      g += quarterTurns(untanglingGradient(*jv.shapes[i], q[0], q[1], q[2], int(c % 3), eps), -jv.turns[i]);
+    }
+    return g;
+  }
+
+  // One damped Newton step (analytic gradient, Hessian by differences of gradients: the fans
+  // are small) that lowers the fan's energy; adds the fan's energy to total and what the step
+  // gained to gained. False when the vertex did not move.
   bool newtonStep(const JointVertex& jv, double eps, double& total, double& gained) {
     double scale = 0.0;
     for (CornerId c : jv.corners) scale += (uv_[nextCorner(c)] - uv_[c]).norm();
@@ -602,14 +635,11 @@ class JointPatch {
     const double delta = 1e-4 * scale;
     const double e0 = fanEnergy(jv, Vec2d::Zero(), eps);
     total += e0;
-    const double ex1 = fanEnergy(jv, Vec2d(delta, 0), eps), ex0 = fanEnergy(jv, Vec2d(-delta, 0), eps);
-    const double ey1 = fanEnergy(jv, Vec2d(0, delta), eps), ey0 = fanEnergy(jv, Vec2d(0, -delta), eps);
-    const double exy = fanEnergy(jv, Vec2d(delta, delta), eps) - fanEnergy(jv, Vec2d(delta, -delta), eps) -
-                       fanEnergy(jv, Vec2d(-delta, delta), eps) + fanEnergy(jv, Vec2d(-delta, -delta), eps);
-    const Vec2d g((ex1 - ex0) / (2 * delta), (ey1 - ey0) / (2 * delta));
+    const Vec2d g = fanGradient(jv, Vec2d::Zero(), eps);
     Eigen::Matrix2d hessian;
-    hessian << (ex1 - 2 * e0 + ex0) / (delta * delta), exy / (4 * delta * delta), exy / (4 * delta * delta),
-        (ey1 - 2 * e0 + ey0) / (delta * delta);
+    hessian.col(0) = (fanGradient(jv, Vec2d(delta, 0), eps) - g) / delta;
+    hessian.col(1) = (fanGradient(jv, Vec2d(0, delta), eps) - g) / delta;
+    hessian = 0.5 * (hessian + hessian.transpose()).eval();
     if (!g.allFinite() || !(g.norm() > 0.0)) return false;
     Vec2d step = -g.normalized() * (0.25 * scale);
     if (hessian.allFinite() && hessian(0, 0) > 0.0 && hessian.determinant() > 0.0) {
