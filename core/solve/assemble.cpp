@@ -64,8 +64,9 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
   reportProgress(options.progress, "assemble", 0.0);
   // The elements are split at the basis' own blocks (e.g. OpenVDB leaf nodes) when it has them,
   // else into fixed-size ranges, and the ranges into kChunks chunks of consecutive ranges. Each
-  // chunk sums into its own accumulator and the chunks are merged in order: the sums do not
-  // depend on how the threads were scheduled, so the system (and the map) is the same every run.
+  // chunk sums into its own accumulator and the chunks are merged in a fixed tree: the sums do
+  // not depend on how the threads were scheduled, so the system (and the map) is the same every
+  // run and for any thread count.
   std::vector<std::uint64_t> blocks = basis.elementBlocks();
   if (!(blocks.size() >= 2 && blocks.front() == 0 && blocks.back() == ne)) {
     blocks.clear();
