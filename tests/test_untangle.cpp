@@ -54,15 +54,20 @@ TEST(FoldedIn3D, AgainstTheSmoothedCopy) {
   EXPECT_TRUE(faceFoldedIn3D(mesh, smooth, 0));
 }
 
+/// A generated scan with scan noise of the given amplitude (edge lengths) and seed.
+TriangleMesh noisyScan(std::uint64_t faces, double amplitude, std::uint64_t seed) {
+  ScanNoiseOptions noise;
+  noise.amplitude = amplitude;
+  noise.seed = seed;
+  TriangleMesh raw = generatedMesh(MeshKind::Scan, faces);
+  addScanNoise(raw, noise);
+  return raw;
+}
+
 TEST(FoldedIn3D, ReleasedFramePositionsGiveTheSameFacesAndPositions) {
   // A noisy generated scan folds faces in 3D; the fold test on a field whose smoothed surface was
   // released (recomputed around the asked faces) must equal the test on the whole surface.
-  ScanNoiseOptions noise;
-  noise.amplitude = 0.6;
-  noise.seed = 4;
-  TriangleMesh raw = generatedMesh(MeshKind::Scan, 20000);
-  addScanNoise(raw, noise);
-  CleanResult clean = cleanMesh(std::move(raw));
+  CleanResult clean = cleanMesh(noisyScan(20000, 0.6, 4));
   const TriangleMesh& mesh = clean.mesh;
   const Topology& topology = clean.topology;
   for (std::uint32_t steps : {1u, 3u, 5u}) {
@@ -539,11 +544,7 @@ TEST(Untangle, PipelineStageLowersFlips) {
 // too (against their own 3D shapes), so a noisy scan's map has no flips left, stays seamless and
 // keeps its gradient error within 1.05x.
 TEST(Untangle, NoisyScanMapHasNoFlipsLeftFoldedFacesIncluded) {
-  ScanNoiseOptions noise;
-  noise.amplitude = 0.5;
-  noise.seed = 7;
-  TriangleMesh raw = generatedMesh(MeshKind::Scan, 60000);
-  addScanNoise(raw, noise);
+  TriangleMesh raw = noisyScan(60000, 0.5, 7);
   PipelineOptions options;
   options.untangle = false;
   const PipelineResult off = parameterize(TriangleMesh(raw), options);

@@ -319,9 +319,14 @@ bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, co
   return true;
 }
 
-// A face's change under a move, as 0 fine, 1 flipped, 2 collapsed (|parameter area ratio| below
-// kCollapsedAreaFraction): worse when a fine face flips or collapses, a flipped one collapses or
-// a collapsed one flips (a collapsed face's state says fine: its flip would go unseen).
+// A face as 0 fine, 1 flipped, 2 collapsed (|parameter area ratio| below kCollapsedAreaFraction),
+// and its change under a move: worse when a fine face flips or collapses, a flipped one
+// collapses or a collapsed one flips (a collapsed face's state says fine: its flip would go
+// unseen).
+int faceBadness(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f, double h) {
+  const double ratio = parameterAreaRatio(mesh, uv, f, h);
+  return std::abs(ratio) < kCollapsedAreaFraction ? 2 : (ratio < 0.0 ? 1 : 0);
+}
 bool becameWorse(int before, int now) {
   return (now != 0 && before == 0) || (now == 2 && before != 2) || (now == 1 && before == 2);
 }
@@ -348,10 +353,7 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
   // A move is undone when it collapses a fan triangle (parameter area below the collapse
   // fraction) that was not collapsed before, or flips one that was positive (the steps are
   // built not to, but a step at the edge of a kernel can, by rounding).
-  const auto badness = [&](FaceId f) {
-    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
-    return std::abs(ratio) < kCollapsedAreaFraction ? 2 : (ratio < 0.0 ? 1 : 0);
-  };
+  const auto badness = [&](FaceId f) { return faceBadness(mesh, cornerUV, f, h); };
   std::vector<int> was;
   const auto tryMove = [&](VertexId v, Move mode) {
     was.clear();
@@ -705,10 +707,7 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
                               std::uint32_t maxRings) {
   std::vector<std::uint8_t> fixed(topology.numVertices(), 0);
   for (VertexId c : cut.cones) fixed[c] = 1;
-  const auto badness = [&](FaceId f) {
-    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
-    return std::abs(ratio) < kCollapsedAreaFraction ? 2 : (ratio < 0.0 ? 1 : 0);
-  };
+  const auto badness = [&](FaceId f) { return faceBadness(mesh, cornerUV, f, h); };
   std::uint32_t movedVertices = 0;
   std::uint64_t work = 0;
   for (const std::uint32_t rings : {2u, 3u, 4u, 6u, 9u, 12u, 18u, 27u, 36u}) {
