@@ -180,7 +180,7 @@ TEST(ConeMerge, CoincidentConeEdgesAreFoundAndMerged) {
   EXPECT_TRUE(coincidentConeEdges(s.topology, sing.cones, WedgeMap::fromCorners(s.mesh.triangles, spread)).empty());
 
   const std::int64_t sum = indexSum(sing);
-  const ConeMergeResult merged = mergeAdjacentCones(s.topology, sing, pairs);
+  const ConeMergeResult merged = mergeCoincidentCones(s.mesh, s.topology, sing, pairs, 0.0);
   EXPECT_GT(merged.mergedPairs + merged.cancelledPairs, 0u);
   EXPECT_EQ(indexSum(sing), sum);
   for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
@@ -189,7 +189,7 @@ TEST(ConeMerge, CoincidentConeEdgesAreFoundAndMerged) {
   const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);
   EXPECT_EQ(cut.cones, sing.cones);
 
-  // Pairs that are not adjacent are left alone.
+  // Pairs that are not adjacent are left alone with no distance to reach them.
   FieldSingularities again = computeSingularities(s.mesh, s.topology, field);
   ASSERT_GE(again.cones.size(), 2u);
   const VertexId far = again.cones.back();
@@ -200,8 +200,67 @@ TEST(ConeMerge, CoincidentConeEdgesAreFoundAndMerged) {
     if (v != far && !adjacent) other = v;
   }
   ASSERT_NE(other, kInvalidId);
-  const ConeMergeResult none = mergeAdjacentCones(s.topology, again, {{far, other}});
+  const ConeMergeResult none = mergeCoincidentCones(s.mesh, s.topology, again, {{far, other}}, 0.0);
   EXPECT_EQ(none.mergedPairs + none.cancelledPairs, 0u);
+}
+
+TEST(ConeMerge, CloseConesOnOnePointAreFoundAndMergedAlongAPath) {
+  // Cones a few edges apart that the map put on one point (a rounding can do that to a +1 and a
+  // +2 cone half a spacing apart) fold the faces between them: they are found within the
+  // distance, and merged along a path of interior edges.
+  const Surface s = testing::makeSurface(testing::torusMesh(30, 12));
+  const CrossField field = testing::randomField(s.mesh, 7);
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  const WedgeMap flat = WedgeMap::fromCorners(s.mesh.triangles, std::vector<Vec2d>(s.topology.numCorners(), Vec2d::Zero()));
+  const auto adjacent = coincidentConeEdges(s.topology, sing.cones, flat);
+  const auto none = coincidentCones(s.mesh, s.topology, sing.cones, flat, 0.0);
+  EXPECT_EQ(none.size(), adjacent.size()) << "with no distance only the adjacent pairs";
+  // Within 3 edge lengths (the torus's edges are at most about 0.35 long), pairs that do not
+  // share an edge as well.
+  double longest = 0.0;
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    const VertexId x = s.topology.vertex(nextCorner(c)), y = s.topology.vertex(prevCorner(c));
+    longest = std::max(longest, (s.mesh.position(x) - s.mesh.position(y)).norm());
+  }
+  const double reach = 3.0 * longest;
+  const auto pairs = coincidentCones(s.mesh, s.topology, sing.cones, flat, reach);
+  ASSERT_GT(pairs.size(), adjacent.size());
+  std::vector<std::uint8_t> isCone(s.topology.numVertices(), 0);
+  for (VertexId v : sing.cones) isCone[v] = 1;
+  std::pair<VertexId, VertexId> apart{kInvalidId, kInvalidId};
+  for (const auto& [a, b] : pairs) {
+    EXPECT_TRUE(isCone[a] && isCone[b] && a < b);
+    EXPECT_LE((s.mesh.position(a) - s.mesh.position(b)).norm(), reach + 1e-12);
+    bool shareEdge = false;
+    s.topology.forEachCornerAround(a, [&](CornerId c) { shareEdge |= s.topology.vertex(nextCorner(c)) == b; });
+    if (!shareEdge && canMergeCoincident(sing.index4[a], sing.index4[b])) apart = {a, b};
+  }
+  ASSERT_NE(apart.first, kInvalidId) << "a mergeable pair that shares no edge";
+  // A map that puts every vertex on its own point has none.
+  std::vector<Vec2d> spread(s.topology.numCorners());
+  for (CornerId c = 0; c < spread.size(); ++c) spread[c] = Vec2d(s.topology.vertex(c), 0.5);
+  EXPECT_TRUE(coincidentCones(s.mesh, s.topology, sing.cones, WedgeMap::fromCorners(s.mesh.triangles, spread), reach).empty());
+
+  // The non-adjacent pair merges along a path; the index sum and the cut's disk are kept.
+  FieldSingularities merged = sing;
+  const std::int32_t sum = sing.index4[apart.first] + sing.index4[apart.second];
+  const ConeMergeResult result = mergeCoincidentCones(s.mesh, s.topology, merged, {apart}, reach);
+  EXPECT_EQ(result.mergedPairs + result.cancelledPairs, 1u);
+  EXPECT_GE(result.changedEdges, 2u) << "a path of more than one edge";
+  EXPECT_EQ(indexSum(merged), indexSum(sing));
+  EXPECT_EQ(merged.index4[apart.first] + merged.index4[apart.second], sum);
+  EXPECT_TRUE(merged.index4[apart.first] == 0 || merged.index4[apart.second] == 0);
+  for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+    if (v != apart.first && v != apart.second) EXPECT_EQ(merged.index4[v], sing.index4[v]) << v;
+  }
+  EXPECT_EQ(merged.cones.size() + (sum == 0 ? 2 : 1), sing.cones.size());
+  const CutResult cut = cutToDisk(s.mesh, s.topology, field, merged);
+  EXPECT_EQ(cut.cones, merged.cones);
+  // Out of reach: left alone.
+  FieldSingularities untouched = sing;
+  const ConeMergeResult far = mergeCoincidentCones(s.mesh, s.topology, untouched, {apart}, 0.0);
+  EXPECT_EQ(far.mergedPairs + far.cancelledPairs, 0u);
+  EXPECT_EQ(untouched.index4, sing.index4);
 }
 
 TEST(ConeMerge, ParamLeavesNoCollapsedFacesOnSharedMeshes) {

@@ -150,7 +150,7 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   // before its first cut (param may merge a few more pairs that a solve puts on one point).
   // h as param takes it (the diagonal without spikes), so both merge the same cones.
   run.edgeLength = c.spacing.spacing(run.clean.report.diagonalWithoutSpikes);
-  run.coneCut = cutThroughCones(mesh, topology, run.field, c.mergeCones * run.edgeLength, {}, c.progress);
+  run.coneCut = cutThroughCones(mesh, topology, run.field, c.mergeCones * run.edgeLength, {}, 0.0, c.progress);
   meter.finish("cut");
   return run;
 }

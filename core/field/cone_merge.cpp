@@ -155,25 +155,79 @@ std::vector<std::pair<VertexId, VertexId>> coincidentConeEdges(const Topology& t
   return out;
 }
 
-ConeMergeResult mergeAdjacentCones(const Topology& topology, FieldSingularities& singularities,
-                                   const std::vector<std::pair<VertexId, VertexId>>& pairs) {
+std::vector<std::pair<VertexId, VertexId>> coincidentCones(const TriangleMesh& mesh, const Topology& topology,
+                                                           const std::vector<VertexId>& cones,
+                                                           const WedgeMap& cornerUV, double maxDistance) {
+  std::vector<std::pair<VertexId, VertexId>> out = coincidentConeEdges(topology, cones, cornerUV);
+  if (!(maxDistance > 0.0)) return out;
+  // Cones grouped by the points their wedges map to (the map puts cones on lattice points, far
+  // from the 1e-6 keys' borders), then one bounded search per cone that shares a point: the work
+  // is the cones' wedges plus a ball per such cone, even when a whole unsolved component's cones
+  // sit at (0, 0).
+  struct Image {
+    std::int64_t u, v;
+    VertexId cone;
+    Vec2d q;
+  };
+  std::vector<Image> images;
+  constexpr double kKeyCell = 1e-6;
+  for (VertexId v : cones) {
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      const Vec2d q = cornerUV[c];
+      images.push_back({std::llround(q.x() / kKeyCell), std::llround(q.y() / kKeyCell), v, q});
+    });
+  }
+  std::sort(images.begin(), images.end(), [](const Image& x, const Image& y) {
+    return x.u != y.u ? x.u < y.u : (x.v != y.v ? x.v < y.v : x.cone < y.cone);
+  });
+  for (std::size_t begin = 0, end = 0; begin < images.size(); begin = end) {
+    while (end < images.size() && images[end].u == images[begin].u && images[end].v == images[begin].v) ++end;
+    if (images[begin].cone == images[end - 1].cone) continue;  // one cone's wedges only
+    for (std::size_t i = begin; i < end; ++i) {
+      if (i > begin && images[i].cone == images[i - 1].cone) continue;
+      const Ball ball = searchBall(mesh, topology, images[i].cone, maxDistance);
+      for (std::size_t j = begin; j < end; ++j) {
+        if (images[j].cone > images[i].cone && ball.distance.count(images[j].cone) &&
+            (images[j].q - images[i].q).norm() <= kCoincidentConeDistance) {
+          out.push_back({images[i].cone, images[j].cone});
+        }
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+ConeMergeResult mergeCoincidentCones(const TriangleMesh& mesh, const Topology& topology,
+                                     FieldSingularities& singularities,
+                                     const std::vector<std::pair<VertexId, VertexId>>& pairs,
+                                     double maxDistance) {
   ConeMergeResult out;
   std::vector<std::int32_t>& index4 = singularities.index4;
   for (const auto& [a, b] : pairs) {
     if (a >= index4.size() || b >= index4.size()) {
-      throw InputError("mergeAdjacentCones: vertex out of range");
+      throw InputError("mergeCoincidentCones: vertex out of range");
     }
     if (!canMergeCoincident(index4[a], index4[b])) continue;
     const bool keepA = std::abs(index4[a]) >= std::abs(index4[b]);
     const VertexId keep = keepA ? a : b, gone = keepA ? b : a;
-    CornerId edge = kInvalidId;  // keep -> gone, interior
+    // An adjacent pair is reached whatever maxDistance: through its own edge at worst.
+    double reach = maxDistance;
     topology.forEachCornerAround(keep, [&](CornerId c) {
       if (topology.vertex(nextCorner(c)) == gone && !topology.isBoundaryEdge(prevCorner(c))) {
-        edge = prevCorner(c);
+        reach = std::max(reach, (mesh.position(gone) - mesh.position(keep)).norm());
       }
     });
-    if (edge == kInvalidId) continue;
-    moveIndex(topology, singularities, keep, gone, {edge}, out);
+    if (!(reach > 0.0)) continue;
+    const Ball ball = searchBall(mesh, topology, keep, reach, gone);
+    if (!ball.pred.count(gone)) continue;  // farther than reach along interior edges
+    std::vector<CornerId> path;
+    for (VertexId y = gone; y != keep; y = topology.vertex(nextCorner(path.back()))) {
+      path.push_back(ball.pred.at(y));
+    }
+    moveIndex(topology, singularities, keep, gone, path, out);
+    out.longestPath = std::max(out.longestPath, ball.distance.at(gone));
   }
   dropVanishedCones(singularities);
   return out;

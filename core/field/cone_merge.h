@@ -34,8 +34,13 @@ constexpr std::int32_t kMaxMergedIndex4 = 2;
 /// Cones the map already put on one point may merge up to |index4| 3 (what the map has there
 /// anyway); 4 would be a cone of angle 0.
 constexpr std::int32_t kMaxCoincidentIndex4 = 3;
-/// Whether two adjacent cones of these indices may be merged (mergeAdjacentCones). Two +2 cones
-/// on one point (e.g. a closed component smaller than the grid) cannot: the map must collapse there.
+/// Cones the map put on one point are looked for this many grid spacings apart along edges: a +1
+/// and a +2 cone half a spacing apart can be rounded onto one point, and merging by distance must
+/// not join them in advance (most such pairs end 0.5 apart, and a +3 cone is a strong distortion).
+constexpr double kCoincidentSearchFraction = 2.0;
+/// Whether two cones of these indices that the map put on one point may be merged
+/// (mergeCoincidentCones). Two +2 cones on one point (e.g. a closed component smaller than the
+/// grid) cannot: the map must collapse there.
 inline bool canMergeCoincident(std::int32_t a, std::int32_t b) {
   return a != 0 && b != 0 && (a + b <= kMaxCoincidentIndex4 && a + b >= -kMaxCoincidentIndex4);
 }
@@ -74,9 +79,20 @@ std::vector<std::pair<VertexId, VertexId>> coincidentConeEdges(const Topology& t
                                                                const std::vector<VertexId>& cones,
                                                                const WedgeMap& cornerUV);
 
-/// Merges the given pairs of adjacent cones like mergeCloseCones (skipping pairs that are not
-/// adjacent, no longer both cones, or whose sum would exceed kMaxCoincidentIndex4).
-ConeMergeResult mergeAdjacentCones(const Topology& topology, FieldSingularities& singularities,
-                                   const std::vector<std::pair<VertexId, VertexId>>& pairs);
+/// Cone pairs the map put on one point (a wedge of each within kCoincidentConeDistance of the
+/// other's) no farther apart than maxDistance along interior edges, adjacent pairs included
+/// whatever maxDistance (coincidentConeEdges): the faces between them collapse or fold, and no
+/// repair with the cones fixed unfolds them. Sorted, each pair once with a < b.
+std::vector<std::pair<VertexId, VertexId>> coincidentCones(const TriangleMesh& mesh, const Topology& topology,
+                                                           const std::vector<VertexId>& cones,
+                                                           const WedgeMap& cornerUV, double maxDistance);
+
+/// Merges the given pairs like mergeCloseCones, along a shortest path of interior edges no longer
+/// than maxDistance (an adjacent pair at least along its edge); skips pairs that are no longer
+/// both cones, are farther apart, or whose sum would exceed kMaxCoincidentIndex4.
+ConeMergeResult mergeCoincidentCones(const TriangleMesh& mesh, const Topology& topology,
+                                     FieldSingularities& singularities,
+                                     const std::vector<std::pair<VertexId, VertexId>>& pairs,
+                                     double maxDistance);
 
 }  // namespace seamvox

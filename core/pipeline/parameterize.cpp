@@ -51,18 +51,19 @@ std::optional<FieldSource> alignedFieldSource(const Topology& topology, const Fe
 ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                         double mergeDistance,
                         const std::vector<std::pair<VertexId, VertexId>>& coincident,
-                        const ProgressFn& progress) {
+                        double coincidentDistance, const ProgressFn& progress) {
   ConeCut result;
   result.singularities = computeSingularities(mesh, topology, field);
   result.conesBeforeMerge = static_cast<std::uint32_t>(result.singularities.cones.size());
   ConeMergeOptions mergeOptions;
   mergeOptions.maxDistance = mergeDistance;
   result.merged = mergeCloseCones(mesh, topology, result.singularities, mergeOptions);
-  const ConeMergeResult adjacent = mergeAdjacentCones(topology, result.singularities, coincident);
-  result.merged.cancelledPairs += adjacent.cancelledPairs;
-  result.merged.mergedPairs += adjacent.mergedPairs;
-  result.merged.changedEdges += adjacent.changedEdges;
-  result.merged.longestPath = std::max(result.merged.longestPath, adjacent.longestPath);
+  const ConeMergeResult onePoint =
+      mergeCoincidentCones(mesh, topology, result.singularities, coincident, coincidentDistance);
+  result.merged.cancelledPairs += onePoint.cancelledPairs;
+  result.merged.mergedPairs += onePoint.mergedPairs;
+  result.merged.changedEdges += onePoint.changedEdges;
+  result.merged.longestPath = std::max(result.merged.longestPath, onePoint.longestPath);
   CutOptions cutOptions;
   cutOptions.progress = progress;
   result.cut = cutToDisk(mesh, topology, field, result.singularities, cutOptions);
@@ -71,13 +72,39 @@ ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, cons
 
 namespace {
 
-/// Adjacent cone pairs the map put on one point that may still be merged (canMergeCoincident).
+/// Cone pairs the map put on one point, adjacent or close (coincidentCones), that may still be
+/// merged (canMergeCoincident).
 std::vector<std::pair<VertexId, VertexId>> mergeableCoincidentCones(
-    const Topology& topology, const std::vector<VertexId>& cones,
-    const std::unordered_map<VertexId, std::int32_t>& coneIndex, const WedgeMap& map) {
+    const TriangleMesh& mesh, const Topology& topology, const std::vector<VertexId>& cones,
+    const std::unordered_map<VertexId, std::int32_t>& coneIndex, const WedgeMap& map, double maxDistance) {
   std::vector<std::pair<VertexId, VertexId>> pairs;
-  for (const auto& [a, b] : coincidentConeEdges(topology, cones, map)) {
+  for (const auto& [a, b] : coincidentCones(mesh, topology, cones, map, maxDistance)) {
     if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b))) pairs.push_back({a, b});
+  }
+  return pairs;
+}
+
+/// Cone pairs the map put on one point within maxDistance of each other along edges
+/// (coincidentCones), mergeable, with a face still flipped within maxDistance of one of them.
+std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
+    const PipelineResult& r, const std::vector<VertexId>& cones,
+    const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
+  const WedgeMap& map = r.solved.param.cornerUV;
+  std::vector<Vec3d> flipped;  // centroids
+  for (FaceId f = 0; f < r.mesh.numFaces(); ++f) {
+    const double ratio = parameterAreaRatio(r.mesh, map, f, r.edgeLength);
+    if (ratio < 0.0 && std::abs(ratio) >= kCollapsedAreaFraction) {
+      const Triangle& t = r.mesh.triangles[f];
+      flipped.push_back((r.mesh.position(t[0]) + r.mesh.position(t[1]) + r.mesh.position(t[2])) / 3.0);
+    }
+  }
+  const auto nearFlip = [&](VertexId v) {
+    const Vec3d p = r.mesh.position(v);
+    return std::any_of(flipped.begin(), flipped.end(), [&](const Vec3d& q) { return (q - p).norm() <= maxDistance; });
+  };
+  std::vector<std::pair<VertexId, VertexId>> pairs;
+  for (const auto& [a, b] : coincidentCones(r.mesh, r.topology, cones, map, maxDistance)) {
+    if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b)) && (nearFlip(a) || nearFlip(b))) pairs.push_back({a, b});
   }
   return pairs;
 }
@@ -165,19 +192,18 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   solverOptions.meter = &meter;  // closes "solve" and "refine"
   solverOptions.refine.coneWeightRadius = options.coneWeightRadius;
   const double mergeDistance = options.mergeCones * r.edgeLength;
+  const double coincidentDistance = kCoincidentSearchFraction * r.edgeLength;
   std::vector<std::pair<VertexId, VertexId>> coincident;
   for (;;) {
     ++r.conePasses;
     restoreFramePositions(r.mesh, r.topology, field);
-    ConeCut coneCut = cutThroughCones(r.mesh, r.topology, field, mergeDistance, coincident, options.progress);
+    ConeCut coneCut = cutThroughCones(r.mesh, r.topology, field, mergeDistance, coincident, coincidentDistance,
+                                      options.progress);
     // Until the next pass's cones only the 3D-fold test of a few flipped faces reads the smoothed
     // surface, and recomputes it around them: 12 bytes per vertex less for the solve.
     releaseFramePositions(field);
     if (r.conePasses == 1) r.conesBeforeMerge = coneCut.conesBeforeMerge;
-    r.merged.cancelledPairs += coneCut.merged.cancelledPairs;
-    r.merged.mergedPairs += coneCut.merged.mergedPairs;
-    r.merged.changedEdges += coneCut.merged.changedEdges;
-    r.merged.longestPath = std::max(r.merged.longestPath, coneCut.merged.longestPath);
+    r.merged = coneCut.merged;  // each pass merges the field's cones afresh
     std::unordered_map<VertexId, std::int32_t> coneIndex;
     for (VertexId v : coneCut.singularities.cones) coneIndex[v] = coneCut.singularities.index4[v];
     coneCut.singularities = FieldSingularities();  // the cut keeps the combed matchings and cones
@@ -198,34 +224,49 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       r.solved = SolverResult{};
       r.solved = parameterizeMeshWithSolver(r.mesh, r.topology, field, coneCut.cut, param, solverOptions);
     }
-    bool again = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
-    if (again) {
-      const auto pairs = mergeableCoincidentCones(r.topology, coneCut.cut.cones, coneIndex, r.solved.param.cornerUV);
-      coincident.insert(coincident.end(), pairs.begin(), pairs.end());
-      again = !pairs.empty();
-    }
-    if (!again) {
-      r.cones = coneCut.cut.cones;
-      std::sort(r.cones.begin(), r.cones.end());
-      r.coneIndex4.clear();
-      for (VertexId v : r.cones) r.coneIndex4.push_back(coneIndex.at(v));
-      r.seams = static_cast<std::uint32_t>(coneCut.cut.seams.size());
-      if (options.untangle) {
-        UntangleOptions untangle = options.untangleOptions;
-        untangle.edgeLength = r.edgeLength;
-        untangle.coneWeightRadius = options.coneWeightRadius;
-        untangle.progress = options.progress;
-        r.untangle = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
-                                   r.solved.param.translations, untangle);
-        r.untangled = true;
-        meter.finish("untangle");
+    // Adjacent cones on one point: another pass before any repair (the faces between them collapse).
+    const bool passesLeft = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
+    if (passesLeft) {
+      const auto pairs = mergeableCoincidentCones(r.mesh, r.topology, coneCut.cut.cones, coneIndex,
+                                                  r.solved.param.cornerUV, 0.0);
+      if (!pairs.empty()) {
+        coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+        r.solved = SolverResult{};  // free the map before the next pass
+        continue;
       }
-      r.seamQuality = measureSeams(r.mesh, r.topology, coneCut.cut, r.solved.param.cornerUV);
-      r.featureLines = r.solved.param.lines;
-      r.featureCurves = measureFeatureAlignment(r.topology, r.features, r.solved.param.cornerUV);
-      return;
     }
-    r.solved = SolverResult{};  // free the map before the next pass
+    if (options.untangle) {
+      UntangleOptions untangle = options.untangleOptions;
+      untangle.edgeLength = r.edgeLength;
+      untangle.coneWeightRadius = options.coneWeightRadius;
+      untangle.progress = options.progress;
+      r.untangle = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
+                                 r.solved.param.translations, untangle);
+      r.untangled = true;
+      meter.finish("untangle");
+      // Close cones on one point with flips left next to them: the repair cannot move them apart
+      // (their seams' translations fix them), merging them can; on a noisy scan most such pairs
+      // are harmless and merging them all costs flips elsewhere, so only these.
+      if (passesLeft && r.untangle.flippedAfter > 0) {
+        const auto pairs = foldedCoincidentCones(r, coneCut.cut.cones, coneIndex, coincidentDistance);
+        if (!pairs.empty()) {
+          coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+          r.solved = SolverResult{};
+          r.untangle = UntangleStats{};
+          r.untangled = false;
+          continue;
+        }
+      }
+    }
+    r.cones = coneCut.cut.cones;
+    std::sort(r.cones.begin(), r.cones.end());
+    r.coneIndex4.clear();
+    for (VertexId v : r.cones) r.coneIndex4.push_back(coneIndex.at(v));
+    r.seams = static_cast<std::uint32_t>(coneCut.cut.seams.size());
+    r.seamQuality = measureSeams(r.mesh, r.topology, coneCut.cut, r.solved.param.cornerUV);
+    r.featureLines = r.solved.param.lines;
+    r.featureCurves = measureFeatureAlignment(r.topology, r.features, r.solved.param.cornerUV);
+    return;
   }
 }
 

@@ -60,12 +60,12 @@ struct ConeCut {
 };
 
 /// computeSingularities, mergeCloseCones (cones at most mergeDistance apart, mesh units; <= 0
-/// merges nothing), mergeAdjacentCones on `coincident` (pairs a previous solve put on one
-/// point), then cutToDisk.
+/// merges nothing), mergeCoincidentCones on `coincident` (pairs a previous solve put on one
+/// point, joined along paths up to coincidentDistance), then cutToDisk.
 ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                         double mergeDistance,
                         const std::vector<std::pair<VertexId, VertexId>>& coincident = {},
-                        const ProgressFn& progress = {});
+                        double coincidentDistance = 0.0, const ProgressFn& progress = {});
 
 struct PipelineOptions {
   CleanOptions clean;  ///< weld, tolerance (progress is set from below)
@@ -129,7 +129,7 @@ struct PipelineResult {
   std::vector<std::int32_t> coneIndex4;  ///< index of each cone, quarter turns
   std::uint32_t seams = 0;       ///< seam curves of the last cut
   std::uint32_t conesBeforeMerge = 0;  ///< of the first pass
-  ConeMergeResult merged;        ///< over all passes
+  ConeMergeResult merged;        ///< of the last pass (each merges the field's cones afresh)
   std::uint32_t conePasses = 0;
   SolverResult solved;           ///< figures of the last solve (its map moved to mesh.cornerUV)
   bool untangled = false;        ///< the foldover repair ran

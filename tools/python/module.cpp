@@ -181,7 +181,7 @@ FieldOutcome crossFieldArrays(const py::object& V, const py::object& F, const st
     clean = cleanMesh(std::move(raw), cleanOptions);
     crossField = computeFieldFromSource(clean.mesh, clean.topology, clean.faceOrigin, inputFaces, source, progressFn);
     const double h = spacing.spacing(clean.report.diagonalWithoutSpikes);
-    coneCut = cutThroughCones(clean.mesh, clean.topology, crossField, merge * h, {}, progressFn);
+    coneCut = cutThroughCones(clean.mesh, clean.topology, crossField, merge * h, {}, 0.0, progressFn);
   });
   FieldOutcome out;
   // One vector per input face, as `seamvox field` writes it: faces cleaning dropped get zero.
