@@ -175,6 +175,61 @@ TEST(Untangle, RepairsFlipsKeepsSeamlessAndMovesOnlyPatches) {
   EXPECT_EQ(stats.freeVertices > 0, true);
 }
 
+TEST(Untangle, FoldedClosedSpecksSmallerThanACellGoOnOnePoint) {
+  DamagedMap d = damagedSphereMap();
+  const TriangleMesh& mesh = d.cs.s.mesh;
+  const Topology& topology = d.cs.s.topology;
+  const double diagonal = computeBoundingBox(mesh.positions).diagonal();
+  const WedgeMap damaged = d.map.cornerUV;
+  ASSERT_GT(measureMap(mesh, damaged, &d.cs.field, 0.15).flipped, 0u);
+  const auto sameMap = [&](const WedgeMap& a, const WedgeMap& b) {
+    for (CornerId c = 0; c < 3u * mesh.numFaces(); ++c) {
+      if (a[c] != b[c]) return false;
+    }
+    return true;
+  };
+  // Larger than a cell: left as it is.
+  std::vector<std::complex<double>> t = d.map.translations;
+  WedgeMap map = damaged;
+  for (std::uint32_t faces : collapseSpecks(mesh, topology, d.cs.cut, map, t, 0.5 * diagonal)) EXPECT_EQ(faces, 0u);
+  EXPECT_TRUE(sameMap(map, damaged));
+  EXPECT_EQ(t, d.map.translations);
+  // Smaller than a cell but not folded: left as it is.
+  ParamOptions options;
+  options.edgeLength = 0.15;
+  const ParamResult clean = parameterizeMesh(mesh, topology, d.cs.field, d.cs.cut, options);
+  ASSERT_EQ(measureMap(mesh, clean.cornerUV, &d.cs.field, 0.15).flipped, 0u);
+  map = clean.cornerUV;
+  t = clean.translations;
+  for (std::uint32_t faces : collapseSpecks(mesh, topology, d.cs.cut, map, t, 2.0 * diagonal)) EXPECT_EQ(faces, 0u);
+  EXPECT_TRUE(sameMap(map, clean.cornerUV));
+  // Smaller than a cell and folded: every corner on (0, 0), seamless, collapsed, not flipped.
+  map = damaged;
+  t = d.map.translations;
+  const std::vector<std::uint32_t> faces = collapseSpecks(mesh, topology, d.cs.cut, map, t, 2.0 * diagonal);
+  ASSERT_EQ(faces.size(), 1u);
+  EXPECT_EQ(faces[0], mesh.numFaces());
+  for (CornerId c = 0; c < 3u * mesh.numFaces(); ++c) EXPECT_EQ(map[c], Vec2d::Zero()) << c;
+  for (const auto& z : t) EXPECT_EQ(z, std::complex<double>(0.0, 0.0));
+  EXPECT_TRUE(measureSeams(mesh, topology, d.cs.cut, map).isSeamless());
+  const MapQuality onePoint = measureMap(mesh, map, &d.cs.field, 2.0 * diagonal);
+  EXPECT_EQ(onePoint.flipped, 0u);
+  EXPECT_EQ(onePoint.collapsed, mesh.numFaces());
+  // The repair's last step, counted in its figures.
+  UntangleOptions nothingElse;
+  nothingElse.edgeLength = 2.0 * diagonal;
+  nothingElse.maxRounds = 0;
+  nothingElse.relocationPasses = 0;
+  nothingElse.jointRings = 0;
+  map = damaged;
+  t = d.map.translations;
+  const UntangleStats stats = untangleFlips(mesh, topology, d.cs.field, d.cs.cut, map, t, nothingElse);
+  EXPECT_GT(stats.flippedBefore, 0u);
+  EXPECT_EQ(stats.flippedAfter, 0u);
+  EXPECT_EQ(stats.specks, 1u);
+  EXPECT_EQ(stats.speckFaces, mesh.numFaces());
+}
+
 TEST(Untangle, RelocationAloneUnfoldsMovedVerticesAndMovesNothingElse) {
   // Without re-solves, each damaged vertex (one wedge, off the cut) moves into the kernel of its
   // fan: no flip left, seams untouched, and no other corner changes.

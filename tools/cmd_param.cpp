@@ -112,6 +112,11 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(r.untangle.foldedIn3D),
                 static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves,
                 r.untangle.relocatedVertices, r.untangle.jointVertices, r.untangle.seconds);
+    if (r.untangle.specks > 0) {
+      std::printf("foldover repair: %u closed components smaller than a cell (%llu faces) were still folded: "
+                  "mapped to one point, their faces collapsed\n",
+                  r.untangle.specks, static_cast<unsigned long long>(r.untangle.speckFaces));
+    }
   }
   if (r.featureCurves.total > 0) {
     std::printf("feature curves: %u (%u boundary, %u crease edges; feature angle %g%s): %u aligned on integer "

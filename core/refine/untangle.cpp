@@ -807,6 +807,47 @@ GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, cons
 
 }  // namespace
 
+std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
+                                          WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h) {
+  const ComponentsResult components = computeComponents(topology);
+  const std::size_t nk = components.components.size();
+  std::vector<std::uint32_t> collapsed(nk, 0);
+  std::vector<std::uint8_t> candidate(nk, 0);
+  for (std::size_t k = 0; k < nk; ++k) {
+    const ComponentInfo& info = components.components[k];
+    candidate[k] = info.boundaryLoops == 0 && info.eulerCharacteristic != 0;
+  }
+  if (std::none_of(candidate.begin(), candidate.end(), [](std::uint8_t c) { return c != 0; })) return collapsed;
+  std::vector<BoundingBox> box(nk);
+  std::vector<std::uint8_t> flipped(nk, 0);
+  for (FaceId f = 0; f < topology.numFaces(); ++f) {
+    const std::uint32_t k = components.faceComponent[f];
+    if (!candidate[k]) continue;
+    for (VertexId v : mesh.triangles[f]) {
+      box[k].min = box[k].min.cwiseMin(mesh.position(v));
+      box[k].max = box[k].max.cwiseMax(mesh.position(v));
+    }
+    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
+    flipped[k] |= ratio < 0.0 && std::abs(ratio) >= kCollapsedAreaFraction;
+  }
+  std::vector<CornerId> corners;
+  for (FaceId f = 0; f < topology.numFaces(); ++f) {
+    const std::uint32_t k = components.faceComponent[f];
+    if (!candidate[k] || !flipped[k] || !(box[k].diagonal() < h)) continue;
+    ++collapsed[k];
+    for (CornerId c = 3 * f; c < 3 * f + 3; ++c) corners.push_back(c);
+  }
+  if (corners.empty()) return collapsed;
+  cornerUV.assign(corners, std::vector<Vec2d>(corners.size(), Vec2d::Zero()));
+  for (std::size_t s = 0; s < cut.seams.size() && s < seamT.size(); ++s) {
+    const SeamCurve& seam = cut.seams[s];
+    if (!seam.corners.empty() && collapsed[components.faceComponent[cornerFace(seam.corners.front())]] > 0) {
+      seamT[s] = 0.0;
+    }
+  }
+  return collapsed;
+}
+
 UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                             const CutResult& cut, WedgeMap& cornerUV, std::vector<Complex>& seamT,
                             const UntangleOptions& options) {
@@ -884,6 +925,13 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   // The last steps re-measure only the faces they watch: the figures come from the whole map, as
   // the quality measure's do.
   if (stats.relocatedVertices > 0 || stats.jointVertices > 0) classifyAll();
+  if (std::any_of(state.begin(), state.end(), [](std::uint8_t s) { return s != kFine; })) {
+    for (std::uint32_t faces : collapseSpecks(mesh, topology, cut, cornerUV, seamT, h)) {
+      stats.specks += faces > 0;
+      stats.speckFaces += faces;
+    }
+    if (stats.specks > 0) classifyAll();
+  }
   std::sort(moved.begin(), moved.end());
   stats.freeVertices = static_cast<std::uint32_t>(std::unique(moved.begin(), moved.end()) - moved.begin());
   for (FaceId f = 0; f < nf; ++f) {

@@ -65,12 +65,28 @@ struct UntangleStats {
   std::uint32_t largestUnknowns = 0;
   std::uint32_t relocatedVertices = 0;  ///< moves of the relocation step (a vertex counted per move)
   std::uint32_t jointVertices = 0;      ///< vertices of the kept joint patches (summed over patches)
+  /// Closed components smaller than a cell left with flips, mapped to one point (collapseSpecks);
+  /// their faces are collapsed, not counted in flippedAfter.
+  std::uint32_t specks = 0;
+  std::uint64_t speckFaces = 0;
   double seconds = 0.0;
 };
 
+/// Closed components whose bounding box diagonal is below h and whose map still has flipped
+/// faces are mapped to the point (0, 0), every corner and the translations of their seams: a
+/// closed surface other than a torus needs cones, which a seamless map puts on lattice points at
+/// least half a unit apart, so a speck far smaller than a cell (a scan's floating crumb) is blown
+/// up to a cell and folded, and no repair with its cones fixed unfolds it. On one point it stays
+/// seamless (its seams' translations 0), its faces are collapsed (`check` counts them so, the
+/// component report says "point") and the quad mesh reports it as an island smaller than a cell.
+/// Returns the faces per component mapped so, in the order of computeComponents.
+std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
+                                          WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h);
+
 /// Repairs flips of cornerUV (3 #F, on the wedges of cut) in place; seamT (per seam of cut,
 /// Gaussian integers) is updated where a seam inside a patch re-rounded its translation. A round
-/// is kept only where it lowers the flips of its patch. Throws InputError on mismatched sizes.
+/// is kept only where it lowers the flips of its patch; last, collapseSpecks. Throws InputError on
+/// mismatched sizes.
 UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                             const CutResult& cut, WedgeMap& cornerUV,
                             std::vector<std::complex<double>>& seamT, const UntangleOptions& options);
