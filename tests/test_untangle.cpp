@@ -16,6 +16,9 @@
 #include "core/synth/generate.h"
 #include "core/system/errors.h"
 #include "test_meshes.h"
+#include "tests/testing.h"
+#include "io/mesh_io.h"
+#include "io/json_reader.h"
 
 namespace seamvox {
 namespace {
@@ -228,6 +231,44 @@ TEST(Untangle, FoldedClosedSpecksSmallerThanACellGoOnOnePoint) {
   EXPECT_EQ(stats.flippedAfter, 0u);
   EXPECT_EQ(stats.specks, 1u);
   EXPECT_EQ(stats.speckFaces, mesh.numFaces());
+}
+
+TEST(Untangle, AFloatingCrumbIsMappedToOnePointAndEveryToolAgrees) {
+  // A closed crumb a tenth of a cell across beside a sphere (a scan's floating speck): its cones
+  // blow its map up to a cell and fold it. param maps it to one point instead: no flips, its
+  // faces collapsed, the component reported as a point; check calls the file seamless with the
+  // same counts, and quads reports the crumb as an island.
+  TriangleMesh crumb = testing::icosphereMesh(2);
+  for (Vec3f& p : crumb.positions) p = p * 0.003f + Vec3f(3.0f, 0.0f, 0.0f);
+  const std::uint32_t crumbFaces = crumb.numFaces();
+  const TriangleMesh mesh = testing::concatMeshes({sphere(20000), crumb});
+  testing::TempDir dir;
+  writeMesh(dir.path("in.obj"), mesh);
+  std::string out;
+  ASSERT_EQ(testing::runSeamvox("param " + dir.path("in.obj") + " -o " + dir.path("raw.ply") +
+                                    " --no-untangle --quiet --report " + dir.path("raw.json"), &out), 0) << out;
+  const JsonValue raw = parseJson(testing::readFile(dir.path("raw.json")));
+  ASSERT_GT(raw.numberAt("quality.flipped"), 0.0) << "the crumb's map should fold without the repair";
+  ASSERT_EQ(testing::runSeamvox("param " + dir.path("in.obj") + " -o " + dir.path("map.ply") +
+                                    " --quiet --report " + dir.path("map.json"), &out), 0) << out;
+  const JsonValue r = parseJson(testing::readFile(dir.path("map.json")));
+  EXPECT_EQ(r.numberAt("quality.flipped"), 0.0);
+  EXPECT_EQ(r.numberAt("quality.collapsed"), double(crumbFaces));
+  EXPECT_EQ(r.numberAt("untangle.specks"), 1.0);
+  EXPECT_EQ(r.numberAt("untangle.speckFaces"), double(crumbFaces));
+  EXPECT_EQ(r.numberAt("componentList.mapped.point"), 1.0);
+  EXPECT_EQ(r.numberAt("quality.seamless"), 1.0);
+  std::string checked;
+  EXPECT_EQ(testing::runSeamvox("check " + dir.path("map.ply"), &checked), 0) << checked;
+  EXPECT_NE(checked.find("flipped 0 "), std::string::npos) << checked;
+  EXPECT_NE(checked.find("collapsed " + std::to_string(crumbFaces)), std::string::npos) << checked;
+  std::string quads;
+  ASSERT_EQ(testing::runSeamvox("quads " + dir.path("map.ply") + " -o " + dir.path("q.obj") + " --quiet --report " +
+                                    dir.path("q.json"), &quads), 0) << quads;
+  const JsonValue q = parseJson(testing::readFile(dir.path("q.json")));
+  EXPECT_EQ(q.numberAt("extraction.islands"), 1.0);
+  EXPECT_EQ(q.numberAt("extraction.islandFaces"), double(crumbFaces));
+  EXPECT_EQ(q.numberAt("validation.valid"), 1.0);
 }
 
 TEST(Untangle, RelocationAloneUnfoldsMovedVerticesAndMovesNothingElse) {
