@@ -151,6 +151,10 @@ void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportConte
   j.key("write").value(stageSeconds(c.stages, "write")).key("total").value(c.totalSeconds);
   j.endObject();
   j.key("peakResidentBytes").value(c.peakBytes);
+  if (c.memoryBudget > 0) {
+    j.key("path").value(std::string("in-memory"));
+    j.key("memoryBudget").value(c.memoryBudget).key("estimatedBytes").value(c.estimatedBytes);
+  }
   // Wall time, peak and end resident size of each stage, in order.
   j.key("stages").beginArray();
   for (const StageFigures& stage : c.stages) {

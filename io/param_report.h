@@ -25,6 +25,8 @@ struct ParamReportContext {
   std::vector<StageFigures> stages;
   double totalSeconds = 0.0;
   std::uint64_t peakBytes = 0;
+  /// The command's memory budget and its estimate of the in-memory peak (0: not written).
+  std::uint64_t memoryBudget = 0, estimatedBytes = 0;
 };
 
 /// The context of a run with these options measured by meter (its stages so far): the settings,

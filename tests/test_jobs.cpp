@@ -15,6 +15,8 @@
 #include "io/json_reader.h"
 #include "io/mesh_io.h"
 #include "core/batch/jobs.h"
+#include "core/solve/param_solver.h"
+#include "core/solve/param_solver.h"
 #include "testing.h"
 
 namespace seamvox {
@@ -90,10 +92,16 @@ TEST(JobSchedule, FirstPendingJobThatFitsTheBudget) {
   EXPECT_EQ(pickNextJob({}, 0, 10), -1);
   EXPECT_EQ(pickNextJob({4}, 12, 10), -1);  // over budget already (no underflow)
   // Estimates grow with faces and, for the voxel solvers, with the grid.
-  const std::vector<std::string> hat = {"--solver", "hat"}, vox = {"--grid", "256"};
+  const std::vector<std::string> hat = {"--solver", "hat"}, voxloc = {"--solver", "voxloc"},
+                                 vox256 = {"--solver", "voxloc", "--grid", "256"};
   EXPECT_LT(estimateJobPeakBytes(1000, hat), estimateJobPeakBytes(1000000, hat));
-  EXPECT_LT(estimateJobPeakBytes(1000, hat), estimateJobPeakBytes(1000, {}));
-  EXPECT_LT(estimateJobPeakBytes(1000, {}), estimateJobPeakBytes(1000, vox));
+  EXPECT_LT(estimateJobPeakBytes(1000, hat), estimateJobPeakBytes(1000, voxloc));
+  EXPECT_LT(estimateJobPeakBytes(1000, voxloc), estimateJobPeakBytes(1000, vox256));
+  // The default solver is param's: auto, hat on small meshes, voxloc on large ones; the same
+  // rule param checks against its own budget.
+  EXPECT_EQ(estimateJobPeakBytes(1000, {}), estimateJobPeakBytes(1000, hat));
+  EXPECT_EQ(estimateJobPeakBytes(20000000, {}), estimateJobPeakBytes(20000000, voxloc));
+  EXPECT_EQ(estimateJobPeakBytes(20000000, {}), estimateParamPeakBytes(20000000, ParamSolver::Auto, 128));
   // Vertex properties count three times (read, gathered by cleaning, written).
   EXPECT_EQ(estimateJobPeakBytes(1000, hat, 4000000), estimateJobPeakBytes(1000, hat) + 12000000);
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 
 #include <tbb/global_control.h>
 
@@ -112,8 +113,36 @@ TEST(Pipeline, GivesWhatTheCommandWrites) {
   const JsonValue mine = parseJson(paramReportJson(r, context));
   for (const auto& [key, value] : flattenJson(j)) {
     if (key.rfind("stages.", 0) == 0) continue;  // the command adds read and write stages
+    if (key == "path" || key == "memoryBudget" || key == "estimatedBytes") continue;  // and its budget
     EXPECT_NE(mine.find(key), nullptr) << key;
   }
+}
+
+TEST(Pipeline, AMeshAboveTheMemoryBudgetIsRefusedBeforeItIsRead) {
+  // param runs in memory only: its estimate (from the header's counts) above the budget is an
+  // error naming the file, the estimate and the budget, and nothing is written; within the
+  // budget the run says which path ran, and the estimate errs high.
+  testing::TempDir dir;
+  const std::string input = dir.path("s.ply");
+  const TriangleMesh mesh = sphere(20000);
+  writeMesh(input, mesh);
+  const std::string common = "param " + input + " -o " + dir.path("o.ply") + " --report " + dir.path("r.json");
+  std::string out;
+  EXPECT_EQ(testing::runSeamvox(common + " --quiet --memory-budget 40M", &out), 1) << out;
+  EXPECT_NE(out.find(input + ": param needs about"), std::string::npos) << out;
+  EXPECT_NE(out.find("above the --memory-budget of 40.0 MiB"), std::string::npos) << out;
+  EXPECT_NE(out.find("no out-of-core path"), std::string::npos) << out;
+  EXPECT_FALSE(std::ifstream(dir.path("o.ply")).good());
+  EXPECT_FALSE(std::ifstream(dir.path("r.json")).good());
+  const std::uint64_t estimate = estimateParamPeakBytes(mesh.numFaces(), ParamSolver::Auto, kDefaultGridResolution);
+  ASSERT_EQ(testing::runSeamvox(common + " --memory-budget " + std::to_string(estimate), &out), 0) << out;
+  EXPECT_NE(out.find("path in memory: estimate"), std::string::npos) << out;
+  const JsonValue report = parseJson(testing::readFile(dir.path("r.json")));
+  EXPECT_EQ(report["path"].text, "in-memory");
+  EXPECT_EQ(report.numberAt("memoryBudget"), double(estimate));
+  EXPECT_EQ(report.numberAt("estimatedBytes"), double(estimate));
+  EXPECT_GE(report.numberAt("estimatedBytes"), report.numberAt("peakResidentBytes"));
+  EXPECT_EQ(testing::runSeamvox(common + " --memory-budget " + std::to_string(estimate - 1), &out), 1) << out;
 }
 
 TEST(Pipeline, CancelsThroughProgress) {

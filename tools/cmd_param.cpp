@@ -12,7 +12,9 @@
 #include "io/param_report.h"
 #include "io/png_io.h"
 #include "io/polygon_io.h"
+#include "core/system/memory_budget.h"
 #include "tools/cli.h"
+#include "tools/memory_path.h"
 
 namespace seamvox::cli {
 namespace {
@@ -22,6 +24,7 @@ struct ParamCommand {
   std::string solverName, fieldSource;
   std::optional<std::string> reportPath, renderPath, quadsPath;
   PipelineOptions options;
+  MemoryOptions memory;
 };
 
 ParamCommand parseParamArgs(Args& args) {
@@ -59,7 +62,7 @@ ParamCommand parseParamArgs(Args& args) {
   c.renderPath = args.value("render");
   c.quadsPath = args.value("quads");
   o.progress = makeProgress(args.flag("quiet"));
-  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
+  c.memory = parseMemoryOptions(args);
   args.finish(1);
   if (c.renderPath) requirePngPath("--render", *c.renderPath);
   if (c.quadsPath && formatFromPath(*c.quadsPath) != MeshFormat::Obj && formatFromPath(*c.quadsPath) != MeshFormat::Ply) {
@@ -160,9 +163,27 @@ int runParam(Args& args) {
   AtomicFile* reportFile = c.reportPath && *c.reportPath != "-" ? &outputs.add(*c.reportPath) : nullptr;
   AtomicFile* renderFile = c.renderPath ? &outputs.add(*c.renderPath) : nullptr;
   AtomicFile* quadsFile = c.quadsPath ? &outputs.add(*c.quadsPath) : nullptr;
+  // The estimate from the header's counts, before anything is read: param runs in memory only,
+  // so a mesh that would not fit the budget is refused now instead of exceeding it later.
+  // One stream for both (a pipe is read once).
+  MemoryPath memoryPath;
+  memoryPath.budget = c.memory.budget;
+  const std::unique_ptr<MeshStream> stream = openMeshStream(c.input);
+  {
+    const MeshCounts counts = guessMeshCounts(c.input, *stream);
+    memoryPath.estimate = estimateParamPeakBytes(counts.faces, c.options.solver.solver, c.options.solver.gridResolution);
+    if (memoryPath.estimate > memoryPath.budget) {
+      throw InputError(c.input + ": param needs about " + formatByteSize(memoryPath.estimate) + " in memory for " +
+                       std::to_string(counts.faces) + " faces, above the --memory-budget of " +
+                       formatByteSize(memoryPath.budget) + (c.memory.budgetGiven ? "" : " (the default: 3/4 of the available memory)") +
+                       "; param has no out-of-core path yet: give a larger --memory-budget if the machine has it, "
+                       "or split the scan into tiles (seamvox jobs)");
+    }
+  }
   StageMeter meter;
   c.options.meter = &meter;
-  TriangleMesh raw = readMesh(c.input);
+  TriangleMesh raw = collectMesh(*stream);
+  if (raw.triangles.empty()) throw InputError(c.input + ": the mesh has no faces");
   if (c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy") {
     // The file has one vector per input face; cleaning may drop or reorder faces.
     c.options.field.importedPerInputFace = readFieldVectors(c.fieldSource, raw.numFaces());
@@ -196,10 +217,16 @@ int runParam(Args& args) {
   writeMesh(meshFile, std::move(r.mesh));
   meter.finish("write");
   printSummary(c, r, meter);
+  // The meter's peak: the stages reset the high-water mark as they close.
+  std::printf("path in memory: estimate %s within the budget %s; peak memory %s\n",
+              formatByteSize(memoryPath.estimate).c_str(), formatByteSize(memoryPath.budget).c_str(),
+              formatByteSize(meter.peakBytes()).c_str());
   if (quads) printQuadSummary(*c.quadsPath, *quads);
   if (c.reportPath) {
-    const ParamReportContext context =
+    ParamReportContext context =
         paramReportContext(c.options, meter, c.input, c.output, c.solverName, c.fieldSource);
+    context.memoryBudget = memoryPath.budget;
+    context.estimatedBytes = memoryPath.estimate;
     if (reportFile) {
       reportFile->write(paramReportJson(r, context));
     } else {
@@ -269,7 +296,10 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --quads Q.obj|.ply  also write the map's quad mesh (seamvox quads) and print its\n"
                  "                      validation\n"
                  "  --quiet             no progress on stderr\n"
-                 SEAMVOX_MEMORY_HELP,
+                 SEAMVOX_MEMORY_HELP
+                 "                        param runs in memory only: a mesh whose estimated peak\n"
+                 "                        (from the header's counts) exceeds the budget is refused\n"
+                 "                        before it is read\n",
                  {"greedy", "no-untangle", "weld", "keep-order", "drop-unsolved", "align-boundary"},
                  &runParam});
 

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "core/solve/param_solver.h"
 #include "core/system/errors.h"
 
 namespace seamvox {
@@ -178,17 +179,17 @@ Manifest parseManifest(const std::string& text, const std::string& source, const
 
 std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::string>& paramArgs,
                                    std::uint64_t propertyBytes) {
-  const std::string solver = optionValue(paramArgs, "--solver", "voxloc");
-  const double grid = std::atof(optionValue(paramArgs, "--grid", "128").c_str());
-  const double mib = 1048576.0;
-  // Fitted on peak RSS of `seamvox param` on generated spheres, rounded up: a fixed part, about
-  // 1.1 KB per face (mesh, topology, field, cut, hat system; 200k faces hat: 256 MB) and, for the
-  // volumetric solvers, about 40 KB per grid^2 (elements and factor; on 3000 faces grid 32:
-  // 85 MB, 64: 213 MB, 128: 648 MB), counted as 48 KB.
-  double bytes = 48.0 * mib + 1300.0 * static_cast<double>(faces);
-  if (solver != "hat") bytes += 48000.0 * grid * grid;
-  bytes += 3.0 * static_cast<double>(propertyBytes);
-  return static_cast<std::uint64_t>(bytes);
+  // The rule `seamvox param` checks against its own budget (estimateParamPeakBytes), with the
+  // job's --solver and --grid; malformed values fall back to the defaults (param reports them).
+  ParamSolver solver = ParamSolver::Auto;
+  try {
+    solver = parseParamSolver(optionValue(paramArgs, "--solver", "auto"));
+  } catch (const InputError&) {
+  }
+  const int grid = std::atoi(optionValue(paramArgs, "--grid", "128").c_str());
+  const std::uint64_t bytes =
+      estimateParamPeakBytes(faces, solver, grid >= 4 && grid <= 1024 ? grid : kDefaultGridResolution);
+  return bytes + 3 * propertyBytes;
 }
 
 std::int64_t pickNextJob(const std::vector<std::uint64_t>& pendingEstimates, std::uint64_t runningBytes,

@@ -47,9 +47,9 @@ Manifest parseManifest(const std::string& text, const std::string& source, const
                        const ExpandFn& expand);
 
 /// Estimated peak resident bytes of one `seamvox param` run on `faces` faces with these param
-/// options (--solver, --grid), whose input holds propertyBytes of vertex properties (colors,
-/// normals...; held about three times at once: read, gathered by cleaning, written). Fitted on
-/// generated meshes (see bench/RESULTS.md); errs high.
+/// options (--solver, default auto; --grid): the rule param itself checks against its budget
+/// (estimateParamPeakBytes), plus three times propertyBytes of vertex properties (colors,
+/// normals...: read, gathered by cleaning, written).
 std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::string>& paramArgs,
                                    std::uint64_t propertyBytes = 0);
 

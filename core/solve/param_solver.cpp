@@ -40,6 +40,14 @@ SolverChoice chooseParamSolver(ParamSolver requested, std::uint64_t numFaces,
   return {hat ? ParamSolver::Hat : ParamSolver::VoxLoc, text};
 }
 
+std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution) {
+  constexpr std::uint64_t kMiB = std::uint64_t(1) << 20;
+  const std::uint64_t program = 48 * kMiB;
+  if (chooseParamSolver(requested, faces, gridResolution).solver == ParamSolver::Hat) return program + 1400 * faces;
+  const double scale = double(gridResolution) / kDefaultGridResolution;
+  return program + static_cast<std::uint64_t>(520.0 * kMiB * scale * scale) + 72 * faces;
+}
+
 void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason) {
   const std::uint64_t needed = faces * kHatBytesPerFace;
   if (availableBytes == 0 || needed <= availableBytes) return;
