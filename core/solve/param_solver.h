@@ -49,9 +49,9 @@ void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, con
 /// Whole-process peak of `seamvox param` in memory for a mesh of this many faces, rounded up
 /// from bench/RESULTS.md: 48 MiB for the program, then with the hat solver (Auto up to
 /// kAutoHatMaxFacesGrid128) 1400 bytes per face (measured 1.2-1.3 KB at 100K-300K faces), with
-/// vox and voxloc the grid's system (520 MiB at grid 128, growing as the grid's square) and 72
-/// bytes per face (measured with the system: 540 MiB at 400K faces, 1704 MiB at 20.0M, 1907 MiB
-/// at 22.1M with two cone passes).
+/// vox and voxloc the grid's system (520 MiB at grid 128, growing as the grid's square) and 82
+/// bytes per face (measured: 540 MiB at 400K faces, 1704 MiB at 20.0M, 1907 MiB at 22.1M with two
+/// cone passes, 8160 MiB at 100M; the estimate is 3% above the last, 25% above the 20M one).
 std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution);
 
 /// Default voxels per axis of the voxel basis's grid (vox, voxloc).
