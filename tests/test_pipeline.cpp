@@ -143,6 +143,11 @@ TEST(Pipeline, AMeshAboveTheMemoryBudgetIsRefusedBeforeItIsRead) {
   EXPECT_EQ(report.numberAt("estimatedBytes"), double(estimate));
   EXPECT_GE(report.numberAt("estimatedBytes"), report.numberAt("peakResidentBytes"));
   EXPECT_EQ(testing::runSeamvox(common + " --memory-budget " + std::to_string(estimate - 1), &out), 1) << out;
+  // An OBJ declares no counts: guessed from its size, the estimate is shown, not enforced.
+  writeMesh(dir.path("s.obj"), mesh);
+  ASSERT_EQ(testing::runSeamvox("param " + dir.path("s.obj") + " -o " + dir.path("o.obj") + " --quiet --memory-budget 40M",
+                                &out), 0) << out;
+  EXPECT_NE(out.find("(faces guessed from the file size) above the budget 40.0 MiB"), std::string::npos) << out;
 }
 
 TEST(Pipeline, CancelsThroughProgress) {

@@ -169,10 +169,14 @@ int runParam(Args& args) {
   MemoryPath memoryPath;
   memoryPath.budget = c.memory.budget;
   const std::unique_ptr<MeshStream> stream = openMeshStream(c.input);
+  bool declared = false;
   {
     const MeshCounts counts = guessMeshCounts(c.input, *stream);
     memoryPath.estimate = estimateParamPeakBytes(counts.faces, c.options.solver.solver, c.options.solver.gridResolution);
-    if (memoryPath.estimate > memoryPath.budget) {
+    // Only a count the header declares is trusted: OBJ's is guessed from the file size (up to
+    // twice too high) and a pipe's is unknown, so those are never refused.
+    declared = stream->declaredFaces() > 0 || stream->expectedTriangles() > 0;
+    if (declared && memoryPath.estimate > memoryPath.budget) {
       throw InputError(c.input + ": param needs about " + formatByteSize(memoryPath.estimate) + " in memory for " +
                        std::to_string(counts.faces) + " faces, above the --memory-budget of " +
                        formatByteSize(memoryPath.budget) + (c.memory.budgetGiven ? "" : " (the default: 3/4 of the available memory)") +
@@ -218,8 +222,9 @@ int runParam(Args& args) {
   meter.finish("write");
   printSummary(c, r, meter);
   // The meter's peak: the stages reset the high-water mark as they close.
-  std::printf("path in memory: estimate %s within the budget %s; peak memory %s\n",
-              formatByteSize(memoryPath.estimate).c_str(), formatByteSize(memoryPath.budget).c_str(),
+  std::printf("path in memory: estimate %s%s %s the budget %s; peak memory %s\n",
+              formatByteSize(memoryPath.estimate).c_str(), declared ? "" : " (faces guessed from the file size)",
+              memoryPath.estimate <= memoryPath.budget ? "within" : "above", formatByteSize(memoryPath.budget).c_str(),
               formatByteSize(meter.peakBytes()).c_str());
   if (quads) printQuadSummary(*c.quadsPath, *quads);
   if (c.reportPath) {
