@@ -310,9 +310,12 @@ std::unique_ptr<MeshStream> openMeshStream(const std::string& path, const ReadOp
 }
 
 TriangleMesh readMesh(const std::string& path, const ReadOptions& options) {
-  const std::unique_ptr<MeshStream> stream = openMeshStream(path, options);
-  TriangleMesh mesh = collectMesh(*stream);
-  if (mesh.triangles.empty()) throw InputError(path + ": the mesh has no faces");
+  return readMesh(*openMeshStream(path, options));
+}
+
+TriangleMesh readMesh(MeshStream& stream) {
+  TriangleMesh mesh = collectMesh(stream);
+  if (mesh.triangles.empty()) throw InputError(stream.name() + ": the mesh has no faces");
   return mesh;
 }
 

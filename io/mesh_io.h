@@ -45,6 +45,8 @@ std::unique_ptr<MeshStream> openMeshStream(const std::string& path, const ReadOp
 /// Reads a whole mesh. Throws InputError for an empty mesh (no faces), indices out of range and
 /// NaN/inf coordinates, naming the file and the element.
 TriangleMesh readMesh(const std::string& path, const ReadOptions& options = {});
+/// The same from a stream already opened (openMeshStream), e.g. after its header was looked at.
+TriangleMesh readMesh(MeshStream& stream);
 
 struct WriteOptions {
   /// Write per-corner UVs when the mesh has them (OBJ vt per corner, PLY face "texcoord" list).

@@ -186,8 +186,7 @@ int runParam(Args& args) {
   }
   StageMeter meter;
   c.options.meter = &meter;
-  TriangleMesh raw = collectMesh(*stream);
-  if (raw.triangles.empty()) throw InputError(c.input + ": the mesh has no faces");
+  TriangleMesh raw = readMesh(*stream);
   if (c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy") {
     // The file has one vector per input face; cleaning may drop or reorder faces.
     c.options.field.importedPerInputFace = readFieldVectors(c.fieldSource, raw.numFaces());

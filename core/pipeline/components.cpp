@@ -66,7 +66,7 @@ ComponentMapFacts gatherMapFacts(const TriangleMesh& mesh, const ComponentsResul
     area[f] = static_cast<float>(faceArea(mesh, f));
     if (!mesh.hasUV()) return;
     const double ratio = parameterAreaRatio(mesh, mesh.cornerUV, f, edgeLength);
-    std::uint8_t b = std::abs(ratio) >= kCollapsedAreaFraction && ratio < 0.0;
+    std::uint8_t b = isFlippedRatio(ratio);
     for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
       if ((mesh.cornerUV[c] - first[faceComponent[f]]).cwiseAbs().maxCoeff() > kCoincidentConeDistance) b |= 2;
     }

@@ -92,8 +92,7 @@ std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
   const WedgeMap& map = r.solved.param.cornerUV;
   std::vector<Vec3d> flipped;  // centroids
   for (FaceId f = 0; f < r.mesh.numFaces(); ++f) {
-    const double ratio = parameterAreaRatio(r.mesh, map, f, r.edgeLength);
-    if (ratio < 0.0 && std::abs(ratio) >= kCollapsedAreaFraction) {
+    if (isFlippedRatio(parameterAreaRatio(r.mesh, map, f, r.edgeLength))) {
       const Triangle& t = r.mesh.triangles[f];
       flipped.push_back((r.mesh.position(t[0]) + r.mesh.position(t[1]) + r.mesh.position(t[2])) / 3.0);
     }

@@ -1,6 +1,7 @@
 #pragma once
 /// Quality figures of a parameterization (DESIGN section 11).
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -45,6 +46,8 @@ SeamQuality measureSeamsFromUV(const TriangleMesh& mesh, const Topology& topolog
 
 /// A face whose |parameter area| is below this fraction of its expected area A_T / h^2 is collapsed.
 constexpr double kCollapsedAreaFraction = 1e-6;
+/// A flipped face by its parameterAreaRatio: negative, and not collapsed.
+inline bool isFlippedRatio(double ratio) { return ratio < 0.0 && std::abs(ratio) >= kCollapsedAreaFraction; }
 
 /// Signed parameter-space area of face f (corners 3 f .. 3 f + 2 of cornerUV) over its expected
 /// area A_T / h^2: 1 for a map with |grad q| = 1/h and no shear, negative when flipped, +-inf or

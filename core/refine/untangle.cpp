@@ -28,7 +28,7 @@ enum FaceState : std::uint8_t { kFine = 0, kFlipped = 1, kFolded = 2 };
 /// kFlipped for a face with negative parameter area ratio (collapsed and zero-area faces
 /// excluded); markFolded then turns those folded in 3D into kFolded.
 std::uint8_t stateOf(double ratio) {
-  return ratio < 0.0 && std::abs(ratio) >= kCollapsedAreaFraction ? kFlipped : kFine;
+  return isFlippedRatio(ratio) ? kFlipped : kFine;
 }
 
 /// kFlipped faces (state[i], mesh face origin(i)) whose whole face is folded in 3D against the
@@ -827,8 +827,7 @@ std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topolo
       box[k].min = box[k].min.cwiseMin(mesh.position(v));
       box[k].max = box[k].max.cwiseMax(mesh.position(v));
     }
-    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
-    flipped[k] |= ratio < 0.0 && std::abs(ratio) >= kCollapsedAreaFraction;
+    flipped[k] |= isFlippedRatio(parameterAreaRatio(mesh, cornerUV, f, h));
   }
   std::vector<CornerId> corners;
   for (FaceId f = 0; f < topology.numFaces(); ++f) {
