@@ -404,6 +404,43 @@ TEST(Quads, InjectedFlipsStillExtract) {
   }
 }
 
+// A vertex moved onto the far edge of one of its triangles (its fan stays positive): that triangle
+// has zero area, and the iso-line through it is traced across it as through a fold.
+TEST(Quads, IsoLinesCrossUVDegenerateTriangles) {
+  const testing::Surface s = flatDisk(10, 0.7, Vec2d(0.13, 0.29));
+  std::vector<Vec2d> uv = testing::cornerValues(s.mesh.cornerUV);
+  const auto area = [&](const std::vector<Vec2d>& q, FaceId f) {
+    const Vec2d a = q[3 * f + 1] - q[3 * f], b = q[3 * f + 2] - q[3 * f];
+    return a.x() * b.y() - a.y() * b.x();
+  };
+  bool moved = false;
+  const VertexId v = 5 * 11 + 5;  // interior
+  s.topology.forEachCornerAround(v, [&](CornerId c) {
+    if (moved) return;
+    const Vec2d x = uv[nextCorner(c)], y = uv[prevCorner(c)], mid = 0.5 * (x + y);
+    // The edge x-y crosses an iso-line at a point that is not a grid point.
+    if (std::floor(x.x()) == std::floor(y.x()) && std::floor(x.y()) == std::floor(y.y())) return;
+    std::vector<Vec2d> trial = uv;
+    s.topology.forEachCornerAround(v, [&](CornerId d) { trial[d] = mid; });
+    bool fanPositive = true;
+    s.topology.forEachCornerAround(v, [&](CornerId d) {
+      if (d != c && area(trial, cornerFace(d)) <= 0.0) fanPositive = false;
+    });
+    if (!fanPositive) return;
+    uv = trial;
+    moved = true;
+  });
+  ASSERT_TRUE(moved);
+  TriangleMesh mesh = s.mesh;
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  const QuadResult q = extractQuads(mesh, s.topology);
+  EXPECT_EQ(q.stats.degenerateFaces, 1u);
+  EXPECT_EQ(q.stats.flippedFaces, 0u);
+  EXPECT_EQ(q.stats.untracedEdges, 0u);
+  EXPECT_EQ(q.stats.openFaces, 0u);
+  EXPECT_TRUE(checkOf(s, q).isValid());
+}
+
 TEST(Quads, MalformedMapsAreRefusedOrReported) {
   testing::Surface s = flatTorus(24, 12, 0.5, Vec2d(0.1, 0.2));
   TriangleMesh noUV = s.mesh;
@@ -489,6 +526,31 @@ TEST(Quads, SharedMeshesWithCreasesAlignedGiveManifoldQuads) {
     EXPECT_EQ(e.check.nonManifoldVertices, 0u);
     EXPECT_EQ(e.check.componentsDiffering, 0u);
     EXPECT_GE(e.check.quadFraction, 0.9);
+  });
+}
+
+TEST(Quads, CreasesAlignedAtOtherSpacingsGiveValidQuads) {
+  // rocker-arm's creases held on iso-lines at a coarse and a fine grid: at 200 cells a repair patch
+  // re-rounded the seam between two -1 cones onto one point (now solved again with its
+  // translation kept), at 60 a curve released in the last round let the solve collapse faces
+  // along another one (now released too).
+  forSharedMeshes({"rocker-arm.obj"}, [](const std::string& path) {
+    for (const double cells : {60.0, 200.0}) {
+      SCOPED_TRACE(cells);
+      PipelineOptions options;
+      options.solver.solver = ParamSolver::Hat;
+      options.features.featureAngle = 30.0;
+      options.spacing.cells = cells;
+      const Extracted e = extract(parameterize(readMesh(path), options));
+      print(e);
+      EXPECT_TRUE(e.map.isSeamless());
+      EXPECT_EQ(e.map.mapQuality.collapsed, 0u);
+      EXPECT_EQ(e.map.mapQuality.flipped, 0u);
+      EXPECT_GT(e.map.featureCurves.aligned, 0u);
+      EXPECT_EQ(e.quads.stats.untracedEdges + e.quads.stats.unpairedEdges + e.quads.stats.openFaces, 0u);
+      EXPECT_TRUE(e.check.isValid());
+      EXPECT_GE(e.check.quadFraction, 0.9);
+    }
   });
 }
 

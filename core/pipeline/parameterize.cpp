@@ -208,15 +208,16 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
     coneCut.singularities = FieldSingularities();  // the cut keeps the combed matchings and cones
     meter.finish("cut");
     r.solved = parameterizeMeshWithSolver(r.mesh, r.topology, field, coneCut.cut, param, solverOptions);
-    // Curves at faces the map collapsed are released (the shortest per cluster, the last round
-    // every one) and the map solved again.
+    // Curves at faces the map collapsed are released (the shortest per cluster; from round
+    // releaseRounds on, every one, at most releaseRounds more times: a release can make the solve
+    // collapse faces next to another curve) and the map solved again.
     const std::uint32_t releaseRounds = options.maxFeatureReleaseRounds;
-    for (std::uint32_t round = 0; releaseRounds > 0 && round <= releaseRounds && param.featureCorners &&
+    for (std::uint32_t round = 0; releaseRounds > 0 && round <= 2 * releaseRounds && param.featureCorners &&
                                   r.solved.param.lines.applied > 0;
          ++round) {
       std::uint32_t released = 0;
       held = releaseCollapsingCurves(r.mesh, r.topology, held, r.solved.param.cornerUV, r.edgeLength,
-                                     coneCut.cut.cones, round == releaseRounds, released);
+                                     coneCut.cut.cones, round >= releaseRounds, released);
       if (released == 0) break;
       r.featureCurvesReleased += released;
       featureCorners = featureSideCorners(r.topology, held);

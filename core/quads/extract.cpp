@@ -509,7 +509,7 @@ class Extractor {
     for (int step = 0; step < kMaxTraceSteps; ++step) {
       const Point q[3] = {map_.at(3 * f), map_.at(3 * f + 1), map_.at(3 * f + 2)};
       const int orientation = sign(orient(q[0], q[1], q[2]));
-      if (orientation == 0) return kNone;
+      if (orientation == 0 && entry < 0) return kNone;  // zero area: crossed like a fold, below
       if (orientation > 0 && orient(q[0], q[1], target) >= 0 && orient(q[1], q[2], target) >= 0 &&
           orient(q[2], q[0], target) >= 0) {
         const auto it = index_.find(locate(f, target));
@@ -520,9 +520,9 @@ class Extractor {
       int zeros = 0, zero = -1, nonzero = -1;
       for (int k = 0; k < 3; ++k) (s[k] == 0 ? (++zeros, zero = k) : nonzero = k);
       int exitEdge = -1, exitVertex = -1;  // local corner naming the exit edge, or the vertex
-      if (orientation < 0 || (entry >= 0 && zeros == 0)) {
-        // A flipped triangle (a fold), or one entered by an edge: out by the other edge the line
-        // crosses, which keeps the walk going through folds (QEx's local tracing).
+      if (orientation <= 0 || (entry >= 0 && zeros == 0)) {
+        // A flipped or zero-area triangle (a fold), or one entered by an edge: out by the other edge
+        // the line crosses, which keeps the walk going through folds (QEx's local tracing).
         if (entry < 0 || zeros > 0) return kNone;
         for (int k = 0; k < 3; ++k) {
           if (k != entry && (s[(k + 1) % 3] < 0) != (s[(k + 2) % 3] < 0)) exitEdge = k;

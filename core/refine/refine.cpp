@@ -712,7 +712,7 @@ RegionSolution solveRegionSystem(const RegionProblem& p, const Reduction& system
 RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<Complex>& seamT, double edgeLength,
                            RefineStats* stats, const std::vector<double>& faceWeight,
-                           double coneWeightRadius) {
+                           double coneWeightRadius, bool keepTranslations) {
   const std::uint32_t rf = region.topology.numFaces();
   const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
   if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
@@ -732,7 +732,8 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
   const Reduction reduction = reduceBasis(basis, reduceOptions);
   const RegionProblem problem(region, cornerUV, basis, reduction);
 
-  const std::vector<std::uint8_t> freeSeam = findFreeSeams(problem);
+  const std::vector<std::uint8_t> freeSeam =
+      keepTranslations ? std::vector<std::uint8_t>(ns, 0) : findFreeSeams(problem);
   RegionComponents components = findRegionComponents(problem, freeSeam);
   const FreeTranslations translations = findFreeTranslations(problem, freeSeam);
   const std::vector<Complex> fixedPart = fixedTranslationPart(problem, seamT);

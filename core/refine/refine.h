@@ -168,11 +168,14 @@ struct RegionSolution {
 /// right-hand side; translations fixed to seamT (per local seam) except on seams among free
 /// vertices only, which are solved, rounded to Gaussian integers and solved again (solveSeamless).
 /// Locked corners keep their input values exactly. faceWeight (#sub faces or empty) scales each
-/// face's energy, and so does HatBasisOptions::coneWeightRadius around the region's cones. Throws SolverError when a factorization fails.
+/// face's energy, and so does HatBasisOptions::coneWeightRadius around the region's cones.
+/// keepTranslations fixes every seam's translation (the foldover repair: re-rounding a seam between
+/// two cones in the region can put them on one point). Throws SolverError when a factorization fails.
 RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<std::complex<double>>& seamT, double edgeLength,
                            RefineStats* stats = nullptr,
-                           const std::vector<double>& faceWeight = {}, double coneWeightRadius = 0.0);
+                           const std::vector<double>& faceWeight = {}, double coneWeightRadius = 0.0,
+                           bool keepTranslations = false);
 
 /// The whole stage: select, extract, solve, re-detect and grow (rounds, above). cornerUV is the
 /// input map (3 #F), seamT its rounded translation per seam of cut (Gaussian integers). Holds one

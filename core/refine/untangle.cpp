@@ -66,6 +66,18 @@ std::vector<std::uint32_t> flipsPerComponent(const std::vector<std::uint8_t>& st
   return count;
 }
 
+/// Whether map uv collapses a region face (|parameter area ratio| < kCollapsedAreaFraction) that
+/// the map before did not.
+bool collapsesMore(const RegionMesh& region, const WedgeMap& uv, const WedgeMap& before, double h) {
+  for (std::uint32_t i = 0; i < region.topology.numFaces(); ++i) {
+    if (std::abs(parameterAreaRatio(region.mesh, uv, i, h)) < kCollapsedAreaFraction &&
+        std::abs(parameterAreaRatio(region.mesh, before, i, h)) >= kCollapsedAreaFraction) {
+      return true;
+    }
+  }
+  return false;
+}
+
 /// The best stiffened solution of one round's region: re-solves while faces stay flipped, each
 /// time multiplying their energy by options.stiffening; per component the solve with the fewest
 /// flips wins (components are independent: everything around them is locked).
@@ -91,6 +103,12 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
   for (std::uint32_t solve = 0; solve < std::max(1u, options.maxSolves); ++solve) {
     RefineStats stats;
     RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius);
+    // Seams whose edges all lie in the patch are re-rounded, which can move two cones onto one
+    // point (their faces collapse): then solved again with every translation kept.
+    if (collapsesMore(region, solved.cornerUV, regionUV, h)) {
+      solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, true);
+      ++out.solves;
+    }
     ++out.solves;
     out.unknowns = std::max(out.unknowns, stats.unknowns);
     const std::vector<std::uint8_t> state = regionStates(region, solved.cornerUV, h, mesh, topology, field);
