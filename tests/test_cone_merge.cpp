@@ -1,5 +1,4 @@
 #include <gtest/gtest.h>
-#include <array>
 #include <cmath>
 #include <numeric>
 #include <string>
@@ -97,42 +96,6 @@ TEST(ConeMerge, EqualConesBecomeOneConeOfTwiceTheIndex) {
     EXPECT_EQ(sing.cones[0], std::min(c.a, c.b));  // equal |index|: the smaller id stays
     EXPECT_EQ(sing.index4[sing.cones[0]], 2 * int(sign));
     expectSeamlessWithoutCollapse(c.s, c.field, sing, 2.0, sign > 0 ? "+2 cone" : "-2 cone");
-  }
-}
-
-// Two +1 cones one edge apart merge into a +2 cone, unless a +2 cone is within the merge distance:
-// the map would round the two +2 cones (which no merge joins) onto one point or one cell apart.
-TEST(ConeMerge, NoPlusTwoConeIsMadeNextToAnother) {
-  const int n = 20;
-  for (const int farI : {9, 2}) {
-    SCOPED_TRACE(farI == 9 ? "+2 cone two edges away" : "+2 cone nine edges away");
-    const Surface s = testing::makeSurface(testing::gridMesh(n, n));
-    const std::array<std::array<int, 3>, 3> cones = {{{farI, 10, 2}, {11, 10, 1}, {11, 11, 1}}};
-    CrossField field;
-    for (FaceId f = 0; f < s.mesh.numFaces(); ++f) {
-      const Triangle& t = s.mesh.triangles[f];
-      const Vec3d x = (s.mesh.position(t[0]) + s.mesh.position(t[1]) + s.mesh.position(t[2])) / 3.0;
-      double theta = 0.0;
-      for (const auto& [i, j, k] : cones) theta += k * std::atan2(x.y() - j, x.x() - i) / 4.0;
-      field.direction.push_back(Vec3f(float(std::cos(theta)), float(std::sin(theta)), 0.f));
-    }
-    FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
-    ASSERT_EQ(sing.cones.size(), 3u);
-    const VertexId plusTwo = VertexId(10 * (n + 1) + farI);
-    ASSERT_EQ(sing.index4[plusTwo], 2);
-    const std::int64_t sum = indexSum(sing);
-    const ConeMergeResult merged = mergeCloseCones(s.mesh, s.topology, sing, {2.5});
-    EXPECT_EQ(indexSum(sing), sum);
-    if (farI == 9) {
-      EXPECT_EQ(merged.mergedPairs, 0u);
-      EXPECT_EQ(sing.cones.size(), 3u);
-    } else {
-      EXPECT_EQ(merged.mergedPairs, 1u);
-      ASSERT_EQ(sing.cones.size(), 2u);
-      for (VertexId v : sing.cones) EXPECT_EQ(sing.index4[v], 2);
-    }
-    const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);  // matchings agree with cones
-    EXPECT_EQ(cut.cones, sing.cones);
   }
 }
 

@@ -76,21 +76,6 @@ void dropVanishedCones(FieldSingularities& singularities) {
   singularities.cones = std::move(cones);
 }
 
-/// Whether merging gone into keep would make a cone of |index4| >= 2 within the ball around keep of
-/// another cone of the same sign that even the map's coincident pairs could not merge with
-/// (|sum| > kMaxCoincidentIndex4, e.g. two +2 cones): a pair closer than the grid resolves with no
-/// merge left, which the map rounds onto one point or adjacent lattice points (two +2 cones one
-/// cell apart close a tube of two quads around them). Left unmerged the smaller cones spread.
-bool blocksMerge(const Ball& ball, const std::vector<std::int32_t>& index4, VertexId keep, VertexId gone) {
-  const std::int32_t sum = index4[keep] + index4[gone];
-  if (std::abs(sum) < kMaxMergedIndex4) return false;
-  for (const auto& [c, distance] : ball.distance) {
-    if (c == keep || c == gone || index4[c] == 0 || (index4[c] > 0) != (sum > 0)) continue;
-    if (std::abs(index4[c] + sum) > kMaxCoincidentIndex4) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topology,
@@ -132,10 +117,9 @@ ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topolo
     // keep = the cone that stays (larger |index4|, then smaller id); gone = the one moved onto it.
     const bool keepA = std::abs(index4[pair.a]) >= std::abs(index4[pair.b]);
     const VertexId keep = keepA ? pair.a : pair.b, gone = keepA ? pair.b : pair.a;
-    const Ball ball = searchBall(mesh, topology, keep, options.maxDistance);
+    const Ball ball = searchBall(mesh, topology, keep, options.maxDistance, gone);
     out.searchedVertices += ball.distance.size();
     if (!ball.pred.count(gone)) continue;  // the same search reached it before: cannot happen
-    if (blocksMerge(ball, index4, keep, gone)) continue;
     std::vector<CornerId> path;
     for (VertexId y = gone; y != keep; y = topology.vertex(nextCorner(path.back()))) {
       path.push_back(ball.pred.at(y));
