@@ -13,6 +13,7 @@
 #include "core/synth/generate.h"
 #include "core/system/errors.h"
 #include "io/mesh_io.h"
+#include "stream/subdivision_stream.h"
 #include "tests/test_meshes.h"
 #include "tests/testing.h"
 
@@ -172,6 +173,61 @@ TEST(Subdivide, BoundariesAndSeveralComponentsAreKept) {
     for (CornerId c = 0; c < cleaned.topology.numCorners(); ++c) coarseBoundary += cleaned.topology.isBoundaryEdge(c);
     for (CornerId c = 0; c < fine.numCorners(); ++c) fineBoundary += fine.isBoundaryEdge(c);
     EXPECT_EQ(fineBoundary, coarseBoundary << levels);
+  }
+}
+
+// The streamed subdivision (for outputs above the memory budget) gives subdivideMesh's faces in
+// its order with the same corner positions and properties bit for bit, numbered its own way:
+// every id used once per position, as many vertices, and the same corner table.
+TEST(Subdivide, TheStreamGivesTheSameFacesNumberedByEdgeAndFace) {
+  TriangleMesh parts = testing::concatMeshes(
+      {testing::gridMesh(5, 3), testing::cylinderMesh(9, 2), testing::torusMesh(8, 5)});
+  VertexProperty& red = parts.attributes.add("red", ScalarType::UInt8, parts.numVertices());
+  VertexProperty& q = parts.attributes.add("quality", ScalarType::Float32, parts.numVertices());
+  for (VertexId v = 0; v < parts.numVertices(); ++v) red.setValue(v, (v * 37) % 256), q.setValue(v, 0.1 * v);
+  const CleanResult cleaned = cleanMesh(parts);
+  for (std::uint32_t levels : {0u, 1u, 2u, 3u}) {
+    SCOPED_TRACE(levels);
+    SubdivideOptions options;
+    options.levels = levels;
+    const SubdivideResult memory = subdivideMesh(cleaned.mesh, cleaned.topology, options);
+    SubdivisionStream stream(cleaned.mesh, cleaned.topology, levels);
+    ASSERT_EQ(stream.numFaces(), memory.mesh.numFaces());
+    ASSERT_EQ(stream.numVertices(), memory.mesh.numVertices());
+    TriangleMesh streamed;
+    streamed.attributes = cleaned.mesh.attributes.emptyCopy();
+    MeshChunk chunk;
+    while (stream.nextVertices(7, chunk)) {  // small chunks: items split across calls
+      ASSERT_EQ(chunk.firstVertex, streamed.numVertices());
+      streamed.positions.insert(streamed.positions.end(), chunk.positions.begin(), chunk.positions.end());
+      streamed.attributes.append(chunk.attributes);
+    }
+    while (stream.nextTriangles(5, chunk)) {
+      streamed.triangles.insert(streamed.triangles.end(), chunk.triangles.begin(), chunk.triangles.end());
+    }
+    ASSERT_EQ(streamed.numVertices(), memory.mesh.numVertices());
+    ASSERT_EQ(streamed.numFaces(), memory.mesh.numFaces());
+    streamed.attributes.checkSize(streamed.numVertices());
+    // One streamed id per in-memory id (a renumbering), positions and properties equal.
+    std::vector<VertexId> memoryId(streamed.numVertices(), kInvalidId), streamedId(streamed.numVertices(), kInvalidId);
+    for (FaceId f = 0; f < streamed.numFaces(); ++f) {
+      for (int k = 0; k < 3; ++k) {
+        const VertexId a = streamed.triangles[f][k], b = memory.mesh.triangles[f][k];
+        ASSERT_LT(a, streamed.numVertices());
+        ASSERT_TRUE(memoryId[a] == kInvalidId || memoryId[a] == b) << "face " << f << " corner " << k;
+        ASSERT_TRUE(streamedId[b] == kInvalidId || streamedId[b] == a) << "face " << f << " corner " << k;
+        memoryId[a] = b;
+        streamedId[b] = a;
+        ASSERT_EQ(streamed.positions[a], memory.mesh.positions[b]) << "face " << f << " corner " << k;
+        for (std::size_t p = 0; p < streamed.attributes.properties.size(); ++p) {
+          ASSERT_EQ(streamed.attributes.properties[p].value(a), memory.mesh.attributes.properties[p].value(b));
+        }
+      }
+    }
+    for (VertexId v = 0; v < streamed.numVertices(); ++v) ASSERT_NE(memoryId[v], kInvalidId) << v;
+    const Topology topology = Topology::build(streamed.triangles, streamed.numVertices());
+    topology.validate();
+    EXPECT_EQ(computeComponents(topology).boundaryLoops, 3u);
   }
 }
 
