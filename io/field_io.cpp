@@ -152,11 +152,19 @@ void writeField(const std::string& path, const std::vector<Vec3d>& vectors) {
 }
 
 void writeField(AtomicFile& file, const std::vector<Vec3d>& vectors) {
-  file.write("# seamvox field: one tangent vector (x y z) per face, in face order\n1 " +
-             std::to_string(vectors.size()) + "\n");
+  writeFieldHeader(file, vectors.size());
+  appendFieldVectors(file, vectors.data(), vectors.size());
+}
+
+void writeFieldHeader(AtomicFile& file, std::uint64_t faces) {
+  file.write("# seamvox field: one tangent vector (x y z) per face, in face order\n1 " + std::to_string(faces) + "\n");
+}
+
+void appendFieldVectors(AtomicFile& file, const Vec3d* vectors, std::size_t count) {
   std::string chunk;
   char buf[96];
-  for (const Vec3d& v : vectors) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vec3d& v = vectors[i];
     const int len = std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", v.x(), v.y(), v.z());
     chunk.append(buf, static_cast<std::size_t>(len));
     if (chunk.size() > (1u << 20)) {

@@ -35,5 +35,9 @@ CrossField importField(const std::string& path, const TriangleMesh& mesh,
 void writeField(const std::string& path, const std::vector<Vec3d>& vectors);
 /// The same into an open output (e.g. one of an OutputSet); the caller commits.
 void writeField(AtomicFile& file, const std::vector<Vec3d>& vectors);
+/// The same in pieces, for fields larger than memory: the header for `faces` vectors, then the
+/// vectors in face order, count at a time (writeField's bytes once all are appended).
+void writeFieldHeader(AtomicFile& file, std::uint64_t faces);
+void appendFieldVectors(AtomicFile& file, const Vec3d* vectors, std::size_t count);
 
 }  // namespace seamvox

@@ -166,6 +166,58 @@ TEST(Cli, SubdivideMultipliesFacesAndCarriesTheField) {
   for (const auto& [x, n] : count) EXPECT_EQ(n, 16) << x;
 }
 
+// Above --memory-budget the subdivision is written chunk by chunk: the same faces in the same order
+// with the same corner positions and colours (the vertices numbered otherwise), the same field
+// file byte for byte, in every format but Draco; noise and Draco are refused naming the budget.
+TEST(Cli, SubdivideAboveTheBudgetWritesTheSameFacesChunkByChunk) {
+  TempDir dir;
+  const std::string scan = dir.path("scan.ply"), colored = dir.path("colored.ply"), field = dir.path("scan.field");
+  run("gen scan --faces 1000 -o " + scan, 0);  // holes, islands, an unwelded seam, duplicates
+  TriangleMesh mesh = readMesh(scan);
+  VertexProperty& red = mesh.attributes.add("red", ScalarType::UInt8, mesh.numVertices());
+  for (VertexId v = 0; v < mesh.numVertices(); ++v) red.setValue(v, (v * 53) % 256);
+  writeMesh(colored, mesh);
+  {
+    std::ofstream out(field);
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) out << f << " 1 0\n";
+  }
+  for (const std::string ext : {"ply", "obj", "off"}) {
+    SCOPED_TRACE(ext);
+    const std::string a = dir.path("memory." + ext), b = dir.path("streamed." + ext);
+    const std::string fieldA = dir.path("memory-" + ext + ".field"), fieldB = dir.path("streamed-" + ext + ".field");
+    // 4 levels: the output's estimate (48 MiB + 36 B per face) is above 54M, the input's is not.
+    const std::string common = "subdivide " + colored + " --levels 4 --field " + field;
+    const std::string outA = run(common + " -o " + a + " --field-out " + fieldA, 0);
+    EXPECT_TRUE(contains(outA, "path in memory")) << outA;
+    const std::string outB = run(common + " -o " + b + " --field-out " + fieldB + " --memory-budget 54M", 0);
+    EXPECT_TRUE(contains(outB, "path out of core")) << outB;
+    EXPECT_TRUE(contains(outB, "written chunk by chunk")) << outB;
+    EXPECT_TRUE(testing::readFile(fieldA) == testing::readFile(fieldB));
+    const TriangleMesh x = readMesh(a), y = readMesh(b);
+    ASSERT_EQ(x.numFaces(), y.numFaces());
+    ASSERT_EQ(x.numVertices(), y.numVertices());
+    const VertexProperty* rx = x.attributes.find("red");
+    const VertexProperty* ry = y.attributes.find("red");
+    ASSERT_EQ(rx != nullptr, ext == "ply");
+    ASSERT_EQ(ry != nullptr, ext == "ply");
+    for (FaceId f = 0; f < x.numFaces(); ++f) {
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_EQ(x.positions[x.triangles[f][k]], y.positions[y.triangles[f][k]]) << f;
+        if (rx) ASSERT_EQ(rx->value(x.triangles[f][k]), ry->value(y.triangles[f][k])) << f;
+      }
+    }
+  }
+  std::string out = run("subdivide " + scan + " --levels 4 -o " + dir.path("n.ply") + " --noise 0.2 --memory-budget 54M", 2);
+  EXPECT_TRUE(contains(out, "--memory-budget")) << out;
+  out = run("subdivide " + scan + " --levels 4 -o " + dir.path("n.drc") + " --memory-budget 54M", 2);
+  EXPECT_TRUE(contains(out, "Draco")) << out;
+  out = run("subdivide " + scan + " --levels 4 -o " + dir.path("n.ply") + " --memory-budget 49M", 1);
+  EXPECT_TRUE(contains(out, scan)) << out;
+  EXPECT_TRUE(contains(out, "reads its input whole")) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.path("n.ply")));
+  EXPECT_FALSE(std::filesystem::exists(dir.path("n.drc")));
+}
+
 TEST(Cli, BadInputGivesAClearMessageAndNonZeroExit) {
   TempDir dir;
   const std::string missing = dir.path("missing.ply");

@@ -4,13 +4,59 @@
 
 #include "core/mesh/clean.h"
 #include "core/mesh/subdivide.h"
+#include "core/system/errors.h"
+#include "core/system/memory_budget.h"
+#include "io/chunked_mesh_writer.h"
 #include "io/field_io.h"
 #include "io/mesh_io.h"
 #include "io/output_set.h"
+#include "stream/subdivision_stream.h"
 #include "tools/cli.h"
+#include "tools/memory_path.h"
 
 namespace seamvox::cli {
 namespace {
+
+// Measured peaks of the in-memory path (armadillo, 86K faces, 3 and 4 levels: 219 and 739 MiB
+// for 5.5M and 22.1M faces, about 33 B per output face over the program; 834 MiB with --noise).
+constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20, kBytesPerFace = 36, kNoiseBytesPerFace = 8;
+// The streamed path holds the cleaned input with its corner table and edge numbers, and a chunk
+// of vertices or faces (about 48 bytes per item with the writer's buffers).
+constexpr std::size_t kChunk = std::size_t(1) << 16;
+constexpr std::uint64_t kInputBytesPerFace = 200, kChunkBytes = 48 * kChunk;
+
+/// Writes the subdivision chunk by chunk (counts known: no scratch) and the field carried to the
+/// fine faces, when asked, in face order. Returns the vertex and face counts.
+std::pair<std::uint64_t, std::uint64_t> writeStreamed(const CleanResult& cleaned, std::uint32_t levels, AtomicFile& meshFile,
+                   const WriteOptions& options, const std::vector<Vec3d>* cleanedField, AtomicFile* fieldFile) {
+  SubdivisionStream stream(cleaned.mesh, cleaned.topology, levels);
+  ChunkedMeshLayout layout;
+  layout.countsKnown = true;
+  layout.vertices = stream.numVertices();
+  layout.faces = stream.numFaces();
+  layout.attributes = cleaned.mesh.attributes.emptyCopy();
+  ChunkedMeshWriter writer(meshFile, layout, options, nullptr);
+  MeshChunk chunk;
+  while (stream.nextVertices(kChunk, chunk)) writer.write(chunk);
+  chunk.positions.clear();
+  chunk.attributes.clearValues();
+  while (stream.nextTriangles(kChunk, chunk)) writer.write(chunk);
+  writer.finish();
+  const std::pair<std::uint64_t, std::uint64_t> counts{stream.numVertices(), stream.numFaces()};
+  if (!fieldFile) return counts;
+  writeFieldHeader(*fieldFile, stream.numFaces());
+  std::vector<Vec3d> children;
+  const std::uint64_t perFace = std::uint64_t(1) << (2 * levels);
+  for (const Vec3d& v : *cleanedField) {
+    for (std::uint64_t done = 0; done < perFace;) {
+      const std::uint64_t n = std::min<std::uint64_t>(perFace - done, kChunk);
+      children.assign(n, v);
+      appendFieldVectors(*fieldFile, children.data(), children.size());
+      done += n;
+    }
+  }
+  return counts;
+}
 
 int runSubdivide(Args& args) {
   const std::string path = args.positional(0, "the mesh file (seamvox subdivide MESH)");
@@ -32,7 +78,7 @@ int runSubdivide(Args& args) {
   WriteOptions writeOptions;
   writeOptions.binary = !args.flag("ascii");
   const ProgressFn progress = makeProgress(args.flag("quiet"));
-  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
+  const MemoryOptions memory = parseMemoryOptions(args);
   args.finish(1);
   if (formatFromPath(*output) == MeshFormat::Unknown) {
     throw UsageError("cannot tell the format of '" + *output + "' (use .ply .obj .off .drc)");
@@ -44,6 +90,19 @@ int runSubdivide(Args& args) {
   AtomicFile* fieldFile = fieldOut ? &outputs.add(*fieldOut) : nullptr;
 
   const auto start = std::chrono::steady_clock::now();
+  MemoryPath memoryPath;
+  memoryPath.budget = memory.budget;
+  {
+    // The input is read whole on either path.
+    const std::unique_ptr<MeshStream> stream = openMeshStream(path);
+    const MeshCounts counts = guessMeshCounts(path, *stream);
+    const std::uint64_t inputBytes = kProgramBytes + kChunkBytes + counts.faces * kInputBytesPerFace;
+    if (inputBytes > memory.budget) {
+      throw InputError(path + ": about " + std::to_string(counts.faces) + " faces; subdivide reads its input whole (about " +
+                       formatByteSize(inputBytes) + "), above the --memory-budget of " + formatByteSize(memory.budget) +
+                       "; raise --memory-budget or subdivide parts of the mesh");
+    }
+  }
   TriangleMesh input = readMesh(path);
   const std::uint32_t inputFaces = input.numFaces();
   // Read the field before cleaning so a mismatch is reported before any long work.
@@ -52,6 +111,40 @@ int runSubdivide(Args& args) {
   cleanOptions.progress = progress;
   CleanResult cleaned = cleanMeshOf(path, std::move(input), cleanOptions);
 
+  const std::uint64_t outputFaces = std::uint64_t(cleaned.mesh.numFaces()) << (2 * levels);
+  memoryPath.estimate = kProgramBytes + outputFaces * (kBytesPerFace + (noisy ? kNoiseBytesPerFace : 0));
+  memoryPath.outOfCore = memoryPath.estimate > memory.budget;
+  if (memoryPath.outOfCore) {
+    if (noisy) {
+      throw UsageError("--noise, --spikes and --folds move vertices by normals summed over the whole mesh: about " +
+                       formatByteSize(memoryPath.estimate) + " in memory for " + std::to_string(outputFaces) +
+                       " faces, above the --memory-budget of " + formatByteSize(memory.budget) +
+                       "; raise --memory-budget or subdivide without them");
+    }
+    if (formatFromPath(*output) == MeshFormat::Draco) {
+      throw UsageError(*output + ": Draco encodes a whole mesh at once: about " + formatByteSize(memoryPath.estimate) +
+                       " in memory for " + std::to_string(outputFaces) + " faces, above the --memory-budget of " +
+                       formatByteSize(memory.budget) + "; write .ply, .obj or .off, or raise --memory-budget");
+    }
+    std::vector<Vec3d> cleanedField;
+    if (fieldIn) {
+      cleanedField.resize(cleaned.faceOrigin.size());
+      for (std::size_t f = 0; f < cleanedField.size(); ++f) cleanedField[f] = field[cleaned.faceOrigin[f]];
+    }
+    const auto [numVertices, numFaces] = writeStreamed(cleaned, static_cast<std::uint32_t>(levels), meshFile, writeOptions, &cleanedField, fieldFile);
+    outputs.commit();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("wrote %s: %llu faces, %llu vertices (%lld level%s from %u cleaned faces, %u input, written chunk "
+                "by chunk) in %.2f s\n",
+                output->c_str(), static_cast<unsigned long long>(numFaces),
+                static_cast<unsigned long long>(numVertices), static_cast<long long>(levels),
+                levels == 1 ? "" : "s", cleaned.mesh.numFaces(), inputFaces, seconds);
+    if (fieldOut) {
+      std::printf("wrote %s: field on %llu faces\n", fieldOut->c_str(), static_cast<unsigned long long>(numFaces));
+    }
+    std::printf("%s\n", describeMemoryPath(memoryPath).c_str());
+    return 0;
+  }
   SubdivideOptions options;
   options.levels = static_cast<std::uint32_t>(levels);
   options.progress = progress;
@@ -75,6 +168,7 @@ int runSubdivide(Args& args) {
               inputFaces, seconds);
   if (noisy) printScanNoise(noise, noiseAdded);
   if (fieldOut) std::printf("wrote %s: field on %u faces\n", fieldOut->c_str(), result.mesh.numFaces());
+  std::printf("%s\n", describeMemoryPath(memoryPath).c_str());
   return 0;
 }
 
@@ -87,6 +181,12 @@ SEAMVOX_COMMAND({"subdivide", "1-to-4 midpoint subdivision (the scaling series),
                  "Cleans MESH, then splits every triangle into four at its edge midpoints, K times\n"
                  "(faces x 4^K; old vertices keep their positions). Vertex properties (colors,\n"
                  "normals, scalars) of a new vertex are the mean of its edge's ends, integers rounded.\n"
+                 "\n"
+                 "Above the memory budget (the output needs about 48 MiB + 36 B per face in memory)\n"
+                 "the input is still read whole, and the output is written chunk by chunk: the same\n"
+                 "faces in the same order with the same positions and properties, the vertices\n"
+                 "numbered by input vertex, then edge, then face. Not with --noise, --spikes, --folds\n"
+                 "or a .drc output (they need the whole mesh).\n"
                  "\n"
                  "  --levels K        number of subdivisions (default 1)\n"
                  "  -o OUT            output mesh (.ply binary by default, .obj, .off, .drc)\n"
