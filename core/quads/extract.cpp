@@ -727,7 +727,8 @@ class Extractor {
   }
 
   // Removes pairs of faces on the same cycle of vertices in opposite orders (QuadStats::pillows)
-  // and the vertices only they used; a remaining vertex loses each pillow edge no face keeps.
+  // and the vertices only they used; a remaining vertex loses each map edge of a pillow's vertex
+  // pairs that the kept faces no longer account for (below).
   // Faces are given by their point ids (face vertices of pm map back through pointOf).
   static void removePillows(PolygonMesh& pm, std::vector<std::uint32_t>& pointOf, std::vector<std::uint8_t>& lostAt,
                             QuadResult& out) {
@@ -782,12 +783,22 @@ class Extractor {
       ++out.stats.pillows;
     }
     if (out.stats.pillows == 0) return;
-    std::set<std::pair<std::uint32_t, std::uint32_t>> kept, lost;
+    // Sides per vertex pair, of all faces and of the kept ones: a pair with 2 k sides stands for k
+    // edges of the map. A pillow pair's side whose edge another face keeps may be an edge of its own
+    // (a tube two quads around, zipped: two rim edges become one), so an end loses every edge of the
+    // pair that the kept faces no longer account for.
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<std::uint32_t, std::uint32_t>> sides;  // all, kept
+    std::set<std::pair<std::uint32_t, std::uint32_t>> lost;
     PolygonMesh faces;
     faces.faceStart = {0};
     for (std::uint32_t f = 0; f < nf; ++f) {
       const std::uint32_t b = pm.faceStart[f], e = pm.faceStart[f + 1];
-      for (std::uint32_t i = b; i < e; ++i) (removed[f] ? lost : kept).insert(edgeOf(f, i));
+      for (std::uint32_t i = b; i < e; ++i) {
+        auto& count = sides[edgeOf(f, i)];
+        ++count.first;
+        count.second += !removed[f];
+        if (removed[f]) lost.insert(edgeOf(f, i));
+      }
       if (removed[f]) continue;
       faces.faceVertices.insert(faces.faceVertices.end(), pm.faceVertices.begin() + b, pm.faceVertices.begin() + e);
       faces.faceStart.push_back(static_cast<std::uint32_t>(faces.faceVertices.size()));
@@ -805,9 +816,10 @@ class Extractor {
       pointOf[renumber[v]] = pointOf[v];
     }
     for (const auto& [a, b] : lost) {
-      if (kept.count({a, b})) continue;
+      const auto [all, keptSides] = sides.at({a, b});
+      const std::uint32_t gone = (all + 1) / 2 - (keptSides + 1) / 2;
       for (std::uint32_t v : {a, b}) {
-        if (renumber[v] != kNone) ++lostAt[pointOf[v]];
+        if (renumber[v] != kNone) lostAt[pointOf[v]] = static_cast<std::uint8_t>(std::min(255u, lostAt[pointOf[v]] + gone));
       }
     }
     pm.positions.resize(next);
