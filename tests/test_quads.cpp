@@ -482,6 +482,19 @@ void forSharedMeshes(std::initializer_list<const char*> names, const Check& chec
   }
 }
 
+// The hat map with creases above 30 degrees held on iso-lines (cells: 0 for param's default),
+// extracted.
+Extracted withCreases(const std::string& path, double cells, bool alignBoundary = false) {
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::Hat;
+  options.features.alignBoundary = alignBoundary;
+  options.features.featureAngle = 30.0;
+  options.spacing.cells = cells;
+  Extracted e = extract(parameterize(readMesh(path), options));
+  print(e);
+  return e;
+}
+
 TEST(Quads, SharedMeshesRepairedAndExtracted) {
   // param's defaults (hat solver at these sizes, repair on) on every shared mesh: no flips left
   // (cheburashka's face folded in 3D included), gradient error within 1.05x of the unrepaired map, and a valid quad
@@ -511,12 +524,7 @@ TEST(Quads, SharedMeshesWithCreasesAlignedGiveManifoldQuads) {
   // covers twice where a face is folded in 3D (cheburashka) is left out as a pillow instead of
   // making its edges non-manifold.
   forSharedMeshes({"rocker-arm.obj", "fertility.off", "camelhead.off", "cheburashka.off"}, [](const std::string& path) {
-    PipelineOptions options;
-    options.solver.solver = ParamSolver::Hat;
-    options.features.alignBoundary = true;
-    options.features.featureAngle = 30.0;
-    const Extracted e = extract(parameterize(readMesh(path), options));
-    print(e);
+    const Extracted e = withCreases(path, 0.0, true);
     EXPECT_TRUE(e.map.isSeamless());
     EXPECT_EQ(e.map.mapQuality.collapsed, 0u);
     EXPECT_GT(e.map.featureCurves.aligned, 0u);
@@ -537,12 +545,7 @@ TEST(Quads, CreasesAlignedAtOtherSpacingsGiveValidQuads) {
   forSharedMeshes({"rocker-arm.obj"}, [](const std::string& path) {
     for (const double cells : {60.0, 200.0}) {
       SCOPED_TRACE(cells);
-      PipelineOptions options;
-      options.solver.solver = ParamSolver::Hat;
-      options.features.featureAngle = 30.0;
-      options.spacing.cells = cells;
-      const Extracted e = extract(parameterize(readMesh(path), options));
-      print(e);
+      const Extracted e = withCreases(path, cells);
       EXPECT_TRUE(e.map.isSeamless());
       EXPECT_EQ(e.map.mapQuality.collapsed, 0u);
       EXPECT_EQ(e.map.mapQuality.flipped, 0u);
@@ -560,12 +563,7 @@ TEST(Quads, ATubeTwoQuadsAroundIsZippedAndAccountedFor) {
   // and the rim's vertices count that edge as lost: a valid mesh (before, a valence-2 vertex and a
   // cone short of one edge made it invalid).
   forSharedMeshes({"cheburashka.off"}, [](const std::string& path) {
-    PipelineOptions options;
-    options.solver.solver = ParamSolver::Hat;
-    options.features.featureAngle = 30.0;
-    options.spacing.cells = 100.0;
-    const Extracted e = extract(parameterize(readMesh(path), options));
-    print(e);
+    const Extracted e = withCreases(path, 100.0);
     EXPECT_TRUE(e.map.isSeamless());
     EXPECT_EQ(e.map.mapQuality.flipped, 0u);
     EXPECT_GE(e.quads.stats.pillows, 1u);
