@@ -40,6 +40,7 @@ std::pair<std::uint64_t, std::uint64_t> writeStreamed(const CleanResult& cleaned
   while (stream.nextVertices(kChunk, chunk)) writer.write(chunk);
   chunk.positions.clear();
   chunk.attributes.clearValues();
+  chunk.firstVertex = static_cast<std::uint32_t>(stream.numVertices());  // triangles only from here
   while (stream.nextTriangles(kChunk, chunk)) writer.write(chunk);
   writer.finish();
   const std::pair<std::uint64_t, std::uint64_t> counts{stream.numVertices(), stream.numFaces()};
