@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "core/mesh/subdivide.h"
 #include "core/system/errors.h"
 
 namespace seamvox {
@@ -26,7 +27,7 @@ struct SubdivisionStream::Points {
   /// New point at (i, j): the midpoint of the points at a and b, as subdivideMesh rounds it.
   void midpoint(std::uint32_t i, std::uint32_t j, std::uint32_t a, std::uint32_t b, bool withAttributes) {
     at(i, j) = static_cast<std::uint32_t>(positions.size());
-    positions.push_back(((positions[a].cast<double>() + positions[b].cast<double>()) * 0.5).cast<float>());
+    positions.push_back(subdivisionMidpoint(positions[a], positions[b]));
     if (withAttributes) ends.push_back({a, b});
   }
   void finishLevel(bool withAttributes) {
@@ -46,18 +47,11 @@ SubdivisionStream::SubdivisionStream(const TriangleMesh& mesh, const Topology& t
   }
   mesh.attributes.checkSize(mesh.numVertices());
   n_ = 1u << levels;
-  const std::uint64_t numCorners = topology.numCorners();
-  edgeOf_.assign(numCorners, 0);
-  for (CornerId c = 0; c < numCorners; ++c) {
+  edgeOf_ = subdivisionEdgeNumbers(topology, numEdges_);
+  edgeOwner_.resize(numEdges_);
+  for (CornerId c = 0; c < topology.numCorners(); ++c) {
     const CornerId o = topology.opposite(c);
-    if (o == kInvalidId || c < o) {
-      edgeOf_[c] = static_cast<std::uint32_t>(numEdges_++);
-      edgeOwner_.push_back(c);
-    }
-  }
-  for (CornerId c = 0; c < numCorners; ++c) {
-    const CornerId o = topology.opposite(c);
-    if (o != kInvalidId && o < c) edgeOf_[c] = edgeOf_[o];
+    if (o == kInvalidId || c < o) edgeOwner_[edgeOf_[c]] = c;
   }
   edgeBase_ = mesh.numVertices();
   faceBase_ = edgeBase_ + numEdges_ * (n_ - 1);

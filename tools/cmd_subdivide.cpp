@@ -25,10 +25,10 @@ constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20, kBytesPerFace =
 constexpr std::size_t kChunk = std::size_t(1) << 16;
 constexpr std::uint64_t kInputBytesPerFace = 200, kChunkBytes = 48 * kChunk;
 
-/// Writes the subdivision chunk by chunk (counts known: no scratch) and the field carried to the
-/// fine faces, when asked, in face order. Returns the vertex and face counts.
-std::pair<std::uint64_t, std::uint64_t> writeStreamed(const CleanResult& cleaned, std::uint32_t levels, AtomicFile& meshFile,
-                   const WriteOptions& options, const std::vector<Vec3d>* cleanedField, AtomicFile* fieldFile) {
+/// Writes the subdivision chunk by chunk (counts known: no scratch) and, when fieldFile is given,
+/// cleanedField carried to the fine faces in face order. Returns the vertex count.
+std::uint64_t writeStreamed(const CleanResult& cleaned, std::uint32_t levels, AtomicFile& meshFile,
+                            const WriteOptions& options, const std::vector<Vec3d>& cleanedField, AtomicFile* fieldFile) {
   SubdivisionStream stream(cleaned.mesh, cleaned.topology, levels);
   ChunkedMeshLayout layout;
   layout.countsKnown = true;
@@ -43,12 +43,11 @@ std::pair<std::uint64_t, std::uint64_t> writeStreamed(const CleanResult& cleaned
   chunk.firstVertex = static_cast<std::uint32_t>(stream.numVertices());  // triangles only from here
   while (stream.nextTriangles(kChunk, chunk)) writer.write(chunk);
   writer.finish();
-  const std::pair<std::uint64_t, std::uint64_t> counts{stream.numVertices(), stream.numFaces()};
-  if (!fieldFile) return counts;
+  if (!fieldFile) return stream.numVertices();
   writeFieldHeader(*fieldFile, stream.numFaces());
   std::vector<Vec3d> children;
   const std::uint64_t perFace = std::uint64_t(1) << (2 * levels);
-  for (const Vec3d& v : *cleanedField) {
+  for (const Vec3d& v : cleanedField) {
     for (std::uint64_t done = 0; done < perFace;) {
       const std::uint64_t n = std::min<std::uint64_t>(perFace - done, kChunk);
       children.assign(n, v);
@@ -56,7 +55,7 @@ std::pair<std::uint64_t, std::uint64_t> writeStreamed(const CleanResult& cleaned
       done += n;
     }
   }
-  return counts;
+  return stream.numVertices();
 }
 
 int runSubdivide(Args& args) {
@@ -93,18 +92,16 @@ int runSubdivide(Args& args) {
   const auto start = std::chrono::steady_clock::now();
   MemoryPath memoryPath;
   memoryPath.budget = memory.budget;
-  {
-    // The input is read whole on either path.
-    const std::unique_ptr<MeshStream> stream = openMeshStream(path);
-    const MeshCounts counts = guessMeshCounts(path, *stream);
-    const std::uint64_t inputBytes = kProgramBytes + kChunkBytes + counts.faces * kInputBytesPerFace;
-    if (inputBytes > memory.budget) {
-      throw InputError(path + ": about " + std::to_string(counts.faces) + " faces; subdivide reads its input whole (about " +
-                       formatByteSize(inputBytes) + "), above the --memory-budget of " + formatByteSize(memory.budget) +
-                       "; raise --memory-budget or subdivide parts of the mesh");
-    }
+  // The input is read whole on either path.
+  const std::unique_ptr<MeshStream> stream = openMeshStream(path);
+  const MeshCounts counts = guessMeshCounts(path, *stream);
+  const std::uint64_t inputBytes = kProgramBytes + kChunkBytes + counts.faces * kInputBytesPerFace;
+  if (inputBytes > memory.budget) {
+    throw InputError(path + ": about " + std::to_string(counts.faces) + " faces; subdivide reads its input whole (about " +
+                     formatByteSize(inputBytes) + "), above the --memory-budget of " + formatByteSize(memory.budget) +
+                     "; raise --memory-budget or subdivide parts of the mesh");
   }
-  TriangleMesh input = readMesh(path);
+  TriangleMesh input = readMesh(*stream);
   const std::uint32_t inputFaces = input.numFaces();
   // Read the field before cleaning so a mismatch is reported before any long work.
   std::vector<Vec3d> field;
@@ -115,6 +112,14 @@ int runSubdivide(Args& args) {
   const std::uint64_t outputFaces = std::uint64_t(cleaned.mesh.numFaces()) << (2 * levels);
   memoryPath.estimate = kProgramBytes + outputFaces * (kBytesPerFace + (noisy ? kNoiseBytesPerFace : 0));
   memoryPath.outOfCore = memoryPath.estimate > memory.budget;
+  // Input face -> cleaned face (faceOrigin) -> children (parentFace, or 4^levels in a row).
+  std::vector<Vec3d> cleanedField;
+  if (fieldIn) {
+    cleanedField.resize(cleaned.faceOrigin.size());
+    for (std::size_t f = 0; f < cleanedField.size(); ++f) cleanedField[f] = field[cleaned.faceOrigin[f]];
+  }
+  std::uint64_t outputVertices = 0;
+  ScanNoiseResult noiseAdded;
   if (memoryPath.outOfCore) {
     if (noisy) {
       throw UsageError("--noise, --spikes and --folds move vertices by normals summed over the whole mesh: about " +
@@ -127,48 +132,31 @@ int runSubdivide(Args& args) {
                        " in memory for " + std::to_string(outputFaces) + " faces, above the --memory-budget of " +
                        formatByteSize(memory.budget) + "; write .ply, .obj or .off, or raise --memory-budget");
     }
-    std::vector<Vec3d> cleanedField;
-    if (fieldIn) {
-      cleanedField.resize(cleaned.faceOrigin.size());
-      for (std::size_t f = 0; f < cleanedField.size(); ++f) cleanedField[f] = field[cleaned.faceOrigin[f]];
-    }
-    const auto [numVertices, numFaces] = writeStreamed(cleaned, static_cast<std::uint32_t>(levels), meshFile, writeOptions, &cleanedField, fieldFile);
-    outputs.commit();
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::printf("wrote %s: %llu faces, %llu vertices (%lld level%s from %u cleaned faces, %u input, written chunk "
-                "by chunk) in %.2f s\n",
-                output->c_str(), static_cast<unsigned long long>(numFaces),
-                static_cast<unsigned long long>(numVertices), static_cast<long long>(levels),
-                levels == 1 ? "" : "s", cleaned.mesh.numFaces(), inputFaces, seconds);
-    if (fieldOut) {
-      std::printf("wrote %s: field on %llu faces\n", fieldOut->c_str(), static_cast<unsigned long long>(numFaces));
-    }
-    std::printf("%s\n", describeMemoryPath(memoryPath).c_str());
-    return 0;
-  }
-  SubdivideOptions options;
-  options.levels = static_cast<std::uint32_t>(levels);
-  options.progress = progress;
-  SubdivideResult result = subdivideMesh(cleaned.mesh, cleaned.topology, options);
-  ScanNoiseResult noiseAdded;
-  if (noisy) noiseAdded = addScanNoise(result.mesh, noise);
-  writeMesh(meshFile, result.mesh, writeOptions);
-  if (fieldIn) {
-    // Input face -> cleaned face (faceOrigin) -> children (parentFace).
-    std::vector<Vec3d> cleanedField(cleaned.faceOrigin.size());
-    for (std::size_t f = 0; f < cleanedField.size(); ++f) cleanedField[f] = field[cleaned.faceOrigin[f]];
-    writeField(*fieldFile, inheritFaceVectors(cleanedField, result.parentFace));
+    outputVertices = writeStreamed(cleaned, static_cast<std::uint32_t>(levels), meshFile, writeOptions,
+                                   cleanedField, fieldFile);
+  } else {
+    SubdivideOptions options;
+    options.levels = static_cast<std::uint32_t>(levels);
+    options.progress = progress;
+    SubdivideResult result = subdivideMesh(cleaned.mesh, cleaned.topology, options);
+    if (noisy) noiseAdded = addScanNoise(result.mesh, noise);
+    writeMesh(meshFile, result.mesh, writeOptions);
+    outputVertices = result.mesh.numVertices();
+    if (fieldIn) writeField(*fieldFile, inheritFaceVectors(cleanedField, result.parentFace));
   }
   outputs.commit();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("wrote %s: %u faces, %u vertices (%lld level%s from %u cleaned faces, %u input) "
+  std::printf("wrote %s: %llu faces, %llu vertices (%lld level%s from %u cleaned faces, %u input%s) "
               "in %.2f s\n",
-              output->c_str(), result.mesh.numFaces(), result.mesh.numVertices(),
-              static_cast<long long>(levels), levels == 1 ? "" : "s", cleaned.mesh.numFaces(),
-              inputFaces, seconds);
+              output->c_str(), static_cast<unsigned long long>(outputFaces),
+              static_cast<unsigned long long>(outputVertices), static_cast<long long>(levels),
+              levels == 1 ? "" : "s", cleaned.mesh.numFaces(), inputFaces,
+              memoryPath.outOfCore ? ", written chunk by chunk" : "", seconds);
   if (noisy) printScanNoise(noise, noiseAdded);
-  if (fieldOut) std::printf("wrote %s: field on %u faces\n", fieldOut->c_str(), result.mesh.numFaces());
+  if (fieldOut) {
+    std::printf("wrote %s: field on %llu faces\n", fieldOut->c_str(), static_cast<unsigned long long>(outputFaces));
+  }
   std::printf("%s\n", describeMemoryPath(memoryPath).c_str());
   return 0;
 }

@@ -12,22 +12,13 @@ namespace {
 /// One level: fills out (positions and triangles) and returns the number of edges.
 std::uint64_t subdivideOnce(const TriangleMesh& mesh, const Topology& topology, TriangleMesh& out) {
   const std::uint64_t numCorners = topology.numCorners();
-  // Edge ids: counted in corner order over the owning corners (min of the pair).
-  std::vector<std::uint32_t> edgeOf(numCorners);
   std::uint64_t edges = 0;
-  for (CornerId c = 0; c < numCorners; ++c) {
-    const CornerId o = topology.opposite(c);
-    if (o == kInvalidId || c < o) edgeOf[c] = static_cast<std::uint32_t>(edges++);
-  }
+  const std::vector<std::uint32_t> edgeOf = subdivisionEdgeNumbers(topology, edges);
   const std::uint64_t numVertices = mesh.numVertices();
   if (numVertices + edges >= kInvalidId) {
     throw TopologyError("subdivision would need " + std::to_string(numVertices + edges) +
                         " vertices, more than 32-bit ids allow");
   }
-  parallelForEach(numCorners, 16384, [&](std::uint64_t c) {
-    const CornerId o = topology.opposite(static_cast<CornerId>(c));
-    if (o != kInvalidId && o < c) edgeOf[c] = edgeOf[o];
-  });
 
   out.positions.resize(numVertices + edges);
   std::copy(mesh.positions.begin(), mesh.positions.end(), out.positions.begin());
@@ -38,7 +29,7 @@ std::uint64_t subdivideOnce(const TriangleMesh& mesh, const Topology& topology, 
     const CornerId o = topology.opposite(cc);
     if (o != kInvalidId && o < cc) return;
     const VertexId a = topology.vertex(nextCorner(cc)), b = topology.vertex(prevCorner(cc));
-    out.positions[numVertices + edgeOf[c]] = ((mesh.position(a) + mesh.position(b)) * 0.5).cast<float>();
+    out.positions[numVertices + edgeOf[c]] = subdivisionMidpoint(mesh.positions[a], mesh.positions[b]);
     if (withAttributes) ends[edgeOf[c]] = {a, b};
   });
   if (withAttributes) out.attributes = mesh.attributes.withMidpoints(ends);
@@ -60,6 +51,21 @@ std::uint64_t subdivideOnce(const TriangleMesh& mesh, const Topology& topology, 
 }
 
 }  // namespace
+
+std::vector<std::uint32_t> subdivisionEdgeNumbers(const Topology& topology, std::uint64_t& edges) {
+  const std::uint64_t numCorners = topology.numCorners();
+  std::vector<std::uint32_t> edgeOf(numCorners);
+  edges = 0;
+  for (CornerId c = 0; c < numCorners; ++c) {
+    const CornerId o = topology.opposite(c);
+    if (o == kInvalidId || c < o) edgeOf[c] = static_cast<std::uint32_t>(edges++);
+  }
+  parallelForEach(numCorners, 16384, [&](std::uint64_t c) {
+    const CornerId o = topology.opposite(static_cast<CornerId>(c));
+    if (o != kInvalidId && o < c) edgeOf[c] = edgeOf[o];
+  });
+  return edgeOf;
+}
 
 SubdivideResult subdivideMesh(const TriangleMesh& mesh, const Topology& topology,
                               const SubdivideOptions& options) {

@@ -30,6 +30,16 @@ struct SubdivideResult {
 SubdivideResult subdivideMesh(const TriangleMesh& mesh, const Topology& topology,
                               const SubdivideOptions& options = {});
 
+/// subdivideMesh's edge numbers per corner: counted in corner order over the owning corners (the
+/// smaller of c and opposite(c); c itself on a boundary), both corners of an edge sharing one.
+/// edges receives the count.
+std::vector<std::uint32_t> subdivisionEdgeNumbers(const Topology& topology, std::uint64_t& edges);
+
+/// The point subdivideMesh puts on an edge from a to b: the midpoint in double, rounded once.
+inline Vec3f subdivisionMidpoint(const Vec3f& a, const Vec3f& b) {
+  return ((a.cast<double>() + b.cast<double>()) * 0.5).cast<float>();
+}
+
 /// Carries per-face vectors (e.g. a field) to the children: out[f] = values[parentFace[f]].
 std::vector<Vec3d> inheritFaceVectors(const std::vector<Vec3d>& values,
                                       const std::vector<FaceId>& parentFace);

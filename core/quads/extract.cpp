@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <map>
-#include <set>
 #include <atomic>
 #include <cmath>
 #include <numeric>
@@ -788,7 +787,6 @@ class Extractor {
     // (a tube two quads around, zipped: two rim edges become one), so an end loses every edge of the
     // pair that the kept faces no longer account for.
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<std::uint32_t, std::uint32_t>> sides;  // all, kept
-    std::set<std::pair<std::uint32_t, std::uint32_t>> lost;
     PolygonMesh faces;
     faces.faceStart = {0};
     for (std::uint32_t f = 0; f < nf; ++f) {
@@ -797,7 +795,6 @@ class Extractor {
         auto& count = sides[edgeOf(f, i)];
         ++count.first;
         count.second += !removed[f];
-        if (removed[f]) lost.insert(edgeOf(f, i));
       }
       if (removed[f]) continue;
       faces.faceVertices.insert(faces.faceVertices.end(), pm.faceVertices.begin() + b, pm.faceVertices.begin() + e);
@@ -815,8 +812,10 @@ class Extractor {
       out.vertexConeIndex[renumber[v]] = out.vertexConeIndex[v];
       pointOf[renumber[v]] = pointOf[v];
     }
-    for (const auto& [a, b] : lost) {
-      const auto [all, keptSides] = sides.at({a, b});
+    for (const auto& [pair, count] : sides) {
+      const auto [all, keptSides] = count;
+      if (all == keptSides) continue;  // no pillow side
+      const auto [a, b] = pair;
       const std::uint32_t gone = (all + 1) / 2 - (keptSides + 1) / 2;
       for (std::uint32_t v : {a, b}) {
         if (renumber[v] != kNone) lostAt[pointOf[v]] = static_cast<std::uint8_t>(std::min(255u, lostAt[pointOf[v]] + gone));

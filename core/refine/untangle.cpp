@@ -66,16 +66,13 @@ std::vector<std::uint32_t> flipsPerComponent(const std::vector<std::uint8_t>& st
   return count;
 }
 
-/// Whether map uv collapses a region face (|parameter area ratio| < kCollapsedAreaFraction) that
-/// the map before did not.
-bool collapsesMore(const RegionMesh& region, const WedgeMap& uv, const WedgeMap& before, double h) {
-  for (std::uint32_t i = 0; i < region.topology.numFaces(); ++i) {
-    if (std::abs(parameterAreaRatio(region.mesh, uv, i, h)) < kCollapsedAreaFraction &&
-        std::abs(parameterAreaRatio(region.mesh, before, i, h)) >= kCollapsedAreaFraction) {
-      return true;
-    }
+/// Per region face, whether map uv collapses it (|parameter area ratio| < kCollapsedAreaFraction).
+std::vector<std::uint8_t> collapsedFaces(const RegionMesh& region, const WedgeMap& uv, double h) {
+  std::vector<std::uint8_t> collapsed(region.topology.numFaces());
+  for (std::uint32_t i = 0; i < collapsed.size(); ++i) {
+    collapsed[i] = std::abs(parameterAreaRatio(region.mesh, uv, i, h)) < kCollapsedAreaFraction;
   }
-  return false;
+  return collapsed;
 }
 
 /// The best stiffened solution of one round's region: re-solves while faces stay flipped, each
@@ -100,12 +97,16 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
   std::vector<std::uint32_t> best = before;
   out.componentImproved.assign(before.size(), 0);
   std::vector<double> weight(region.topology.numFaces(), 1.0);
+  const std::vector<std::uint8_t> collapsedBefore = collapsedFaces(region, regionUV, h);
   for (std::uint32_t solve = 0; solve < std::max(1u, options.maxSolves); ++solve) {
     RefineStats stats;
     RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius);
     // Seams whose edges all lie in the patch are re-rounded, which can move two cones onto one
     // point (their faces collapse): then solved again with every translation kept.
-    if (collapsesMore(region, solved.cornerUV, regionUV, h)) {
+    const std::vector<std::uint8_t> collapsed = collapsedFaces(region, solved.cornerUV, h);
+    bool collapsesMore = false;
+    for (std::size_t i = 0; i < collapsed.size() && !collapsesMore; ++i) collapsesMore = collapsed[i] > collapsedBefore[i];
+    if (collapsesMore) {
       solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, true);
       ++out.solves;
     }
