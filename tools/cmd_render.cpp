@@ -93,7 +93,8 @@ int runRender(Args& args) {
   const double secondsRead =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   options.progress = progress;
-  const RenderResult result = renderCheckerboard(cleaned.mesh, cleaned.topology, options);
+  // Depth ties go to the smaller input face, as out of core.
+  const RenderResult result = renderCheckerboard(cleaned.mesh, cleaned.topology, options, cleaned.faceOrigin);
   const auto writeStart = std::chrono::steady_clock::now();
   writePng(*output, result.image);
   const double secondsWrite =

@@ -103,8 +103,11 @@ MapCones findMapCones(const TriangleMesh& mesh, const Topology& topology,
 
 /// Renders the mesh with its per-corner (u, v) as a shaded checkerboard, both sides lit.
 /// Requires mesh.cornerUV (InputError otherwise) and a topology of mesh.triangles when seams or
-/// cones are drawn. Parallel; memory about 12 bytes per sample plus 3 bytes per output pixel.
+/// cones are drawn. faceIds (one per face, or empty: the face index) break exact depth ties, the
+/// nearest smaller id winning: a cleaned mesh's faceOrigin gives the pixels the out-of-core
+/// renderer (stream/map_render) gives for the input. Parallel; memory about 11 bytes per sample
+/// plus 3 bytes per output pixel.
 RenderResult renderCheckerboard(const TriangleMesh& mesh, const Topology& topology,
-                                const RenderOptions& options = {});
+                                const RenderOptions& options = {}, const std::vector<FaceId>& faceIds = {});
 
 }  // namespace seamvox

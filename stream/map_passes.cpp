@@ -1,0 +1,131 @@
+#include "stream/map_passes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/system/errors.h"
+
+namespace seamvox::map_pass {
+
+Duplicates findDuplicateFaces(ExternalSorter<DuplicateKey>& keys, ScratchFolder& scratch,
+                              const ExternalSortOptions& options) {
+  Duplicates out;
+  out.ranks = std::make_unique<ExternalSorter<std::uint32_t>>(scratch, options);
+  keys.finish();
+  DuplicateKey key, previous{kInvalidId, kInvalidId, kInvalidId, kInvalidId};
+  while (keys.next(key)) {
+    if (key.a == previous.a && key.b == previous.b && key.c == previous.c) {
+      out.ranks->add(key.face);
+      ++out.count;
+    }
+    previous = key;
+  }
+  out.ranks->finish();
+  return out;
+}
+
+// The geometry of the cleaned faces, read back for the few corners that need it (seam edges,
+
+ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<DuplicateKey>& duplicates,
+                    CornerPositions& positions) {
+  const std::string& name = stream.name();
+  ReadPass out;
+  ScratchWriter faces(scratch, "read");
+  MeshChunk chunk;
+  bool uvDecided = false, withUV = false;
+  std::uint64_t nonFinite = kInvalidId;
+  while (stream.next(chunk)) {
+    if (chunk.firstVertex != out.vertices) {
+      throw InputError(name + ": stream chunk starts at vertex " + std::to_string(chunk.firstVertex) + " but " +
+                       std::to_string(out.vertices) + " vertices came before it");
+    }
+    if (out.vertices + chunk.positions.size() >= kInvalidId || out.inputFaces + chunk.triangles.size() >= kInvalidId) {
+      throw InputError(name + ": more than 2^32 - 1 vertices or faces (ids are 32-bit)");
+    }
+    for (const Vec3f& p : chunk.positions) {
+      if (!p.allFinite() && nonFinite == kInvalidId) nonFinite = out.vertices;
+      positions.addVertex(p);
+      ++out.vertices;
+    }
+    if (chunk.triangles.empty()) continue;
+    const bool chunkUV = !chunk.cornerUV.empty();
+    if (chunkUV && chunk.cornerUV.size() != 3 * chunk.triangles.size()) {
+      throw InputError(name + ": stream chunk has " + std::to_string(chunk.cornerUV.size()) + " corner UVs for " +
+                       std::to_string(chunk.triangles.size()) + " triangles");
+    }
+    if (!uvDecided) {
+      withUV = chunkUV;
+      uvDecided = true;
+    } else if (withUV != chunkUV) {
+      throw InputError(name + ": some triangles have texture coordinates and others do not");
+    }
+    for (std::size_t f = 0; f < chunk.triangles.size(); ++f, ++out.inputFaces) {
+      const Triangle& t = chunk.triangles[f];
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // degenerate: dropped
+      FaceRecord record{{t[0], t[1], t[2]}, static_cast<std::uint32_t>(out.inputFaces), {}};
+      for (int j = 0; j < 3; ++j) {
+        if (withUV) record.uv[j][0] = chunk.cornerUV[3 * f + j].x(), record.uv[j][1] = chunk.cornerUV[3 * f + j].y();
+      }
+      positions.addFace(static_cast<std::uint32_t>(out.kept), t, static_cast<std::uint32_t>(out.inputFaces));
+      faces.write(&record, sizeof record);
+      Triangle s = t;
+      std::sort(s.begin(), s.end());
+      duplicates.add({s[0], s[1], s[2], static_cast<std::uint32_t>(out.kept)});
+      ++out.kept;
+    }
+  }
+  if (out.inputFaces == 0) throw InputError(name + ": the mesh has no faces");
+  if (!withUV) throw InputError(name + ": the mesh has no per-corner texture coordinates");
+  if (nonFinite != kInvalidId) {
+    throw InputError(name + ": vertex " + std::to_string(nonFinite) + " has a non-finite coordinate (NaN or inf)");
+  }
+  positions.finish();
+  out.faces = faces.finish();
+  return out;
+}
+
+std::vector<std::pair<std::size_t, std::size_t>> glueSides(const std::vector<EdgeRecord>& sides,
+                                                           const std::function<Vec3d(std::size_t)>& normalOf,
+                                                           bool& clash) {
+  clash = false;
+  std::vector<std::pair<std::size_t, std::size_t>> glued;
+  if (sides.size() < 2) return glued;  // boundary
+  const bool firstForward = sides[0].forward();
+  if (sides.size() == 2) {
+    if (sides[1].forward() == firstForward) {
+      clash = true;
+    } else {
+      glued.push_back({0, 1});
+    }
+    return glued;
+  }
+  struct Pair {
+    double alignment;
+    std::size_t x, y;  // same direction as the first side, reverse
+  };
+  std::vector<Vec3d> normals;
+  for (std::size_t i = 0; i < sides.size(); ++i) normals.push_back(normalOf(i));
+  std::vector<Pair> pairs;
+  for (std::size_t x = 0; x < sides.size(); ++x) {
+    if (sides[x].forward() != firstForward) continue;
+    for (std::size_t y = 0; y < sides.size(); ++y) {
+      if (sides[y].forward() == firstForward) continue;
+      const double alignment = normals[x].dot(normals[y]);  // as cleanMesh computes it
+      pairs.push_back({std::isfinite(alignment) ? alignment : -2.0, x, y});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) {
+    return p.alignment != q.alignment ? p.alignment > q.alignment : p.x != q.x ? p.x < q.x : p.y < q.y;
+  });
+  std::vector<std::uint8_t> used(sides.size(), 0);
+  for (const Pair& pair : pairs) {
+    if (used[pair.x] || used[pair.y]) continue;
+    used[pair.x] = used[pair.y] = 1;
+    const bool xFirst = sides[pair.x].corner() < sides[pair.y].corner();
+    glued.push_back(xFirst ? std::make_pair(pair.x, pair.y) : std::make_pair(pair.y, pair.x));
+  }
+  return glued;
+}
+
+}  // namespace seamvox::map_pass
