@@ -32,22 +32,7 @@ struct FaceGeometry {  // a cleaned face's unit normal (0 when degenerate) and e
 
 // The geometry of the cleaned faces, read back for the few corners that need it (seam edges,
 // edges of more than two faces).
-class FaceGeometries {
- public:
-  FaceGeometries(ScratchFolder& scratch, const ScratchFile& file) : reader_(scratch, file, "edges") {}
-  const FaceGeometry& at(std::uint64_t corner) {
-    if (corner / 3 != face_) {
-      face_ = corner / 3;
-      reader_.readAt(face_ * sizeof(FaceGeometry), &geometry_, sizeof geometry_);
-    }
-    return geometry_;
-  }
-
- private:
-  ScratchRandomReader reader_;
-  std::uint64_t face_ = ~std::uint64_t(0);
-  FaceGeometry geometry_{};
-};
+using FaceGeometries = RecordsByFace<FaceGeometry>;
 
 // Measures the seam between the glued sides c < o of an edge.
 void measureSeam(const EdgeRecord& c, const EdgeRecord& o, FaceGeometries& geometry, SeamQuality& seams,
@@ -107,12 +92,8 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   };
   const ReadPass read = readStream(stream, scratch, *duplicateKeys, positions);
   finishStage("read");
-  Duplicates duplicates = findDuplicateFaces(*duplicateKeys, scratch, sortOptions("duplicates"));
+  Duplicates duplicates = findDuplicateFaces(name, read, *duplicateKeys, scratch, sortOptions("duplicates"));
   duplicateKeys.reset();
-  if (read.kept == duplicates.count) {
-    throw InputError(name + ": the mesh has no valid faces (" + std::to_string(read.inputFaces) +
-                     " faces in the input, all degenerate or duplicates)");
-  }
 
   finishStage("duplicates");
   // Pass over the faces in order: areas, and the sides of every edge.
@@ -120,18 +101,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   ScratchWriter areas(scratch, "faces"), geometries(scratch, "faces");
   double areaSum = 0.0, uvAreaSum = 0.0;
   {
-    ScratchReader faces(scratch, read.faces, "faces");
-    FaceRecord face;
-    std::uint32_t nextDuplicate = kInvalidId;
-    bool moreDuplicates = duplicates.ranks->next(nextDuplicate);
-    for (std::uint64_t k = 0; k < read.kept; ++k) {
-      if (!faces.read(&face, sizeof face)) throw IoError(read.faces.path + ": scratch faces end early");
-      Vec3d p[3];
-      positions.face(k, face.v, face.inputFace, p);
-      if (moreDuplicates && nextDuplicate == k) {
-        moreDuplicates = duplicates.ranks->next(nextDuplicate);
-        continue;
-      }
+    forEachKeptFace(scratch, read, duplicates, positions, [&](const FaceRecord& face, const Vec3d (&p)[3]) {
       const std::uint64_t f = result.faces++;
       const Vec3d cross = (p[1] - p[0]).cross(p[2] - p[0]);
       const double length = cross.norm();
@@ -150,7 +120,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
         geometry.length[j] = (p[s] - p[e]).norm();
       }
       geometries.write(&geometry, sizeof geometry);
-    }
+    });
   }
   duplicates.ranks.reset();
   scratch.remove(read.faces);
@@ -160,7 +130,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   // Edges: glue the sides, measure the seams; their lengths summed in corner order.
   {
     ExternalSorter<SeamLength> lengths(scratch, sortOptions("seams"));
-    FaceGeometries geometry(scratch, geometryFile);
+    FaceGeometries geometry(scratch, geometryFile, "edges");
     edges.finish();
     std::vector<EdgeRecord> sides;
     EdgeRecord edge;

@@ -8,8 +8,8 @@
 
 namespace seamvox::map_pass {
 
-Duplicates findDuplicateFaces(ExternalSorter<DuplicateKey>& keys, ScratchFolder& scratch,
-                              const ExternalSortOptions& options) {
+Duplicates findDuplicateFaces(const std::string& name, const ReadPass& read, ExternalSorter<DuplicateKey>& keys,
+                              ScratchFolder& scratch, const ExternalSortOptions& options) {
   Duplicates out;
   out.ranks = std::make_unique<ExternalSorter<std::uint32_t>>(scratch, options);
   keys.finish();
@@ -22,6 +22,10 @@ Duplicates findDuplicateFaces(ExternalSorter<DuplicateKey>& keys, ScratchFolder&
     previous = key;
   }
   out.ranks->finish();
+  if (read.kept == out.count) {
+    throw InputError(name + ": the mesh has no valid faces (" + std::to_string(read.inputFaces) +
+                     " faces in the input, all degenerate or duplicates)");
+  }
   return out;
 }
 

@@ -6,11 +6,13 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
 
 #include "core/mesh/mesh.h"
+#include "core/system/errors.h"
 #include "stream/corner_positions.h"
 #include "stream/external_sort.h"
 #include "stream/mesh_stream.h"
@@ -48,8 +50,7 @@ struct Duplicates {
   std::unique_ptr<ExternalSorter<std::uint32_t>> ranks;
   std::uint64_t count = 0;
 };
-Duplicates findDuplicateFaces(ExternalSorter<DuplicateKey>& keys, ScratchFolder& scratch,
-                              const ExternalSortOptions& options);
+
 
 // Pass 1: the stream into the corner positions, the non-degenerate faces file and the sort that
 // finds duplicate faces. Throws InputError for no faces, no (u, v), non-finite coordinates and
@@ -60,6 +61,51 @@ struct ReadPass {
 };
 ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<DuplicateKey>& duplicates,
                     CornerPositions& positions);
+
+/// The duplicate faces of a read pass from its keys; InputError naming the stream when no face is left.
+Duplicates findDuplicateFaces(const std::string& name, const ReadPass& read, ExternalSorter<DuplicateKey>& keys,
+                              ScratchFolder& scratch, const ExternalSortOptions& options);
+
+/// The faces of the read pass in order with their corner positions (every face is asked of
+/// positions, in step), duplicates left out: visit(face, p) for each.
+template <class Visit>
+void forEachKeptFace(ScratchFolder& scratch, const ReadPass& read, Duplicates& duplicates, CornerPositions& positions,
+                     Visit&& visit) {
+  ScratchReader faces(scratch, read.faces, "faces");
+  FaceRecord face;
+  std::uint32_t nextDuplicate = kInvalidId;
+  bool moreDuplicates = duplicates.ranks->next(nextDuplicate);
+  for (std::uint64_t k = 0; k < read.kept; ++k) {
+    if (!faces.read(&face, sizeof face)) throw IoError(read.faces.path + ": scratch faces end early");
+    Vec3d p[3];
+    positions.face(k, face.v, face.inputFace, p);
+    if (moreDuplicates && nextDuplicate == k) {
+      moreDuplicates = duplicates.ranks->next(nextDuplicate);
+      continue;
+    }
+    visit(face, p);
+  }
+}
+
+/// Records of a scratch file, one per face, read back by corner for the few corners that need
+/// them (pread, the last face's record kept).
+template <class Record>
+class RecordsByFace {
+ public:
+  RecordsByFace(ScratchFolder& scratch, const ScratchFile& file, const char* stage) : reader_(scratch, file, stage) {}
+  const Record& at(std::uint64_t corner) {
+    if (corner / 3 != face_) {
+      face_ = corner / 3;
+      reader_.readAt(face_ * sizeof(Record), &record_, sizeof record_);
+    }
+    return record_;
+  }
+
+ private:
+  ScratchRandomReader reader_;
+  std::uint64_t face_ = ~std::uint64_t(0);
+  Record record_{};
+};
 
 /// The sides of one edge (sorted by corner) glued as cleanMesh glues them: two sides in opposite
 /// directions; on an edge of more than two sides, pairs of opposite directions with the most

@@ -7,14 +7,29 @@
 
 #include "core/mesh/clean.h"
 #include "core/system/errors.h"
+#include "core/system/memory.h"
+#include "core/system/memory_budget.h"
 #include "core/synth/render.h"
 #include "io/mesh_io.h"
 #include "io/png_io.h"
 #include "io/polygon_io.h"
+#include "stream/map_render.h"
 #include "tools/cli.h"
+#include "tools/memory_path.h"
 
 namespace seamvox::cli {
 namespace {
+
+// Measured peak of the in-memory render: 48 MiB for the program, about 70 B per face of a
+// 1M-face and a 22M-face map (read, cleaned, its topology), plus the canvas; rounded up.
+constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20, kBytesPerFace = 80;
+
+/// Bytes of the supersampled canvas (key and colour per sample) and the output image.
+std::uint64_t canvasBytes(const RenderOptions& options) {
+  std::uint64_t ss = std::max<std::uint32_t>(1, options.supersample);
+  while (ss > 1 && std::uint64_t(options.width) * ss * options.height * ss > 4096ull * 4096ull) --ss;
+  return std::uint64_t(options.width) * options.height * (ss * ss * 11 + 3);
+}
 
 /// Parses "A<sep>B" into two numbers, or throws UsageError naming the option.
 std::pair<double, double> parsePair(const std::string& text, char separator, const char* option) {
@@ -63,7 +78,7 @@ int runRender(Args& args) {
   cleanOptions.weldVertices = args.flag("weld");
   const bool quiet = args.flag("quiet");
   const ProgressFn progress = makeProgress(quiet);
-  parseMemoryOptions(args);  // validated; this command runs in memory (out of core: issue 17)
+  const MemoryOptions memory = parseMemoryOptions(args);
   args.finish(1);
   requirePngPath("-o", *output);
   checkOutputPaths({{"MESH_WITH_UV", path}, {"--quads", quadsPath.value_or("")}}, {{"-o", *output}});
@@ -72,14 +87,6 @@ int runRender(Args& args) {
   }
 
   const auto start = std::chrono::steady_clock::now();
-  ReadOptions readOptions;
-  readOptions.readUV = true;
-  TriangleMesh mesh = readMesh(path, readOptions);
-  if (!mesh.hasUV()) {
-    throw InputError(path + ": has no texture coordinates; run seamvox param first");
-  }
-  cleanOptions.progress = progress;
-  const CleanResult cleaned = cleanMeshOf(path, std::move(mesh), cleanOptions);
   if (quadsPath) {  // the quad mesh's edges over a plain surface
     const PolygonMesh quads = readPolygonObj(*quadsPath);
     for (std::uint32_t f = 0; f < quads.numFaces(); ++f) {
@@ -90,18 +97,60 @@ int runRender(Args& args) {
     }
     options.dark = options.light;
   }
-  const double secondsRead =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  MemoryPath memoryPath;
+  memoryPath.budget = memory.budget;
+  const std::uint64_t fixedBytes = kProgramBytes + canvasBytes(options);
+  refuseDracoInputAboveBudget(path, memory.budget, fixedBytes, kBytesPerFace,
+                              "convert it to PLY (seamvox convert " + path + " OUT.ply) or raise --memory-budget");
+  ReadOptions readOptions;
+  readOptions.readUV = true;
+  const std::unique_ptr<MeshStream> stream = openMeshStream(path, readOptions);
+  memoryPath.estimate = fixedBytes + guessMeshCounts(path, *stream).faces * kBytesPerFace;
+  memoryPath.outOfCore = memoryPath.estimate > memory.budget;
   options.progress = progress;
-  // Depth ties go to the smaller input face, as out of core.
-  const RenderResult result = renderCheckerboard(cleaned.mesh, cleaned.topology, options, cleaned.faceOrigin);
+  RenderResult result;
+  std::uint64_t faces = 0;
+  double secondsRead = 0.0;
+  if (!memoryPath.outOfCore) {
+    TriangleMesh mesh = collectMesh(*stream);
+    if (!mesh.hasUV()) {
+      throw InputError(path + ": has no texture coordinates; run seamvox param first");
+    }
+    cleanOptions.progress = progress;
+    const CleanResult cleaned = cleanMeshOf(path, std::move(mesh), cleanOptions);
+    secondsRead = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // Depth ties go to the smaller input face, as out of core.
+    result = renderCheckerboard(cleaned.mesh, cleaned.topology, options, cleaned.faceOrigin);
+    faces = cleaned.mesh.numFaces();
+  } else {
+    if (cleanOptions.weldVertices) {
+      throw UsageError("--weld: out of core vertices are not welded; the map (about " +
+                       formatByteSize(memoryPath.estimate) + " in memory) is above the --memory-budget of " +
+                       formatByteSize(memory.budget) + ": weld it first (seamvox convert " + path +
+                       " OUT.ply --weld) or raise --memory-budget");
+    }
+    MapRenderOptions ooc;
+    ooc.render = options;
+    const std::uint64_t program = currentResidentBytes() + canvasBytes(options);
+    ooc.memoryBytes = memory.budget > program ? memory.budget - program : 0;
+    if (ooc.memoryBytes < (std::uint64_t(4) << 20)) {
+      std::fprintf(stderr, "seamvox render: the budget %s is below what the program and the canvas hold (%s) and 4 MiB for the sorts: running with that minimum (a smaller --size or --supersample 1 needs less)\n",
+                   formatByteSize(memory.budget).c_str(), formatByteSize(program).c_str());
+    }
+    ooc.scratchParent = memory.scratch;
+    MapRenderResult rendered = renderMapStream(*stream, ooc);
+    result = std::move(rendered.render);
+    faces = rendered.faces;
+    memoryPath.traffic = rendered.traffic;
+    memoryPath.scratchPeakBytes = rendered.scratchPeakBytes;
+  }
   const auto writeStart = std::chrono::steady_clock::now();
   writePng(*output, result.image);
   const double secondsWrite =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count();
 
-  std::printf("wrote %s: %ux%u, %u faces, %.1f%% of the picture covered",
-              output->c_str(), result.image.width, result.image.height, cleaned.mesh.numFaces(),
+  std::printf("wrote %s: %ux%u, %llu faces, %.1f%% of the picture covered",
+              output->c_str(), result.image.width, result.image.height, static_cast<unsigned long long>(faces),
               100.0 * double(result.coveredPixels) / (double(result.image.width) * result.image.height));
   if (quadsPath) std::printf(", %zu quad-mesh edges drawn", options.lines.size() / 2);
   if (options.drawSeams) std::printf(", %llu seam edges", static_cast<unsigned long long>(result.seamEdges));
@@ -115,8 +164,12 @@ int runRender(Args& args) {
                   "degrees)", static_cast<unsigned long long>(result.irregularVertices));
     }
   }
-  std::printf("\n  read+clean %.2f s, render %.2f s, png %.2f s\n", secondsRead, result.seconds,
-              secondsWrite);
+  if (memoryPath.outOfCore) {
+    std::printf("\n  read and render %.2f s, png %.2f s\n", result.seconds, secondsWrite);
+  } else {
+    std::printf("\n  read+clean %.2f s, render %.2f s, png %.2f s\n", secondsRead, result.seconds, secondsWrite);
+  }
+  std::printf("%s\n", describeMemoryPath(memoryPath).c_str());
   return 0;
 }
 

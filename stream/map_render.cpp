@@ -1,0 +1,253 @@
+#include "stream/map_render.h"
+
+#include <algorithm>
+#include <memory>
+#include <tuple>
+
+#include "core/synth/render_canvas.h"
+#include "core/system/errors.h"
+#include "core/system/stopwatch.h"
+#include "stream/corner_positions.h"
+#include "stream/external_sort.h"
+#include "stream/map_passes.h"
+
+namespace seamvox {
+namespace {
+
+using namespace map_pass;
+using namespace render_detail;
+
+/// Faces handed to the rasterizer at once.
+constexpr std::size_t kRasterChunk = std::size_t(1) << 14;
+
+struct DrawnFace {  // a face drawn: unit normal (0 when degenerate), corners, (u, v), ids
+  double normal[3];
+  float corner[3][3];
+  double uv[3][2];
+  std::uint32_t v[3], inputFace;
+  Vec3d position(int j) const { return Vec3f(corner[j][0], corner[j][1], corner[j][2]).cast<double>(); }
+};
+struct CornerAngle {  // a drawn face's corner: its vertex and signed (u, v) angle
+  std::uint32_t vertex = 0, pad = 0;
+  std::uint64_t corner = 0;  // 3 face + j, drawn faces numbered in order
+  double angle = 0.0;
+  bool operator<(const CornerAngle& o) const { return std::tie(vertex, corner) < std::tie(o.vertex, o.corner); }
+};
+
+/// The drawn faces, read back for the few corners that need them (seam edges, edges of more
+/// than two sides, cones).
+using DrawnFaces = RecordsByFace<DrawnFace>;
+
+/// (u, v) of a side at the smaller and at the larger vertex of its edge.
+std::pair<Vec2d, Vec2d> uvAtEnds(const EdgeRecord& side) {
+  const Vec2d start = vec2(side.uvStart), end = vec2(side.uvEnd);
+  return side.forward() ? std::make_pair(start, end) : std::make_pair(end, start);
+}
+
+}  // namespace
+
+std::uint64_t mapRenderScratchBytes(std::uint64_t vertices, std::uint64_t faces, bool seamsOrCones) {
+  // Faces and duplicate keys, the corner join (positions not in memory), and with seams or cones
+  // the edge and corner runs and the geometry file: an upper bound of the peak.
+  std::uint64_t perFace = sizeof(FaceRecord) + sizeof(DuplicateKey) +
+                          3 * (sizeof(corner_detail::CornerRequest) + sizeof(corner_detail::CornerPosition));
+  perFace += sizeof(DrawnFace);
+  if (seamsOrCones) perFace += 3 * sizeof(EdgeRecord) + 3 * sizeof(CornerAngle);
+  return vertices * sizeof(Vec3f) + faces * perFace;
+}
+
+MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& options) {
+  const RenderOptions& render = options.render;
+  checkOptions(render);
+  const std::string& name = stream.name();
+  const bool seamsOrCones = render.drawSeams || render.drawCones;
+  ScratchFolder scratch(options.scratchParent,
+                        mapRenderScratchBytes(stream.declaredVertices(), stream.expectedTriangles(), seamsOrCones));
+  if (options.onScratch) options.onScratch(scratch);
+  std::uint64_t sortMemory = options.memoryBytes / 4;  // up to four sorts alive at a time
+  auto sortOptions = [&](const char* stage) {
+    return ExternalSortOptions{std::max<std::uint64_t>(sortMemory, std::uint64_t(1) << 20), stage};
+  };
+  MapRenderResult result;
+  SteadyClock::time_point start = SteadyClock::now();
+  const SteadyClock::time_point begin = start;
+  auto finishStage = [&](const char* stage) {
+    result.stageSeconds.push_back({stage, secondsSince(start)});
+    start = SteadyClock::now();
+  };
+
+  // Read: positions (in memory when they fit half the memory), faces, duplicate keys.
+  CornerPositions positions(name, scratch, stream.declaredVertices(), options.memoryBytes / 2, sortOptions("corners"));
+  if (positions.inMemory()) sortMemory -= std::min(sortMemory / 2, stream.declaredVertices() * sizeof(Vec3f) / 4);
+  auto duplicateKeys = std::make_unique<ExternalSorter<DuplicateKey>>(scratch, sortOptions("duplicates"));
+  const ReadPass read = readStream(stream, scratch, *duplicateKeys, positions);
+  finishStage("read");
+  Duplicates duplicates = findDuplicateFaces(name, read, *duplicateKeys, scratch, sortOptions("duplicates"));
+  duplicateKeys.reset();
+  finishStage("duplicates");
+
+  // Faces: the drawn ones (duplicates left out) with their corner positions, framed; their edges
+  // and corners sorted for the seams and cones.
+  FrameBuilder frame(render);
+  std::unique_ptr<ExternalSorter<EdgeRecord>> edges;
+  std::unique_ptr<ExternalSorter<CornerAngle>> angles;
+  if (seamsOrCones) edges = std::make_unique<ExternalSorter<EdgeRecord>>(scratch, sortOptions("edges"));
+  if (render.drawCones) angles = std::make_unique<ExternalSorter<CornerAngle>>(scratch, sortOptions("cones"));
+  ScratchFile drawnFile;
+  {
+    ScratchWriter drawn(scratch, "faces");
+    forEachKeptFace(scratch, read, duplicates, positions, [&](const FaceRecord& face, const Vec3d (&p)[3]) {
+      const std::uint64_t f = result.faces++;
+      DrawnFace out{};
+      const Vec3d cross = (p[1] - p[0]).cross(p[2] - p[0]);
+      const double length = cross.norm();
+      const Vec3d normal = length > 0.0 ? Vec3d(cross / length) : Vec3d::Zero();
+      for (int k3 = 0; k3 < 3; ++k3) out.normal[k3] = normal[k3];
+      for (int j = 0; j < 3; ++j) {
+        const Vec3f q = p[j].cast<float>();
+        frame.add(q);
+        for (int k3 = 0; k3 < 3; ++k3) out.corner[j][k3] = q[k3];
+        out.uv[j][0] = face.uv[j][0], out.uv[j][1] = face.uv[j][1];
+        out.v[j] = face.v[j];
+      }
+      out.inputFace = face.inputFace;
+      drawn.write(&out, sizeof out);
+      for (int j = 0; edges && j < 3; ++j) {
+        const int s = (j + 1) % 3, e = (j + 2) % 3;
+        EdgeRecord edge(face.v[s], face.v[e], 3 * f + j);
+        for (int k2 = 0; k2 < 2; ++k2) edge.uvStart[k2] = face.uv[s][k2], edge.uvEnd[k2] = face.uv[e][k2];
+        edges->add(edge);
+      }
+      for (int j = 0; angles && j < 3; ++j) {
+        const double angle = cornerAngle(vec2(face.uv[j]), vec2(face.uv[(j + 1) % 3]), vec2(face.uv[(j + 2) % 3]));
+        angles->add({face.v[j], 0, 3 * f + j, angle});
+      }
+    });
+    drawnFile = drawn.finish();
+  }
+  duplicates.ranks.reset();
+  scratch.remove(read.faces);
+  const RenderCamera camera = frame.camera();
+  result.render.camera = camera;
+  finishStage("faces");
+
+  // Rasterize chunk by chunk.
+  const std::uint32_t ss = samplesPerPixel(render);
+  SampleCanvas canvas(render.width * ss, render.height * ss, render.background);
+  {
+    ScratchReader faces(scratch, drawnFile, "raster");
+    std::vector<ScreenFace> chunk;
+    chunk.reserve(kRasterChunk);
+    DrawnFace face;
+    for (std::uint64_t f = 0; f < result.faces; ++f) {
+      if (!faces.read(&face, sizeof face)) throw IoError(drawnFile.path + ": scratch faces end early");
+      ScreenFace s;
+      const Vec3d p[3] = {face.position(0), face.position(1), face.position(2)};
+      for (int j = 0; j < 3; ++j) {
+        s.corner[j] = toScreen(camera, ss, p[j]);
+        s.uv[j] = vec2(face.uv[j]);
+      }
+      s.shade = faceShade(camera, p[0], p[1], p[2]);
+      s.id = face.inputFace;
+      chunk.push_back(s);
+      if (chunk.size() == kRasterChunk || f + 1 == result.faces) {
+        rasterizeFaces(chunk, render, canvas);
+        chunk.clear();
+        reportProgress(render.progress, "render", 0.1 + 0.6 * double(f + 1) / result.faces);
+      }
+    }
+  }
+  finishStage("raster");
+
+  // Seams: the glued sides of every edge whose (u, v) differ, drawn from the smaller corner's
+  // next vertex to its previous one (as in memory); vertices of unglued sides are boundary.
+  const double tolerance = lineTolerance(camera, ss);
+  std::unique_ptr<ExternalSorter<std::uint32_t>> boundary;
+  if (render.drawCones) boundary = std::make_unique<ExternalSorter<std::uint32_t>>(scratch, sortOptions("cones"));
+  if (edges) {
+    DrawnFaces drawn(scratch, drawnFile, "edges");
+    edges->finish();
+    std::vector<EdgeRecord> sides;
+    std::vector<std::uint8_t> used;
+    EdgeRecord edge;
+    auto flush = [&] {
+      bool clash = false;
+      auto glued = glueSides(
+          sides, [&](std::size_t i) { return vec3(drawn.at(sides[i].corner()).normal); }, clash);
+      if (clash) glued.push_back({0, 1});  // in memory the faces are reoriented, then glued
+      used.assign(sides.size(), 0);
+      for (const auto& [x, y] : glued) {
+        used[x] = used[y] = 1;
+        const auto [xLow, xHigh] = uvAtEnds(sides[x]);
+        const auto [yLow, yHigh] = uvAtEnds(sides[y]);
+        if (!render.drawSeams ||
+            !(uvDiffer(xLow, yLow, render.seamTolerance) || uvDiffer(xHigh, yHigh, render.seamTolerance))) {
+          continue;
+        }
+        ++result.render.seamEdges;
+        const std::uint64_t c = sides[x].corner();
+        const DrawnFace& face = drawn.at(c);
+        const int j = static_cast<int>(c % 3);
+        drawSegment(toScreen(camera, ss, face.position((j + 1) % 3)), toScreen(camera, ss, face.position((j + 2) % 3)),
+                    0.5 * render.seamWidth * ss, tolerance, render.seamColor, canvas);
+      }
+      for (std::size_t i = 0; boundary && i < sides.size(); ++i) {
+        if (used[i]) continue;
+        boundary->add(static_cast<std::uint32_t>(sides[i].edge >> 32));
+        boundary->add(static_cast<std::uint32_t>(sides[i].edge & 0xffffffffu));
+      }
+      sides.clear();
+    };
+    while (edges->next(edge)) {
+      if (!sides.empty() && sides[0].edge != edge.edge) flush();
+      sides.push_back(edge);
+    }
+    if (!sides.empty()) flush();
+    edges.reset();
+  }
+  finishStage("edges");
+  drawLines(render, camera, ss, canvas);
+
+  // Cones: interior vertices whose corners' angles sum to 2 pi - k pi / 2, k != 0.
+  if (angles) {
+    DrawnFaces drawn(scratch, drawnFile, "cones");
+    angles->finish();
+    boundary->finish();
+    std::uint32_t nextBoundary = 0;
+    bool moreBoundary = boundary->next(nextBoundary);
+    std::vector<Vec3d> screen;
+    CornerAngle corner;
+    bool have = angles->next(corner);
+    while (have) {
+      const CornerAngle first = corner;
+      double sum = 0.0;
+      while (have && corner.vertex == first.vertex) {
+        sum += corner.angle;
+        have = angles->next(corner);
+      }
+      while (moreBoundary && nextBoundary < first.vertex) moreBoundary = boundary->next(nextBoundary);
+      if (moreBoundary && nextBoundary == first.vertex) continue;
+      const int turns = coneTurns(sum);
+      if (turns == kIrregularAngleSum) {
+        ++result.render.irregularVertices;
+      } else if (turns != 0) {
+        result.render.cones.push_back({first.vertex, turns});
+        screen.push_back(toScreen(camera, ss, drawn.at(first.corner).position(int(first.corner % 3))));
+      }
+    }
+    drawCones(result.render.cones, screen, render, ss, tolerance, canvas);
+    angles.reset();
+    boundary.reset();
+  }
+  finishStage("cones");
+  scratch.remove(drawnFile);
+  downsample(canvas, ss, render, result.render);
+  reportProgress(render.progress, "render", 1.0);
+  result.render.seconds = secondsSince(begin);
+  result.positionsInMemory = positions.inMemory();
+  result.traffic = scratch.traffic();
+  result.scratchPeakBytes = scratch.peakBytesOnDisk();
+  return result;
+}
+
+}  // namespace seamvox
