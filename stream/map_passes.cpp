@@ -32,7 +32,7 @@ Duplicates findDuplicateFaces(const std::string& name, const ReadPass& read, Ext
 // The geometry of the cleaned faces, read back for the few corners that need it (seam edges,
 
 ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<DuplicateKey>& duplicates,
-                    CornerPositions& positions) {
+                    CornerPositions& positions, ExternalSorter<WeldKey>* weld) {
   const std::string& name = stream.name();
   ReadPass out;
   ScratchWriter faces(scratch, "read");
@@ -50,6 +50,7 @@ ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<D
     for (const Vec3f& p : chunk.positions) {
       if (!p.allFinite() && nonFinite == kInvalidId) nonFinite = out.vertices;
       positions.addVertex(p);
+      if (weld) weld->add({{p.x(), p.y(), p.z()}, static_cast<std::uint32_t>(out.vertices)});
       ++out.vertices;
     }
     if (chunk.triangles.empty()) continue;
@@ -87,6 +88,25 @@ ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<D
   positions.finish();
   out.faces = faces.finish();
   return out;
+}
+
+bool WeldKey::operator<(const WeldKey& o) const {
+  for (int k = 0; k < 3; ++k) {
+    if (p[k] != o.p[k]) return p[k] < o.p[k];
+  }
+  return vertex < o.vertex;
+}
+
+std::vector<std::uint32_t> weldMap(ExternalSorter<WeldKey>& keys, std::uint64_t vertices) {
+  std::vector<std::uint32_t> canonical(vertices);
+  keys.finish();
+  WeldKey key, first{};
+  bool any = false;
+  while (keys.next(key)) {
+    if (!any || key.p[0] != first.p[0] || key.p[1] != first.p[1] || key.p[2] != first.p[2]) first = key, any = true;
+    canonical[key.vertex] = first.vertex;
+  }
+  return canonical;
 }
 
 std::vector<std::pair<std::size_t, std::size_t>> glueSides(const std::vector<EdgeRecord>& sides,

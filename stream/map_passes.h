@@ -29,6 +29,11 @@ struct DuplicateKey {  // its sorted vertex set; face = its rank among non-degen
   std::uint32_t a, b, c, face;
   bool operator<(const DuplicateKey& o) const { return std::tie(a, b, c, face) < std::tie(o.a, o.b, o.c, o.face); }
 };
+struct WeldKey {  // a vertex by its position (-0 and 0 equal, as cleanMesh compares them)
+  float p[3];
+  std::uint32_t vertex;
+  bool operator<(const WeldKey& o) const;
+};
 struct EdgeRecord {  // corner c of the cleaned mesh: its edge runs from a = vertex(next c) to b = vertex(prev c)
   std::uint64_t edge;     // min(a, b) << 32 | max(a, b): the sort key
   std::uint64_t corner2;  // 2 c + (a < b): by corner within an edge, with the direction
@@ -60,7 +65,11 @@ struct ReadPass {
   std::uint64_t vertices = 0, inputFaces = 0, kept = 0;
 };
 ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<DuplicateKey>& duplicates,
-                    CornerPositions& positions);
+                    CornerPositions& positions, ExternalSorter<WeldKey>* weld = nullptr);
+
+/// Welding vertices at exactly equal positions (cleanMesh's weld with tolerance 0): per vertex the
+/// smallest id at its position, from the keys readStream added (4 bytes per vertex in memory).
+std::vector<std::uint32_t> weldMap(ExternalSorter<WeldKey>& keys, std::uint64_t vertices);
 
 /// The duplicate faces of a read pass from its keys; InputError naming the stream when no face is left.
 Duplicates findDuplicateFaces(const std::string& name, const ReadPass& read, ExternalSorter<DuplicateKey>& keys,

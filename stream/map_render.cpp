@@ -20,12 +20,17 @@ using namespace render_detail;
 /// Faces handed to the rasterizer at once.
 constexpr std::size_t kRasterChunk = std::size_t(1) << 14;
 
-struct DrawnFace {  // a face drawn: unit normal (0 when degenerate), corners, (u, v), ids
-  double normal[3];
+struct DrawnFace {  // a face drawn: corners, (u, v), input index
   float corner[3][3];
   double uv[3][2];
-  std::uint32_t v[3], inputFace;
+  std::uint32_t inputFace;
   Vec3d position(int j) const { return Vec3f(corner[j][0], corner[j][1], corner[j][2]).cast<double>(); }
+  /// Unit normal (0 when degenerate), as cleanMesh computes it to glue the sides of an edge.
+  Vec3d normal() const {
+    const Vec3d a = position(0), cross = (position(1) - a).cross(position(2) - a);
+    const double length = cross.norm();
+    return length > 0.0 ? Vec3d(cross / length) : Vec3d::Zero();
+  }
 };
 struct CornerAngle {  // a drawn face's corner: its vertex and signed (u, v) angle
   std::uint32_t vertex = 0, pad = 0;
@@ -49,7 +54,7 @@ std::pair<Vec2d, Vec2d> uvAtEnds(const EdgeRecord& side) {
 std::uint64_t mapRenderScratchBytes(std::uint64_t vertices, std::uint64_t faces, bool seamsOrCones) {
   // Faces and duplicate keys, the corner join (positions not in memory), and with seams or cones
   // the edge and corner runs and the geometry file: an upper bound of the peak.
-  std::uint64_t perFace = sizeof(FaceRecord) + sizeof(DuplicateKey) +
+  std::uint64_t perFace = sizeof(WeldKey) / 2 + sizeof(FaceRecord) + sizeof(DuplicateKey) +
                           3 * (sizeof(corner_detail::CornerRequest) + sizeof(corner_detail::CornerPosition));
   perFace += sizeof(DrawnFace);
   if (seamsOrCones) perFace += 3 * sizeof(EdgeRecord) + 3 * sizeof(CornerAngle);
@@ -80,8 +85,18 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
   CornerPositions positions(name, scratch, stream.declaredVertices(), options.memoryBytes / 2, sortOptions("corners"));
   if (positions.inMemory()) sortMemory -= std::min(sortMemory / 2, stream.declaredVertices() * sizeof(Vec3f) / 4);
   auto duplicateKeys = std::make_unique<ExternalSorter<DuplicateKey>>(scratch, sortOptions("duplicates"));
-  const ReadPass read = readStream(stream, scratch, *duplicateKeys, positions);
+  std::unique_ptr<ExternalSorter<WeldKey>> weldKeys;
+  if (options.weld && seamsOrCones) weldKeys = std::make_unique<ExternalSorter<WeldKey>>(scratch, sortOptions("weld"));
+  const ReadPass read = readStream(stream, scratch, *duplicateKeys, positions, weldKeys.get());
   finishStage("read");
+  // Welded ids for the edges and corners (faces keep theirs for the corner positions).
+  std::vector<std::uint32_t> welded;
+  if (weldKeys) {
+    welded = weldMap(*weldKeys, read.vertices);
+    weldKeys.reset();
+    finishStage("weld");
+  }
+  const auto vertexId = [&](std::uint32_t v) { return welded.empty() ? v : welded[v]; };
   Duplicates duplicates = findDuplicateFaces(name, read, *duplicateKeys, scratch, sortOptions("duplicates"));
   duplicateKeys.reset();
   finishStage("duplicates");
@@ -99,28 +114,25 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
     forEachKeptFace(scratch, read, duplicates, positions, [&](const FaceRecord& face, const Vec3d (&p)[3]) {
       const std::uint64_t f = result.faces++;
       DrawnFace out{};
-      const Vec3d cross = (p[1] - p[0]).cross(p[2] - p[0]);
-      const double length = cross.norm();
-      const Vec3d normal = length > 0.0 ? Vec3d(cross / length) : Vec3d::Zero();
-      for (int k3 = 0; k3 < 3; ++k3) out.normal[k3] = normal[k3];
       for (int j = 0; j < 3; ++j) {
         const Vec3f q = p[j].cast<float>();
         frame.add(q);
         for (int k3 = 0; k3 < 3; ++k3) out.corner[j][k3] = q[k3];
         out.uv[j][0] = face.uv[j][0], out.uv[j][1] = face.uv[j][1];
-        out.v[j] = face.v[j];
       }
       out.inputFace = face.inputFace;
       drawn.write(&out, sizeof out);
+      const std::uint32_t v[3] = {vertexId(face.v[0]), vertexId(face.v[1]), vertexId(face.v[2])};
+      if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) return;  // welded into a segment: not in the mesh
       for (int j = 0; edges && j < 3; ++j) {
         const int s = (j + 1) % 3, e = (j + 2) % 3;
-        EdgeRecord edge(face.v[s], face.v[e], 3 * f + j);
+        EdgeRecord edge(v[s], v[e], 3 * f + j);
         for (int k2 = 0; k2 < 2; ++k2) edge.uvStart[k2] = face.uv[s][k2], edge.uvEnd[k2] = face.uv[e][k2];
         edges->add(edge);
       }
       for (int j = 0; angles && j < 3; ++j) {
         const double angle = cornerAngle(vec2(face.uv[j]), vec2(face.uv[(j + 1) % 3]), vec2(face.uv[(j + 2) % 3]));
-        angles->add({face.v[j], 0, 3 * f + j, angle});
+        angles->add({v[j], 0, 3 * f + j, angle});
       }
     });
     drawnFile = drawn.finish();
@@ -173,7 +185,7 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
     auto flush = [&] {
       bool clash = false;
       auto glued = glueSides(
-          sides, [&](std::size_t i) { return vec3(drawn.at(sides[i].corner()).normal); }, clash);
+          sides, [&](std::size_t i) { return drawn.at(sides[i].corner()).normal(); }, clash);
       if (clash) glued.push_back({0, 1});  // in memory the faces are reoriented, then glued
       used.assign(sides.size(), 0);
       for (const auto& [x, y] : glued) {

@@ -23,6 +23,9 @@ struct MapRenderOptions {
   /// Memory of the sorts and of the positions when they fit half of it (the canvas comes on top).
   std::uint64_t memoryBytes = std::uint64_t(256) << 20;
   std::string scratchParent = "/tmp";  ///< the scratch folder is created in it
+  /// Vertices at exactly equal positions are one vertex for the seams and cones (cleanMesh's weld
+  /// with tolerance 0; a map whose vertices are split along its seams): 4 bytes per vertex.
+  bool weld = false;
   /// Called with the scratch folder once created (tests set a write limit through it).
   std::function<void(ScratchFolder&)> onScratch;
 };
@@ -44,7 +47,8 @@ std::uint64_t mapRenderScratchBytes(std::uint64_t vertices, std::uint64_t faces,
 /// renderCheckerboard's on the cleaned mesh with its faceOrigin as face ids; seams and cones too
 /// on meshes without non-manifold vertices and orientation clashes (out of core a clashing edge
 /// is glued as it is, without reorienting faces, and the fans of a non-manifold vertex are summed
-/// as one vertex). Throws InputError (no UVs, indices out of range, non-finite coordinates, no
+/// as one vertex; with weld, faces that become duplicates when welded are kept for the seams and
+/// cones). Throws InputError (no UVs, indices out of range, non-finite coordinates, no
 /// valid faces), IoError (scratch).
 MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& options);
 

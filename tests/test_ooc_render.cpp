@@ -45,6 +45,16 @@ class OocRender : public ::testing::Test {
     for (int j = 0; j < 3; ++j) uv.push_back(uv[30 + j]);
     mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
     writeMesh(path("fin-map.ply"), mesh);
+    // The sphere's map as a triangle soup: three vertices of its own per face.
+    TriangleMesh sphere = readMesh(path("sphere-map.ply"), options);
+    TriangleMesh soup;
+    soup.cornerUV = sphere.cornerUV;
+    for (const Triangle& t : sphere.triangles) {
+      const VertexId first = soup.numVertices();
+      for (const VertexId v : t) soup.positions.push_back(sphere.positions[v]);
+      soup.triangles.push_back({first, first + 1, first + 2});
+    }
+    writeMesh(path("soup-map.ply"), soup);
   }
   static void TearDownTestSuite() {
     delete dir_;
@@ -133,6 +143,40 @@ TEST_F(OocRender, ClosedMapSamePicture) {
   EXPECT_EQ(turns, 8);  // Poincare-Hopf: a sphere's cones sum to 2, in quarter turns 8
 }
 
+TEST_F(OocRender, WeldedSoupSamePicture) {
+  RenderOptions o = options();
+  ReadOptions read;
+  read.readUV = true;
+  CleanOptions weld;
+  weld.weldVertices = true;
+  const CleanResult clean = cleanMesh(readMesh(path("soup-map.ply"), read), weld);
+  const RenderResult expected = renderCheckerboard(clean.mesh, clean.topology, o, clean.faceOrigin);
+  ReadOptions chunked = read;
+  chunked.chunkTriangles = 500;
+  const auto stream = openMeshStream(path("soup-map.ply"), chunked);
+  testing::TempDir scratch;
+  MapRenderOptions ooc;
+  ooc.render = o;
+  ooc.weld = true;
+  ooc.scratchParent = scratch.dir();
+  const MapRenderResult got = renderMapStream(*stream, ooc);
+  EXPECT_EQ(got.render.image.pixels, expected.image.pixels);
+  EXPECT_EQ(got.render.seamEdges, expected.seamEdges);
+  EXPECT_GT(expected.seamEdges, 0u);
+  EXPECT_EQ(got.render.irregularVertices, expected.irregularVertices);
+  int turns = 0;
+  for (const RenderCone& cone : got.render.cones) turns += cone.quarterTurns;
+  EXPECT_EQ(turns, 8);
+  EXPECT_EQ(got.render.cones.size(), expected.cones.size());
+  // Not welded, every edge is a boundary: no seam, no cone.
+  ooc.weld = false;
+  const auto again = openMeshStream(path("soup-map.ply"), chunked);
+  const MapRenderResult unwelded = renderMapStream(*again, ooc);
+  EXPECT_EQ(unwelded.render.seamEdges, 0u);
+  EXPECT_TRUE(unwelded.render.cones.empty());
+  EXPECT_TRUE(fs::is_empty(scratch.dir()));
+}
+
 TEST_F(OocRender, HolesAndIslandsSamePicture) { expectSamePicture(path("scan-map.ply")); }
 
 TEST_F(OocRender, NonManifoldWithDuplicateAndDegenerateFacesSamePicture) {
@@ -167,11 +211,17 @@ TEST_F(OocRender, CommandGivesTheSamePngOnBothPaths) {
   const auto figures = [](const std::string& text) { return text.substr(text.find("wrote"), text.find('\n', text.find("wrote")) - text.find("wrote")); };
   EXPECT_EQ(figures(inMemory).substr(figures(inMemory).find(':')), figures(outOfCore).substr(figures(outOfCore).find(':')));
   EXPECT_TRUE(fs::is_empty(scratch.dir()));
-  // Welding needs the in-memory path: a clear error naming the alternatives, no picture.
+  // A map whose vertices are split at every corner, welded back on both paths.
   std::string log;
-  EXPECT_EQ(testing::runSeamvox(base + " -o " + path("c.png") + " --memory-budget 1K --weld", &log), 2) << log;
-  EXPECT_NE(log.find("seamvox convert"), std::string::npos) << log;
-  EXPECT_FALSE(fs::exists(path("c.png")));
+  ASSERT_EQ(testing::runSeamvox(base + " -o " + path("c.png") + " --memory-budget 64G --weld " + path("soup-map.ply"), &log), 2)
+      << "two meshes are a usage error: " << log;
+  const std::string soup = "render " + path("soup-map.ply") + " --seams --cones --size 300x200 --quiet --weld --scratch " + scratch.dir();
+  ASSERT_EQ(testing::runSeamvox(soup + " -o " + path("c.png") + " --memory-budget 64G", &inMemory), 0) << inMemory;
+  ASSERT_EQ(testing::runSeamvox(soup + " -o " + path("d.png") + " --memory-budget 1K", &outOfCore), 0) << outOfCore;
+  EXPECT_EQ(testing::readFile(path("c.png")), testing::readFile(path("d.png")));
+  EXPECT_EQ(figures(inMemory).substr(figures(inMemory).find(':')), figures(outOfCore).substr(figures(outOfCore).find(':')));
+  EXPECT_EQ(inMemory.find(", 0 seam edges"), std::string::npos) << "welded: seams, not boundaries: " << inMemory;
+  EXPECT_EQ(inMemory.find(", 0 cones"), std::string::npos) << inMemory;
 }
 
 TEST_F(OocRender, FullScratchDiskNamesTheFolderAndLeavesNothing) {

@@ -31,6 +31,12 @@ std::uint64_t canvasBytes(const RenderOptions& options) {
   return std::uint64_t(options.width) * options.height * (ss * ss * 11 + 3);
 }
 
+std::string formatSeconds(double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f s", seconds);
+  return text;
+}
+
 /// Parses "A<sep>B" into two numbers, or throws UsageError naming the option.
 std::pair<double, double> parsePair(const std::string& text, char separator, const char* option) {
   const auto at = text.find(separator);
@@ -111,6 +117,7 @@ int runRender(Args& args) {
   RenderResult result;
   std::uint64_t faces = 0;
   double secondsRead = 0.0;
+  std::string stages;  // out of core: seconds per pass
   if (!memoryPath.outOfCore) {
     TriangleMesh mesh = collectMesh(*stream);
     if (!mesh.hasUV()) {
@@ -123,14 +130,9 @@ int runRender(Args& args) {
     result = renderCheckerboard(cleaned.mesh, cleaned.topology, options, cleaned.faceOrigin);
     faces = cleaned.mesh.numFaces();
   } else {
-    if (cleanOptions.weldVertices) {
-      throw UsageError("--weld: out of core vertices are not welded; the map (about " +
-                       formatByteSize(memoryPath.estimate) + " in memory) is above the --memory-budget of " +
-                       formatByteSize(memory.budget) + ": weld it first (seamvox convert " + path +
-                       " OUT.ply --weld) or raise --memory-budget");
-    }
     MapRenderOptions ooc;
     ooc.render = options;
+    ooc.weld = cleanOptions.weldVertices;
     const std::uint64_t program = currentResidentBytes() + canvasBytes(options);
     ooc.memoryBytes = memory.budget > program ? memory.budget - program : 0;
     if (ooc.memoryBytes < (std::uint64_t(4) << 20)) {
@@ -142,6 +144,7 @@ int runRender(Args& args) {
     result = std::move(rendered.render);
     faces = rendered.faces;
     memoryPath.traffic = rendered.traffic;
+    for (const auto& [stage, seconds] : rendered.stageSeconds) stages += (stages.empty() ? "" : ", ") + stage + " " + formatSeconds(seconds);
     memoryPath.scratchPeakBytes = rendered.scratchPeakBytes;
   }
   const auto writeStart = std::chrono::steady_clock::now();
@@ -165,7 +168,7 @@ int runRender(Args& args) {
     }
   }
   if (memoryPath.outOfCore) {
-    std::printf("\n  read and render %.2f s, png %.2f s\n", result.seconds, secondsWrite);
+    std::printf("\n  read and render %.2f s (%s), png %.2f s\n", result.seconds, stages.c_str(), secondsWrite);
   } else {
     std::printf("\n  read+clean %.2f s, render %.2f s, png %.2f s\n", secondsRead, result.seconds, secondsWrite);
   }
