@@ -202,6 +202,11 @@ SEAMVOX_COMMAND({"render", "checkerboard picture (PNG) of a mesh's texture coord
                  "  --weld             weld coincident vertices (files whose vertices are split\n"
                  "                     along seams: otherwise those seams show as open boundary)\n"
                  "  --quiet            no progress on stderr\n"
+                 "\n"
+                 "A map whose in-memory render would exceed the budget (48 MiB + 80 B per face + the\n"
+                 "canvas, from the header's counts) is rendered out of core: streamed once, its faces\n"
+                 "kept in a scratch folder and rasterized in chunks, seams and cones found by external\n"
+                 "sorts; the same picture. The last line says which path ran.\n"
                  SEAMVOX_MEMORY_HELP,
                  {"seams", "cones", "weld"},
                  &runRender});
