@@ -177,6 +177,24 @@ TEST_F(OocRender, WeldedSoupSamePicture) {
   EXPECT_TRUE(fs::is_empty(scratch.dir()));
 }
 
+// Maps of real scans (a closed one, one with holes, one with a sharp crease) and a noisy variant.
+TEST_F(OocRender, SharedMeshesSamePicture) {
+  int rendered = 0;
+  for (const char* name : {"bunny.off", "camelhead.off", "spot.obj"}) {
+    const std::string mesh = testing::sharedMesh(name);
+    if (mesh.empty()) GTEST_SKIP() << "../shared/data is absent: shared meshes not rendered";
+    const std::string map = path(std::string(name) + "-map.ply"), noisy = path(std::string(name) + "-noisy.ply");
+    std::string log;
+    ASSERT_EQ(testing::runSeamvox("param " + mesh + " -o " + map + " --quiet", &log), 0) << log;
+    expectSamePicture(map);
+    ASSERT_EQ(testing::runSeamvox("subdivide " + mesh + " --levels 1 --noise 0.25 --seed 3 -o " + noisy, &log), 0) << log;
+    ASSERT_EQ(testing::runSeamvox("param " + noisy + " -o " + map + " --quiet", &log), 0) << log;
+    expectSamePicture(map);
+    ++rendered;
+  }
+  EXPECT_EQ(rendered, 3);
+}
+
 TEST_F(OocRender, HolesAndIslandsSamePicture) { expectSamePicture(path("scan-map.ply")); }
 
 TEST_F(OocRender, NonManifoldWithDuplicateAndDegenerateFacesSamePicture) {
