@@ -74,11 +74,15 @@ class InputFile {
   bool refill(std::size_t n);
   std::size_t readSome(char* into, std::size_t n);
   void detectLineEnd();
+  /// A regular file whose size or modification time differs from when it was opened changed
+  /// while it was read: IoError naming it (checked after every read from the file).
+  void checkUnchanged() const;
 
   std::string path_;
   int fd_ = -1;
   bool regular_ = true;
   std::uint64_t size_ = 0;
+  std::int64_t modifiedSeconds_ = 0, modifiedNanoseconds_ = 0;  ///< st_mtim at open (regular files)
   std::uint64_t consumed_ = 0;  ///< input bytes before buffer_[0]
   std::vector<char> buffer_;
   std::size_t pos_ = 0, end_ = 0;

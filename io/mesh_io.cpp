@@ -80,6 +80,8 @@ InputFile::InputFile(std::string path, double pipeWaitSeconds) : path_(std::move
     throw;
   }
   size_ = regular_ ? static_cast<std::uint64_t>(info.st_size) : std::numeric_limits<std::uint64_t>::max();
+  modifiedSeconds_ = info.st_mtim.tv_sec;
+  modifiedNanoseconds_ = info.st_mtim.tv_nsec;
   buffer_.resize(static_cast<std::size_t>(std::clamp<std::uint64_t>(size_, 4096, std::uint64_t(1) << 22)));
 }
 
@@ -88,9 +90,27 @@ InputFile::~InputFile() { ::close(fd_); }
 std::size_t InputFile::readSome(char* into, std::size_t n) {
   for (;;) {
     const ssize_t got = ::read(fd_, into, n);
-    if (got >= 0) return static_cast<std::size_t>(got);
+    if (got >= 0) {
+      checkUnchanged();
+      return static_cast<std::size_t>(got);
+    }
     if (errno != EINTR) throw IoError(path_ + ": read failed: " + std::strerror(errno));
   }
+}
+
+void InputFile::checkUnchanged() const {
+  if (!regular_) return;
+  struct stat info {};
+  if (::fstat(fd_, &info) != 0) throw IoError(path_ + ": cannot check the file: " + std::strerror(errno));
+  if (static_cast<std::uint64_t>(info.st_size) == size_ && info.st_mtim.tv_sec == modifiedSeconds_ &&
+      info.st_mtim.tv_nsec == modifiedNanoseconds_) {
+    return;
+  }
+  throw IoError(path_ + ": the file changed while it was read (" +
+                (static_cast<std::uint64_t>(info.st_size) != size_
+                     ? "its size went from " + std::to_string(size_) + " to " + std::to_string(info.st_size) + " bytes"
+                     : std::string("it was modified")) +
+                "); nothing was written: run again once it is complete");
 }
 
 bool InputFile::refill(std::size_t n) {

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <functional>
 #include <future>
@@ -199,6 +200,44 @@ TEST(MeshIo, StreamsInChunksOfTheRequestedSize) {
     EXPECT_GE(chunks, (121 + 200) / 17u) << name;
     EXPECT_FALSE(stream->next(chunk));
     expectSameMesh(mesh, readMesh(dir.path(name), options), formatFromPath(name) != MeshFormat::Off);
+  }
+}
+
+// A file rewritten in place (same size, new time) or grown while a stream reads it: an IoError
+// naming it, in every format (the reader checks after each read from the file; files larger than
+// its 4 MiB buffer are read in several).
+TEST(MeshIo, AFileThatChangesWhileItIsReadIsAnError) {
+  TempDir dir;
+  const TriangleMesh mesh = makeGrid(500, 500, true);  // 251K vertices, 500K triangles
+  for (const char* name : {"big.ply", "big.obj", "big.off"}) {
+    for (const bool grow : {false, true}) {
+      writeMesh(dir.path(name), mesh);
+      ASSERT_GT(std::filesystem::file_size(dir.path(name)), std::uintmax_t(9) << 20) << name;
+      ReadOptions options;
+      options.chunkTriangles = 1000;
+      auto stream = openMeshStream(dir.path(name), options);
+      MeshChunk chunk;
+      ASSERT_TRUE(stream->next(chunk));
+      if (grow) {
+        std::FILE* f = std::fopen(dir.path(name).c_str(), "ab");
+        std::fputs("# more\n", f);
+        std::fclose(f);
+      } else {
+        const timespec later[2] = {{0, UTIME_OMIT}, {std::time(nullptr) + 100, 0}};
+        ASSERT_EQ(::utimensat(AT_FDCWD, dir.path(name).c_str(), later, 0), 0);
+      }
+      try {
+        while (stream->next(chunk)) {
+        }
+        ADD_FAILURE() << name << ": the change went unnoticed";
+      } catch (const IoError& e) {
+        EXPECT_THAT(e.what(), ::testing::HasSubstr(dir.path(name)));
+        EXPECT_THAT(e.what(), ::testing::HasSubstr("changed while it was read"));
+        if (grow) EXPECT_THAT(e.what(), ::testing::HasSubstr("its size went from"));
+      }
+    }
+    // Unchanged, the same file reads whole.
+    EXPECT_EQ(readMesh(dir.path(name)).numFaces(), mesh.numFaces()) << name;
   }
 }
 
