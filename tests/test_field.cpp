@@ -11,6 +11,7 @@
 #include "core/mesh/clean.h"
 #include "core/system/errors.h"
 #include "core/field/field.h"
+#include "core/field/field_proxy.h"
 #include "core/synth/generate.h"
 #include "core/mesh/topology.h"
 #include "io/field_io.h"
@@ -84,6 +85,28 @@ TEST(Field, PoincareHopfOnGeneratedClosedMeshes) {
     ASSERT_EQ(eulerCharacteristic(s.topology), expectedChi[i]);
     expectPoincareHopf(s, computeSmoothestField(s.mesh, s.topology), "smoothest #" + std::to_string(i));
     expectPoincareHopf(s, randomField(s.mesh, 7 + i), "random #" + std::to_string(i));
+  }
+}
+
+// A scan's collinear faces, cleaned: two near-degenerate slivers glued along their long edge, their
+// tips at one position (centroids equal: the largest dual weight), as an island of a closed mesh.
+// Both field solvers factor it (its flat pair used to lose its shift to rounding: "not positive
+// definite") and give every face a unit direction; the sphere keeps its eight quarter cones.
+TEST(Field, GluedSliversOnOnePointStillFactor) {
+  TriangleMesh island;
+  island.positions = {Vec3f(3.0f, 0.0f, 0.0f), Vec3f(4.0f, 0.0f, 0.0f), Vec3f(3.5f, 1e-9f, 0.0f), Vec3f(3.5f, 1e-9f, 0.0f)};
+  island.triangles = {{0, 2, 1}, {1, 3, 0}};
+  const CleanResult clean = cleanMesh(testing::concatMeshes({testing::icosphereMesh(3), island}));
+  ASSERT_EQ(clean.mesh.numFaces(), 1282u);
+  ASSERT_GT(faceArea(clean.mesh, 1280), 0.0);
+  ASSERT_LT(faceArea(clean.mesh, 1280), 1e-5);
+  for (const FieldMethod method : {FieldMethod::Direct, FieldMethod::Proxy}) {
+    const CrossField field = computeCrossField(clean.mesh, clean.topology, method);
+    for (FaceId f = 0; f < clean.mesh.numFaces(); ++f) EXPECT_NEAR(field.at(f).norm(), 1.0, 1e-6) << f;
+    const FieldSingularities sing = computeSingularities(clean.mesh, clean.topology, field);
+    std::int32_t sphere = 0;
+    for (const VertexId v : sing.cones) sphere += v < 642 ? sing.index4[v] : 0;
+    EXPECT_EQ(sphere, 8) << fieldMethodName(method);
   }
 }
 

@@ -400,7 +400,8 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
   // A tiny shift keeps A + sigma M definite when the field has a flat mode (trivial holonomy,
   // e.g. a flat torus) without changing the smallest eigenvector.
   const double sigma = detail::flatModeShift(diagonalTrace, sys.mass.sum());
-  std::vector<double> shift(numFaces, sigma);
+  std::vector<double> shift(numFaces), rowSigma(numFaces);
+  for (std::uint32_t f = 0; f < numFaces; ++f) shift[f] = rowSigma[f] = detail::rowShift(sigma, baseDiagonal[f], sys.mass[f]);
   shiftDiagonal(a, baseDiagonal, sys.mass, shift);
 
   // Smallest eigenvector of A x = lambda M x by inverse power iteration, normalized per
@@ -431,7 +432,7 @@ CrossField computeSmoothestField(const TriangleMesh& mesh, const Topology& topol
       const std::uint32_t k = comp[f];
       const double lambda = 0.5 * std::max(lambda1[k] - sigma, 0.0) -
                             options.curvatureWeight * 4.0 * M_PI * M_PI / area[k];
-      shift[f] = sigma - lambda;
+      shift[f] = rowSigma[f] - lambda;
     }
     shiftDiagonal(a, baseDiagonal, sys.mass, shift);
     detail::factorFieldMatrix(factor, a, "curvature-aligned field", "faces", options.stats);

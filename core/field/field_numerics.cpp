@@ -73,6 +73,11 @@ double flatModeShift(double diagonalTrace, double massSum) {
   return diagonalTrace > 0.0 ? 1e-9 * diagonalTrace / massSum : 1.0;
 }
 
+double rowShift(double sigma, double diagonal, double mass) {
+  constexpr double kRelativeRowShift = 1e-10;
+  return mass > 0.0 ? std::max(sigma, kRelativeRowShift * diagonal / mass) : sigma;
+}
+
 Eigen::VectorXcd startVector(std::uint32_t n, StartHash hash) {
   Eigen::VectorXcd x(n);
   for (std::uint32_t i = 0; i < n; ++i) {

@@ -38,6 +38,11 @@ void floorMasses(Eigen::VectorXd& mass);
 /// holonomy (a flat piece) and leaves the smallest eigenvector unchanged: 1e-9 of the mean
 /// diagonal per unit mass (1 when A has no edge at all).
 double flatModeShift(double diagonalTrace, double massSum);
+/// The shift per unit mass of one row: sigma, or more where the row's own diagonal needs it. Two
+/// near-degenerate slivers glued with coincident centroids (a scan's collinear faces) are joined by
+/// the largest weight, and their flat pair loses far more than sigma times a floored mass to
+/// rounding in the factorization: each row keeps at least 1e-10 of its own diagonal.
+double rowShift(double sigma, double diagonal, double mass);
 
 /// Which fixed hash startVector uses. The two solvers keep the start they always had: 30 or 40
 /// iterations do not converge fully where the two smallest eigenvalues are close (bumpy: a change

@@ -244,7 +244,9 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress, FieldS
   }
   // A tiny shift keeps the matrix definite for fields without holonomy (flat pieces).
   const double sigma = detail::flatModeShift(trace, mass.sum());
-  for (std::uint32_t e = 0; e < numElements; ++e) a.valuePtr()[start[e]] += sigma * mass[e];
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    a.valuePtr()[start[e]] += detail::rowShift(sigma, a.valuePtr()[start[e]].real(), mass[e]) * mass[e];
+  }
 
   std::vector<std::uint32_t> comp(numElements);
   std::uint32_t numComponents = 0;
