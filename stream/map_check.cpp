@@ -26,7 +26,7 @@ struct SeamLength {
 struct FaceArea {  // signed parameter area and 3D area of a cleaned face
   double uv, area;
 };
-struct FaceGeometry {  // a cleaned face's unit normal (0 when degenerate) and edge lengths (of corner j's edge)
+struct FaceGeometry {  // a cleaned face's gluingNormal and edge lengths (of corner j's edge)
   double normal[3], length[3];
 };
 
@@ -103,9 +103,8 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   {
     forEachKeptFace(scratch, read, duplicates, positions, [&](const FaceRecord& face, const Vec3d (&p)[3]) {
       const std::uint64_t f = result.faces++;
-      const Vec3d cross = (p[1] - p[0]).cross(p[2] - p[0]);
-      const double length = cross.norm();
-      const Vec3d normal = length > 0.0 ? Vec3d(cross / length) : Vec3d::Zero();
+      const double length = (p[1] - p[0]).cross(p[2] - p[0]).norm();
+      const Vec3d normal = gluingNormal(p[0], p[1], p[2]);
       const Vec2d a = vec2(face.uv[1]) - vec2(face.uv[0]), b = vec2(face.uv[2]) - vec2(face.uv[0]);
       const FaceArea area{0.5 * (a.x() * b.y() - a.y() * b.x()), 0.5 * length};
       areas.write(&area, sizeof area);

@@ -135,8 +135,7 @@ std::vector<std::pair<std::size_t, std::size_t>> glueSides(const std::vector<Edg
     if (sides[x].forward() != firstForward) continue;
     for (std::size_t y = 0; y < sides.size(); ++y) {
       if (sides[y].forward() == firstForward) continue;
-      const double alignment = normals[x].dot(normals[y]);  // as cleanMesh computes it
-      pairs.push_back({std::isfinite(alignment) ? alignment : -2.0, x, y});
+      pairs.push_back({gluingAlignment(normals[x], normals[y]), x, y});  // as cleanMesh computes it
     }
   }
   std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) {

@@ -118,7 +118,8 @@ class RecordsByFace {
 
 /// The sides of one edge (sorted by corner) glued as cleanMesh glues them: two sides in opposite
 /// directions; on an edge of more than two sides, pairs of opposite directions with the most
-/// aligned normals first (ties: smaller corners first), normalOf(i) giving side i's face normal.
+/// aligned normals first (ties: smaller corners first), normalOf(i) giving side i's face's
+/// gluingNormal.
 /// Each pair is (smaller corner, larger). Two sides in the same direction (an orientation clash)
 /// give no pair and set clash.
 std::vector<std::pair<std::size_t, std::size_t>> glueSides(const std::vector<EdgeRecord>& sides,

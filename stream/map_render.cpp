@@ -25,12 +25,8 @@ struct DrawnFace {  // a face drawn: corners, (u, v), input index
   double uv[3][2];
   std::uint32_t inputFace;
   Vec3d position(int j) const { return Vec3f(corner[j][0], corner[j][1], corner[j][2]).cast<double>(); }
-  /// Unit normal (0 when degenerate), as cleanMesh computes it to glue the sides of an edge.
-  Vec3d normal() const {
-    const Vec3d a = position(0), cross = (position(1) - a).cross(position(2) - a);
-    const double length = cross.norm();
-    return length > 0.0 ? Vec3d(cross / length) : Vec3d::Zero();
-  }
+  /// The normal cleanMesh glues the sides of an edge by.
+  Vec3d normal() const { return gluingNormal(position(0), position(1), position(2)); }
 };
 struct CornerAngle {  // a drawn face's corner: its vertex and signed (u, v) angle
   std::uint32_t vertex = 0, pad = 0;

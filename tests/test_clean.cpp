@@ -177,6 +177,27 @@ TEST(Clean, InjectedFinsAndBowtiesAreSplit) {
   expectOriginsLeadBack(input, r);
 }
 
+// A scan's collinear face on an edge of a closed surface, lying in the plane of one of the edge's
+// faces (so its rounding-noise normal matches that face better than the two faces match each
+// other): the surface's two faces are glued, the sliver is left on its own, the sphere stays closed.
+TEST(Clean, ASliverOnAnEdgeIsGluedLast) {
+  TriangleMesh mesh = testing::icosphereMesh(3);
+  const Triangle t = mesh.triangles[0];
+  const Vec3d a = mesh.position(t[0]), b = mesh.position(t[1]), c = mesh.position(t[2]);
+  const Vec3d along = (b - a).normalized(), n = (b - a).cross(c - a).normalized();
+  const Vec3d away = n.cross(along).dot(c - a) > 0.0 ? Vec3d(-n.cross(along)) : Vec3d(n.cross(along));
+  mesh.positions.push_back((0.5 * (a + b) + 1e-5 * (b - a).norm() * away).cast<float>());
+  const VertexId tip = mesh.numVertices() - 1;
+  mesh.triangles.push_back({t[0], tip, t[1]});  // runs b -> a, as the sphere's other face there
+  ASSERT_LT(gluingNormal(a, mesh.position(tip), b).norm(), 0.5) << "a sliver";
+  const CleanResult clean = cleanMesh(mesh);
+  EXPECT_EQ(clean.report.nonManifoldEdges, 1u);
+  std::uint32_t open = 0;
+  for (CornerId k = 0; k < 3 * 1280; ++k) open += clean.topology.opposite(k) == kInvalidId;
+  EXPECT_EQ(open, 0u) << "the sphere's faces are glued to each other";
+  for (CornerId k = 3 * 1280; k < 3 * 1281; ++k) EXPECT_EQ(clean.topology.opposite(k), kInvalidId);
+}
+
 TEST(Clean, RemovesDegenerateDuplicateAndUnreferenced) {
   TriangleMesh mesh = gridMesh(3, 3);
   const std::uint32_t faces = mesh.numFaces();

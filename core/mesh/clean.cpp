@@ -209,6 +209,9 @@ void pairNonManifoldEdges(const TriangleMesh& mesh, const detail::VertexCorners&
                           std::vector<CornerId>& opposite) {
   const std::vector<Triangle>& tris = mesh.triangles;
   auto vertexOf = [&](CornerId x) { return tris[x / 3][x % 3]; };
+  auto normalOf = [&](FaceId f) {
+    return gluingNormal(mesh.position(tris[f][0]), mesh.position(tris[f][1]), mesh.position(tris[f][2]));
+  };
   std::vector<CornerId> same, reverse;
   for (CornerId c = 0; c < 3 * tris.size(); ++c) {
     if (opposite[c] != kInvalidId) continue;
@@ -230,8 +233,7 @@ void pairNonManifoldEdges(const TriangleMesh& mesh, const detail::VertexCorners&
     std::vector<Pair> pairs;
     for (CornerId x : same) {
       for (CornerId y : reverse) {
-        const double alignment = faceNormal(mesh, x / 3).dot(faceNormal(mesh, y / 3));
-        pairs.push_back({std::isfinite(alignment) ? alignment : -2.0, x, y});
+        pairs.push_back({gluingAlignment(normalOf(x / 3), normalOf(y / 3)), x, y});
       }
     }
     std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) {

@@ -1,5 +1,8 @@
 #include "core/mesh/mesh.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace seamvox {
 
 BoundingBox computeBoundingBox(const std::vector<Vec3f>& positions) {
@@ -18,6 +21,21 @@ Vec3d faceNormal(const TriangleMesh& mesh, FaceId f) {
   const Vec3d n = (b - a).cross(c - a);
   const double len = n.norm();
   return len > 0.0 ? Vec3d(n / len) : Vec3d::Zero();
+}
+
+Vec3d gluingNormal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  constexpr double kSliver = 1e-4;
+  const Vec3d n = (b - a).cross(c - a);
+  const double length = n.norm();
+  const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  if (!(length > kSliver * longest * longest) || !std::isfinite(length)) return Vec3d::Zero();
+  return n / length;
+}
+
+double gluingAlignment(const Vec3d& n0, const Vec3d& n1) {
+  if (n0.isZero() || n1.isZero()) return -3.0;
+  const double alignment = n0.dot(n1);
+  return std::isfinite(alignment) ? alignment : -2.0;
 }
 
 double faceArea(const TriangleMesh& mesh, FaceId f) {

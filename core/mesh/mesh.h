@@ -46,4 +46,12 @@ Vec3d faceNormal(const TriangleMesh& mesh, FaceId f);
 /// Area of a face.
 double faceArea(const TriangleMesh& mesh, FaceId f);
 
+/// The unit normal cleanMesh glues the sides of an edge of more than two faces by (the best
+/// aligned pairs first): zero for a sliver (height below 1e-4 of its longest edge: its normal is
+/// rounding noise) and for a non-finite triangle.
+Vec3d gluingNormal(const Vec3d& a, const Vec3d& b, const Vec3d& c);
+/// Alignment of two faces by their gluing normals: their dot product; -3 when either is a sliver
+/// (a scan's collinear faces on an edge are glued last); -2 when not finite.
+double gluingAlignment(const Vec3d& n0, const Vec3d& n1);
+
 }  // namespace seamvox
