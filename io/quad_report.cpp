@@ -16,6 +16,7 @@ QuadReportContext quadReportContext(const QuadRun& run, std::uint32_t mapFaces, 
   context.mapFaces = mapFaces;
   context.seamResidual = run.seams.maxResidual;
   context.integerDistance = run.seams.maxIntegerDistance;
+  context.filledHoles = run.filledHoles;
   context.stages = meter.stages();
   context.totalSeconds = meter.totalSeconds();
   context.peakBytes = meter.peakBytes();
@@ -44,7 +45,7 @@ std::string quadReportJson(const QuadResult& quads, const QuadValidation& v, con
   j.key("openFaces").value(s.openFaces).key("digons").value(s.digons).key("deadEnds").value(s.deadEnds);
   j.key("halfwayCones").value(s.halfwayCones).key("spikes").value(s.spikes).key("loops").value(s.loops).key("pillows").value(s.pillows);
   j.key("pointsInFlippedFaces").value(s.pointsInFlippedFaces);
-  j.key("holesWithoutVertex").value(s.holesWithoutVertex);
+  j.key("holesWithoutVertex").value(s.holesWithoutVertex).key("smallHolesClosed").value(context.filledHoles);
   j.key("islands").value(s.islands).key("islandFaces").value(s.islandFaces);
   j.endObject();
   j.key("quadMesh").beginObject();

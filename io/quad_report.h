@@ -15,6 +15,7 @@ struct QuadReportContext {
   std::int64_t scale = 1;
   std::uint32_t mapFaces = 0;
   double seamResidual = 0.0, integerDistance = 0.0;  ///< of the map (measureSeamsFromUV)
+  std::uint64_t filledHoles = 0;                     ///< QuadRun::filledHoles
   std::vector<StageFigures> stages;
   double totalSeconds = 0.0;
   std::uint64_t peakBytes = 0;

@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "core/pipeline/parameterize.h"
+#include "core/quads/checked.h"
 #include "core/quads/extract.h"
 #include "core/quads/validate.h"
 #include "core/system/errors.h"
@@ -357,6 +358,45 @@ TEST(Quads, TorusSphereGenus2Closed) {
     ASSERT_EQ(e.check.components.size(), 1u);
     EXPECT_EQ(e.check.components[0].genus, kind == MeshKind::Sphere ? 0 : kind == MeshKind::Torus ? 1 : 2);
   }
+}
+
+// A scan's missing triangles, much smaller than a quad: five faces away from the seams taken out of
+// a torus's map. Left open, iso-lines end on their boundaries; closed for the extraction, the quad
+// mesh is the closed genus-1 one.
+TEST(Quads, HolesSmallerThanAQuadAreClosed) {
+  const PipelineResult map = mapOf(testing::generatedMesh(MeshKind::Torus, 20000), 40);
+  const TriangleMesh& m = map.mesh;
+  std::vector<std::uint8_t> drop(m.numFaces(), 0);
+  int dropped = 0;
+  for (FaceId f = 100; f < m.numFaces() && dropped < 5; f += 997) {
+    bool inside = true;  // no seam on its edges, no neighbour dropped
+    for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+      const CornerId o = map.topology.opposite(c);
+      inside = inside && o != kInvalidId && !drop[cornerFace(o)] && m.cornerUV[nextCorner(c)] == m.cornerUV[prevCorner(o)] &&
+               m.cornerUV[prevCorner(c)] == m.cornerUV[nextCorner(o)];
+    }
+    if (inside) drop[f] = 1, ++dropped;
+  }
+  ASSERT_EQ(dropped, 5);
+  TriangleMesh holed;
+  holed.positions = m.positions;
+  std::vector<Vec2d> uv;
+  for (FaceId f = 0; f < m.numFaces(); ++f) {
+    if (drop[f]) continue;
+    holed.triangles.push_back(m.triangles[f]);
+    for (int k = 0; k < 3; ++k) uv.push_back(m.cornerUV[3 * f + k]);
+  }
+  holed.cornerUV = WedgeMap::fromCorners(holed.triangles, uv);
+  const Topology topology = Topology::build(holed.triangles, holed.numVertices());
+  const QuadResult open = extractQuads(holed, topology, QuadOptions{});
+  EXPECT_GT(open.stats.boundaryVertices, 0u) << "iso-lines end on the open holes";
+  const QuadRun run = extractCheckedQuads("holed torus", holed, topology, 1, {});
+  EXPECT_EQ(run.filledHoles, 5u);
+  EXPECT_TRUE(run.check.isValid());
+  EXPECT_EQ(run.check.boundaryEdges, 0u);
+  ASSERT_EQ(run.check.components.size(), 1u);
+  EXPECT_EQ(run.check.components[0].genus, 1);
+  EXPECT_EQ(run.quads.stats.boundaryVertices, 0u);
 }
 
 TEST(Quads, ScanWithHolesAndIslands) {

@@ -25,10 +25,10 @@ void printQuadSummary(const std::string& output, const QuadRun& run) {
               U(s.flippedFaces), U(s.degenerateFaces), s.maxSnap);
   std::printf("extraction: %llu integer points, %llu boundary points, %llu traced edges; untraced %llu, "
               "unpaired %llu, open faces %llu, two-edge faces %llu, ends at cones %llu, cones halfway %llu, spikes %llu, loops %llu, pillows %llu; islands %llu (%llu triangles), "
-              "holes without a point %llu\n",
+              "holes without a point %llu, holes smaller than a quad closed %llu\n",
               U(s.gridVertices), U(s.boundaryVertices), U(s.tracedEdges), U(s.untracedEdges),
               U(s.unpairedEdges), U(s.openFaces), U(s.digons), U(s.deadEnds), U(s.halfwayCones), U(s.spikes), U(s.loops), U(s.pillows), U(s.islands), U(s.islandFaces),
-              U(s.holesWithoutVertex));
+              U(s.holesWithoutVertex), U(run.filledHoles));
   std::printf("validation: %s; non-manifold edges %llu, vertices %llu; faces through a vertex twice %llu; "
               "%llu/%zu components with the map's Euler characteristic and boundary loops; irregular vertices "
               "off cones %llu, cones with valence != 4 - k %llu of %llu, interior non-quads %llu\n",

@@ -14,7 +14,20 @@ struct QuadRun {
   QuadResult quads;
   QuadValidation check;
   SeamQuality seams;  ///< of the map, measured from its UVs (measureSeamsFromUV)
+  /// Holes of the map smaller than a quad (fillSmallHoles) closed for the extraction.
+  std::uint64_t filledHoles = 0;
 };
+
+/// A copy of a map with its holes smaller than a quad closed: every boundary loop of at most 32
+/// edges inside one chart (no seam ends on it) whose (u, v) span less than `scale` units each way,
+/// in a component more than four times its size across, and star-shaped around its mean (u, v)
+/// (no face of the fan flipped), gets a fan of triangles from a new vertex at its centroid (mean
+/// position and (u, v)). A hole that small cannot show in the quad mesh; left
+/// open, iso-lines crossing it end on its boundary and the quads around it carry extra boundary
+/// vertices (a scan's missing triangles). Returns the number of holes filled; when 0, `out` is
+/// left empty and the map itself is to be used.
+std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology, std::int64_t scale,
+                             TriangleMesh& out);
 
 /// Extracts and validates the quad mesh of a cleaned map read from (or made for) `name`. Throws
 /// InputError naming it when the map has no UVs or is not seamless (kQuadSeamTolerance), or when
