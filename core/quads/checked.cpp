@@ -77,10 +77,13 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
     if (starShaped) holes.push_back(loop);
   }
   if (holes.empty()) return 0;
+  // The copy keeps the map's wedges (4 bytes per corner) and adds the fans' corners to them.
   out.positions = mesh.positions;
   out.triangles = mesh.triangles;
-  std::vector<Vec2d> uv(3 * std::size_t(mesh.numFaces()));
-  for (CornerId k = 0; k < uv.size(); ++k) uv[k] = mesh.cornerUV[k];
+  std::vector<std::uint32_t> wedge(mesh.cornerUV.size());
+  for (CornerId k = 0; k < wedge.size(); ++k) wedge[k] = mesh.cornerUV.wedge(k);
+  std::vector<Vec2d> value(mesh.cornerUV.numWedges());
+  for (std::uint32_t w = 0; w < value.size(); ++w) value[w] = mesh.cornerUV.wedgeValue(w);
   for (const std::vector<CornerId>& hole : holes) {
     Vec3d centre = Vec3d::Zero();
     Vec2d centreUV = Vec2d::Zero();
@@ -88,18 +91,18 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
       centre += mesh.position(topology.vertex(nextCorner(b)));
       centreUV += mesh.cornerUV[nextCorner(b)];
     }
-    centre /= double(hole.size());
-    centreUV /= double(hole.size());
     const VertexId middle = static_cast<VertexId>(out.positions.size());
-    out.positions.push_back(centre.cast<float>());
+    out.positions.push_back((centre / double(hole.size())).cast<float>());
+    const std::uint32_t middleWedge = static_cast<std::uint32_t>(value.size());
+    value.push_back(centreUV / double(hole.size()));
     for (const CornerId b : hole) {  // the surface's edge a -> b closed by the face b -> a -> centre
       out.triangles.push_back({topology.vertex(prevCorner(b)), topology.vertex(nextCorner(b)), middle});
-      uv.push_back(mesh.cornerUV[prevCorner(b)]);
-      uv.push_back(mesh.cornerUV[nextCorner(b)]);
-      uv.push_back(centreUV);
+      wedge.push_back(mesh.cornerUV.wedge(prevCorner(b)));
+      wedge.push_back(mesh.cornerUV.wedge(nextCorner(b)));
+      wedge.push_back(middleWedge);
     }
   }
-  out.cornerUV = WedgeMap::fromCorners(out.triangles, uv);
+  out.cornerUV = WedgeMap(std::move(wedge), std::move(value));
   return holes.size();
 }
 
