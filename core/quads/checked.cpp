@@ -1,18 +1,47 @@
 #include "core/quads/checked.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/system/errors.h"
 
 namespace seamvox {
 
+namespace {
+
+/// q -> R^r q + t, R a quarter turn: how a chart's (u, v) read in another chart.
+struct Rigid {
+  int r = 0;
+  Vec2d t = Vec2d::Zero();
+  static Vec2d turn(const Vec2d& q, int r) {
+    switch (r & 3) {
+      case 0: return q;
+      case 1: return {-q.y(), q.x()};
+      case 2: return -q;
+      default: return {q.y(), -q.x()};
+    }
+  }
+  Vec2d apply(const Vec2d& q) const { return turn(q, r) + t; }
+  Vec2d inverse(const Vec2d& p) const { return turn(p - t, -r); }
+  Rigid after(const Rigid& m) const { return {(r + m.r) & 3, turn(m.t, r) + t}; }  // this o m
+};
+
+/// A hole to close: its boundary corners in order, each face's chart read in the first's.
+struct Hole {
+  std::vector<CornerId> corners;
+  std::vector<Rigid> chart;
+  Vec2d centre = Vec2d::Zero();  // in the first corner's chart
+};
+
+}  // namespace
+
 std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology, std::int64_t scale,
                              TriangleMesh& out) {
   constexpr std::size_t kMaxLoop = 32;
   const double span = static_cast<double>(std::max<std::int64_t>(scale, 1));
+  const WedgeMap& uv = mesh.cornerUV;
   std::vector<std::uint8_t> seen(topology.numCorners(), 0);
-  std::vector<CornerId> loop;  // boundary corners, in order
-  std::vector<std::vector<CornerId>> holes;
+  std::vector<Hole> holes;
   // A component hardly larger than its loop is an island, not a surface with a hole: left open.
   std::vector<std::uint32_t> component;
   std::vector<BoundingBox> extent;
@@ -29,77 +58,100 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
     }
     return extent[component[f]];
   };
+  Hole hole;
   for (CornerId start = 0; start < topology.numCorners(); ++start) {
     if (topology.opposite(start) != kInvalidId || seen[start]) continue;
     // Walk the loop: the edge of boundary corner c runs vertex(next c) -> vertex(prev c); the next
-    // boundary edge leaves vertex(prev c), found by turning around it through interior edges.
-    loop.clear();
-    bool oneChart = true, closed = false;
+    // boundary edge leaves vertex(prev c), found by turning around it through interior edges, each
+    // crossing read as the rigid map between the two faces' charts (identity off seams).
+    hole.corners.clear();
+    hole.chart.clear();
+    bool closed = false;
+    Rigid chart;  // the current face's chart read in the first face's
     CornerId c = start;
     for (std::size_t steps = 0; steps < kMaxLoop + 1; ++steps) {
       seen[c] = 1;
-      loop.push_back(c);
-      const CornerId atEnd = prevCorner(c);  // the corner at vertex(prev c) in c's face
-      CornerId d = atEnd, e = prevCorner(d);
+      hole.corners.push_back(c);
+      hole.chart.push_back(chart);
+      CornerId d = prevCorner(c), e = prevCorner(d);  // d: the corner at the far end vertex
       for (std::size_t turns = 0; topology.opposite(e) != kInvalidId && turns < 4096; ++turns) {
-        d = prevCorner(topology.opposite(e));
+        const CornerId o = topology.opposite(e), d2 = prevCorner(o);
+        // Across the edge B -> X of corner e: B at d and d2, X at next(d) and next(o).
+        const Vec2d here = uv[nextCorner(d)] - uv[d], there = uv[nextCorner(o)] - uv[d2];
+        if (!(here != Vec2d::Zero()) || !(there != Vec2d::Zero())) {
+          chart.r = -1;  // a zero-length edge in (u, v): no direction to read the turn from
+          break;
+        }
+        const double angle = std::atan2(there.x() * here.y() - there.y() * here.x(), there.dot(here));
+        Rigid m;
+        m.r = static_cast<int>(std::lround(angle / (0.5 * M_PI))) & 3;
+        m.t = uv[d] - Rigid::turn(uv[d2], m.r);
+        chart = chart.after(m);
+        d = d2;
         e = prevCorner(d);
       }
-      if (topology.opposite(e) != kInvalidId) break;  // a fan that does not end: not a plain hole
-      oneChart = oneChart && mesh.cornerUV[d] == mesh.cornerUV[atEnd];
+      if (chart.r < 0 || topology.opposite(e) != kInvalidId) break;  // not a plain hole
       c = e;
       if (c == start) {
-        closed = true;
+        // Around a cone the charts do not come back: nothing to close there.
+        closed = chart.r == 0 && chart.t.norm() <= 1e-6;
         break;
       }
       if (seen[c]) break;
     }
-    if (!closed || !oneChart || loop.size() > kMaxLoop) continue;
-    Vec2d lo = mesh.cornerUV[nextCorner(loop[0])], hi = lo;
+    if (!closed || hole.corners.size() > kMaxLoop) continue;
+    // The loop's points in the first chart: a span below a quad, in a component four times larger.
+    std::vector<Vec2d> point;
     BoundingBox around;
-    for (const CornerId b : loop) {
-      lo = lo.cwiseMin(mesh.cornerUV[nextCorner(b)]);
-      hi = hi.cwiseMax(mesh.cornerUV[nextCorner(b)]);
-      around.min = around.min.cwiseMin(mesh.position(topology.vertex(nextCorner(b))));
-      around.max = around.max.cwiseMax(mesh.position(topology.vertex(nextCorner(b))));
+    for (std::size_t k = 0; k < hole.corners.size(); ++k) {
+      point.push_back(hole.chart[k].apply(uv[nextCorner(hole.corners[k])]));
+      around.min = around.min.cwiseMin(mesh.position(topology.vertex(nextCorner(hole.corners[k]))));
+      around.max = around.max.cwiseMax(mesh.position(topology.vertex(nextCorner(hole.corners[k]))));
     }
+    Vec2d lo = point[0], hi = point[0];
+    hole.centre = Vec2d::Zero();
+    for (const Vec2d& q : point) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q), hole.centre += q;
+    hole.centre /= double(point.size());
     if (!((hi - lo).maxCoeff() < span)) continue;
     if (!(componentExtent(cornerFace(start)).diagonal() > 4.0 * around.diagonal())) continue;
     // Every face of the fan must turn the way the map's faces do (a star-shaped hole in (u, v)).
-    Vec2d centre = Vec2d::Zero();
-    for (const CornerId b : loop) centre += mesh.cornerUV[nextCorner(b)];
-    centre /= double(loop.size());
-    const bool starShaped = std::all_of(loop.begin(), loop.end(), [&](CornerId b) {
-      const Vec2d p = mesh.cornerUV[prevCorner(b)], q = mesh.cornerUV[nextCorner(b)];
-      const Vec2d x = q - p, y = centre - p;
-      return x.x() * y.y() - x.y() * y.x() > 0.0;
-    });
-    if (starShaped) holes.push_back(loop);
+    bool starShaped = true;
+    for (std::size_t k = 0; k < point.size(); ++k) {
+      const Vec2d p = point[(k + 1) % point.size()], q = point[k];  // the edge's end B and start A
+      const Vec2d x = q - p, y = hole.centre - p;
+      starShaped = starShaped && x.x() * y.y() - x.y() * y.x() > 0.0;
+    }
+    if (starShaped) holes.push_back(hole);
   }
   if (holes.empty()) return 0;
-  // The copy keeps the map's wedges (4 bytes per corner) and adds the fans' corners to them.
+  // The copy keeps the map's wedges (4 bytes per corner) and adds the fans' corners to them: the
+  // edge a -> b of the surface closed by the face b -> a -> centre, in that face's chart (the fan's
+  // own edges to the centre become seams where the loop crosses one).
   out.positions = mesh.positions;
   out.triangles = mesh.triangles;
-  std::vector<std::uint32_t> wedge(mesh.cornerUV.size());
-  for (CornerId k = 0; k < wedge.size(); ++k) wedge[k] = mesh.cornerUV.wedge(k);
-  std::vector<Vec2d> value(mesh.cornerUV.numWedges());
-  for (std::uint32_t w = 0; w < value.size(); ++w) value[w] = mesh.cornerUV.wedgeValue(w);
-  for (const std::vector<CornerId>& hole : holes) {
+  std::vector<std::uint32_t> wedge(uv.size());
+  for (CornerId k = 0; k < wedge.size(); ++k) wedge[k] = uv.wedge(k);
+  std::vector<Vec2d> value(uv.numWedges());
+  for (std::uint32_t w = 0; w < value.size(); ++w) value[w] = uv.wedgeValue(w);
+  for (const Hole& h : holes) {
     Vec3d centre = Vec3d::Zero();
-    Vec2d centreUV = Vec2d::Zero();
-    for (const CornerId b : hole) {
-      centre += mesh.position(topology.vertex(nextCorner(b)));
-      centreUV += mesh.cornerUV[nextCorner(b)];
-    }
+    for (const CornerId b : h.corners) centre += mesh.position(topology.vertex(nextCorner(b)));
     const VertexId middle = static_cast<VertexId>(out.positions.size());
-    out.positions.push_back((centre / double(hole.size())).cast<float>());
-    const std::uint32_t middleWedge = static_cast<std::uint32_t>(value.size());
-    value.push_back(centreUV / double(hole.size()));
-    for (const CornerId b : hole) {  // the surface's edge a -> b closed by the face b -> a -> centre
+    out.positions.push_back((centre / double(h.corners.size())).cast<float>());
+    std::vector<std::pair<Vec2d, std::uint32_t>> centreWedges;
+    for (std::size_t k = 0; k < h.corners.size(); ++k) {
+      const CornerId b = h.corners[k];
+      const Vec2d q = h.chart[k].inverse(h.centre);
+      auto it = std::find_if(centreWedges.begin(), centreWedges.end(), [&](const auto& w) { return w.first == q; });
+      if (it == centreWedges.end()) {
+        centreWedges.push_back({q, static_cast<std::uint32_t>(value.size())});
+        value.push_back(q);
+        it = centreWedges.end() - 1;
+      }
       out.triangles.push_back({topology.vertex(prevCorner(b)), topology.vertex(nextCorner(b)), middle});
-      wedge.push_back(mesh.cornerUV.wedge(prevCorner(b)));
-      wedge.push_back(mesh.cornerUV.wedge(nextCorner(b)));
-      wedge.push_back(middleWedge);
+      wedge.push_back(uv.wedge(prevCorner(b)));
+      wedge.push_back(uv.wedge(nextCorner(b)));
+      wedge.push_back(it->second);
     }
   }
   out.cornerUV = WedgeMap(std::move(wedge), std::move(value));
