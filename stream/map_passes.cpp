@@ -37,34 +37,17 @@ ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<D
   ReadPass out;
   ScratchWriter faces(scratch, "read");
   MeshChunk chunk;
-  bool uvDecided = false, withUV = false;
+  StreamChecker checker(name);  // chunks in step, 32-bit ids, (u, v) on all faces or none
   std::uint64_t nonFinite = kInvalidId;
   while (stream.next(chunk)) {
-    if (chunk.firstVertex != out.vertices) {
-      throw InputError(name + ": stream chunk starts at vertex " + std::to_string(chunk.firstVertex) + " but " +
-                       std::to_string(out.vertices) + " vertices came before it");
-    }
-    if (out.vertices + chunk.positions.size() >= kInvalidId || out.inputFaces + chunk.triangles.size() >= kInvalidId) {
-      throw InputError(name + ": more than 2^32 - 1 vertices or faces (ids are 32-bit)");
-    }
+    checker.check(chunk);
     for (const Vec3f& p : chunk.positions) {
       if (!p.allFinite() && nonFinite == kInvalidId) nonFinite = out.vertices;
       positions.addVertex(p);
       if (weld) weld->add({{p.x(), p.y(), p.z()}, static_cast<std::uint32_t>(out.vertices)});
       ++out.vertices;
     }
-    if (chunk.triangles.empty()) continue;
-    const bool chunkUV = !chunk.cornerUV.empty();
-    if (chunkUV && chunk.cornerUV.size() != 3 * chunk.triangles.size()) {
-      throw InputError(name + ": stream chunk has " + std::to_string(chunk.cornerUV.size()) + " corner UVs for " +
-                       std::to_string(chunk.triangles.size()) + " triangles");
-    }
-    if (!uvDecided) {
-      withUV = chunkUV;
-      uvDecided = true;
-    } else if (withUV != chunkUV) {
-      throw InputError(name + ": some triangles have texture coordinates and others do not");
-    }
+    const bool withUV = !chunk.cornerUV.empty();
     for (std::size_t f = 0; f < chunk.triangles.size(); ++f, ++out.inputFaces) {
       const Triangle& t = chunk.triangles[f];
       if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // degenerate: dropped
@@ -81,7 +64,7 @@ ReadPass readStream(MeshStream& stream, ScratchFolder& scratch, ExternalSorter<D
     }
   }
   if (out.inputFaces == 0) throw InputError(name + ": the mesh has no faces");
-  if (!withUV) throw InputError(name + ": the mesh has no per-corner texture coordinates");
+  if (!checker.hasUV()) throw InputError(name + ": the mesh has no per-corner texture coordinates");
   if (nonFinite != kInvalidId) {
     throw InputError(name + ": vertex " + std::to_string(nonFinite) + " has a non-finite coordinate (NaN or inf)");
   }

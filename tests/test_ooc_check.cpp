@@ -204,16 +204,6 @@ TEST_F(OocCheck, OrientationClashIsAClearErrorOutOfCore) {
   EXPECT_NE(log.find("--memory-budget"), std::string::npos) << log;
 }
 
-// A stream that hides its header's counts (as a pipe's, or an OBJ file's).
-class UndeclaredStream final : public MeshStream {
- public:
-  explicit UndeclaredStream(std::unique_ptr<MeshStream> inner) : inner_(std::move(inner)) {}
-  bool next(MeshChunk& chunk) override { return inner_->next(chunk); }
-  const std::string& name() const override { return inner_->name(); }
-
- private:
-  std::unique_ptr<MeshStream> inner_;
-};
 
 // The library call on its own: positions held in memory (declared count) or joined by sorts
 // (none declared), against measureSeamsFromUV and measureMap on the cleaned mesh.
@@ -227,7 +217,7 @@ TEST_F(OocCheck, BothPositionModesMatchTheInMemoryFigures) {
     options.readUV = true;
     options.chunkTriangles = 1000;  // several chunks
     std::unique_ptr<MeshStream> stream = openMeshStream(path("scan-map.ply"), options);
-    if (!declared) stream = std::make_unique<UndeclaredStream>(std::move(stream));
+    if (!declared) stream = std::make_unique<testing::UndeclaredStream>(std::move(stream));
     testing::TempDir scratch;
     MapCheckOptions check;
     check.memoryBytes = 64 << 20;

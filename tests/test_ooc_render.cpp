@@ -88,7 +88,7 @@ class OocRender : public ::testing::Test {
     read.readUV = true;
     read.chunkTriangles = 700;  // several chunks
     std::unique_ptr<MeshStream> stream = openMeshStream(file, read);
-    if (!declared) stream = std::make_unique<Undeclared>(std::move(stream));
+    if (!declared) stream = std::make_unique<testing::UndeclaredStream>(std::move(stream));
     testing::TempDir scratch;
     MapRenderOptions ooc;
     ooc.render = o;
@@ -119,16 +119,7 @@ class OocRender : public ::testing::Test {
     }
   }
 
-  // A stream that hides its header's counts (as a pipe's, or an OBJ file's).
-  class Undeclared final : public MeshStream {
-   public:
-    explicit Undeclared(std::unique_ptr<MeshStream> inner) : inner_(std::move(inner)) {}
-    bool next(MeshChunk& chunk) override { return inner_->next(chunk); }
-    const std::string& name() const override { return inner_->name(); }
 
-   private:
-    std::unique_ptr<MeshStream> inner_;
-  };
 
   static testing::TempDir* dir_;
 };

@@ -1,9 +1,11 @@
 #pragma once
 /// Helpers shared by the test suites: shared-data lookup, temporary folders, running the CLI.
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/mesh/wedge_map.h"
+#include "stream/mesh_stream.h"
 
 namespace seamvox::testing {
 
@@ -42,5 +44,16 @@ std::vector<std::string> temporaryFilesIn(const std::string& dir);
 /// Writes bytes to a file (for malformed-input tests).
 void writeFile(const std::string& path, const std::string& bytes);
 std::string readFile(const std::string& path);
+
+/// A stream that hides its inner stream's declared counts (as a pipe's, or an OBJ file's).
+class UndeclaredStream final : public MeshStream {
+ public:
+  explicit UndeclaredStream(std::unique_ptr<MeshStream> inner) : inner_(std::move(inner)) {}
+  bool next(MeshChunk& chunk) override { return inner_->next(chunk); }
+  const std::string& name() const override { return inner_->name(); }
+
+ private:
+  std::unique_ptr<MeshStream> inner_;
+};
 
 }  // namespace seamvox::testing

@@ -10,6 +10,7 @@
 #include "core/system/memory.h"
 #include "core/system/memory_budget.h"
 #include "core/synth/render.h"
+#include "core/synth/render_canvas.h"
 #include "io/mesh_io.h"
 #include "io/png_io.h"
 #include "io/polygon_io.h"
@@ -26,8 +27,7 @@ constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20, kBytesPerFace =
 
 /// Bytes of the supersampled canvas (key and colour per sample) and the output image.
 std::uint64_t canvasBytes(const RenderOptions& options) {
-  std::uint64_t ss = std::max<std::uint32_t>(1, options.supersample);
-  while (ss > 1 && std::uint64_t(options.width) * ss * options.height * ss > 4096ull * 4096ull) --ss;
+  const std::uint64_t ss = render_detail::samplesPerPixel(options);
   return std::uint64_t(options.width) * options.height * (ss * ss * 11 + 3);
 }
 
