@@ -140,7 +140,7 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   try {
     const std::optional<FieldSource> aligned =
         alignedFieldSource(topology, findFeatures(mesh, topology, c.features), source, mesh.numFaces());
-    run.field = computeFieldFromSource(mesh, topology, run.clean.faceOrigin, run.inputFaces,
+    run.field = computeFieldFromSource(run.clean.mesh, topology, run.clean.faceOrigin, run.inputFaces,
                                        aligned ? *aligned : source, c.progress, &run.fieldSolve);
   } catch (...) {
     rethrowWithContext(c.importPath ? *c.importPath : c.input);

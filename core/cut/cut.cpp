@@ -2,6 +2,7 @@
 #include "core/cut/cut.h"
 
 #include <algorithm>
+#include <deque>
 #include <string>
 
 #include "core/system/errors.h"
@@ -31,26 +32,28 @@ std::uint32_t buildDualTree(const Topology& topology, const FieldSingularities& 
   cut.corners = CutCorners(3 * std::size_t(numFaces), true);
   cut.faceRotation.assign(numFaces, kUnvisited);
   faceComponent.assign(numFaces, kInvalidId);
-  std::vector<FaceId> queue;
-  queue.reserve(numFaces);
+  std::deque<FaceId> queue;  // the BFS front only (a surface's front is far smaller than it)
   std::uint32_t numComponents = 0;
+  const auto visit = [&](FaceId f) {
+    faceComponent[f] = numComponents;
+    queue.push_back(f);
+  };
   for (FaceId root = 0; root < numFaces; ++root) {
     if (cut.faceRotation[root] != kUnvisited) continue;
     cut.faceRotation[root] = 0;
-    faceComponent[root] = numComponents;
-    queue.push_back(root);
-    for (std::size_t head = queue.size() - 1; head < queue.size(); ++head) {
-      const FaceId f = queue[head];
+    visit(root);
+    while (!queue.empty()) {
+      const FaceId f = queue.front();
+      queue.pop_front();
       for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
         const CornerId o = topology.opposite(c);
         if (o == kInvalidId) continue;
         const FaceId g = cornerFace(o);
         if (cut.faceRotation[g] != kUnvisited) continue;
         cut.faceRotation[g] = static_cast<std::uint8_t>((cut.faceRotation[f] + 4 - singularities.matching[c]) % 4);
-        faceComponent[g] = numComponents;
         cut.corners.setCut(c, false);
         cut.corners.setCut(o, false);
-        queue.push_back(g);
+        visit(g);
       }
     }
     ++numComponents;

@@ -118,23 +118,33 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
     }
   });
 
-  // Matchings and residuals: once per interior edge (from its smaller corner), so that the two
-  // sides are exactly opposite. kappa as in transportAngle.
-  std::vector<float> eps(3 * std::size_t(numFaces), 0.0f);  // residual rotation per corner
+  // Matching and residual rotation of an interior edge, from its smaller corner so that the two
+  // sides are exactly opposite; kappa as in transportAngle. The residuals are recomputed where the
+  // index needs them instead of kept (12 bytes per face).
+  struct Crossing {
+    std::uint8_t matching;
+    float eps;
+  };
+  const auto crossing = [&](CornerId c, CornerId o) {
+    const FaceData& f = faceData[cornerFace(c)];
+    const FaceData& g = faceData[cornerFace(o)];
+    const double kappa = wrapAngle(double(g.edge[o % 3]) + M_PI - double(f.edge[c % 3]));
+    const double d = wrapAngle(double(g.theta) - double(f.theta) - kappa);
+    const long k = std::lround(d / (0.5 * M_PI));  // in [-2, 2]
+    return Crossing{static_cast<std::uint8_t>(((k % 4) + 4) % 4), static_cast<float>(d - k * (0.5 * M_PI))};
+  };
+  const auto residual = [&](CornerId c) {
+    const CornerId o = topology.opposite(c);
+    if (o == kInvalidId) return 0.0f;
+    return c < o ? crossing(c, o).eps : -crossing(o, c).eps;
+  };
   parallelFor(3 * numFaces, 8192, [&](const IndexRange& range) {
     for (CornerId c = range.begin(); c != range.end(); ++c) {
       const CornerId o = topology.opposite(c);
       if (o == kInvalidId || o < c) continue;
-      const FaceData& f = faceData[cornerFace(c)];
-      const FaceData& g = faceData[cornerFace(o)];
-      const double kappa = wrapAngle(double(g.edge[o % 3]) + M_PI - double(f.edge[c % 3]));
-      const double d = wrapAngle(double(g.theta) - double(f.theta) - kappa);
-      const long k = std::lround(d / (0.5 * M_PI));  // in [-2, 2]
-      const double e = d - k * (0.5 * M_PI);
-      out.matching[c] = static_cast<std::uint8_t>(((k % 4) + 4) % 4);
-      out.matching[o] = static_cast<std::uint8_t>((4 - out.matching[c]) % 4);
-      eps[c] = static_cast<float>(e);
-      eps[o] = static_cast<float>(-e);
+      const std::uint8_t k = crossing(c, o).matching;
+      out.matching[c] = k;
+      out.matching[o] = static_cast<std::uint8_t>((4 - k) % 4);
     }
   });
 
@@ -153,7 +163,7 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
       topology.forEachCornerAround(v, [&](CornerId c) {
         double corner[3];
         cornerAngles(faceData[cornerFace(c)].edge, corner);
-        sum += eps[nextCorner(c)] - corner[c % 3];
+        sum += residual(nextCorner(c)) - corner[c % 3];
         last = c;
       });
       const auto index = [&](double turn) { return static_cast<std::int32_t>(std::lround(4.0 * turn / (2.0 * M_PI))); };

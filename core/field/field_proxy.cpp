@@ -447,7 +447,7 @@ FieldMethod parseFieldMethod(const std::string& name) {
   throw InputError("unknown field method '" + name + "' (known: auto, direct or smooth, proxy)");
 }
 
-CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology, FieldMethod method,
+CrossField computeCrossField(TriangleMesh& mesh, const Topology& topology, FieldMethod method,
                              const SmoothFieldOptions& smooth, const ProxyFieldOptions& proxy,
                              const FieldGeometryOptions& geometry) {
   const bool direct = resolveFieldMethod(method, topology.numFaces()) == FieldMethod::Direct;
@@ -470,23 +470,40 @@ CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology,
     return field;
   };
   if (geometry.smoothingIterations == 0) return snap(compute(mesh));
-  TriangleMesh smoothed;
-  smoothed.positions = smoothPositions(mesh, topology, geometry.smoothingIterations);
-  smoothed.triangles = mesh.triangles;
-  CrossField field = compute(smoothed);
+  // The mesh itself, with the smoothed positions in place of its own while the field is solved
+  // (restored on every exit): the smoothed surface needs no copy of the triangles.
+  std::vector<Vec3f> own = smoothPositions(mesh, topology, geometry.smoothingIterations);
+  struct Restore {
+    std::vector<Vec3f>& a;
+    std::vector<Vec3f>& b;
+    ~Restore() { a.swap(b); }
+  };
+  CrossField field;
+  {
+    mesh.positions.swap(own);
+    Restore restore{mesh.positions, own};
+    field = compute(mesh);
+  }
+  const std::vector<Vec3f>& flat = own;  // now the smoothed positions
   // Onto the mesh's own faces by the rotation between the two normals, which computeSingularities
   // undoes exactly (a projection would not: on a tilted face it turns the direction).
   parallelFor(topology.numFaces(), 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
-      const FaceGeometry own = faceGeometry(mesh, f), flat = faceGeometry(smoothed, f);
-      field.set(f, rotateBetween(flat.n, own.n, field.at(f)));
+      const Triangle& t = mesh.triangles[f];
+      field.set(f, rotateBetween(detail::faceFrame(flat, t).n, detail::faceFrame(mesh.positions, t).n, field.at(f)));
     }
   });
-  std::vector<Triangle>().swap(smoothed.triangles);
   field = snap(std::move(field));
-  field.framePositions = std::move(smoothed.positions);
+  field.framePositions = std::move(own);
   field.frameSmoothing = geometry.smoothingIterations;
   return field;
+}
+
+CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology, FieldMethod method,
+                             const SmoothFieldOptions& smooth, const ProxyFieldOptions& proxy,
+                             const FieldGeometryOptions& geometry) {
+  TriangleMesh copy = mesh;
+  return computeCrossField(copy, topology, method, smooth, proxy, geometry);
 }
 
 double measureFieldEnergy(const TriangleMesh& mesh, const Topology& topology, const CrossField& field) {

@@ -66,9 +66,15 @@ struct FieldGeometryOptions {
 /// The smoothest field by the given method, computed on the mesh smoothed by
 /// geometry.smoothingIterations steps (kept in framePositions, so that computeSingularities
 /// reads the cones off that surface) and projected onto the mesh's own faces. Extra memory
-/// while it runs: 12 bytes per face and 24 per vertex. Faces of smooth.alignCorners end exactly
+/// while it runs: 24 bytes per vertex (mesh.positions hold the smoothed positions while the field
+/// is solved, and get their own back on every exit). Faces of smooth.alignCorners end exactly
 /// along their edges (snapToFeatureEdges). Throws InputError when curvature or feature alignment
 /// is asked of the proxy field (it computes the smoothest field only).
+CrossField computeCrossField(TriangleMesh& mesh, const Topology& topology, FieldMethod method,
+                             const SmoothFieldOptions& smooth = {},
+                             const ProxyFieldOptions& proxy = {},
+                             const FieldGeometryOptions& geometry = {});
+/// The same on a const mesh (a copy of it: 12 more bytes per face and per vertex).
 CrossField computeCrossField(const TriangleMesh& mesh, const Topology& topology, FieldMethod method,
                              const SmoothFieldOptions& smooth = {},
                              const ProxyFieldOptions& proxy = {},

@@ -11,7 +11,7 @@
 
 namespace seamvox {
 
-CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topology,
+CrossField computeFieldFromSource(TriangleMesh& mesh, const Topology& topology,
                                   const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces,
                                   const FieldSource& source, const ProgressFn& progress,
                                   FieldSolveStats* stats) {

@@ -40,8 +40,9 @@ struct FieldSource {
 
 /// The cross field of a cleaned mesh from its source; faceOrigin maps cleaned faces to input
 /// faces (CleanResult::faceOrigin) for an imported field. Throws InputError for a field whose
-/// size does not match inputFaces. The field solve's factor figures go to stats when set.
-CrossField computeFieldFromSource(const TriangleMesh& mesh, const Topology& topology,
+/// size does not match inputFaces. The field solve's factor figures go to stats when set. The
+/// mesh is unchanged on return (computeCrossField lends its positions array to the smoothed surface).
+CrossField computeFieldFromSource(TriangleMesh& mesh, const Topology& topology,
                                   const std::vector<FaceId>& faceOrigin, std::uint32_t inputFaces,
                                   const FieldSource& source, const ProgressFn& progress = {},
                                   FieldSolveStats* stats = nullptr);

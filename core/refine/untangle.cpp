@@ -8,6 +8,8 @@
 #include <string>
 #include <tuple>
 #include <unordered_map>
+#include <unordered_set>
+#include <vector>
 
 #include <Eigen/LU>
 
@@ -828,40 +830,51 @@ GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, cons
 
 std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                           WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h) {
-  const ComponentsResult components = computeComponents(topology);
-  const std::size_t nk = components.components.size();
-  std::vector<std::uint32_t> collapsed(nk, 0);
-  std::vector<std::uint8_t> candidate(nk, 0);
-  for (std::size_t k = 0; k < nk; ++k) {
-    const ComponentInfo& info = components.components[k];
-    candidate[k] = info.boundaryLoops == 0 && info.eulerCharacteristic != 0;
-  }
-  if (std::none_of(candidate.begin(), candidate.end(), [](std::uint8_t c) { return c != 0; })) return collapsed;
-  std::vector<BoundingBox> box(nk);
-  std::vector<std::uint8_t> flipped(nk, 0);
-  for (FaceId f = 0; f < topology.numFaces(); ++f) {
-    const std::uint32_t k = components.faceComponent[f];
-    if (!candidate[k]) continue;
-    for (VertexId v : mesh.triangles[f]) {
-      box[k].min = box[k].min.cwiseMin(mesh.position(v));
-      box[k].max = box[k].max.cwiseMax(mesh.position(v));
-    }
-    flipped[k] |= isFlippedRatio(parameterAreaRatio(mesh, cornerUV, f, h));
-  }
+  // Only the components of flipped faces are walked, each walk given up once its box reaches h:
+  // the cost follows the flips, and nothing is kept per face of the mesh.
+  std::vector<std::uint32_t> collapsed;
+  std::unordered_set<FaceId> walked, speckFaces;
   std::vector<CornerId> corners;
-  for (FaceId f = 0; f < topology.numFaces(); ++f) {
-    const std::uint32_t k = components.faceComponent[f];
-    if (!candidate[k] || !flipped[k] || !(box[k].diagonal() < h)) continue;
-    ++collapsed[k];
-    for (CornerId c = 3 * f; c < 3 * f + 3; ++c) corners.push_back(c);
+  for (FaceId seed = 0; seed < topology.numFaces(); ++seed) {
+    if (walked.count(seed) || !isFlippedRatio(parameterAreaRatio(mesh, cornerUV, seed, h))) continue;
+    std::vector<FaceId> faces{seed};
+    walked.insert(seed);
+    BoundingBox box;
+    bool closed = true, small = true;
+    for (std::size_t i = 0; i < faces.size() && small; ++i) {
+      for (CornerId c = 3 * faces[i]; c < 3 * faces[i] + 3; ++c) {
+        const Vec3d p = mesh.position(topology.vertex(c));
+        box.min = box.min.cwiseMin(p);
+        box.max = box.max.cwiseMax(p);
+        const CornerId o = topology.opposite(c);
+        if (o == kInvalidId) {
+          closed = false;
+        } else if (walked.insert(cornerFace(o)).second) {
+          faces.push_back(cornerFace(o));
+        }
+      }
+      small = box.diagonal() < h;
+    }
+    if (!small || !closed) continue;
+    // Closed: E = 3F / 2; a torus (chi 0) needs no cone and is left to the repair.
+    std::vector<VertexId> vertices;
+    for (FaceId f : faces) vertices.insert(vertices.end(), mesh.triangles[f].begin(), mesh.triangles[f].end());
+    std::sort(vertices.begin(), vertices.end());
+    const std::int64_t v = std::unique(vertices.begin(), vertices.end()) - vertices.begin();
+    const std::int64_t chi = v - 3 * std::int64_t(faces.size()) / 2 + std::int64_t(faces.size());
+    if (chi == 0) continue;
+    collapsed.push_back(static_cast<std::uint32_t>(faces.size()));
+    for (FaceId f : faces) {
+      speckFaces.insert(f);
+      for (CornerId c = 3 * f; c < 3 * f + 3; ++c) corners.push_back(c);
+    }
   }
   if (corners.empty()) return collapsed;
+  std::sort(corners.begin(), corners.end());
   cornerUV.assign(corners, std::vector<Vec2d>(corners.size(), Vec2d::Zero()));
   for (std::size_t s = 0; s < cut.seams.size() && s < seamT.size(); ++s) {
     const SeamCurve& seam = cut.seams[s];
-    if (!seam.corners.empty() && collapsed[components.faceComponent[cornerFace(seam.corners.front())]] > 0) {
-      seamT[s] = 0.0;
-    }
+    if (!seam.corners.empty() && speckFaces.count(cornerFace(seam.corners.front()))) seamT[s] = 0.0;
   }
   return collapsed;
 }

@@ -79,7 +79,7 @@ struct UntangleStats {
 /// up to a cell and folded, and no repair with its cones fixed unfolds it. On one point it stays
 /// seamless (its seams' translations 0), its faces are collapsed (`check` counts them so, the
 /// component report says "point") and the quad mesh reports it as an island smaller than a cell.
-/// Returns the faces per component mapped so, in the order of computeComponents.
+/// Returns the faces of each component mapped so (in the order of their first flipped face).
 std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                           WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h);
 
