@@ -61,7 +61,7 @@ void runCase(const std::string& label, const TriangleMesh& input, const CrossFie
     source.importedPerInputFace.resize(inherited->direction.size());
     for (FaceId f = 0; f < inherited->direction.size(); ++f) source.importedPerInputFace[f] = inherited->at(f);
   }
-  const CrossField field = computeFieldFromSource(clean.mesh, topology, clean.faceOrigin, input.numFaces(), source);
+  CrossField field = computeFieldFromSource(clean.mesh, topology, clean.faceOrigin, input.numFaces(), source);
   ParamOptions param;
   param.edgeLength = clean.report.diagonalWithoutSpikes / options.cells;
   const CutResult cut = cutThroughCones(mesh, topology, field, kConeMergeFraction * param.edgeLength).cut;

@@ -154,6 +154,7 @@ void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportConte
   if (c.memoryBudget > 0) {
     j.key("path").value(std::string("in-memory"));
     j.key("memoryBudget").value(c.memoryBudget).key("estimatedBytes").value(c.estimatedBytes);
+    j.key("fieldBytesOnDisk").value(c.fieldBytesOnDisk);
   }
   // Wall time, peak and end resident size of each stage, in order.
   j.key("stages").beginArray();

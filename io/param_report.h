@@ -27,6 +27,8 @@ struct ParamReportContext {
   std::uint64_t peakBytes = 0;
   /// The command's memory budget and its estimate of the in-memory peak (0: not written).
   std::uint64_t memoryBudget = 0, estimatedBytes = 0;
+  /// Bytes of the field's directions kept on disk while the map was built (0: none).
+  std::uint64_t fieldBytesOnDisk = 0;
 };
 
 /// The context of a run with these options measured by meter (its stages so far): the settings,

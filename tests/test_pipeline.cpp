@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 
 #include <tbb/global_control.h>
@@ -16,6 +17,8 @@
 #include "io/json_reader.h"
 #include "io/mesh_io.h"
 #include "io/param_report.h"
+#include "stream/scratch_direction_store.h"
+#include "stream/scratch_folder.h"
 #include "test_meshes.h"
 #include "testing.h"
 
@@ -113,7 +116,9 @@ TEST(Pipeline, GivesWhatTheCommandWrites) {
   const JsonValue mine = parseJson(paramReportJson(r, context));
   for (const auto& [key, value] : flattenJson(j)) {
     if (key.rfind("stages.", 0) == 0) continue;  // the command adds read and write stages
-    if (key == "path" || key == "memoryBudget" || key == "estimatedBytes") continue;  // and its budget
+    if (key == "path" || key == "memoryBudget" || key == "estimatedBytes" || key == "fieldBytesOnDisk") {
+      continue;  // and its budget
+    }
     EXPECT_NE(mine.find(key), nullptr) << key;
   }
 }
@@ -148,6 +153,87 @@ TEST(Pipeline, AMeshAboveTheMemoryBudgetIsRefusedBeforeItIsRead) {
   ASSERT_EQ(testing::runSeamvox("param " + dir.path("s.obj") + " -o " + dir.path("o.obj") + " --quiet --memory-budget 40M",
                                 &out), 0) << out;
   EXPECT_NE(out.find("(faces guessed from the file size) above the budget 40.0 MiB"), std::string::npos) << out;
+}
+
+TEST(Pipeline, TheFieldWaitsOnDiskWhileTheMapIsBuiltAndTheMapIsTheSame) {
+  // A scan with holes, islands and bad faces, mapped by voxloc with the field's directions in a
+  // scratch file between the basis and the refinement: the same map, corner by corner, and the
+  // file gone afterwards.
+  const TriangleMesh mesh = testing::generatedMesh(MeshKind::Scan, 30000);
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::VoxLoc;
+  options.solver.gridResolution = 32;
+  options.spacing.cells = 20;
+  const PipelineResult inMemory = parameterize(mesh, options);
+  testing::TempDir dir;
+  ScratchFolder folder(dir.dir());
+  ScratchDirectionStore store(folder);
+  options.directionStore = &store;
+  const PipelineResult onDisk = parameterize(mesh, options);
+  const std::uint64_t perPass = 12 * std::uint64_t(onDisk.mesh.numFaces());
+  EXPECT_GE(store.bytesStored(), perPass);
+  EXPECT_EQ(store.bytesStored() % perPass, 0u);  // once per cone pass
+  EXPECT_EQ(folder.bytesOnDisk(), 0u);
+  ASSERT_EQ(onDisk.mesh.numFaces(), inMemory.mesh.numFaces());
+  EXPECT_EQ(onDisk.cones, inMemory.cones);
+  EXPECT_EQ(onDisk.solved.param.translations, inMemory.solved.param.translations);
+  const WedgeMap& a = inMemory.mesh.cornerUV;
+  const WedgeMap& b = onDisk.mesh.cornerUV;
+  ASSERT_EQ(a.size(), b.size());
+  std::size_t different = 0;
+  for (CornerId c = 0; c < a.size(); ++c) different += a[c] != b[c];
+  EXPECT_EQ(different, 0u);
+  EXPECT_TRUE(onDisk.seamQuality.isSeamless());
+}
+
+TEST(Pipeline, AFullDiskWhileTheFieldGoesToDiskIsAnErrorNamingTheFolder) {
+  testing::TempDir dir;
+  ScratchFolder folder(dir.dir(), 1234567);
+  folder.setWriteLimit(4096);
+  ScratchDirectionStore store(folder);
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::VoxLoc;
+  options.solver.gridResolution = 32;
+  options.spacing.cells = 20;
+  options.directionStore = &store;
+  try {
+    parameterize(sphere(20000), options);
+    FAIL() << "a full scratch disk must stop the run";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(folder.path()), std::string::npos) << e.what();
+  }
+}
+
+TEST(Pipeline, AboveTheBudgetParamKeepsTheFieldOnDiskWhenThatFits) {
+  // A budget between the in-memory estimate and the one with the field on disk: param runs, says
+  // so, reports the bytes it kept on disk, leaves no scratch behind and writes the same file as
+  // within the budget.
+  testing::TempDir dir;
+  const std::string input = dir.path("s.ply");
+  const TriangleMesh mesh = testing::generatedMesh(MeshKind::Scan, 20000);
+  writeMesh(input, mesh);
+  ASSERT_TRUE(std::filesystem::create_directory(dir.path("scratch")));
+  const auto estimate = [&](bool onDisk) {
+    return estimateParamPeakBytes(mesh.numFaces(), ParamSolver::VoxLoc, 32, onDisk);
+  };
+  ASSERT_LT(estimate(true), estimate(false));
+  const std::string common = "param " + input + " --solver voxloc --grid 32 --quiet --scratch " + dir.path("scratch");
+  std::string out;
+  ASSERT_EQ(testing::runSeamvox(common + " -o " + dir.path("m.ply") + " --memory-budget " +
+                                    std::to_string(estimate(false)), &out), 0) << out;
+  EXPECT_NE(out.find("path in memory: estimate"), std::string::npos) << out;
+  const std::uint64_t between = (estimate(true) + estimate(false)) / 2;
+  ASSERT_EQ(testing::runSeamvox(common + " -o " + dir.path("d.ply") + " --report " + dir.path("r.json") +
+                                    " --memory-budget " + std::to_string(between), &out), 0) << out;
+  EXPECT_NE(out.find("path in memory (the field's directions on disk while the map is built)"), std::string::npos) << out;
+  const JsonValue report = parseJson(testing::readFile(dir.path("r.json")));
+  EXPECT_EQ(report.numberAt("estimatedBytes"), double(estimate(true)));
+  EXPECT_GE(report.numberAt("fieldBytesOnDisk"), 12.0 * report.numberAt("faces"));
+  EXPECT_EQ(testing::readFile(dir.path("d.ply")), testing::readFile(dir.path("m.ply")));
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path("scratch"))) << "scratch left behind";
+  // Below both estimates it is still refused.
+  EXPECT_EQ(testing::runSeamvox(common + " -o " + dir.path("x.ply") + " --memory-budget " +
+                                    std::to_string(estimate(true) - 1), &out), 1) << out;
 }
 
 TEST(Pipeline, CancelsThroughProgress) {

@@ -13,6 +13,8 @@
 #include "io/png_io.h"
 #include "io/polygon_io.h"
 #include "core/system/memory_budget.h"
+#include "stream/scratch_direction_store.h"
+#include "stream/scratch_folder.h"
 #include "tools/cli.h"
 #include "tools/memory_path.h"
 
@@ -170,9 +172,22 @@ int runParam(Args& args) {
   memoryPath.budget = c.memory.budget;
   const std::unique_ptr<MeshStream> stream = openMeshStream(c.input);
   bool declared = false;
+  // Above the budget the field's directions wait in a scratch file while the map is built, when
+  // that brings the estimate within it.
+  std::unique_ptr<ScratchFolder> scratch;
+  std::unique_ptr<ScratchDirectionStore> directionStore;
   {
     const MeshCounts counts = guessMeshCounts(c.input, *stream);
-    memoryPath.estimate = estimateParamPeakBytes(counts.faces, c.options.solver.solver, c.options.solver.gridResolution);
+    const auto estimate = [&](bool fieldOnDisk) {
+      return estimateParamPeakBytes(counts.faces, c.options.solver.solver, c.options.solver.gridResolution, fieldOnDisk);
+    };
+    memoryPath.estimate = estimate(false);
+    if (memoryPath.estimate > memoryPath.budget && estimate(true) < memoryPath.estimate) {
+      memoryPath.estimate = estimate(true);
+      scratch = std::make_unique<ScratchFolder>(c.memory.scratch, 12 * counts.faces);
+      directionStore = std::make_unique<ScratchDirectionStore>(*scratch);
+      c.options.directionStore = directionStore.get();
+    }
     // Only a count the header declares is trusted: OBJ's is guessed from the file size (up to
     // twice too high) and a pipe's is unknown, so those are never refused.
     declared = stream->declaredFaces() > 0 || stream->expectedTriangles() > 0;
@@ -221,7 +236,8 @@ int runParam(Args& args) {
   meter.finish("write");
   printSummary(c, r, meter);
   // The meter's peak: the stages reset the high-water mark as they close.
-  std::printf("path in memory: estimate %s%s %s the budget %s; peak memory %s\n",
+  std::printf("path in memory%s: estimate %s%s %s the budget %s; peak memory %s\n",
+              directionStore ? " (the field's directions on disk while the map is built)" : "",
               formatByteSize(memoryPath.estimate).c_str(), declared ? "" : " (faces guessed from the file size)",
               memoryPath.estimate <= memoryPath.budget ? "within" : "above", formatByteSize(memoryPath.budget).c_str(),
               formatByteSize(meter.peakBytes()).c_str());
@@ -231,6 +247,7 @@ int runParam(Args& args) {
         paramReportContext(c.options, meter, c.input, c.output, c.solverName, c.fieldSource);
     context.memoryBudget = memoryPath.budget;
     context.estimatedBytes = memoryPath.estimate;
+    context.fieldBytesOnDisk = directionStore ? directionStore->bytesStored() : 0;
     if (reportFile) {
       reportFile->write(paramReportJson(r, context));
     } else {

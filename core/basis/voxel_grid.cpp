@@ -168,12 +168,20 @@ VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topol
           tbb::make_filter<std::shared_ptr<ClippedChunk>, void>(
               tbb::filter_mode::serial_in_order, [&](std::shared_ptr<ClippedChunk> chunk) {
                 for (std::size_t i = 0; i < chunk->face.size(); ++i) {
-                  fragments.push_back(
-                      {chunk->face[i], out.grid.insert(chunk->voxel[i]), chunk->edgeMask[i]});
+                  const std::uint32_t voxel = out.grid.insert(chunk->voxel[i]);
+                  if (voxel >= VoxelFragment::kMaxVoxels) {
+                    throw InputError("voxel basis: more than 2^29 voxels on the surface; use a coarser grid");
+                  }
+                  VoxelFragment fragment;
+                  fragment.face = chunk->face[i];
+                  fragment.voxel = voxel;
+                  fragment.edgeMask = chunk->edgeMask[i];
+                  fragments.push_back(fragment);
                 }
                 reportProgress(options.progress, "voxel clip", double(chunk->end) / nf);
               }));
-  fragments.shrink_to_fit();
+  // No shrink_to_fit: the reserve's unused tail was never touched (not resident), and the copy
+  // would hold the fragments twice.
   // Ids in tree order: the elements of one 8^3 leaf block are contiguous, and the assembly takes
   // them block by block.
   const std::vector<std::uint32_t> remap = out.grid.orderByBlocks();

@@ -6,6 +6,7 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <complex>
 #include <cstdint>
 #include <unordered_map>
@@ -86,8 +87,12 @@ std::int64_t FieldSingularities::indexSum4() const {
   return sum;
 }
 
-FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology& topology,
-                                        const CrossField& field) {
+namespace {
+
+/// computeSingularities; afterFaceAngles (if set) runs once the faces' angles are read, before
+/// anything else is allocated.
+FieldSingularities singularitiesOf(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                                   const std::function<void()>& afterFaceAngles) {
   const std::uint32_t numFaces = topology.numFaces();
   const std::uint32_t numVertices = topology.numVertices();
   if (field.direction.size() != numFaces || mesh.triangles.size() != numFaces) {
@@ -101,8 +106,6 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
   }
   const std::vector<Vec3f>& positions = field.framePositions.empty() ? mesh.positions : field.framePositions;
   FieldSingularities out;
-  out.matching.assign(3 * std::size_t(numFaces), 0);
-  out.index4.assign(numVertices, 0);
   // Per face, once: the field angle and the edge angles in the face frame (16 bytes per face;
   // float is ample for rounding to quarter turns).
   struct FaceData {
@@ -117,6 +120,9 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
       faceData[f] = {float(frameAngle(a.frame, u)), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
     }
   });
+  if (afterFaceAngles) afterFaceAngles();
+  out.matching.assign(3 * std::size_t(numFaces), 0);
+  out.index4.assign(numVertices, 0);
 
   // Matching and residual rotation of an interior edge, from its smaller corner so that the two
   // sides are exactly opposite; kappa as in transportAngle. The residuals are recomputed where the
@@ -183,6 +189,18 @@ FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology
     if (out.index4[v] != 0) out.cones.push_back(v);
   }
   return out;
+}
+
+}  // namespace
+
+FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology& topology,
+                                        const CrossField& field) {
+  return singularitiesOf(mesh, topology, field, {});
+}
+
+FieldSingularities computeSingularitiesReleasingFrames(const TriangleMesh& mesh, const Topology& topology,
+                                                       CrossField& field) {
+  return singularitiesOf(mesh, topology, field, [&] { releaseFramePositions(field); });
 }
 
 namespace {

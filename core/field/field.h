@@ -58,6 +58,10 @@ struct FieldSingularities {
 /// falls back to any tangent direction).
 FieldSingularities computeSingularities(const TriangleMesh& mesh, const Topology& topology,
                                         const CrossField& field);
+/// The same, with field.framePositions released (releaseFramePositions) as soon as the faces'
+/// angles are read: 12 bytes per vertex less while the matchings and indices are computed.
+FieldSingularities computeSingularitiesReleasingFrames(const TriangleMesh& mesh, const Topology& topology,
+                                                       CrossField& field);
 
 /// Figures of a field's CHOLMOD factorization (the largest when it factors more than once), as
 /// SeamlessStats has them for the seamless solve.

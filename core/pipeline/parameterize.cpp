@@ -48,12 +48,12 @@ std::optional<FieldSource> alignedFieldSource(const Topology& topology, const Fe
   return aligned;
 }
 
-ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, CrossField& field,
                         double mergeDistance,
                         const std::vector<std::pair<VertexId, VertexId>>& coincident,
                         double coincidentDistance, const ProgressFn& progress) {
   ConeCut result;
-  result.singularities = computeSingularities(mesh, topology, field);
+  result.singularities = computeSingularitiesReleasingFrames(mesh, topology, field);
   result.conesBeforeMerge = static_cast<std::uint32_t>(result.singularities.cones.size());
   ConeMergeOptions mergeOptions;
   mergeOptions.maxDistance = mergeDistance;
@@ -189,6 +189,18 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   param.failsToFactor = options.failsToFactor;
   SolverOptions solverOptions = options.solver;
   solverOptions.meter = &meter;  // closes "solve" and "refine"
+  bool directionsStored = false;
+  if (options.directionStore) {
+    solverOptions.fieldIdle = [&] {
+      options.directionStore->store(field.direction);
+      directionsStored = true;
+    };
+    solverOptions.fieldNeeded = [&] {
+      if (!directionsStored) return;
+      options.directionStore->load(field.direction);
+      directionsStored = false;
+    };
+  }
   solverOptions.refine.coneWeightRadius = options.coneWeightRadius;
   const double mergeDistance = options.mergeCones * r.edgeLength;
   const double coincidentDistance = kCoincidentSearchFraction * r.edgeLength;
@@ -198,9 +210,8 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
     restoreFramePositions(r.mesh, r.topology, field);
     ConeCut coneCut = cutThroughCones(r.mesh, r.topology, field, mergeDistance, coincident, coincidentDistance,
                                       options.progress);
-    // Until the next pass's cones only the 3D-fold test of a few flipped faces reads the smoothed
-    // surface, and recomputes it around them: 12 bytes per vertex less for the solve.
-    releaseFramePositions(field);
+    // The cut released the smoothed surface: until the next pass's cones only the 3D-fold test of
+    // a few flipped faces reads it, and recomputes it around them.
     if (r.conePasses == 1) r.conesBeforeMerge = coneCut.conesBeforeMerge;
     r.merged = coneCut.merged;  // each pass merges the field's cones afresh
     std::unordered_map<VertexId, std::int32_t> coneIndex;
@@ -323,6 +334,8 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   r.features = findFeatures(r.mesh, r.topology, featureOptions);
   std::optional<FieldSource> aligned = alignedFieldSource(r.topology, r.features, options.field, r.mesh.numFaces());
   r.featureFieldAligned = aligned.has_value();
+  // Only an imported field reads the faces' input ids: otherwise they go now (4 bytes per face).
+  if (options.field.importedPerInputFace.empty()) std::vector<FaceId>().swap(clean.faceOrigin);
   CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces,
                                             aligned ? *aligned : options.field, options.progress, &r.fieldSolve);
   aligned.reset();

@@ -62,11 +62,24 @@ struct ConeCut {
 
 /// computeSingularities, mergeCloseCones (cones at most mergeDistance apart, mesh units; <= 0
 /// merges nothing), mergeCoincidentCones on `coincident` (pairs a previous solve put on one
-/// point, joined along paths up to coincidentDistance), then cutToDisk.
-ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+/// point, joined along paths up to coincidentDistance), then cutToDisk. The field's smoothed
+/// positions are released once read (computeSingularitiesReleasingFrames; restoreFramePositions
+/// brings them back).
+ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, CrossField& field,
                         double mergeDistance,
                         const std::vector<std::pair<VertexId, VertexId>>& coincident = {},
                         double coincidentDistance = 0.0, const ProgressFn& progress = {});
+
+/// Somewhere the field's directions can wait while nothing reads them (a scratch file:
+/// stream/scratch_direction_store.h).
+class DirectionStore {
+ public:
+  virtual ~DirectionStore() = default;
+  /// Takes the directions away (the vector is left empty, its memory freed).
+  virtual void store(std::vector<Vec3f>& directions) = 0;
+  /// Gives the stored directions back.
+  virtual void load(std::vector<Vec3f>& directions) = 0;
+};
 
 struct PipelineOptions {
   CleanOptions clean;  ///< weld, tolerance (progress is set from below)
@@ -105,6 +118,9 @@ struct PipelineOptions {
   bool dropUnsolved = false;
   /// Test hook (RoundOptions::failsToFactor): components it names are left unsolved.
   std::function<bool(std::uint32_t unknowns)> failsToFactor;
+  /// When set, the field's directions (12 bytes per face) wait in it while the voxel solvers
+  /// build the map next to the basis (SolverOptions::fieldIdle), the stage of the largest peak.
+  DirectionStore* directionStore = nullptr;
 };
 
 /// Sizes of a result's mesh and map, kept apart so they can be reported after the mesh was

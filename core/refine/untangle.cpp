@@ -268,7 +268,7 @@ void moveFanWedges(WedgeMap& uv, const std::vector<CornerId>& corners, const std
 // a larger worst margin when the kernel is empty, or (a neighbour making room) halfway into it.
 enum class Move { Kernel, Gain, Room };
 
-bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, const std::vector<std::uint8_t>& folded,
+bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, const std::vector<std::uint8_t>& state,
                     MoveLog& log, Move mode) {
   if (topology.isBoundaryVertex(v) || topology.isIsolatedVertex(v)) return false;
   std::vector<CornerId> corners;
@@ -279,7 +279,7 @@ bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, co
   Vec2d lo = Vec2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (std::size_t i = 0; i < corners.size(); ++i) {
     const CornerId c = corners[i];
-    if (folded[c / 3]) return false;
+    if (state[c / 3] == kFolded) return false;
     // Triangle (p + i^k d, a, b) positive: (b - a) x (p + i^k d) + a x b > 0.
     const Vec2d p = cornerUV[c], a = cornerUV[nextCorner(c)], b = cornerUV[prevCorner(c)];
     const Vec2d n(a.y() - b.y(), b.x() - a.x());
@@ -364,11 +364,10 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
                                       std::uint32_t passes) {
   std::vector<std::uint8_t> fixed(topology.numVertices(), 0);
   for (VertexId c : cut.cones) fixed[c] = 1;
-  std::vector<std::uint8_t> folded(state.size(), 0);
-  for (std::size_t f = 0; f < state.size(); ++f) folded[f] = state[f] == kFolded;
+  // Only faces flipped at the start change state here (folded ones stay kFolded): no copies of
+  // the states (a byte per face each).
   std::uint32_t moves = 0;
   MoveLog log;
-  const std::vector<std::uint8_t> stateBefore = state;
   const auto flips = [&] { return std::count(state.begin(), state.end(), std::uint8_t(kFlipped)); };
   const auto flipsBefore = flips();
   // A move is undone when it collapses a fan triangle (parameter area below the collapse
@@ -380,7 +379,7 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
     was.clear();
     topology.forEachCornerAround(v, [&](CornerId c) { was.push_back(badness(c / 3)); });
     const std::size_t mark = log.size();
-    if (!relocateVertex(topology, cornerUV, v, folded, log, mode)) return false;
+    if (!relocateVertex(topology, cornerUV, v, state, log, mode)) return false;
     std::size_t i = 0;
     bool worse = false;
     topology.forEachCornerAround(v, [&](CornerId c) {
@@ -437,7 +436,7 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
   }
   if (moves > 0 && flips() >= flipsBefore) {  // no gain: the moves would only cost gradient error
     for (auto it = log.rbegin(); it != log.rend(); ++it) cornerUV.setWedgeValue(it->first, it->second);
-    state = stateBefore;
+    for (FaceId f : flippedFaces) state[f] = kFlipped;
     return 0;
   }
   return moves;

@@ -75,7 +75,12 @@ WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
   });
   const std::uint32_t numWedges = first[nv];
   std::vector<std::uint32_t>().swap(first);
-  return WedgeMap(std::move(cornerWedge), std::vector<Vec2d>(numWedges, Vec2d::Zero()));
+  // Room for the wedges the refinement and the repair add (WedgeMap::assign): an untouched
+  // reserve is not resident, a reallocation would hold the values twice.
+  std::vector<Vec2d> values;
+  values.reserve(numWedges + numWedges / 8);
+  values.resize(numWedges, Vec2d::Zero());
+  return WedgeMap(std::move(cornerWedge), std::move(values));
 }
 
 void evaluateMap(const Basis& basis, const Reduction& reduction,

@@ -40,12 +40,13 @@ SolverChoice chooseParamSolver(ParamSolver requested, std::uint64_t numFaces,
   return {hat ? ParamSolver::Hat : ParamSolver::VoxLoc, text};
 }
 
-std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution) {
+std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution,
+                                     bool fieldOnDisk) {
   constexpr std::uint64_t kMiB = std::uint64_t(1) << 20;
   const std::uint64_t program = 48 * kMiB;
   if (chooseParamSolver(requested, faces, gridResolution).solver == ParamSolver::Hat) return program + 1400 * faces;
   const double scale = double(gridResolution) / kDefaultGridResolution;
-  return program + static_cast<std::uint64_t>(520.0 * kMiB * scale * scale) + 82 * faces;
+  return program + static_cast<std::uint64_t>(520.0 * kMiB * scale * scale) + (fieldOnDisk ? 70 : 82) * faces;
 }
 
 void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason) {
@@ -77,9 +78,15 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   try {
     if (solverOptions.beforeVoxelSolve) solverOptions.beforeVoxelSolve();
     ParamOptions voxOptions = options;
-    if (solverOptions.meter) voxOptions.basisBuilt = [&] { solverOptions.meter->finish("basis"); };
+    voxOptions.basisBuilt = [&] {
+      if (options.basisBuilt) options.basisBuilt();
+      if (solverOptions.meter) solverOptions.meter->finish("basis");
+      if (solverOptions.fieldIdle) solverOptions.fieldIdle();
+    };
     vox = parameterizeMeshVoxel(mesh, topology, field, cut, voxOptions, solverOptions.gridResolution);
+    if (solverOptions.fieldNeeded) solverOptions.fieldNeeded();
   } catch (const SolverError& e) {
+    if (solverOptions.fieldNeeded) solverOptions.fieldNeeded();
     // The voxel system could not be factored: the hat solver gives the same kind of map, if it
     // fits in memory (on a massive mesh it would not, and swapping or being killed is worse
     // than an error).

@@ -51,8 +51,12 @@ void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, con
 /// kAutoHatMaxFacesGrid128) 1400 bytes per face (measured 1.2-1.3 KB at 100K-300K faces), with
 /// vox and voxloc the grid's system (520 MiB at grid 128, growing as the grid's square) and 82
 /// bytes per face (measured: 540 MiB at 400K faces, 1704 MiB at 20.0M, 1907 MiB at 22.1M with two
-/// cone passes, 8160 MiB at 100M; the estimate is 3% above the last, 25% above the 20M one).
-std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution);
+/// cone passes, 8160 MiB at 100M before the memory of the field, cut and map stages was cut down;
+/// 7584 MiB at 100M after the first of those changes). fieldOnDisk: the field's directions wait on
+/// disk while the map is built (PipelineOptions::directionStore), 70 bytes per face (measured
+/// 6974 MiB at 100M faces, 67 bytes per face above the grid's system).
+std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution,
+                                     bool fieldOnDisk = false);
 
 /// Default voxels per axis of the voxel basis's grid (vox, voxloc).
 constexpr std::int32_t kDefaultGridResolution = 128;
@@ -69,6 +73,10 @@ struct SolverOptions {
   /// Test hook, run just before the voxel solve: a SolverError it throws takes the path of a
   /// voxel system that cannot be factored (the hat fallback).
   std::function<void()> beforeVoxelSolve;
+  /// vox, voxloc: fieldIdle runs once the voxel basis is built, after which nothing reads the
+  /// field's directions until fieldNeeded runs (before the refinement, or the hat fallback): a
+  /// caller may keep them elsewhere meanwhile, while the map is built next to the basis.
+  std::function<void()> fieldIdle, fieldNeeded;
 };
 
 struct SolverResult {
