@@ -193,7 +193,9 @@ int runParam(Args& args) {
     declared = stream->declaredFaces() > 0 || stream->expectedTriangles() > 0;
     if (declared && memoryPath.estimate > memoryPath.budget) {
       throw InputError(c.input + ": param needs about " + formatByteSize(memoryPath.estimate) + " in memory for " +
-                       std::to_string(counts.faces) + " faces, above the --memory-budget of " +
+                       std::to_string(counts.faces) + " faces" +
+                       (directionStore ? " (with its field's directions on disk while the map is built)" : "") +
+                       ", above the --memory-budget of " +
                        formatByteSize(memoryPath.budget) + (c.memory.budgetGiven ? "" : " (the default: 3/4 of the available memory)") +
                        "; param has no out-of-core path yet: give a larger --memory-budget if the machine has it, "
                        "or split the scan into tiles (seamvox jobs)");

@@ -46,7 +46,7 @@ std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested,
   const std::uint64_t program = 48 * kMiB;
   if (chooseParamSolver(requested, faces, gridResolution).solver == ParamSolver::Hat) return program + 1400 * faces;
   const double scale = double(gridResolution) / kDefaultGridResolution;
-  return program + static_cast<std::uint64_t>(520.0 * kMiB * scale * scale) + (fieldOnDisk ? 70 : 82) * faces;
+  return program + static_cast<std::uint64_t>(520.0 * kMiB * scale * scale) + (fieldOnDisk ? 70 : 78) * faces;
 }
 
 void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason) {

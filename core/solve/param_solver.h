@@ -49,12 +49,12 @@ void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, con
 /// Whole-process peak of `seamvox param` in memory for a mesh of this many faces, rounded up
 /// from bench/RESULTS.md: 48 MiB for the program, then with the hat solver (Auto up to
 /// kAutoHatMaxFacesGrid128) 1400 bytes per face (measured 1.2-1.3 KB at 100K-300K faces), with
-/// vox and voxloc the grid's system (520 MiB at grid 128, growing as the grid's square) and 82
-/// bytes per face (measured: 540 MiB at 400K faces, 1704 MiB at 20.0M, 1907 MiB at 22.1M with two
-/// cone passes, 8160 MiB at 100M before the memory of the field, cut and map stages was cut down;
-/// 7584 MiB at 100M after the first of those changes). fieldOnDisk: the field's directions wait on
-/// disk while the map is built (PipelineOptions::directionStore), 70 bytes per face (measured
-/// 6974 MiB at 100M faces, 67 bytes per face above the grid's system).
+/// vox and voxloc the grid's system (520 MiB at grid 128, growing as the grid's square) and 78
+/// bytes per face (measured: 1.58 GiB at 20.0M faces, 1.78 GiB at 22.1M with two cone passes,
+/// 7.45 GiB at 100M, 74 bytes per face above the grid's system). fieldOnDisk: the field's
+/// directions wait on disk while the map is built (PipelineOptions::directionStore), 70 bytes per
+/// face (measured 16990 MiB at 250M faces, 69 bytes per face above the grid's system: the
+/// estimate is 1.6% above it there).
 std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution,
                                      bool fieldOnDisk = false);
 
