@@ -179,6 +179,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("nonManifoldEdgesSplit").value(r.cleanReport.nonManifoldEdges);
   j.key("nonManifoldVerticesSplit").value(r.cleanReport.nonManifoldVertices);
   j.key("spikeVertices").value(r.cleanReport.spikeVertices);
+  j.key("unweldedBoundaryVertices").value(r.cleanReport.unweldedBoundaryVertices);
   j.key("reorderedForLocality").value(r.cleanReport.reordered);
   j.key("cones").value(static_cast<U64>(r.cones.size()));
   j.key("conesBeforeMerge").value(U64{r.conesBeforeMerge});

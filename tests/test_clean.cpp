@@ -175,6 +175,80 @@ TEST(Clean, InjectedFinsAndBowtiesAreSplit) {
   EXPECT_EQ(r.mesh.numFaces(), input.numFaces());
   EXPECT_EQ(computeComponents(r.topology).components.size(), 1u + fins + bowties);
   expectOriginsLeadBack(input, r);
+  EXPECT_EQ(r.report.unweldedBoundaryVertices, 0u) << "split copies of one vertex are not a crack";
+}
+
+// A grid cut along the line x = 2 with its own copies of that line's vertices on the right: a
+// crack of 5 + 5 boundary vertices on each other, counted (and kept); welding joins them. A
+// bowtie on a boundary corner: its two copies come from one input vertex, not counted.
+TEST(Clean, AnUnweldedCrackIsCountedAndWeldingJoinsIt) {
+  TriangleMesh mesh = gridMesh(4, 4, 1.0);
+  std::vector<VertexId> copyOf(mesh.numVertices(), kInvalidId);
+  for (Triangle& t : mesh.triangles) {
+    const float cx = (mesh.positions[t[0]].x() + mesh.positions[t[1]].x() + mesh.positions[t[2]].x()) / 3.0f;
+    if (cx < 2.0f) continue;
+    for (VertexId& v : t) {
+      if (mesh.positions[v].x() != 2.0f) continue;
+      if (copyOf[v] == kInvalidId) {
+        copyOf[v] = mesh.numVertices();
+        mesh.positions.push_back(mesh.positions[v]);
+      }
+      v = copyOf[v];
+    }
+  }
+  const VertexId corner = 0;
+  ASSERT_EQ(mesh.positions[corner], Vec3f(0.f, 0.f, 0.f));
+  mesh.positions.push_back(Vec3f(-1.f, -0.5f, 0.f));
+  mesh.positions.push_back(Vec3f(-0.5f, -1.f, 0.f));
+  mesh.triangles.push_back({corner, mesh.numVertices() - 1, mesh.numVertices() - 2});
+  const CleanResult kept = cleanMesh(mesh);
+  EXPECT_EQ(kept.report.nonManifoldVertices, 1u);
+  EXPECT_EQ(kept.report.unweldedBoundaryVertices, 10u);
+  EXPECT_EQ(computeComponents(kept.topology).components.size(), 3u);
+  CleanOptions weld;
+  weld.weldVertices = true;
+  const CleanResult welded = cleanMesh(mesh, weld);
+  EXPECT_EQ(welded.report.weldedVertices, 5u);
+  EXPECT_EQ(welded.report.unweldedBoundaryVertices, 0u);
+  EXPECT_EQ(computeComponents(welded.topology).components.size(), 2u);
+}
+
+// A 1280-face icosphere with one more face on one of its edges: after cleaning, the sphere's
+// faces are glued to each other and the extra face is on its own.
+void expectSphereClosedAndFaceApart(const TriangleMesh& mesh) {
+  ASSERT_EQ(mesh.numFaces(), 1281u);
+  const CleanResult clean = cleanMesh(mesh);
+  EXPECT_EQ(clean.report.nonManifoldEdges, 1u);
+  std::uint32_t open = 0;
+  for (CornerId k = 0; k < 3 * 1280; ++k) open += clean.topology.opposite(k) == kInvalidId;
+  EXPECT_EQ(open, 0u) << "the sphere's faces are glued to each other";
+  for (CornerId k = 3 * 1280; k < 3 * 1281; ++k) EXPECT_EQ(clean.topology.opposite(k), kInvalidId);
+  EXPECT_EQ(computeComponents(clean.topology).components.size(), 2u);
+}
+
+// A flap folded onto one of the edge's faces, lying exactly in the plane of the other one (so it
+// matches that face better than the two surface faces match each other, 1280-face icosphere:
+// about 10 degrees): the surface's faces are glued, the flap is left on its own, the sphere
+// stays closed. Glued to the far face instead, the sphere would open along the edge and the
+// flap would cover its face in the map (quads through a vertex twice on fin-damaged scans).
+TEST(Clean, AFlapOnAnEdgeLeavesTheSurfaceClosedHoweverFlatItLies) {
+  TriangleMesh mesh = testing::icosphereMesh(3);
+  const Topology sphere = buildOf(mesh);
+  const CornerId c = 0;  // face 0's edge a -> b opposite its corner 0
+  const VertexId a = sphere.vertex(nextCorner(c)), b = sphere.vertex(prevCorner(c));
+  const VertexId d = sphere.vertex(sphere.opposite(c));  // the far face runs b -> a -> d
+  const Vec3d pa = mesh.position(a), pb = mesh.position(b), pd = mesh.position(d);
+  const Vec3d along = (pb - pa).normalized();
+  const Vec3d toD = (pd - pa) - (pd - pa).dot(along) * along;  // in the far face's plane
+  mesh.positions.push_back((0.5 * (pa + pb) - toD).cast<float>());
+  mesh.triangles.push_back({a, b, mesh.numVertices() - 1});  // runs a -> b, as face 0 does
+  const Vec3d flapNormal = gluingNormal(pa, pb, mesh.position(mesh.numVertices() - 1));
+  const Vec3d farNormal = gluingNormal(pb, pa, pd);
+  const Triangle t0 = mesh.triangles[0];
+  const Vec3d faceNormal = gluingNormal(mesh.position(t0[0]), mesh.position(t0[1]), mesh.position(t0[2]));
+  ASSERT_GT(gluingAlignment(flapNormal, farNormal), gluingAlignment(faceNormal, farNormal))
+      << "the flap lies flatter against the far face than the sphere's own face";
+  expectSphereClosedAndFaceApart(mesh);
 }
 
 // A scan's collinear face on an edge of a closed surface, lying in the plane of one of the edge's
@@ -190,12 +264,7 @@ TEST(Clean, ASliverOnAnEdgeIsGluedLast) {
   const VertexId tip = mesh.numVertices() - 1;
   mesh.triangles.push_back({t[0], tip, t[1]});  // runs b -> a, as the sphere's other face there
   ASSERT_LT(gluingNormal(a, mesh.position(tip), b).norm(), 0.5) << "a sliver";
-  const CleanResult clean = cleanMesh(mesh);
-  EXPECT_EQ(clean.report.nonManifoldEdges, 1u);
-  std::uint32_t open = 0;
-  for (CornerId k = 0; k < 3 * 1280; ++k) open += clean.topology.opposite(k) == kInvalidId;
-  EXPECT_EQ(open, 0u) << "the sphere's faces are glued to each other";
-  for (CornerId k = 3 * 1280; k < 3 * 1281; ++k) EXPECT_EQ(clean.topology.opposite(k), kInvalidId);
+  expectSphereClosedAndFaceApart(mesh);
 }
 
 TEST(Clean, RemovesDegenerateDuplicateAndUnreferenced) {

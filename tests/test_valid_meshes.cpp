@@ -559,6 +559,25 @@ TEST(ValidMeshes, InfoAndTheReportCountTheVerticesNonManifoldSplitsDuplicate) {
   EXPECT_EQ(param.numberAt("vertices"), mesh.numVertices() + split);
 }
 
+TEST(ValidMeshes, InfoAndParamNameAnUnweldedCrackAndWeldingJoinsIt) {
+  testing::TempDir dir;
+  const std::string input = dir.path("seam.obj"), output = dir.path("out.obj"), report = dir.path("r.json");
+  writeMesh(input, unweldedSeamWithFin());
+  std::string log;
+  ASSERT_EQ(testing::runSeamvox("info --quiet --json '" + input + "'", &log), 0) << log;
+  const double crack = parseJson(log).numberAt("clean.unweldedBoundaryVertices");
+  EXPECT_GT(crack, 0);
+  ASSERT_EQ(testing::runSeamvox("info --quiet --weld --json '" + input + "'", &log), 0) << log;
+  EXPECT_EQ(parseJson(log).numberAt("clean.unweldedBoundaryVertices"), 0);
+  ASSERT_EQ(testing::runSeamvox("param '" + input + "' -o '" + output + "' --solver hat --cells 8 --quiet --report '" +
+                                report + "'", &log), 0) << log;
+  EXPECT_NE(log.find("lie exactly on another boundary vertex"), std::string::npos) << log;
+  EXPECT_EQ(parseJson(testing::readFile(report)).numberAt("unweldedBoundaryVertices"), crack);
+  ASSERT_EQ(testing::runSeamvox("param '" + input + "' -o '" + output + "' --weld --solver hat --cells 8 --quiet", &log), 0)
+      << log;
+  EXPECT_EQ(log.find("lie exactly on another boundary vertex"), std::string::npos) << log;
+}
+
 TEST(ValidMeshes, DracoDecodesToTheWrittenConnectivity) {
   const TriangleMesh mesh = unweldedSeamWithFin();
   ASSERT_GT(mesh.numVertices(), testing::gridMesh(4, 4, 1.0).numVertices());

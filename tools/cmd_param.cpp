@@ -83,6 +83,10 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   std::printf("%s -> %s: %u faces, %zu cones, %u seams, h = %.6g (%.1f cells on the diagonal)\n",
               c.input.c_str(), c.output.c_str(), r.size.faces, r.cones.size(), r.seams,
               r.edgeLength, r.diagonal / r.edgeLength);
+  if (r.cleanReport.unweldedBoundaryVertices) {
+    std::printf("%llu boundary vertices lie exactly on another boundary vertex: cracks left open "
+                "(--weld joins them)\n", static_cast<unsigned long long>(r.cleanReport.unweldedBoundaryVertices));
+  }
   if (r.cleanReport.reordered) {
     std::printf("the input's order was scattered: vertices and faces were put in spatial order (so are the output's)\n");
   }

@@ -136,10 +136,12 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
   out += format("cleaning        welded vertices %llu, degenerate faces %llu, duplicate faces %llu,\n"
                 "                zero-area faces %llu (kept), unreferenced vertices %llu,\n"
                 "                non-manifold edges %llu (split), non-manifold vertices %llu (split),\n"
-                "                flipped faces %llu, spike vertices %llu (kept)%s\n",
+                "                flipped faces %llu, spike vertices %llu (kept),\n"
+                "                boundary vertices on another one %llu (kept: an unwelded crack%s)%s\n",
                 ull(c.weldedVertices), ull(c.degenerateFaces), ull(c.duplicateFaces),
                 ull(c.zeroAreaFaces), ull(c.unreferencedVertices), ull(c.nonManifoldEdges),
                 ull(c.nonManifoldVertices), ull(c.flippedFaces), ull(c.spikeVertices),
+                ull(c.unweldedBoundaryVertices), c.unweldedBoundaryVertices ? "; --weld joins it" : "",
                 c.reordered ? ";\n                vertices and faces put in spatial order (the input's was scattered)" : "");
   }
   if (!s.box.isEmpty()) {
@@ -202,11 +204,14 @@ std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
   j.key("unreferencedVertices").value(c.unreferencedVertices);
   j.key("nonManifoldEdges").value(c.nonManifoldEdges);
   if (s.outOfCore) {
-    for (const char* key : {"nonManifoldVertices", "flippedFaces", "spikeVertices"}) j.key(key).null();
+    for (const char* key : {"nonManifoldVertices", "flippedFaces", "spikeVertices", "unweldedBoundaryVertices"}) {
+      j.key(key).null();
+    }
   } else {
     j.key("nonManifoldVertices").value(c.nonManifoldVertices);
     j.key("flippedFaces").value(c.flippedFaces);
     j.key("spikeVertices").value(c.spikeVertices);
+    j.key("unweldedBoundaryVertices").value(c.unweldedBoundaryVertices);
     j.key("reorderedForLocality").value(c.reordered);
   }
   j.endObject();

@@ -10,6 +10,7 @@
 #include <limits>
 #include <numeric>
 #include <string>
+#include <tuple>
 
 #include "core/mesh/detail_corner_table.h"
 #include "core/mesh/detail_union_find.h"
@@ -200,11 +201,31 @@ std::uint64_t orientFaces(TriangleMesh& mesh, const detail::VertexCorners& vc) {
   return flips;
 }
 
+/// Pieces of at least this many faces count as large when non-manifold edges are paired.
+constexpr std::uint32_t kLargePieceFaces = 1024;
+
+/// Per face, the number of faces of its piece (faces joined by glued edges), capped at
+/// kLargePieceFaces.
+std::vector<std::uint32_t> cappedPieceSizes(std::size_t numFaces, const std::vector<CornerId>& opposite) {
+  detail::UnionFind pieces(numFaces);
+  for (CornerId c = 0; c < opposite.size(); ++c) {
+    if (opposite[c] != kInvalidId && c < opposite[c]) pieces.unite(c / 3, opposite[c] / 3);
+  }
+  std::vector<std::uint32_t> size(numFaces, 0);
+  for (FaceId f = 0; f < numFaces; ++f) ++size[pieces.find(f)];
+  for (FaceId f = 0; f < numFaces; ++f) size[f] = std::min(size[pieces.find(f)], kLargePieceFaces);
+  return size;
+}
+
 /// On every edge shared by more than two faces (all left unglued by glueEdges), glues pairs of
-/// oppositely oriented faces, flattest pair first (most aligned normals): a fin on a closed
-/// surface then leaves the surface closed and only the fin's own edge open. An edge left open
-/// with both sides in one fan of each endpoint would stay shared in the written file (the same
-/// vertex ids on both sides) while the map treats it as a boundary. Serial: such edges are rare.
+/// oppositely oriented faces: pairs of two large pieces first (faces joined through the glued
+/// edges, kLargePieceFaces), then the flattest pair (most aligned normals). A fin or a small flap
+/// on a closed surface then leaves the surface closed and only its own edge open, even when it
+/// lies flatter against the surface than the surface's own faces meet (a flap folded onto its
+/// face: glued to the far side, the surface would open along the edge and the flap would overlap
+/// the face in the map). An edge left open with both sides in one fan of each endpoint would stay
+/// shared in the written file (the same vertex ids on both sides) while the map treats it as a
+/// boundary. Serial: such edges are rare.
 void pairNonManifoldEdges(const TriangleMesh& mesh, const detail::VertexCorners& vc,
                           std::vector<CornerId>& opposite) {
   const std::vector<Triangle>& tris = mesh.triangles;
@@ -212,6 +233,7 @@ void pairNonManifoldEdges(const TriangleMesh& mesh, const detail::VertexCorners&
   auto normalOf = [&](FaceId f) {
     return gluingNormal(mesh.position(tris[f][0]), mesh.position(tris[f][1]), mesh.position(tris[f][2]));
   };
+  const std::vector<std::uint32_t> pieceFaces = cappedPieceSizes(tris.size(), opposite);
   std::vector<CornerId> same, reverse;
   for (CornerId c = 0; c < 3 * tris.size(); ++c) {
     if (opposite[c] != kInvalidId) continue;
@@ -227,16 +249,19 @@ void pairNonManifoldEdges(const TriangleMesh& mesh, const detail::VertexCorners&
       if (vertexOf(prevCorner(d)) == b) reverse.push_back(nextCorner(d));
     }
     struct Pair {
+      std::uint32_t smallerPiece;
       double alignment;
       CornerId x, y;
     };
     std::vector<Pair> pairs;
     for (CornerId x : same) {
       for (CornerId y : reverse) {
-        pairs.push_back({gluingAlignment(normalOf(x / 3), normalOf(y / 3)), x, y});
+        pairs.push_back({std::min(pieceFaces[x / 3], pieceFaces[y / 3]),
+                         gluingAlignment(normalOf(x / 3), normalOf(y / 3)), x, y});
       }
     }
     std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) {
+      if (p.smallerPiece != q.smallerPiece) return p.smallerPiece > q.smallerPiece;
       return p.alignment != q.alignment ? p.alignment > q.alignment : p.x != q.x ? p.x < q.x : p.y < q.y;
     });
     for (const Pair& pair : pairs) {
@@ -245,6 +270,31 @@ void pairNonManifoldEdges(const TriangleMesh& mesh, const detail::VertexCorners&
       opposite[pair.y] = pair.x;
     }
   }
+}
+
+/// Boundary vertices at exactly the position of another boundary vertex of another origin.
+std::uint64_t countUnweldedBoundaryVertices(const TriangleMesh& mesh, const Topology& topology,
+                                            const std::vector<VertexId>& vertexOrigin) {
+  struct Entry {
+    Vec3f p;
+    VertexId origin;
+  };
+  std::vector<Entry> boundary;
+  for (VertexId v = 0; v < mesh.numVertices(); ++v) {
+    if (topology.vertexCorner(v) != kInvalidId && topology.isBoundaryVertex(v)) {
+      boundary.push_back({mesh.positions[v], vertexOrigin[v]});
+    }
+  }
+  const auto key = [](const Entry& e) { return std::make_tuple(e.p.x(), e.p.y(), e.p.z(), e.origin); };
+  std::sort(boundary.begin(), boundary.end(), [&](const Entry& a, const Entry& b) { return key(a) < key(b); });
+  std::uint64_t count = 0;
+  for (std::size_t i = 0; i < boundary.size();) {
+    std::size_t j = i + 1;
+    while (j < boundary.size() && boundary[j].p == boundary[i].p) ++j;
+    if (boundary[j - 1].origin != boundary[i].origin) count += j - i;  // two origins at least
+    i = j;
+  }
+  return count;
 }
 
 /// Median of a small list (reorders it); 0 for an empty one.
@@ -550,6 +600,7 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   report.outputFaces = mesh.numFaces();
   result.mesh = std::move(mesh);
   result.topology = Topology::viewParts(result.mesh.triangles, std::move(opposite), std::move(vertexCorner));
+  report.unweldedBoundaryVertices = countUnweldedBoundaryVertices(result.mesh, result.topology, result.vertexOrigin);
   result.spikes = findSpikeVertices(result.mesh, result.topology);
   report.spikeVertices = result.spikes.size();
   report.diagonalWithoutSpikes = diagonalWithout(result.mesh, result.spikes);

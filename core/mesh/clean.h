@@ -34,6 +34,9 @@ struct CleanReport {
   std::uint64_t nonManifoldEdges = 0;      ///< edges split apart (> 2 faces, or orientation clash)
   std::uint64_t nonManifoldVertices = 0;   ///< vertices duplicated, one copy per extra fan
   std::uint64_t flippedFaces = 0;          ///< faces reoriented to agree with their component
+  /// Kept, counted: boundary vertices at exactly the position of another boundary vertex that
+  /// does not come from the same input vertex (a crack left unwelded; welding joins them).
+  std::uint64_t unweldedBoundaryVertices = 0;
   /// Kept, counted: vertices whose every edge is over kSpikeRatio times longer than the typical
   /// edge around their neighbours (an outlier pulled far out of the surface: needle faces).
   std::uint64_t spikeVertices = 0;
