@@ -72,6 +72,24 @@ void expectPoincareHopf(const Surface& s, const CrossField& field, const std::st
   }
 }
 
+// What a later cone pass restores: every matching, index and boundary index as computed, in
+// about a quarter of the matchings' bytes.
+TEST(Field, PackedSingularitiesUnpackToTheSame) {
+  const Surface s = makeSurface(testing::concatMeshes({testing::gridMesh(9, 7, 1.0), testing::torusMesh(20, 10)}));
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, randomField(s.mesh, 5));
+  ASSERT_GT(sing.cones.size(), 4u);
+  ASSERT_TRUE(std::any_of(sing.boundaryIndex4.begin(), sing.boundaryIndex4.end(), [](std::int32_t k) { return k != 0; }));
+  const PackedSingularities packed = packSingularities(sing);
+  EXPECT_LE(packed.matching.size(), sing.matching.size() / 4 + 1);
+  const FieldSingularities back = unpackSingularities(packed);
+  EXPECT_EQ(back.matching, sing.matching);
+  EXPECT_EQ(back.index4, sing.index4);
+  EXPECT_EQ(back.boundaryIndex4, sing.boundaryIndex4);
+  EXPECT_EQ(back.cones, sing.cones);
+  EXPECT_TRUE(PackedSingularities().empty());
+  EXPECT_FALSE(packed.empty());
+}
+
 TEST(Field, PoincareHopfOnGeneratedClosedMeshes) {
   GenerateOptions genus2;
   genus2.kind = MeshKind::Genus2;

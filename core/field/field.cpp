@@ -81,6 +81,37 @@ double transportAngle(CornerId c, CornerId o, const FaceAngles& from, const Face
 
 }  // namespace
 
+PackedSingularities packSingularities(const FieldSingularities& singularities) {
+  PackedSingularities packed;
+  packed.corners = singularities.matching.size();
+  packed.vertices = singularities.index4.size();
+  packed.boundaryVertices = singularities.boundaryIndex4.size();
+  packed.matching.assign((packed.corners + 3) / 4, 0);
+  for (std::size_t c = 0; c < packed.corners; ++c) {
+    packed.matching[c / 4] |= static_cast<std::uint8_t>((singularities.matching[c] & 3u) << (2 * (c % 4)));
+  }
+  for (VertexId v = 0; v < packed.vertices; ++v) {
+    if (singularities.index4[v] != 0) packed.index4.push_back({v, singularities.index4[v]});
+  }
+  for (VertexId v = 0; v < singularities.boundaryIndex4.size(); ++v) {
+    if (singularities.boundaryIndex4[v] != 0) packed.boundaryIndex4.push_back({v, singularities.boundaryIndex4[v]});
+  }
+  packed.cones = singularities.cones;
+  return packed;
+}
+
+FieldSingularities unpackSingularities(const PackedSingularities& packed) {
+  FieldSingularities s;
+  s.matching.resize(packed.corners);
+  for (std::size_t c = 0; c < packed.corners; ++c) s.matching[c] = (packed.matching[c / 4] >> (2 * (c % 4))) & 3u;
+  s.index4.assign(packed.vertices, 0);
+  for (const auto& [v, k] : packed.index4) s.index4[v] = k;
+  s.boundaryIndex4.assign(packed.boundaryVertices, 0);
+  for (const auto& [v, k] : packed.boundaryIndex4) s.boundaryIndex4[v] = k;
+  s.cones = packed.cones;
+  return s;
+}
+
 std::int64_t FieldSingularities::indexSum4() const {
   std::int64_t sum = 0;
   for (std::int32_t i : index4) sum += i;

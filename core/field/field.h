@@ -14,6 +14,7 @@
 ///   Boundary vertices get index 0 (the boundary is free); their turning relative to the
 ///   boundary is boundaryIndex4 (below).
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/mesh/mesh.h"
@@ -52,6 +53,19 @@ struct FieldSingularities {
   std::vector<std::int32_t> boundaryIndex4;
   std::int64_t indexSum4() const;      ///< sum of index4 (== 4 chi on closed meshes)
 };
+
+/// FieldSingularities in about 0.75 byte per face: matchings packed four to a byte, indices
+/// listed where they are not 0. What a later cone pass restores instead of recomputing them on
+/// the smoothed surface.
+struct PackedSingularities {
+  std::vector<std::uint8_t> matching;  ///< 2 bits per corner
+  std::size_t corners = 0, vertices = 0, boundaryVertices = 0;  ///< the unpacked vectors' sizes
+  std::vector<std::pair<VertexId, std::int32_t>> index4, boundaryIndex4;  ///< the nonzero entries
+  std::vector<VertexId> cones;
+  bool empty() const { return corners == 0; }
+};
+PackedSingularities packSingularities(const FieldSingularities& singularities);
+FieldSingularities unpackSingularities(const PackedSingularities& packed);
 
 /// Matchings, indices and cones of a field, on the surface of field.framePositions when set (the
 /// mesh's own otherwise). Linear, parallel. Zero-area faces are handled without NaN (their frame

@@ -51,9 +51,14 @@ std::optional<FieldSource> alignedFieldSource(const Topology& topology, const Fe
 ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, CrossField& field,
                         double mergeDistance,
                         const std::vector<std::pair<VertexId, VertexId>>& coincident,
-                        double coincidentDistance, const ProgressFn& progress) {
+                        double coincidentDistance, const ProgressFn& progress, PackedSingularities* reuse) {
   ConeCut result;
-  result.singularities = computeSingularitiesReleasingFrames(mesh, topology, field);
+  if (reuse && !reuse->empty()) {
+    result.singularities = unpackSingularities(*reuse);
+  } else {
+    result.singularities = computeSingularitiesReleasingFrames(mesh, topology, field);
+    if (reuse) *reuse = packSingularities(result.singularities);
+  }
   result.conesBeforeMerge = static_cast<std::uint32_t>(result.singularities.cones.size());
   ConeMergeOptions mergeOptions;
   mergeOptions.maxDistance = mergeDistance;
@@ -205,11 +210,16 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   const double mergeDistance = options.mergeCones * r.edgeLength;
   const double coincidentDistance = kCoincidentSearchFraction * r.edgeLength;
   std::vector<std::pair<VertexId, VertexId>> coincident;
+  // The field's singularities before merging, kept for a later pass (0.75 B per face) instead of
+  // recomputing them on the smoothed surface (a quarter of a pass at 22M faces); not above the
+  // memory budget (the field's directions on disk).
+  const bool keepSingularities = !options.directionStore && options.mergeCones > 0.0 && options.maxConePasses > 1;
+  PackedSingularities fieldSingularities;
   for (;;) {
     ++r.conePasses;
-    restoreFramePositions(r.mesh, r.topology, field);
+    if (fieldSingularities.empty()) restoreFramePositions(r.mesh, r.topology, field);
     ConeCut coneCut = cutThroughCones(r.mesh, r.topology, field, mergeDistance, coincident, coincidentDistance,
-                                      options.progress);
+                                      options.progress, keepSingularities ? &fieldSingularities : nullptr);
     // The cut released the smoothed surface: until the next pass's cones only the 3D-fold test of
     // a few flipped faces reads it, and recomputes it around them.
     if (r.conePasses == 1) r.conesBeforeMerge = coneCut.conesBeforeMerge;

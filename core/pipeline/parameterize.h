@@ -64,11 +64,14 @@ struct ConeCut {
 /// merges nothing), mergeCoincidentCones on `coincident` (pairs a previous solve put on one
 /// point, joined along paths up to coincidentDistance), then cutToDisk. The field's smoothed
 /// positions are released once read (computeSingularitiesReleasingFrames; restoreFramePositions
-/// brings them back).
+/// brings them back). With `reuse`: when it holds singularities they are taken instead of
+/// computed (the smoothed positions are not read), when empty it is given the computed ones
+/// (before merging).
 ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, CrossField& field,
                         double mergeDistance,
                         const std::vector<std::pair<VertexId, VertexId>>& coincident = {},
-                        double coincidentDistance = 0.0, const ProgressFn& progress = {});
+                        double coincidentDistance = 0.0, const ProgressFn& progress = {},
+                        PackedSingularities* reuse = nullptr);
 
 /// Somewhere the field's directions can wait while nothing reads them (a scratch file:
 /// stream/scratch_direction_store.h).
