@@ -361,6 +361,57 @@ TEST(Quads, TorusSphereGenus2Closed) {
   }
 }
 
+// A hole wider than a quad that one iso-line crosses, in a flat 6 x 4 map: its rim meets the
+// lines at two points only, so a quad mesh cannot keep it open (the faces on both sides would
+// share its one edge between those points, both of valence 2). It is closed like a small hole,
+// and the quad mesh is the plain 6 x 4 grid.
+TEST(Quads, AHoleOneIsoLineCrossesIsClosed) {
+  const TriangleMesh grid = testing::gridMesh(24, 16, 0.25);
+  TriangleMesh holed;
+  holed.positions = grid.positions;
+  std::vector<Vec2d> uv;
+  for (const Triangle& t : grid.triangles) {
+    const Vec3d c = (grid.position(t[0]) + grid.position(t[1]) + grid.position(t[2])) / 3.0;
+    if (c.x() > 2.25 && c.x() < 3.75 && c.y() > 1.25 && c.y() < 1.75) continue;  // 6 x 2 cells
+    holed.triangles.push_back(t);
+    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
+  }
+  ASSERT_EQ(holed.numFaces(), grid.numFaces() - 24);
+  holed.cornerUV = WedgeMap::fromCorners(holed.triangles, uv);
+  const Topology topology = Topology::build(holed.triangles, holed.numVertices());
+  const QuadRun run = extractCheckedQuads("holed grid", holed, topology, 1, {});
+  TriangleMesh plain = grid;
+  uv.clear();
+  for (const Triangle& t : grid.triangles) {
+    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
+  }
+  plain.cornerUV = WedgeMap::fromCorners(plain.triangles, uv);
+  const QuadRun reference = extractCheckedQuads("grid", plain, Topology::build(plain.triangles, plain.numVertices()), 1, {});
+  EXPECT_EQ(run.filledHoles, 1u);
+  EXPECT_TRUE(run.check.isValid());
+  EXPECT_EQ(run.check.irregularVertices, 0u);
+  EXPECT_EQ(run.check.boundaryLoops, 1u);
+  EXPECT_EQ(run.check.faces, reference.check.faces);
+  EXPECT_EQ(run.check.quads, reference.check.quads);
+  EXPECT_EQ(run.quads.mesh.numVertices(), reference.quads.mesh.numVertices());
+  // Wider than a quad both ways, it stays open: iso-lines end on its rim.
+  TriangleMesh wide;
+  wide.positions = grid.positions;
+  uv.clear();
+  for (const Triangle& t : grid.triangles) {
+    const Vec3d c = (grid.position(t[0]) + grid.position(t[1]) + grid.position(t[2])) / 3.0;
+    if (c.x() > 2.25 && c.x() < 3.75 && c.y() > 0.75 && c.y() < 2.25) continue;
+    wide.triangles.push_back(t);
+    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
+  }
+  wide.cornerUV = WedgeMap::fromCorners(wide.triangles, uv);
+  const Topology wideTopology = Topology::build(wide.triangles, wide.numVertices());
+  const QuadRun open = extractCheckedQuads("wide hole", wide, wideTopology, 1, {});
+  EXPECT_EQ(open.filledHoles, 0u);
+  EXPECT_TRUE(open.check.isValid());
+  EXPECT_EQ(open.check.boundaryLoops, 2u);
+}
+
 // A scan's missing triangles, much smaller than a quad: five faces away from the seams and three
 // with a seam edge taken out of a torus's map. Left open, iso-lines end on their boundaries; closed
 // for the extraction (across the seams through the fan), the quad mesh is the closed genus-1 one.

@@ -33,6 +33,25 @@ struct Hole {
   Vec2d centre = Vec2d::Zero();  // in the first corner's chart
 };
 
+/// Points where the lines u = k s or v = k s (s = span) meet the closed polygon `rim`: its
+/// vertices on a line (once each) and its edges' crossings between their ends.
+std::size_t rimGridPoints(const std::vector<Vec2d>& rim, double span) {
+  constexpr double kOnLine = 1e-6;
+  const auto onLine = [&](double x) { return std::abs(x / span - std::round(x / span)) < kOnLine; };
+  const auto crossings = [&](double a, double b) -> std::size_t {
+    const double lo = std::min(a, b) / span, hi = std::max(a, b) / span;
+    const double first = std::floor(lo + kOnLine) + 1.0, last = std::ceil(hi - kOnLine) - 1.0;
+    return last >= first ? static_cast<std::size_t>(last - first + 1.0) : 0;
+  };
+  std::size_t points = 0;
+  for (std::size_t k = 0; k < rim.size(); ++k) {
+    const Vec2d& a = rim[k];
+    const Vec2d& b = rim[(k + 1) % rim.size()];
+    points += (onLine(a.x()) || onLine(a.y())) + crossings(a.x(), b.x()) + crossings(a.y(), b.y());
+  }
+  return points;
+}
+
 }  // namespace
 
 std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology, std::int64_t scale,
@@ -112,7 +131,10 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
     hole.centre = Vec2d::Zero();
     for (const Vec2d& q : point) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q), hole.centre += q;
     hole.centre /= double(point.size());
-    if (!((hi - lo).maxCoeff() < span)) continue;
+    // Or a hole whose rim the iso-lines meet at two points or none, whatever its span (at most one
+    // line crosses it, so it is under two units one way and one the other): a quad mesh cannot
+    // leave it open (two points give one edge that the faces on both sides share).
+    if (!((hi - lo).maxCoeff() < span) && rimGridPoints(point, span) > 2) continue;
     if (!(componentExtent(cornerFace(start)).diagonal() > 4.0 * around.diagonal())) continue;
     // Every face of the fan must turn the way the map's faces do (a star-shaped hole in (u, v)).
     bool starShaped = true;

@@ -20,7 +20,7 @@ struct QuadRun {
 
 /// A copy of a map with its holes smaller than a quad closed: every boundary loop of at most 32
 /// edges around which the charts come back (no cone inside; seams may cross it) whose (u, v), read
-/// in one chart, span less than `scale` units each way,
+/// in one chart, span less than `scale` units each way or meet the iso-lines at two points or none,
 /// in a component more than four times its size across, and star-shaped around its mean (u, v)
 /// (no face of the fan flipped), gets a fan of triangles from a new vertex at its centroid (mean
 /// position and (u, v); in each fan face's own chart, so a seam crossing the loop continues
