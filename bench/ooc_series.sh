@@ -7,7 +7,10 @@
 # scan_L<k>_voxloc128.json, the solver every size above 300K faces runs).
 #
 #   bash bench/ooc_series.sh [--sizes "1000000 2000000 ..."] [--cache DIR] [--out DIR]
-#                            [--seamvox PATH] [--reporter PATH] [--budget SIZE]
+#                            [--seamvox PATH] [--reporter PATH] [--budget SIZE] [--noise A]
+#
+# --noise A: scan noise (`gen scan --noise A`, every vertex moved up to A mean edge lengths); the
+# inputs are then cached as scan_<faces>_noise<A>.ply.
 #
 # Inputs are cached (DIR/scan_<faces>.ply, about 19 bytes per face); each run's output map is
 # removed after the run (it is as large again). Peak = the report's peakResidentBytes (VmHWM) and
@@ -22,6 +25,7 @@ out=$here/ooc_series
 seamvox=$here/../build/seamvox
 reporter=$here/../build/bench/bench_scaling_report
 budget=""
+noise=""
 while (($#)); do
   case "$1" in
     --sizes) sizes=$2; shift 2 ;;
@@ -30,6 +34,7 @@ while (($#)); do
     --seamvox) seamvox=$2; shift 2 ;;
     --reporter) reporter=$2; shift 2 ;;
     --budget) budget=$2; shift 2 ;;
+    --noise) noise=$2; shift 2 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -39,11 +44,12 @@ mkdir -p "$cache" "$out/runs" || exit 1
 budget_args=()
 [ -n "$budget" ] && budget_args=(--memory-budget "$budget")
 for n in $sizes; do
-  input=$cache/scan_$n.ply
+  input=$cache/scan_$n${noise:+_noise$noise}.ply
   report=$out/runs/$n.json
   [ -f "$report" ] && { echo "$n: done before ($report)"; continue; }
   if [ ! -f "$input" ]; then
-    "$seamvox" gen scan --faces "$n" -o "$input" --quiet > /dev/null || { echo "$n: gen failed" >&2; exit 1; }
+    "$seamvox" gen scan --faces "$n" ${noise:+--noise "$noise"} -o "$input" --quiet > /dev/null ||
+      { echo "$n: gen failed" >&2; exit 1; }
   fi
   map=$cache/map_$n.ply
   log=$out/runs/$n.log
