@@ -170,6 +170,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("solverUsed").value(paramSolverName(r.solved.solver));
   j.key("solverReason").value(r.solved.solverReason);
   if (!r.solved.fallbackReason.empty()) j.key("fallbackReason").value(r.solved.fallbackReason);
+  if (!r.solved.voxelRetryReason.empty()) j.key("voxelRetryReason").value(r.solved.voxelRetryReason);
   j.key("field").value(c.fieldSource).key("fieldMethod").value(r.fieldMethod);
   j.key("faces").value(U64{r.size.faces});
   j.key("vertices").value(U64{r.size.vertices});

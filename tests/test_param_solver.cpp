@@ -66,6 +66,33 @@ TEST(ParamSolver, UnfactorableVoxelSystemFallsBackToTheHatSolver) {
   }
 }
 
+TEST(ParamSolver, AVoxelSystemThatFailsOnceIsBuiltAgainWithMoreSplinesJoined) {
+  // The first voxel attempt fails (injected), the second (negligible B-splines joined up to
+  // kRetryMinDomainWeight) factors: the map is the voxel solver's, seamless, the first failure
+  // reported; the field's directions are back before the second basis reads them.
+  const FieldTorus t;
+  for (ParamSolver chosen : {ParamSolver::Vox, ParamSolver::VoxLoc}) {
+    SCOPED_TRACE(paramSolverName(chosen));
+    SolverOptions solverOptions;
+    solverOptions.solver = chosen;
+    solverOptions.gridResolution = 16;
+    int attempts = 0, idle = 0, needed = 0;
+    solverOptions.beforeVoxelSolve = [&] {
+      if (attempts++ == 0) throw SolverError("CHOLMOD: not positive definite at column 7 (injected)");
+      EXPECT_EQ(idle, needed) << "the second basis reads the field";
+    };
+    solverOptions.fieldIdle = [&] { ++idle; };
+    solverOptions.fieldNeeded = [&] { needed = idle; };
+    const SolverResult result =
+        parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, t.options(), solverOptions);
+    EXPECT_EQ(attempts, 2);
+    EXPECT_EQ(result.solver, chosen);
+    EXPECT_TRUE(result.fallbackReason.empty()) << result.fallbackReason;
+    EXPECT_NE(result.voxelRetryReason.find("(injected)"), std::string::npos) << result.voxelRetryReason;
+    EXPECT_TRUE(measureSeams(t.s.mesh, t.s.topology, t.cut, result.param.cornerUV).isSeamless(1e-6));
+  }
+}
+
 TEST(ParamSolver, OtherErrorsOfTheVoxelSolveAreNotSwallowed) {
   const FieldTorus t;
   SolverOptions solverOptions;

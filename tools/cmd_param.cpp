@@ -149,6 +149,11 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
     std::printf("WARNING: the %s system could not be factored (%s); the hat solver ran instead\n",
                 c.solverName.c_str(), r.solved.fallbackReason.c_str());
   }
+  if (!r.solved.voxelRetryReason.empty()) {
+    std::printf("the first voxel system could not be factored (%s); solved with the B-splines that barely touch "
+                "the surface (weight below %g) joined to a neighbour\n",
+                r.solved.voxelRetryReason.c_str(), kRetryMinDomainWeight);
+  }
   std::printf("solver %s: %s\n", paramSolverName(r.solved.solver), r.solved.solverReason.c_str());
   const auto& stages = meter.stages();
   std::printf("time %.2f s (field %.2f, cut %.2f, solve %.2f)\n", meter.totalSeconds(),

@@ -198,7 +198,8 @@ VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topol
 
 VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology& topology,
                                        const CrossField& field, const CutResult& cut,
-                                       const ParamOptions& options, std::int32_t gridResolution) {
+                                       const ParamOptions& options, std::int32_t gridResolution,
+                                       double minDomainWeight) {
   VoxelParamResult out;
   ParamResult& param = out.param;
   auto start = std::chrono::steady_clock::now();
@@ -209,6 +210,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   basisOptions.gridResolution = gridResolution;
   basisOptions.edgeLength = options.edgeLength;
   basisOptions.progress = options.progress;
+  if (minDomainWeight >= 0.0) basisOptions.minDomainWeight = minDomainWeight;
   start = std::chrono::steady_clock::now();
   VoxelBuildResult built = buildVoxelBasis(mesh, topology, field, cut, basisOptions);
   VoxelBasis& basis = *built.basis;

@@ -80,10 +80,10 @@ struct VoxelParamResult {
 constexpr double kMaxVoxelRegularization = 1e-3;
 /// The Vox solver. When CHOLMOD finds the system indefinite, it re-assembles and refactors with a
 /// 100x stronger regularization (up to kMaxVoxelRegularization; the basis is built once) before
-/// giving up with the last SolverError.
+/// giving up with the last SolverError. minDomainWeight: VoxelBasisOptions's (< 0: its default).
 VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology& topology,
                                        const CrossField& field, const CutResult& cut,
                                        const ParamOptions& options,
-                                       std::int32_t gridResolution = 128);
+                                       std::int32_t gridResolution = 128, double minDomainWeight = -1.0);
 
 }  // namespace seamvox

@@ -58,6 +58,12 @@ void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, con
 std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution,
                                      bool fieldOnDisk = false);
 
+/// VoxelBasisOptions::minDomainWeight of the voxel solver's second attempt, when the first could
+/// not factor its system even at kMaxVoxelRegularization: on a noisy 50M-face scan B-splines that
+/// barely touch the surface (diagonal entries down to 1e-17 against a median 0.17) were nearly
+/// dependent, which a stronger normal regularization does not change.
+constexpr double kRetryMinDomainWeight = 1e-6;
+
 /// Default voxels per axis of the voxel basis's grid (vox, voxloc).
 constexpr std::int32_t kDefaultGridResolution = 128;
 
@@ -70,8 +76,8 @@ struct SolverOptions {
   /// built), then "solve" (the hat or voxel solve, with the fallback if any) and, for voxloc,
   /// "refine".
   StageMeter* meter = nullptr;
-  /// Test hook, run just before the voxel solve: a SolverError it throws takes the path of a
-  /// voxel system that cannot be factored (the hat fallback).
+  /// Test hook, run just before each voxel solve (the first, and the second with more B-splines
+  /// joined): a SolverError it throws takes the path of a voxel system that cannot be factored.
   std::function<void()> beforeVoxelSolve;
   /// vox, voxloc: fieldIdle runs once the voxel basis is built, after which nothing reads the
   /// field's directions until fieldNeeded runs (before the refinement, or the hat fallback): a
@@ -95,6 +101,10 @@ struct SolverResult {
   /// Set when the voxel system could not be factored and the hat solver ran instead (solver is
   /// then Hat): CHOLMOD's message. Reported, never silent.
   std::string fallbackReason;
+  /// Set when the first voxel system could not be factored and the second, built with the
+  /// B-splines of weight below kRetryMinDomainWeight joined to a neighbour, could: the first's
+  /// message. Reported.
+  std::string voxelRetryReason;
 };
 
 /// Runs the chosen solver (Auto resolved by chooseParamSolver) on a mesh cut to a disk per
