@@ -21,6 +21,8 @@ void writeSystem(JsonWriter& j, const PipelineResult& r) {
   j.key("translational").value(U64{st.translational});
   j.key("conePositions").value(U64{st.determinedPositions});
   j.key("translationConstraints").value(U64{p.translationConstraints});
+  j.key("smallHoles").value(U64{p.smallHoles});
+  j.key("smallHolesRotated").value(U64{p.smallHolesRotated});
   j.key("nonUnitConstraints").value(U64{st.nonUnitConstraints});
   j.key("pinnedFirstSolve").value(U64{st.pinnedFirst});
   j.key("pinnedSecondSolve").value(U64{st.pinnedSecond});

@@ -81,6 +81,47 @@ TEST(Topology, CylinderHasTwoBoundaryLoops) {
   EXPECT_EQ(c.genus, 0);
 }
 
+// Walking a loop by nextBoundaryCorner: each boundary edge once, consecutive edges share their
+// vertex, and the interior edges crossed are those at the loop's vertices (grid n x m: every
+// interior edge with one end on the boundary, each crossed once).
+TEST(Topology, NextBoundaryCornerWalksEachLoopOnce) {
+  const int n = 5, m = 4;
+  const Topology t = buildOf(gridMesh(n, m));
+  CornerId start = kInvalidId;
+  std::uint32_t boundaryEdges = 0;
+  for (CornerId c = 0; c < t.numCorners(); ++c) {
+    if (!t.isBoundaryEdge(c)) continue;
+    ++boundaryEdges;
+    if (start == kInvalidId) start = c;
+  }
+  ASSERT_NE(start, kInvalidId);
+  std::vector<CornerId> crossed;
+  std::uint32_t steps = 0;
+  CornerId c = start;
+  do {
+    const CornerId next = nextBoundaryCorner(t, c, &crossed);
+    ASSERT_TRUE(t.isBoundaryEdge(next));
+    EXPECT_EQ(t.vertex(prevCorner(c)), t.vertex(nextCorner(next)));  // the edges chain head to tail
+    c = next;
+    ASSERT_LE(++steps, boundaryEdges);
+  } while (c != start);
+  EXPECT_EQ(steps, boundaryEdges);
+  EXPECT_EQ(boundaryEdges, 2u * (n + m));
+  std::uint32_t interiorAtBoundary = 0;  // interior edges with at least one boundary end
+  for (CornerId e = 0; e < t.numCorners(); ++e) {
+    if (t.isBoundaryEdge(e) || t.opposite(e) < e) continue;
+    if (t.isBoundaryVertex(t.vertex(nextCorner(e))) || t.isBoundaryVertex(t.vertex(prevCorner(e)))) ++interiorAtBoundary;
+  }
+  for (CornerId e : crossed) EXPECT_FALSE(t.isBoundaryEdge(e));
+  // An edge with both ends on the boundary is crossed from each end.
+  std::uint32_t bothEnds = 0;
+  for (CornerId e = 0; e < t.numCorners(); ++e) {
+    if (t.isBoundaryEdge(e) || t.opposite(e) < e) continue;
+    if (t.isBoundaryVertex(t.vertex(nextCorner(e))) && t.isBoundaryVertex(t.vertex(prevCorner(e)))) ++bothEnds;
+  }
+  EXPECT_EQ(crossed.size(), interiorAtBoundary + bothEnds);
+}
+
 TEST(Topology, ComponentsAreSortedBySize) {
   const TriangleMesh mesh = concatMeshes({gridMesh(2, 2), torusMesh(10, 6), icosphereMesh(1)});
   const Topology t = buildOf(mesh);

@@ -258,8 +258,13 @@ void eliminateTranslations(std::uint32_t ns, const ReduceOptions& options,
                            std::vector<std::pair<std::uint32_t, GaussVector>> ownConstraints,
                            Reduction& out) {
   LatticeEliminator lattice(ns);
+  const auto addExtra = [&] {
+    if (!options.extraConstraints) return;
+    for (const GaussVector& row : *options.extraConstraints) lattice.addConstraint(row);
+  };
   if (options.translationConstraints) {
     for (const GaussVector& row : *options.translationConstraints) lattice.addConstraint(row);
+    addExtra();
     for (const auto& [b, row] : ownConstraints) {
       if (!lattice.express(row).empty()) out.inconsistentBasis.push_back(b);
     }
@@ -269,6 +274,7 @@ void eliminateTranslations(std::uint32_t ns, const ReduceOptions& options,
         out.inconsistentBasis.end());
   } else {
     for (const auto& [b, row] : ownConstraints) lattice.addConstraint(row);
+    addExtra();
   }
   for (auto& entry : ownConstraints) out.cycleConstraints.push_back(std::move(entry.second));
   lattice.finish();

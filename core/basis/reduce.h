@@ -19,6 +19,9 @@ struct ReduceOptions {
   /// constraints (DESIGN section 7: the voxel basis takes the hat basis' set). The basis' own
   /// cycles are then checked against them; violating basis functions are marked inconsistent.
   const std::vector<GaussVector>* translationConstraints = nullptr;
+  /// Further constraints on t kept in either case, e.g. the loops of small holes
+  /// (smallHoleConstraints, hole_loops.h); the basis' own cycles are checked against them too.
+  const std::vector<GaussVector>* extraConstraints = nullptr;
   /// #basis functions or null: a flagged function whose c_0 its seams determine (a cone) is put on
   /// a Gaussian integer, an integer point of the map, through one more translational unknown
   /// (alpha g = beta . t with g in Z[i]): feature curves meeting at a cone stay on integer lines.

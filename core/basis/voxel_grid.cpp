@@ -11,6 +11,7 @@
 #include "core/system/errors.h"
 #include "core/system/memory.h"
 #include "core/solve/evaluate.h"
+#include "core/solve/hat_solver.h"
 #include "core/basis/reduce.h"
 #include "core/solve/assemble.h"
 #include "core/solve/seamless_solve.h"
@@ -224,6 +225,8 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   start = std::chrono::steady_clock::now();
   ReduceOptions reduceOptions;
   reduceOptions.translationConstraints = &constraints;
+  const std::vector<GaussVector> holes = closeSmallHoles(mesh, topology, cut, options, param);
+  reduceOptions.extraConstraints = &holes;
   reduceOptions.progress = options.progress;
   const Reduction reduction = reduceBasis(basis, reduceOptions);
   param.translationConstraints = static_cast<std::uint32_t>(constraints.size());

@@ -271,6 +271,16 @@ Topology& Topology::operator=(const Topology& other) {
   return *this;
 }
 
+CornerId nextBoundaryCorner(const Topology& topology, CornerId c, std::vector<CornerId>* crossed) {
+  CornerId around = prevCorner(c);  // at vertex(prev c) in the current face
+  while (!topology.isBoundaryEdge(prevCorner(around))) {
+    const CornerId edge = prevCorner(around);
+    if (crossed) crossed->push_back(edge);
+    around = prevCorner(topology.opposite(edge));
+  }
+  return prevCorner(around);
+}
+
 bool Topology::isBoundaryVertex(VertexId v) const {
   const CornerId c = vertexCorner_[v];
   return c != kInvalidId && cw(c) == kInvalidId;

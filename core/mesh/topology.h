@@ -114,6 +114,11 @@ class Topology {
   std::vector<CornerId> vertexCorner_;  // #V
 };
 
+/// The boundary corner after boundary corner c along its loop (c's edge runs vertex(next c) ->
+/// vertex(prev c) with the face on the left): turns clockwise around vertex(prev c), appending
+/// the corner of every interior edge it crosses (in the face it leaves) to crossed when given.
+CornerId nextBoundaryCorner(const Topology& topology, CornerId c, std::vector<CornerId>* crossed = nullptr);
+
 /// Connected components (through shared edges) with their topological figures.
 struct ComponentInfo {
   std::uint32_t faces = 0;

@@ -188,6 +188,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   if (r.featureFieldAligned) param.featureCorners = &featureCorners;
   FeatureSet held = r.features;  // the curves the solve holds on iso-lines
   param.edgeLength = r.edgeLength;
+  param.closeHolesWithin = options.closeHoles * r.edgeLength;
   param.greedyRounding = options.greedyRounding;
   param.coneWeightRadius = options.coneWeightRadius;
   param.progress = options.progress;

@@ -84,6 +84,10 @@ class DirectionStore {
   virtual void load(std::vector<Vec3f>& directions) = 0;
 };
 
+/// PipelineOptions::closeHoles: one-triangle holes of coarse scans span up to about 2 spacings
+/// (the shared meshes' "split" damage, bench/RESULTS.md).
+constexpr double kCloseHoleCells = 2.0;
+
 struct PipelineOptions {
   CleanOptions clean;  ///< weld, tolerance (progress is set from below)
   FieldSource field;
@@ -91,6 +95,10 @@ struct PipelineOptions {
   /// Cones closer than this many grid spacings are merged (kConeMergeFraction); 0 keeps them all
   /// and runs a single cone pass.
   double mergeCones = kConeMergeFraction;
+  /// Holes whose boundary fits in a box of this many grid spacings (diagonal) carry no seam
+  /// translation: the map extends over them and a quad mesh can close them (ParamOptions::
+  /// closeHolesWithin). Larger holes (a scan's missing base) keep theirs; 0: none closed.
+  double closeHoles = kCloseHoleCells;
   /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
   std::uint32_t maxConePasses = 3;
   /// Feature curves at faces the map collapses are released and the map solved again: the

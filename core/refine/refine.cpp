@@ -16,6 +16,7 @@
 #include "core/system/errors.h"
 #include "core/solve/evaluate.h"
 #include "core/basis/gaussian_int.h"
+#include "core/basis/hole_loops.h"
 #include "core/quality/metrics.h"
 #include "core/basis/reduce.h"
 #include "core/solve/assemble.h"
@@ -460,18 +461,43 @@ struct RegionProblem {
   }
 };
 
+/// Region vertices on a boundary loop of the region that has a locked vertex: a hole of the
+/// mesh the region holds only in part lies on such a loop, and a seam at it keeps its t (the
+/// hole's translation, ParamOptions::closeHolesWithin, is not a constraint of the region).
+std::vector<std::uint8_t> verticesOnLockedLoops(const RegionProblem& p) {
+  const Topology& topology = p.region.topology;
+  std::vector<std::uint8_t> onLoop(topology.numVertices(), 0), seen(topology.numCorners(), 0);
+  std::vector<CornerId> loop;
+  for (CornerId start = 0; start < topology.numCorners(); ++start) {
+    if (!topology.isBoundaryEdge(start) || seen[start]) continue;
+    loop.clear();
+    bool locked = false;
+    for (CornerId c = start; loop.empty() || c != start; c = nextBoundaryCorner(topology, c)) {
+      seen[c] = 1;
+      loop.push_back(c);
+      locked = locked || p.isLockedVertex(topology.vertex(prevCorner(c)));
+    }
+    if (!locked) continue;
+    for (CornerId c : loop) onLoop[topology.vertex(prevCorner(c))] = 1;
+  }
+  return onLoop;
+}
+
 /// Translations: a seam touching a locked vertex keeps the input's t (the locked values on its
-/// two sides obey it). The other seams lie among free vertices only (e.g. between a cone and a
-/// seam node): the input map says little about their t (the Vox solve barely sees them), so
-/// t = seamT + U s is solved, rounded and solved again, where U spans the Gaussian-integer
-/// solutions of the cycle constraints restricted to these seams (seamT obeys the constraints,
-/// so every t of this form does too). Returns 1 for the free seams.
+/// two sides obey it), as does a seam at a hole the region holds in part. The other seams lie
+/// among free vertices only (e.g. between a cone and a seam node): the input map says little
+/// about their t (the Vox solve barely sees them), so t = seamT + U s is solved, rounded and
+/// solved again, where U spans the Gaussian-integer solutions of the cycle constraints (and of
+/// the small holes the region holds whole) restricted to these seams (seamT obeys the
+/// constraints, so every t of this form does too). Returns 1 for the free seams.
 std::vector<std::uint8_t> findFreeSeams(const RegionProblem& p) {
   std::vector<std::uint8_t> freeSeam(p.ns, 1);
+  const std::vector<std::uint8_t> onLockedLoop = verticesOnLockedLoops(p);
+  const auto keepsT = [&](VertexId v) { return p.isLockedVertex(v) || onLockedLoop[v]; };
   for (std::uint32_t j = 0; j < p.ns; ++j) {
     for (CornerId c : p.region.cut.seams[j].corners) {
       const Triangle& t = p.region.mesh.triangles[c / 3];
-      if (p.isLockedVertex(t[(c + 1) % 3]) || p.isLockedVertex(t[(c + 2) % 3])) freeSeam[j] = 0;
+      if (keepsT(t[(c + 1) % 3]) || keepsT(t[(c + 2) % 3])) freeSeam[j] = 0;
     }
   }
   return freeSeam;
@@ -520,9 +546,15 @@ struct FreeTranslations {
   explicit FreeTranslations(std::uint32_t ns) : lattice(ns) {}
 };
 
-FreeTranslations findFreeTranslations(const RegionProblem& p, const std::vector<std::uint8_t>& freeSeam) {
+FreeTranslations findFreeTranslations(const RegionProblem& p, const std::vector<std::uint8_t>& freeSeam,
+                                      double edgeLength) {
   FreeTranslations ft(p.ns);
-  for (const GaussVector& row : p.reduction.cycleConstraints) {
+  // The holes the region holds whole stay closed as the global solve left them
+  // (ParamOptions::closeHolesWithin).
+  std::vector<GaussVector> rows =
+      smallHoleConstraints(p.region.mesh, p.region.topology, p.region.cut, edgeLength, &p.region.vertexFree).rows;
+  rows.insert(rows.begin(), p.reduction.cycleConstraints.begin(), p.reduction.cycleConstraints.end());
+  for (const GaussVector& row : rows) {
     GaussVector restricted;
     for (const auto& entry : row) {
       if (freeSeam[entry.first]) restricted.push_back(entry);
@@ -735,7 +767,7 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
   const std::vector<std::uint8_t> freeSeam =
       keepTranslations ? std::vector<std::uint8_t>(ns, 0) : findFreeSeams(problem);
   RegionComponents components = findRegionComponents(problem, freeSeam);
-  const FreeTranslations translations = findFreeTranslations(problem, freeSeam);
+  const FreeTranslations translations = findFreeTranslations(problem, freeSeam, edgeLength);
   const std::vector<Complex> fixedPart = fixedTranslationPart(problem, seamT);
   RefineStats local;
   std::vector<std::uint8_t> pinned;

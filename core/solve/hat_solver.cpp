@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/basis/basis.h"
+#include "core/basis/hole_loops.h"
 #include "core/solve/evaluate.h"
 #include "core/basis/reduce.h"
 #include "core/system/stopwatch.h"
@@ -33,6 +34,8 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
     integerPoints = conesOnFeatures(topology, cut, basis, *options.featureCorners);
     reduceOptions.integerPoints = &integerPoints;
   }
+  const std::vector<GaussVector> holes = closeSmallHoles(mesh, topology, cut, options, out);
+  reduceOptions.extraConstraints = &holes;
   const Reduction reduction = reduceBasis(basis, reduceOptions);
   out.translationConstraints = static_cast<std::uint32_t>(reduction.cycleConstraints.size());
   out.secondsReduce = secondsSince(start);
@@ -129,6 +132,16 @@ void storeSeamlessSolution(const Basis& basis, const Reduction& reduction, Seaml
   out.cornerUV = buildCutWedges(topology, cut);
   evaluateMap(basis, reduction, solution.unknowns, out.cornerUV);
   out.secondsEvaluate = secondsSince(start);
+}
+
+std::vector<GaussVector> closeSmallHoles(const TriangleMesh& mesh, const Topology& topology,
+                                         const CutResult& cut, const ParamOptions& options,
+                                         ParamResult& out) {
+  if (options.closeHolesWithin <= 0.0) return {};
+  HoleLoopConstraints holes = smallHoleConstraints(mesh, topology, cut, options.closeHolesWithin);
+  out.smallHoles = holes.smallLoops;
+  out.smallHolesRotated = holes.rotatedLoops;
+  return std::move(holes.rows);
 }
 
 std::vector<GaussVector> seamCycleConstraints(const TriangleMesh& mesh, const Topology& topology,

@@ -28,6 +28,9 @@ struct ParamOptions {
   /// When set: corners on either side of feature edges (featureSideCorners, features.h) whose
   /// normal coordinate the map holds on an integer (featureLineConstraints).
   const std::vector<CornerId>* featureCorners = nullptr;
+  /// Boundary loops within this extent (mesh units; 0: none) carry no seam translation, so the
+  /// map extends over the hole (smallHoleConstraints, hole_loops.h). The pipeline passes h.
+  double closeHolesWithin = 0.0;
 };
 
 struct ParamResult {
@@ -36,6 +39,9 @@ struct ParamResult {
   SeamlessStats stats;
   std::uint32_t basisFunctions = 0, domains = 0, seamAdjacencies = 0;
   std::uint32_t translationConstraints = 0;  ///< cycle constraints found
+  /// Boundary loops within ParamOptions::closeHolesWithin, and of them those closed (no net
+  /// translation: the constraint held or was added) and those left open by a net rotation.
+  std::uint32_t smallHoles = 0, smallHolesRotated = 0;
   /// Faces (sorted) of the components the solve left unsolved (mapped to the point 0) and of
   /// those it anchored through a translation (SeamlessSolution).
   std::vector<FaceId> unsolvedFaces, anchoredFaces;
@@ -71,6 +77,12 @@ std::vector<std::uint8_t> conesOnFeatures(const Topology& topology, const CutRes
 /// once per wedge of the cut (timed as secondsEvaluate). Shared by the hat and voxel solvers.
 void storeSeamlessSolution(const Basis& basis, const Reduction& reduction, SeamlessSolution solution,
                            const Topology& topology, const CutResult& cut, ParamResult& out);
+
+/// The small-hole constraints of ParamOptions::closeHolesWithin (empty when 0), their counts
+/// stored in out.
+std::vector<GaussVector> closeSmallHoles(const TriangleMesh& mesh, const Topology& topology,
+                                         const CutResult& cut, const ParamOptions& options,
+                                         ParamResult& out);
 
 /// The translation constraints of the hat basis (Reduction::cycleConstraints, DESIGN section 7)
 /// from a hat basis built only on the faces around seam vertices: cycles of seam crossings only
