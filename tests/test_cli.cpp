@@ -120,6 +120,30 @@ TEST(Cli, ParamPutsAScatteredInputInSpatialOrderUnlessToldToKeepIt) {
   }
 }
 
+// Small holes are closed (no seam translation around them) for a quad mesh, not for a plain map,
+// and --close-holes says otherwise either way.
+TEST(Cli, ParamClosesSmallHolesForQuads) {
+  TempDir dir;
+  const std::string input = dir.path("holes.ply");
+  writeMesh(input, testing::withOneTriangleHoles(testing::generatedMesh(MeshKind::Sphere, 6000), 37));
+  for (const auto& [flags, closed] : {std::pair<std::string, bool>{"", false}, {" --quads " + dir.path("q.obj"), true},
+                                      {" --quads " + dir.path("q.obj") + " --close-holes 0", false},
+                                      {" --close-holes 2", true}}) {
+    SCOPED_TRACE(flags);
+    const std::string report = dir.path("r.json");
+    const std::string out = run("param " + input + " -o " + dir.path("o.ply") + " --cells 25 --solver hat --quiet --report " +
+                                    report + flags, 0);
+    EXPECT_TRUE(contains(out, ": seamless")) << out;
+    const Json r = parseJson(testing::readFile(report));
+    if (closed) {
+      EXPECT_GE(r.numberAt("system.smallHoles"), 100.0);
+    } else {
+      EXPECT_EQ(r.numberAt("system.smallHoles"), 0.0);
+    }
+  }
+  run("param " + input + " -o " + dir.path("o.ply") + " --close-holes -1", 2);
+}
+
 TEST(Cli, GenIsByteIdenticalForTheSameSeed) {
   TempDir dir;
   run("gen scan --faces 30000 --seed 9 -o " + dir.path("a.ply"), 0);

@@ -157,6 +157,22 @@ CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed) {
   return projectToTangent(mesh, std::move(v));
 }
 
+TriangleMesh withOneTriangleHoles(TriangleMesh mesh, std::uint32_t every) {
+  std::vector<Triangle> kept;
+  std::vector<std::uint8_t> touched(mesh.numVertices(), 0);
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    const bool remove = f % every == every / 2 && !touched[t[0]] && !touched[t[1]] && !touched[t[2]];
+    if (remove) {
+      for (VertexId v : t) touched[v] = 1;
+    } else {
+      kept.push_back(t);
+    }
+  }
+  mesh.triangles = std::move(kept);
+  return mesh;
+}
+
 TriangleMesh shuffledMesh(const TriangleMesh& mesh, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::vector<VertexId> vertexPerm(mesh.numVertices());

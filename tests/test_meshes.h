@@ -24,6 +24,9 @@ TriangleMesh generatedMesh(MeshKind kind, std::uint64_t faces);
 TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts);
 /// The same surface with its vertices and faces in a random order (seeded).
 TriangleMesh shuffledMesh(const TriangleMesh& mesh, std::uint32_t seed);
+/// The mesh with one face in every `every` removed where none of its vertices touches a removed
+/// face: separate one-triangle holes, as a scan's missing triangles.
+TriangleMesh withOneTriangleHoles(TriangleMesh mesh, std::uint32_t every);
 
 /// A mesh with its corner table (the table views mesh.triangles, whose buffer moves with it).
 struct Surface {

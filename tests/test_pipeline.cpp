@@ -443,23 +443,6 @@ std::vector<LoopHolonomy> holeHolonomies(const PipelineResult& r, double maxExte
   return out;
 }
 
-TriangleMesh sphereWithOneTriangleHoles(std::uint64_t faces, std::uint32_t every) {
-  TriangleMesh mesh = sphere(faces);
-  std::vector<Triangle> kept;
-  std::vector<std::uint8_t> touched(mesh.numVertices(), 0);
-  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
-    const Triangle& t = mesh.triangles[f];
-    const bool remove = f % every == every / 2 && !touched[t[0]] && !touched[t[1]] && !touched[t[2]];
-    if (remove) {
-      for (VertexId v : t) touched[v] = 1;
-    } else {
-      kept.push_back(t);
-    }
-  }
-  mesh.triangles = std::move(kept);
-  return mesh;
-}
-
 // A hole smaller than a few grid cells carries no seam translation in the written map (it can be
 // closed by a quad mesh); without closeHoles the rounding leaves some of them a translation.
 TEST(Pipeline, SmallHolesCarryNoTranslationInTheWrittenMap) {
@@ -471,7 +454,7 @@ TEST(Pipeline, SmallHolesCarryNoTranslationInTheWrittenMap) {
     options.solver.gridResolution = 32;
     options.spacing.cells = 25;
     options.closeHoles = cells;
-    const PipelineResult r = parameterize(sphereWithOneTriangleHoles(6000, 37), options);
+    const PipelineResult r = parameterize(testing::withOneTriangleHoles(sphere(6000), 37), options);
     ASSERT_TRUE(r.isSeamless());
     const std::vector<LoopHolonomy> holes = holeHolonomies(r, kCloseHoleCells * r.edgeLength);
     ASSERT_GE(holes.size(), 100u);

@@ -63,6 +63,9 @@ ParamCommand parseParamArgs(Args& args) {
   c.reportPath = args.value("report");
   c.renderPath = args.value("render");
   c.quadsPath = args.value("quads");
+  // A quad mesh can close only holes without a translation; a plain map keeps the lower
+  // distortion that translations at tiny holes allow (bench/RESULTS.md, session 17).
+  o.closeHoles = args.number("close-holes", c.quadsPath ? kCloseHoleCells : 0.0, 0.0, 1000.0);
   o.progress = makeProgress(args.flag("quiet"));
   c.memory = parseMemoryOptions(args);
   args.finish(1);
@@ -277,7 +280,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--no-untangle] [--weld] [--keep-order] [--report R.json]\n"
                  "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
-                 "                     [--quads Q.obj|.ply] [--align-boundary] [--feature-angle DEG]\n"
+                 "                     [--quads Q.obj|.ply] [--close-holes C] [--align-boundary]\n"
+                 "                     [--feature-angle DEG]\n"
                  "\n"
                  "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
@@ -327,6 +331,10 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      default view of seamvox render)\n"
                  "  --quads Q.obj|.ply  also write the map's quad mesh (seamvox quads) and print its\n"
                  "                      validation\n"
+                 "  --close-holes C     holes whose boundary fits in a box of C * H carry no seam\n"
+                 "                      translation, so the map extends over them and a quad mesh\n"
+                 "                      can close them (default 2 with --quads, else 0: translations\n"
+                 "                      at tiny holes let the map follow the field more closely)\n"
                  "  --quiet             no progress on stderr\n"
                  SEAMVOX_MEMORY_HELP
                  "                        param runs in memory only: a mesh whose estimated peak\n"

@@ -84,8 +84,8 @@ class DirectionStore {
   virtual void load(std::vector<Vec3f>& directions) = 0;
 };
 
-/// PipelineOptions::closeHoles: one-triangle holes of coarse scans span up to about 2 spacings
-/// (the shared meshes' "split" damage, bench/RESULTS.md).
+/// PipelineOptions::closeHoles for a quad mesh: one-triangle holes of coarse scans span up to
+/// about 2 spacings (the shared meshes' "split" damage, bench/RESULTS.md).
 constexpr double kCloseHoleCells = 2.0;
 
 struct PipelineOptions {
@@ -97,8 +97,9 @@ struct PipelineOptions {
   double mergeCones = kConeMergeFraction;
   /// Holes whose boundary fits in a box of this many grid spacings (diagonal) carry no seam
   /// translation: the map extends over them and a quad mesh can close them (ParamOptions::
-  /// closeHolesWithin). Larger holes (a scan's missing base) keep theirs; 0: none closed.
-  double closeHoles = kCloseHoleCells;
+  /// closeHolesWithin; kCloseHoleCells for quads). 0: none closed, the default: the field turns
+  /// freely at holes, and translations there let the map follow it more closely.
+  double closeHoles = 0.0;
   /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
   std::uint32_t maxConePasses = 3;
   /// Feature curves at faces the map collapses are released and the map solved again: the
