@@ -361,6 +361,40 @@ TEST(Quads, TorusSphereGenus2Closed) {
   }
 }
 
+// A small hole that is not star-shaped around its centre (a U of five cells inside one unit of a
+// flat map) is closed by its own points, triangulated, instead of a fan: the quad mesh is the
+// plain grid's.
+TEST(Quads, AHoleNotStarShapedIsClosedByEars) {
+  const double cell = 0.125;
+  const TriangleMesh grid = testing::gridMesh(48, 32, cell);
+  TriangleMesh holed;
+  holed.positions = grid.positions;
+  std::vector<Vec2d> uv;
+  for (const Triangle& t : grid.triangles) {
+    const Vec3d c = (grid.position(t[0]) + grid.position(t[1]) + grid.position(t[2])) / 3.0;
+    const int i = static_cast<int>(std::floor(c.x() / cell)), j = static_cast<int>(std::floor(c.y() / cell));
+    if ((j == 9 && i >= 17 && i <= 19) || (j == 10 && (i == 17 || i == 19))) continue;
+    holed.triangles.push_back(t);
+    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
+  }
+  ASSERT_EQ(holed.numFaces(), grid.numFaces() - 10);
+  holed.cornerUV = WedgeMap::fromCorners(holed.triangles, uv);
+  const QuadRun run = extractCheckedQuads("U hole", holed, Topology::build(holed.triangles, holed.numVertices()), 1, {});
+  TriangleMesh plain = grid;
+  uv.clear();
+  for (const Triangle& t : grid.triangles) {
+    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
+  }
+  plain.cornerUV = WedgeMap::fromCorners(plain.triangles, uv);
+  const QuadRun reference = extractCheckedQuads("grid", plain, Topology::build(plain.triangles, plain.numVertices()), 1, {});
+  EXPECT_EQ(run.filledHoles, 1u);
+  EXPECT_TRUE(run.check.isValid());
+  EXPECT_EQ(run.check.irregularVertices, 0u);
+  EXPECT_EQ(run.check.boundaryLoops, 1u);
+  EXPECT_EQ(run.check.faces, reference.check.faces);
+  EXPECT_EQ(run.quads.mesh.numVertices(), reference.quads.mesh.numVertices());
+}
+
 // A hole wider than a quad that one iso-line crosses, in a flat 6 x 4 map: its rim meets the
 // lines at two points only, so a quad mesh cannot keep it open (the faces on both sides would
 // share its one edge between those points, both of valence 2). It is closed like a small hole,

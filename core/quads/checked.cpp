@@ -1,6 +1,7 @@
 #include "core/quads/checked.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/system/errors.h"
@@ -31,7 +32,46 @@ struct Hole {
   std::vector<CornerId> corners;
   std::vector<Rigid> chart;
   Vec2d centre = Vec2d::Zero();  // in the first corner's chart
+  /// Empty: a fan from the centre. Else triangles over the loop's points (indices into corners,
+  /// counter-clockwise in the first chart), for a loop not star-shaped around its centre.
+  std::vector<std::array<std::uint32_t, 3>> ears;
 };
+
+double cross2(const Vec2d& a, const Vec2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// Ear clipping of the simple polygon `polygon` (counter-clockwise; at most a few dozen points):
+/// triangles of indices, counter-clockwise, or empty when it is not simple enough to clip (no
+/// ear left: self-touching or clockwise).
+std::vector<std::array<std::uint32_t, 3>> clipEars(const std::vector<Vec2d>& polygon) {
+  std::vector<std::uint32_t> left(polygon.size());
+  for (std::uint32_t k = 0; k < left.size(); ++k) left[k] = k;
+  std::vector<std::array<std::uint32_t, 3>> out;
+  while (left.size() > 3) {
+    bool clipped = false;
+    for (std::size_t k = 0; k < left.size() && !clipped; ++k) {
+      const std::uint32_t a = left[(k + left.size() - 1) % left.size()], b = left[k], c = left[(k + 1) % left.size()];
+      const Vec2d &pa = polygon[a], &pb = polygon[b], &pc = polygon[c];
+      if (!(cross2(pb - pa, pc - pb) > 0.0)) continue;  // reflex or flat
+      bool empty = true;
+      for (const std::uint32_t q : left) {
+        if (q == a || q == b || q == c) continue;
+        const Vec2d& x = polygon[q];
+        if (cross2(pb - pa, x - pa) >= 0.0 && cross2(pc - pb, x - pb) >= 0.0 && cross2(pa - pc, x - pc) >= 0.0) {
+          empty = false;
+          break;
+        }
+      }
+      if (!empty) continue;
+      out.push_back({a, b, c});
+      left.erase(left.begin() + static_cast<std::ptrdiff_t>(k));
+      clipped = true;
+    }
+    if (!clipped) return {};
+  }
+  if (!(cross2(polygon[left[1]] - polygon[left[0]], polygon[left[2]] - polygon[left[1]]) > 0.0)) return {};
+  out.push_back({left[0], left[1], left[2]});
+  return out;
+}
 
 /// Points where the lines u = k s or v = k s (s = span) meet the closed polygon `rim`: its
 /// vertices on a line (once each) and its edges' crossings between their ends.
@@ -140,10 +180,25 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
     bool starShaped = true;
     for (std::size_t k = 0; k < point.size(); ++k) {
       const Vec2d p = point[(k + 1) % point.size()], q = point[k];  // the edge's end B and start A
-      const Vec2d x = q - p, y = hole.centre - p;
-      starShaped = starShaped && x.x() * y.y() - x.y() * y.x() > 0.0;
+      starShaped = starShaped && cross2(q - p, hole.centre - p) > 0.0;
     }
-    if (starShaped) holes.push_back(hole);
+    hole.ears.clear();
+    if (!starShaped) {
+      // Else the loop's own points triangulated: the fill runs against the loop's direction, so the
+      // polygon is the points in reverse; a loop through a vertex twice is left open.
+      std::vector<VertexId> rim;
+      for (const CornerId b : hole.corners) rim.push_back(topology.vertex(nextCorner(b)));
+      std::sort(rim.begin(), rim.end());
+      if (std::adjacent_find(rim.begin(), rim.end()) != rim.end()) continue;
+      const std::vector<Vec2d> reversed(point.rbegin(), point.rend());
+      hole.ears = clipEars(reversed);
+      if (hole.ears.empty()) continue;
+      const std::uint32_t last = static_cast<std::uint32_t>(point.size()) - 1;
+      for (auto& ear : hole.ears) {
+        for (std::uint32_t& k : ear) k = last - k;
+      }
+    }
+    holes.push_back(hole);
   }
   if (holes.empty()) return 0;
   // The copy keeps the map's wedges (4 bytes per corner) and adds the fans' corners to them: the
@@ -156,6 +211,23 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
   std::vector<Vec2d> value(uv.numWedges());
   for (std::uint32_t w = 0; w < value.size(); ++w) value[w] = uv.wedgeValue(w);
   for (const Hole& h : holes) {
+    if (!h.ears.empty()) {
+      // One chart for the whole fill (the first corner's): the loop's edges become seams where
+      // the loop crossed one.
+      const std::uint32_t first = static_cast<std::uint32_t>(value.size());
+      for (std::size_t k = 0; k < h.corners.size(); ++k) {
+        value.push_back(h.chart[k].apply(uv[nextCorner(h.corners[k])]));
+      }
+      for (const auto& ear : h.ears) {
+        Triangle t;
+        for (int j = 0; j < 3; ++j) {
+          t[j] = topology.vertex(nextCorner(h.corners[ear[j]]));
+          wedge.push_back(first + ear[j]);
+        }
+        out.triangles.push_back(t);
+      }
+      continue;
+    }
     Vec3d centre = Vec3d::Zero();
     for (const CornerId b : h.corners) centre += mesh.position(topology.vertex(nextCorner(b)));
     const VertexId middle = static_cast<VertexId>(out.positions.size());

@@ -21,10 +21,11 @@ struct QuadRun {
 /// A copy of a map with its holes smaller than a quad closed: every boundary loop of at most 32
 /// edges around which the charts come back (no cone inside; seams may cross it) whose (u, v), read
 /// in one chart, span less than `scale` units each way or meet the iso-lines at two points or none,
-/// in a component more than four times its size across, and star-shaped around its mean (u, v)
-/// (no face of the fan flipped), gets a fan of triangles from a new vertex at its centroid (mean
-/// position and (u, v); in each fan face's own chart, so a seam crossing the loop continues
-/// through the fan to the centre). A hole that small cannot show in the quad mesh; left
+/// in a component more than four times its size across, gets a fan of triangles from a new vertex
+/// at its centroid (mean position and (u, v); in each fan face's own chart, so a seam crossing the
+/// loop continues through the fan to the centre) when it is star-shaped around its mean (u, v) (no
+/// face of the fan flipped), else its own points triangulated by ear clipping in the first
+/// chart (a simple polygon in (u, v) through distinct vertices; otherwise left open). A hole that small cannot show in the quad mesh; left
 /// open, iso-lines crossing it end on its boundary and the quads around it carry extra boundary
 /// vertices (a scan's missing triangles). Returns the number of holes filled; when 0, `out` is
 /// left empty and the map itself is to be used.
