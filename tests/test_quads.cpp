@@ -4,6 +4,8 @@
 // extract or say what failed; malformed maps are refused.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <algorithm>
 #include <cmath>
 #include <array>
@@ -361,32 +363,36 @@ TEST(Quads, TorusSphereGenus2Closed) {
   }
 }
 
+/// The flat map (u, v) = (x, y) of a grid without the faces whose centroid `drop` names, and
+/// its quad mesh.
+QuadRun flatGridQuads(const TriangleMesh& grid, const std::function<bool(const Vec3d&)>& drop,
+                      std::uint32_t* dropped = nullptr) {
+  TriangleMesh map;
+  map.positions = grid.positions;
+  std::vector<Vec2d> uv;
+  for (const Triangle& t : grid.triangles) {
+    if (drop((grid.position(t[0]) + grid.position(t[1]) + grid.position(t[2])) / 3.0)) continue;
+    map.triangles.push_back(t);
+    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
+  }
+  if (dropped) *dropped = grid.numFaces() - map.numFaces();
+  map.cornerUV = WedgeMap::fromCorners(map.triangles, uv);
+  return extractCheckedQuads("flat grid", map, Topology::build(map.triangles, map.numVertices()), 1, {});
+}
+
 // A small hole that is not star-shaped around its centre (a U of five cells inside one unit of a
 // flat map) is closed by its own points, triangulated, instead of a fan: the quad mesh is the
 // plain grid's.
 TEST(Quads, AHoleNotStarShapedIsClosedByEars) {
   const double cell = 0.125;
   const TriangleMesh grid = testing::gridMesh(48, 32, cell);
-  TriangleMesh holed;
-  holed.positions = grid.positions;
-  std::vector<Vec2d> uv;
-  for (const Triangle& t : grid.triangles) {
-    const Vec3d c = (grid.position(t[0]) + grid.position(t[1]) + grid.position(t[2])) / 3.0;
+  std::uint32_t dropped = 0;
+  const QuadRun run = flatGridQuads(grid, [&](const Vec3d& c) {
     const int i = static_cast<int>(std::floor(c.x() / cell)), j = static_cast<int>(std::floor(c.y() / cell));
-    if ((j == 9 && i >= 17 && i <= 19) || (j == 10 && (i == 17 || i == 19))) continue;
-    holed.triangles.push_back(t);
-    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
-  }
-  ASSERT_EQ(holed.numFaces(), grid.numFaces() - 10);
-  holed.cornerUV = WedgeMap::fromCorners(holed.triangles, uv);
-  const QuadRun run = extractCheckedQuads("U hole", holed, Topology::build(holed.triangles, holed.numVertices()), 1, {});
-  TriangleMesh plain = grid;
-  uv.clear();
-  for (const Triangle& t : grid.triangles) {
-    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
-  }
-  plain.cornerUV = WedgeMap::fromCorners(plain.triangles, uv);
-  const QuadRun reference = extractCheckedQuads("grid", plain, Topology::build(plain.triangles, plain.numVertices()), 1, {});
+    return (j == 9 && i >= 17 && i <= 19) || (j == 10 && (i == 17 || i == 19));
+  }, &dropped);
+  ASSERT_EQ(dropped, 10u);
+  const QuadRun reference = flatGridQuads(grid, [](const Vec3d&) { return false; });
   EXPECT_EQ(run.filledHoles, 1u);
   EXPECT_TRUE(run.check.isValid());
   EXPECT_EQ(run.check.irregularVertices, 0u);
@@ -401,26 +407,12 @@ TEST(Quads, AHoleNotStarShapedIsClosedByEars) {
 // and the quad mesh is the plain 6 x 4 grid.
 TEST(Quads, AHoleOneIsoLineCrossesIsClosed) {
   const TriangleMesh grid = testing::gridMesh(24, 16, 0.25);
-  TriangleMesh holed;
-  holed.positions = grid.positions;
-  std::vector<Vec2d> uv;
-  for (const Triangle& t : grid.triangles) {
-    const Vec3d c = (grid.position(t[0]) + grid.position(t[1]) + grid.position(t[2])) / 3.0;
-    if (c.x() > 2.25 && c.x() < 3.75 && c.y() > 1.25 && c.y() < 1.75) continue;  // 6 x 2 cells
-    holed.triangles.push_back(t);
-    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
-  }
-  ASSERT_EQ(holed.numFaces(), grid.numFaces() - 24);
-  holed.cornerUV = WedgeMap::fromCorners(holed.triangles, uv);
-  const Topology topology = Topology::build(holed.triangles, holed.numVertices());
-  const QuadRun run = extractCheckedQuads("holed grid", holed, topology, 1, {});
-  TriangleMesh plain = grid;
-  uv.clear();
-  for (const Triangle& t : grid.triangles) {
-    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
-  }
-  plain.cornerUV = WedgeMap::fromCorners(plain.triangles, uv);
-  const QuadRun reference = extractCheckedQuads("grid", plain, Topology::build(plain.triangles, plain.numVertices()), 1, {});
+  std::uint32_t dropped = 0;
+  const QuadRun run = flatGridQuads(grid, [](const Vec3d& c) {
+    return c.x() > 2.25 && c.x() < 3.75 && c.y() > 1.25 && c.y() < 1.75;  // 6 x 2 cells
+  }, &dropped);
+  ASSERT_EQ(dropped, 24u);
+  const QuadRun reference = flatGridQuads(grid, [](const Vec3d&) { return false; });
   EXPECT_EQ(run.filledHoles, 1u);
   EXPECT_TRUE(run.check.isValid());
   EXPECT_EQ(run.check.irregularVertices, 0u);
@@ -429,18 +421,9 @@ TEST(Quads, AHoleOneIsoLineCrossesIsClosed) {
   EXPECT_EQ(run.check.quads, reference.check.quads);
   EXPECT_EQ(run.quads.mesh.numVertices(), reference.quads.mesh.numVertices());
   // Wider than a quad both ways, it stays open: iso-lines end on its rim.
-  TriangleMesh wide;
-  wide.positions = grid.positions;
-  uv.clear();
-  for (const Triangle& t : grid.triangles) {
-    const Vec3d c = (grid.position(t[0]) + grid.position(t[1]) + grid.position(t[2])) / 3.0;
-    if (c.x() > 2.25 && c.x() < 3.75 && c.y() > 0.75 && c.y() < 2.25) continue;
-    wide.triangles.push_back(t);
-    for (const VertexId v : t) uv.push_back(grid.position(v).head<2>());
-  }
-  wide.cornerUV = WedgeMap::fromCorners(wide.triangles, uv);
-  const Topology wideTopology = Topology::build(wide.triangles, wide.numVertices());
-  const QuadRun open = extractCheckedQuads("wide hole", wide, wideTopology, 1, {});
+  const QuadRun open = flatGridQuads(grid, [](const Vec3d& c) {
+    return c.x() > 2.25 && c.x() < 3.75 && c.y() > 0.75 && c.y() < 2.25;
+  });
   EXPECT_EQ(open.filledHoles, 0u);
   EXPECT_TRUE(open.check.isValid());
   EXPECT_EQ(open.check.boundaryLoops, 2u);
