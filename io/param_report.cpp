@@ -23,6 +23,7 @@ void writeSystem(JsonWriter& j, const PipelineResult& r) {
   j.key("translationConstraints").value(U64{p.translationConstraints});
   j.key("smallHoles").value(U64{p.smallHoles});
   j.key("smallHolesRotated").value(U64{p.smallHolesRotated});
+  j.key("holesCappedForField").value(U64{r.fieldCappedHoles});
   j.key("nonUnitConstraints").value(U64{st.nonUnitConstraints});
   j.key("pinnedFirstSolve").value(U64{st.pinnedFirst});
   j.key("pinnedSecondSolve").value(U64{st.pinnedSecond});

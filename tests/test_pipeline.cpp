@@ -467,9 +467,11 @@ TEST(Pipeline, SmallHolesCarryNoTranslationInTheWrittenMap) {
     if (cells > 0.0) {
       EXPECT_EQ(translated, 0u);
       EXPECT_EQ(r.solved.param.smallHoles, holes.size());
+      EXPECT_EQ(r.fieldCappedHoles, holes.size());  // the direct field saw the holes capped
     } else {
       EXPECT_GT(translated, 0u) << "no hole kept a translation without closeHoles: the test proves nothing";
       EXPECT_EQ(r.solved.param.smallHoles, 0u);
+      EXPECT_EQ(r.fieldCappedHoles, 0u);
     }
   }
 }

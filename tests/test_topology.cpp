@@ -3,6 +3,7 @@
 
 #include "core/mesh/clean.h"
 #include "core/system/errors.h"
+#include "core/mesh/hole_caps.h"
 #include "core/mesh/topology.h"
 #include "io/mesh_io.h"
 #include "test_meshes.h"
@@ -120,6 +121,27 @@ TEST(Topology, NextBoundaryCornerWalksEachLoopOnce) {
     if (t.isBoundaryVertex(t.vertex(nextCorner(e))) && t.isBoundaryVertex(t.vertex(prevCorner(e)))) ++bothEnds;
   }
   EXPECT_EQ(crossed.size(), interiorAtBoundary + bothEnds);
+}
+
+// Capping small holes: a sphere with one-triangle holes becomes closed again (Euler
+// characteristic 2), the original faces and vertices keep their ids, and holes larger than the
+// extent stay open.
+TEST(Topology, CapSmallHolesClosesEachSmallLoop) {
+  const TriangleMesh holed = testing::withOneTriangleHoles(icosphereMesh(3), 17);
+  const Topology t = buildOf(holed);
+  const std::uint32_t loops = computeComponents(t).boundaryLoops;
+  ASSERT_GE(loops, 10u);
+  const CappedHoles caps = capSmallHoles(holed, t, 1.0);  // the unit sphere's holes are small
+  EXPECT_EQ(caps.holes, loops);
+  EXPECT_EQ(caps.mesh.numVertices(), holed.numVertices() + loops);
+  EXPECT_EQ(caps.mesh.numFaces(), holed.numFaces() + 3 * loops);
+  for (FaceId f = 0; f < holed.numFaces(); ++f) ASSERT_EQ(caps.mesh.triangles[f], holed.triangles[f]);
+  caps.topology.validate();
+  const ComponentsResult capped = computeComponents(caps.topology);
+  ASSERT_EQ(capped.components.size(), 1u);
+  EXPECT_EQ(capped.boundaryLoops, 0u);
+  EXPECT_EQ(capped.components[0].eulerCharacteristic, 2);
+  EXPECT_EQ(capSmallHoles(holed, t, 1e-6).holes, 0u);  // smaller than any hole
 }
 
 TEST(Topology, ComponentsAreSortedBySize) {

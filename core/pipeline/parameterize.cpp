@@ -7,6 +7,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/mesh/hole_caps.h"
 #include "core/system/errors.h"
 
 namespace seamvox {
@@ -179,6 +180,29 @@ FeatureSet releaseCollapsingCurves(const TriangleMesh& mesh, const Topology& top
   return kept;
 }
 
+/// The field, on a copy with the small holes capped when the map closes them (hole_caps.h; the
+/// direct field only: up to kDirectFieldMaxFaces, where the copy is cheap), restricted to the
+/// mesh's faces and vertices.
+CrossField computeFieldWithCaps(PipelineResult& r, const std::vector<FaceId>& faceOrigin, const FieldSource& source,
+                                const PipelineOptions& options) {
+  CappedHoles caps;
+  if (options.closeHoles > 0.0 && source.importedPerInputFace.empty() &&
+      resolveFieldMethod(source.method, r.mesh.numFaces()) == FieldMethod::Direct) {
+    caps = capSmallHoles(r.mesh, r.topology, options.closeHoles * r.edgeLength);
+  }
+  r.fieldCappedHoles = caps.holes;
+  if (caps.holes == 0) {
+    return computeFieldFromSource(r.mesh, r.topology, faceOrigin, r.inputFaces, source, options.progress, &r.fieldSolve);
+  }
+  FieldSource capped = source;
+  capped.method = FieldMethod::Direct;  // the copy has more faces than the mesh that chose it
+  CrossField field = computeFieldFromSource(caps.mesh, caps.topology, faceOrigin, r.inputFaces, capped,
+                                            options.progress, &r.fieldSolve);
+  field.direction.resize(r.mesh.numFaces());
+  if (!field.framePositions.empty()) field.framePositions.resize(r.mesh.numVertices());
+  return field;
+}
+
 /// The cone passes: merge and cut, solve; again with the pairs a solve put on one point merged,
 /// while there are such pairs (at most options.maxConePasses passes).
 void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions& options,
@@ -347,16 +371,15 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   r.featureFieldAligned = aligned.has_value();
   // Only an imported field reads the faces' input ids: otherwise they go now (4 bytes per face).
   if (options.field.importedPerInputFace.empty()) std::vector<FaceId>().swap(clean.faceOrigin);
-  CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces,
-                                            aligned ? *aligned : options.field, options.progress, &r.fieldSolve);
+  r.diagonal = r.cleanReport.diagonalWithoutSpikes;  // a spike would inflate h
+  r.edgeLength = options.spacing.spacing(r.diagonal);
+  CrossField field = computeFieldWithCaps(r, clean.faceOrigin, aligned ? *aligned : options.field, options);
   aligned.reset();
   r.fieldMethod = options.field.importedPerInputFace.empty()
                       ? fieldMethodName(resolveFieldMethod(options.field.method, r.mesh.numFaces()))
                       : "file";
   std::vector<FaceId>().swap(clean.faceOrigin);
   meter.finish("field");
-  r.diagonal = r.cleanReport.diagonalWithoutSpikes;  // a spike would inflate h
-  r.edgeLength = options.spacing.spacing(r.diagonal);
 
   solveConePasses(r, field, options, meter);
   r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength, nullptr, &r.topology);

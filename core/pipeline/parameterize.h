@@ -160,6 +160,8 @@ struct PipelineResult {
   std::uint32_t conesBeforeMerge = 0;  ///< of the first pass
   ConeMergeResult merged;        ///< of the last pass (each merges the field's cones afresh)
   std::uint32_t conePasses = 0;
+  /// Small holes capped for the field (PipelineOptions::closeHoles with the direct field).
+  std::uint32_t fieldCappedHoles = 0;
   SolverResult solved;           ///< figures of the last solve (its map moved to mesh.cornerUV)
   bool untangled = false;        ///< the foldover repair ran
   UntangleStats untangle;

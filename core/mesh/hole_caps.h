@@ -1,0 +1,25 @@
+#pragma once
+/// Small holes capped for the field: a cross field is free to turn at a hole's boundary, so it
+/// puts singularities inside small holes (a full turn, index -4, leaves the map wound twice around
+/// the hole). Solved on a copy with those holes capped by fans, the field turns only where the
+/// surface's shape asks it to, and a map closed over such a hole (ParamOptions::closeHolesWithin)
+/// follows it without a dislocation.
+#include <cstdint>
+
+#include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+struct CappedHoles {
+  TriangleMesh mesh;      ///< the positions, then one centre per cap; the faces, then the caps' fans
+  Topology topology;      ///< of mesh
+  std::uint32_t holes = 0;
+};
+
+/// Caps every boundary loop through distinct vertices (at most 64 edges) whose vertices fit in a
+/// box of diagonal maxExtent with a fan from a new vertex at its centroid; the original faces and
+/// vertices keep their ids. With no such hole, holes is 0 and mesh is left empty. Linear.
+CappedHoles capSmallHoles(const TriangleMesh& mesh, const Topology& topology, double maxExtent);
+
+}  // namespace seamvox
