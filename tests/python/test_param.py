@@ -81,6 +81,23 @@ def test_same_map_as_the_command(tmp_path, seamvox_command):
     assert {k for k in theirs if not k.startswith(("stages.", "seconds.")) and k not in budget} <= set(mine)
 
 
+def test_close_holes_is_the_commands(tmp_path, seamvox_command):
+    """close_holes=2 closes what `param --close-holes 2` closes; the default, like the command's
+    without --quads, closes none."""
+    V, F = sphere(4)
+    F = np.array([f for k, f in enumerate(F) if k % 41 != 20])  # scattered one-triangle holes
+    mesh, out, report = tmp_path / "in.ply", tmp_path / "out.ply", tmp_path / "report.json"
+    seamvox.write_mesh(str(mesh), V, F)
+    seamvox_command("param", str(mesh), "-o", str(out), "--report", str(report), "--quiet", "--close-holes", "2",
+                    "--cells", "25")
+    closed = seamvox.parameterize(*seamvox.read_mesh(str(mesh)), close_holes=2, cells=25)
+    command = json.loads(report.read_text())
+    assert closed.report["system"]["smallHoles"] == command["system"]["smallHoles"] > 0
+    assert closed.report["system"]["holesCappedForField"] == command["system"]["holesCappedForField"] > 0
+    assert closed.report["cones"] == command["cones"]
+    assert seamvox.parameterize(V, F, cells=25).report["system"]["smallHoles"] == 0
+
+
 def test_cross_field_is_the_field_commands(tmp_path, seamvox_command):
     V, F = sphere(3)
     mesh, field, cones = tmp_path / "in.off", tmp_path / "f.field", tmp_path / "cones.obj"

@@ -123,8 +123,11 @@ std::string fieldSource(const py::object& field, std::size_t faces, FieldSource&
 ParamOutcome parameterizeArrays(const py::object& V, const py::object& F, const std::string& solver, double cells,
                                 const py::object& edgeLength, std::int32_t grid, const py::object& field,
                                 double mergeCones, const py::object& threads, const py::object& progress,
-                                bool untangle, bool weld) {
+                                bool untangle, bool weld, double closeHoles) {
   TriangleMesh raw = meshFromArrays(V, F);
+  if (!(closeHoles >= 0.0 && closeHoles <= 1000.0)) {
+    throw InputError("close_holes must be a number from 0 to 1000 (grid spacings), got " + std::to_string(closeHoles));
+  }
   PipelineOptions options;
   options.solver.solver = parseParamSolver(solver);
   if (grid < 4 || grid > 1024 || (grid & (grid - 1)) != 0) {
@@ -135,6 +138,7 @@ ParamOutcome parameterizeArrays(const py::object& V, const py::object& F, const 
   options.mergeCones = mergeFraction(mergeCones);
   options.untangle = untangle;
   options.clean.weldVertices = weld;
+  options.closeHoles = closeHoles;
   const std::string fieldName = fieldSource(field, raw.numFaces(), options.field);
   Interruptible interruptible(progress, threadCount(threads));
   options.progress = interruptible.progressFn();
@@ -387,21 +391,24 @@ PYBIND11_MODULE(seamvox, m) {
         "is written whole or not at all.");
   m.def("parameterize", &parameterizeArrays, py::arg("V"), py::arg("F"), py::kw_only(),
         py::arg("solver") = "auto", py::arg("cells") = 100.0, py::arg("edge_length") = py::none(),
-        py::arg("grid") = 128, py::arg("field") = py::none(), py::arg("merge_cones") = 0.5,
+        py::arg("grid") = 128, py::arg("field") = py::none(), py::arg("merge_cones") = seamvox::kConeMergeFraction,
         py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("untangle") = true,
-        py::arg("weld") = false,
+        py::arg("weld") = false, py::arg("close_holes") = 0.0,
         "parameterize(V, F, *, solver='auto', cells=100, edge_length=None, grid=128, field=None,\n"
-        "             merge_cones=0.5, threads=None, progress=None, untangle=True, weld=False) -> Result\n\n"
+        "             merge_cones=1, threads=None, progress=None, untangle=True, weld=False,\n"
+        "             close_holes=0) -> Result\n\n"
         "The pipeline of `seamvox param` with the same defaults (so the same map). solver: 'auto',\n"
         "'hat', 'vox' or 'voxloc'; grid spacing h = edge_length, or the bounding-box diagonal / cells;\n"
         "field: None or 'auto', 'smooth', 'proxy', or an (m, 3) array of one direction per face of F;\n"
         "threads: worker threads (None: all cores). progress(stage, fraction) is called from the\n"
         "work as it goes; returning False cancels (seamvox.CancelledError), an exception it raises\n"
-        "cancels and is re-raised, and Ctrl-C cancels with KeyboardInterrupt. The GIL is released.");
+        "cancels and is re-raised, and Ctrl-C cancels with KeyboardInterrupt. The GIL is released.\n"
+        "close_holes: holes within that many grid spacings carry no seam translation, so quads() can\n"
+        "close them (`seamvox param --close-holes`; 2 is what `param --quads` uses).");
   m.def("cross_field", &crossFieldArrays, py::arg("V"), py::arg("F"), py::kw_only(), py::arg("field") = "auto",
-        py::arg("curvature") = 0.0, py::arg("merge_cones") = 0.5, py::arg("cells") = 100.0,
+        py::arg("curvature") = 0.0, py::arg("merge_cones") = seamvox::kConeMergeFraction, py::arg("cells") = 100.0,
         py::arg("edge_length") = py::none(), py::arg("threads") = py::none(), py::arg("progress") = py::none(),
-        "cross_field(V, F, *, field='auto', curvature=0.0, merge_cones=0.5, cells=100,\n"
+        "cross_field(V, F, *, field='auto', curvature=0.0, merge_cones=1, cells=100,\n"
         "            edge_length=None, threads=None, progress=None) -> FieldResult\n\n"
         "The cross field, its cones (merged as parameterize merges them before its first cut) and\n"
         "the cut, as `seamvox field` computes them. field: 'auto', 'smooth' or 'proxy'; curvature > 0\n"
