@@ -179,4 +179,20 @@ RestrictedSystem restrictSystem(const LinearSystem& system, const std::vector<st
   return out;
 }
 
+std::vector<std::int64_t> restrictOrder(const std::vector<std::uint32_t>& order,
+                                        const std::vector<std::uint32_t>& freeUnknowns, std::uint32_t numUnknowns) {
+  if (order.empty()) return {};
+  std::vector<std::int64_t> position(numUnknowns, -1);
+  for (std::size_t k = 0; k < freeUnknowns.size(); ++k) position[freeUnknowns[k]] = std::int64_t(k);
+  std::vector<std::int64_t> out;
+  out.reserve(freeUnknowns.size());
+  for (std::uint32_t j : order) {
+    if (position[j] >= 0) out.push_back(position[j]), position[j] = -1;
+  }
+  for (std::size_t k = 0; k < freeUnknowns.size(); ++k) {
+    if (position[freeUnknowns[k]] >= 0) out.push_back(std::int64_t(k));
+  }
+  return out;
+}
+
 }  // namespace seamvox

@@ -44,4 +44,10 @@ RestrictedSystem restrictSystem(const LinearSystem& system, const std::vector<st
                                 const std::vector<std::complex<double>>& values,
                                 const std::vector<ComplexTriplet>& extraLower = {});
 
+/// A fill-reducing order given in a system's full numbering (`order`: unknowns, the first
+/// eliminated first; empty: none), for its restriction to freeUnknowns: positions among them, in
+/// that order, then those the order missed (CholmodFactor::factor with an order).
+std::vector<std::int64_t> restrictOrder(const std::vector<std::uint32_t>& order,
+                                        const std::vector<std::uint32_t>& freeUnknowns, std::uint32_t numUnknowns);
+
 }  // namespace seamvox

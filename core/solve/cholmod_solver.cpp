@@ -45,6 +45,7 @@ struct CholmodFactor::Impl {
   cholmod_common common;
   cholmod_factor* L = nullptr;
   bool realForm = false;
+  bool realMatrix = false;    // every entry real: factored as a real n x n matrix
   bool realFormOnly = false;  // test hook (setRealFormOnly)
   std::int64_t n = 0;
   std::int64_t failedColumn = -1;  // of the complex form, in the input numbering
@@ -129,8 +130,13 @@ void CholmodFactor::factor(const ComplexSparse& lowerIn, const std::vector<std::
     return;
   }
   std::string why = "skipped";
+  // A real matrix (e.g. the real form of feature-line systems, built by the caller) is factored
+  // in real arithmetic: a quarter of the complex flops, half the memory.
+  m.realMatrix = std::all_of(lower.valuePtr(), lower.valuePtr() + nnz,
+                             [](const std::complex<double>& v) { return v.imag() == 0.0; });
   if (!m.realFormOnly && realFormOnlyScopes.load() == 0) {
-    cholmod_sparse* A = cholmod_l_allocate_sparse(n, n, nnz, 1, 1, -1, CHOLMOD_COMPLEX, &m.common);
+    cholmod_sparse* A =
+        cholmod_l_allocate_sparse(n, n, nnz, 1, 1, -1, m.realMatrix ? CHOLMOD_REAL : CHOLMOD_COMPLEX, &m.common);
     if (!A) throw SolverError("CHOLMOD: out of memory allocating a " + std::to_string(n) + " matrix");
     auto* p = static_cast<SuiteSparse_long*>(A->p);
     auto* i = static_cast<SuiteSparse_long*>(A->i);
@@ -138,8 +144,12 @@ void CholmodFactor::factor(const ComplexSparse& lowerIn, const std::vector<std::
     for (std::int64_t j = 0; j <= n; ++j) p[j] = lower.outerIndexPtr()[j];
     for (std::int64_t k = 0; k < nnz; ++k) {
       i[k] = lower.innerIndexPtr()[k];
-      x[2 * k] = lower.valuePtr()[k].real();
-      x[2 * k + 1] = lower.valuePtr()[k].imag();
+      if (m.realMatrix) {
+        x[k] = lower.valuePtr()[k].real();
+      } else {
+        x[2 * k] = lower.valuePtr()[k].real();
+        x[2 * k + 1] = lower.valuePtr()[k].imag();
+      }
     }
     if (!order.empty() && static_cast<std::int64_t>(order.size()) != n) {
       cholmod_l_free_sparse(&A, &m.common);
@@ -161,6 +171,7 @@ void CholmodFactor::factor(const ComplexSparse& lowerIn, const std::vector<std::
                         " (a component without a pinned unknown, or a degenerate mesh region)");
     }
   }
+  m.realMatrix = false;
   // Real form [Re -Im; Im Re], lower triangle: blocks (1,1) and (2,2) = lower(Re K), block (2,1) =
   // Im K in full (Im K is antisymmetric: entry (i, j) from the lower triangle, (j, i) negated).
   std::string whyReal;
@@ -212,13 +223,15 @@ ComplexVector CholmodFactor::solve(const ComplexVector& rhs) const {
   if (m.n == 0) return ComplexVector();
   if (!m.L) throw SolverError("CHOLMOD: solve called without a factor");
   auto& common = const_cast<cholmod_common&>(m.common);
+  // The real form stacks (Re, Im) in one column; a real matrix takes them as two columns.
   const std::int64_t rows = m.realForm ? 2 * m.n : m.n;
-  cholmod_dense* B = cholmod_l_allocate_dense(rows, 1, rows, m.realForm ? CHOLMOD_REAL : CHOLMOD_COMPLEX,
+  const bool real = m.realForm || m.realMatrix;
+  cholmod_dense* B = cholmod_l_allocate_dense(rows, m.realMatrix ? 2 : 1, rows, real ? CHOLMOD_REAL : CHOLMOD_COMPLEX,
                                               &common);
   if (!B) throw SolverError("CHOLMOD: out of memory allocating the right-hand side");
   auto* b = static_cast<double*>(B->x);
   for (std::int64_t k = 0; k < m.n; ++k) {
-    if (m.realForm) {
+    if (real) {
       b[k] = rhs[k].real();
       b[m.n + k] = rhs[k].imag();
     } else {
@@ -232,8 +245,8 @@ ComplexVector CholmodFactor::solve(const ComplexVector& rhs) const {
   ComplexVector out(m.n);
   const auto* xv = static_cast<const double*>(X->x);
   for (std::int64_t k = 0; k < m.n; ++k) {
-    out[k] = m.realForm ? std::complex<double>(xv[k], xv[m.n + k])
-                        : std::complex<double>(xv[2 * k], xv[2 * k + 1]);
+    out[k] = m.realForm || m.realMatrix ? std::complex<double>(xv[k], xv[m.n + k])
+                                        : std::complex<double>(xv[2 * k], xv[2 * k + 1]);
   }
   cholmod_l_free_dense(&X, &common);
   return out;

@@ -9,8 +9,9 @@
 
 namespace seamvox {
 
-/// Supernodal complex Hermitian Cholesky; falls back to the real 2n x 2n form [Re -Im; Im Re]
-/// only when the complex factorization fails. Move-only.
+/// Supernodal complex Hermitian Cholesky (a matrix whose entries are all real: real symmetric,
+/// in real arithmetic); falls back to the real 2n x 2n form [Re -Im; Im Re] only when the
+/// complex factorization fails. Move-only.
 class CholmodFactor {
  public:
   CholmodFactor();

@@ -210,14 +210,17 @@ LinearSystem reducedRealSystem(const LinearSystem& system, const RealMap& map) {
   return out;
 }
 
-/// Solves the restricted system into z (free columns only).
+/// Solves the restricted system into z (free columns only). order: empty, the elimination order
+/// to use (full numbering), filled with the one used; the second solve reuses the first's.
 void solveRestricted(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
-                     std::vector<Complex>& z, const char* stage) {
+                     std::vector<Complex>& z, const char* stage, std::vector<std::uint32_t>& order) {
   const RestrictedSystem restricted = restrictSystem(system, fixed, z);
   if (restricted.freeUnknowns.empty()) return;
   CholmodFactor factor;
   try {
-    factor.factor(restricted.lower);
+    factor.factor(restricted.lower, restrictOrder(order, restricted.freeUnknowns, static_cast<std::uint32_t>(z.size())));
+    order.clear();
+    for (std::int64_t k : factor.permutation()) order.push_back(restricted.freeUnknowns[k]);
   } catch (const SolverError& e) {
     throw SolverError(std::string("seamless solve with feature lines, ") + stage + ": " + e.what());
   }
@@ -247,7 +250,8 @@ void solveWithLineConstraints(const LinearSystem& system, const Reduction& reduc
   // First with the integers free, then with them rounded and fixed.
   std::vector<Complex> z(map.columns, 0.0);
   std::vector<std::uint8_t> none(map.columns, 0), integers(map.integer.begin(), map.integer.end());
-  solveRestricted(real, none, z, "first solve");
+  std::vector<std::uint32_t> order;
+  solveRestricted(real, none, z, "first solve", order);
   for (std::uint32_t k = 0; k < map.columns; ++k) {
     if (!integers[k]) continue;
     ++stats.integerUnknowns;
@@ -255,7 +259,7 @@ void solveWithLineConstraints(const LinearSystem& system, const Reduction& reduc
     stats.maxRoundingShift = std::max(stats.maxRoundingShift, std::abs(z[k].real() - rounded));
     z[k] = rounded;
   }
-  if (stats.integerUnknowns > 0) solveRestricted(real, integers, z, "second solve");
+  if (stats.integerUnknowns > 0) solveRestricted(real, integers, z, "second solve", order);
   for (std::uint32_t j = 0; j < n; ++j) {
     if (fixed[j]) continue;
     double part[2];

@@ -37,22 +37,6 @@ struct FillOrder {
 
 /// The restricted system's order from a full-numbering order: its free unknowns in that order,
 /// those the order does not hold last. Empty when order is empty.
-std::vector<std::int64_t> restrictOrder(const FillOrder& order, const std::vector<std::uint32_t>& freeUnknowns,
-                                        std::uint32_t numUnknowns) {
-  if (order.unknowns.empty()) return {};
-  std::vector<std::int64_t> position(numUnknowns, -1);
-  for (std::size_t k = 0; k < freeUnknowns.size(); ++k) position[freeUnknowns[k]] = std::int64_t(k);
-  std::vector<std::int64_t> out;
-  out.reserve(freeUnknowns.size());
-  for (std::uint32_t j : order.unknowns) {
-    if (position[j] >= 0) out.push_back(position[j]), position[j] = -1;
-  }
-  for (std::size_t k = 0; k < freeUnknowns.size(); ++k) {
-    if (position[freeUnknowns[k]] >= 0) out.push_back(std::int64_t(k));
-  }
-  return out;
-}
-
 void factorSystem(const LinearSystem& system, const std::vector<std::uint8_t>& fixed,
                   const std::vector<Complex>& x, const std::vector<ComplexTriplet>& extraLower,
                   const char* stage, FactoredSystem& out, SeamlessStats& stats,
@@ -60,7 +44,7 @@ void factorSystem(const LinearSystem& system, const std::vector<std::uint8_t>& f
   out.restricted = restrictSystem(system, fixed, x, extraLower);
   try {
     out.factor.factor(out.restricted.lower,
-                      restrictOrder(givenOrder, out.restricted.freeUnknowns, static_cast<std::uint32_t>(x.size())));
+                      restrictOrder(givenOrder.unknowns, out.restricted.freeUnknowns, static_cast<std::uint32_t>(x.size())));
   } catch (const SolverError& e) {
     const std::int64_t column = out.factor.failedColumn();
     throw FactorFailure{stage, column >= 0 ? out.restricted.freeUnknowns[column] : kInvalidId, e.what()};
