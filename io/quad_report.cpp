@@ -17,6 +17,7 @@ QuadReportContext quadReportContext(const QuadRun& run, std::uint32_t mapFaces, 
   context.seamResidual = run.seams.maxResidual;
   context.integerDistance = run.seams.maxIntegerDistance;
   context.filledHoles = run.filledHoles;
+  context.translatedHoles = run.translatedHoles;
   context.stages = meter.stages();
   context.totalSeconds = meter.totalSeconds();
   context.peakBytes = meter.peakBytes();
@@ -46,6 +47,7 @@ std::string quadReportJson(const QuadResult& quads, const QuadValidation& v, con
   j.key("halfwayCones").value(s.halfwayCones).key("spikes").value(s.spikes).key("loops").value(s.loops).key("pillows").value(s.pillows);
   j.key("pointsInFlippedFaces").value(s.pointsInFlippedFaces);
   j.key("holesWithoutVertex").value(s.holesWithoutVertex).key("smallHolesClosed").value(context.filledHoles);
+  j.key("smallHolesWithTranslation").value(context.translatedHoles);
   j.key("islands").value(s.islands).key("islandFaces").value(s.islandFaces);
   j.endObject();
   j.key("quadMesh").beginObject();

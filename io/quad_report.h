@@ -16,6 +16,7 @@ struct QuadReportContext {
   std::uint32_t mapFaces = 0;
   double seamResidual = 0.0, integerDistance = 0.0;  ///< of the map (measureSeamsFromUV)
   std::uint64_t filledHoles = 0;                     ///< QuadRun::filledHoles
+  std::uint64_t translatedHoles = 0;                 ///< QuadRun::translatedHoles
   std::vector<StageFigures> stages;
   double totalSeconds = 0.0;
   std::uint64_t peakBytes = 0;

@@ -29,6 +29,11 @@ void printQuadSummary(const std::string& output, const QuadRun& run) {
               U(s.gridVertices), U(s.boundaryVertices), U(s.tracedEdges), U(s.untracedEdges),
               U(s.unpairedEdges), U(s.openFaces), U(s.digons), U(s.deadEnds), U(s.halfwayCones), U(s.spikes), U(s.loops), U(s.pillows), U(s.islands), U(s.islandFaces),
               U(s.holesWithoutVertex), U(run.filledHoles));
+  if (run.translatedHoles > 0) {
+    std::printf("note: %llu small holes were left open because the map carries a seam translation around "
+                "them; a map from `seamvox param --close-holes 2` (the default with --quads) has none\n",
+                U(run.translatedHoles));
+  }
   std::printf("validation: %s; non-manifold edges %llu, vertices %llu; faces through a vertex twice %llu; "
               "%llu/%zu components with the map's Euler characteristic and boundary loops; irregular vertices "
               "off cones %llu, cones with valence != 4 - k %llu of %llu, interior non-quads %llu\n",

@@ -95,7 +95,7 @@ std::size_t rimGridPoints(const std::vector<Vec2d>& rim, double span) {
 }  // namespace
 
 std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology, std::int64_t scale,
-                             TriangleMesh& out) {
+                             TriangleMesh& out, std::uint64_t* translated) {
   constexpr std::size_t kMaxLoop = 32;
   const double span = static_cast<double>(std::max<std::int64_t>(scale, 1));
   const WedgeMap& uv = mesh.cornerUV;
@@ -154,6 +154,7 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
       if (c == start) {
         // Around a cone the charts do not come back: nothing to close there.
         closed = chart.r == 0 && chart.t.norm() <= 1e-6;
+        if (translated && chart.r == 0 && !closed && hole.corners.size() <= kMaxLoop) ++*translated;
         break;
       }
       if (seen[c]) break;
@@ -268,7 +269,7 @@ QuadRun extractCheckedQuads(const std::string& name, const TriangleMesh& mesh, c
   options.scale = scale;
   options.progress = progress;
   TriangleMesh filled;
-  run.filledHoles = fillSmallHoles(mesh, topology, scale, filled);
+  run.filledHoles = fillSmallHoles(mesh, topology, scale, filled, &run.translatedHoles);
   const Topology filledTopology =
       run.filledHoles ? Topology::build(filled.triangles, filled.numVertices()) : Topology();
   const TriangleMesh& map = run.filledHoles ? filled : mesh;

@@ -16,6 +16,9 @@ struct QuadRun {
   SeamQuality seams;  ///< of the map, measured from its UVs (measureSeamsFromUV)
   /// Holes of the map smaller than a quad (fillSmallHoles) closed for the extraction.
   std::uint64_t filledHoles = 0;
+  /// Holes of at most 32 edges left open because their loop carries a seam translation (a map
+  /// made without `param --close-holes`): fillSmallHoles' `translated`.
+  std::uint64_t translatedHoles = 0;
 };
 
 /// A copy of a map with its holes smaller than a quad closed: every boundary loop of at most 32
@@ -29,8 +32,10 @@ struct QuadRun {
 /// open, iso-lines crossing it end on its boundary and the quads around it carry extra boundary
 /// vertices (a scan's missing triangles). Returns the number of holes filled; when 0, `out` is
 /// left empty and the map itself is to be used.
+/// translated (optional) counts the loops of at most 32 edges left open because the charts come
+/// back with a translation and no rotation.
 std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology, std::int64_t scale,
-                             TriangleMesh& out);
+                             TriangleMesh& out, std::uint64_t* translated = nullptr);
 
 /// Extracts and validates the quad mesh of a cleaned map read from (or made for) `name`. Throws
 /// InputError naming it when the map has no UVs or is not seamless (kQuadSeamTolerance), or when
