@@ -1,9 +1,10 @@
 #pragma once
-/// Small holes capped for the field: a cross field is free to turn at a hole's boundary, so it
+/// Small holes capped for the solve: a cross field is free to turn at a hole's boundary, so it
 /// puts singularities inside small holes (a full turn, index -4, leaves the map wound twice around
-/// the hole). Solved on a copy with those holes capped by fans, the field turns only where the
-/// surface's shape asks it to, and a map closed over such a hole (ParamOptions::closeHolesWithin)
-/// follows it without a dislocation.
+/// the hole), and the rounding leaves translations around them. Solved on a copy with those holes
+/// capped by fans (PipelineOptions::closeHoles; the caps are dropped from the output), the field
+/// turns only where the surface's shape asks it to and the map closes over every capped hole,
+/// also two holes that touched at a vertex (split by cleaning).
 #include <cstdint>
 
 #include "core/mesh/mesh.h"

@@ -96,9 +96,11 @@ struct PipelineOptions {
   /// and runs a single cone pass.
   double mergeCones = kConeMergeFraction;
   /// Holes whose boundary fits in a box of this many grid spacings (diagonal) carry no seam
-  /// translation: the map extends over them and a quad mesh can close them (ParamOptions::
-  /// closeHolesWithin; kCloseHoleCells for quads). 0: none closed, the default: the field turns
-  /// freely at holes, and translations there let the map follow it more closely.
+  /// translation: the map extends over them and a quad mesh can close them (kCloseHoleCells for
+  /// quads). Up to the direct field's size they are capped for the field and the solve
+  /// (capSmallHoles, fieldCappedHoles), above held by constraints (ParamOptions::
+  /// closeHolesWithin). 0: none closed, the default: the field turns freely at holes, and
+  /// translations there let the map follow it more closely.
   double closeHoles = 0.0;
   /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
   std::uint32_t maxConePasses = 3;
@@ -160,7 +162,8 @@ struct PipelineResult {
   std::uint32_t conesBeforeMerge = 0;  ///< of the first pass
   ConeMergeResult merged;        ///< of the last pass (each merges the field's cones afresh)
   std::uint32_t conePasses = 0;
-  /// Small holes capped for the field (PipelineOptions::closeHoles with the direct field).
+  /// Small holes capped for the field and the solve (PipelineOptions::closeHoles with the direct
+  /// field), not in the output.
   std::uint32_t fieldCappedHoles = 0;
   SolverResult solved;           ///< figures of the last solve (its map moved to mesh.cornerUV)
   bool untangled = false;        ///< the foldover repair ran
