@@ -142,6 +142,14 @@ TEST(Topology, CapSmallHolesClosesEachSmallLoop) {
   EXPECT_EQ(capped.boundaryLoops, 0u);
   EXPECT_EQ(capped.components[0].eulerCharacteristic, 2);
   EXPECT_EQ(capSmallHoles(holed, t, 1e-6).holes, 0u);  // smaller than any hole
+  // An island's own outline and a hole whose cap would be flat are not capped.
+  TriangleMesh island;
+  island.positions = {Vec3f(3.0f, 0.0f, 0.0f), Vec3f(3.01f, 0.0f, 0.0f), Vec3f(3.0f, 0.01f, 0.0f)};
+  island.triangles = {{0, 1, 2}};
+  const TriangleMesh withIsland = testing::concatMeshes({holed, island});
+  const Topology t2 = buildOf(withIsland);
+  EXPECT_EQ(computeComponents(t2).boundaryLoops, loops + 1);
+  EXPECT_EQ(capSmallHoles(withIsland, t2, 1.0).holes, loops);
 }
 
 TEST(Topology, ComponentsAreSortedBySize) {

@@ -11,6 +11,17 @@ CappedHoles capSmallHoles(const TriangleMesh& mesh, const Topology& topology, do
   std::vector<CornerId> loop;
   std::vector<VertexId> rim;
   std::vector<std::vector<CornerId>> caps;
+  // A loop that bounds most of its component is an island, not a hole: capping it would make a
+  // closed pillow of zero volume.
+  const ComponentsResult components = computeComponents(topology);
+  std::vector<BoundingBox> componentBox(components.components.size());
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    BoundingBox& b = componentBox[components.faceComponent[f]];
+    for (const VertexId v : mesh.triangles[f]) {
+      b.min = b.min.cwiseMin(mesh.position(v));
+      b.max = b.max.cwiseMax(mesh.position(v));
+    }
+  }
   for (CornerId start = 0; start < topology.numCorners(); ++start) {
     if (!topology.isBoundaryEdge(start) || seen[start]) continue;
     loop.clear();
@@ -26,11 +37,23 @@ CappedHoles capSmallHoles(const TriangleMesh& mesh, const Topology& topology, do
       small = loop.size() <= kMaxLoop && box.diagonal() <= maxExtent;
     }
     if (!small || loop.size() < 3) continue;
+    if (!(componentBox[components.faceComponent[cornerFace(start)]].diagonal() > 4.0 * box.diagonal())) continue;
     rim.clear();
     for (CornerId c : loop) rim.push_back(topology.vertex(prevCorner(c)));
     std::sort(rim.begin(), rim.end());
     if (std::adjacent_find(rim.begin(), rim.end()) != rim.end()) continue;  // a pinched loop
-    caps.push_back(loop);
+    // No cap face may be degenerate (a crack whose two sides coincide, a sliver): it would make
+    // the solve singular.
+    Vec3d centre = Vec3d::Zero();
+    for (CornerId c : loop) centre += mesh.position(topology.vertex(prevCorner(c)));
+    centre /= double(loop.size());
+    const double minArea = 1e-6 * box.diagonal() * box.diagonal();
+    bool flat = false;
+    for (CornerId c : loop) {
+      const Vec3d a = mesh.position(topology.vertex(nextCorner(c))), b = mesh.position(topology.vertex(prevCorner(c)));
+      flat = flat || !(0.5 * (a - centre).cross(b - centre).norm() > minArea);
+    }
+    if (!flat) caps.push_back(loop);
   }
   if (caps.empty()) return out;
   out.holes = static_cast<std::uint32_t>(caps.size());

@@ -19,8 +19,10 @@ struct CappedHoles {
 };
 
 /// Caps every boundary loop through distinct vertices (at most 64 edges) whose vertices fit in a
-/// box of diagonal maxExtent with a fan from a new vertex at its centroid; the original faces and
-/// vertices keep their ids. With no such hole, holes is 0 and mesh is left empty. Linear.
+/// box of diagonal maxExtent, in a component more than four times that size across (not an
+/// island's own outline), with a fan from a new vertex at its centroid when no fan face is
+/// degenerate; the original faces and vertices keep their ids. With no such hole, holes is 0 and
+/// mesh is left empty. Linear.
 CappedHoles capSmallHoles(const TriangleMesh& mesh, const Topology& topology, double maxExtent);
 
 }  // namespace seamvox
