@@ -382,6 +382,17 @@ QuadRun flatGridQuads(const TriangleMesh& grid, const std::function<bool(const V
   return extractCheckedQuads("flat grid", map, Topology::build(map.triangles, map.numVertices()), 1, {});
 }
 
+/// A map with one hole that quads closed gives the plain grid's quad mesh: valid, one boundary
+/// loop, as many faces and vertices.
+void expectClosedLikeThePlainGrid(const QuadRun& run, const QuadRun& reference) {
+  EXPECT_EQ(run.filledHoles, 1u);
+  EXPECT_TRUE(run.check.isValid());
+  EXPECT_EQ(run.check.irregularVertices, 0u);
+  EXPECT_EQ(run.check.boundaryLoops, 1u);
+  EXPECT_EQ(run.check.faces, reference.check.faces);
+  EXPECT_EQ(run.quads.mesh.numVertices(), reference.quads.mesh.numVertices());
+}
+
 // A small hole that is not star-shaped around its centre (a U of five cells inside one unit of a
 // flat map) is closed by its own points, triangulated, instead of a fan: the quad mesh is the
 // plain grid's.
@@ -394,13 +405,7 @@ TEST(Quads, AHoleNotStarShapedIsClosedByEars) {
     return (j == 9 && i >= 17 && i <= 19) || (j == 10 && (i == 17 || i == 19));
   }, &dropped);
   ASSERT_EQ(dropped, 10u);
-  const QuadRun reference = flatGridQuads(grid, [](const Vec3d&) { return false; });
-  EXPECT_EQ(run.filledHoles, 1u);
-  EXPECT_TRUE(run.check.isValid());
-  EXPECT_EQ(run.check.irregularVertices, 0u);
-  EXPECT_EQ(run.check.boundaryLoops, 1u);
-  EXPECT_EQ(run.check.faces, reference.check.faces);
-  EXPECT_EQ(run.quads.mesh.numVertices(), reference.quads.mesh.numVertices());
+  expectClosedLikeThePlainGrid(run, flatGridQuads(grid, [](const Vec3d&) { return false; }));
 }
 
 // A small hole around which the map comes back shifted by a unit (u grows by the angle around
@@ -436,13 +441,8 @@ TEST(Quads, AHoleOneIsoLineCrossesIsClosed) {
   }, &dropped);
   ASSERT_EQ(dropped, 24u);
   const QuadRun reference = flatGridQuads(grid, [](const Vec3d&) { return false; });
-  EXPECT_EQ(run.filledHoles, 1u);
-  EXPECT_TRUE(run.check.isValid());
-  EXPECT_EQ(run.check.irregularVertices, 0u);
-  EXPECT_EQ(run.check.boundaryLoops, 1u);
-  EXPECT_EQ(run.check.faces, reference.check.faces);
+  expectClosedLikeThePlainGrid(run, reference);
   EXPECT_EQ(run.check.quads, reference.check.quads);
-  EXPECT_EQ(run.quads.mesh.numVertices(), reference.quads.mesh.numVertices());
   // Wider than a quad both ways, it stays open: iso-lines end on its rim.
   const QuadRun open = flatGridQuads(grid, [](const Vec3d& c) {
     return c.x() > 2.25 && c.x() < 3.75 && c.y() > 0.75 && c.y() < 2.25;

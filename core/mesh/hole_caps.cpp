@@ -10,7 +10,7 @@ CappedHoles capSmallHoles(const TriangleMesh& mesh, const Topology& topology, do
   std::vector<std::uint8_t> seen(topology.numCorners(), 0);
   std::vector<CornerId> loop;
   std::vector<VertexId> rim;
-  std::vector<std::vector<CornerId>> caps;
+  std::vector<std::pair<std::vector<CornerId>, Vec3d>> caps;  // loop and centroid
   // A loop that bounds most of its component is an island, not a hole: capping it would make a
   // closed pillow of zero volume.
   const ComponentsResult components = computeComponents(topology);
@@ -53,17 +53,15 @@ CappedHoles capSmallHoles(const TriangleMesh& mesh, const Topology& topology, do
       const Vec3d a = mesh.position(topology.vertex(nextCorner(c))), b = mesh.position(topology.vertex(prevCorner(c)));
       flat = flat || !(0.5 * (a - centre).cross(b - centre).norm() > minArea);
     }
-    if (!flat) caps.push_back(loop);
+    if (!flat) caps.emplace_back(loop, centre);
   }
   if (caps.empty()) return out;
   out.holes = static_cast<std::uint32_t>(caps.size());
   out.mesh.positions = mesh.positions;
   out.mesh.triangles = mesh.triangles;
-  for (const std::vector<CornerId>& cap : caps) {
-    Vec3d centre = Vec3d::Zero();
-    for (CornerId c : cap) centre += mesh.position(topology.vertex(prevCorner(c)));
+  for (const auto& [cap, centre] : caps) {
     const VertexId middle = static_cast<VertexId>(out.mesh.positions.size());
-    out.mesh.positions.push_back((centre / double(cap.size())).cast<float>());
+    out.mesh.positions.push_back(centre.cast<float>());
     // The boundary edge of corner c runs vertex(next c) -> vertex(prev c): the cap face runs back.
     for (CornerId c : cap) out.mesh.triangles.push_back({topology.vertex(prevCorner(c)), topology.vertex(nextCorner(c)), middle});
   }
