@@ -429,6 +429,61 @@ TEST(Quads, AHoleWithATranslationIsCountedNotClosed) {
   EXPECT_TRUE(plain.check.isValid());
 }
 
+// Holes at a cone, as a map solved over capped holes leaves them (the cone on a cap's centre or
+// at a rim vertex): around them the charts come back turned. quadrantFan's cone, on an integer
+// point, with its whole fan taken out (the cone inside the hole) or one face at it (the cone on
+// the rim): closed around the turn's fixed point or through the rim cone, the quad mesh is the
+// intact fan's, with the cone's valence 4 - k. Off the integer point, the cone inside is still
+// closed and the quads stay valid.
+TEST(Quads, HolesAtAConeAreClosedAroundIt) {
+  for (const int k : {3, 5}) {
+    for (const Vec2d cone : {Vec2d(0.0, 0.0), Vec2d(0.5, 0.5)}) {
+      SCOPED_TRACE("quadrants " + std::to_string(k) + " cone at " + std::to_string(cone.x()));
+      const testing::Surface intact = quadrantFan(k, cone, 3.0, 8);
+      const QuadRun reference = extractCheckedQuads("fan", intact.mesh, intact.topology, 1, {});
+      ASSERT_TRUE(reference.check.isValid());
+      for (const bool wholeFan : {true, false}) {
+        SCOPED_TRACE(wholeFan ? "cone inside" : "cone on the rim");
+        // Vertex 0 is the cone; with its whole fan out, the other vertices are renumbered down.
+        TriangleMesh holed;
+        holed.positions = intact.mesh.positions;
+        if (wholeFan) holed.positions.erase(holed.positions.begin());
+        std::vector<Vec2d> uv;
+        bool droppedOne = false;
+        for (FaceId f = 0; f < intact.mesh.numFaces(); ++f) {
+          const Triangle& t = intact.mesh.triangles[f];
+          const bool atCone = t[0] == 0 || t[1] == 0 || t[2] == 0;
+          if (atCone && (wholeFan || !droppedOne)) {
+            droppedOne = true;
+            continue;
+          }
+          Triangle kept = t;
+          if (wholeFan) {
+            for (VertexId& v : kept) --v;
+          }
+          holed.triangles.push_back(kept);
+          for (int c = 0; c < 3; ++c) uv.push_back(intact.mesh.cornerUV[3 * f + c]);
+        }
+        holed.cornerUV = WedgeMap::fromCorners(holed.triangles, uv);
+        const testing::Surface s = testing::makeSurface(std::move(holed));
+        const QuadRun run = extractCheckedQuads("holed fan", s.mesh, s.topology, 1, {});
+        EXPECT_EQ(run.filledHoles, 1u);
+        EXPECT_EQ(run.translatedHoles, 0u);
+        EXPECT_TRUE(run.check.isValid());
+        EXPECT_EQ(run.check.boundaryLoops, 1u);
+        EXPECT_EQ(run.quads.cones, 1u);
+        if (cone == Vec2d(0.0, 0.0)) {
+          EXPECT_EQ(run.check.faces, reference.check.faces);
+          EXPECT_EQ(run.check.quads, reference.check.quads);
+          EXPECT_EQ(run.check.conesOnVertices, 1u);
+          EXPECT_EQ(run.check.conesWithWrongValence, 0u);
+          EXPECT_EQ(run.check.irregularVertices, 0u);
+        }
+      }
+    }
+  }
+}
+
 // A hole wider than a quad that one iso-line crosses, in a flat 6 x 4 map: its rim meets the
 // lines at two points only, so a quad mesh cannot keep it open (the faces on both sides would
 // share its one edge between those points, both of valence 2). It is closed like a small hole,

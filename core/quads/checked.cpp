@@ -152,8 +152,9 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
       if (chart.r < 0 || topology.opposite(e) != kInvalidId) break;  // not a plain hole
       c = e;
       if (c == start) {
-        // Around a cone the charts do not come back: nothing to close there.
-        closed = chart.r == 0 && chart.t.norm() <= 1e-6;
+        // The charts come back (no cone inside), or turned (a cone inside or on the loop); back
+        // with a translation only (a dislocation), nothing can close the hole.
+        closed = chart.r != 0 || chart.t.norm() <= 1e-6;
         if (translated && chart.r == 0 && !closed && hole.corners.size() <= kMaxLoop) ++*translated;
         break;
       }
@@ -161,29 +162,54 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
     }
     if (!closed || hole.corners.size() > kMaxLoop) continue;
     // The loop's points in the first chart: a span below a quad, in a component four times larger.
-    std::vector<Vec2d> point;
+    std::vector<Vec2d> point, end;  // each rim edge's start and end
     BoundingBox around;
     for (std::size_t k = 0; k < hole.corners.size(); ++k) {
       point.push_back(hole.chart[k].apply(uv[nextCorner(hole.corners[k])]));
+      end.push_back(hole.chart[k].apply(uv[prevCorner(hole.corners[k])]));
       around.min = around.min.cwiseMin(mesh.position(topology.vertex(nextCorner(hole.corners[k]))));
       around.max = around.max.cwiseMax(mesh.position(topology.vertex(nextCorner(hole.corners[k]))));
     }
-    Vec2d lo = point[0], hi = point[0];
+    // Turned: a cone inside, at the turn's fixed point q = R q + t (first chart), or on the rim.
+    bool turned = chart.r != 0;
+    Vec2d cone = Vec2d::Zero();
+    if (turned) {
+      const Vec2d x = Rigid::turn(Vec2d(1.0, 0.0), chart.r), y = Rigid::turn(Vec2d(0.0, 1.0), chart.r);
+      const double a = 1.0 - x.x(), b = -y.x(), c2 = -x.y(), d = 1.0 - y.y(), det = a * d - b * c2;
+      cone = Vec2d(d * chart.t.x() - b * chart.t.y(), a * chart.t.y() - c2 * chart.t.x()) / det;
+      // A cone on the rim: read the points before it after the turn, and the loop, from the cone
+      // round to it, closes in the first chart (the fill's faces at the cone widen its fan).
+      for (std::size_t j = 0; j < point.size() && turned; ++j) {
+        if ((point[j] - cone).norm() > 1e-6) continue;
+        for (std::size_t k = 0; k < j; ++k) {
+          hole.chart[k] = chart.after(hole.chart[k]);
+          point[k] = chart.apply(point[k]);
+          end[k] = chart.apply(end[k]);
+        }
+        turned = false;
+      }
+    }
+    Vec2d lo = end.back(), hi = end.back();
     hole.centre = Vec2d::Zero();
     for (const Vec2d& q : point) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q), hole.centre += q;
     hole.centre /= double(point.size());
+    if (turned) {
+      hole.centre = cone;
+      lo = lo.cwiseMin(cone), hi = hi.cwiseMax(cone);
+    }
     // Or a hole whose rim the iso-lines meet at two points or none, whatever its span (at most one
     // line crosses it, so it is under two units one way and one the other): a quad mesh cannot
     // leave it open (two points give one edge that the faces on both sides share).
-    if (!((hi - lo).maxCoeff() < span) && rimGridPoints(point, span) > 2) continue;
+    if (!((hi - lo).maxCoeff() < span) && (turned || rimGridPoints(point, span) > 2)) continue;
     if (!(componentExtent(cornerFace(start)).diagonal() > 4.0 * around.diagonal())) continue;
     // Every face of the fan must turn the way the map's faces do (a star-shaped hole in (u, v)).
     bool starShaped = true;
     for (std::size_t k = 0; k < point.size(); ++k) {
-      const Vec2d p = point[(k + 1) % point.size()], q = point[k];  // the edge's end B and start A
+      const Vec2d p = end[k], q = point[k];  // the edge's end B and start A
       starShaped = starShaped && cross2(q - p, hole.centre - p) > 0.0;
     }
     hole.ears.clear();
+    if (!starShaped && turned) continue;  // a fan around the cone or nothing
     if (!starShaped) {
       // Else the loop's own points triangulated: the fill runs against the loop's direction, so the
       // polygon is the points in reverse; a loop through a vertex twice is left open.

@@ -22,7 +22,10 @@ struct QuadRun {
 };
 
 /// A copy of a map with its holes smaller than a quad closed: every boundary loop of at most 32
-/// edges around which the charts come back (no cone inside; seams may cross it) whose (u, v), read
+/// edges around which the charts come back (no cone inside; seams may cross it) or come back
+/// turned by a cone on the loop (the loop is then read from that cone round to it, in one chart)
+/// or inside it (closed only by a fan around the turn's fixed point, the cone's point, when the
+/// loop and that point span less than `scale` units each way and the fan is star-shaped), whose (u, v), read
 /// in one chart, span less than `scale` units each way or meet the iso-lines at two points or none,
 /// in a component more than four times its size across, gets a fan of triangles from a new vertex
 /// at its centroid (mean position and (u, v); in each fan face's own chart, so a seam crossing the
