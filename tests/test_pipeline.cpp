@@ -444,25 +444,31 @@ std::vector<LoopHolonomy> holeHolonomies(const PipelineResult& r, double maxExte
 }
 
 // A hole smaller than a few grid cells carries no seam translation in the written map (it can be
-// closed by a quad mesh); without closeHoles the rounding leaves some of them a translation. Up
-// to the direct field's size the holes are capped for the solve (then dropped); with the proxy
-// field (larger meshes) the loops' translations are held at zero as constraints.
+// closed by a quad mesh); without closeHoles the rounding leaves some of them a translation. The
+// holes are capped for the solve (then dropped), with the direct field and the proxy (larger
+// meshes); loops no cap closes have their translations held at zero as constraints (here all of
+// them, with the caps off).
 TEST(Pipeline, SmallHolesCarryNoTranslationInTheWrittenMap) {
   struct Case {
     ParamSolver solver;
     double cells;
     FieldMethod field;
+    bool capped;
   };
-  for (const Case& c : {Case{ParamSolver::Hat, 0.0, FieldMethod::Auto}, Case{ParamSolver::Hat, kCloseHoleCells, FieldMethod::Auto},
-                        Case{ParamSolver::VoxLoc, kCloseHoleCells, FieldMethod::Auto},
-                        Case{ParamSolver::Hat, kCloseHoleCells, FieldMethod::Proxy},
-                        Case{ParamSolver::VoxLoc, kCloseHoleCells, FieldMethod::Proxy}}) {
-    SCOPED_TRACE(std::string(paramSolverName(c.solver)) + " " + std::to_string(c.cells) + " " + fieldMethodName(c.field));
+  for (const Case& c : {Case{ParamSolver::Hat, 0.0, FieldMethod::Auto, false},
+                        Case{ParamSolver::Hat, kCloseHoleCells, FieldMethod::Auto, true},
+                        Case{ParamSolver::VoxLoc, kCloseHoleCells, FieldMethod::Auto, true},
+                        Case{ParamSolver::VoxLoc, kCloseHoleCells, FieldMethod::Proxy, true},
+                        Case{ParamSolver::Hat, kCloseHoleCells, FieldMethod::Proxy, false},
+                        Case{ParamSolver::VoxLoc, kCloseHoleCells, FieldMethod::Auto, false}}) {
+    SCOPED_TRACE(std::string(paramSolverName(c.solver)) + " " + std::to_string(c.cells) + " " +
+                 fieldMethodName(c.field) + (c.capped ? " capped" : ""));
     PipelineOptions options;
     options.solver.solver = c.solver;
     options.solver.gridResolution = 32;
     options.spacing.cells = 25;
     options.closeHoles = c.cells;
+    options.capHoles = c.capped;
     options.field.method = c.field;
     const TriangleMesh input = testing::withOneTriangleHoles(sphere(6000), 37);
     const PipelineResult r = parameterize(input, options);
@@ -478,7 +484,7 @@ TEST(Pipeline, SmallHolesCarryNoTranslationInTheWrittenMap) {
       if (std::abs(h.r - 1.0) < 1e-9 && std::abs(h.t) > 1e-6) ++translated;
     }
     EXPECT_GT(crossing, 0u) << "no hole touches a seam: the test proves nothing";
-    const bool capped = c.cells > 0.0 && c.field == FieldMethod::Auto;
+    const bool capped = c.cells > 0.0 && c.capped;
     EXPECT_EQ(r.fieldCappedHoles, capped ? holes.size() : 0u);
     EXPECT_EQ(r.solved.param.smallHoles, c.cells > 0.0 && !capped ? holes.size() : 0u);
     if (c.cells > 0.0) {

@@ -123,31 +123,55 @@ TEST(Topology, NextBoundaryCornerWalksEachLoopOnce) {
   EXPECT_EQ(crossed.size(), interiorAtBoundary + bothEnds);
 }
 
-// Capping small holes: a sphere with one-triangle holes becomes closed again (Euler
-// characteristic 2), the original faces and vertices keep their ids, and holes larger than the
-// extent stay open.
+// Capping small holes in place: a sphere with one-triangle holes becomes closed again (Euler
+// characteristic 2; its corner table equals the one built from scratch), the original faces and
+// vertices keep their ids, uncapping gives the table back as it was, and holes larger than the
+// extent stay open. On a table that views the triangles and on one that owns them.
 TEST(Topology, CapSmallHolesClosesEachSmallLoop) {
   const TriangleMesh holed = testing::withOneTriangleHoles(icosphereMesh(3), 17);
-  const Topology t = buildOf(holed);
-  const std::uint32_t loops = computeComponents(t).boundaryLoops;
+  const Topology original = buildOf(holed);
+  const std::uint32_t loops = computeComponents(original).boundaryLoops;
   ASSERT_GE(loops, 10u);
-  const CappedHoles caps = capSmallHoles(holed, t, 1.0);  // the unit sphere's holes are small
-  EXPECT_EQ(caps.holes, loops);
-  EXPECT_EQ(caps.mesh.numVertices(), holed.numVertices() + loops);
-  EXPECT_EQ(caps.mesh.numFaces(), holed.numFaces() + 3 * loops);
-  for (FaceId f = 0; f < holed.numFaces(); ++f) ASSERT_EQ(caps.mesh.triangles[f], holed.triangles[f]);
-  caps.topology.validate();
-  const ComponentsResult capped = computeComponents(caps.topology);
-  ASSERT_EQ(capped.components.size(), 1u);
-  EXPECT_EQ(capped.boundaryLoops, 0u);
-  EXPECT_EQ(capped.components[0].eulerCharacteristic, 2);
-  EXPECT_EQ(capSmallHoles(holed, t, 1e-6).holes, 0u);  // smaller than any hole
+  for (const bool view : {true, false}) {
+    SCOPED_TRACE(view ? "viewing" : "owning");
+    TriangleMesh mesh = holed;
+    Topology t = original;  // owns a copy of the faces
+    if (view) {
+      std::vector<CornerId> opposite, starts;
+      for (CornerId c = 0; c < original.numCorners(); ++c) opposite.push_back(original.opposite(c));
+      for (VertexId v = 0; v < original.numVertices(); ++v) starts.push_back(original.vertexCorner(v));
+      t = Topology::viewParts(mesh.triangles, std::move(opposite), std::move(starts));
+    }
+    const CappedHoles caps = capSmallHoles(mesh, t, 1.0);  // the unit sphere's holes are small
+    EXPECT_EQ(caps.holes, loops);
+    EXPECT_EQ(mesh.numVertices(), holed.numVertices() + loops);
+    EXPECT_EQ(mesh.numFaces(), holed.numFaces() + 3 * loops);
+    for (FaceId f = 0; f < holed.numFaces(); ++f) ASSERT_EQ(mesh.triangles[f], holed.triangles[f]);
+    t.validate();
+    const Topology built = buildOf(mesh);
+    for (CornerId c = 0; c < t.numCorners(); ++c) ASSERT_EQ(t.opposite(c), built.opposite(c)) << c;
+    for (VertexId v = 0; v < t.numVertices(); ++v) ASSERT_EQ(t.vertexCorner(v), built.vertexCorner(v)) << v;
+    const ComponentsResult capped = computeComponents(t);
+    ASSERT_EQ(capped.components.size(), 1u);
+    EXPECT_EQ(capped.boundaryLoops, 0u);
+    EXPECT_EQ(capped.components[0].eulerCharacteristic, 2);
+    uncapHoles(mesh, t, caps);
+    ASSERT_EQ(mesh.triangles, holed.triangles);
+    ASSERT_EQ(mesh.positions, holed.positions);
+    ASSERT_EQ(t.numFaces(), original.numFaces());
+    ASSERT_EQ(t.numVertices(), original.numVertices());
+    for (CornerId c = 0; c < t.numCorners(); ++c) ASSERT_EQ(t.opposite(c), original.opposite(c)) << c;
+    for (VertexId v = 0; v < t.numVertices(); ++v) ASSERT_EQ(t.vertexCorner(v), original.vertexCorner(v)) << v;
+    for (FaceId f = 0; f < t.numFaces(); ++f) ASSERT_EQ(t.triangles()[f], holed.triangles[f]);
+    EXPECT_EQ(capSmallHoles(mesh, t, 1e-6).holes, 0u);  // smaller than any hole
+    EXPECT_EQ(mesh.numFaces(), holed.numFaces());
+  }
   // An island's own outline and a hole whose cap would be flat are not capped.
   TriangleMesh island;
   island.positions = {Vec3f(3.0f, 0.0f, 0.0f), Vec3f(3.01f, 0.0f, 0.0f), Vec3f(3.0f, 0.01f, 0.0f)};
   island.triangles = {{0, 1, 2}};
-  const TriangleMesh withIsland = testing::concatMeshes({holed, island});
-  const Topology t2 = buildOf(withIsland);
+  TriangleMesh withIsland = testing::concatMeshes({holed, island});
+  Topology t2 = buildOf(withIsland);
   EXPECT_EQ(computeComponents(t2).boundaryLoops, loops + 1);
   EXPECT_EQ(capSmallHoles(withIsland, t2, 1.0).holes, loops);
 }

@@ -4,7 +4,7 @@
 
 namespace seamvox {
 
-CappedHoles capSmallHoles(const TriangleMesh& mesh, const Topology& topology, double maxExtent) {
+CappedHoles capSmallHoles(TriangleMesh& mesh, Topology& topology, double maxExtent) {
   constexpr std::size_t kMaxLoop = 64;
   CappedHoles out;
   std::vector<std::uint8_t> seen(topology.numCorners(), 0);
@@ -57,16 +57,41 @@ CappedHoles capSmallHoles(const TriangleMesh& mesh, const Topology& topology, do
   }
   if (caps.empty()) return out;
   out.holes = static_cast<std::uint32_t>(caps.size());
-  out.mesh.positions = mesh.positions;
-  out.mesh.triangles = mesh.triangles;
+  out.faces = mesh.numFaces();
+  out.vertices = mesh.numVertices();
+  // The caps' faces first (the corner table views the faces, whose array may move when it grows).
+  std::vector<Triangle> added;
+  std::vector<Vec3f> centres;
+  std::vector<std::pair<CornerId, CornerId>> glued;
   for (const auto& [cap, centre] : caps) {
-    const VertexId middle = static_cast<VertexId>(out.mesh.positions.size());
-    out.mesh.positions.push_back(centre.cast<float>());
-    // The boundary edge of corner c runs vertex(next c) -> vertex(prev c): the cap face runs back.
-    for (CornerId c : cap) out.mesh.triangles.push_back({topology.vertex(prevCorner(c)), topology.vertex(nextCorner(c)), middle});
+    const VertexId middle = static_cast<VertexId>(mesh.positions.size() + centres.size());
+    centres.push_back(centre.cast<float>());
+    // The boundary edge of corner c runs A = vertex(next c) -> B = vertex(prev c): the cap face
+    // B, A, centre runs back along it (its centre corner faces c), and its edge centre -> B meets
+    // the next cap face's B -> centre.
+    const FaceId first = mesh.numFaces() + static_cast<FaceId>(added.size());
+    for (std::size_t k = 0; k < cap.size(); ++k) {
+      const CornerId c = cap[k];
+      const FaceId g = first + static_cast<FaceId>(k), h = first + static_cast<FaceId>((k + 1) % cap.size());
+      added.push_back({topology.vertex(prevCorner(c)), topology.vertex(nextCorner(c)), middle});
+      glued.push_back({3 * g + 2, c});
+      glued.push_back({3 * g + 1, 3 * h});
+    }
   }
-  out.topology = Topology::build(out.mesh.triangles, out.mesh.numVertices());
+  // Exact allocations: a growing vector would double the mesh's arrays.
+  mesh.positions.reserve(mesh.positions.size() + centres.size());
+  mesh.positions.insert(mesh.positions.end(), centres.begin(), centres.end());
+  mesh.triangles.reserve(mesh.triangles.size() + added.size());
+  mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
+  out.fanStarts = topology.extend(mesh.triangles, mesh.numVertices(), glued);
   return out;
+}
+
+void uncapHoles(TriangleMesh& mesh, Topology& topology, const CappedHoles& caps) {
+  if (caps.holes == 0) return;
+  mesh.triangles.resize(caps.faces);
+  mesh.positions.resize(caps.vertices);
+  topology.shrink(mesh.triangles, caps.faces, caps.vertices, caps.fanStarts);
 }
 
 }  // namespace seamvox

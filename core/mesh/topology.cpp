@@ -271,6 +271,85 @@ Topology& Topology::operator=(const Topology& other) {
   return *this;
 }
 
+namespace {
+
+/// Grows a vector to n elements with an exact allocation (resize would double a large array).
+template <class T>
+void growExactly(std::vector<T>& v, std::size_t n, const T& fill) {
+  if (n > v.capacity()) v.reserve(n);
+  v.resize(n, fill);
+}
+
+}  // namespace
+
+std::vector<std::pair<VertexId, CornerId>> Topology::extend(const std::vector<Triangle>& triangles,
+                                                            std::uint32_t numVertices,
+                                                            const std::vector<std::pair<CornerId, CornerId>>& glued) {
+  const CornerId oldCorners = numCorners();
+  const VertexId oldVertices = this->numVertices();
+  if (owned_.empty()) {
+    tris_ = triangles.data();
+  } else {
+    owned_ = triangles;
+    tris_ = owned_.data();
+  }
+  numFaces_ = static_cast<std::uint32_t>(triangles.size());
+  growExactly(opposite_, std::size_t(numCorners()), kInvalidId);
+  growExactly(vertexCorner_, std::size_t(numVertices), kInvalidId);
+  for (const auto& [a, b] : glued) {
+    opposite_[a] = b;
+    opposite_[b] = a;
+  }
+  // One corner per vertex of the new faces; its fan start as build() picks it: the most clockwise
+  // corner of an open fan, the largest corner of a closed one.
+  std::vector<std::pair<VertexId, CornerId>> at;
+  for (CornerId c = oldCorners; c < numCorners(); ++c) at.push_back({vertex(c), c});
+  std::sort(at.begin(), at.end());
+  at.erase(std::unique(at.begin(), at.end(), [](const auto& x, const auto& y) { return x.first == y.first; }), at.end());
+  std::vector<std::pair<VertexId, CornerId>> before;
+  for (const auto& [v, c0] : at) {
+    if (v < oldVertices) before.push_back({v, vertexCorner_[v]});
+    CornerId s = c0;
+    bool closed = false;
+    for (;;) {
+      const CornerId o = opposite_[prevCorner(s)];
+      if (o == kInvalidId) break;
+      if (prevCorner(o) == c0) {
+        closed = true;
+        break;
+      }
+      s = prevCorner(o);
+    }
+    if (closed) {
+      CornerId c = c0;
+      do {
+        s = std::max(s, c);
+        c = ccw(c);
+      } while (c != c0);
+    }
+    vertexCorner_[v] = s;
+  }
+  return before;
+}
+
+void Topology::shrink(const std::vector<Triangle>& triangles, std::uint32_t faces, std::uint32_t vertices,
+                      const std::vector<std::pair<VertexId, CornerId>>& starts) {
+  const CornerId kept = 3 * faces;
+  for (CornerId c = kept; c < numCorners(); ++c) {
+    if (opposite_[c] != kInvalidId && opposite_[c] < kept) opposite_[opposite_[c]] = kInvalidId;
+  }
+  opposite_.resize(kept);
+  vertexCorner_.resize(vertices);
+  for (const auto& [v, c] : starts) vertexCorner_[v] = c;
+  if (owned_.empty()) {
+    tris_ = triangles.data();
+  } else {
+    owned_.resize(faces);
+    tris_ = owned_.data();
+  }
+  numFaces_ = faces;
+}
+
 CornerId nextBoundaryCorner(const Topology& topology, CornerId c, std::vector<CornerId>* crossed) {
   CornerId around = prevCorner(c);  // at vertex(prev c) in the current face
   while (!topology.isBoundaryEdge(prevCorner(around))) {

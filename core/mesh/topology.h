@@ -16,6 +16,7 @@
 ///   invalid) for boundary vertices, any corner for interior ones, so walking ccw() from it
 ///   visits the whole fan of v exactly once.
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/mesh/mesh.h"
@@ -98,6 +99,19 @@ class Topology {
   }
   /// Number of faces incident to v.
   std::uint32_t valence(VertexId v) const;
+
+  /// Faces appended in place: `triangles` holds this table's faces unchanged, then new ones (the
+  /// table views it, or owns a copy when it owned its faces), `numVertices` counts new vertices
+  /// too, and each pair in `glued` joins two corners' edges (one of them at least new). The fan
+  /// starts of the vertices of the new faces are found as build() finds them. Returns the old
+  /// fan starts of the old vertices among them, for shrink().
+  std::vector<std::pair<VertexId, CornerId>> extend(const std::vector<Triangle>& triangles, std::uint32_t numVertices,
+                                                    const std::vector<std::pair<CornerId, CornerId>>& glued);
+  /// Undoes extend(): keeps the first `faces` faces of `triangles` (its first faces unchanged) and
+  /// the first `vertices` vertices, opens the edges glued to dropped corners and gives `starts`
+  /// back. The table then equals the one before extend().
+  void shrink(const std::vector<Triangle>& triangles, std::uint32_t faces, std::uint32_t vertices,
+              const std::vector<std::pair<VertexId, CornerId>>& starts);
 
   /// Checks every invariant (opposite is an involution between corners of different faces that
   /// share the edge reversed, fans, vertexCorner). Throws TopologyError with the first failure.

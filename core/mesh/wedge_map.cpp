@@ -130,6 +130,21 @@ void WedgeMap::resizeCorners(std::size_t n) {
   wedge_.shrink_to_fit();
 }
 
+void WedgeMap::keepCorners(std::size_t n) {
+  if (n >= wedge_.size()) return;
+  wedge_.resize(n);
+  std::vector<std::uint32_t> renumber(value_.size(), kInvalidId);
+  for (const std::uint32_t w : wedge_) renumber[w] = 0;
+  std::uint32_t kept = 0;
+  for (std::uint32_t w = 0; w < value_.size(); ++w) {
+    if (renumber[w] == kInvalidId) continue;
+    renumber[w] = kept;
+    value_[kept++] = value_[w];
+  }
+  value_.resize(kept);
+  for (std::uint32_t& w : wedge_) w = renumber[w];
+}
+
 void WedgeMap::clear() {
   std::vector<std::uint32_t>().swap(wedge_);
   std::vector<Vec2d>().swap(value_);

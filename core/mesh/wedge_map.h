@@ -45,6 +45,8 @@ class WedgeMap {
   void copyCorner(CornerId to, CornerId from) { wedge_[to] = wedge_[from]; }
   void swapCorners(CornerId a, CornerId b) { std::swap(wedge_[a], wedge_[b]); }
   void resizeCorners(std::size_t n);
+  /// Keeps the first n corners (no copy of the array) and drops the wedges left without corners.
+  void keepCorners(std::size_t n);
   void clear();
   /// Bytes held (for memory reports).
   std::size_t memoryBytes() const;

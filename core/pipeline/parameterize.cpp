@@ -180,68 +180,38 @@ FeatureSet releaseCollapsingCurves(const TriangleMesh& mesh, const Topology& top
   return kept;
 }
 
-/// The mesh as it was before capSmallHoles replaced it for the solve.
-struct Uncapped {
-  bool active = false;
-  std::uint32_t faces = 0, vertices = 0;
-  std::vector<Triangle> triangles;  // moved, not copied: the topology may view their buffer
-  Topology topology;
-  VertexAttributes attributes;
-};
-
-/// With PipelineOptions::closeHoles (direct field sizes: up to kDirectFieldMaxFaces, where the
-/// copy is cheap; no imported field): the small holes capped by fans for the field and the whole
-/// solve (hole_caps.h), so the field does not turn inside them and the map is closed over them;
-/// uncapForOutput drops the caps again.
-Uncapped capForSolve(PipelineResult& r, const FieldSource& source, const PipelineOptions& options) {
-  Uncapped kept;
-  if (!(options.closeHoles > 0.0 && source.importedPerInputFace.empty() &&
-        resolveFieldMethod(source.method, r.mesh.numFaces()) == FieldMethod::Direct)) {
-    return kept;
-  }
+/// With PipelineOptions::closeHoles (no imported field: it has no vectors for the caps): the small
+/// holes capped in place by fans for the field and the whole solve (hole_caps.h), so the field does
+/// not turn inside them and the map is closed over them; uncapForOutput takes the caps off again.
+CappedHoles capForSolve(PipelineResult& r, const FieldSource& source, const PipelineOptions& options) {
+  if (!(options.closeHoles > 0.0 && options.capHoles && source.importedPerInputFace.empty())) return {};
   CappedHoles caps = capSmallHoles(r.mesh, r.topology, options.closeHoles * r.edgeLength);
   r.fieldCappedHoles = caps.holes;
-  if (caps.holes == 0) return kept;
-  kept.active = true;
-  kept.faces = r.mesh.numFaces();
-  kept.vertices = r.mesh.numVertices();
-  kept.triangles = std::move(r.mesh.triangles);
-  kept.topology = std::move(r.topology);
-  kept.attributes = std::move(r.mesh.attributes);
-  r.mesh.positions = std::move(caps.mesh.positions);
-  r.mesh.triangles = std::move(caps.mesh.triangles);
-  r.topology = std::move(caps.topology);
-  return kept;
+  return caps;
 }
 
 /// The mesh, field, map and cones without the caps: the map keeps its values on the mesh's own
 /// corners (seamless there as on the capped surface); a cone at a cap's centre goes with it.
-void uncapForOutput(PipelineResult& r, CrossField& field, Uncapped& kept) {
-  if (!kept.active) return;
-  const WedgeMap& capped = r.solved.param.cornerUV;
-  std::vector<Vec2d> values(3u * static_cast<std::size_t>(kept.faces));
-  for (CornerId c = 0; c < values.size(); ++c) values[c] = capped[c];
-  r.mesh.positions.resize(kept.vertices);
-  r.mesh.triangles = std::move(kept.triangles);
-  r.mesh.attributes = std::move(kept.attributes);
-  r.topology = std::move(kept.topology);
-  r.solved.param.cornerUV = WedgeMap::fromCorners(r.mesh.triangles, values);
-  field.direction.resize(kept.faces);
-  if (!field.framePositions.empty()) field.framePositions.resize(kept.vertices);
+void uncapForOutput(PipelineResult& r, CrossField& field, CappedHoles& caps) {
+  if (caps.holes == 0) return;
+  r.solved.param.cornerUV.keepCorners(3 * std::size_t(caps.faces));
+  uncapHoles(r.mesh, r.topology, caps);
+  field.direction.resize(caps.faces);
+  if (!field.framePositions.empty()) field.framePositions.resize(caps.vertices);
   std::vector<VertexId> cones;
   std::vector<std::int32_t> index4;
   for (std::size_t k = 0; k < r.cones.size(); ++k) {
-    if (r.cones[k] >= kept.vertices) continue;
+    if (r.cones[k] >= caps.vertices) continue;
     cones.push_back(r.cones[k]);
     index4.push_back(r.coneIndex4[k]);
   }
   r.cones = std::move(cones);
   r.coneIndex4 = std::move(index4);
   for (std::vector<FaceId>* faces : {&r.solved.param.unsolvedFaces, &r.solved.param.anchoredFaces}) {
-    faces->erase(std::remove_if(faces->begin(), faces->end(), [&](FaceId f) { return f >= kept.faces; }),
+    faces->erase(std::remove_if(faces->begin(), faces->end(), [&](FaceId f) { return f >= caps.faces; }),
                  faces->end());
   }
-  kept.active = false;
+  caps = CappedHoles();
 }
 
 /// The cone passes: merge and cut, solve; again with the pairs a solve put on one point merged,
@@ -419,15 +389,16 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
                       : "file";
   FieldSource source = aligned ? *aligned : options.field;
   aligned.reset();
-  Uncapped uncapped = capForSolve(r, source, options);
-  if (uncapped.active) source.method = FieldMethod::Direct;  // the caps' faces count too
+  // The field's method as the mesh's own size picks it (the caps' faces do not count).
+  source.method = resolveFieldMethod(source.method, r.mesh.numFaces());
+  CappedHoles caps = capForSolve(r, source, options);
   CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces, source,
                                             options.progress, &r.fieldSolve);
   std::vector<FaceId>().swap(clean.faceOrigin);
   meter.finish("field");
 
   solveConePasses(r, field, options, meter);
-  uncapForOutput(r, field, uncapped);
+  uncapForOutput(r, field, caps);
   r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength, nullptr, &r.topology);
   r.mesh.cornerUV = std::move(r.solved.param.cornerUV);
   field = CrossField();  // before the per-component figures (10 bytes per face)

@@ -97,11 +97,14 @@ struct PipelineOptions {
   double mergeCones = kConeMergeFraction;
   /// Holes whose boundary fits in a box of this many grid spacings (diagonal) carry no seam
   /// translation: the map extends over them and a quad mesh can close them (kCloseHoleCells for
-  /// quads). Up to the direct field's size they are capped for the field and the solve
-  /// (capSmallHoles, fieldCappedHoles), above held by constraints (ParamOptions::
-  /// closeHolesWithin). 0: none closed, the default: the field turns freely at holes, and
-  /// translations there let the map follow it more closely.
+  /// quads). They are capped in place for the field and the solve (capSmallHoles,
+  /// fieldCappedHoles; without an imported field), and the loops no cap closes (through a vertex
+  /// twice, flat caps) are held by constraints (ParamOptions::closeHolesWithin). 0: none closed,
+  /// the default: the field turns freely at holes, and translations there let the map follow it
+  /// more closely.
   double closeHoles = 0.0;
+  /// With closeHoles: caps for the solve (false: constraints alone; tests).
+  bool capHoles = true;
   /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
   std::uint32_t maxConePasses = 3;
   /// Feature curves at faces the map collapses are released and the map solved again: the
