@@ -165,8 +165,8 @@ struct PipelineResult {
   std::uint32_t conesBeforeMerge = 0;  ///< of the first pass
   ConeMergeResult merged;        ///< of the last pass (each merges the field's cones afresh)
   std::uint32_t conePasses = 0;
-  /// Small holes capped for the field and the solve (PipelineOptions::closeHoles with the direct
-  /// field), not in the output.
+  /// Small holes capped for the field and the solve (PipelineOptions::closeHoles), not in the
+  /// output.
   std::uint32_t fieldCappedHoles = 0;
   SolverResult solved;           ///< figures of the last solve (its map moved to mesh.cornerUV)
   bool untangled = false;        ///< the foldover repair ran
