@@ -178,6 +178,49 @@ TEST(Untangle, RepairsFlipsKeepsSeamlessAndMovesOnlyPatches) {
   EXPECT_EQ(stats.freeVertices > 0, true);
 }
 
+// Restricted to marked faces (the repair near a few cones before deciding on another pass): the
+// flips among them are repaired and counted, the others are left exactly as they were.
+TEST(Untangle, OnlyTheMarkedFacesFlipsAreRepaired) {
+  DamagedMap d = damagedSphereMap();
+  const TriangleMesh& mesh = d.cs.s.mesh;
+  const double h = 0.15;
+  const WedgeMap before = d.map.cornerUV;
+  // Faces within h of the first three damaged vertices.
+  const auto nearOf = [&](const Vec3d& p, std::size_t first, std::size_t last) {
+    double nearest = 1e300;
+    for (std::size_t k = first; k < last; ++k) nearest = std::min(nearest, (p - mesh.position(d.damaged[k])).norm());
+    return nearest;
+  };
+  std::vector<std::uint8_t> marked(mesh.numFaces(), 0);
+  std::uint64_t flippedMarked = 0, flippedElsewhere = 0;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    const Triangle& tri = mesh.triangles[f];
+    const Vec3d c = (mesh.position(tri[0]) + mesh.position(tri[1]) + mesh.position(tri[2])) / 3.0;
+    marked[f] = nearOf(c, 0, 3) < h;
+    const bool flipped = isFlippedRatio(parameterAreaRatio(mesh, before, f, h));
+    (marked[f] ? flippedMarked : flippedElsewhere) += flipped;
+  }
+  ASSERT_GT(flippedMarked, 0u);
+  ASSERT_GT(flippedElsewhere, 0u);
+  UntangleOptions options;
+  options.edgeLength = h;
+  options.onlyFaces = &marked;
+  std::vector<std::complex<double>> t = d.map.translations;
+  const UntangleStats stats = untangleFlips(mesh, d.cs.s.topology, d.cs.field, d.cs.cut, d.map.cornerUV, t, options);
+  EXPECT_EQ(stats.flippedBefore, flippedMarked);
+  EXPECT_EQ(stats.flippedAfter, 0u);
+  EXPECT_EQ(measureMap(mesh, d.map.cornerUV, &d.cs.field, h).flipped, flippedElsewhere);
+  EXPECT_TRUE(measureSeams(mesh, d.cs.s.topology, d.cs.cut, d.map.cornerUV).isSeamless());
+  for (CornerId c = 0; c < 3u * mesh.numFaces(); ++c) {
+    if (d.map.cornerUV[c] == before[c]) continue;
+    EXPECT_LT(nearOf(mesh.position(d.cs.s.topology.vertex(c)), 0, 3), nearOf(mesh.position(d.cs.s.topology.vertex(c)), 3, 6))
+        << "corner " << c << " moved nearer an unmarked damaged vertex";
+  }
+  std::vector<std::uint8_t> wrongSize(3, 1);
+  options.onlyFaces = &wrongSize;
+  EXPECT_THROW(untangleFlips(mesh, d.cs.s.topology, d.cs.field, d.cs.cut, d.map.cornerUV, t, options), InputError);
+}
+
 TEST(Untangle, FoldedClosedSpecksSmallerThanACellGoOnOnePoint) {
   DamagedMap d = damagedSphereMap();
   const TriangleMesh& mesh = d.cs.s.mesh;

@@ -9,6 +9,7 @@
 
 #include "core/mesh/hole_caps.h"
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -112,6 +113,22 @@ std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
     if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b)) && (nearFlip(a) || nearFlip(b))) pairs.push_back({a, b});
   }
   return pairs;
+}
+
+/// Per face: its centroid within maxDistance of a cone of `pairs`.
+std::vector<std::uint8_t> facesNearCones(const TriangleMesh& mesh,
+                                         const std::vector<std::pair<VertexId, VertexId>>& pairs, double maxDistance) {
+  std::vector<Vec3d> cones;
+  for (const auto& [a, b] : pairs) cones.push_back(mesh.position(a)), cones.push_back(mesh.position(b));
+  std::vector<std::uint8_t> near(mesh.numFaces(), 0);
+  parallelFor(mesh.numFaces(), 1u << 14, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
+      near[f] = std::any_of(cones.begin(), cones.end(), [&](const Vec3d& p) { return (c - p).norm() <= maxDistance; });
+    }
+  });
+  return near;
 }
 
 /// Curves of `features` the map could not hold on integer iso-lines without squeezing faces (two
@@ -297,8 +314,30 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       untangle.edgeLength = r.edgeLength;
       untangle.coneWeightRadius = options.coneWeightRadius;
       untangle.progress = options.progress;
+      // Close cones on one point with flips next to them (below) start another pass, which
+      // repairs its own map: they are repaired first alone, and when flips stay next to them the
+      // pass starts before the whole map is repaired.
+      std::uint64_t repairedNearCones = 0;
+      if (passesLeft) {
+        const auto suspects = foldedCoincidentCones(r, coneCut.cut.cones, coneIndex, coincidentDistance);
+        if (!suspects.empty()) {
+          const std::vector<std::uint8_t> near = facesNearCones(r.mesh, suspects, coincidentDistance);
+          UntangleOptions local = untangle;
+          local.onlyFaces = &near;
+          const UntangleStats stats = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
+                                                    r.solved.param.translations, local);
+          repairedNearCones = stats.flippedBefore - stats.flippedAfter;
+          const auto pairs = foldedCoincidentCones(r, coneCut.cut.cones, coneIndex, coincidentDistance);
+          if (!pairs.empty()) {
+            coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+            r.solved = SolverResult{};
+            continue;
+          }
+        }
+      }
       r.untangle = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
                                  r.solved.param.translations, untangle);
+      r.untangle.flippedBefore += repairedNearCones;
       r.untangled = true;
       meter.finish("untangle");
       // Close cones on one point with flips left next to them: the repair cannot move them apart

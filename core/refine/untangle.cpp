@@ -893,12 +893,19 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   }
   const double h = options.edgeLength;
   std::vector<std::uint8_t> state(nf, kFine);
+  const std::vector<std::uint8_t>* only = options.onlyFaces;
   auto classifyAll = [&] {
     parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-      for (FaceId f = range.begin(); f != range.end(); ++f) state[f] = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
+      for (FaceId f = range.begin(); f != range.end(); ++f) {
+        state[f] = only && !(*only)[f] ? kFine : stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
+      }
     });
     markFolded(mesh, topology, field, state, [](FaceId f) { return f; });
   };
+  if (only && only->size() != nf) {
+    throw InputError("untangle: " + std::to_string(only->size()) + " face flags for " +
+                     std::to_string(nf) + " faces");
+  }
   classifyAll();
   UntangleStats stats;
   for (FaceId f = 0; f < nf; ++f) stats.flippedBefore += state[f] != kFine;

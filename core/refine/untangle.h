@@ -51,6 +51,9 @@ struct UntangleOptions {
   /// did not before. The wide patches matter on fine meshes: at 36 edges per h, a cone's
   /// distorted neighbourhood spans more than 12 rings.
   std::uint32_t jointRings = 36;
+  /// When given (one flag per face): only the flipped faces marked here are repaired and counted,
+  /// the others are taken as fine (a repair near a few cones, before deciding on another pass).
+  const std::vector<std::uint8_t>* onlyFaces = nullptr;
   ProgressFn progress;
 };
 
