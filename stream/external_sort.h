@@ -20,6 +20,12 @@ namespace seamvox {
 struct ExternalSortOptions {
   std::uint64_t memoryBytes = std::uint64_t(64) << 20;  ///< records buffered plus merge buffers
   std::string stage = "sort";                           ///< names the scratch traffic
+  /// The same options naming another stage.
+  ExternalSortOptions named(const char* name) const {
+    ExternalSortOptions o = *this;
+    o.stage = name;
+    return o;
+  }
 };
 
 namespace detail {

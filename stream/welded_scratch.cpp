@@ -109,11 +109,7 @@ class WeldPass {
   }
 
  private:
-  ExternalSortOptions sortOptions(const char* stage) const {
-    ExternalSortOptions o = sort_;
-    o.stage = stage;
-    return o;
-  }
+  ExternalSortOptions sortOptions(const char* stage) const { return sort_.named(stage); }
 
   /// Pass 1: positions and triangles to scratch as read; the weld sort fed.
   void readStream() {
@@ -451,6 +447,17 @@ class WeldPass {
 };
 
 }  // namespace
+
+CleanReport weldCleanReport(const WeldCensus& census) {
+  CleanReport r;
+  r.inputVertices = census.inputVertices;
+  r.inputFaces = census.inputFaces;
+  r.weldedVertices = census.weldedVertices;
+  r.degenerateFaces = census.degenerateFaces;
+  r.duplicateFaces = census.duplicateFaces;
+  r.unreferencedVertices = census.unreferencedVertices;
+  return r;
+}
 
 WeldStreamResult weldMeshStream(MeshStream& stream, ScratchFolder& folder, const WeldStreamOptions& options) {
   return WeldPass(stream, folder, options).run();

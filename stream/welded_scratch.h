@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/mesh/clean.h"
 #include "core/mesh/morton.h"
 #include "core/mesh/mesh.h"
 #include "core/mesh/topology.h"
@@ -59,6 +60,10 @@ struct WeldCensus {
   /// Wall seconds of the passes: read, weld, faces, duplicates, edges, positions, morton, components.
   std::vector<std::pair<std::string, double>> stageSeconds;
 };
+
+/// cleanMesh's counts the weld pass already knows (input, welded, degenerate, duplicate and
+/// unreferenced); the others 0.
+CleanReport weldCleanReport(const WeldCensus& census);
 
 /// The weld pass's output files in the scratch folder.
 struct WeldedScratch {

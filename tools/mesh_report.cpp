@@ -67,26 +67,17 @@ MeshSummary summarizeMeshStream(const std::string& path, MeshStream& stream, con
   return summary;
 }
 
-MeshSummary summarizeCensus(const std::string& path, const WeldCensus& census, double seconds) {
+MeshSummary summarizeCensus(const std::string& path, const WeldCensus& census, const CleanReport& cleaned,
+                            ComponentsResult components, double seconds) {
   MeshSummary s;
   s.path = path;
   s.outOfCore = true;
-  s.vertices = census.vertices;
-  s.faces = census.faces;
-  CleanReport& c = s.clean;
-  c.inputVertices = census.inputVertices;
-  c.inputFaces = census.inputFaces;
-  c.weldedVertices = census.weldedVertices;
-  c.degenerateFaces = census.degenerateFaces;
-  c.duplicateFaces = census.duplicateFaces;
-  c.zeroAreaFaces = census.zeroAreaFaces;
-  c.unreferencedVertices = census.unreferencedVertices;
-  c.nonManifoldEdges = census.nonManifoldEdges + census.clashEdges;
-  c.outputVertices = census.vertices;
-  c.outputFaces = census.faces;
+  s.vertices = cleaned.outputVertices;
+  s.faces = cleaned.outputFaces;
+  s.clean = cleaned;
   s.properties = census.properties.emptyCopy();
-  s.components = census.components;
-  s.boundaryLoops = census.boundaryLoops;
+  s.components = std::move(components.components);
+  s.boundaryLoops = components.boundaryLoops;
   s.box = census.box;
   s.readSeconds = seconds;
   s.edges = census.edges;
@@ -124,15 +115,9 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
   out += format("boundary loops  %u\n", s.boundaryLoops);
   if (s.outOfCore) {
     out += format("edges           %llu: boundary %llu, two faces %llu, two faces in one direction %llu,\n"
-                  "                more than two faces %llu\n",
+                  "                more than two faces %llu (before cleaning)\n",
                   ull(s.edges), ull(s.boundaryEdges), ull(s.manifoldEdges), ull(s.clashEdges), ull(s.edgesOfMoreFaces));
-    out += format("cleaning        welded vertices %llu, degenerate faces %llu, duplicate faces %llu,\n"
-                  "                zero-area faces %llu (kept), unreferenced vertices %llu,\n"
-                  "                non-manifold edges %llu; out of core: non-manifold vertices, flipped\n"
-                  "                faces and spikes not computed, components joined through vertices\n",
-                  ull(c.weldedVertices), ull(c.degenerateFaces), ull(c.duplicateFaces), ull(c.zeroAreaFaces),
-                  ull(c.unreferencedVertices), ull(c.nonManifoldEdges));
-  } else {
+  }
   out += format("cleaning        welded vertices %llu, degenerate faces %llu, duplicate faces %llu,\n"
                 "                zero-area faces %llu (kept), unreferenced vertices %llu,\n"
                 "                non-manifold edges %llu (split), non-manifold vertices %llu (split),\n"
@@ -143,7 +128,6 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
                 ull(c.nonManifoldVertices), ull(c.flippedFaces), ull(c.spikeVertices),
                 ull(c.unweldedBoundaryVertices), c.unweldedBoundaryVertices ? "; --weld joins it" : "",
                 c.reordered ? ";\n                vertices and faces put in spatial order (the input's was scattered)" : "");
-  }
   if (!s.box.isEmpty()) {
     out += format("bounding box    (%g, %g, %g) - (%g, %g, %g), diagonal %g\n", s.box.min.x(),
                   s.box.min.y(), s.box.min.z(), s.box.max.x(), s.box.max.y(), s.box.max.z(),
@@ -203,17 +187,11 @@ std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
   j.key("zeroAreaFaces").value(c.zeroAreaFaces);
   j.key("unreferencedVertices").value(c.unreferencedVertices);
   j.key("nonManifoldEdges").value(c.nonManifoldEdges);
-  if (s.outOfCore) {
-    for (const char* key : {"nonManifoldVertices", "flippedFaces", "spikeVertices", "unweldedBoundaryVertices"}) {
-      j.key(key).null();
-    }
-  } else {
-    j.key("nonManifoldVertices").value(c.nonManifoldVertices);
-    j.key("flippedFaces").value(c.flippedFaces);
-    j.key("spikeVertices").value(c.spikeVertices);
-    j.key("unweldedBoundaryVertices").value(c.unweldedBoundaryVertices);
-    j.key("reorderedForLocality").value(c.reordered);
-  }
+  j.key("nonManifoldVertices").value(c.nonManifoldVertices);
+  j.key("flippedFaces").value(c.flippedFaces);
+  j.key("spikeVertices").value(c.spikeVertices);
+  j.key("unweldedBoundaryVertices").value(c.unweldedBoundaryVertices);
+  j.key("reorderedForLocality").value(c.reordered);
   j.endObject();
   if (s.outOfCore) {
     j.key("edges").beginObject();

@@ -30,9 +30,8 @@ struct MeshSummary {
   BoundingBox box;
   double readSeconds = 0, cleanSeconds = 0, componentsSeconds = 0;
   std::uint64_t peakResidentBytes = 0;
-  /// Measured out of core (stream/welded_scratch): edges counted by their faces; non-manifold
-  /// vertices, flipped faces and spikes not computed (null in JSON), components joined through
-  /// vertices, orientation clashes counted (in clean.nonManifoldEdges too) but not reoriented.
+  /// Measured out of core (stream/welded_scratch, stream/clean_stream): the same figures, and the
+  /// edges counted by their faces before cleaning.
   bool outOfCore = false;
   std::uint64_t edges = 0, boundaryEdges = 0, manifoldEdges = 0, clashEdges = 0, edgesOfMoreFaces = 0;
   std::vector<std::pair<std::string, double>> stageSeconds;  ///< the weld pass's
@@ -50,8 +49,10 @@ MeshSummary summarizeMeshFile(const std::string& path, const SummarizeOptions& o
 /// The same from a stream opened on path (read time counted from start).
 MeshSummary summarizeMeshStream(const std::string& path, MeshStream& stream, const SummarizeOptions& options,
                                 std::chrono::steady_clock::time_point start);
-/// The same from the weld pass's census (out of core).
-MeshSummary summarizeCensus(const std::string& path, const WeldCensus& census, double seconds);
+/// The same from the weld pass's census and the streamed cleaning's report and components (out
+/// of core).
+MeshSummary summarizeCensus(const std::string& path, const WeldCensus& census, const CleanReport& cleaned,
+                            ComponentsResult components, double seconds);
 /// Human-readable report; lists the `largest` biggest components.
 std::string formatSummaryText(const MeshSummary& summary, std::size_t largest = 5);
 /// The same as a JSON document.

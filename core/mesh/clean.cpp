@@ -6,11 +6,13 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <string>
 #include <tuple>
+#include <unordered_map>
 
 #include "core/mesh/detail_corner_table.h"
 #include "core/mesh/detail_union_find.h"
@@ -162,37 +164,56 @@ std::vector<std::uint8_t> findUniqueFaces(const std::vector<Triangle>& tris, std
 }
 
 /// Flips faces so each component is consistently oriented where its edges allow it. Per
-/// component, keeps the orientation most of its faces already have. Returns the flips made.
+/// component, keeps the orientation most of its faces already have. The edges of exactly two
+/// faces join the faces with their relation (same direction: one of them flips) in the order of
+/// their vertex pairs (smaller vertex, larger vertex, then corner), as the out-of-core cleaning
+/// (stream/clean_stream) reads them from its sort; in a non-orientable component the edge closing
+/// a loop against the orientation stays a clash. Returns the flips made.
 std::uint64_t orientFaces(TriangleMesh& mesh, const detail::VertexCorners& vc) {
   const std::uint32_t nf = mesh.numFaces();
-  std::vector<std::uint8_t> visited(nf, 0), flip(nf, 0);
-  std::vector<FaceId> queue;
-  std::uint64_t flips = 0;
-  for (FaceId seed = 0; seed < nf; ++seed) {
-    if (visited[seed]) continue;
-    queue.assign(1, seed);
-    visited[seed] = 1;
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      const FaceId f = queue[head];
-      for (int k = 0; k < 3; ++k) {
-        const detail::EdgeMatch m = detail::matchEdge(mesh.triangles, vc, 3 * f + k);
-        if (m.sameDirection + m.reverseDirection != 2) continue;
-        const bool same = m.sameDirection == 2;
-        const FaceId g = (same ? m.sameCorner : m.reverseCorner) / 3;
-        if (!visited[g]) {
-          visited[g] = 1;
-          flip[g] = flip[f] ^ std::uint8_t(same);
-          queue.push_back(g);
-        }
-        // A conflict (non-orientable surface) stays an orientation clash: that edge is split.
-      }
+  const auto& tris = mesh.triangles;
+  auto vertexOf = [&](CornerId x) { return tris[x / 3][x % 3]; };
+  detail::ParityUnionFind faces(nf);
+  struct Side {
+    VertexId hi;
+    CornerId corner;
+    bool forward;
+    bool operator<(const Side& o) const { return hi != o.hi ? hi < o.hi : corner < o.corner; }
+  };
+  std::vector<Side> sides;
+  for (VertexId lo = 0; lo + 1 < vc.offsets.size(); ++lo) {
+    // The sides of the edges (lo, hi > lo): corner p's edge runs lo -> vertex(n), corner n's runs
+    // vertex(p) -> lo, for the corners d, n, p of each face at lo.
+    sides.clear();
+    for (std::uint32_t i = vc.offsets[lo]; i < vc.offsets[lo + 1]; ++i) {
+      const CornerId d = vc.corners[i], n = nextCorner(d), p = prevCorner(d);
+      if (vertexOf(n) > lo) sides.push_back({vertexOf(n), p, true});
+      if (vertexOf(p) > lo) sides.push_back({vertexOf(p), n, false});
     }
-    std::size_t flipped = 0;
-    for (FaceId f : queue) flipped += flip[f];
-    const bool invert = 2 * flipped > queue.size();
-    for (FaceId f : queue) flip[f] ^= std::uint8_t(invert);
+    std::sort(sides.begin(), sides.end());
+    for (std::size_t i = 0; i < sides.size();) {
+      std::size_t j = i + 1;
+      while (j < sides.size() && sides[j].hi == sides[i].hi) ++j;
+      if (j - i == 2) faces.unite(sides[i].corner / 3, sides[i + 1].corner / 3, sides[i].forward == sides[i + 1].forward);
+      i = j;
+    }
+  }
+  // Flips against each component's smallest face; a component flips whole when that flips most.
+  std::vector<std::uint8_t> flip(nf, 0);
+  std::unordered_map<std::uint32_t, std::array<std::uint64_t, 2>> tally;  // flipped, faces
+  for (FaceId f = 0; f < nf; ++f) {
+    const std::uint32_t root = faces.find(f);
+    flip[f] = root == f ? 0 : faces.parity[f];
+    if (flip[f]) ++tally[root][0];
   }
   for (FaceId f = 0; f < nf; ++f) {
+    const auto it = tally.find(faces.parent[f]);
+    if (it != tally.end()) ++it->second[1];
+  }
+  std::uint64_t flips = 0;
+  for (FaceId f = 0; f < nf; ++f) {
+    const auto it = tally.find(faces.parent[f]);
+    if (it != tally.end() && 2 * it->second[0] > it->second[1]) flip[f] ^= 1;
     if (!flip[f]) continue;
     ++flips;
     std::swap(mesh.triangles[f][1], mesh.triangles[f][2]);

@@ -21,4 +21,40 @@ struct UnionFind {
   }
 };
 
+/// Union-find whose entries carry a parity against their root: flip(a) xor flip(b) = relation.
+/// The root is a component's smallest id, as in detail::UnionFind.
+struct ParityUnionFind {
+  std::vector<std::uint32_t> parent;
+  std::vector<std::uint8_t> parity;  // against parent
+  explicit ParityUnionFind(std::size_t n) : parent(n), parity(n, 0) {
+    for (std::uint32_t i = 0; i < n; ++i) parent[i] = i;
+  }
+  /// The root of x; x's parity is then against it.
+  std::uint32_t find(std::uint32_t x) {
+    std::uint32_t root = x;
+    std::uint8_t total = 0;
+    while (parent[root] != root) total ^= parity[root], root = parent[root];
+    // Path compression: every entry on the path points at the root with its own parity.
+    while (parent[x] != root) {
+      const std::uint32_t next = parent[x];
+      const std::uint8_t own = parity[x];
+      parent[x] = root;
+      parity[x] = total;
+      total ^= own;
+      x = next;
+    }
+    return root;
+  }
+  /// False when a and b are joined already with the other parity (a non-orientable loop).
+  bool unite(std::uint32_t a, std::uint32_t b, std::uint8_t relation) {
+    const std::uint32_t ra = find(a), rb = find(b);
+    const std::uint8_t pa = parity[a] * (a != ra), pb = parity[b] * (b != rb);
+    if (ra == rb) return (pa ^ pb) == relation;
+    const std::uint32_t lo = std::min(ra, rb), hi = std::max(ra, rb);
+    parent[hi] = lo;
+    parity[hi] = pa ^ pb ^ relation;
+    return true;
+  }
+};
+
 }  // namespace seamvox::detail

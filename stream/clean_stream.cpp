@@ -1,0 +1,709 @@
+#include "stream/clean_stream.h"
+
+#include <algorithm>
+#include <array>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+#include <vector>
+
+#include "core/mesh/detail_union_find.h"
+#include "core/mesh/topology.h"
+#include "core/system/errors.h"
+#include "stream/external_sort.h"
+
+namespace seamvox {
+
+namespace {
+
+constexpr std::size_t kChunkFaces = 1u << 16;
+constexpr std::uint64_t kMinimumSortBytes = std::uint64_t(1) << 20;
+/// Pieces of at least this many faces count as large when edges of more than two faces are
+/// paired (cleanMesh's kLargePieceFaces).
+constexpr std::uint32_t kLargePieceFaces = 1024;
+
+/// A side of an edge: corner c's edge runs vertex(next c) -> vertex(prev c).
+struct EdgeSide {
+  std::uint32_t lo, hi;  ///< its vertices, smaller first
+  CornerId corner;
+  std::uint32_t forward;  ///< runs lo -> hi
+};
+struct EdgeSideLess {
+  bool operator()(const EdgeSide& a, const EdgeSide& b) const {
+    return std::tie(a.lo, a.hi, a.corner) < std::tie(b.lo, b.hi, b.corner);
+  }
+};
+
+struct CornerPair {
+  CornerId corner, other;
+  bool operator<(const CornerPair& o) const { return corner < o.corner; }
+};
+
+/// A value at a vertex (an edge length, a neighbour's typical length), sorted by vertex then value.
+struct VertexValue {
+  VertexId vertex;
+  double value;
+  bool operator<(const VertexValue& o) const { return vertex != o.vertex ? vertex < o.vertex : value < o.value; }
+};
+
+/// A boundary vertex's position and input vertex.
+struct BoundaryPoint {
+  float p[3];
+  VertexId origin;
+  bool operator<(const BoundaryPoint& o) const {
+    return std::tie(p[0], p[1], p[2], origin) < std::tie(o.p[0], o.p[1], o.p[2], o.origin);
+  }
+};
+
+/// A corner at its vertex with the corner clockwise of it around the vertex (kInvalidId across a
+/// boundary edge).
+struct CornerAround {
+  VertexId vertex;
+  CornerId corner, clockwise;
+};
+struct CornerAroundLess {
+  bool operator()(const CornerAround& a, const CornerAround& b) const {
+    return a.vertex != b.vertex ? a.vertex < b.vertex : a.corner < b.corner;
+  }
+};
+
+/// The corner of a face after the face was flipped (its corners 1 and 2 swapped).
+CornerId flippedCorner(CornerId c) {
+  const CornerId k = c % 3;
+  return c - k + (k == 0 ? 0 : 3 - k);
+}
+
+class CleanPass {
+ public:
+  CleanPass(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census, std::uint64_t memoryBytes)
+      : folder_(folder), welded_(welded) {
+    sort_.memoryBytes = std::max(kMinimumSortBytes, memoryBytes / 2);
+    out_.numFaces = welded.numFaces;
+    out_.report = weldCleanReport(census);
+  }
+
+  CleanScratch run() {
+    renumberVertices();
+    readFaces();
+    orient();
+    glue();
+    splitVertices();
+    writeFaces();
+    measure();
+    out_.report.outputVertices = out_.numVertices;
+    out_.report.outputFaces = out_.numFaces;
+    return std::move(out_);
+  }
+
+ private:
+  ExternalSortOptions sortOptions(const char* stage) const { return sort_.named(stage); }
+
+  /// Welded vertices that some face references, numbered in order (cleanMesh's
+  /// dropUnreferencedVertices); their positions and input ids.
+  void renumberVertices() {
+    newId_.assign(welded_.numVertices, kInvalidId);
+    WeldedFaceReader faces(folder_, welded_, "clean: vertices");
+    std::vector<WeldedFace> chunk;
+    while (faces.next(chunk, kChunkFaces)) {
+      for (const WeldedFace& f : chunk) {
+        for (const VertexId v : f.triangle) newId_[v] = 0;
+      }
+    }
+    ScratchReader in(folder_, welded_.positions, "clean: vertices");
+    ScratchWriter positions(folder_, "clean: vertices"), origin(folder_, "clean: vertices");
+    std::uint32_t n = 0;
+    Vec3f p;
+    for (VertexId v = 0; v < newId_.size(); ++v) {
+      if (!in.read(&p, sizeof p)) throw IoError(welded_.positions.path + ": scratch positions end early");
+      if (newId_[v] == kInvalidId) continue;
+      newId_[v] = n++;
+      positions.write(&p, sizeof p);
+      origin.write(&v, sizeof v);
+    }
+    positions_ = positions.finish();
+    out_.vertexOrigin = origin.finish();
+    out_.numVertices = n;
+  }
+
+  /// The faces on the new ids (a scratch file) and their edges' sides into a sort.
+  void readFaces() {
+    edges_ = std::make_unique<ExternalSorter<EdgeSide, EdgeSideLess>>(folder_, sortOptions("clean: edges"));
+    WeldedFaceReader faces(folder_, welded_, "clean: faces");
+    ScratchWriter out(folder_, "clean: faces");
+    std::vector<WeldedFace> chunk;
+    CornerId corner = 0;
+    while (faces.next(chunk, kChunkFaces)) {
+      for (const WeldedFace& f : chunk) {
+        CleanFace face{{newId_[f.triangle[0]], newId_[f.triangle[1]], newId_[f.triangle[2]]}, f.face};
+        out.write(&face, sizeof face);
+        for (int k = 0; k < 3; ++k, ++corner) {
+          const VertexId a = face.triangle[(k + 1) % 3], b = face.triangle[(k + 2) % 3];
+          edges_->add({std::min(a, b), std::max(a, b), corner, a < b ? 1u : 0u});
+        }
+      }
+    }
+    std::vector<std::uint32_t>().swap(newId_);
+    faces_ = out.finish();
+    edges_->finish();
+    // The sorted sides are read twice more: kept in a file.
+    ScratchWriter sorted(folder_, "clean: edges");
+    EdgeSide side{};
+    while (edges_->next(side)) sorted.write(&side, sizeof side);
+    edges_.reset();
+    sortedEdges_ = sorted.finish();
+  }
+
+  /// Calls visit(sides) for the sides of each edge in turn (sorted by corner).
+  template <class Visit>
+  void forEachEdge(const char* stage, Visit&& visit) {
+    ScratchReader in(folder_, sortedEdges_, stage);
+    std::vector<EdgeSide> sides;
+    EdgeSide side{};
+    while (in.read(&side, sizeof side)) {
+      if (!sides.empty() && (side.lo != sides[0].lo || side.hi != sides[0].hi)) {
+        visit(sides);
+        sides.clear();
+      }
+      sides.push_back(side);
+    }
+    if (!sides.empty()) visit(sides);
+  }
+
+  /// cleanMesh's orientation: when two faces meet along an edge in the same direction, each
+  /// component (through edges of exactly two faces) is oriented like most of its faces, the
+  /// edges united in order (a non-orientable loop keeps the edge closing it as a clash).
+  void orient() {
+    std::uint64_t clashes = 0;
+    forEachEdge("clean: orient", [&](const std::vector<EdgeSide>& sides) {
+      if (sides.size() == 2 && sides[0].forward == sides[1].forward) ++clashes;
+      if (sides.size() > 2) ++multiEdges_;
+    });
+    if (clashes == 0) return;
+    detail::ParityUnionFind faces(out_.numFaces);
+    forEachEdge("clean: orient", [&](const std::vector<EdgeSide>& sides) {
+      if (sides.size() != 2) return;
+      faces.unite(sides[0].corner / 3, sides[1].corner / 3, sides[0].forward == sides[1].forward);
+    });
+    // Flip against the component's smallest face, then the whole component when that flips most.
+    flip_.assign(out_.numFaces, 0);
+    std::vector<std::uint32_t> flippedIn;  // per root with a flipped face: flipped, then faces
+    std::unordered_map<std::uint32_t, std::array<std::uint64_t, 2>> tally;
+    for (FaceId f = 0; f < out_.numFaces; ++f) {
+      const std::uint32_t root = faces.find(f);
+      flip_[f] = root == f ? 0 : faces.parity[f];
+      if (flip_[f]) ++tally[root][0];
+    }
+    for (FaceId f = 0; f < out_.numFaces; ++f) {
+      const auto it = tally.find(faces.parent[f]);
+      if (it != tally.end()) ++it->second[1];
+    }
+    for (FaceId f = 0; f < out_.numFaces; ++f) {
+      const auto it = tally.find(faces.parent[f]);
+      if (it != tally.end() && 2 * it->second[0] > it->second[1]) flip_[f] ^= 1;
+      out_.report.flippedFaces += flip_[f];
+    }
+  }
+
+  /// The sides of an edge after the flips: corners renamed, directions turned, by corner again.
+  void applyFlips(std::vector<EdgeSide>& sides) const {
+    if (flip_.empty()) return;
+    bool changed = false;
+    for (EdgeSide& s : sides) {
+      if (!flip_[s.corner / 3]) continue;
+      s.corner = flippedCorner(s.corner);
+      s.forward ^= 1;
+      changed = true;
+    }
+    if (changed) std::sort(sides.begin(), sides.end(), EdgeSideLess{});
+  }
+
+  /// cleanMesh's gluing: an edge of two faces in opposite directions is glued, two in the same
+  /// direction stay open (a clash); on an edge of more than two faces, pairs of opposite
+  /// directions are glued, pairs between large pieces first, then the most aligned normals.
+  void glue() {
+    ExternalSorter<CornerPair> pairs(folder_, sortOptions("clean: glue"));
+    std::unique_ptr<detail::UnionFind> pieces;
+    if (multiEdges_ > 0) pieces = std::make_unique<detail::UnionFind>(out_.numFaces);
+    std::vector<std::vector<EdgeSide>> multi;
+    forEachEdge("clean: glue", [&](std::vector<EdgeSide>& sides) {
+      applyFlips(sides);
+      if (sides.size() > 2) {
+        ++out_.report.nonManifoldEdges;
+        multi.push_back(sides);
+      } else if (sides.size() == 2 && sides[0].forward == sides[1].forward) {
+        ++out_.report.nonManifoldEdges;
+      } else if (sides.size() == 2) {
+        pairs.add({sides[0].corner, sides[1].corner});
+        pairs.add({sides[1].corner, sides[0].corner});
+        if (pieces) pieces->unite(sides[0].corner / 3, sides[1].corner / 3);
+      }
+    });
+    if (!multi.empty()) pairMultiEdges(multi, *pieces, pairs);
+    pieces.reset();
+    pairs.finish();
+    ScratchWriter out(folder_, "clean: glue");
+    CornerPair next{kInvalidId, kInvalidId};
+    bool more = pairs.next(next);
+    for (CornerId c = 0; c < 3 * out_.numFaces; ++c) {
+      CornerId o = kInvalidId;
+      if (more && next.corner == c) {
+        o = next.other;
+        more = pairs.next(next);
+      }
+      out.write(&o, sizeof o);
+    }
+    out_.opposite = out.finish();
+  }
+
+  /// The faces' gluing normals (cleanMesh's gluingNormal of the oriented face), read from the
+  /// weld pass's records for the few faces on edges of more than two faces.
+  std::unordered_map<FaceId, Vec3d> gluingNormals(const std::vector<std::vector<EdgeSide>>& multi) {
+    std::vector<FaceId> faces;
+    for (const auto& sides : multi) {
+      for (const EdgeSide& s : sides) faces.push_back(s.corner / 3);
+    }
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    std::unordered_map<FaceId, Vec3d> normal;
+    ScratchRandomReader in(folder_, welded_.faces, "clean: glue");
+    for (const FaceId f : faces) {
+      WeldedFace w;
+      in.readAt(std::uint64_t(f) * sizeof(WeldedFace), &w, sizeof w);
+      Vec3d p[3] = {w.corner(0).cast<double>(), w.corner(1).cast<double>(), w.corner(2).cast<double>()};
+      if (!flip_.empty() && flip_[f]) std::swap(p[1], p[2]);
+      normal[f] = gluingNormal(p[0], p[1], p[2]);
+    }
+    return normal;
+  }
+
+  void pairMultiEdges(const std::vector<std::vector<EdgeSide>>& multi, detail::UnionFind& pieces,
+                      ExternalSorter<CornerPair>& pairs) {
+    // Per face, its piece's size (capped): counted per root.
+    std::unordered_map<std::uint32_t, std::uint32_t> wanted;
+    for (const auto& sides : multi) {
+      for (const EdgeSide& s : sides) wanted[pieces.find(s.corner / 3)] = 0;
+    }
+    for (FaceId f = 0; f < out_.numFaces; ++f) {
+      const auto it = wanted.find(pieces.find(f));
+      if (it != wanted.end() && it->second < kLargePieceFaces) ++it->second;
+    }
+    const std::unordered_map<FaceId, Vec3d> normal = gluingNormals(multi);
+    struct Pair {
+      std::uint32_t smallerPiece;
+      double alignment;
+      CornerId x, y;
+    };
+    std::vector<Pair> candidates;
+    for (const auto& sides : multi) {
+      // `same`: the sides running like the edge's smallest corner; `reverse`: the others.
+      const std::uint32_t direction = sides[0].forward;
+      candidates.clear();
+      for (const EdgeSide& x : sides) {
+        if (x.forward != direction) continue;
+        for (const EdgeSide& y : sides) {
+          if (y.forward == direction) continue;
+          const FaceId fx = x.corner / 3, fy = y.corner / 3;
+          candidates.push_back({std::min(wanted.at(pieces.find(fx)), wanted.at(pieces.find(fy))),
+                                gluingAlignment(normal.at(fx), normal.at(fy)), x.corner, y.corner});
+        }
+      }
+      std::sort(candidates.begin(), candidates.end(), [](const Pair& p, const Pair& q) {
+        if (p.smallerPiece != q.smallerPiece) return p.smallerPiece > q.smallerPiece;
+        return p.alignment != q.alignment ? p.alignment > q.alignment : p.x != q.x ? p.x < q.x : p.y < q.y;
+      });
+      std::vector<CornerId> used;
+      for (const Pair& p : candidates) {
+        if (std::find(used.begin(), used.end(), p.x) != used.end() ||
+            std::find(used.begin(), used.end(), p.y) != used.end()) {
+          continue;
+        }
+        used.push_back(p.x);
+        used.push_back(p.y);
+        pairs.add({p.x, p.y});
+        pairs.add({p.y, p.x});
+      }
+    }
+  }
+
+  /// Fans: the corners around each vertex joined through glued edges (a sort by vertex). A
+  /// vertex's first fan (the one with its smallest corner) keeps it; every further fan gets a new
+  /// vertex, numbered after all others in the order of their vertices (cleanMesh's
+  /// splitNonManifoldVertices). Fan starts as Topology::build picks them.
+  void splitVertices() {
+    ExternalSorter<CornerAround, CornerAroundLess> around(folder_, sortOptions("clean: fans"));
+    {
+      ScratchReader faces(folder_, faces_, "clean: fans"), opposite(folder_, out_.opposite, "clean: fans");
+      CleanFace face;
+      CornerId o[3];
+      for (FaceId f = 0; faces.read(&face, sizeof face); ++f) {
+        if (!opposite.read(o, sizeof o)) throw IoError(out_.opposite.path + ": scratch corner table ends early");
+        const Triangle t = oriented(f, face.triangle);
+        for (int k = 0; k < 3; ++k) {
+          // Clockwise of corner c around its vertex: prev(opposite(prev c)).
+          const CornerId across = o[(k + 2) % 3];
+          around.add({t[k], 3 * f + k, across == kInvalidId ? kInvalidId : prevCorner(across)});
+        }
+      }
+    }
+    around.finish();
+    ScratchWriter starts(folder_, "clean: fans");
+    moved_ = std::make_unique<ExternalSorter<CornerPair>>(folder_, sortOptions("clean: fans"));
+    ExternalSorter<CornerPair>& moved = *moved_;
+    std::vector<CornerId> copyStarts;
+    std::vector<std::uint8_t> copyBoundary;
+    std::vector<VertexId> copyOf;
+    std::vector<CornerAround> group;
+    CornerAround next{};
+    bool more = around.next(next);
+    VertexId copy = static_cast<VertexId>(out_.numVertices);
+    while (more) {
+      group.assign(1, next);
+      while ((more = around.next(next)) && next.vertex == group[0].vertex) group.push_back(next);
+      const std::vector<std::vector<CornerId>> fans = fansOf(group);
+      for (std::size_t i = 0; i < fans.size(); ++i) {
+        // The start: the most clockwise corner (an open fan), else the largest corner of a
+        // vertex's only fan or the smallest of one of several (findFans).
+        const CornerId start = mostClockwise(group, fans.size() == 1 ? fans[i].back() : fans[i].front());
+        const bool open = clockwiseOf(group, start) == kInvalidId;
+        if (i == 0) {
+          boundary_.push_back(open);
+          starts.write(&start, sizeof start);
+          continue;
+        }
+        copyStarts.push_back(start);
+        copyBoundary.push_back(open);
+        copyOf.push_back(group[0].vertex);
+        for (const CornerId c : fans[i]) moved.add({c, copy});
+        ++copy;
+      }
+      out_.report.nonManifoldVertices += fans.size() > 1;
+    }
+    for (const CornerId c : copyStarts) starts.write(&c, sizeof c);
+    boundary_.insert(boundary_.end(), copyBoundary.begin(), copyBoundary.end());
+    out_.vertexCorner = starts.finish();
+    moved.finish();
+    // The copies' positions and origins, after the others'.
+    if (!copyOf.empty()) {
+      ScratchRandomReader positions(folder_, positions_, "clean: fans"), origin(folder_, out_.vertexOrigin, "clean: fans");
+      std::vector<Vec3f> p(copyOf.size());
+      std::vector<VertexId> from(copyOf.size());
+      for (std::size_t i = 0; i < copyOf.size(); ++i) {
+        positions.readAt(std::uint64_t(copyOf[i]) * sizeof(Vec3f), &p[i], sizeof(Vec3f));
+        origin.readAt(std::uint64_t(copyOf[i]) * sizeof(VertexId), &from[i], sizeof(VertexId));
+      }
+      positions_ = appendTo(positions_, p.data(), p.size() * sizeof(Vec3f), "clean: fans");
+      out_.vertexOrigin = appendTo(out_.vertexOrigin, from.data(), from.size() * sizeof(VertexId), "clean: fans");
+    }
+    out_.positions = positions_;
+    out_.numVertices = copy;
+  }
+
+  /// A copy of a scratch file with bytes appended (the old one removed).
+  ScratchFile appendTo(const ScratchFile& file, const void* data, std::size_t bytes, const char* stage) {
+    ScratchReader in(folder_, file, stage);
+    ScratchWriter out(folder_, stage);
+    std::vector<char> buffer(1u << 20);
+    for (std::size_t n; (n = in.readUpTo(buffer.data(), buffer.size())) > 0;) out.write(buffer.data(), n);
+    out.write(data, bytes);
+    folder_.remove(file);
+    return out.finish();
+  }
+
+  Triangle oriented(FaceId f, Triangle t) const {
+    if (!flip_.empty() && flip_[f]) std::swap(t[1], t[2]);
+    return t;
+  }
+
+  /// The fans of one vertex's corners (group, sorted by corner): each sorted, ordered by their
+  /// smallest corner.
+  static std::vector<std::vector<CornerId>> fansOf(const std::vector<CornerAround>& group) {
+    std::vector<std::uint32_t> root(group.size());
+    for (std::uint32_t i = 0; i < root.size(); ++i) root[i] = i;
+    const auto find = [&](std::uint32_t i) {
+      while (root[i] != i) i = root[i] = root[root[i]];
+      return i;
+    };
+    const auto indexOf = [&](CornerId c) {
+      const auto it = std::lower_bound(group.begin(), group.end(), c,
+                                       [](const CornerAround& a, CornerId x) { return a.corner < x; });
+      return it != group.end() && it->corner == c ? std::uint32_t(it - group.begin()) : kInvalidId;
+    };
+    for (std::uint32_t i = 0; i < group.size(); ++i) {
+      if (group[i].clockwise == kInvalidId) continue;
+      const std::uint32_t j = indexOf(group[i].clockwise);
+      if (j == kInvalidId) continue;
+      const std::uint32_t a = find(i), b = find(j);
+      if (a != b) root[std::max(a, b)] = std::min(a, b);
+    }
+    std::vector<std::vector<CornerId>> fans;
+    std::vector<std::uint32_t> fanOf(group.size(), kInvalidId);
+    for (std::uint32_t i = 0; i < group.size(); ++i) {
+      const std::uint32_t r = find(i);
+      if (fanOf[r] == kInvalidId) fanOf[r] = static_cast<std::uint32_t>(fans.size()), fans.emplace_back();
+      fans[fanOf[r]].push_back(group[i].corner);
+    }
+    return fans;
+  }
+
+  /// From corner d clockwise around its vertex to the last corner before a boundary edge, or d
+  /// itself when the fan closes.
+  static CornerId clockwiseOf(const std::vector<CornerAround>& group, CornerId c) {
+    const auto it = std::lower_bound(group.begin(), group.end(), c,
+                                     [](const CornerAround& a, CornerId x) { return a.corner < x; });
+    return it->clockwise;
+  }
+  static CornerId mostClockwise(const std::vector<CornerAround>& group, CornerId d) {
+    CornerId s = d;
+    for (;;) {
+      const CornerId cw = clockwiseOf(group, s);
+      if (cw == kInvalidId) return s;
+      if (cw == d) return d;
+      s = cw;
+    }
+  }
+
+  /// The final faces: oriented, corners of split fans on their copies.
+  void writeFaces() {
+    ScratchReader in(folder_, faces_, "clean: write");
+    ScratchWriter out(folder_, "clean: write");
+    CornerPair next{kInvalidId, kInvalidId};
+    bool more = moved_->next(next);
+    CleanFace face;
+    for (FaceId f = 0; in.read(&face, sizeof face); ++f) {
+      face.triangle = oriented(f, face.triangle);
+      for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+        if (more && next.corner == c) {
+          face.triangle[c - 3 * f] = next.other;
+          more = moved_->next(next);
+        }
+      }
+      out.write(&face, sizeof face);
+    }
+    folder_.remove(faces_);
+    folder_.remove(sortedEdges_);
+    out_.faces = out.finish();
+  }
+
+  /// Calls visit(face, triangle, p) for each final face with its corner positions (from the
+  /// weld pass's records, in the final corner order).
+  template <class Visit>
+  void forEachPlacedFace(const char* stage, Visit&& visit) {
+    ScratchReader faces(folder_, out_.faces, stage);
+    WeldedFaceReader welded(folder_, welded_, stage);
+    std::vector<WeldedFace> chunk;
+    CleanFace face;
+    FaceId f = 0;
+    while (welded.next(chunk, kChunkFaces)) {
+      for (const WeldedFace& w : chunk) {
+        if (!faces.read(&face, sizeof face)) throw IoError(out_.faces.path + ": scratch faces end early");
+        Vec3d p[3] = {w.corner(0).cast<double>(), w.corner(1).cast<double>(), w.corner(2).cast<double>()};
+        if (!flip_.empty() && flip_[f]) std::swap(p[1], p[2]);
+        visit(f++, face.triangle, p);
+      }
+    }
+  }
+
+  /// cleanMesh's last counts: zero-area faces, boundary vertices at the position of another of
+  /// another origin (cracks), spikes and the bounding box diagonal without them.
+  void measure() {
+    CleanReport& r = out_.report;
+    BoundingBox box;
+    {
+      ScratchReader in(folder_, out_.positions, "clean: measure");
+      Vec3f p;
+      while (in.read(&p, sizeof p)) box.min = box.min.cwiseMin(p.cast<double>()), box.max = box.max.cwiseMax(p.cast<double>());
+    }
+    const double tiny = 1e-14 * box.diagonal() * box.diagonal();
+    // Edge lengths at each vertex: two per corner, as forEachEdgeLength gives them.
+    ExternalSorter<VertexValue> lengths(folder_, sortOptions("clean: measure"));
+    forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&p)[3]) {
+      r.zeroAreaFaces += 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm() <= tiny;
+      for (int k = 0; k < 3; ++k) {
+        lengths.add({t[k], (p[(k + 1) % 3] - p[k]).norm()});
+        lengths.add({t[k], (p[(k + 2) % 3] - p[k]).norm()});
+      }
+    });
+    lengths.finish();
+    // Per vertex: the median (typical, kept) and the shortest (a file, in vertex order).
+    std::vector<double> typical(out_.numVertices, 0.0);
+    ScratchWriter shortestOut(folder_, "clean: measure");
+    std::vector<double> values;
+    VertexValue next{};
+    bool more = lengths.next(next);
+    while (more) {
+      const VertexId v = next.vertex;
+      values.clear();
+      for (; more && next.vertex == v; more = lengths.next(next)) values.push_back(next.value);
+      typical[v] = values[values.size() / 2];
+      shortestOut.write(&values.front(), sizeof(double));
+    }
+    const ScratchFile shortestFile = shortestOut.finish();
+    // Around each vertex, its neighbours' typical lengths: a spike's shortest edge is over
+    // kSpikeRatio times their median.
+    ExternalSorter<VertexValue> around(folder_, sortOptions("clean: measure"));
+    forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&)[3]) {
+      for (int k = 0; k < 3; ++k) {
+        around.add({t[k], typical[t[(k + 1) % 3]]});
+        around.add({t[k], typical[t[(k + 2) % 3]]});
+      }
+    });
+    around.finish();
+    std::vector<double>().swap(typical);
+    std::vector<VertexId> spikes;
+    {
+      ScratchReader shortestIn(folder_, shortestFile, "clean: measure");
+      more = around.next(next);
+      while (more) {
+        const VertexId v = next.vertex;
+        values.clear();
+        for (; more && next.vertex == v; more = around.next(next)) values.push_back(next.value);
+        double shortest = 0.0;
+        if (!shortestIn.read(&shortest, sizeof shortest)) throw IoError(shortestFile.path + ": scratch file ends early");
+        const double scale = values[values.size() / 2];
+        if (shortest > kSpikeRatio * values.front() && scale > 0.0 && shortest > kSpikeRatio * scale) spikes.push_back(v);
+      }
+    }
+    folder_.remove(shortestFile);
+    r.spikeVertices = spikes.size();
+    // Boundary points at one position with two origins, and the box without the spikes.
+    ExternalSorter<BoundaryPoint> points(folder_, sortOptions("clean: measure"));
+    BoundingBox kept;
+    {
+      ScratchReader positions(folder_, out_.positions, "clean: measure"), origin(folder_, out_.vertexOrigin, "clean: measure");
+      Vec3f p;
+      VertexId from = 0;
+      std::size_t nextSpike = 0;
+      for (VertexId v = 0; positions.read(&p, sizeof p); ++v) {
+        if (!origin.read(&from, sizeof from)) throw IoError(out_.vertexOrigin.path + ": scratch file ends early");
+        if (boundary_[v]) points.add({{p.x(), p.y(), p.z()}, from});
+        if (nextSpike < spikes.size() && spikes[nextSpike] == v) {
+          ++nextSpike;
+          continue;
+        }
+        kept.min = kept.min.cwiseMin(p.cast<double>());
+        kept.max = kept.max.cwiseMax(p.cast<double>());
+      }
+    }
+    r.diagonalWithoutSpikes = kept.isEmpty() ? 0.0 : kept.diagonal();
+    points.finish();
+    std::vector<BoundaryPoint> same;
+    BoundaryPoint point{};
+    more = points.next(point);
+    while (more) {
+      same.assign(1, point);
+      while ((more = points.next(point)) && point.p[0] == same[0].p[0] && point.p[1] == same[0].p[1] &&
+             point.p[2] == same[0].p[2]) {
+        same.push_back(point);
+      }
+      if (same.back().origin != same.front().origin) r.unweldedBoundaryVertices += same.size();
+    }
+    std::vector<std::uint8_t>().swap(boundary_);
+  }
+
+  ScratchFolder& folder_;
+  const WeldedScratch& welded_;
+  ExternalSortOptions sort_;
+  CleanScratch out_;
+  std::vector<VertexId> newId_;
+  ScratchFile positions_, faces_, sortedEdges_;
+  std::unique_ptr<ExternalSorter<EdgeSide, EdgeSideLess>> edges_;
+  std::unique_ptr<ExternalSorter<CornerPair>> moved_;  // corners moved to a copy of their vertex
+  std::vector<std::uint8_t> flip_;  // per face, when the orientation changed any
+  std::uint64_t multiEdges_ = 0;
+  std::vector<std::uint8_t> boundary_;  // per vertex: its fan is open
+};
+
+template <class T>
+std::vector<T> readWhole(ScratchFolder& folder, const ScratchFile& file, std::uint64_t count) {
+  std::vector<T> out(count);
+  ScratchReader in(folder, file, "clean: read");
+  if (count > 0 && !in.read(out.data(), count * sizeof(T))) throw IoError(file.path + ": scratch file ends early");
+  return out;
+}
+
+}  // namespace
+
+CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
+                             std::uint64_t memoryBytes) {
+  return CleanPass(folder, welded, census, memoryBytes).run();
+}
+
+ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch) {
+  const std::uint64_t nf = scratch.numFaces, nv = scratch.numVertices;
+  // Faces joined through glued edges; a component's id in the order of its smallest face.
+  detail::UnionFind faces(nf);
+  {
+    ScratchReader opposite(folder, scratch.opposite, "components");
+    CornerId o;
+    for (CornerId c = 0; opposite.read(&o, sizeof o); ++c) {
+      if (o != kInvalidId && c < o) faces.unite(c / 3, o / 3);
+    }
+  }
+  std::unordered_map<std::uint32_t, std::uint32_t> id;  // root face -> component
+  std::vector<ComponentInfo> comps;
+  for (FaceId f = 0; f < nf; ++f) {
+    const std::uint32_t root = faces.find(f);
+    if (root == f) id[f] = static_cast<std::uint32_t>(comps.size()), comps.emplace_back();
+    ++comps[id.at(root)].faces;
+  }
+  const auto componentOf = [&](FaceId f) -> ComponentInfo& { return comps[id.at(faces.parent[f])]; };
+  {
+    ScratchReader starts(folder, scratch.vertexCorner, "components");
+    CornerId c;
+    while (starts.read(&c, sizeof c)) {
+      if (c != kInvalidId) ++componentOf(c / 3).vertices;
+    }
+  }
+  // Edges: one per glued pair and per boundary corner. Boundary loops: the cycles of boundary
+  // edges (every boundary vertex has one edge in and one out), as sets of vertices joined by them.
+  detail::UnionFind loops(nv);
+  const auto forEachCorner = [&](auto&& visit) {
+    ScratchReader triangles(folder, scratch.faces, "components"), opposite(folder, scratch.opposite, "components");
+    CleanFace face;
+    CornerId o[3];
+    for (FaceId f = 0; triangles.read(&face, sizeof face); ++f) {
+      if (!opposite.read(o, sizeof o)) throw IoError(scratch.opposite.path + ": scratch corner table ends early");
+      for (int k = 0; k < 3; ++k) visit(3 * f + k, o[k], face.triangle[(k + 1) % 3], face.triangle[(k + 2) % 3]);
+    }
+  };
+  forEachCorner([&](CornerId c, CornerId o, VertexId a, VertexId b) {
+    if (o == kInvalidId) loops.unite(a, b);
+    if (o == kInvalidId || c < o) ++componentOf(c / 3).edges;
+  });
+  std::vector<std::uint8_t> counted(nv, 0);
+  forEachCorner([&](CornerId c, CornerId o, VertexId a, VertexId) {
+    if (o != kInvalidId) return;
+    std::uint8_t& seen = counted[loops.find(a)];
+    if (!seen) ++componentOf(c / 3).boundaryLoops;
+    seen = 1;
+  });
+  ComponentsResult result;
+  for (ComponentInfo& info : comps) {
+    info.eulerCharacteristic = std::int64_t(info.vertices) - std::int64_t(info.edges) + info.faces;
+    info.genus = (2 - info.eulerCharacteristic - info.boundaryLoops) / 2;
+    result.boundaryLoops += info.boundaryLoops;
+  }
+  std::stable_sort(comps.begin(), comps.end(), [](const ComponentInfo& a, const ComponentInfo& b) { return a.faces > b.faces; });
+  result.components = std::move(comps);
+  return result;
+}
+
+CleanResult readCleanScratch(ScratchFolder& folder, const CleanScratch& scratch) {
+  CleanResult r;
+  const std::vector<CleanFace> faces = readWhole<CleanFace>(folder, scratch.faces, scratch.numFaces);
+  r.mesh.triangles.resize(faces.size());
+  r.faceOrigin.resize(faces.size());
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    r.mesh.triangles[f] = faces[f].triangle;
+    r.faceOrigin[f] = faces[f].inputFace;
+  }
+  r.mesh.positions = readWhole<Vec3f>(folder, scratch.positions, scratch.numVertices);
+  r.vertexOrigin = readWhole<VertexId>(folder, scratch.vertexOrigin, scratch.numVertices);
+  r.topology = Topology::viewParts(r.mesh.triangles, readWhole<CornerId>(folder, scratch.opposite, 3 * scratch.numFaces),
+                                   readWhole<CornerId>(folder, scratch.vertexCorner, scratch.numVertices));
+  r.report = scratch.report;
+  return r;
+}
+
+}  // namespace seamvox

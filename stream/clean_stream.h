@@ -1,0 +1,54 @@
+#pragma once
+/// The cleaning stage of the out-of-core param, after the weld pass (welded_scratch): the
+/// unreferenced vertices dropped, each component's faces oriented, the edges glued as cleanMesh
+/// glues them (edges of more than two faces paired, orientation clashes left open) and every
+/// fan of a vertex beyond its first given a copy of it; the cleaned faces, their corner table
+/// and the vertices written to the scratch folder by external sorts of edge and corner records.
+/// Equal to cleanMesh on the weld pass's faces in the weld pass's (Morton) order. Memory: the
+/// sorts' limit, 4 bytes per welded vertex while ids are renumbered, and only when the input
+/// needs them, 5 bytes per face for the orientation and 8 for the pieces of edges shared by more
+/// than two faces. Not yet streamed: the counts of zero-area faces, unwelded boundary vertices
+/// and spikes (CleanReport keeps them 0).
+#include <cstdint>
+
+#include "core/mesh/clean.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
+#include "stream/scratch_folder.h"
+#include "stream/welded_scratch.h"
+
+namespace seamvox {
+
+/// A face of the cleaned mesh (16 bytes).
+struct CleanFace {
+  Triangle triangle{};         ///< cleaned vertex ids, oriented
+  std::uint32_t inputFace = 0;  ///< in the input stream
+};
+
+/// The cleaned mesh in the scratch folder, faces in the weld pass's order.
+struct CleanScratch {
+  ScratchFile faces;         ///< CleanFace per face
+  ScratchFile opposite;      ///< CornerId per corner (kInvalidId on a boundary)
+  ScratchFile vertexCorner;  ///< CornerId per vertex: the start of its fan, as Topology::build picks it
+  ScratchFile positions;     ///< Vec3f per vertex; the copies of split vertices after the others
+  ScratchFile vertexOrigin;  ///< input vertex id per vertex
+  std::uint64_t numFaces = 0, numVertices = 0;
+  /// cleanMesh's counts: welded, degenerate, duplicate and unreferenced from the weld pass, then
+  /// non-manifold edges and vertices and flipped faces (the others 0 for now).
+  CleanReport report;
+};
+
+/// Cleans the weld pass's output (kept in folder) into folder. memoryBytes: the sorts' share.
+/// Throws IoError (scratch, a full disk) naming the folder.
+CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
+                             std::uint64_t memoryBytes);
+
+/// The cleaned mesh's components as computeComponents gives them (joined through glued edges, by
+/// decreasing face count, ties in the order of their first faces; faceComponent left empty),
+/// streamed from the scratch. Memory: 4 bytes per face and per vertex (union-finds).
+ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch);
+
+/// The scratch read back whole, as cleanMesh returns its result (faceOrigin: input faces).
+CleanResult readCleanScratch(ScratchFolder& folder, const CleanScratch& scratch);
+
+}  // namespace seamvox
