@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -40,12 +42,15 @@ struct CornerPair {
   bool operator<(const CornerPair& o) const { return corner < o.corner; }
 };
 
-/// A value at a vertex (an edge length, a neighbour's typical length), sorted by vertex then value.
+/// An edge length at a vertex, sorted by vertex then length (12 bytes: six per face are sorted).
+#pragma pack(push, 4)
 struct VertexValue {
   VertexId vertex;
   double value;
   bool operator<(const VertexValue& o) const { return vertex != o.vertex ? vertex < o.vertex : value < o.value; }
 };
+#pragma pack(pop)
+static_assert(sizeof(VertexValue) == 12, "packed");
 
 /// A boundary vertex's position and input vertex.
 struct BoundaryPoint {
@@ -540,31 +545,48 @@ class CleanPass {
     }
     const ScratchFile shortestFile = shortestOut.finish();
     // Around each vertex, its neighbours' typical lengths: a spike's shortest edge is over
-    // kSpikeRatio times their median.
-    ExternalSorter<VertexValue> around(folder_, sortOptions("clean: measure"));
+    // kSpikeRatio times their median, so over kSpikeRatio times their least. The least first
+    // (as a float rounded down: a superset of the candidates), then the values around the few
+    // candidates only.
+    std::vector<float> least(out_.numVertices, std::numeric_limits<float>::infinity());
+    const auto below = [](double x) {
+      const float f = static_cast<float>(x);
+      return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+    };
     forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&)[3]) {
       for (int k = 0; k < 3; ++k) {
-        around.add({t[k], typical[t[(k + 1) % 3]]});
-        around.add({t[k], typical[t[(k + 2) % 3]]});
+        least[t[k]] = std::min({least[t[k]], below(typical[t[(k + 1) % 3]]), below(typical[t[(k + 2) % 3]])});
       }
     });
-    around.finish();
-    std::vector<double>().swap(typical);
-    std::vector<VertexId> spikes;
+    std::unordered_map<VertexId, std::pair<double, std::vector<double>>> candidates;  // shortest, values around
     {
       ScratchReader shortestIn(folder_, shortestFile, "clean: measure");
-      more = around.next(next);
-      while (more) {
-        const VertexId v = next.vertex;
-        values.clear();
-        for (; more && next.vertex == v; more = around.next(next)) values.push_back(next.value);
-        double shortest = 0.0;
-        if (!shortestIn.read(&shortest, sizeof shortest)) throw IoError(shortestFile.path + ": scratch file ends early");
-        const double scale = values[values.size() / 2];
-        if (shortest > kSpikeRatio * values.front() && scale > 0.0 && shortest > kSpikeRatio * scale) spikes.push_back(v);
+      double shortest = 0.0;
+      for (VertexId v = 0; shortestIn.read(&shortest, sizeof shortest); ++v) {
+        if (shortest > kSpikeRatio * double(least[v])) candidates[v].first = shortest;
       }
     }
     folder_.remove(shortestFile);
+    std::vector<float>().swap(least);
+    std::vector<VertexId> spikes;
+    if (!candidates.empty()) {
+      forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&)[3]) {
+        for (int k = 0; k < 3; ++k) {
+          const auto it = candidates.find(t[k]);
+          if (it == candidates.end()) continue;
+          it->second.second.push_back(typical[t[(k + 1) % 3]]);
+          it->second.second.push_back(typical[t[(k + 2) % 3]]);
+        }
+      });
+      for (auto& [v, entry] : candidates) {
+        std::vector<double>& around = entry.second;
+        std::sort(around.begin(), around.end());
+        const double shortest = entry.first, scale = around[around.size() / 2];
+        if (shortest > kSpikeRatio * around.front() && scale > 0.0 && shortest > kSpikeRatio * scale) spikes.push_back(v);
+      }
+      std::sort(spikes.begin(), spikes.end());
+    }
+    std::vector<double>().swap(typical);
     r.spikeVertices = spikes.size();
     // Boundary points at one position with two origins, and the box without the spikes.
     ExternalSorter<BoundaryPoint> points(folder_, sortOptions("clean: measure"));
