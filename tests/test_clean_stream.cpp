@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <random>
 #include <tuple>
 
 #include "core/mesh/clean.h"
 #include "core/synth/generate.h"
+#include "core/system/errors.h"
 #include "stream/clean_stream.h"
 #include "stream/mesh_stream.h"
 #include "stream/welded_scratch.h"
@@ -206,6 +208,37 @@ TEST(CleanStream, EqualsCleanMeshOnNonManifoldAndNonOrientableMeshes) {
       EXPECT_GT(c.inMemory.report.spikeVertices, 0u);
       EXPECT_GT(c.inMemory.report.zeroAreaFaces, 0u);
     }
+  }
+}
+
+// A scratch disk that fills up during the cleaning (after the weld pass) is an error naming the
+// folder, and the folder is removed with everything in it.
+TEST(CleanStream, AFullScratchDiskIsAnErrorNamingTheFolder) {
+  const auto mesh = std::make_shared<const TriangleMesh>(testing::generatedMesh(MeshKind::Scan, 20000));
+  testing::TempDir dir;
+  std::uint64_t weldBytes = 0;
+  {
+    ScratchFolder folder(dir.dir());
+    const std::unique_ptr<MeshStream> stream = makeMemoryStream("mesh", mesh, 5000);
+    weldMeshStream(*stream, folder, {});
+    weldBytes = folder.bytesWritten();
+  }
+  for (const std::uint64_t extra : {std::uint64_t(1000), std::uint64_t(2000000)}) {
+    std::string message;
+    {
+      ScratchFolder folder(dir.dir());
+      folder.setWriteLimit(weldBytes + extra);
+      const std::unique_ptr<MeshStream> stream = makeMemoryStream("mesh", mesh, 5000);
+      const WeldStreamResult welded = weldMeshStream(*stream, folder, {});
+      try {
+        cleanWeldedMesh(folder, welded.scratch, welded.census, std::uint64_t(1) << 20);
+      } catch (const IoError& e) {
+        message = e.what();
+      }
+      EXPECT_NE(message.find(folder.path()), std::string::npos) << message;
+      EXPECT_NE(message.find("full"), std::string::npos) << message;
+    }
+    EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));
   }
 }
 
