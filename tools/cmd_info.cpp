@@ -18,9 +18,9 @@ namespace {
 // Measured peak of the in-memory path: 153 MB for a 2M-face scan, about 54 B per face over the
 // program (cleaning's corner table, fans and origins on top of the mesh); rounded up.
 constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20, kBytesPerFace = 64, kBytesPerVertex = 16;
-/// Scratch at its peak, per face (measured: 304 B per face on a 20M-face scan, the cleaning's
+/// Scratch at its peak, per face (measured: 192 B per face on a 20M-face scan, the cleaning's
 /// measuring sorts next to the weld pass's output).
-constexpr std::uint64_t kScratchBytesPerFace = 320;
+constexpr std::uint64_t kScratchBytesPerFace = 200;
 
 /// The weld pass in a scratch folder, its census as the summary.
 MeshSummary summarizeOutOfCore(const std::string& path, MeshStream& stream, const SummarizeOptions& options,
@@ -102,7 +102,7 @@ SEAMVOX_COMMAND({"info", "read and clean a mesh; print its components, genus and
                  "\n"
                  "Above the memory budget (the in-memory path needs about 48 MiB + 64 B per face,\n"
                  "counted from the header, or the file size for OBJ) the mesh is streamed once and\n"
-                 "cleaned by external sorts in the scratch folder (about 300 B per face at the peak):\n"
+                 "cleaned by external sorts in the scratch folder (about 200 B per face at the peak):\n"
                  "welding of equal positions (no --weld-tolerance), degenerate and duplicate faces,\n"
                  "orientation, edges of more than two faces paired and non-manifold vertices split as\n"
                  "in memory, spikes, then the components (4 B per face and per vertex in memory, 5 B\n"
