@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -89,13 +90,16 @@ class CleanPass {
   }
 
   CleanScratch run() {
-    renumberVertices();
-    readFaces();
-    orient();
-    glue();
-    splitVertices();
-    writeFaces();
-    measure();
+    const std::pair<const char*, void (CleanPass::*)()> passes[] = {
+        {"vertices", &CleanPass::renumberVertices}, {"faces", &CleanPass::readFaces},
+        {"orient", &CleanPass::orient},             {"glue", &CleanPass::glue},
+        {"fans", &CleanPass::splitVertices},        {"write", &CleanPass::writeFaces},
+        {"measure", &CleanPass::measure}};
+    for (const auto& [name, pass] : passes) {
+      const auto start = std::chrono::steady_clock::now();
+      (this->*pass)();
+      out_.stageSeconds.emplace_back(name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
     out_.report.outputVertices = out_.numVertices;
     out_.report.outputFaces = out_.numFaces;
     return std::move(out_);

@@ -10,6 +10,9 @@
 /// than two faces. Not yet streamed: the counts of zero-area faces, unwelded boundary vertices
 /// and spikes (CleanReport keeps them 0).
 #include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "core/mesh/clean.h"
 #include "core/mesh/mesh.h"
@@ -36,6 +39,8 @@ struct CleanScratch {
   /// cleanMesh's counts: welded, degenerate, duplicate and unreferenced from the weld pass, then
   /// non-manifold edges and vertices and flipped faces (the others 0 for now).
   CleanReport report;
+  /// Wall seconds of the passes: vertices, faces, orient, glue, fans, write, measure.
+  std::vector<std::pair<std::string, double>> stageSeconds;
 };
 
 /// Cleans the weld pass's output (kept in folder) into folder. memoryBytes: the sorts' share.

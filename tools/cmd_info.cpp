@@ -46,6 +46,7 @@ MeshSummary summarizeOutOfCore(const std::string& path, MeshStream& stream, cons
   const double componentsSeconds = secondsSince(componentsStart);
   MeshSummary summary = summarizeCensus(path, result.census, cleaned.report, std::move(components), secondsSince(start));
   summary.stageSeconds.emplace_back("clean", cleanSeconds);
+  for (const auto& [pass, seconds] : cleaned.stageSeconds) summary.stageSeconds.emplace_back("clean: " + pass, seconds);
   summary.stageSeconds.emplace_back("cleaned components", componentsSeconds);
   memoryPath.recordScratch(scratch);
   return summary;
