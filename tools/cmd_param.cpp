@@ -223,6 +223,16 @@ int runParam(Args& args) {
     c.options.field.method = parseFieldMethod(c.fieldSource);
   }
   meter.finish("read");
+  // The quad mesh of the map as solved, small holes still capped (PipelineOptions::withSolvedMap).
+  std::optional<QuadRun> quads;
+  if (quadsFile) {
+    c.options.withSolvedMap = [&](const TriangleMesh& map, const Topology& topology) {
+      quads = extractCheckedQuads(c.input, map, topology, 1, c.options.progress);
+      writePolygonMesh(*quadsFile, quads->quads.mesh);
+      quads->quads.mesh = PolygonMesh();
+      meter.finish("quads");
+    };
+  }
   PipelineResult r;
   try {
     r = parameterize(std::move(raw), c.options);
@@ -235,13 +245,6 @@ int runParam(Args& args) {
     renderOptions.progress = c.options.progress;
     writePng(*renderFile, renderCheckerboard(r.mesh, r.topology, renderOptions).image);
     meter.finish("render");
-  }
-  std::optional<QuadRun> quads;
-  if (quadsFile) {
-    quads = extractCheckedQuads(c.input, r.mesh, r.topology, 1, c.options.progress);
-    writePolygonMesh(*quadsFile, quads->quads.mesh);
-    quads->quads.mesh = PolygonMesh();
-    meter.finish("quads");
   }
   // The writer takes the mesh and its map (r.size keeps their figures): the corner table goes
   // first, and a Draco write frees the mesh as its own copy takes it.

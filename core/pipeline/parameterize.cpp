@@ -437,6 +437,11 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   meter.finish("field");
 
   solveConePasses(r, field, options, meter);
+  if (options.withSolvedMap) {
+    std::swap(r.mesh.cornerUV, r.solved.param.cornerUV);  // an input's own UVs wait meanwhile
+    options.withSolvedMap(r.mesh, r.topology);
+    std::swap(r.mesh.cornerUV, r.solved.param.cornerUV);
+  }
   uncapForOutput(r, field, caps);
   r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength, nullptr, &r.topology);
   r.mesh.cornerUV = std::move(r.solved.param.cornerUV);

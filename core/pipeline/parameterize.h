@@ -105,6 +105,10 @@ struct PipelineOptions {
   double closeHoles = 0.0;
   /// With closeHoles: caps for the solve (false: constraints alone; tests).
   bool capHoles = true;
+  /// Called with the solved map on the surface the solve saw (mesh.cornerUV set; small holes
+  /// still capped) before the caps are taken off: `param --quads` extracts there, where the
+  /// caps close the holes a quad mesh cannot keep open, with no copy of the map to fill them.
+  std::function<void(const TriangleMesh& map, const Topology& topology)> withSolvedMap;
   /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
   std::uint32_t maxConePasses = 3;
   /// Feature curves at faces the map collapses are released and the map solved again: the
