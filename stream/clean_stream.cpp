@@ -194,24 +194,8 @@ class CleanPass {
       if (sides.size() != 2) return;
       faces.unite(sides[0].corner / 3, sides[1].corner / 3, sides[0].forward == sides[1].forward);
     });
-    // Flip against the component's smallest face, then the whole component when that flips most.
-    flip_.assign(out_.numFaces, 0);
-    std::vector<std::uint32_t> flippedIn;  // per root with a flipped face: flipped, then faces
-    std::unordered_map<std::uint32_t, std::array<std::uint64_t, 2>> tally;
-    for (FaceId f = 0; f < out_.numFaces; ++f) {
-      const std::uint32_t root = faces.find(f);
-      flip_[f] = root == f ? 0 : faces.parity[f];
-      if (flip_[f]) ++tally[root][0];
-    }
-    for (FaceId f = 0; f < out_.numFaces; ++f) {
-      const auto it = tally.find(faces.parent[f]);
-      if (it != tally.end()) ++it->second[1];
-    }
-    for (FaceId f = 0; f < out_.numFaces; ++f) {
-      const auto it = tally.find(faces.parent[f]);
-      if (it != tally.end() && 2 * it->second[0] > it->second[1]) flip_[f] ^= 1;
-      out_.report.flippedFaces += flip_[f];
-    }
+    flip_ = faces.majorityFlips();
+    for (const std::uint8_t f : flip_) out_.report.flippedFaces += f;
   }
 
   /// The sides of an edge after the flips: corners renamed, directions turned, by corner again.

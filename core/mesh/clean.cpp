@@ -12,7 +12,6 @@
 #include <numeric>
 #include <string>
 #include <tuple>
-#include <unordered_map>
 
 #include "core/mesh/detail_corner_table.h"
 #include "core/mesh/detail_union_find.h"
@@ -198,22 +197,9 @@ std::uint64_t orientFaces(TriangleMesh& mesh, const detail::VertexCorners& vc) {
       i = j;
     }
   }
-  // Flips against each component's smallest face; a component flips whole when that flips most.
-  std::vector<std::uint8_t> flip(nf, 0);
-  std::unordered_map<std::uint32_t, std::array<std::uint64_t, 2>> tally;  // flipped, faces
-  for (FaceId f = 0; f < nf; ++f) {
-    const std::uint32_t root = faces.find(f);
-    flip[f] = root == f ? 0 : faces.parity[f];
-    if (flip[f]) ++tally[root][0];
-  }
-  for (FaceId f = 0; f < nf; ++f) {
-    const auto it = tally.find(faces.parent[f]);
-    if (it != tally.end()) ++it->second[1];
-  }
+  const std::vector<std::uint8_t> flip = faces.majorityFlips();
   std::uint64_t flips = 0;
   for (FaceId f = 0; f < nf; ++f) {
-    const auto it = tally.find(faces.parent[f]);
-    if (it != tally.end() && 2 * it->second[0] > it->second[1]) flip[f] ^= 1;
     if (!flip[f]) continue;
     ++flips;
     std::swap(mesh.triangles[f][1], mesh.triangles[f][2]);

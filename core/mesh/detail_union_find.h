@@ -2,8 +2,10 @@
 /// Union-find over 32-bit ids with path halving; unite keeps the smaller id as the root, so
 /// results do not depend on the order of unions.
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <numeric>
+#include <unordered_map>
 #include <vector>
 
 namespace seamvox::detail {
@@ -54,6 +56,28 @@ struct ParityUnionFind {
     parent[hi] = lo;
     parity[hi] = pa ^ pb ^ relation;
     return true;
+  }
+  /// Per entry, whether it flips: its parity against its set's smallest id, the whole set turned
+  /// over when that flips most of it (a component keeps the orientation most of its faces have).
+  std::vector<std::uint8_t> majorityFlips() {
+    const std::size_t n = parent.size();
+    std::vector<std::uint8_t> flip(n, 0);
+    std::unordered_map<std::uint32_t, std::array<std::uint64_t, 2>> tally;  // per root: flipped, entries
+    for (std::uint32_t x = 0; x < n; ++x) {
+      const std::uint32_t root = find(x);
+      flip[x] = root == x ? 0 : parity[x];
+      if (flip[x]) ++tally[root][0];
+    }
+    if (tally.empty()) return flip;
+    for (std::uint32_t x = 0; x < n; ++x) {
+      const auto it = tally.find(parent[x]);
+      if (it != tally.end()) ++it->second[1];
+    }
+    for (std::uint32_t x = 0; x < n; ++x) {
+      const auto it = tally.find(parent[x]);
+      if (it != tally.end() && 2 * it->second[0] > it->second[1]) flip[x] ^= 1;
+    }
+    return flip;
   }
 };
 
