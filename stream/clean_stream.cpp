@@ -32,6 +32,15 @@ struct EdgeSide {
   CornerId corner;
   std::uint32_t forward;  ///< runs lo -> hi
 };
+/// A kept vertex: its new id, welded id and position (20 bytes).
+struct NumberedVertex {
+  std::uint32_t id = 0, origin = 0;
+  float position[3] = {0.0f, 0.0f, 0.0f};  // plain floats: written as bytes
+};
+struct NumberedVertexLess {
+  bool operator()(const NumberedVertex& a, const NumberedVertex& b) const { return a.id < b.id; }
+};
+
 struct EdgeSideLess {
   bool operator()(const EdgeSide& a, const EdgeSide& b) const {
     return std::tie(a.lo, a.hi, a.corner) < std::tie(b.lo, b.hi, b.corner);
@@ -108,27 +117,42 @@ class CleanPass {
  private:
   ExternalSortOptions sortOptions(const char* stage) const { return sort_.named(stage); }
 
-  /// Welded vertices that some face references, numbered in order (cleanMesh's
-  /// dropUnreferencedVertices); their positions and input ids.
+  /// Welded vertices that some face references, numbered in the order the (Morton-ordered) faces
+  /// first name them, so that a vertex's id is near its faces' ids (cleanMesh's
+  /// dropUnreferencedVertices on vertices so numbered); their positions and input ids, put in
+  /// that order by a sort.
   void renumberVertices() {
     newId_.assign(welded_.numVertices, kInvalidId);
     WeldedFaceReader faces(folder_, welded_, "clean: vertices");
     std::vector<WeldedFace> chunk;
+    std::uint32_t n = 0;
     while (faces.next(chunk, kChunkFaces)) {
       for (const WeldedFace& f : chunk) {
-        for (const VertexId v : f.triangle) newId_[v] = 0;
+        for (const VertexId v : f.triangle) {
+          if (newId_[v] == kInvalidId) newId_[v] = n++;
+        }
       }
     }
-    ScratchReader in(folder_, welded_.positions, "clean: vertices");
+    ExternalSorter<NumberedVertex, NumberedVertexLess> sorter(folder_, sortOptions("clean: vertices"));
+    {
+      ScratchReader in(folder_, welded_.positions, "clean: vertices");
+      NumberedVertex record;
+      for (VertexId v = 0; v < newId_.size(); ++v) {
+        if (!in.read(&record.position, sizeof record.position)) {
+          throw IoError(welded_.positions.path + ": scratch positions end early");
+        }
+        if (newId_[v] == kInvalidId) continue;
+        record.id = newId_[v];
+        record.origin = v;
+        sorter.add(record);
+      }
+    }
+    sorter.finish();
     ScratchWriter positions(folder_, "clean: vertices"), origin(folder_, "clean: vertices");
-    std::uint32_t n = 0;
-    Vec3f p;
-    for (VertexId v = 0; v < newId_.size(); ++v) {
-      if (!in.read(&p, sizeof p)) throw IoError(welded_.positions.path + ": scratch positions end early");
-      if (newId_[v] == kInvalidId) continue;
-      newId_[v] = n++;
-      positions.write(&p, sizeof p);
-      origin.write(&v, sizeof v);
+    NumberedVertex record;
+    while (sorter.next(record)) {
+      positions.write(&record.position, sizeof record.position);
+      origin.write(&record.origin, sizeof record.origin);
     }
     positions_ = positions.finish();
     out_.vertexOrigin = origin.finish();

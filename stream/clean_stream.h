@@ -4,11 +4,11 @@
 /// glues them (edges of more than two faces paired, orientation clashes left open) and every
 /// fan of a vertex beyond its first given a copy of it; the cleaned faces, their corner table
 /// and the vertices written to the scratch folder by external sorts of edge and corner records.
-/// Equal to cleanMesh on the weld pass's faces in the weld pass's (Morton) order. Memory: the
+/// Equal to cleanMesh on the weld pass's faces in the weld pass's (Morton) order, their vertices numbered
+/// in the order the faces first name them (a vertex near its faces in the files). Memory: the
 /// sorts' limit, 4 bytes per welded vertex while ids are renumbered, and only when the input
 /// needs them, 5 bytes per face for the orientation and 8 for the pieces of edges shared by more
-/// than two faces. Not yet streamed: the counts of zero-area faces, unwelded boundary vertices
-/// and spikes (CleanReport keeps them 0).
+/// than two faces.
 #include <cstdint>
 #include <string>
 #include <utility>

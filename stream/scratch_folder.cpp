@@ -173,16 +173,20 @@ ScratchRandomReader::~ScratchRandomReader() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void ScratchRandomReader::readAt(std::uint64_t offset, void* out, std::size_t bytes) {
+void readScratchAt(int fd, const std::string& path, std::uint64_t offset, void* out, std::size_t bytes) {
   char* to = static_cast<char*>(out);
   std::size_t done = 0;
   while (done < bytes) {
-    const ssize_t n = ::pread(fd_, to + done, bytes - done, static_cast<off_t>(offset + done));
+    const ssize_t n = ::pread(fd, to + done, bytes - done, static_cast<off_t>(offset + done));
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw IoError(path_ + ": cannot read a scratch file (" + std::strerror(errno) + ")");
-    if (n == 0) throw IoError(path_ + ": scratch file ends inside a record (it changed while it was read)");
+    if (n < 0) throw IoError(path + ": cannot read a scratch file (" + std::strerror(errno) + ")");
+    if (n == 0) throw IoError(path + ": scratch file ends inside a record (it changed while it was read)");
     done += static_cast<std::size_t>(n);
   }
+}
+
+void ScratchRandomReader::readAt(std::uint64_t offset, void* out, std::size_t bytes) {
+  readScratchAt(fd_, path_, offset, out, bytes);
   folder_.countRead(stage_, bytes);
 }
 

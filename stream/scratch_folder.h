@@ -110,6 +110,10 @@ class ScratchReader {
   std::size_t begin_ = 0, end_ = 0;
 };
 
+/// Reads exactly `bytes` at offset of the open file fd (named path in errors): IoError when it
+/// cannot, or when the file ends first (it changed while it was read).
+void readScratchAt(int fd, const std::string& path, std::uint64_t offset, void* out, std::size_t bytes);
+
 /// Reads records of a finished scratch file at given offsets (pread: for sparse lookups).
 class ScratchRandomReader {
  public:

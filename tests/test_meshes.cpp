@@ -191,4 +191,88 @@ TriangleMesh shuffledMesh(const TriangleMesh& mesh, std::uint32_t seed) {
   return out;
 }
 
+// A Moebius strip of n quads (two triangles each), its last quad glued to the first turned over.
+TriangleMesh moebiusStrip(int n, const Vec3f& at) {
+  TriangleMesh m;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2.0 * M_PI * i / n;
+    for (const double s : {-0.2, 0.2}) {
+      m.positions.push_back(at + Vec3f(float((1.0 + s * std::cos(t / 2)) * std::cos(t)),
+                                       float((1.0 + s * std::cos(t / 2)) * std::sin(t)), float(s * std::sin(t / 2))));
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const VertexId a = 2 * i, b = 2 * i + 1;
+    const bool last = i + 1 == n;
+    const VertexId c = last ? 1 : 2 * (i + 1), d = last ? 0 : 2 * (i + 1) + 1;
+    m.triangles.push_back({a, c, d});
+    m.triangles.push_back({a, d, b});
+  }
+  return m;
+}
+
+// A scan-like mesh with every kind of damage cleaning repairs: fins (edges of three and four
+// faces), bowties (a fan joined at one vertex), flipped patches, duplicate and reversed faces,
+// a Moebius strip and a pair of faces meeting along an edge in the same direction.
+TriangleMesh damagedMesh(std::uint32_t seed) {
+  TriangleMesh m = generatedMesh(MeshKind::Scan, 6000);
+  std::mt19937 random(seed);
+  const std::uint32_t nf = m.numFaces();
+  for (int k = 0; k < 12; ++k) {  // fins: one or two extra faces on an edge
+    const Triangle t = m.triangles[random() % nf];
+    for (int j = 0; j <= k % 2; ++j) {
+      const Vec3f tip = m.positions[t[0]] + 0.3f * (m.positions[t[1]] - m.positions[t[0]]).cross(Vec3f::UnitZ()) +
+                        Vec3f(0.0f, 0.0f, 0.01f * float(j + 1));
+      m.positions.push_back(tip);
+      m.triangles.push_back({t[0], t[1], VertexId(m.positions.size() - 1)});
+    }
+  }
+  for (int k = 0; k < 8; ++k) {  // bowties: a small fan sharing one vertex with the surface
+    const VertexId v = m.triangles[random() % nf][0];
+    const VertexId base = static_cast<VertexId>(m.positions.size());
+    for (int j = 0; j < 3; ++j) {
+      const double a = 2.0 * M_PI * j / 3;
+      m.positions.push_back(m.positions[v] + Vec3f(0.01f * float(std::cos(a)), 0.01f * float(std::sin(a)), 0.02f));
+    }
+    for (int j = 0; j < 3; ++j) m.triangles.push_back({v, base + VertexId(j), base + VertexId((j + 1) % 3)});
+  }
+  for (int k = 0; k < 300; ++k) {  // flipped faces
+    Triangle& t = m.triangles[random() % nf];
+    std::swap(t[1], t[2]);
+  }
+  for (int k = 0; k < 20; ++k) {  // cracks: faces on copies of their vertices
+    Triangle& t = m.triangles[random() % nf];
+    for (VertexId& v : t) {
+      m.positions.push_back(m.positions[v]);
+      v = static_cast<VertexId>(m.positions.size() - 1);
+    }
+  }
+  for (int k = 0; k < 3; ++k) m.positions[m.triangles[random() % nf][0]] += Vec3f(0.0f, 0.0f, 5.0f);  // spikes
+  for (int k = 0; k < 5; ++k) {  // zero-area faces: a point on an edge's middle
+    const Triangle t = m.triangles[random() % nf];
+    m.positions.push_back(0.5f * (m.positions[t[0]] + m.positions[t[1]]));
+    m.triangles.push_back({t[1], t[0], VertexId(m.positions.size() - 1)});
+  }
+  for (int k = 0; k < 40; ++k) {  // duplicates, some reversed
+    Triangle t = m.triangles[random() % nf];
+    if (k % 2) std::swap(t[1], t[2]);
+    m.triangles.push_back(t);
+  }
+  // Books: single triangles around one edge, two each way, paired by how flat they meet.
+  TriangleMesh books;
+  for (int b = 0; b < 4; ++b) {
+    const Vec3f p(8.0f + float(b), 0.0f, 0.0f), q(8.0f + float(b), 0.0f, 0.5f);
+    const VertexId base = static_cast<VertexId>(books.positions.size());
+    books.positions.push_back(p);
+    books.positions.push_back(q);
+    const double angles[4] = {0.0, 1.2 + 0.3 * b, 3.3, 4.0 + 0.2 * b};
+    for (int j = 0; j < 4; ++j) {
+      books.positions.push_back(p + Vec3f(0.3f * float(std::cos(angles[j])), 0.3f * float(std::sin(angles[j])), 0.2f));
+      const VertexId tip = static_cast<VertexId>(books.positions.size() - 1);
+      books.triangles.push_back(j % 2 ? Triangle{base + 1, base, tip} : Triangle{base, base + 1, tip});
+    }
+  }
+  return concatMeshes({m, moebiusStrip(24, Vec3f(5.0f, 0.0f, 0.0f)), books});
+}
+
 }  // namespace seamvox::testing

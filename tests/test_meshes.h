@@ -52,4 +52,10 @@ CrossField constantField(const TriangleMesh& mesh, const Vec3d& direction = Vec3
 /// Unit tangent directions at pseudo-random angles (a field with many cones); deterministic.
 CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed);
 
+/// A Moebius strip of n quads (two triangles each) at `at`.
+TriangleMesh moebiusStrip(int n, const Vec3f& at);
+/// A 6K-face scan with fins, bowties, flipped patches, duplicates, a Moebius strip and books of
+/// faces on one edge: every kind of damage cleaning repairs.
+TriangleMesh damagedMesh(std::uint32_t seed);
+
 }  // namespace seamvox::testing

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <unordered_map>
 
+#include "core/field/detail_smoothing.h"
 #include "core/field/field_numerics.h"
 #include "core/solve/assemble.h"
 #include "core/solve/cholmod_solver.h"
@@ -559,25 +560,6 @@ Vec3d rotateBetween(const Vec3d& from, const Vec3d& to, const Vec3d& v) {
   return 2.0 * axis.dot(v) * axis - v;
 }
 
-namespace {
-
-// One smoothing step at vertex v: halfway to the mean of its neighbours (valueOf(w) gives the
-// current position of w in double); boundary and isolated vertices stay.
-template <class ValueOf>
-Vec3f smoothingStep(const Topology& topology, VertexId v, const ValueOf& valueOf) {
-  const Vec3d here = valueOf(v);
-  if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) return here.cast<float>();
-  Vec3d sum = Vec3d::Zero();
-  std::uint32_t count = 0;
-  topology.forEachCornerAround(v, [&](CornerId c) {
-    sum += valueOf(topology.vertex(nextCorner(c)));
-    ++count;
-  });
-  const Vec3d target = 0.5 * (here + sum / count);
-  return target.allFinite() ? Vec3f(target.cast<float>()) : Vec3f(here.cast<float>());
-}
-
-}  // namespace
 
 std::vector<Vec3f> smoothPositions(const TriangleMesh& mesh, const Topology& topology,
                                    std::uint32_t iterations) {
@@ -592,7 +574,7 @@ std::vector<Vec3f> smoothPositions(const TriangleMesh& mesh, const Topology& top
   for (std::uint32_t it = 0; it < iterations; ++it) {
     parallelFor(numVertices, 4096, [&](const IndexRange& range) {
       for (VertexId v = range.begin(); v != range.end(); ++v) {
-        next[v] = smoothingStep(topology, v, [&](VertexId w) { return pointOf(current, w); });
+        next[v] = detail::smoothingStep(topology, v, [&](VertexId w) { return pointOf(current, w); });
       }
     });
     current.swap(next);
@@ -635,7 +617,7 @@ std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& t
     return it == local.end() ? pointOf(mesh.positions, w) : pointOf(current, it->second);
   };
   for (std::uint32_t it = 0; it < iterations; ++it) {
-    for (std::size_t i = 0; i < ball.size(); ++i) next[i] = smoothingStep(topology, ball[i], valueOf);
+    for (std::size_t i = 0; i < ball.size(); ++i) next[i] = detail::smoothingStep(topology, ball[i], valueOf);
     current.swap(next);
   }
   std::vector<Vec3f> out(vertices.size());

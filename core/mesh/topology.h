@@ -25,6 +25,19 @@ namespace seamvox {
 
 inline CornerId nextCorner(CornerId c) { return c % 3 == 2 ? c - 2 : c + 1; }
 inline CornerId prevCorner(CornerId c) { return c % 3 == 0 ? c + 2 : c - 1; }
+
+/// Calls f(corner) from start (none when kInvalidId) counter-clockwise through table.ccw until
+/// the fan closes or ends: the fan walk of Topology and of the out-of-core corner table.
+template <class Table, class F>
+void walkCornersAround(Table& table, CornerId start, F&& f) {
+  if (start == kInvalidId) return;
+  CornerId c = start;
+  do {
+    f(c);
+    c = table.ccw(c);
+  } while (c != kInvalidId && c != start);
+}
+
 inline FaceId cornerFace(CornerId c) { return c / 3; }
 
 /// Read-only view of a triangle array (what Topology::triangles() returns).
@@ -89,13 +102,7 @@ class Topology {
   /// Calls f(corner) for every corner at v, counter-clockwise starting at vertexCorner(v).
   template <class F>
   void forEachCornerAround(VertexId v, F&& f) const {
-    const CornerId start = vertexCorner_[v];
-    if (start == kInvalidId) return;
-    CornerId c = start;
-    do {
-      f(c);
-      c = ccw(c);
-    } while (c != kInvalidId && c != start);
+    walkCornersAround(*this, vertexCorner_[v], f);
   }
   /// Number of faces incident to v.
   std::uint32_t valence(VertexId v) const;

@@ -1,0 +1,75 @@
+// The out-of-core field stage against the in-memory one: wall time and peak resident memory per
+// step, scratch traffic. Steps run on the weld pass's faces (Morton order), as param's
+// out-of-core path will.
+//   seamvox gen scan --faces 20000000 -o /tmp/s20.ply
+//   bench_ooc_field MESH [BUDGET_MIB=1024] [SCRATCH=/tmp] [in-memory]
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "bench/bench_common.h"
+#include "core/field/field.h"
+#include "core/field/field_proxy.h"
+#include "core/system/memory.h"
+#include "stream/clean_stream.h"
+#include "stream/field_stream.h"
+#include "stream/mesh_stream.h"
+#include "stream/welded_scratch.h"
+
+using namespace seamvox;
+using bench::Clock;
+using bench::mib;
+using bench::seconds;
+
+namespace {
+void line(const char* step, Clock::time_point a, Clock::time_point b) {
+  std::printf("%-28s %8.2f s   RSS %8.1f MiB   peak %8.1f MiB\n", step, seconds(a, b), mib(currentResidentBytes()),
+              mib(peakResidentBytes()));
+  std::fflush(stdout);
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: bench_ooc_field MESH [BUDGET_MIB=1024] [SCRATCH=/tmp] [in-memory]\n");
+    return 2;
+  }
+  const std::string path = argv[1];
+  const std::uint64_t budget = (argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 1024) << 20;
+  const std::string scratchParent = argc > 3 ? argv[3] : "/tmp";
+  const bool inMemory = argc > 4 && !std::strcmp(argv[4], "in-memory");
+  tbb::global_control control(tbb::global_control::max_allowed_parallelism, 2);
+  ScratchFolder folder(scratchParent);
+  const std::unique_ptr<MeshStream> stream = openMeshStream(path);
+  auto t0 = Clock::now();
+  WeldStreamOptions weld;
+  weld.memoryBytes = budget;
+  const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
+  auto t1 = Clock::now();
+  line("weld pass", t0, t1);
+  const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, budget);
+  auto t2 = Clock::now();
+  line("clean", t1, t2);
+  const ScratchFile smoothed = smoothScratchPositions(folder, scratch, kFieldSmoothingIterations, budget);
+  auto t3 = Clock::now();
+  line("field: smooth positions", t2, t3);
+  for (const ScratchTraffic& t : folder.traffic()) {
+    std::printf("  traffic %-24s read %9.1f MiB  written %9.1f MiB\n", t.stage.c_str(), mib(t.bytesRead),
+                mib(t.bytesWritten));
+  }
+  std::printf("  scratch peak %.1f MiB, faces %llu, vertices %llu\n", mib(folder.peakBytesOnDisk()),
+              (unsigned long long)scratch.numFaces, (unsigned long long)scratch.numVertices);
+  if (inMemory) {
+    const CleanResult cleaned = readCleanScratch(folder, scratch);
+    auto t4 = Clock::now();
+    line("in memory: read scratch", t3, t4);
+    const std::vector<Vec3f> positions = smoothPositions(cleaned.mesh, cleaned.topology, kFieldSmoothingIterations);
+    auto t5 = Clock::now();
+    line("in memory: smooth positions", t4, t5);
+  }
+  return 0;
+}

@@ -1,0 +1,67 @@
+#include "stream/paged_reader.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <string>
+
+#include "core/system/errors.h"
+
+namespace seamvox {
+
+namespace {
+constexpr std::size_t kPageBytes = std::size_t(1) << 16;
+constexpr std::uint64_t kNoPage = ~std::uint64_t(0);
+}  // namespace
+
+PageCache::PageCache(const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes)
+    : path_(file.path), recordBytes_(recordBytes) {
+  if (recordBytes == 0 || file.bytes % recordBytes != 0) {
+    throw IoError(path_ + ": scratch file of " + std::to_string(file.bytes) + " bytes is not a whole number of " +
+                  std::to_string(recordBytes) + "-byte records");
+  }
+  numRecords_ = file.bytes / recordBytes;
+  // Powers of two (records per page, pages in the cache): a lookup is a shift, a mask and a compare.
+  while ((std::size_t(2) << pageShift_) * recordBytes <= kPageBytes) ++pageShift_;
+  pageRecords_ = std::size_t(1) << pageShift_;
+  pageBytes_ = pageRecords_ * recordBytes;
+  const std::uint64_t pagesInFile = (numRecords_ + pageRecords_ - 1) / pageRecords_;
+  const std::uint64_t wanted = std::min<std::uint64_t>(pagesInFile, std::max<std::size_t>(2, cacheBytes / pageBytes_));
+  std::size_t slots = 1;
+  while (slots < wanted) slots *= 2;
+  slotMask_ = slots - 1;
+  tags_.assign(slots, kNoPage);
+  data_.resize(slots * pageBytes_);
+  fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) throw IoError(path_ + ": cannot open a scratch file (" + std::strerror(errno) + ")");
+}
+
+PageCache::~PageCache() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+const char* PageCache::record(std::uint64_t i) {
+  if (i >= numRecords_) {
+    throw IoError(path_ + ": record " + std::to_string(i) + " past the end of a scratch file of " +
+                  std::to_string(numRecords_) + " records");
+  }
+  const std::uint64_t page = i >> pageShift_;
+  const std::size_t slot = static_cast<std::size_t>(page) & slotMask_;
+  const char* base = tags_[slot] == page ? data_.data() + slot * pageBytes_ : load(page, slot);
+  return base + (i & (pageRecords_ - 1)) * recordBytes_;
+}
+
+const char* PageCache::load(std::uint64_t page, std::size_t slot) {
+  char* to = data_.data() + slot * pageBytes_;
+  const std::uint64_t offset = page * pageBytes_;
+  const std::size_t bytes = static_cast<std::size_t>(std::min<std::uint64_t>(pageBytes_, numRecords_ * recordBytes_ - offset));
+  readScratchAt(fd_, path_, offset, to, bytes);
+  bytesRead_ += bytes;
+  tags_[slot] = page;
+  return to;
+}
+
+}  // namespace seamvox

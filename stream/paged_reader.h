@@ -1,0 +1,105 @@
+#pragma once
+/// Records of a finished scratch file read by index through a small cache of pages (pread, no
+/// mmap: resident memory is the cache). Lookups in a spatially coherent order (faces and vertices
+/// in Morton order, their neighbours nearby) hit cached pages; a miss reads one page. A reader
+/// belongs to one thread at a time: ReaderPool hands them to the blocks of a parallel loop.
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "stream/scratch_folder.h"
+
+namespace seamvox {
+
+/// Direct-mapped cache of fixed-size records of one file.
+class PageCache {
+ public:
+  /// cacheBytes: what the pages may hold (rounded up to a power of two of pages, at least two).
+  PageCache(const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes);
+  ~PageCache();
+  PageCache(const PageCache&) = delete;
+  PageCache& operator=(const PageCache&) = delete;
+  /// Record i (IoError past the end); valid until the next call.
+  const char* record(std::uint64_t i);
+  std::uint64_t numRecords() const { return numRecords_; }
+  std::uint64_t bytesRead() const { return bytesRead_; }
+  std::size_t memoryBytes() const { return data_.size() + tags_.size() * sizeof(tags_[0]); }
+
+ private:
+  const char* load(std::uint64_t page, std::size_t slot);
+  std::string path_;
+  int fd_ = -1;
+  std::size_t recordBytes_ = 0, pageRecords_ = 0, pageBytes_ = 0, slotMask_ = 0;
+  unsigned pageShift_ = 0;
+  std::uint64_t numRecords_ = 0, bytesRead_ = 0;
+  std::vector<std::uint64_t> tags_;
+  std::vector<char> data_;
+};
+
+/// Records of type T (trivially copyable) by index.
+template <class T>
+class PagedReader {
+ public:
+  PagedReader(const ScratchFile& file, std::size_t cacheBytes) : cache_(file, sizeof(T), cacheBytes) {}
+  T operator[](std::uint64_t i) {
+    T value;
+    std::memcpy(&value, cache_.record(i), sizeof(T));
+    return value;
+  }
+  std::uint64_t size() const { return cache_.numRecords(); }
+  std::uint64_t bytesRead() const { return cache_.bytesRead(); }
+  std::size_t memoryBytes() const { return cache_.memoryBytes(); }
+
+ private:
+  PageCache cache_;
+};
+
+/// Sets of readers for the blocks of a parallel loop: a block takes one (made on first need) and
+/// gives it back when done, so at most one set per thread exists.
+template <class Set>
+class ReaderPool {
+ public:
+  explicit ReaderPool(std::function<std::unique_ptr<Set>()> make) : make_(std::move(make)) {}
+  struct Lease {
+    ReaderPool* pool;
+    std::unique_ptr<Set> set;
+    Lease(ReaderPool* p, std::unique_ptr<Set> s) : pool(p), set(std::move(s)) {}
+    Lease(Lease&&) = default;
+    ~Lease() {
+      if (set) pool->giveBack(std::move(set));
+    }
+    Set& operator*() { return *set; }
+    Set* operator->() { return set.get(); }
+  };
+  Lease take() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!free_.empty()) {
+        std::unique_ptr<Set> set = std::move(free_.back());
+        free_.pop_back();
+        return Lease(this, std::move(set));
+      }
+    }
+    return Lease(this, make_());
+  }
+  /// Calls f on every set made so far (none may be taken).
+  template <class F>
+  void forEach(F&& f) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (auto& set : free_) f(*set);
+  }
+
+ private:
+  void giveBack(std::unique_ptr<Set> set) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.push_back(std::move(set));
+  }
+  std::function<std::unique_ptr<Set>()> make_;
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<Set>> free_;
+};
+
+}  // namespace seamvox
