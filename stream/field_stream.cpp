@@ -1,10 +1,16 @@
 #include "stream/field_stream.h"
 
 #include <algorithm>
+#include <array>
+#include <chrono>
 #include <memory>
 #include <vector>
 
+#include "core/field/detail_proxy.h"
 #include "core/field/detail_smoothing.h"
+#include "core/field/field_numerics.h"
+#include "stream/external_sort.h"
+#include "core/system/errors.h"
 #include "core/system/parallel.h"
 #include "stream/paged_reader.h"
 
@@ -51,15 +57,14 @@ std::size_t pageCacheBytes(std::uint64_t memoryBytes) {
   return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 32, std::uint64_t(1) << 17, std::uint64_t(1) << 23));
 }
 
-// Records per block written at once: 12 MB of positions.
-constexpr std::uint64_t kBlockVertices = std::uint64_t(1) << 20;
 
 }  // namespace
 
 ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t iterations,
-                                   std::uint64_t memoryBytes) {
+                                   const StreamPassOptions& pass) {
   const char* stage = "field: smooth";
-  const std::size_t cacheBytes = pageCacheBytes(memoryBytes);
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  const std::uint64_t blockRecords = std::max<std::uint64_t>(1, pass.blockRecords);
   ScratchFile current = scratch.positions;
   for (std::uint32_t it = 0; it < iterations; ++it) {
     struct Readers {
@@ -71,8 +76,8 @@ ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& sc
     });
     ScratchWriter writer(folder, stage);
     std::vector<Vec3f> next;
-    for (std::uint64_t first = 0; first < scratch.numVertices; first += kBlockVertices) {
-      const std::uint64_t count = std::min(kBlockVertices, scratch.numVertices - first);
+    for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
+      const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
       next.resize(count);
       parallelFor(count, 4096, [&](const IndexRange& range) {
         auto readers = pool.take();
@@ -89,6 +94,405 @@ ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& sc
     current = written;
   }
   return current;
+}
+
+
+namespace {
+
+/// A face's corner positions (in double, as TriangleMesh::position gives them) through caches.
+class PagedFacePoints {
+ public:
+  PagedFacePoints(const CleanScratch& scratch, const ScratchFile& positions, std::size_t cacheBytes)
+      : faces_(scratch.faces, cacheBytes), positions_(positions, cacheBytes) {}
+  Triangle triangle(FaceId f) { return faces_[f].triangle; }
+  std::array<Vec3d, 3> points(const Triangle& t) {
+    return {positions_[t[0]].cast<double>(), positions_[t[1]].cast<double>(), positions_[t[2]].cast<double>()};
+  }
+  std::array<Vec3d, 3> points(FaceId f) { return points(triangle(f)); }
+  std::uint64_t bytesRead() const { return faces_.bytesRead() + positions_.bytesRead(); }
+
+ private:
+  PagedReader<CleanFace> faces_;
+  PagedReader<Vec3f> positions_;
+};
+
+struct CellFace {
+  std::uint32_t cell = 0, face = 0;
+};
+struct CellFaceLess {
+  bool operator()(const CellFace& a, const CellFace& b) const {
+    return a.cell != b.cell ? a.cell < b.cell : a.face < b.face;
+  }
+};
+struct FaceKey {
+  std::uint32_t face = 0, key = 0;
+};
+struct FaceKeyLess {
+  bool operator()(const FaceKey& a, const FaceKey& b) const { return a.face < b.face; }
+};
+
+/// Reads a file of (cell, face) records sorted by cell one cell at a time.
+class CellGroups {
+ public:
+  CellGroups(ScratchFolder& folder, const ScratchFile& file, const char* stage) : reader_(folder, file, stage) {
+    more_ = reader_.read(&pending_, sizeof pending_);
+  }
+  bool next(std::uint32_t& cell, std::vector<FaceId>& faces) {
+    faces.clear();
+    if (!more_) return false;
+    cell = pending_.cell;
+    while (more_ && pending_.cell == cell) {
+      faces.push_back(pending_.face);
+      more_ = reader_.read(&pending_, sizeof pending_);
+    }
+    return true;
+  }
+
+ private:
+  ScratchReader reader_;
+  CellFace pending_;
+  bool more_ = false;
+};
+
+/// The pieces of one cell's faces (sorted) joined through their shared edges: per face, the
+/// smallest face of its piece.
+std::vector<FaceId> piecesOfCell(const std::vector<FaceId>& faces, PagedReader<CornerId>& opposite) {
+  std::vector<std::uint32_t> parent(faces.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  const auto find = [&](std::uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (std::uint32_t i = 0; i < faces.size(); ++i) {
+    for (CornerId c = 3 * faces[i]; c < 3 * faces[i] + 3; ++c) {
+      const CornerId o = opposite[c];
+      if (o == kInvalidId) continue;
+      const auto it = std::lower_bound(faces.begin(), faces.end(), cornerFace(o));
+      if (it == faces.end() || *it != cornerFace(o)) continue;
+      const std::uint32_t a = find(i), b = find(static_cast<std::uint32_t>(it - faces.begin()));
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);  // roots are the smallest faces
+    }
+  }
+  std::vector<FaceId> smallest(faces.size());
+  for (std::uint32_t i = 0; i < faces.size(); ++i) smallest[i] = faces[find(i)];
+  return smallest;
+}
+
+class StageClock {
+ public:
+  explicit StageClock(std::vector<std::pair<std::string, double>>& out) : out_(out) {}
+  void finish(const char* name) {
+    const auto now = std::chrono::steady_clock::now();
+    out_.emplace_back(name, std::chrono::duration<double>(now - start_).count());
+    start_ = now;
+  }
+
+ private:
+  std::vector<std::pair<std::string, double>>& out_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+/// Calls fill(block, first, count) for blocks of faces in order, each filling `count` records of
+/// T in parallel, and writes them to a new file.
+template <class T, class Fill>
+ScratchFile writeFaceBlocks(ScratchFolder& folder, const char* stage, std::uint64_t numFaces, std::uint64_t blockFaces,
+                            Fill&& fill) {
+  ScratchWriter writer(folder, stage);
+  std::vector<T> block;
+  for (std::uint64_t first = 0; first < numFaces; first += blockFaces) {
+    const std::uint64_t count = std::min(blockFaces, numFaces - first);
+    block.resize(count);
+    fill(block, first, count);
+    writer.write(block.data(), count * sizeof(T));
+  }
+  return writer.finish();
+}
+
+}  // namespace
+
+ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scratch, const ProxyFieldOptions& proxy,
+                                 const FieldGeometryOptions& geometry, const StreamPassOptions& pass) {
+  ScratchField out;
+  StageClock clock(out.stageSeconds);
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  const std::uint64_t blockFaces = std::max<std::uint64_t>(1, pass.blockRecords);
+  ExternalSortOptions sort;
+  sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
+  const std::uint64_t nf = scratch.numFaces;
+  const bool smoothed = geometry.smoothingIterations > 0;
+  const ScratchFile surface = smoothed ? smoothScratchPositions(folder, scratch, geometry.smoothingIterations, pass)
+                                       : scratch.positions;
+  if (smoothed) out.framePositions = surface;
+  clock.finish("smooth");
+  if (nf == 0) return out;
+
+  // Cells of the surface's face centroids, sorted by cell.
+  BoundingBox box;
+  {
+    ScratchReader reader(folder, surface, "field: cells");
+    const std::uint64_t numVertices = surface.bytes / sizeof(Vec3f);
+    std::vector<Vec3f> chunk;
+    for (std::uint64_t first = 0; first < numVertices; first += blockFaces) {
+      chunk.resize(std::min(blockFaces, numVertices - first));
+      if (!reader.read(chunk.data(), chunk.size() * sizeof(Vec3f))) throw IoError(surface.path + ": scratch positions end early");
+      for (const Vec3f& p : chunk) {
+        box.min = box.min.cwiseMin(p.cast<double>());
+        box.max = box.max.cwiseMax(p.cast<double>());
+      }
+    }
+  }
+  const detail::ProxyCells cells = detail::proxyCells(box, proxy.gridResolution);
+  ScratchFile cellFaces;
+  {
+    ExternalSorter<CellFace, CellFaceLess> sorter(folder, sort.named("field: cells"));
+    PagedFacePoints points(scratch, surface, cacheBytes);
+    for (FaceId f = 0; f < nf; ++f) {
+      const std::array<Vec3d, 3> p = points.points(f);
+      sorter.add({cells.cellOf((p[0] + p[1] + p[2]) / 3.0), f});
+    }
+    folder.countRead("field: cells", points.bytesRead());
+    sorter.finish();
+    ScratchWriter writer(folder, "field: cells");
+    CellFace record;
+    while (sorter.next(record)) writer.write(&record, sizeof record);
+    cellFaces = writer.finish();
+  }
+  clock.finish("cells");
+
+  // Elements: the pieces of each cell, numbered by their smallest faces; face -> element.
+  ScratchFile faceElement;
+  std::uint32_t numElements = 0;
+  {
+    std::vector<FaceId> smallestFaces;
+    ExternalSorter<FaceKey, FaceKeyLess> byFace(folder, sort.named("field: elements"));
+    PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
+    CellGroups groups(folder, cellFaces, "field: elements");
+    std::uint32_t cell = 0;
+    std::vector<FaceId> faces;
+    while (groups.next(cell, faces)) {
+      const std::vector<FaceId> smallest = piecesOfCell(faces, opposite);
+      for (std::size_t i = 0; i < faces.size(); ++i) {
+        if (smallest[i] == faces[i]) smallestFaces.push_back(faces[i]);
+        byFace.add({faces[i], smallest[i]});
+      }
+    }
+    folder.countRead("field: elements", opposite.bytesRead());
+    std::sort(smallestFaces.begin(), smallestFaces.end());
+    numElements = static_cast<std::uint32_t>(smallestFaces.size());
+    byFace.finish();
+    ScratchWriter writer(folder, "field: elements");
+    FaceKey record;
+    while (byFace.next(record)) {
+      const std::uint32_t e = static_cast<std::uint32_t>(
+          std::lower_bound(smallestFaces.begin(), smallestFaces.end(), record.key) - smallestFaces.begin());
+      writer.write(&e, sizeof e);
+    }
+    faceElement = writer.finish();
+  }
+  // Per element its sums over its faces in increasing order (a cell's elements are all in it).
+  detail::ProxyElements elements;
+  elements.cellSize = cells.cellSize;
+  elements.normal.resize(numElements);
+  elements.centroid.resize(numElements);
+  elements.area.resize(numElements);
+  {
+    std::vector<std::vector<std::pair<std::uint32_t, double>>> lists(numElements);
+    PagedFacePoints points(scratch, surface, cacheBytes);
+    PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
+    PagedReader<std::uint32_t> elementOf(faceElement, cacheBytes);
+    CellGroups groups(folder, cellFaces, "field: elements");
+    std::uint32_t cell = 0;
+    std::vector<FaceId> faces;
+    std::vector<std::pair<std::uint32_t, detail::ElementSums>> sums;
+    while (groups.next(cell, faces)) {
+      sums.clear();
+      for (const FaceId f : faces) {
+        const std::uint32_t e = elementOf[f];
+        auto it = std::find_if(sums.begin(), sums.end(), [&](const auto& s) { return s.first == e; });
+        if (it == sums.end()) it = sums.emplace(sums.end(), e, detail::ElementSums());
+        const std::array<Vec3d, 3> p = points.points(f);
+        it->second.addFace(detail::faceGeometry(p));
+        for (int k = 0; k < 3; ++k) {
+          const CornerId o = opposite[3 * f + k];
+          if (o == kInvalidId) continue;
+          const std::uint32_t other = elementOf[cornerFace(o)];
+          if (other != e) it->second.addNeighbour(other, (p[(k + 1) % 3] - p[(k + 2) % 3]).norm());
+        }
+      }
+      for (auto& [e, s] : sums) lists[e] = s.finish(elements, e);
+    }
+    folder.countRead("field: elements", points.bytesRead() + opposite.bytesRead() + elementOf.bytesRead());
+    detail::storeNeighbours(lists, elements);
+  }
+  folder.remove(cellFaces);
+  out.elements = numElements;
+  out.elementEdges = elements.neighbours.size() / 2;
+  clock.finish("elements");
+
+  const Eigen::VectorXcd z = detail::solveElementField(elements, proxy.progress, proxy.stats);
+  const detail::ElementDirections directions = detail::elementDirections(elements, z);
+  clock.finish("solve");
+
+  // Transfer: directions and the sweeps' float normals.
+  const bool sweeps = proxy.smoothingSweeps > 0;
+  struct TransferReaders {
+    PagedFacePoints points;
+    PagedReader<std::uint32_t> elementOf;
+  };
+  ReaderPool<TransferReaders> transferPool([&] {
+    return std::unique_ptr<TransferReaders>(
+        new TransferReaders{PagedFacePoints(scratch, surface, cacheBytes), PagedReader<std::uint32_t>(faceElement, cacheBytes)});
+  });
+  ScratchWriter normalWriter(folder, "field: transfer");
+  std::vector<Vec3f> normalBlock;
+  ScratchFile direction = writeFaceBlocks<Vec3f>(folder, "field: transfer", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
+    normalBlock.resize(count);
+    parallelFor(count, 2048, [&](const IndexRange& range) {
+      auto readers = transferPool.take();
+      for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+        const FaceId f = static_cast<FaceId>(first + i);
+        const detail::FaceGeometry g = detail::faceGeometry(readers->points.points(f));
+        block[i] = detail::transferredDirection(elements, directions, g, readers->elementOf[f]).cast<float>();
+        normalBlock[i] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
+      }
+    });
+    if (sweeps) normalWriter.write(normalBlock.data(), count * sizeof(Vec3f));
+  });
+  const ScratchFile sweepNormal = normalWriter.finish();
+  transferPool.forEach([&](TransferReaders& r) { folder.countRead("field: transfer", r.points.bytesRead() + r.elementOf.bytesRead()); });
+  folder.remove(faceElement);
+  clock.finish("transfer");
+
+  if (sweeps) {
+    // Greedy colouring in face order: a face's earlier neighbours are in this block or, read
+    // back, in the blocks written before.
+    ScratchWriter colourWriter(folder, "field: colour");
+    {
+      PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
+      std::vector<std::uint8_t> block;
+      std::uint32_t used = 0;
+      for (std::uint64_t first = 0; first < nf; first += blockFaces) {
+        const std::uint64_t count = std::min(blockFaces, nf - first);
+        block.assign(count, 0xff);
+        std::unique_ptr<PagedReader<std::uint8_t>> earlier;
+        if (first > 0) earlier = std::make_unique<PagedReader<std::uint8_t>>(colourWriter.written(), cacheBytes);
+        for (std::uint64_t i = 0; i < count; ++i) {
+          const FaceId f = static_cast<FaceId>(first + i);
+          unsigned taken = 0;
+          for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+            const CornerId o = opposite[c];
+            if (o == kInvalidId || cornerFace(o) >= f) continue;  // not coloured yet
+            const FaceId g = cornerFace(o);
+            taken |= 1u << (g >= first ? block[g - first] : (*earlier)[g]);
+          }
+          block[i] = detail::firstFreeColour(taken);
+          used = std::max<std::uint32_t>(used, block[i] + 1u);
+        }
+        if (earlier) folder.countRead("field: colour", earlier->bytesRead());
+        colourWriter.write(block.data(), count);
+      }
+      folder.countRead("field: colour", opposite.bytesRead());
+      out.colours = used;
+    }
+    const ScratchFile colour = colourWriter.finish();
+    clock.finish("colour");
+
+    // One pass per sweep and colour: a colour's faces read only faces of other colours, as the
+    // in-memory sweep's parallel loop over that colour does.
+    for (std::int32_t sweep = 0; sweep < proxy.smoothingSweeps; ++sweep) {
+      for (std::uint32_t k = 0; k < out.colours; ++k) {
+        struct SweepReaders {
+          PagedReader<CornerId> opposite;
+          PagedReader<Vec3f> normal, direction;
+          PagedReader<std::uint8_t> colour;
+        };
+        ReaderPool<SweepReaders> pool([&] {
+          return std::unique_ptr<SweepReaders>(new SweepReaders{
+              PagedReader<CornerId>(scratch.opposite, cacheBytes), PagedReader<Vec3f>(sweepNormal, cacheBytes),
+              PagedReader<Vec3f>(direction, cacheBytes), PagedReader<std::uint8_t>(colour, cacheBytes)});
+        });
+        const ScratchFile next = writeFaceBlocks<Vec3f>(folder, "field: sweeps", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
+          parallelFor(count, 4096, [&](const IndexRange& range) {
+            auto r = pool.take();
+            for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+              const FaceId f = static_cast<FaceId>(first + i);
+              block[i] = r->direction[f];
+              const Vec3f normal = r->normal[f];
+              if (r->colour[f] != k || detail::isZero(normal)) continue;
+              Vec3f normals[3];
+              Vec3d neighbours[3];
+              int count3 = 0;
+              for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+                const CornerId o = r->opposite[c];
+                if (o == kInvalidId) continue;
+                const Vec3f n = r->normal[cornerFace(o)];
+                if (detail::isZero(n)) continue;
+                normals[count3] = n;
+                neighbours[count3++] = r->direction[cornerFace(o)].cast<double>();
+              }
+              Vec3d swept;
+              if (detail::sweptDirection(normal, block[i].cast<double>(), normals, neighbours, count3, swept)) {
+                block[i] = swept.cast<float>();
+              }
+            }
+          });
+        });
+        pool.forEach([&](SweepReaders& r) {
+          folder.countRead("field: sweeps", r.opposite.bytesRead() + r.normal.bytesRead() + r.direction.bytesRead() +
+                                                r.colour.bytesRead());
+        });
+        folder.remove(direction);
+        direction = next;
+      }
+    }
+    folder.remove(colour);
+    clock.finish("sweeps");
+  }
+
+  // The exact tangent planes of the surface (after sweeps), then onto the mesh's own faces.
+  struct FinishReaders {
+    PagedFacePoints surface, own;
+    PagedReader<Vec3f> direction;
+    std::unique_ptr<PagedReader<Vec3f>> normal;
+  };
+  ReaderPool<FinishReaders> finishPool([&] {
+    auto r = std::unique_ptr<FinishReaders>(new FinishReaders{PagedFacePoints(scratch, surface, cacheBytes),
+                                                              PagedFacePoints(scratch, scratch.positions, cacheBytes),
+                                                              PagedReader<Vec3f>(direction, cacheBytes), nullptr});
+    if (sweeps) r->normal = std::make_unique<PagedReader<Vec3f>>(sweepNormal, cacheBytes);
+    return r;
+  });
+  out.directions = writeFaceBlocks<Vec3f>(folder, "field: finish", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
+    parallelFor(count, 4096, [&](const IndexRange& range) {
+      auto r = finishPool.take();
+      for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+        const FaceId f = static_cast<FaceId>(first + i);
+        block[i] = r->direction[f];
+        const Triangle t = r->surface.triangle(f);
+        const std::array<Vec3d, 3> p = r->surface.points(t);
+        if (sweeps && !detail::isZero((*r->normal)[f])) {
+          const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+          const double len = n.norm();
+          Vec3d tangent;
+          if (detail::tangentOf(len > 0.0 ? Vec3d(n / len) : Vec3d::Zero(), block[i].cast<double>(), tangent)) {
+            block[i] = tangent.cast<float>();
+          }
+        }
+        if (smoothed) {
+          block[i] = rotateBetween(detail::faceFrame(p).n, detail::faceFrame(r->own.points(t)).n, block[i].cast<double>())
+                         .cast<float>();
+        }
+      }
+    });
+  });
+  finishPool.forEach([&](FinishReaders& r) {
+    folder.countRead("field: finish", r.surface.bytesRead() + r.own.bytesRead() + r.direction.bytesRead() +
+                                          (r.normal ? r.normal->bytesRead() : 0));
+  });
+  folder.remove(direction);
+  if (sweeps) folder.remove(sweepNormal);
+  clock.finish("finish");
+  return out;
 }
 
 }  // namespace seamvox

@@ -3,15 +3,47 @@
 /// (clean_stream): each step equals its in-memory counterpart on readCleanScratch's mesh, and
 /// reads the scratch through page caches (paged_reader) in the faces' Morton order.
 #include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include "core/field/field_proxy.h"
 #include "stream/clean_stream.h"
 #include "stream/scratch_folder.h"
 
 namespace seamvox {
 
+/// Memory of a streamed pass.
+struct StreamPassOptions {
+  std::uint64_t memoryBytes = std::uint64_t(256) << 20;  ///< the sorts' and page caches' share
+  /// Records (faces, vertices) computed and written at once; small in tests, so that passes run
+  /// over many blocks.
+  std::uint64_t blockRecords = std::uint64_t(1) << 20;
+};
+
 /// smoothPositions(mesh, topology, iterations) of the cleaned mesh: Vec3f per vertex, a new file
-/// (the cleaned positions themselves when iterations is 0). memoryBytes: the page caches' share.
+/// (the cleaned positions themselves when iterations is 0).
 ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t iterations,
-                                   std::uint64_t memoryBytes);
+                                   const StreamPassOptions& pass);
+
+/// computeCrossField(mesh, topology, FieldMethod::Proxy, {}, proxy, geometry) of the cleaned mesh,
+/// in the scratch folder.
+struct ScratchField {
+  ScratchFile directions;      ///< Vec3f per face, tangent to the mesh's own faces
+  ScratchFile framePositions;  ///< Vec3f per vertex, the smoothed surface (none without smoothing)
+  std::uint32_t elements = 0, colours = 0;
+  std::uint64_t elementEdges = 0;
+  /// Wall seconds of the passes: smooth, cells, elements, solve, transfer, colour, sweeps, finish.
+  std::vector<std::pair<std::string, double>> stageSeconds;
+};
+
+/// The proxy field out of core: (cell, face) records sorted by cell give the elements (a
+/// union-find per cell) and their sums; the element solve is grid-sized; the transfer, the greedy
+/// colouring in face order, one pass per sweep and colour and the last projection stream the faces.
+/// Equal, bit for bit, to the in-memory field (with the BLAS on one thread, as the seamvox
+/// command runs it). Memory: the sorts and caches, a block of faces, the elements. IoError naming
+/// the folder on a full disk.
+ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scratch, const ProxyFieldOptions& proxy,
+                                 const FieldGeometryOptions& geometry, const StreamPassOptions& pass);
 
 }  // namespace seamvox

@@ -83,6 +83,11 @@ void ScratchWriter::write(const void* data, std::size_t bytes) {
   }
 }
 
+ScratchFile ScratchWriter::written() {
+  flush();
+  return ScratchFile{path_, bytes_};
+}
+
 void ScratchWriter::flush() {
   if (used_ == 0) return;
   folder_.countWrite(stage_, used_);

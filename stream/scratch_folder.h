@@ -76,6 +76,8 @@ class ScratchWriter {
   void write(const void* data, std::size_t bytes);
   /// Flushes and closes the file.
   ScratchFile finish();
+  /// Flushes: the bytes written so far, readable by other readers of the file while it grows.
+  ScratchFile written();
 
  private:
   void flush();

@@ -3,9 +3,12 @@
 // lookups miss.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
+#include <string>
 
 #include "core/field/field.h"
+#include "core/field/field_proxy.h"
 #include "core/synth/generate.h"
 #include "core/system/errors.h"
 #include "stream/clean_stream.h"
@@ -28,11 +31,34 @@ CleanScratch cleanIntoScratch(ScratchFolder& folder, const TriangleMesh& mesh, s
   return cleanWeldedMesh(folder, welded.scratch, welded.census, memoryBytes);
 }
 
+// A file of Vec3f records (positions or directions).
 std::vector<Vec3f> readPositions(ScratchFolder& folder, const ScratchFile& file) {
   std::vector<Vec3f> out(file.bytes / sizeof(Vec3f));
   ScratchReader reader(folder, file, "test");
   if (!out.empty()) EXPECT_TRUE(reader.read(out.data(), file.bytes));
   return out;
+}
+
+using NamedMeshes = std::vector<std::pair<const char*, TriangleMesh>>;
+
+// f(folder, scratch, cleaned) for each mesh cleaned into a folder of its own and read back.
+template <class F>
+void forEachCleaned(const NamedMeshes& meshes, F&& f) {
+  for (const auto& [name, mesh] : meshes) {
+    SCOPED_TRACE(name);
+    testing::TempDir dir;
+    ScratchFolder folder(dir.dir());
+    const CleanScratch scratch = cleanIntoScratch(folder, mesh, 1);
+    const CleanResult cleaned = readCleanScratch(folder, scratch);
+    f(folder, scratch, cleaned);
+  }
+}
+
+std::size_t countDiffering(const std::vector<Vec3f>& a, const std::vector<Vec3f>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  std::size_t wrong = 0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) wrong += a[i] != b[i];
+  return wrong;
 }
 
 TEST(PagedReader, ReadsEveryRecordInAnyOrderThroughTwoPages) {
@@ -55,28 +81,61 @@ TEST(PagedReader, ReadsEveryRecordInAnyOrderThroughTwoPages) {
 }
 
 TEST(FieldStream, SmoothedPositionsEqualSmoothPositions) {
-  const std::vector<std::pair<const char*, TriangleMesh>> meshes = {
+  const NamedMeshes meshes = {
       {"scan with holes", testing::withOneTriangleHoles(testing::generatedMesh(MeshKind::Scan, 40000), 53)},
       {"damaged", testing::damagedMesh(7)},
       {"torus", testing::torusMesh(60, 40)}};
-  for (const auto& [name, mesh] : meshes) {
-    SCOPED_TRACE(name);
-    testing::TempDir dir;
-    ScratchFolder folder(dir.dir());
-    const CleanScratch scratch = cleanIntoScratch(folder, mesh, 1);
-    const CleanResult cleaned = readCleanScratch(folder, scratch);
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
     for (const std::uint32_t iterations : {0u, 1u, 3u}) {
       const std::vector<Vec3f> expected = smoothPositions(cleaned.mesh, cleaned.topology, iterations);
-      // 1 byte of memory: every cache holds two 64 KB pages, far less than the files.
-      const ScratchFile smoothed = smoothScratchPositions(folder, scratch, iterations, 1);
+      // 1 byte of memory: every cache holds two 64 KB pages, far less than the files; blocks
+      // of 1000 vertices.
+      const ScratchFile smoothed = smoothScratchPositions(folder, scratch, iterations, StreamPassOptions{1, 1000});
       const std::vector<Vec3f> streamed = readPositions(folder, smoothed);
-      ASSERT_EQ(streamed.size(), expected.size());
-      std::size_t wrong = 0;
-      for (std::size_t v = 0; v < expected.size(); ++v) wrong += streamed[v] != expected[v];
-      EXPECT_EQ(wrong, 0u) << iterations << " iterations";
+      EXPECT_EQ(countDiffering(streamed, expected), 0u) << iterations << " iterations";
       if (iterations > 0) EXPECT_NE(streamed, cleaned.mesh.positions);  // the smoothing did move them
     }
-  }
+  });
+}
+
+TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
+  const NamedMeshes meshes = {
+      {"scan with holes", testing::withOneTriangleHoles(testing::generatedMesh(MeshKind::Scan, 40000), 53)},
+      {"damaged", testing::damagedMesh(11)},
+      {"torus and islands", testing::concatMeshes({testing::torusMesh(60, 40), testing::icosphereMesh(2),
+                                                   testing::moebiusStrip(16, Vec3f(4.0f, 0.0f, 0.0f))})}};
+  struct Variant {
+    std::int32_t grid, sweeps;
+    std::uint32_t smoothing;
+  };
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    for (const Variant v : {Variant{128, 4, 3}, Variant{16, 4, 3}, Variant{32, 0, 3}, Variant{64, 2, 0}}) {
+      SCOPED_TRACE("grid " + std::to_string(v.grid) + ", sweeps " + std::to_string(v.sweeps) + ", smoothing " +
+                   std::to_string(v.smoothing));
+      ProxyFieldOptions proxy;
+      proxy.gridResolution = v.grid;
+      proxy.smoothingSweeps = v.sweeps;
+      FieldGeometryOptions geometry;
+      geometry.smoothingIterations = v.smoothing;
+      const CrossField expected = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, proxy, geometry);
+      // 1 byte: sorts spill at once and every cache holds two pages; blocks of 1000 faces.
+      const std::uint64_t filesBefore = folder.bytesOnDisk();
+      const ScratchField streamed = computeScratchField(folder, scratch, proxy, geometry, StreamPassOptions{1, 1000});
+      EXPECT_EQ(countDiffering(readPositions(folder, streamed.directions), expected.direction), 0u)
+          << "directions differ";
+      if (v.smoothing > 0) {
+        EXPECT_EQ(readPositions(folder, streamed.framePositions), expected.framePositions);
+      } else {
+        EXPECT_TRUE(streamed.framePositions.path.empty());
+      }
+      EXPECT_GT(streamed.elements, 0u);
+      if (v.sweeps > 0) EXPECT_GE(streamed.colours, 2u);
+      // Only the results stay: every intermediate file was removed.
+      EXPECT_EQ(folder.bytesOnDisk() - filesBefore, streamed.directions.bytes + streamed.framePositions.bytes);
+      folder.remove(streamed.directions);
+      if (v.smoothing > 0) folder.remove(streamed.framePositions);
+    }
+  });
 }
 
 }  // namespace

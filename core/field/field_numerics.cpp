@@ -13,8 +13,10 @@ namespace seamvox::detail {
 using Complex = std::complex<double>;
 
 FaceFrame faceFrame(const std::vector<Vec3f>& positions, const Triangle& t) {
-  const Vec3d p[3] = {positions[t[0]].cast<double>(), positions[t[1]].cast<double>(),
-                      positions[t[2]].cast<double>()};
+  return faceFrame({positions[t[0]].cast<double>(), positions[t[1]].cast<double>(), positions[t[2]].cast<double>()});
+}
+
+FaceFrame faceFrame(const std::array<Vec3d, 3>& p) {
   FaceFrame frame;
   const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
   const double area2 = n.norm();

@@ -4,6 +4,7 @@
 /// floor and flat-mode shift, and the inverse iteration for the smallest eigenvector of
 /// A z = lambda M z through the project's CHOLMOD wrapper. Internal to core/field.
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -21,6 +22,7 @@ struct FaceFrame {
   Vec3d e1, e2, n;
   bool degenerate = false;  ///< zero-area face: fallback frame
 };
+FaceFrame faceFrame(const std::array<Vec3d, 3>& p);
 FaceFrame faceFrame(const std::vector<Vec3f>& positions, const Triangle& t);
 FaceFrame faceFrame(const TriangleMesh& mesh, FaceId f);
 

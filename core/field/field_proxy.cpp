@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/field/detail_proxy.h"
 #include "core/field/field_numerics.h"
 #include "core/mesh/detail_union_find.h"
 #include "core/solve/cholmod_solver.h"
@@ -19,29 +20,12 @@
 
 namespace seamvox {
 
-namespace {
+namespace detail {
 
 using Complex = std::complex<double>;
+using VectorC = Eigen::VectorXcd;
 
-/// Geometry of one face: its frame (detail::faceFrame; zero-area faces get a fallback frame and
-/// are flagged), centroid and area (0 when degenerate).
-struct FaceGeometry {
-  Vec3d n, e1, e2, centroid;
-  double area = 0.0;
-  bool degenerate = false;
-};
-
-FaceGeometry faceGeometry(const TriangleMesh& mesh, FaceId f) {
-  const detail::FaceFrame frame = detail::faceFrame(mesh, f);
-  FaceGeometry g;
-  g.n = frame.n;
-  g.e1 = frame.e1;
-  g.e2 = frame.e2;
-  g.centroid = detail::faceCentroid(mesh, f);
-  g.area = frame.degenerate ? 0.0 : faceArea(mesh, f);
-  g.degenerate = frame.degenerate;
-  return g;
-}
+namespace {
 
 /// Unit 4th power of the tangent vector v written in the frame (e1, e2); 0 for a zero vector.
 /// (x + iy)^4 / (x^2 + y^2)^2: no trigonometry, no square root.
@@ -69,141 +53,90 @@ Vec3d directionOf(Complex z, const Vec3d& e1, const Vec3d& e2) {
   return r.real() * e1 + r.imag() * e2;
 }
 
-bool isZero(const Vec3f& n) { return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f; }
-
-using detail::dualWeight;
-using detail::edgeLength;
-
-/// The proxy: elements (connected pieces of the mesh inside one grid cell) and their graph.
-struct Proxy {
-  std::vector<std::uint32_t> faceElement;     ///< #F
-  std::vector<std::uint32_t> elementStart;    ///< #E + 1, offsets into elementFaces
-  std::vector<std::uint32_t> elementFaces;    ///< faces grouped by element, increasing in each
-  std::vector<Vec3d> normal, centroid;        ///< #E, area-weighted unit normal and centroid
-  std::vector<double> area;                   ///< #E
-  std::vector<std::uint32_t> neighbourStart;  ///< #E + 1, offsets into neighbours
-  std::vector<std::pair<std::uint32_t, double>> neighbours;  ///< (element, shared edge length)
-  double cellSize = 0.0;
-  std::uint32_t numElements() const { return static_cast<std::uint32_t>(area.size()); }
-};
-
-/// Cell of every face's centroid, then faces of one cell joined through their shared edges.
-void buildElements(const TriangleMesh& mesh, const Topology& topology, std::int32_t resolution,
-                   Proxy& proxy) {
-  const std::uint32_t numFaces = topology.numFaces();
-  const BoundingBox box = computeBoundingBox(mesh.positions);
-  const Vec3d extent = box.extent();
-  const double longest = std::max(extent.maxCoeff(), 1e-300);
-  // Cubic cells, the grid centred on the box and padded by a few percent of a cell.
-  proxy.cellSize = longest * (1.0 + 1e-3) / resolution;
-  if (!(proxy.cellSize > 0.0) || !std::isfinite(proxy.cellSize)) proxy.cellSize = 1.0;
-  const Vec3d origin = 0.5 * (box.min + box.max) - Vec3d::Constant(0.5 * resolution * proxy.cellSize);
-  const std::uint32_t r = static_cast<std::uint32_t>(resolution);
-
-  std::vector<std::uint32_t> cell(numFaces);
-  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
-    for (FaceId f = range.begin(); f != range.end(); ++f) {
-      const Triangle& t = mesh.triangles[f];
-      const Vec3d b = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
-      std::uint32_t key = 0;
-      for (int axis = 2; axis >= 0; --axis) {
-        const double x = (b[axis] - origin[axis]) / proxy.cellSize;
-        const std::uint32_t i = x >= 0.0 ? std::min(static_cast<std::uint32_t>(std::min(x, 1e9)), r - 1) : 0;
-        key = key * r + i;  // NaN centroids land in cell 0
-      }
-      cell[f] = key;
-    }
-  });
-  detail::UnionFind sets(numFaces);
-  for (CornerId c = 0; c < topology.numCorners(); ++c) {
-    const CornerId o = topology.opposite(c);
-    if (o != kInvalidId && o > c && cell[cornerFace(c)] == cell[cornerFace(o)]) {
-      sets.unite(cornerFace(c), cornerFace(o));
-    }
-  }
-  std::vector<std::uint32_t>().swap(cell);
-  // Parents never point to a larger id, so one increasing pass turns roots into element ids
-  // (numbered by their smallest face) and every other face into its root's id.
-  std::vector<std::uint32_t>& element = sets.parent;
-  std::uint32_t numElements = 0;
-  for (FaceId f = 0; f < numFaces; ++f) element[f] = element[f] == f ? numElements++ : element[element[f]];
-  proxy.faceElement = std::move(element);
-
-  proxy.elementStart.assign(numElements + 1, 0);
-  for (FaceId f = 0; f < numFaces; ++f) ++proxy.elementStart[proxy.faceElement[f] + 1];
-  for (std::uint32_t e = 0; e < numElements; ++e) proxy.elementStart[e + 1] += proxy.elementStart[e];
-  proxy.elementFaces.resize(numFaces);
-  {
-    std::vector<std::uint32_t> fill(proxy.elementStart.begin(), proxy.elementStart.end() - 1);
-    for (FaceId f = 0; f < numFaces; ++f) proxy.elementFaces[fill[proxy.faceElement[f]]++] = f;
-  }
-}
-
-/// Area, normal and centroid per element; neighbours with the summed length of shared edges.
-/// Parallel over elements, each summing its faces in increasing order (deterministic).
-void accumulateElements(const TriangleMesh& mesh, const Topology& topology, Proxy& proxy) {
-  const std::uint32_t numElements = static_cast<std::uint32_t>(proxy.elementStart.size() - 1);
-  proxy.normal.resize(numElements);
-  proxy.centroid.resize(numElements);
-  proxy.area.resize(numElements);
-  std::vector<std::vector<std::pair<std::uint32_t, double>>> adjacent(numElements);
-  parallelFor(numElements, 64, [&](const IndexRange& range) {
-    for (std::uint32_t e = range.begin(); e != range.end(); ++e) {
-      Vec3d normal = Vec3d::Zero(), weighted = Vec3d::Zero(), plain = Vec3d::Zero();
-      double area = 0.0;
-      auto& list = adjacent[e];
-      for (std::uint32_t i = proxy.elementStart[e]; i < proxy.elementStart[e + 1]; ++i) {
-        const FaceId f = proxy.elementFaces[i];
-        const FaceGeometry g = faceGeometry(mesh, f);
-        normal += g.area * g.n;
-        weighted += g.area * g.centroid;
-        plain += g.centroid;
-        area += g.area;
-        for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-          const CornerId o = topology.opposite(c);
-          if (o == kInvalidId) continue;
-          const std::uint32_t other = proxy.faceElement[cornerFace(o)];
-          if (other == e) continue;
-          const double len = edgeLength(mesh, topology, c);
-          auto it = std::find_if(list.begin(), list.end(), [&](const auto& p) { return p.first == other; });
-          if (it == list.end()) {
-            list.emplace_back(other, std::isfinite(len) ? len : 0.0);
-          } else {
-            it->second += std::isfinite(len) ? len : 0.0;
-          }
-        }
-      }
-      std::sort(list.begin(), list.end());
-      const std::uint32_t count = proxy.elementStart[e + 1] - proxy.elementStart[e];
-      const double len = normal.norm();
-      proxy.normal[e] = len > 0.0 && std::isfinite(len) ? Vec3d(normal / len) : Vec3d::UnitZ();
-      proxy.centroid[e] = area > 0.0 && std::isfinite(area) ? Vec3d(weighted / area) : Vec3d(plain / count);
-      proxy.area[e] = std::isfinite(area) ? area : 0.0;
-    }
-  });
-  proxy.neighbourStart.assign(numElements + 1, 0);
-  for (std::uint32_t e = 0; e < numElements; ++e) {
-    proxy.neighbourStart[e + 1] = proxy.neighbourStart[e] + static_cast<std::uint32_t>(adjacent[e].size());
-  }
-  proxy.neighbours.reserve(proxy.neighbourStart[numElements]);
-  for (auto& list : adjacent) {
-    proxy.neighbours.insert(proxy.neighbours.end(), list.begin(), list.end());
-    std::vector<std::pair<std::uint32_t, double>>().swap(list);
-  }
-}
-
 /// Tangent frame of an element: e1 any unit vector perpendicular to its normal.
 void elementFrame(const Vec3d& n, Vec3d& e1, Vec3d& e2) {
   e1 = n.unitOrthogonal();
   e2 = n.cross(e1);
 }
 
-using SparseMatrixC = Eigen::SparseMatrix<Complex, Eigen::ColMajor, int>;
-using VectorC = Eigen::VectorXcd;
+}  // namespace
 
-/// Smallest eigenvector of the element connection Laplacian A z = lambda M z (energy
-/// sum w_ab |z_b - exp(4 i kappa_ab) z_a|^2, M the element areas), normalized per component.
-VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress, FieldSolveStats* stats) {
+FaceGeometry faceGeometry(const std::array<Vec3d, 3>& p) {
+  const FaceFrame frame = faceFrame(p);
+  FaceGeometry g;
+  g.n = frame.n;
+  g.e1 = frame.e1;
+  g.e2 = frame.e2;
+  g.centroid = (p[0] + p[1] + p[2]) / 3.0;
+  g.area = frame.degenerate ? 0.0 : 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
+  g.degenerate = frame.degenerate;
+  return g;
+}
+
+ProxyCells proxyCells(const BoundingBox& box, std::int32_t resolution) {
+  ProxyCells cells;
+  const Vec3d extent = box.extent();
+  const double longest = std::max(extent.maxCoeff(), 1e-300);
+  // Cubic cells, the grid centred on the box and padded by a few percent of a cell.
+  cells.cellSize = longest * (1.0 + 1e-3) / resolution;
+  if (!(cells.cellSize > 0.0) || !std::isfinite(cells.cellSize)) cells.cellSize = 1.0;
+  cells.origin = 0.5 * (box.min + box.max) - Vec3d::Constant(0.5 * resolution * cells.cellSize);
+  cells.resolution = static_cast<std::uint32_t>(resolution);
+  return cells;
+}
+
+std::uint32_t ProxyCells::cellOf(const Vec3d& b) const {
+  std::uint32_t key = 0;
+  for (int axis = 2; axis >= 0; --axis) {
+    const double x = (b[axis] - origin[axis]) / cellSize;
+    const std::uint32_t i = x >= 0.0 ? std::min(static_cast<std::uint32_t>(std::min(x, 1e9)), resolution - 1) : 0;
+    key = key * resolution + i;  // NaN centroids land in cell 0
+  }
+  return key;
+}
+
+void ElementSums::addFace(const FaceGeometry& g) {
+  normal_ += g.area * g.n;
+  weighted_ += g.area * g.centroid;
+  plain_ += g.centroid;
+  area_ += g.area;
+  ++count_;
+}
+
+void ElementSums::addNeighbour(std::uint32_t other, double len) {
+  auto it = std::find_if(list_.begin(), list_.end(), [&](const auto& p) { return p.first == other; });
+  if (it == list_.end()) {
+    list_.emplace_back(other, std::isfinite(len) ? len : 0.0);
+  } else {
+    it->second += std::isfinite(len) ? len : 0.0;
+  }
+}
+
+std::vector<std::pair<std::uint32_t, double>> ElementSums::finish(ProxyElements& elements, std::uint32_t e) {
+  std::sort(list_.begin(), list_.end());
+  const double len = normal_.norm();
+  elements.normal[e] = len > 0.0 && std::isfinite(len) ? Vec3d(normal_ / len) : Vec3d::UnitZ();
+  elements.centroid[e] = area_ > 0.0 && std::isfinite(area_) ? Vec3d(weighted_ / area_) : Vec3d(plain_ / count_);
+  elements.area[e] = std::isfinite(area_) ? area_ : 0.0;
+  return std::move(list_);
+}
+
+void storeNeighbours(std::vector<std::vector<std::pair<std::uint32_t, double>>>& lists, ProxyElements& elements) {
+  const std::uint32_t numElements = static_cast<std::uint32_t>(lists.size());
+  elements.neighbourStart.assign(numElements + 1, 0);
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    elements.neighbourStart[e + 1] = elements.neighbourStart[e] + static_cast<std::uint32_t>(lists[e].size());
+  }
+  elements.neighbours.reserve(elements.neighbourStart[numElements]);
+  for (auto& list : lists) {
+    elements.neighbours.insert(elements.neighbours.end(), list.begin(), list.end());
+    std::vector<std::pair<std::uint32_t, double>>().swap(list);
+  }
+}
+
+using SparseMatrixC = Eigen::SparseMatrix<Complex, Eigen::ColMajor, int>;
+
+VectorC solveElementField(const ProxyElements& proxy, const ProgressFn& progress, FieldSolveStats* stats) {
   const std::uint32_t numElements = proxy.numElements();
   std::vector<Vec3d> e1(numElements), e2(numElements);
   for (std::uint32_t e = 0; e < numElements; ++e) elementFrame(proxy.normal[e], e1[e], e2[e]);
@@ -267,6 +200,148 @@ VectorC solveElementField(const Proxy& proxy, const ProgressFn& progress, FieldS
   return detail::smallestEigenvectors(factor, mass, comp, numComponents, iteration);
 }
 
+ElementDirections elementDirections(const ProxyElements& proxy, const VectorC& z) {
+  ElementDirections out;
+  const std::uint32_t numElements = proxy.numElements();
+  out.direction.resize(numElements);
+  out.confidence.resize(numElements);
+  for (std::uint32_t e = 0; e < numElements; ++e) {
+    Vec3d e1, e2;
+    elementFrame(proxy.normal[e], e1, e2);
+    out.direction[e] = directionOf(z[e], e1, e2);
+    out.confidence[e] = std::isfinite(std::abs(z[e])) ? std::abs(z[e]) : 0.0;
+  }
+  out.radius = 2.0 * proxy.cellSize;
+  return out;
+}
+
+Vec3d transferredDirection(const ProxyElements& proxy, const ElementDirections& directions, const FaceGeometry& g,
+                           std::uint32_t own) {
+  Complex sum = 0.0;
+  auto add = [&](std::uint32_t e) {
+    const double d = (g.centroid - proxy.centroid[e]).norm() / directions.radius;
+    const double bump = d < 1.0 ? (1.0 - d * d) * (1.0 - d * d) : 0.0;
+    // The own element always counts a little, so no face is left without a value.
+    const double w = directions.confidence[e] * (e == own ? std::max(bump, 1e-3) : bump);
+    if (w > 0.0) sum += w * fourthPower(rotateBetween(proxy.normal[e], g.n, directions.direction[e]), g.e1, g.e2);
+  };
+  add(own);
+  for (std::uint32_t i = proxy.neighbourStart[own]; i < proxy.neighbourStart[own + 1]; ++i) {
+    add(proxy.neighbours[i].first);
+  }
+  return directionOf(sum, g.e1, g.e2);
+}
+
+bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal, const Vec3d* neighbourDirection,
+                    int count, Vec3d& out) {
+  const Vec3d n = normal.cast<double>();
+  // Frame with e1 = the current direction: the new one is the representative nearest it.
+  const Vec3d v = n.cross(u);
+  Complex sum = 0.0;
+  for (int i = 0; i < count; ++i) {
+    sum += fourthPower(rotateBetween(neighbourNormal[i].cast<double>(), n, neighbourDirection[i]), u, v);
+  }
+  const Vec3d next = directionOf(sum, u, v);
+  return tangentOf(n, next, out);
+}
+
+bool tangentOf(const Vec3d& n, const Vec3d& u, Vec3d& out) {
+  const Vec3d tangent = u - u.dot(n) * n;
+  const double len = tangent.norm();
+  if (!(len > 0.0 && std::isfinite(len))) return false;
+  out = tangent / len;
+  return true;
+}
+
+}  // namespace detail
+
+namespace {
+
+using Complex = std::complex<double>;
+using VectorC = Eigen::VectorXcd;
+using detail::dualWeight;
+using detail::edgeLength;
+using detail::FaceGeometry;
+using detail::isZero;
+using detail::fourthPower;
+
+FaceGeometry faceGeometry(const TriangleMesh& mesh, FaceId f) {
+  const Triangle& t = mesh.triangles[f];
+  return detail::faceGeometry({mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])});
+}
+
+/// The proxy: elements (connected pieces of the mesh inside one grid cell) and their graph.
+struct Proxy : detail::ProxyElements {
+  std::vector<std::uint32_t> faceElement;     ///< #F
+  std::vector<std::uint32_t> elementStart;    ///< #E + 1, offsets into elementFaces
+  std::vector<std::uint32_t> elementFaces;    ///< faces grouped by element, increasing in each
+};
+
+/// Cell of every face's centroid, then faces of one cell joined through their shared edges.
+void buildElements(const TriangleMesh& mesh, const Topology& topology, std::int32_t resolution,
+                   Proxy& proxy) {
+  const std::uint32_t numFaces = topology.numFaces();
+  const detail::ProxyCells cells = detail::proxyCells(computeBoundingBox(mesh.positions), resolution);
+  proxy.cellSize = cells.cellSize;
+  std::vector<std::uint32_t> cell(numFaces);
+  parallelFor(numFaces, 4096, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      cell[f] = cells.cellOf((mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0);
+    }
+  });
+  detail::UnionFind sets(numFaces);
+  for (CornerId c = 0; c < topology.numCorners(); ++c) {
+    const CornerId o = topology.opposite(c);
+    if (o != kInvalidId && o > c && cell[cornerFace(c)] == cell[cornerFace(o)]) {
+      sets.unite(cornerFace(c), cornerFace(o));
+    }
+  }
+  std::vector<std::uint32_t>().swap(cell);
+  // Parents never point to a larger id, so one increasing pass turns roots into element ids
+  // (numbered by their smallest face) and every other face into its root's id.
+  std::vector<std::uint32_t>& element = sets.parent;
+  std::uint32_t numElements = 0;
+  for (FaceId f = 0; f < numFaces; ++f) element[f] = element[f] == f ? numElements++ : element[element[f]];
+  proxy.faceElement = std::move(element);
+
+  proxy.elementStart.assign(numElements + 1, 0);
+  for (FaceId f = 0; f < numFaces; ++f) ++proxy.elementStart[proxy.faceElement[f] + 1];
+  for (std::uint32_t e = 0; e < numElements; ++e) proxy.elementStart[e + 1] += proxy.elementStart[e];
+  proxy.elementFaces.resize(numFaces);
+  {
+    std::vector<std::uint32_t> fill(proxy.elementStart.begin(), proxy.elementStart.end() - 1);
+    for (FaceId f = 0; f < numFaces; ++f) proxy.elementFaces[fill[proxy.faceElement[f]]++] = f;
+  }
+}
+
+/// Area, normal and centroid per element; neighbours with the summed length of shared edges.
+/// Parallel over elements, each summing its faces in increasing order (deterministic).
+void accumulateElements(const TriangleMesh& mesh, const Topology& topology, Proxy& proxy) {
+  const std::uint32_t numElements = static_cast<std::uint32_t>(proxy.elementStart.size() - 1);
+  proxy.normal.resize(numElements);
+  proxy.centroid.resize(numElements);
+  proxy.area.resize(numElements);
+  std::vector<std::vector<std::pair<std::uint32_t, double>>> adjacent(numElements);
+  parallelFor(numElements, 64, [&](const IndexRange& range) {
+    for (std::uint32_t e = range.begin(); e != range.end(); ++e) {
+      detail::ElementSums sums;
+      for (std::uint32_t i = proxy.elementStart[e]; i < proxy.elementStart[e + 1]; ++i) {
+        const FaceId f = proxy.elementFaces[i];
+        sums.addFace(faceGeometry(mesh, f));
+        for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+          const CornerId o = topology.opposite(c);
+          if (o == kInvalidId) continue;
+          const std::uint32_t other = proxy.faceElement[cornerFace(o)];
+          if (other != e) sums.addNeighbour(other, edgeLength(mesh, topology, c));
+        }
+      }
+      adjacent[e] = sums.finish(proxy, e);
+    }
+  });
+  detail::storeNeighbours(adjacent, proxy);
+}
+
 /// Greedy colouring of the face graph (faces adjacent through edges), in face order: at most 4
 /// colours since a face has at most 3 neighbours.
 std::uint32_t colourFaces(const Topology& topology, std::vector<std::uint8_t>& colour) {
@@ -279,10 +354,8 @@ std::uint32_t colourFaces(const Topology& topology, std::vector<std::uint8_t>& c
       const CornerId o = topology.opposite(c);
       if (o != kInvalidId && colour[cornerFace(o)] != 0xff) taken |= 1u << colour[cornerFace(o)];
     }
-    std::uint8_t k = 0;
-    while (taken & (1u << k)) ++k;
-    colour[f] = k;
-    used = std::max<std::uint32_t>(used, k + 1u);
+    colour[f] = detail::firstFreeColour(taken);
+    used = std::max<std::uint32_t>(used, colour[f] + 1u);
   }
   return used;
 }
@@ -309,35 +382,12 @@ void checkProxyFieldInput(const TriangleMesh& mesh, const Topology& topology, co
 void transferToFaces(const TriangleMesh& mesh, const Proxy& proxy, const VectorC& z, CrossField& field,
                      std::vector<Vec3f>& sweepNormal) {
   const std::uint32_t numFaces = static_cast<std::uint32_t>(mesh.triangles.size());
-  // Element directions in world coordinates, with the magnitude |z| as confidence.
-  const std::uint32_t numElements = proxy.numElements();
-  std::vector<Vec3d> elementDirection(numElements);
-  std::vector<double> confidence(numElements);
-  for (std::uint32_t e = 0; e < numElements; ++e) {
-    Vec3d e1, e2;
-    elementFrame(proxy.normal[e], e1, e2);
-    elementDirection[e] = directionOf(z[e], e1, e2);
-    confidence[e] = std::isfinite(std::abs(z[e])) ? std::abs(z[e]) : 0.0;
-  }
+  const detail::ElementDirections directions = detail::elementDirections(proxy, z);
   field.direction.resize(numFaces);
-  const double radius = 2.0 * proxy.cellSize;
   parallelFor(numFaces, 2048, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceGeometry g = faceGeometry(mesh, f);
-      const std::uint32_t own = proxy.faceElement[f];
-      Complex sum = 0.0;
-      auto add = [&](std::uint32_t e) {
-        const double d = (g.centroid - proxy.centroid[e]).norm() / radius;
-        const double bump = d < 1.0 ? (1.0 - d * d) * (1.0 - d * d) : 0.0;
-        // The own element always counts a little, so no face is left without a value.
-        const double w = confidence[e] * (e == own ? std::max(bump, 1e-3) : bump);
-        if (w > 0.0) sum += w * fourthPower(rotateBetween(proxy.normal[e], g.n, elementDirection[e]), g.e1, g.e2);
-      };
-      add(own);
-      for (std::uint32_t i = proxy.neighbourStart[own]; i < proxy.neighbourStart[own + 1]; ++i) {
-        add(proxy.neighbours[i].first);
-      }
-      field.set(f, directionOf(sum, g.e1, g.e2));
+      field.set(f, detail::transferredDirection(proxy, directions, g, proxy.faceElement[f]));
       if (!sweepNormal.empty()) sweepNormal[f] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
     }
   });
@@ -354,21 +404,17 @@ void smoothSweep(const Topology& topology, const std::vector<std::uint8_t>& colo
     parallelFor(numFaces, 4096, [&](const IndexRange& range) {
       for (FaceId f = range.begin(); f != range.end(); ++f) {
         if (colour[f] != k || isZero(sweepNormal[f])) continue;
-        const Vec3d n = sweepNormal[f].cast<double>();
-        // Frame with e1 = the current direction: the new one is the representative nearest it.
-        const Vec3d u = field.at(f);
-        const Vec3d v = n.cross(u);
-        Complex sum = 0.0;
+        Vec3f normals[3];
+        Vec3d directions[3];
+        int count = 0;
         for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
           const CornerId o = topology.opposite(c);
           if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
-          const FaceId g = cornerFace(o);
-          sum += fourthPower(rotateBetween(sweepNormal[g].cast<double>(), n, field.at(g)), u, v);
+          normals[count] = sweepNormal[cornerFace(o)];
+          directions[count++] = field.at(cornerFace(o));
         }
-        const Vec3d next = directionOf(sum, u, v);
-        const Vec3d tangent = next - next.dot(n) * n;
-        const double len = tangent.norm();
-        if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
+        Vec3d next;
+        if (detail::sweptDirection(sweepNormal[f], field.at(f), normals, directions, count, next)) field.set(f, next);
       }
     });
   }
@@ -379,11 +425,8 @@ void restoreTangentPlanes(const TriangleMesh& mesh, const std::vector<Vec3f>& sw
   parallelFor(mesh.numFaces(), 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       if (isZero(sweepNormal[f])) continue;
-      const Vec3d n = faceNormal(mesh, f);
-      const Vec3d u = field.at(f);
-      const Vec3d tangent = u - u.dot(n) * n;
-      const double len = tangent.norm();
-      if (len > 0.0 && std::isfinite(len)) field.set(f, tangent / len);
+      Vec3d tangent;
+      if (detail::tangentOf(faceNormal(mesh, f), field.at(f), tangent)) field.set(f, tangent);
     }
   });
 }
@@ -406,7 +449,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   result.elements = proxy.numElements();
   result.elementEdges = proxy.neighbours.size() / 2;
 
-  const VectorC z = solveElementField(proxy, options.progress, options.stats);
+  const VectorC z = detail::solveElementField(proxy, options.progress, options.stats);
   reportProgress(options.progress, "proxy field: transfer", 0.5);
   // Unit normals as floats for the sweeps (zero for a zero-area face): 12 bytes per face, read
   // 4 times per face and sweep without decoding.

@@ -1,0 +1,98 @@
+#pragma once
+/// The proxy field's steps (field_proxy.cpp) as kernels on one face or one element, shared by the
+/// in-memory computeProxyField and the out-of-core field stage (stream/field_stream), so both
+/// compute the same numbers in the same order. Internal.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "core/field/field.h"
+#include "core/mesh/mesh.h"
+#include "core/system/progress.h"
+
+namespace seamvox::detail {
+
+/// Geometry of one face from its corners' positions: its frame (faceFrame; zero-area faces get a
+/// fallback frame and are flagged), centroid and area (0 when degenerate).
+struct FaceGeometry {
+  Vec3d n, e1, e2, centroid;
+  double area = 0.0;
+  bool degenerate = false;
+};
+FaceGeometry faceGeometry(const std::array<Vec3d, 3>& p);
+
+/// The proxy's cubic cells, the grid centred on the bounding box of the positions.
+struct ProxyCells {
+  Vec3d origin = Vec3d::Zero();
+  double cellSize = 1.0;
+  std::uint32_t resolution = 1;
+  /// Cell key of a face centroid (NaN centroids land in cell 0).
+  std::uint32_t cellOf(const Vec3d& centroid) const;
+};
+ProxyCells proxyCells(const BoundingBox& box, std::int32_t resolution);
+
+/// The grid-sized part of the proxy: per element its area-weighted unit normal, centroid and area,
+/// and its neighbours with the summed length of the edges they share (increasing element ids).
+struct ProxyElements {
+  std::vector<Vec3d> normal, centroid;
+  std::vector<double> area;
+  std::vector<std::uint32_t> neighbourStart;                 ///< #E + 1
+  std::vector<std::pair<std::uint32_t, double>> neighbours;  ///< (element, shared edge length)
+  double cellSize = 0.0;
+  std::uint32_t numElements() const { return static_cast<std::uint32_t>(area.size()); }
+};
+
+/// One element's sums, fed its faces in increasing order and, per face, its edges to faces of
+/// other elements in corner order.
+class ElementSums {
+ public:
+  void addFace(const FaceGeometry& g);
+  void addNeighbour(std::uint32_t other, double edgeLength);
+  /// Stores normal, centroid and area of element e (sized by the caller) and returns its
+  /// neighbours sorted by element.
+  std::vector<std::pair<std::uint32_t, double>> finish(ProxyElements& elements, std::uint32_t e);
+
+ private:
+  Vec3d normal_ = Vec3d::Zero(), weighted_ = Vec3d::Zero(), plain_ = Vec3d::Zero();
+  double area_ = 0.0;
+  std::uint32_t count_ = 0;
+  std::vector<std::pair<std::uint32_t, double>> list_;
+};
+/// The neighbour lists of elements 0.. in order as ProxyElements' CSR arrays (the lists are freed).
+void storeNeighbours(std::vector<std::vector<std::pair<std::uint32_t, double>>>& lists, ProxyElements& elements);
+
+/// Smallest eigenvector of the element connection Laplacian, normalized per component.
+Eigen::VectorXcd solveElementField(const ProxyElements& elements, const ProgressFn& progress, FieldSolveStats* stats);
+
+/// Element directions in world coordinates with |z| as confidence, for the transfer.
+struct ElementDirections {
+  std::vector<Vec3d> direction;
+  std::vector<double> confidence;
+  double radius = 0.0;  ///< of the transfer's bump: two cells
+};
+ElementDirections elementDirections(const ProxyElements& elements, const Eigen::VectorXcd& z);
+/// The transferred direction of a face of element own (its geometry g).
+Vec3d transferredDirection(const ProxyElements& elements, const ElementDirections& directions, const FaceGeometry& g,
+                           std::uint32_t own);
+
+/// The greedy colouring's choice: the smallest colour not in `taken` (a bit per colour).
+inline std::uint8_t firstFreeColour(unsigned taken) {
+  std::uint8_t k = 0;
+  while (taken & (1u << k)) ++k;
+  return k;
+}
+
+/// One Gauss-Seidel step at a face of unit float normal `normal` (not zero) and direction u:
+/// the normalized transported average of its `count` neighbours' 4th powers (their float normals,
+/// not zero, and directions). False when the face keeps u.
+bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal, const Vec3d* neighbourDirection,
+                    int count, Vec3d& out);
+
+/// u projected onto the plane of unit normal n and normalized; false when it cannot be.
+bool tangentOf(const Vec3d& n, const Vec3d& u, Vec3d& out);
+
+inline bool isZero(const Vec3f& n) { return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f; }
+
+}  // namespace seamvox::detail
