@@ -62,6 +62,12 @@ int main(int argc, char** argv) {
   line("field (proxy)", t2, t3);
   for (const auto& [name, s] : field.stageSeconds) std::printf("  field: %-20s %8.2f s\n", name.c_str(), s);
   std::printf("  elements %u, colours %u\n", field.elements, field.colours);
+  const ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, StreamPassOptions{budget});
+  auto t3b = Clock::now();
+  line("singularities", t3, t3b);
+  std::printf("  cones %zu, boundary vertices with an index %zu\n", singularities.cones.size(),
+              singularities.boundaryIndex4.size());
+  t3 = t3b;
   for (const ScratchTraffic& t : folder.traffic()) {
     std::printf("  traffic %-24s read %9.1f MiB  written %9.1f MiB\n", t.stage.c_str(), mib(t.bytesRead),
                 mib(t.bytesWritten));
@@ -88,6 +94,12 @@ int main(int argc, char** argv) {
     }
     std::printf("  directions differing from the in-memory field: %zu of %zu (%zu by more than 1e-3; largest %.3g)\n",
                 differ, streamed.size(), far, largest);
+    auto t6 = Clock::now();
+    const FieldSingularities expected = computeSingularities(cleaned.mesh, cleaned.topology, inMemory);
+    auto t7 = Clock::now();
+    line("in memory: singularities", t6, t7);
+    std::printf("  cones equal to the in-memory ones: %s (%zu)\n", expected.cones == singularities.cones ? "yes" : "NO",
+                expected.cones.size());
   }
   return 0;
 }

@@ -7,8 +7,10 @@
 #include <vector>
 
 #include "core/field/detail_proxy.h"
+#include "core/field/detail_singularities.h"
 #include "core/field/detail_smoothing.h"
 #include "core/field/field_numerics.h"
+#include "core/mesh/morton.h"
 #include "stream/external_sort.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
@@ -115,6 +117,13 @@ class PagedFacePoints {
   PagedReader<CleanFace> faces_;
   PagedReader<Vec3f> positions_;
 };
+
+/// A cell's key (ProxyCells::cellOf, row by row) as its Morton code: the same groups of faces,
+/// taken in a spatially coherent order, so the page caches of the faces hit.
+std::uint32_t cellOrder(std::uint32_t key, std::uint32_t resolution) {
+  const std::uint32_t x = key % resolution, y = key / resolution % resolution, z = key / resolution / resolution;
+  return static_cast<std::uint32_t>(spreadBits(x) | spreadBits(y) << 1 | spreadBits(z) << 2);
+}
 
 struct CellFace {
   std::uint32_t cell = 0, face = 0;
@@ -248,7 +257,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
     PagedFacePoints points(scratch, surface, cacheBytes);
     for (FaceId f = 0; f < nf; ++f) {
       const std::array<Vec3d, 3> p = points.points(f);
-      sorter.add({cells.cellOf((p[0] + p[1] + p[2]) / 3.0), f});
+      sorter.add({cellOrder(cells.cellOf((p[0] + p[1] + p[2]) / 3.0), cells.resolution), f});
     }
     folder.countRead("field: cells", points.bytesRead());
     sorter.finish();
@@ -345,7 +354,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   });
   ScratchWriter normalWriter(folder, "field: transfer");
   std::vector<Vec3f> normalBlock;
-  ScratchFile direction = writeFaceBlocks<Vec3f>(folder, "field: transfer", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
+  const ScratchFile direction = writeFaceBlocks<Vec3f>(folder, "field: transfer", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
     normalBlock.resize(count);
     parallelFor(count, 2048, [&](const IndexRange& range) {
       auto readers = transferPool.take();
@@ -397,52 +406,60 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
     const ScratchFile colour = colourWriter.finish();
     clock.finish("colour");
 
-    // One pass per sweep and colour: a colour's faces read only faces of other colours, as the
-    // in-memory sweep's parallel loop over that colour does.
+    // One pass per sweep and colour, in place: a colour's faces read only faces of other colours
+    // (as the in-memory sweep's parallel loop over that colour does), so the cached pages of the
+    // directions stay right for every face read, and only that colour's faces are written back.
+    struct SweepReaders {
+      PagedReader<CornerId> opposite;
+      PagedReader<Vec3f> normal, direction;
+    };
+    std::vector<Vec3f> block, normals;
+    std::vector<std::uint8_t> colours;
     for (std::int32_t sweep = 0; sweep < proxy.smoothingSweeps; ++sweep) {
       for (std::uint32_t k = 0; k < out.colours; ++k) {
-        struct SweepReaders {
-          PagedReader<CornerId> opposite;
-          PagedReader<Vec3f> normal, direction;
-          PagedReader<std::uint8_t> colour;
-        };
         ReaderPool<SweepReaders> pool([&] {
-          return std::unique_ptr<SweepReaders>(new SweepReaders{
-              PagedReader<CornerId>(scratch.opposite, cacheBytes), PagedReader<Vec3f>(sweepNormal, cacheBytes),
-              PagedReader<Vec3f>(direction, cacheBytes), PagedReader<std::uint8_t>(colour, cacheBytes)});
+          return std::unique_ptr<SweepReaders>(new SweepReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes),
+                                                                PagedReader<Vec3f>(sweepNormal, cacheBytes),
+                                                                PagedReader<Vec3f>(direction, cacheBytes)});
         });
-        const ScratchFile next = writeFaceBlocks<Vec3f>(folder, "field: sweeps", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
+        ScratchUpdater directions(folder, direction, "field: sweeps");
+        ScratchReader colourReader(folder, colour, "field: sweeps"), normalReader(folder, sweepNormal, "field: sweeps");
+        for (std::uint64_t first = 0; first < nf; first += blockFaces) {
+          const std::uint64_t count = std::min(blockFaces, nf - first);
+          block.resize(count);
+          normals.resize(count);
+          colours.resize(count);
+          if (!colourReader.read(colours.data(), count) || !normalReader.read(normals.data(), count * sizeof(Vec3f))) {
+            throw IoError(colour.path + ": scratch colours or normals end early");
+          }
+          directions.readAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
           parallelFor(count, 4096, [&](const IndexRange& range) {
             auto r = pool.take();
             for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+              if (colours[i] != k || detail::isZero(normals[i])) continue;
               const FaceId f = static_cast<FaceId>(first + i);
-              block[i] = r->direction[f];
-              const Vec3f normal = r->normal[f];
-              if (r->colour[f] != k || detail::isZero(normal)) continue;
-              Vec3f normals[3];
-              Vec3d neighbours[3];
-              int count3 = 0;
+              Vec3f neighbourNormal[3];
+              Vec3d neighbourDirection[3];
+              int n = 0;
               for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
                 const CornerId o = r->opposite[c];
                 if (o == kInvalidId) continue;
-                const Vec3f n = r->normal[cornerFace(o)];
-                if (detail::isZero(n)) continue;
-                normals[count3] = n;
-                neighbours[count3++] = r->direction[cornerFace(o)].cast<double>();
+                const Vec3f normal = r->normal[cornerFace(o)];
+                if (detail::isZero(normal)) continue;
+                neighbourNormal[n] = normal;
+                neighbourDirection[n++] = r->direction[cornerFace(o)].cast<double>();
               }
               Vec3d swept;
-              if (detail::sweptDirection(normal, block[i].cast<double>(), normals, neighbours, count3, swept)) {
+              if (detail::sweptDirection(normals[i], block[i].cast<double>(), neighbourNormal, neighbourDirection, n, swept)) {
                 block[i] = swept.cast<float>();
               }
             }
           });
-        });
+          directions.writeAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+        }
         pool.forEach([&](SweepReaders& r) {
-          folder.countRead("field: sweeps", r.opposite.bytesRead() + r.normal.bytesRead() + r.direction.bytesRead() +
-                                                r.colour.bytesRead());
+          folder.countRead("field: sweeps", r.opposite.bytesRead() + r.normal.bytesRead() + r.direction.bytesRead());
         });
-        folder.remove(direction);
-        direction = next;
       }
     }
     folder.remove(colour);
@@ -492,6 +509,115 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   folder.remove(direction);
   if (sweeps) folder.remove(sweepNormal);
   clock.finish("finish");
+  return out;
+}
+
+ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const CleanScratch& scratch,
+                                                 const ScratchField& field, const StreamPassOptions& pass) {
+  ScratchSingularities out;
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  const std::uint64_t block = std::max<std::uint64_t>(1, pass.blockRecords);
+  const std::uint64_t nf = scratch.numFaces, nv = scratch.numVertices;
+  const bool smoothed = !field.framePositions.path.empty();
+  const ScratchFile& surface = smoothed ? field.framePositions : scratch.positions;
+
+  // Per face its angles on the surface.
+  struct AngleReaders {
+    PagedFacePoints surface, own;
+    PagedReader<Vec3f> direction;
+  };
+  ReaderPool<AngleReaders> anglePool([&] {
+    return std::unique_ptr<AngleReaders>(new AngleReaders{PagedFacePoints(scratch, surface, cacheBytes),
+                                                          PagedFacePoints(scratch, scratch.positions, cacheBytes),
+                                                          PagedReader<Vec3f>(field.directions, cacheBytes)});
+  });
+  const ScratchFile angles = writeFaceBlocks<detail::FaceAngleData>(
+      folder, "singularities: angles", nf, block, [&](std::vector<detail::FaceAngleData>& data, std::uint64_t first, std::uint64_t count) {
+        parallelFor(count, 4096, [&](const IndexRange& range) {
+          auto r = anglePool.take();
+          for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+            const FaceId f = static_cast<FaceId>(first + i);
+            const Triangle t = r->surface.triangle(f);
+            const Vec3d ownNormal = smoothed ? detail::faceFrame(r->own.points(t)).n : Vec3d::Zero();
+            data[i] = detail::faceAngleData(r->surface.points(t), smoothed ? &ownNormal : nullptr, r->direction[f].cast<double>());
+          }
+        });
+      });
+  anglePool.forEach([&](AngleReaders& r) {
+    folder.countRead("singularities: angles", r.surface.bytesRead() + r.own.bytesRead() + r.direction.bytesRead());
+  });
+
+  // Per corner the matching, read from the smaller corner of its edge as in memory.
+  struct CrossingReaders {
+    PagedReader<CornerId> opposite;
+    PagedReader<detail::FaceAngleData> angles;
+    float residual(CornerId c) {
+      const CornerId o = opposite[c];
+      if (o == kInvalidId) return 0.0f;
+      return c < o ? crossing(c, o).eps : -crossing(o, c).eps;
+    }
+    detail::Crossing crossing(CornerId c, CornerId o) {
+      return detail::crossingOf(angles[cornerFace(c)], c % 3, angles[cornerFace(o)], o % 3);
+    }
+  };
+  ReaderPool<CrossingReaders> crossingPool([&] {
+    return std::unique_ptr<CrossingReaders>(new CrossingReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes),
+                                                                PagedReader<detail::FaceAngleData>(angles, cacheBytes)});
+  });
+  out.matching = writeFaceBlocks<std::array<std::uint8_t, 3>>(
+      folder, "singularities: matching", nf, block, [&](std::vector<std::array<std::uint8_t, 3>>& data, std::uint64_t first, std::uint64_t count) {
+        parallelFor(count, 4096, [&](const IndexRange& range) {
+          auto r = crossingPool.take();
+          for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+            for (unsigned k = 0; k < 3; ++k) {
+              const CornerId c = static_cast<CornerId>(3 * (first + i) + k);
+              const CornerId o = r->opposite[c];
+              std::uint8_t m = 0;
+              if (o != kInvalidId) m = c < o ? r->crossing(c, o).matching : static_cast<std::uint8_t>((4 - r->crossing(o, c).matching) % 4);
+              data[i][k] = m;
+            }
+          }
+        });
+      });
+
+  // Per vertex the index, walking its fan.
+  struct IndexReaders {
+    PagedCornerTable table;
+    CrossingReaders crossings;
+  };
+  ReaderPool<IndexReaders> indexPool([&] {
+    return std::unique_ptr<IndexReaders>(new IndexReaders{
+        PagedCornerTable(scratch, cacheBytes),
+        CrossingReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes), PagedReader<detail::FaceAngleData>(angles, cacheBytes)}});
+  });
+  std::vector<std::int32_t> index(block), boundaryIndex(block);
+  for (std::uint64_t first = 0; first < nv; first += block) {
+    const std::uint64_t count = std::min(block, nv - first);
+    std::fill(index.begin(), index.begin() + count, 0);
+    std::fill(boundaryIndex.begin(), boundaryIndex.begin() + count, 0);
+    parallelFor(count, 4096, [&](const IndexRange& range) {
+      auto r = indexPool.take();
+      for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+        const VertexId v = static_cast<VertexId>(first + i);
+        if (r->table.isIsolatedVertex(v)) continue;
+        detail::vertexIndices(
+            r->table, v, [&](FaceId f) { return r->crossings.angles[f]; },
+            [&](CornerId c) { return r->crossings.residual(c); }, index[i], boundaryIndex[i]);
+      }
+    });
+    for (std::uint64_t i = 0; i < count; ++i) {
+      const VertexId v = static_cast<VertexId>(first + i);
+      if (index[i] != 0) out.index4.emplace_back(v, index[i]), out.cones.push_back(v);
+      if (boundaryIndex[i] != 0) out.boundaryIndex4.emplace_back(v, boundaryIndex[i]);
+    }
+  }
+  crossingPool.forEach([&](CrossingReaders& r) {
+    folder.countRead("singularities: matching", r.opposite.bytesRead() + r.angles.bytesRead());
+  });
+  indexPool.forEach([&](IndexReaders& r) {
+    folder.countRead("singularities: index", r.table.bytesRead() + r.crossings.opposite.bytesRead() + r.crossings.angles.bytesRead());
+  });
+  folder.remove(angles);
   return out;
 }
 

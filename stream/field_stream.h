@@ -46,4 +46,18 @@ struct ScratchField {
 ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scratch, const ProxyFieldOptions& proxy,
                                  const FieldGeometryOptions& geometry, const StreamPassOptions& pass);
 
+/// computeSingularities of the out-of-core field (its smoothed surface when it has one).
+struct ScratchSingularities {
+  ScratchFile matching;  ///< std::uint8_t per corner, FieldSingularities::matching
+  /// The nonzero entries of FieldSingularities::index4 and boundaryIndex4, by vertex.
+  std::vector<std::pair<VertexId, std::int32_t>> index4, boundaryIndex4;
+  std::vector<VertexId> cones;  ///< vertices with index4 != 0, increasing
+};
+
+/// Per face its angles (a file of 16 bytes per face, removed at the end), per corner the matching
+/// across its edge, per vertex the index by a walk around its fan: equal to computeSingularities
+/// of the in-memory field on the cleaned mesh.
+ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const CleanScratch& scratch,
+                                                 const ScratchField& field, const StreamPassOptions& pass);
+
 }  // namespace seamvox

@@ -13,7 +13,7 @@
 namespace seamvox {
 
 namespace {
-constexpr std::size_t kPageBytes = std::size_t(1) << 16;
+constexpr std::size_t kPageBytes = std::size_t(1) << 14;
 constexpr std::uint64_t kNoPage = ~std::uint64_t(0);
 }  // namespace
 

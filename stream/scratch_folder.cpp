@@ -48,11 +48,11 @@ ScratchTraffic& ScratchFolder::stage(const std::string& name) {
 
 void ScratchFolder::countRead(const std::string& name, std::uint64_t bytes) { stage(name).bytesRead += bytes; }
 
-void ScratchFolder::countWrite(const std::string& name, std::uint64_t bytes) {
+void ScratchFolder::countWrite(const std::string& name, std::uint64_t bytes, bool grows) {
   if (written_ + bytes > writeLimit_) throwDiskFull(path_, bytes, "write limit of the test hook");
   stage(name).bytesWritten += bytes;
   written_ += bytes;
-  onDisk_ += bytes;
+  if (grows) onDisk_ += bytes;
   peakOnDisk_ = std::max(peakOnDisk_, onDisk_);
 }
 
@@ -193,6 +193,36 @@ void readScratchAt(int fd, const std::string& path, std::uint64_t offset, void* 
 void ScratchRandomReader::readAt(std::uint64_t offset, void* out, std::size_t bytes) {
   readScratchAt(fd_, path_, offset, out, bytes);
   folder_.countRead(stage_, bytes);
+}
+
+ScratchUpdater::ScratchUpdater(ScratchFolder& folder, const ScratchFile& file, std::string stage)
+    : folder_(folder), stage_(std::move(stage)), path_(file.path), bytes_(file.bytes) {
+  fd_ = ::open(path_.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd_ < 0) throw IoError(path_ + ": cannot open a scratch file (" + std::strerror(errno) + ")");
+}
+
+ScratchUpdater::~ScratchUpdater() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void ScratchUpdater::readAt(std::uint64_t offset, void* out, std::size_t bytes) {
+  readScratchAt(fd_, path_, offset, out, bytes);
+  folder_.countRead(stage_, bytes);
+}
+
+void ScratchUpdater::writeAt(std::uint64_t offset, const void* data, std::size_t bytes) {
+  if (offset + bytes > bytes_) throw IoError(path_ + ": a write in place past the end of a scratch file");
+  folder_.countWrite(stage_, bytes, false);  // in place: the file does not grow
+  const char* from = static_cast<const char*>(data);
+  std::size_t done = 0;
+  while (done < bytes) {
+    const ssize_t n = ::pwrite(fd_, from + done, bytes - done, static_cast<off_t>(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && (errno == ENOSPC || errno == EDQUOT)) folder_.throwDiskFull(path_, bytes - done, std::strerror(errno));
+    if (n < 0) throw IoError(path_ + ": cannot write a scratch file (" + std::strerror(errno) + ")");
+    if (n == 0) folder_.throwDiskFull(path_, bytes - done, "short write");
+    done += static_cast<std::size_t>(n);
+  }
 }
 
 }  // namespace seamvox

@@ -50,8 +50,9 @@ class ScratchFolder {
 
   // Bookkeeping of ScratchWriter / ScratchReader.
   void countRead(const std::string& stage, std::uint64_t bytes);
-  /// Counts a write about to happen; throws the disk-full IoError when the test limit is reached.
-  void countWrite(const std::string& stage, std::uint64_t bytes);
+  /// Counts a write about to happen (grows: it appends to a file); throws the disk-full IoError
+  /// when the test limit is reached.
+  void countWrite(const std::string& stage, std::uint64_t bytes, bool grows = true);
   [[noreturn]] void throwDiskFull(const std::string& file, std::uint64_t failedBytes, const char* reason) const;
 
  private:
@@ -129,6 +130,25 @@ class ScratchRandomReader {
  private:
   ScratchFolder& folder_;
   std::string stage_, path_;
+  int fd_ = -1;
+};
+
+/// Reads and rewrites records of a finished scratch file in place (pread / pwrite), for passes that
+/// change some records of a file and keep the rest.
+class ScratchUpdater {
+ public:
+  ScratchUpdater(ScratchFolder& folder, const ScratchFile& file, std::string stage);
+  ~ScratchUpdater();
+  ScratchUpdater(const ScratchUpdater&) = delete;
+  ScratchUpdater& operator=(const ScratchUpdater&) = delete;
+  void readAt(std::uint64_t offset, void* out, std::size_t bytes);
+  /// Within the file's bytes; the disk-full IoError as ScratchWriter's.
+  void writeAt(std::uint64_t offset, const void* data, std::size_t bytes);
+
+ private:
+  ScratchFolder& folder_;
+  std::string stage_, path_;
+  std::uint64_t bytes_ = 0;
   int fd_ = -1;
 };
 

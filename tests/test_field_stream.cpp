@@ -138,5 +138,49 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
   });
 }
 
+// A generated scan with scanner noise (a quarter of an edge), spikes and folds.
+TriangleMesh noisyScan(std::uint64_t faces) {
+  TriangleMesh mesh = testing::generatedMesh(MeshKind::Scan, faces);
+  ScanNoiseOptions noise;
+  noise.amplitude = 0.25;
+  noise.spikes = 5;
+  noise.folds = 5;
+  addScanNoise(mesh, noise);
+  return mesh;
+}
+
+TEST(FieldStream, SingularitiesEqualTheInMemoryOnes) {
+  const NamedMeshes meshes = {
+      {"noisy scan with holes", testing::withOneTriangleHoles(noisyScan(30000), 41)},
+      {"damaged", testing::damagedMesh(13)},
+      {"torus and islands", testing::concatMeshes({testing::torusMesh(60, 40), testing::icosphereMesh(2),
+                                                   testing::moebiusStrip(16, Vec3f(4.0f, 0.0f, 0.0f))})}};
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    for (const std::uint32_t smoothing : {3u, 0u}) {
+      SCOPED_TRACE("smoothing " + std::to_string(smoothing));
+      FieldGeometryOptions geometry;
+      geometry.smoothingIterations = smoothing;
+      const CrossField field = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, {}, geometry);
+      const FieldSingularities expected = computeSingularities(cleaned.mesh, cleaned.topology, field);
+      const StreamPassOptions pass{1, 1000};
+      const ScratchField streamedField = computeScratchField(folder, scratch, {}, geometry, pass);
+      const ScratchSingularities streamed = computeScratchSingularities(folder, scratch, streamedField, pass);
+      std::vector<std::uint8_t> matching(streamed.matching.bytes);
+      ScratchReader reader(folder, streamed.matching, "test");
+      ASSERT_TRUE(reader.read(matching.data(), matching.size()));
+      EXPECT_EQ(matching, expected.matching);
+      std::vector<std::pair<VertexId, std::int32_t>> index4, boundaryIndex4;
+      for (VertexId v = 0; v < expected.index4.size(); ++v) {
+        if (expected.index4[v] != 0) index4.emplace_back(v, expected.index4[v]);
+        if (expected.boundaryIndex4[v] != 0) boundaryIndex4.emplace_back(v, expected.boundaryIndex4[v]);
+      }
+      EXPECT_EQ(streamed.index4, index4);
+      EXPECT_EQ(streamed.boundaryIndex4, boundaryIndex4);
+      EXPECT_EQ(streamed.cones, expected.cones);
+      EXPECT_FALSE(streamed.cones.empty());  // the torus has none, the scan and the sphere do
+    }
+  });
+}
+
 }  // namespace
 }  // namespace seamvox

@@ -5,12 +5,14 @@
 
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <complex>
 #include <cstdint>
 #include <unordered_map>
 
+#include "core/field/detail_singularities.h"
 #include "core/field/detail_smoothing.h"
 #include "core/field/field_numerics.h"
 #include "core/solve/assemble.h"
@@ -20,17 +22,7 @@
 
 namespace seamvox {
 
-namespace {
-
-using detail::FaceFrame;
-using detail::faceFrame;
-
-/// A frame, the angles of the three corner edges in it and the three corner angles.
-struct FaceAngles {
-  FaceFrame frame;
-  double edge[3];    ///< angle of the directed edge of corner k
-  double corner[3];  ///< interior angle at corner k (they sum to pi)
-};
+namespace detail {
 
 /// a wrapped into (-pi, pi].
 double wrapAngle(double a) {
@@ -41,6 +33,23 @@ double wrapAngle(double a) {
   return a;
 }
 
+}  // namespace detail
+
+namespace {
+
+using detail::cornerAngles;
+using detail::FaceFrame;
+using detail::faceFrame;
+using detail::wrapAngle;
+
+/// A frame, the angles of the three corner edges in it and the three corner angles.
+struct FaceAngles {
+  FaceFrame frame;
+  double edge[3];    ///< angle of the directed edge of corner k
+  double corner[3];  ///< interior angle at corner k (they sum to pi)
+};
+
+
 Vec3d pointOf(const std::vector<Vec3f>& positions, VertexId v) { return positions[v].cast<double>(); }
 
 double frameAngle(const FaceFrame& frame, const Vec3d& v) {
@@ -48,28 +57,17 @@ double frameAngle(const FaceFrame& frame, const Vec3d& v) {
   return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : std::atan2(y, x);
 }
 
-/// Interior angles at the three corners from the frame angles of their edges. Turning angle at
-/// corner k: from the incoming edge (corner k+1) to the outgoing one (corner k+2). The third is
-/// set so the turns sum to exactly 2 pi, hence the corner angles to pi, also for degenerate
-/// faces; every value agrees with the frame angles modulo 2 pi.
-template <class T>
-void cornerAngles(const T edge[3], double corner[3]) {
-  const double turn0 = wrapAngle(double(edge[2]) - double(edge[1]));
-  const double turn1 = wrapAngle(double(edge[0]) - double(edge[2]));
-  const double turn2 = 2.0 * M_PI - turn0 - turn1;
-  corner[0] = M_PI - turn0;
-  corner[1] = M_PI - turn1;
-  corner[2] = M_PI - turn2;
-}
-
-FaceAngles faceAngles(const std::vector<Vec3f>& positions, const Triangle& t) {
-  const Vec3d p[3] = {pointOf(positions, t[0]), pointOf(positions, t[1]), pointOf(positions, t[2])};
+FaceAngles faceAngles(const std::array<Vec3d, 3>& p) {
   FaceAngles a;
-  a.frame = faceFrame(positions, t);
+  a.frame = faceFrame(p);
   // Corner k names the edge from vertex k+1 to vertex k+2 (topology.h).
   for (int k = 0; k < 3; ++k) a.edge[k] = frameAngle(a.frame, p[(k + 2) % 3] - p[(k + 1) % 3]);
   cornerAngles(a.edge, a.corner);
   return a;
+}
+
+FaceAngles faceAngles(const std::vector<Vec3f>& positions, const Triangle& t) {
+  return faceAngles({pointOf(positions, t[0]), pointOf(positions, t[1]), pointOf(positions, t[2])});
 }
 
 FaceAngles faceAngles(const TriangleMesh& mesh, FaceId f) { return faceAngles(mesh.positions, mesh.triangles[f]); }
@@ -81,6 +79,24 @@ double transportAngle(CornerId c, CornerId o, const FaceAngles& from, const Face
 }
 
 }  // namespace
+
+namespace detail {
+
+FaceAngleData faceAngleData(const std::array<Vec3d, 3>& surface, const Vec3d* ownNormal, const Vec3d& direction) {
+  const FaceAngles a = faceAngles(surface);
+  const Vec3d u = ownNormal ? rotateBetween(*ownNormal, a.frame.n, direction) : direction;
+  return {float(frameAngle(a.frame, u)), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
+}
+
+Crossing crossingOf(const FaceAngleData& f, unsigned cSlot, const FaceAngleData& g, unsigned oSlot) {
+  // kappa as in transportAngle.
+  const double kappa = wrapAngle(double(g.edge[oSlot]) + M_PI - double(f.edge[cSlot]));
+  const double d = wrapAngle(double(g.theta) - double(f.theta) - kappa);
+  const long k = std::lround(d / (0.5 * M_PI));  // in [-2, 2]
+  return Crossing{static_cast<std::uint8_t>(((k % 4) + 4) % 4), static_cast<float>(d - k * (0.5 * M_PI))};
+}
+
+}  // namespace detail
 
 PackedSingularities packSingularities(const FieldSingularities& singularities) {
   PackedSingularities packed;
@@ -140,16 +156,14 @@ FieldSingularities singularitiesOf(const TriangleMesh& mesh, const Topology& top
   FieldSingularities out;
   // Per face, once: the field angle and the edge angles in the face frame (16 bytes per face;
   // float is ample for rounding to quarter turns).
-  struct FaceData {
-    float theta, edge[3];
-  };
-  std::vector<FaceData> faceData(numFaces);
+  std::vector<detail::FaceAngleData> faceData(numFaces);
   const bool ownFrames = field.framePositions.empty();
   parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
-      const FaceAngles a = faceAngles(positions, mesh.triangles[f]);
-      const Vec3d u = ownFrames ? field.at(f) : rotateBetween(faceFrame(mesh, f).n, a.frame.n, field.at(f));
-      faceData[f] = {float(frameAngle(a.frame, u)), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
+      const Triangle& t = mesh.triangles[f];
+      const Vec3d ownNormal = ownFrames ? Vec3d::Zero() : faceFrame(mesh, f).n;
+      faceData[f] = detail::faceAngleData({pointOf(positions, t[0]), pointOf(positions, t[1]), pointOf(positions, t[2])},
+                                          ownFrames ? nullptr : &ownNormal, field.at(f));
     }
   });
   if (afterFaceAngles) afterFaceAngles();
@@ -157,19 +171,10 @@ FieldSingularities singularitiesOf(const TriangleMesh& mesh, const Topology& top
   out.index4.assign(numVertices, 0);
 
   // Matching and residual rotation of an interior edge, from its smaller corner so that the two
-  // sides are exactly opposite; kappa as in transportAngle. The residuals are recomputed where the
-  // index needs them instead of kept (12 bytes per face).
-  struct Crossing {
-    std::uint8_t matching;
-    float eps;
-  };
+  // sides are exactly opposite. The residuals are recomputed where the index needs them instead
+  // of kept (12 bytes per face).
   const auto crossing = [&](CornerId c, CornerId o) {
-    const FaceData& f = faceData[cornerFace(c)];
-    const FaceData& g = faceData[cornerFace(o)];
-    const double kappa = wrapAngle(double(g.edge[o % 3]) + M_PI - double(f.edge[c % 3]));
-    const double d = wrapAngle(double(g.theta) - double(f.theta) - kappa);
-    const long k = std::lround(d / (0.5 * M_PI));  // in [-2, 2]
-    return Crossing{static_cast<std::uint8_t>(((k % 4) + 4) % 4), static_cast<float>(d - k * (0.5 * M_PI))};
+    return detail::crossingOf(faceData[cornerFace(c)], c % 3, faceData[cornerFace(o)], o % 3);
   };
   const auto residual = [&](CornerId c) {
     const CornerId o = topology.opposite(c);
@@ -186,35 +191,13 @@ FieldSingularities singularitiesOf(const TriangleMesh& mesh, const Topology& top
     }
   });
 
-  // Index: walk counter-clockwise around each vertex; crossing from face(c) to the next face ccw
-  // goes through the edge of next(c) (a boundary edge, eps 0, after the last face of a boundary
-  // fan). A boundary fan turns by pi less, and the field's angle from the first and the last
-  // boundary edge modulo quarter turns enters its boundaryIndex4 (field.h).
+  // Index: walk counter-clockwise around each vertex (detail::vertexIndices).
   out.boundaryIndex4.assign(numVertices, 0);
-  const auto offQuarterTurn = [](double a) { return a - std::round(a / (0.5 * M_PI)) * (0.5 * M_PI); };
   parallelFor(numVertices, 4096, [&](const IndexRange& range) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       if (topology.isIsolatedVertex(v)) continue;
-      const bool boundary = topology.isBoundaryVertex(v);
-      double sum = boundary ? M_PI : 2.0 * M_PI;
-      CornerId last = kInvalidId;
-      topology.forEachCornerAround(v, [&](CornerId c) {
-        double corner[3];
-        cornerAngles(faceData[cornerFace(c)].edge, corner);
-        sum += residual(nextCorner(c)) - corner[c % 3];
-        last = c;
-      });
-      const auto index = [&](double turn) { return static_cast<std::int32_t>(std::lround(4.0 * turn / (2.0 * M_PI))); };
-      if (!boundary) {
-        out.index4[v] = index(sum);
-        continue;
-      }
-      const CornerId first = topology.vertexCorner(v);
-      const FaceData& a = faceData[cornerFace(first)];
-      const FaceData& b = faceData[cornerFace(last)];
-      const double deltaFirst = offQuarterTurn(double(a.theta) - a.edge[prevCorner(first) % 3]);
-      const double deltaLast = offQuarterTurn(double(b.theta) - b.edge[nextCorner(last) % 3]);
-      out.boundaryIndex4[v] = index(sum + deltaFirst - deltaLast);
+      detail::vertexIndices(topology, v, [&](FaceId f) { return faceData[f]; }, residual, out.index4[v],
+                            out.boundaryIndex4[v]);
     }
   });
   for (VertexId v = 0; v < numVertices; ++v) {
