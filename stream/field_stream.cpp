@@ -4,8 +4,10 @@
 #include <array>
 #include <chrono>
 #include <memory>
+#include <unordered_map>
 #include <vector>
 
+#include "core/field/detail_cone_merge.h"
 #include "core/field/detail_proxy.h"
 #include "core/field/detail_singularities.h"
 #include "core/field/detail_smoothing.h"
@@ -618,6 +620,62 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
     folder.countRead("singularities: index", r.table.bytesRead() + r.crossings.opposite.bytesRead() + r.crossings.angles.bytesRead());
   });
   folder.remove(angles);
+  return out;
+}
+
+namespace {
+
+/// The out-of-core singularities for detail::mergeCloseConesWith: the nonzero indices in a map,
+/// the matchings read from their file unless changed.
+class ScratchSingularityEdits {
+ public:
+  ScratchSingularityEdits(const ScratchSingularities& s, std::size_t cacheBytes) : file_(s.matching, cacheBytes) {
+    for (const auto& [v, k] : s.index4) index_[v] = k;
+  }
+  std::int32_t index(VertexId v) const {
+    const auto it = index_.find(v);
+    return it == index_.end() ? 0 : it->second;
+  }
+  void setIndex(VertexId v, std::int32_t k) {
+    if (k == 0) {
+      index_.erase(v);
+    } else {
+      index_[v] = k;
+    }
+  }
+  std::uint8_t matching(CornerId c) {
+    const auto it = changed_.find(c);
+    return it != changed_.end() ? it->second : file_[c];
+  }
+  void setMatching(CornerId c, std::uint8_t m) { changed_[c] = m; }
+  const std::unordered_map<CornerId, std::uint8_t>& changed() const { return changed_; }
+  std::uint64_t bytesRead() const { return file_.bytesRead(); }
+
+ private:
+  PagedReader<std::uint8_t> file_;
+  std::unordered_map<VertexId, std::int32_t> index_;
+  std::unordered_map<CornerId, std::uint8_t> changed_;
+};
+
+}  // namespace
+
+ConeMergeResult mergeScratchCones(ScratchFolder& folder, const CleanScratch& scratch, ScratchSingularities& singularities,
+                                  const ConeMergeOptions& options, const StreamPassOptions& pass) {
+  const char* stage = "singularities: merge";
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  PagedCornerTable table(scratch, cacheBytes);
+  PagedReader<Vec3f> positions(scratch.positions, cacheBytes);
+  ScratchSingularityEdits edits(singularities, cacheBytes);
+  const ConeMergeResult out = detail::mergeCloseConesWith(
+      [&](VertexId v) -> Vec3d { return positions[v].cast<double>(); }, table, edits, singularities.cones,
+      options.maxDistance);
+  folder.countRead(stage, table.bytesRead() + positions.bytesRead() + edits.bytesRead());
+  std::vector<std::pair<CornerId, std::uint8_t>> changed(edits.changed().begin(), edits.changed().end());
+  std::sort(changed.begin(), changed.end());
+  ScratchUpdater matching(folder, singularities.matching, stage);
+  for (const auto& [c, m] : changed) matching.writeAt(c, &m, 1);
+  singularities.index4.clear();
+  for (VertexId v : singularities.cones) singularities.index4.emplace_back(v, edits.index(v));
   return out;
 }
 

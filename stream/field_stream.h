@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/field/cone_merge.h"
 #include "core/field/field_proxy.h"
 #include "stream/clean_stream.h"
 #include "stream/scratch_folder.h"
@@ -59,5 +60,11 @@ struct ScratchSingularities {
 /// of the in-memory field on the cleaned mesh.
 ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const CleanScratch& scratch,
                                                  const ScratchField& field, const StreamPassOptions& pass);
+
+/// mergeCloseCones on the out-of-core singularities (the cleaned mesh's own positions): the
+/// matchings along the paths rewritten in place in the matching file, index4 and cones updated.
+/// Memory: the searches' balls and the changed corners.
+ConeMergeResult mergeScratchCones(ScratchFolder& folder, const CleanScratch& scratch, ScratchSingularities& singularities,
+                                  const ConeMergeOptions& options, const StreamPassOptions& pass);
 
 }  // namespace seamvox

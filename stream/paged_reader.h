@@ -46,7 +46,7 @@ class PagedReader {
   PagedReader(const ScratchFile& file, std::size_t cacheBytes) : cache_(file, sizeof(T), cacheBytes) {}
   T operator[](std::uint64_t i) {
     T value;
-    std::memcpy(&value, cache_.record(i), sizeof(T));
+    std::memcpy(static_cast<void*>(&value), cache_.record(i), sizeof(T));  // T is a plain record
     return value;
   }
   std::uint64_t size() const { return cache_.numRecords(); }

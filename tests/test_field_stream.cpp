@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "core/field/cone_merge.h"
 #include "core/field/field.h"
 #include "core/field/field_proxy.h"
 #include "core/synth/generate.h"
@@ -179,6 +180,39 @@ TEST(FieldStream, SingularitiesEqualTheInMemoryOnes) {
       EXPECT_EQ(streamed.cones, expected.cones);
       EXPECT_FALSE(streamed.cones.empty());  // the torus has none, the scan and the sphere do
     }
+  });
+}
+
+TEST(FieldStream, MergedConesEqualTheInMemoryMerge) {
+  const NamedMeshes meshes = {{"noisy scan with holes", testing::withOneTriangleHoles(noisyScan(30000), 41)},
+                              {"damaged", testing::damagedMesh(17)}};
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    // Without smoothing the noise puts pairs of cones everywhere: much to merge.
+    FieldGeometryOptions geometry;
+    geometry.smoothingIterations = 0;
+    const CrossField field = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, {}, geometry);
+    FieldSingularities expected = computeSingularities(cleaned.mesh, cleaned.topology, field);
+    ConeMergeOptions merge;
+    merge.maxDistance = 0.05 * computeBoundingBox(cleaned.mesh.positions).extent().norm();
+    const ConeMergeResult inMemory = mergeCloseCones(cleaned.mesh, cleaned.topology, expected, merge);
+    const StreamPassOptions pass{1, 1000};
+    ScratchSingularities streamed =
+        computeScratchSingularities(folder, scratch, computeScratchField(folder, scratch, {}, geometry, pass), pass);
+    const std::size_t before = streamed.cones.size();
+    const ConeMergeResult merged = mergeScratchCones(folder, scratch, streamed, merge, pass);
+    EXPECT_GT(inMemory.cancelledPairs + inMemory.mergedPairs, 0u);
+    EXPECT_EQ(merged.cancelledPairs, inMemory.cancelledPairs);
+    EXPECT_EQ(merged.mergedPairs, inMemory.mergedPairs);
+    EXPECT_EQ(merged.changedEdges, inMemory.changedEdges);
+    EXPECT_LT(streamed.cones.size(), before);
+    EXPECT_EQ(streamed.cones, expected.cones);
+    std::vector<std::uint8_t> matching(streamed.matching.bytes);
+    ScratchReader reader(folder, streamed.matching, "test");
+    ASSERT_TRUE(reader.read(matching.data(), matching.size()));
+    EXPECT_EQ(matching, expected.matching);
+    std::vector<std::pair<VertexId, std::int32_t>> index4;
+    for (VertexId v : expected.cones) index4.emplace_back(v, expected.index4[v]);
+    EXPECT_EQ(streamed.index4, index4);
   });
 }
 

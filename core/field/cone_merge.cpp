@@ -1,5 +1,7 @@
 #include "core/field/cone_merge.h"
 
+#include "core/field/detail_cone_merge.h"
+
 #include <algorithm>
 #include <cstdlib>
 #include <queue>
@@ -12,60 +14,26 @@
 namespace seamvox {
 namespace {
 
-/// Shortest-path tree of interior edges from one vertex, cut off at a radius. pred holds the
-/// corner naming the directed edge X -> Y that reached Y (topology.h: the edge of corner d runs
-/// from vertex(next d) to vertex(prev d)).
-struct Ball {
-  std::unordered_map<VertexId, double> distance;
-  std::unordered_map<VertexId, CornerId> pred;
+using detail::Ball;
+
+/// The in-memory singularities for detail::mergeCloseConesWith and detail::moveIndex.
+struct MemorySingularities {
+  FieldSingularities& s;
+  std::int32_t index(VertexId v) const { return s.index4[v]; }
+  void setIndex(VertexId v, std::int32_t k) { s.index4[v] = k; }
+  std::uint8_t matching(CornerId c) const { return s.matching[c]; }
+  void setMatching(CornerId c, std::uint8_t m) { s.matching[c] = m; }
 };
 
 Ball searchBall(const TriangleMesh& mesh, const Topology& topology, VertexId source, double radius,
-                VertexId stopAt = kInvalidId) {
-  Ball ball;
-  using Item = std::pair<double, VertexId>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
-  ball.distance[source] = 0.0;
-  queue.push({0.0, source});
-  while (!queue.empty()) {
-    const auto [d, x] = queue.top();
-    queue.pop();
-    if (d > ball.distance[x]) continue;
-    if (x == stopAt) break;
-    const Vec3d px = mesh.position(x);
-    topology.forEachCornerAround(x, [&](CornerId c) {
-      const CornerId edge = prevCorner(c);  // runs from x to vertex(next c), face(c) on its left
-      if (topology.isBoundaryEdge(edge)) return;
-      const VertexId y = topology.vertex(nextCorner(c));
-      const double dy = d + (mesh.position(y) - px).norm();
-      if (dy > radius) return;
-      const auto it = ball.distance.find(y);
-      if (it != ball.distance.end() && it->second <= dy) return;
-      ball.distance[y] = dy;
-      ball.pred[y] = edge;
-      queue.push({dy, y});
-    });
-  }
-  return ball;
+                        VertexId stopAt = kInvalidId) {
+  return detail::searchBall([&](VertexId v) { return mesh.position(v); }, topology, source, radius, stopAt);
 }
 
-/// Moves the whole index of `gone` onto `keep` along path (directed edges from keep to gone, in
-/// any order). A matching change of delta on the directed edge X -> Y adds delta to index4(X) and
-/// takes it from index4(Y) (field.cpp's index sums the eps of the edges ending at the vertex), so
-/// delta = index4(gone) on every path edge empties gone into keep and leaves inner vertices as
-/// they were.
-void moveIndex(const Topology& topology, FieldSingularities& singularities, VertexId keep,
-               VertexId gone, const std::vector<CornerId>& path, ConeMergeResult& out) {
-  std::vector<std::uint8_t>& matching = singularities.matching;
-  const std::int32_t delta = singularities.index4[gone];
-  for (CornerId edge : path) {
-    matching[edge] = static_cast<std::uint8_t>(((matching[edge] + delta) % 4 + 4) % 4);
-    matching[topology.opposite(edge)] = static_cast<std::uint8_t>((4 - matching[edge]) % 4);
-    ++out.changedEdges;
-  }
-  singularities.index4[keep] += delta;
-  singularities.index4[gone] = 0;
-  ++(singularities.index4[keep] == 0 ? out.cancelledPairs : out.mergedPairs);
+void moveIndex(const Topology& topology, FieldSingularities& singularities, VertexId keep, VertexId gone,
+               const std::vector<CornerId>& path, ConeMergeResult& out) {
+  MemorySingularities s{singularities};
+  detail::moveIndex(topology, s, keep, gone, path, out);
 }
 
 void dropVanishedCones(FieldSingularities& singularities) {
@@ -80,55 +48,15 @@ void dropVanishedCones(FieldSingularities& singularities) {
 
 ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topology,
                                 FieldSingularities& singularities, const ConeMergeOptions& options) {
-  ConeMergeResult out;
   const std::size_t nc = std::size_t(topology.numCorners());
   if (singularities.matching.size() != nc || singularities.index4.size() != topology.numVertices()) {
     throw InputError("mergeCloseCones: singularities do not match the mesh (" +
                      std::to_string(singularities.matching.size()) + " matchings for " +
                      std::to_string(nc) + " corners)");
   }
-  if (!(options.maxDistance > 0.0) || singularities.cones.size() < 2) return out;
-  std::vector<std::int32_t>& index4 = singularities.index4;
-  const auto mergeable = [&](VertexId a, VertexId b) {
-    return index4[a] != 0 && index4[b] != 0 && std::abs(index4[a] + index4[b]) <= kMaxMergedIndex4;
-  };
-
-  struct Candidate {
-    double distance;
-    VertexId a, b;
-  };
-  // Pairs within reach: the cones each ball settles (index4 tells a cone in O(1)), so the work
-  // is the balls' size, linear in the number of cones, not quadratic.
-  std::vector<Candidate> candidates;
-  for (VertexId a : singularities.cones) {
-    const Ball ball = searchBall(mesh, topology, a, options.maxDistance);
-    out.searchedVertices += ball.distance.size();
-    for (const auto& [b, distance] : ball.distance) {
-      if (b > a && mergeable(a, b)) candidates.push_back({distance, a, b});
-    }
-  }
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
-    return x.distance != y.distance ? x.distance < y.distance
-                                    : (x.a != y.a ? x.a < y.a : x.b < y.b);
-  });
-
-  for (const Candidate& pair : candidates) {
-    if (!mergeable(pair.a, pair.b)) continue;  // an earlier merge changed one of them
-    // keep = the cone that stays (larger |index4|, then smaller id); gone = the one moved onto it.
-    const bool keepA = std::abs(index4[pair.a]) >= std::abs(index4[pair.b]);
-    const VertexId keep = keepA ? pair.a : pair.b, gone = keepA ? pair.b : pair.a;
-    const Ball ball = searchBall(mesh, topology, keep, options.maxDistance, gone);
-    out.searchedVertices += ball.distance.size();
-    if (!ball.pred.count(gone)) continue;  // the same search reached it before: cannot happen
-    std::vector<CornerId> path;
-    for (VertexId y = gone; y != keep; y = topology.vertex(nextCorner(path.back()))) {
-      path.push_back(ball.pred.at(y));
-    }
-    moveIndex(topology, singularities, keep, gone, path, out);
-    out.longestPath = std::max(out.longestPath, pair.distance);
-  }
-  dropVanishedCones(singularities);
-  return out;
+  MemorySingularities s{singularities};
+  return detail::mergeCloseConesWith([&](VertexId v) { return mesh.position(v); }, topology, s, singularities.cones,
+                                     options.maxDistance);
 }
 
 std::vector<std::pair<VertexId, VertexId>> coincidentConeEdges(const Topology& topology,

@@ -1,0 +1,117 @@
+#pragma once
+/// mergeCloseCones (cone_merge.cpp) written once for the in-memory mesh and the out-of-core one
+/// (stream/field_stream): positions, corner table and singularities come through small
+/// interfaces. Internal.
+#include <algorithm>
+#include <cstdlib>
+#include <queue>
+#include <unordered_map>
+#include <vector>
+
+#include "core/field/cone_merge.h"
+
+namespace seamvox::detail {
+
+/// Shortest-path tree of interior edges from one vertex, cut off at a radius. pred holds the
+/// corner naming the directed edge X -> Y that reached Y (topology.h: the edge of corner d runs
+/// from vertex(next d) to vertex(prev d)).
+struct Ball {
+  std::unordered_map<VertexId, double> distance;
+  std::unordered_map<VertexId, CornerId> pred;
+};
+
+/// positionOf(v): Vec3d; table: forEachCornerAround, opposite, vertex.
+template <class PositionOf, class Table>
+Ball searchBall(PositionOf&& positionOf, Table& table, VertexId source, double radius, VertexId stopAt = kInvalidId) {
+  Ball ball;
+  using Item = std::pair<double, VertexId>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  ball.distance[source] = 0.0;
+  queue.push({0.0, source});
+  while (!queue.empty()) {
+    const auto [d, x] = queue.top();
+    queue.pop();
+    if (d > ball.distance[x]) continue;
+    if (x == stopAt) break;
+    const Vec3d px = positionOf(x);
+    table.forEachCornerAround(x, [&](CornerId c) {
+      const CornerId edge = prevCorner(c);  // runs from x to vertex(next c), face(c) on its left
+      if (table.opposite(edge) == kInvalidId) return;
+      const VertexId y = table.vertex(nextCorner(c));
+      const double dy = d + (positionOf(y) - px).norm();
+      if (dy > radius) return;
+      const auto it = ball.distance.find(y);
+      if (it != ball.distance.end() && it->second <= dy) return;
+      ball.distance[y] = dy;
+      ball.pred[y] = edge;
+      queue.push({dy, y});
+    });
+  }
+  return ball;
+}
+
+/// Moves the whole index of `gone` onto `keep` along path (directed edges from keep to gone, in
+/// any order). A matching change of delta on the directed edge X -> Y adds delta to index4(X) and
+/// takes it from index4(Y) (field.cpp's index sums the eps of the edges ending at the vertex), so
+/// delta = index4(gone) on every path edge empties gone into keep and leaves inner vertices as
+/// they were. Singularities: index, setIndex, matching, setMatching.
+template <class Table, class Singularities>
+void moveIndex(Table& table, Singularities& s, VertexId keep, VertexId gone, const std::vector<CornerId>& path,
+               ConeMergeResult& out) {
+  const std::int32_t delta = s.index(gone);
+  for (CornerId edge : path) {
+    const auto moved = static_cast<std::uint8_t>(((s.matching(edge) + delta) % 4 + 4) % 4);
+    s.setMatching(edge, moved);
+    s.setMatching(table.opposite(edge), static_cast<std::uint8_t>((4 - moved) % 4));
+    ++out.changedEdges;
+  }
+  s.setIndex(keep, s.index(keep) + delta);
+  s.setIndex(gone, 0);
+  ++(s.index(keep) == 0 ? out.cancelledPairs : out.mergedPairs);
+}
+
+/// mergeCloseCones on these interfaces; cones: the cones, increasing, updated.
+template <class PositionOf, class Table, class Singularities>
+ConeMergeResult mergeCloseConesWith(PositionOf&& positionOf, Table& table, Singularities& s,
+                                    std::vector<VertexId>& cones, double maxDistance) {
+  ConeMergeResult out;
+  if (!(maxDistance > 0.0) || cones.size() < 2) return out;
+  const auto mergeable = [&](VertexId a, VertexId b) {
+    const std::int32_t ia = s.index(a), ib = s.index(b);
+    return ia != 0 && ib != 0 && std::abs(ia + ib) <= kMaxMergedIndex4;
+  };
+  struct Candidate {
+    double distance;
+    VertexId a, b;
+  };
+  // Pairs within reach: the cones each ball settles (the index tells a cone in O(1)), so the work
+  // is the balls' size, linear in the number of cones, not quadratic.
+  std::vector<Candidate> candidates;
+  for (VertexId a : cones) {
+    const Ball ball = searchBall(positionOf, table, a, maxDistance);
+    out.searchedVertices += ball.distance.size();
+    for (const auto& [b, distance] : ball.distance) {
+      if (b > a && mergeable(a, b)) candidates.push_back({distance, a, b});
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+    return x.distance != y.distance ? x.distance < y.distance : (x.a != y.a ? x.a < y.a : x.b < y.b);
+  });
+  for (const Candidate& pair : candidates) {
+    if (!mergeable(pair.a, pair.b)) continue;  // an earlier merge changed one of them
+    // keep = the cone that stays (larger |index4|, then smaller id); gone = the one moved onto it.
+    const bool keepA = std::abs(s.index(pair.a)) >= std::abs(s.index(pair.b));
+    const VertexId keep = keepA ? pair.a : pair.b, gone = keepA ? pair.b : pair.a;
+    const Ball ball = searchBall(positionOf, table, keep, maxDistance, gone);
+    out.searchedVertices += ball.distance.size();
+    if (!ball.pred.count(gone)) continue;  // the same search reached it before: cannot happen
+    std::vector<CornerId> path;
+    for (VertexId y = gone; y != keep; y = table.vertex(nextCorner(path.back()))) path.push_back(ball.pred.at(y));
+    moveIndex(table, s, keep, gone, path, out);
+    out.longestPath = std::max(out.longestPath, pair.distance);
+  }
+  cones.erase(std::remove_if(cones.begin(), cones.end(), [&](VertexId v) { return s.index(v) == 0; }), cones.end());
+  return out;
+}
+
+}  // namespace seamvox::detail
