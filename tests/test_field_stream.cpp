@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -214,6 +215,38 @@ TEST(FieldStream, MergedConesEqualTheInMemoryMerge) {
     for (VertexId v : expected.cones) index4.emplace_back(v, expected.index4[v]);
     EXPECT_EQ(streamed.index4, index4);
   });
+}
+
+// A scratch disk that fills during the field stage (at its start, in the sweeps, at its end) is
+// an IoError naming the folder, and nothing of the run stays on disk.
+TEST(FieldStream, AFullScratchDiskIsAnErrorAndLeavesNothing) {
+  const TriangleMesh mesh = testing::generatedMesh(MeshKind::Scan, 6000);
+  testing::TempDir dir;
+  std::uint64_t cleanBytes = 0, fieldBytes = 0;
+  {
+    ScratchFolder folder(dir.dir());
+    const CleanScratch scratch = cleanIntoScratch(folder, mesh, 1 << 20);
+    cleanBytes = folder.bytesWritten();
+    computeScratchField(folder, scratch, {}, {}, StreamPassOptions{1, 1000});
+    fieldBytes = folder.bytesWritten() - cleanBytes;
+  }
+  for (const double share : {0.0, 0.5, 0.95}) {
+    SCOPED_TRACE(share);
+    std::string message;
+    {
+      ScratchFolder folder(dir.dir());
+      const CleanScratch scratch = cleanIntoScratch(folder, mesh, 1 << 20);
+      folder.setWriteLimit(folder.bytesWritten() + static_cast<std::uint64_t>(share * fieldBytes));
+      try {
+        computeScratchField(folder, scratch, {}, {}, StreamPassOptions{1, 1000});
+      } catch (const IoError& e) {
+        message = e.what();
+      }
+      EXPECT_NE(message.find(folder.path()), std::string::npos) << message;
+      EXPECT_NE(message.find("full"), std::string::npos) << message;
+    }
+    EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));
+  }
 }
 
 }  // namespace
