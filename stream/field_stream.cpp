@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -12,10 +11,12 @@
 #include "core/field/detail_singularities.h"
 #include "core/field/detail_smoothing.h"
 #include "core/field/field_numerics.h"
+#include "core/mesh/detail_union_find.h"
 #include "core/mesh/morton.h"
 #include "stream/external_sort.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
+#include "core/system/stopwatch.h"
 #include "stream/paged_reader.h"
 
 namespace seamvox {
@@ -168,39 +169,32 @@ class CellGroups {
 /// The pieces of one cell's faces (sorted) joined through their shared edges: per face, the
 /// smallest face of its piece.
 std::vector<FaceId> piecesOfCell(const std::vector<FaceId>& faces, PagedReader<CornerId>& opposite) {
-  std::vector<std::uint32_t> parent(faces.size());
-  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-  const auto find = [&](std::uint32_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  detail::UnionFind sets(faces.size());  // roots are the smallest indices, so the smallest faces
   for (std::uint32_t i = 0; i < faces.size(); ++i) {
     for (CornerId c = 3 * faces[i]; c < 3 * faces[i] + 3; ++c) {
       const CornerId o = opposite[c];
       if (o == kInvalidId) continue;
       const auto it = std::lower_bound(faces.begin(), faces.end(), cornerFace(o));
-      if (it == faces.end() || *it != cornerFace(o)) continue;
-      const std::uint32_t a = find(i), b = find(static_cast<std::uint32_t>(it - faces.begin()));
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);  // roots are the smallest faces
+      if (it != faces.end() && *it == cornerFace(o)) sets.unite(i, static_cast<std::uint32_t>(it - faces.begin()));
     }
   }
   std::vector<FaceId> smallest(faces.size());
-  for (std::uint32_t i = 0; i < faces.size(); ++i) smallest[i] = faces[find(i)];
+  for (std::uint32_t i = 0; i < faces.size(); ++i) smallest[i] = faces[sets.find(i)];
   return smallest;
 }
 
+/// Appends the seconds since the previous finish (or since it was made) under a name.
 class StageClock {
  public:
   explicit StageClock(std::vector<std::pair<std::string, double>>& out) : out_(out) {}
   void finish(const char* name) {
-    const auto now = std::chrono::steady_clock::now();
-    out_.emplace_back(name, std::chrono::duration<double>(now - start_).count());
-    start_ = now;
+    out_.emplace_back(name, secondsSince(start_));
+    start_ = SteadyClock::now();
   }
 
  private:
   std::vector<std::pair<std::string, double>>& out_;
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  SteadyClock::time_point start_ = SteadyClock::now();
 };
 
 /// Calls fill(block, first, count) for blocks of faces in order, each filling `count` records of
@@ -490,10 +484,8 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
         const Triangle t = r->surface.triangle(f);
         const std::array<Vec3d, 3> p = r->surface.points(t);
         if (sweeps && !detail::isZero((*r->normal)[f])) {
-          const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
-          const double len = n.norm();
           Vec3d tangent;
-          if (detail::tangentOf(len > 0.0 ? Vec3d(n / len) : Vec3d::Zero(), block[i].cast<double>(), tangent)) {
+          if (detail::tangentOf(faceNormal(p[0], p[1], p[2]), block[i].cast<double>(), tangent)) {
             block[i] = tangent.cast<float>();
           }
         }
@@ -509,7 +501,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
                                           (r.normal ? r.normal->bytesRead() : 0));
   });
   folder.remove(direction);
-  if (sweeps) folder.remove(sweepNormal);
+  folder.remove(sweepNormal);  // empty without sweeps
   clock.finish("finish");
   return out;
 }

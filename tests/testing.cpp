@@ -1,5 +1,6 @@
 #include "testing.h"
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -10,6 +11,8 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+
+#include "core/system/errors.h"
 
 namespace seamvox::testing {
 
@@ -76,6 +79,17 @@ std::vector<Vec2d> cornerValues(const WedgeMap& map) {
   std::vector<Vec2d> values(map.size());
   for (CornerId c = 0; c < map.size(); ++c) values[c] = map[c];
   return values;
+}
+
+void expectScratchFull(const ScratchFolder& folder, const std::function<void()>& run) {
+  std::string message;
+  try {
+    run();
+  } catch (const IoError& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find(folder.path()), std::string::npos) << message;
+  EXPECT_NE(message.find("full"), std::string::npos) << message;
 }
 
 }  // namespace seamvox::testing

@@ -1,11 +1,13 @@
 #pragma once
 /// Helpers shared by the test suites: shared-data lookup, temporary folders, running the CLI.
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "core/mesh/wedge_map.h"
 #include "stream/mesh_stream.h"
+#include "stream/scratch_folder.h"
 
 namespace seamvox::testing {
 
@@ -18,6 +20,9 @@ std::vector<Vec2d> cornerValues(const WedgeMap& map);
 std::string sharedMesh(const std::string& name);
 /// The message to skip with when sharedMesh returned "".
 std::string missingSharedMessage(const std::string& name);
+
+/// Expects run() to fail on the folder's full scratch disk: an IoError naming the folder.
+void expectScratchFull(const ScratchFolder& folder, const std::function<void()>& run);
 
 /// A fresh temporary folder, removed when the object goes away.
 class TempDir {

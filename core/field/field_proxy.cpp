@@ -68,7 +68,7 @@ FaceGeometry faceGeometry(const std::array<Vec3d, 3>& p) {
   g.e1 = frame.e1;
   g.e2 = frame.e2;
   g.centroid = (p[0] + p[1] + p[2]) / 3.0;
-  g.area = frame.degenerate ? 0.0 : 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
+  g.area = frame.degenerate ? 0.0 : faceArea(p[0], p[1], p[2]);
   g.degenerate = frame.degenerate;
   return g;
 }

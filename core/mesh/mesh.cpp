@@ -17,7 +17,10 @@ BoundingBox computeBoundingBox(const std::vector<Vec3f>& positions) {
 
 Vec3d faceNormal(const TriangleMesh& mesh, FaceId f) {
   const Triangle& t = mesh.triangles[f];
-  const Vec3d a = mesh.position(t[0]), b = mesh.position(t[1]), c = mesh.position(t[2]);
+  return faceNormal(mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2]));
+}
+
+Vec3d faceNormal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   const Vec3d n = (b - a).cross(c - a);
   const double len = n.norm();
   return len > 0.0 ? Vec3d(n / len) : Vec3d::Zero();
@@ -40,8 +43,9 @@ double gluingAlignment(const Vec3d& n0, const Vec3d& n1) {
 
 double faceArea(const TriangleMesh& mesh, FaceId f) {
   const Triangle& t = mesh.triangles[f];
-  const Vec3d a = mesh.position(t[0]), b = mesh.position(t[1]), c = mesh.position(t[2]);
-  return 0.5 * (b - a).cross(c - a).norm();
+  return faceArea(mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2]));
 }
+
+double faceArea(const Vec3d& a, const Vec3d& b, const Vec3d& c) { return 0.5 * (b - a).cross(c - a).norm(); }
 
 }  // namespace seamvox

@@ -43,8 +43,12 @@ BoundingBox computeBoundingBox(const std::vector<Vec3f>& positions);
 
 /// Unit normal of a face (zero vector for a zero-area face).
 Vec3d faceNormal(const TriangleMesh& mesh, FaceId f);
+/// The same for the corners a, b, c.
+Vec3d faceNormal(const Vec3d& a, const Vec3d& b, const Vec3d& c);
 /// Area of a face.
 double faceArea(const TriangleMesh& mesh, FaceId f);
+/// The same for the corners a, b, c.
+double faceArea(const Vec3d& a, const Vec3d& b, const Vec3d& c);
 
 /// The unit normal cleanMesh glues the sides of an edge of more than two faces by (the best
 /// aligned pairs first): zero for a sliver (height below 1e-4 of its longest edge: its normal is

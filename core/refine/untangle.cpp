@@ -29,7 +29,7 @@ enum FaceState : std::uint8_t { kFine = 0, kFlipped = 1, kFolded = 2 };
 
 /// kFlipped for a face with negative parameter area ratio (collapsed and zero-area faces
 /// excluded); markFolded then turns those folded in 3D into kFolded.
-std::uint8_t stateOf(double ratio) {
+FaceState stateOf(double ratio) {
   return isFlippedRatio(ratio) ? kFlipped : kFine;
 }
 
