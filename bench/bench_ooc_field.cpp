@@ -1,6 +1,7 @@
-// The out-of-core field stage against the in-memory one: wall time and peak resident memory per
-// step, scratch traffic, and with in-memory the directions that differ (0 expected). Steps run on the weld pass's faces (Morton order), as param's
-// out-of-core path will.
+// The out-of-core field and cut stages against the in-memory ones: wall time and peak resident
+// memory per step, scratch traffic, and with in-memory the directions, cones and cut that differ
+// (none expected). Steps run on the weld pass's faces (Morton order), as param's out-of-core path
+// will; cones merged within one default grid spacing (the diagonal over 100).
 //   seamvox gen scan --faces 20000000 -o /tmp/s20.ply
 //   bench_ooc_field MESH [BUDGET_MIB=1024] [SCRATCH=/tmp] [in-memory]
 #include <tbb/global_control.h>
@@ -14,10 +15,14 @@
 
 #include "bench/bench_common.h"
 #include "core/field/field.h"
+#include "core/cut/cut.h"
+#include "core/field/cone_merge.h"
 #include "core/field/field_proxy.h"
+#include "core/pipeline/grid_spacing.h"
 #include "core/system/blas_threads.h"
 #include "core/system/memory.h"
 #include "stream/clean_stream.h"
+#include "stream/cut_stream.h"
 #include "stream/field_stream.h"
 #include "stream/mesh_stream.h"
 #include "stream/welded_scratch.h"
@@ -62,12 +67,32 @@ int main(int argc, char** argv) {
   line("field (proxy)", t2, t3);
   for (const auto& [name, s] : field.stageSeconds) std::printf("  field: %-20s %8.2f s\n", name.c_str(), s);
   std::printf("  elements %u, colours %u\n", field.elements, field.colours);
-  const ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, StreamPassOptions{budget});
+  ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, StreamPassOptions{budget});
   auto t3b = Clock::now();
   line("singularities", t3, t3b);
   std::printf("  cones %zu, boundary vertices with an index %zu\n", singularities.cones.size(),
               singularities.boundaryIndex4.size());
-  t3 = t3b;
+  ConeMergeOptions merge;
+  {
+    Vec3f lo(1e30f, 1e30f, 1e30f), hi = -lo;
+    ScratchReader reader(folder, scratch.positions, "bench");
+    Vec3f p;
+    while (reader.read(&p, sizeof(p))) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    merge.maxDistance = GridSpacing{}.spacing((hi - lo).cast<double>().norm());
+  }
+  const ConeMergeResult merged = mergeScratchCones(folder, scratch, singularities, merge, StreamPassOptions{budget});
+  auto t3c = Clock::now();
+  line("merge cones", t3b, t3c);
+  std::printf("  cones %zu after merging (%zu pairs cancelled, %zu merged)\n", singularities.cones.size(),
+              std::size_t(merged.cancelledPairs), std::size_t(merged.mergedPairs));
+  const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, StreamPassOptions{budget});
+  auto t3d = Clock::now();
+  line("cut", t3c, t3d);
+  for (const auto& [name, s] : cut.stageSeconds) std::printf("  cut: %-22s %8.2f s\n", name.c_str(), s);
+  std::size_t seamEdges = 0;
+  for (const SeamCurve& seam : cut.seams) seamEdges += seam.corners.size();
+  std::printf("  components %u, seams %zu, seam edges %zu\n", cut.components, cut.seams.size(), seamEdges);
+  t3 = t3d;
   for (const ScratchTraffic& t : folder.traffic()) {
     std::printf("  traffic %-24s read %9.1f MiB  written %9.1f MiB\n", t.stage.c_str(), mib(t.bytesRead),
                 mib(t.bytesWritten));

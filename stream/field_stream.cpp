@@ -17,53 +17,10 @@
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"
+#include "stream/paged_corner_table.h"
 #include "stream/paged_reader.h"
 
 namespace seamvox {
-
-namespace {
-
-/// The cleaned mesh's corner table through page caches: the same fan walk as Topology's.
-class PagedCornerTable {
- public:
-  PagedCornerTable(const CleanScratch& scratch, std::size_t cacheBytes)
-      : faces_(scratch.faces, cacheBytes), opposite_(scratch.opposite, cacheBytes),
-        vertexCorner_(scratch.vertexCorner, cacheBytes) {}
-  VertexId vertex(CornerId c) { return faces_[c / 3].triangle[c % 3]; }
-  CornerId opposite(CornerId c) { return opposite_[c]; }
-  bool isIsolatedVertex(VertexId v) { return vertexCorner_[v] == kInvalidId; }
-  bool isBoundaryVertex(VertexId v) {
-    const CornerId c = vertexCorner_[v];
-    return c != kInvalidId && cw(c) == kInvalidId;
-  }
-  CornerId ccw(CornerId c) {
-    const CornerId o = opposite_[nextCorner(c)];
-    return o == kInvalidId ? kInvalidId : nextCorner(o);
-  }
-  CornerId cw(CornerId c) {
-    const CornerId o = opposite_[prevCorner(c)];
-    return o == kInvalidId ? kInvalidId : prevCorner(o);
-  }
-  template <class F>
-  void forEachCornerAround(VertexId v, F&& f) {
-    walkCornersAround(*this, vertexCorner_[v], f);
-  }
-  std::uint64_t bytesRead() const { return faces_.bytesRead() + opposite_.bytesRead() + vertexCorner_.bytesRead(); }
-
- private:
-  PagedReader<CleanFace> faces_;
-  PagedReader<CornerId> opposite_;
-  PagedReader<CornerId> vertexCorner_;
-};
-
-// Per page cache: lookups in Morton order stay within a few megabytes of each file, and a
-// thread holds a handful of caches; a larger cache hardly saves reads.
-std::size_t pageCacheBytes(std::uint64_t memoryBytes) {
-  return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 32, std::uint64_t(1) << 17, std::uint64_t(1) << 23));
-}
-
-
-}  // namespace
 
 ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t iterations,
                                    const StreamPassOptions& pass) {
@@ -182,20 +139,6 @@ std::vector<FaceId> piecesOfCell(const std::vector<FaceId>& faces, PagedReader<C
   for (std::uint32_t i = 0; i < faces.size(); ++i) smallest[i] = faces[sets.find(i)];
   return smallest;
 }
-
-/// Appends the seconds since the previous finish (or since it was made) under a name.
-class StageClock {
- public:
-  explicit StageClock(std::vector<std::pair<std::string, double>>& out) : out_(out) {}
-  void finish(const char* name) {
-    out_.emplace_back(name, secondsSince(start_));
-    start_ = SteadyClock::now();
-  }
-
- private:
-  std::vector<std::pair<std::string, double>>& out_;
-  SteadyClock::time_point start_ = SteadyClock::now();
-};
 
 /// Calls fill(block, first, count) for blocks of faces in order, each filling `count` records of
 /// T in parallel, and writes them to a new file.

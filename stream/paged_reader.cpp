@@ -17,6 +17,12 @@ constexpr std::size_t kPageBytes = std::size_t(1) << 14;
 constexpr std::uint64_t kNoPage = ~std::uint64_t(0);
 }  // namespace
 
+PageCache::PageCache(ScratchUpdater& updater, const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes)
+    : PageCache(file, recordBytes, cacheBytes) {
+  updater_ = &updater;
+  dirty_.assign(tags_.size(), 0);
+}
+
 PageCache::PageCache(const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes)
     : path_(file.path), recordBytes_(recordBytes) {
   if (recordBytes == 0 || file.bytes % recordBytes != 0) {
@@ -43,18 +49,40 @@ PageCache::~PageCache() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-const char* PageCache::record(std::uint64_t i) {
+const char* PageCache::record(std::uint64_t i) { return slotFor(i); }
+
+char* PageCache::recordForWrite(std::uint64_t i) {
+  if (!updater_) throw IoError(path_ + ": a write through a read-only page cache");
+  char* at = slotFor(i);
+  dirty_[static_cast<std::size_t>(i >> pageShift_) & slotMask_] = 1;
+  return at;
+}
+
+void PageCache::flush() {
+  for (std::size_t slot = 0; slot < dirty_.size(); ++slot) writeBack(slot);
+}
+
+void PageCache::writeBack(std::size_t slot) {
+  if (!dirty_[slot]) return;
+  const std::uint64_t offset = tags_[slot] * pageBytes_;
+  const std::size_t bytes = static_cast<std::size_t>(std::min<std::uint64_t>(pageBytes_, numRecords_ * recordBytes_ - offset));
+  updater_->writeAt(offset, data_.data() + slot * pageBytes_, bytes);
+  dirty_[slot] = 0;
+}
+
+char* PageCache::slotFor(std::uint64_t i) {
   if (i >= numRecords_) {
     throw IoError(path_ + ": record " + std::to_string(i) + " past the end of a scratch file of " +
                   std::to_string(numRecords_) + " records");
   }
   const std::uint64_t page = i >> pageShift_;
   const std::size_t slot = static_cast<std::size_t>(page) & slotMask_;
-  const char* base = tags_[slot] == page ? data_.data() + slot * pageBytes_ : load(page, slot);
+  char* base = tags_[slot] == page ? data_.data() + slot * pageBytes_ : load(page, slot);
   return base + (i & (pageRecords_ - 1)) * recordBytes_;
 }
 
-const char* PageCache::load(std::uint64_t page, std::size_t slot) {
+char* PageCache::load(std::uint64_t page, std::size_t slot) {
+  if (updater_) writeBack(slot);
   char* to = data_.data() + slot * pageBytes_;
   const std::uint64_t offset = page * pageBytes_;
   const std::size_t bytes = static_cast<std::size_t>(std::min<std::uint64_t>(pageBytes_, numRecords_ * recordBytes_ - offset));

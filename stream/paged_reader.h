@@ -8,6 +8,8 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "stream/scratch_folder.h"
@@ -19,23 +21,34 @@ class PageCache {
  public:
   /// cacheBytes: what the pages may hold (rounded up to a power of two of pages, at least two).
   PageCache(const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes);
+  /// Writable: a changed page is written back in place when it leaves the cache and on flush(),
+  /// through `updater` (its writes counted in its folder; a full disk is the folder's IoError).
+  PageCache(ScratchUpdater& updater, const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes);
   ~PageCache();
   PageCache(const PageCache&) = delete;
   PageCache& operator=(const PageCache&) = delete;
   /// Record i (IoError past the end); valid until the next call.
   const char* record(std::uint64_t i);
+  /// Record i of a writable cache, its page marked changed; valid until the next call.
+  char* recordForWrite(std::uint64_t i);
+  /// Writes the changed pages back (a writable cache's changes are lost without it).
+  void flush();
   std::uint64_t numRecords() const { return numRecords_; }
   std::uint64_t bytesRead() const { return bytesRead_; }
   std::size_t memoryBytes() const { return data_.size() + tags_.size() * sizeof(tags_[0]); }
 
  private:
-  const char* load(std::uint64_t page, std::size_t slot);
+  char* slotFor(std::uint64_t i);
+  char* load(std::uint64_t page, std::size_t slot);
+  void writeBack(std::size_t slot);
+  ScratchUpdater* updater_ = nullptr;
   std::string path_;
   int fd_ = -1;
   std::size_t recordBytes_ = 0, pageRecords_ = 0, pageBytes_ = 0, slotMask_ = 0;
   unsigned pageShift_ = 0;
   std::uint64_t numRecords_ = 0, bytesRead_ = 0;
   std::vector<std::uint64_t> tags_;
+  std::vector<std::uint8_t> dirty_;
   std::vector<char> data_;
 };
 
@@ -54,6 +67,28 @@ class PagedReader {
   std::size_t memoryBytes() const { return cache_.memoryBytes(); }
 
  private:
+  PageCache cache_;
+};
+
+/// Records of type T read and changed by index through a writable page cache; flush() before the
+/// file is read by anything else.
+template <class T>
+class PagedArray {
+ public:
+  PagedArray(ScratchFolder& folder, const ScratchFile& file, std::string stage, std::size_t cacheBytes)
+      : updater_(folder, file, std::move(stage)), cache_(updater_, file, sizeof(T), cacheBytes) {}
+  T operator[](std::uint64_t i) {
+    T value;
+    std::memcpy(static_cast<void*>(&value), cache_.record(i), sizeof(T));
+    return value;
+  }
+  void set(std::uint64_t i, const T& value) { std::memcpy(cache_.recordForWrite(i), &value, sizeof(T)); }
+  void flush() { cache_.flush(); }
+  std::uint64_t size() const { return cache_.numRecords(); }
+  std::uint64_t bytesRead() const { return cache_.bytesRead(); }
+
+ private:
+  ScratchUpdater updater_;
   PageCache cache_;
 };
 

@@ -34,6 +34,22 @@ ScratchFolder::~ScratchFolder() {
 
 std::string ScratchFolder::newFilePath() { return path_ + "/" + std::to_string(files_.fetch_add(1)); }
 
+ScratchFile ScratchFolder::zeroFile(std::uint64_t bytes) {
+  const std::string path = newFilePath();
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) throw IoError(path + ": cannot create a scratch file (" + std::strerror(errno) + ")");
+  const int failed = ::ftruncate(fd, static_cast<off_t>(bytes));
+  const int error = errno;
+  ::close(fd);
+  if (failed != 0) {
+    if (error == ENOSPC || error == EDQUOT || error == EFBIG) throwDiskFull(path, bytes, std::strerror(error));
+    throw IoError(path + ": cannot size a scratch file (" + std::strerror(error) + ")");
+  }
+  onDisk_ += bytes;
+  peakOnDisk_ = std::max(peakOnDisk_, onDisk_);
+  return {path, bytes};
+}
+
 void ScratchFolder::remove(const ScratchFile& file) {
   if (::unlink(file.path.c_str()) == 0) onDisk_ -= std::min(onDisk_, file.bytes);
 }

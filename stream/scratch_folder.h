@@ -36,6 +36,9 @@ class ScratchFolder {
   const std::string& path() const { return path_; }
   /// The path of a new file in the folder (named by number, so a signal handler can find it).
   std::string newFilePath();
+  /// A new file of `bytes` zero bytes, sparse (the disk fills as pages are written in place), counted
+  /// on disk at its full size.
+  ScratchFile zeroFile(std::uint64_t bytes);
   /// Removes a finished file now (its bytes leave bytesOnDisk).
   void remove(const ScratchFile& file);
 

@@ -19,42 +19,17 @@
 #include "stream/paged_reader.h"
 #include "stream/welded_scratch.h"
 #include "test_meshes.h"
+#include "stream_testing.h"
 #include "testing.h"
 
 namespace seamvox {
 namespace {
 
-// The mesh welded and cleaned into the folder, as param's out-of-core path starts.
-CleanScratch cleanIntoScratch(ScratchFolder& folder, const TriangleMesh& mesh, std::uint64_t memoryBytes) {
-  const std::unique_ptr<MeshStream> stream = makeMemoryStream("mesh", std::make_shared<const TriangleMesh>(mesh), 997);
-  WeldStreamOptions weld;
-  weld.memoryBytes = memoryBytes;
-  const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
-  return cleanWeldedMesh(folder, welded.scratch, welded.census, memoryBytes);
-}
-
-// A file of Vec3f records (positions or directions).
-std::vector<Vec3f> readPositions(ScratchFolder& folder, const ScratchFile& file) {
-  std::vector<Vec3f> out(file.bytes / sizeof(Vec3f));
-  ScratchReader reader(folder, file, "test");
-  if (!out.empty()) EXPECT_TRUE(reader.read(out.data(), file.bytes));
-  return out;
-}
-
-using NamedMeshes = std::vector<std::pair<const char*, TriangleMesh>>;
-
-// f(folder, scratch, cleaned) for each mesh cleaned into a folder of its own and read back.
-template <class F>
-void forEachCleaned(const NamedMeshes& meshes, F&& f) {
-  for (const auto& [name, mesh] : meshes) {
-    SCOPED_TRACE(name);
-    testing::TempDir dir;
-    ScratchFolder folder(dir.dir());
-    const CleanScratch scratch = cleanIntoScratch(folder, mesh, 1);
-    const CleanResult cleaned = readCleanScratch(folder, scratch);
-    f(folder, scratch, cleaned);
-  }
-}
+using testing::forEachCleaned;
+using testing::NamedMeshes;
+using testing::noisyScan;
+using testing::cleanIntoScratch;
+using testing::readPositions;
 
 std::size_t countDiffering(const std::vector<Vec3f>& a, const std::vector<Vec3f>& b) {
   EXPECT_EQ(a.size(), b.size());
@@ -80,6 +55,34 @@ TEST(PagedReader, ReadsEveryRecordInAnyOrderThroughTwoPages) {
   EXPECT_EQ(wrong, 0u);
   EXPECT_GT(reader.bytesRead(), file.bytes);  // pages read again: the cache holds two
   EXPECT_THROW(reader[values.size()], IoError);
+}
+
+// Random reads and writes through a two-page writable cache agree with a vector; after flush()
+// the file holds the vector, the rest of a zero file still zero.
+TEST(PagedArray, ChangesThroughTwoPagesReachTheFile) {
+  testing::TempDir dir;
+  ScratchFolder folder(dir.dir());
+  const std::size_t n = 50000;
+  const ScratchFile file = folder.zeroFile(n * sizeof(std::uint32_t));
+  std::vector<std::uint32_t> model(n, 0);
+  {
+    PagedArray<std::uint32_t> array(folder, file, "test", 1);
+    std::size_t wrong = 0;
+    for (std::size_t k = 0; k < 3 * n; ++k) {
+      const std::size_t i = (k * 7919) % (n - n / 10);  // the last tenth never written
+      wrong += array[i] != model[i];
+      model[i] += static_cast<std::uint32_t>(k);
+      array.set(i, array[i] + static_cast<std::uint32_t>(k));
+    }
+    EXPECT_EQ(wrong, 0u);
+    array.flush();
+    EXPECT_THROW(array.set(n, 1), IoError);
+  }
+  std::vector<std::uint32_t> stored(n);
+  ScratchReader reader(folder, file, "test");
+  ASSERT_TRUE(reader.read(stored.data(), n * sizeof(std::uint32_t)));
+  EXPECT_EQ(stored, model);
+  EXPECT_GT(folder.bytesWritten(), file.bytes);  // pages written back more than once
 }
 
 TEST(FieldStream, SmoothedPositionsEqualSmoothPositions) {
@@ -138,17 +141,6 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
       if (v.smoothing > 0) folder.remove(streamed.framePositions);
     }
   });
-}
-
-// A generated scan with scanner noise (a quarter of an edge), spikes and folds.
-TriangleMesh noisyScan(std::uint64_t faces) {
-  TriangleMesh mesh = testing::generatedMesh(MeshKind::Scan, faces);
-  ScanNoiseOptions noise;
-  noise.amplitude = 0.25;
-  noise.spikes = 5;
-  noise.folds = 5;
-  addScanNoise(mesh, noise);
-  return mesh;
 }
 
 TEST(FieldStream, SingularitiesEqualTheInMemoryOnes) {

@@ -50,6 +50,13 @@ class CutCorners {
     bits_[c] = static_cast<std::uint8_t>((bits_[c] & ~kMatchingBits) | (k & kMatchingBits));
   }
   std::size_t memoryBytes() const { return bits_.capacity(); }
+  /// The per-corner bytes (the out-of-core cut writes the same bytes to a file).
+  const std::vector<std::uint8_t>& bytes() const { return bits_; }
+  static std::uint8_t byteOf(bool cut, std::uint8_t k) {
+    return static_cast<std::uint8_t>((cut ? kCutBit : 0) | (k & kMatchingBits));
+  }
+  static bool isCutByte(std::uint8_t byte) { return (byte & kCutBit) != 0; }
+  static std::uint8_t matchingOfByte(std::uint8_t byte) { return byte & kMatchingBits; }
 
  private:
   static constexpr std::uint8_t kMatchingBits = 3, kCutBit = 4;

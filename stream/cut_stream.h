@@ -1,0 +1,35 @@
+#pragma once
+/// The cut stage of the out-of-core param: cutToDisk on the cleaned mesh in the scratch folder and
+/// the out-of-core field's singularities (field_stream), the same steps (core/cut/detail_cut.h)
+/// over page caches of scratch files. Conventions: core/cut/cut.h.
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/cut/cut.h"
+#include "stream/clean_stream.h"
+#include "stream/field_stream.h"
+#include "stream/scratch_folder.h"
+
+namespace seamvox {
+
+struct ScratchCut {
+  ScratchFile corners;       ///< per corner CutCorners' byte: cut flag and combed matching
+  ScratchFile faceRotation;  ///< per face the quarter turns combing applied (0..3)
+  std::vector<SeamCurve> seams;
+  std::vector<VertexId> cones;
+  std::uint32_t components = 0;
+  /// Wall seconds of the passes: tree, prune, comb, seams.
+  std::vector<std::pair<std::string, double>> stageSeconds;
+};
+
+/// Equal to cutToDisk on readCleanScratch's mesh with the singularities' matchings and cones:
+/// the same cut, rotations and seam curves. Working state in scratch files (1 byte per face for
+/// the rotations, 4 for the components, 1 per corner, 4 per vertex), removed at the end; in
+/// memory the page caches, the tree's front and the seams. TopologyError as cutToDisk's; IoError
+/// naming the folder on a full disk.
+ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, const ScratchSingularities& singularities,
+                            const StreamPassOptions& pass);
+
+}  // namespace seamvox

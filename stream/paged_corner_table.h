@@ -1,0 +1,52 @@
+#pragma once
+/// The cleaned mesh's corner table (clean_stream) read through page caches, for the out-of-core
+/// passes that walk it as Topology is walked.
+#include <algorithm>
+#include <cstdint>
+
+#include "core/mesh/topology.h"
+#include "stream/clean_stream.h"
+#include "stream/paged_reader.h"
+
+namespace seamvox {
+
+/// The cleaned mesh's corner table through page caches: the same fan walk as Topology's.
+class PagedCornerTable {
+ public:
+  PagedCornerTable(const CleanScratch& scratch, std::size_t cacheBytes)
+      : faces_(scratch.faces, cacheBytes), opposite_(scratch.opposite, cacheBytes),
+        vertexCorner_(scratch.vertexCorner, cacheBytes) {}
+  VertexId vertex(CornerId c) { return faces_[c / 3].triangle[c % 3]; }
+  CornerId opposite(CornerId c) { return opposite_[c]; }
+  bool isIsolatedVertex(VertexId v) { return vertexCorner_[v] == kInvalidId; }
+  bool isBoundaryVertex(VertexId v) {
+    const CornerId c = vertexCorner_[v];
+    return c != kInvalidId && cw(c) == kInvalidId;
+  }
+  CornerId ccw(CornerId c) {
+    const CornerId o = opposite_[nextCorner(c)];
+    return o == kInvalidId ? kInvalidId : nextCorner(o);
+  }
+  CornerId cw(CornerId c) {
+    const CornerId o = opposite_[prevCorner(c)];
+    return o == kInvalidId ? kInvalidId : prevCorner(o);
+  }
+  template <class F>
+  void forEachCornerAround(VertexId v, F&& f) {
+    walkCornersAround(*this, vertexCorner_[v], f);
+  }
+  std::uint64_t bytesRead() const { return faces_.bytesRead() + opposite_.bytesRead() + vertexCorner_.bytesRead(); }
+
+ private:
+  PagedReader<CleanFace> faces_;
+  PagedReader<CornerId> opposite_;
+  PagedReader<CornerId> vertexCorner_;
+};
+
+/// Per page cache: lookups in Morton order stay within a few megabytes of each file, and a
+/// thread holds a handful of caches; a larger cache hardly saves reads.
+inline std::size_t pageCacheBytes(std::uint64_t memoryBytes) {
+  return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 32, std::uint64_t(1) << 17, std::uint64_t(1) << 23));
+}
+
+}  // namespace seamvox

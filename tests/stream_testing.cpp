@@ -1,0 +1,44 @@
+#include "stream_testing.h"
+
+#include <memory>
+
+#include "core/synth/generate.h"
+#include "stream/mesh_stream.h"
+#include "stream/welded_scratch.h"
+#include "test_meshes.h"
+
+namespace seamvox::testing {
+
+CleanScratch cleanIntoScratch(ScratchFolder& folder, const TriangleMesh& mesh, std::uint64_t memoryBytes) {
+  const std::unique_ptr<MeshStream> stream = makeMemoryStream("mesh", std::make_shared<const TriangleMesh>(mesh), 997);
+  WeldStreamOptions weld;
+  weld.memoryBytes = memoryBytes;
+  const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
+  return cleanWeldedMesh(folder, welded.scratch, welded.census, memoryBytes);
+}
+
+std::vector<Vec3f> readPositions(ScratchFolder& folder, const ScratchFile& file) {
+  std::vector<Vec3f> out(file.bytes / sizeof(Vec3f));
+  ScratchReader reader(folder, file, "test");
+  if (!out.empty()) EXPECT_TRUE(reader.read(out.data(), file.bytes));
+  return out;
+}
+
+std::vector<std::uint8_t> readBytes(ScratchFolder& folder, const ScratchFile& file) {
+  std::vector<std::uint8_t> out(file.bytes);
+  ScratchReader reader(folder, file, "test");
+  if (!out.empty()) EXPECT_TRUE(reader.read(out.data(), out.size()));
+  return out;
+}
+
+TriangleMesh noisyScan(std::uint64_t faces) {
+  TriangleMesh mesh = generatedMesh(MeshKind::Scan, faces);
+  ScanNoiseOptions noise;
+  noise.amplitude = 0.25;
+  noise.spikes = 5;
+  noise.folds = 5;
+  addScanNoise(mesh, noise);
+  return mesh;
+}
+
+}  // namespace seamvox::testing

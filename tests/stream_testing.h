@@ -1,0 +1,45 @@
+#pragma once
+// Fixtures of the out-of-core stage tests: a mesh welded and cleaned into a scratch folder as
+// param's out-of-core path starts, and the scratch files read back.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "core/mesh/clean.h"
+#include "core/mesh/mesh.h"
+#include "stream/clean_stream.h"
+#include "stream/scratch_folder.h"
+#include "testing.h"
+
+namespace seamvox::testing {
+
+/// The mesh welded (memory stream, blocks of 997 faces) and cleaned into the folder.
+CleanScratch cleanIntoScratch(ScratchFolder& folder, const TriangleMesh& mesh, std::uint64_t memoryBytes);
+
+/// A file of Vec3f records (positions or directions).
+std::vector<Vec3f> readPositions(ScratchFolder& folder, const ScratchFile& file);
+/// A file's bytes.
+std::vector<std::uint8_t> readBytes(ScratchFolder& folder, const ScratchFile& file);
+
+/// A generated scan with scanner noise (a quarter of an edge), spikes and folds.
+TriangleMesh noisyScan(std::uint64_t faces);
+
+using NamedMeshes = std::vector<std::pair<const char*, TriangleMesh>>;
+
+/// f(folder, scratch, cleaned) for each mesh cleaned (smallest sort memory) into a folder of its
+/// own and read back.
+template <class F>
+void forEachCleaned(const NamedMeshes& meshes, F&& f) {
+  for (const auto& [name, mesh] : meshes) {
+    SCOPED_TRACE(name);
+    TempDir dir;
+    ScratchFolder folder(dir.dir());
+    const CleanScratch scratch = cleanIntoScratch(folder, mesh, 1);
+    const CleanResult cleaned = readCleanScratch(folder, scratch);
+    f(folder, scratch, cleaned);
+  }
+}
+
+}  // namespace seamvox::testing
