@@ -1,4 +1,4 @@
-// The out-of-core field and cut stages against the in-memory ones: wall time and peak resident
+// The out-of-core field, cut and voxel-element stages against the in-memory ones: wall time and peak resident
 // memory per step, scratch traffic, and with in-memory the directions, cones and cut that differ
 // (none expected). Steps run on the weld pass's faces (Morton order), as param's out-of-core path
 // will; cones merged within one default grid spacing (the diagonal over 100).
@@ -15,6 +15,7 @@
 
 #include "bench/bench_common.h"
 #include "core/field/field.h"
+#include "core/basis/voxel_grid.h"
 #include "core/cut/cut.h"
 #include "core/field/cone_merge.h"
 #include "core/field/field_proxy.h"
@@ -23,6 +24,7 @@
 #include "core/system/memory.h"
 #include "stream/clean_stream.h"
 #include "stream/cut_stream.h"
+#include "stream/voxel_stream.h"
 #include "stream/field_stream.h"
 #include "stream/mesh_stream.h"
 #include "stream/welded_scratch.h"
@@ -72,6 +74,7 @@ int main(int argc, char** argv) {
   line("singularities", t3, t3b);
   std::printf("  cones %zu, boundary vertices with an index %zu\n", singularities.cones.size(),
               singularities.boundaryIndex4.size());
+  const std::vector<VertexId> fieldCones = singularities.cones;
   ConeMergeOptions merge;
   {
     Vec3f lo(1e30f, 1e30f, 1e30f), hi = -lo;
@@ -92,7 +95,16 @@ int main(int argc, char** argv) {
   std::size_t seamEdges = 0;
   for (const SeamCurve& seam : cut.seams) seamEdges += seam.corners.size();
   std::printf("  components %u, seams %zu, seam edges %zu\n", cut.components, cut.seams.size(), seamEdges);
-  t3 = t3d;
+  VoxelBasisOptions voxelOptions;
+  voxelOptions.edgeLength = merge.maxDistance;
+  const ScratchVoxelElements voxels =
+      buildScratchVoxelElements(folder, scratch, field, cut, voxelOptions, StreamPassOptions{budget});
+  auto t3e = Clock::now();
+  line("voxel elements (grid 128)", t3d, t3e);
+  for (const auto& [name, s] : voxels.stageSeconds) std::printf("  voxel: %-20s %8.2f s\n", name.c_str(), s);
+  std::printf("  voxels %u, fragments %llu, elements %zu\n", voxels.grid.size(), (unsigned long long)voxels.numFragments,
+              voxels.elementVoxel.size());
+  t3 = t3e;
   for (const ScratchTraffic& t : folder.traffic()) {
     std::printf("  traffic %-24s read %9.1f MiB  written %9.1f MiB\n", t.stage.c_str(), mib(t.bytesRead),
                 mib(t.bytesWritten));
@@ -123,8 +135,38 @@ int main(int argc, char** argv) {
     const FieldSingularities expected = computeSingularities(cleaned.mesh, cleaned.topology, inMemory);
     auto t7 = Clock::now();
     line("in memory: singularities", t6, t7);
-    std::printf("  cones equal to the in-memory ones: %s (%zu)\n", expected.cones == singularities.cones ? "yes" : "NO",
+    std::printf("  cones equal to the in-memory ones: %s (%zu)\n", expected.cones == fieldCones ? "yes" : "NO",
                 expected.cones.size());
+    FieldSingularities mergedExpected = expected;
+    mergeCloseCones(cleaned.mesh, cleaned.topology, mergedExpected, merge);
+    auto t8 = Clock::now();
+    line("in memory: merge cones", t7, t8);
+    std::printf("  merged cones equal to the in-memory ones: %s (%zu)\n",
+                mergedExpected.cones == singularities.cones ? "yes" : "NO", mergedExpected.cones.size());
+    const CutResult cutExpected = cutToDisk(cleaned.mesh, cleaned.topology, inMemory, mergedExpected);
+    auto t9 = Clock::now();
+    line("in memory: cut", t8, t9);
+    std::vector<std::uint8_t> corners(cut.corners.bytes);
+    ScratchReader cutReader(folder, cut.corners, "bench");
+    if (!corners.empty() && !cutReader.read(corners.data(), corners.size())) return 1;
+    bool sameSeams = cut.seams.size() == cutExpected.seams.size();
+    for (std::size_t i = 0; sameSeams && i < cut.seams.size(); ++i) {
+      sameSeams = cut.seams[i].corners == cutExpected.seams[i].corners && cut.seams[i].matching == cutExpected.seams[i].matching;
+    }
+    std::printf("  cut corners equal to the in-memory cut: %s; seams equal: %s (%zu)\n",
+                corners == cutExpected.corners.bytes() ? "yes" : "NO", sameSeams ? "yes" : "NO", cutExpected.seams.size());
+    const VoxelBuildResult built = buildVoxelBasis(cleaned.mesh, cleaned.topology, inMemory, cutExpected, voxelOptions);
+    auto t10 = Clock::now();
+    line("in memory: voxel basis", t9, t10);
+    std::printf("  clip %.2f s, basis %.2f s\n", built.secondsClip, built.secondsBasis);
+    std::size_t wrong = 0;
+    for (std::uint64_t e = 0; e < built.basis->numElements() && e < voxels.records.size(); ++e) {
+      wrong += std::memcmp(&voxels.records[e], &built.basis->elementRecord(e), sizeof(VoxelIntegrals)) != 0 ||
+               voxels.normalStiffness[e] != built.basis->elementNormalStiffness(e);
+    }
+    std::printf("  elements equal to the in-memory basis: %s (%llu; %zu integrals differ)\n",
+                built.basis->numElements() == voxels.records.size() && wrong == 0 ? "yes" : "NO",
+                (unsigned long long)built.basis->numElements(), wrong);
   }
   return 0;
 }

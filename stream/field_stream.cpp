@@ -61,23 +61,6 @@ ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& sc
 
 namespace {
 
-/// A face's corner positions (in double, as TriangleMesh::position gives them) through caches.
-class PagedFacePoints {
- public:
-  PagedFacePoints(const CleanScratch& scratch, const ScratchFile& positions, std::size_t cacheBytes)
-      : faces_(scratch.faces, cacheBytes), positions_(positions, cacheBytes) {}
-  Triangle triangle(FaceId f) { return faces_[f].triangle; }
-  std::array<Vec3d, 3> points(const Triangle& t) {
-    return {positions_[t[0]].cast<double>(), positions_[t[1]].cast<double>(), positions_[t[2]].cast<double>()};
-  }
-  std::array<Vec3d, 3> points(FaceId f) { return points(triangle(f)); }
-  std::uint64_t bytesRead() const { return faces_.bytesRead() + positions_.bytesRead(); }
-
- private:
-  PagedReader<CleanFace> faces_;
-  PagedReader<Vec3f> positions_;
-};
-
 /// A cell's key (ProxyCells::cellOf, row by row) as its Morton code: the same groups of faces,
 /// taken in a spatially coherent order, so the page caches of the faces hit.
 std::uint32_t cellOrder(std::uint32_t key, std::uint32_t resolution) {

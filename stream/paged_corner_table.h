@@ -1,7 +1,8 @@
 #pragma once
-/// The cleaned mesh's corner table (clean_stream) read through page caches, for the out-of-core
-/// passes that walk it as Topology is walked.
+/// The cleaned mesh's corner table and face corners (clean_stream) read through page caches, for
+/// the out-of-core passes that walk it as Topology is walked.
 #include <algorithm>
+#include <array>
 #include <cstdint>
 
 #include "core/mesh/topology.h"
@@ -48,5 +49,22 @@ class PagedCornerTable {
 inline std::size_t pageCacheBytes(std::uint64_t memoryBytes) {
   return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 32, std::uint64_t(1) << 17, std::uint64_t(1) << 23));
 }
+
+/// A face's corner positions (in double, as TriangleMesh::position gives them) through caches.
+class PagedFacePoints {
+ public:
+  PagedFacePoints(const CleanScratch& scratch, const ScratchFile& positions, std::size_t cacheBytes)
+      : faces_(scratch.faces, cacheBytes), positions_(positions, cacheBytes) {}
+  Triangle triangle(FaceId f) { return faces_[f].triangle; }
+  std::array<Vec3d, 3> points(const Triangle& t) {
+    return {positions_[t[0]].cast<double>(), positions_[t[1]].cast<double>(), positions_[t[2]].cast<double>()};
+  }
+  std::array<Vec3d, 3> points(FaceId f) { return points(triangle(f)); }
+  std::uint64_t bytesRead() const { return faces_.bytesRead() + positions_.bytesRead(); }
+
+ private:
+  PagedReader<CleanFace> faces_;
+  PagedReader<Vec3f> positions_;
+};
 
 }  // namespace seamvox

@@ -31,6 +31,18 @@ std::vector<std::uint8_t> readBytes(ScratchFolder& folder, const ScratchFile& fi
   return out;
 }
 
+FieldSingularities inMemorySingularities(ScratchFolder& folder, const ScratchSingularities& streamed,
+                                         std::uint32_t numVertices) {
+  FieldSingularities out;
+  out.matching = readBytes(folder, streamed.matching);
+  out.index4.assign(numVertices, 0);
+  out.boundaryIndex4.assign(numVertices, 0);
+  for (const auto& [v, index] : streamed.index4) out.index4[v] = index;
+  for (const auto& [v, index] : streamed.boundaryIndex4) out.boundaryIndex4[v] = index;
+  out.cones = streamed.cones;
+  return out;
+}
+
 TriangleMesh noisyScan(std::uint64_t faces) {
   TriangleMesh mesh = generatedMesh(MeshKind::Scan, faces);
   ScanNoiseOptions noise;
@@ -39,6 +51,13 @@ TriangleMesh noisyScan(std::uint64_t faces) {
   noise.folds = 5;
   addScanNoise(mesh, noise);
   return mesh;
+}
+
+NamedMeshes stageTestMeshes(std::uint32_t damageSeed) {
+  return {{"noisy scan with holes", withOneTriangleHoles(noisyScan(30000), 41)},
+          {"damaged", damagedMesh(damageSeed)},
+          {"torus and islands", concatMeshes({torusMesh(60, 40), icosphereMesh(2),
+                                              moebiusStrip(16, Vec3f(4.0f, 0.0f, 0.0f))})}};
 }
 
 }  // namespace seamvox::testing

@@ -9,7 +9,9 @@
 
 #include "core/mesh/clean.h"
 #include "core/mesh/mesh.h"
+#include "core/field/field.h"
 #include "stream/clean_stream.h"
+#include "stream/field_stream.h"
 #include "stream/scratch_folder.h"
 #include "testing.h"
 
@@ -23,10 +25,18 @@ std::vector<Vec3f> readPositions(ScratchFolder& folder, const ScratchFile& file)
 /// A file's bytes.
 std::vector<std::uint8_t> readBytes(ScratchFolder& folder, const ScratchFile& file);
 
+/// The in-memory singularities of out-of-core ones (what cutToDisk reads of them).
+FieldSingularities inMemorySingularities(ScratchFolder& folder, const ScratchSingularities& streamed,
+                                         std::uint32_t numVertices);
+
 /// A generated scan with scanner noise (a quarter of an edge), spikes and folds.
 TriangleMesh noisyScan(std::uint64_t faces);
 
 using NamedMeshes = std::vector<std::pair<const char*, TriangleMesh>>;
+
+/// The stages' usual cases: a noisy generated scan with one-triangle holes, the damaged mesh of
+/// a seed, and a torus with two islands (a sphere and a Moebius strip).
+NamedMeshes stageTestMeshes(std::uint32_t damageSeed);
 
 /// f(folder, scratch, cleaned) for each mesh cleaned (smallest sort memory) into a folder of its
 /// own and read back.

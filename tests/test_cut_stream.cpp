@@ -24,24 +24,12 @@ using testing::readBytes;
 
 const StreamPassOptions kTinyPass{1, 1000};
 
-// The in-memory singularities of the streamed ones (what cutToDisk reads of them).
-FieldSingularities inMemory(ScratchFolder& folder, const ScratchSingularities& streamed, std::uint32_t numVertices) {
-  FieldSingularities out;
-  out.matching = readBytes(folder, streamed.matching);
-  out.index4.assign(numVertices, 0);
-  out.boundaryIndex4.assign(numVertices, 0);
-  for (const auto& [v, index] : streamed.index4) out.index4[v] = index;
-  for (const auto& [v, index] : streamed.boundaryIndex4) out.boundaryIndex4[v] = index;
-  out.cones = streamed.cones;
-  return out;
-}
-
 void expectSameCut(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
                    const ScratchSingularities& singularities) {
   CrossField field;
   field.direction.assign(cleaned.topology.numFaces(), Vec3f(1.0f, 0.0f, 0.0f));  // cutToDisk reads its size only
   const CutResult expected =
-      cutToDisk(cleaned.mesh, cleaned.topology, field, inMemory(folder, singularities, cleaned.topology.numVertices()));
+      cutToDisk(cleaned.mesh, cleaned.topology, field, testing::inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
   const std::uint64_t onDisk = folder.bytesOnDisk();
   const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, kTinyPass);
   EXPECT_EQ(readBytes(folder, cut.corners), expected.corners.bytes());
@@ -60,11 +48,7 @@ void expectSameCut(ScratchFolder& folder, const CleanScratch& scratch, const Cle
 
 // Singularities of the proxy field computed out of core, with and without merging.
 TEST(CutStream, CutEqualsTheInMemoryCut) {
-  const NamedMeshes meshes = {
-      {"noisy scan with holes", testing::withOneTriangleHoles(testing::noisyScan(30000), 41)},
-      {"damaged", testing::damagedMesh(13)},
-      {"torus and islands", testing::concatMeshes({testing::torusMesh(60, 40), testing::icosphereMesh(2),
-                                                   testing::moebiusStrip(16, Vec3f(4.0f, 0.0f, 0.0f))})}};
+  const NamedMeshes meshes = testing::stageTestMeshes(13);
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
     const ScratchField field = computeScratchField(folder, scratch, {}, {}, kTinyPass);
     ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, kTinyPass);

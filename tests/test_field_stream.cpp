@@ -144,11 +144,7 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
 }
 
 TEST(FieldStream, SingularitiesEqualTheInMemoryOnes) {
-  const NamedMeshes meshes = {
-      {"noisy scan with holes", testing::withOneTriangleHoles(noisyScan(30000), 41)},
-      {"damaged", testing::damagedMesh(13)},
-      {"torus and islands", testing::concatMeshes({testing::torusMesh(60, 40), testing::icosphereMesh(2),
-                                                   testing::moebiusStrip(16, Vec3f(4.0f, 0.0f, 0.0f))})}};
+  const NamedMeshes meshes = testing::stageTestMeshes(13);
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
     for (const std::uint32_t smoothing : {3u, 0u}) {
       SCOPED_TRACE("smoothing " + std::to_string(smoothing));

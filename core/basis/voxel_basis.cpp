@@ -6,6 +6,7 @@
 #include <numeric>
 #include <string>
 
+#include "core/basis/detail_voxel_elements.h"
 #include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
@@ -14,21 +15,8 @@ namespace seamvox {
 
 namespace {
 
+using detail::denseLabels;
 using detail::UnionFind;
-
-// Dense labels 0.. of the union-find classes, in order of first appearance.
-std::uint32_t denseLabels(UnionFind& uf, std::vector<std::uint32_t>& label) {
-  const std::size_t n = uf.parent.size();
-  std::vector<std::uint32_t> rootLabel(n, kInvalidId);
-  label.resize(n);
-  std::uint32_t count = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t r = uf.find(static_cast<std::uint32_t>(i));
-    if (rootLabel[r] == kInvalidId) rootLabel[r] = count++;
-    label[i] = rootLabel[r];
-  }
-  return count;
-}
 
 VoxelCoord difference(const VoxelCoord& b, const VoxelCoord& a) {
   return {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
@@ -46,14 +34,6 @@ void forSharedCorners(const VoxelCoord& d, F&& f) {
     if (kx < 0 || kx > 1 || ky < 0 || ky > 1 || kz < 0 || kz > 1) continue;
     f(k, kx + 2 * ky + 4 * kz);
   }
-}
-
-Vec3d combedDirection(const TriangleMesh& mesh, const CrossField& field, const CutResult& cut,
-                      FaceId f, Vec3d& normal) {
-  normal = faceNormal(mesh, f);
-  Vec3d u = field.at(f);
-  for (int k = 0; k < cut.faceRotation[f] % 4; ++k) u = normal.cross(u);
-  return u;
 }
 
 // Joins every domain (a class of element-function nodes 8 e + k) whose weight (sum of its nodes'
@@ -148,44 +128,22 @@ VoxelFragmentIndex indexFragmentsByVoxel(const std::vector<VoxelFragment>& fragm
   return out;
 }
 
-// Elements of voxel v: its fragments joined through shared non-cut edges (union-find). Writes
-// each fragment's element label local to v; returns the number of elements of v.
-/// Position of key in the increasing list, kInvalidId when absent. Branch-free halving (the
-/// compiler emits conditional moves): the searches of element labelling hit unpredictable keys.
-std::uint32_t findSorted(const std::vector<FaceId>& sorted, FaceId key) {
-  if (sorted.empty()) return kInvalidId;
-  const FaceId* base = sorted.data();
-  std::size_t n = sorted.size();
-  while (n > 1) {
-    const std::size_t half = n / 2;
-    base = base[half] <= key ? base + half : base;
-    n -= half;
-  }
-  return *base == key ? static_cast<std::uint32_t>(base - sorted.data()) : kInvalidId;
-}
-
-std::uint32_t labelVoxelElements(const BasisInput& in, const VoxelFragmentIndex& byVoxel,
-                                 std::uint32_t v, std::vector<FaceId>& faces,
-                                 std::vector<std::uint32_t>& fragmentElement) {
-  const std::vector<VoxelFragment>& fragments = in.fragments;
+// Elements of voxel v (labelVoxelFragments): each fragment's element label local to v; returns
+// the number of elements of v.
+std::uint32_t labelVoxelElements(const BasisInput& in, const VoxelFragmentIndex& byVoxel, std::uint32_t v,
+                                 std::vector<FaceId>& faces, std::vector<std::uint8_t>& masks,
+                                 std::vector<std::uint32_t>& label, std::vector<std::uint32_t>& fragmentElement) {
   const std::uint32_t begin = byVoxel.start[v], m = byVoxel.start[v + 1] - begin;
   faces.resize(m);
-  for (std::uint32_t i = 0; i < m; ++i) faces[i] = fragments[byVoxel.fragments[begin + i]].face;
-  UnionFind uf(m);
+  masks.resize(m);
   for (std::uint32_t i = 0; i < m; ++i) {
-    const VoxelFragment& fr = fragments[byVoxel.fragments[begin + i]];
-    for (int j = 0; j < 3; ++j) {
-      const CornerId c = 3 * fr.face + j;
-      if (!(fr.edgeMask >> j & 1) || in.cut.corners.isCut(c)) continue;
-      const CornerId o = in.topology.opposite(c);
-      if (o == kInvalidId) continue;
-      const std::uint32_t i2 = findSorted(faces, cornerFace(o));
-      if (i2 == kInvalidId) continue;
-      if (fragments[byVoxel.fragments[begin + i2]].edgeMask >> (o % 3) & 1) uf.unite(i, i2);
-    }
+    const VoxelFragment& fr = in.fragments[byVoxel.fragments[begin + i]];
+    faces[i] = fr.face;
+    masks[i] = static_cast<std::uint8_t>(fr.edgeMask);
   }
-  std::vector<std::uint32_t> label;
-  const std::uint32_t count = denseLabels(uf, label);
+  const std::uint32_t count = detail::labelVoxelFragments(
+      faces, masks, [&](CornerId c) { return in.topology.opposite(c); },
+      [&](CornerId c) { return in.cut.corners.isCut(c); }, label);
   for (std::uint32_t i = 0; i < m; ++i) fragmentElement[byVoxel.fragments[begin + i]] = label[i];
   return count;
 }
@@ -207,8 +165,10 @@ Elements buildElements(const BasisInput& in, const VoxelFragmentIndex& byVoxel) 
   out.voxelElementStart.assign(nv + 1, 0);
   parallelFor(nv, 64, [&](const IndexRange& range) {
     std::vector<FaceId> faces;
+    std::vector<std::uint8_t> masks;
+    std::vector<std::uint32_t> label;
     for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
-      out.voxelElementStart[v + 1] = labelVoxelElements(in, byVoxel, v, faces, out.fragmentElement);
+      out.voxelElementStart[v + 1] = labelVoxelElements(in, byVoxel, v, faces, masks, label, out.fragmentElement);
     }
   });
   std::partial_sum(out.voxelElementStart.begin(), out.voxelElementStart.end(),
@@ -241,28 +201,28 @@ void integrateFragments(const BasisInput& in, const VoxelFragmentIndex& byVoxel,
     // A voxel's elements are numbered contiguously: their sums are kept while its fragments are
     // added, and assembled once per element.
     std::vector<FragmentSums> sums;
+    std::vector<FaceId> faces;
+    std::vector<std::uint32_t> element;
+    const auto integrand = [&](FaceId f) {
+      detail::FaceIntegrand out;
+      out.grid = faceGridCoords(in.mesh, in.grid, f);
+      out.normal = faceNormal(in.mesh, f);
+      out.direction = detail::combedDirection(in.field.at(f), out.normal, in.cut.faceRotation[f]);
+      return out;
+    };
     for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
       std::uint32_t first = kInvalidId, last = 0;
-      for (std::uint32_t k = byVoxel.start[v]; k < byVoxel.start[v + 1]; ++k) {
-        const std::uint32_t e = fragmentElement[byVoxel.fragments[k]];
-        first = std::min(first, e), last = std::max(last, e);
-      }
-      if (first == kInvalidId) continue;
-      sums.assign(last - first + 1, FragmentSums{});
+      faces.clear();
+      element.clear();
       for (std::uint32_t k = byVoxel.start[v]; k < byVoxel.start[v + 1]; ++k) {
         const std::uint32_t i = byVoxel.fragments[k];
-        const FaceId f = in.fragments[i].face;
-        Vec3d n;
-        const Vec3d u = combedDirection(in.mesh, in.field, in.cut, f, n);
-        if (n.squaredNorm() == 0.0) continue;  // zero-area face: nothing to integrate
-        const ClipPolygon piece =
-            clipTriangleToVoxel(faceGridCoords(in.mesh, in.grid, f), in.voxelCoords[v]);
-        accumulateFragment(piece, in.voxelCoords[v], in.grid.voxelSize, n, u, edgeLength,
-                           sums[fragmentElement[i] - first]);
+        faces.push_back(in.fragments[i].face);
+        element.push_back(fragmentElement[i]);
+        first = std::min(first, element.back()), last = std::max(last, element.back());
       }
-      for (std::uint32_t e = first; e <= last; ++e) {
-        finishElement(sums[e - first], records[e], 0.0, normalStiffness[e].data());
-      }
+      if (first == kInvalidId) continue;
+      detail::integrateVoxel(in.voxelCoords[v], in.grid.voxelSize, edgeLength, faces, element, first, last, integrand,
+                             sums, records.data() + first, normalStiffness.data() + first);
     }
   });
 }

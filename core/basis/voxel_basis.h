@@ -85,6 +85,8 @@ class VoxelBasis final : public Basis {
   /// Integrals of element e in compact form (upper triangle of the stiffness), without the
   /// normal-derivative term.
   const VoxelIntegrals& elementRecord(std::uint64_t e) const { return records_[e]; }
+  /// The unweighted normal-derivative stiffness of element e (packed as VoxelIntegrals::stiffness).
+  const std::array<double, 36>& elementNormalStiffness(std::uint64_t e) const { return normalStiffness_[e]; }
   /// Weight of the normal-derivative term in elementIntegrals (VoxelBasisOptions::regularization).
   /// Its integrals are kept per element, so changing the weight costs no re-clipping.
   double regularization() const { return regularization_; }

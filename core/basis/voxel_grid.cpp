@@ -1,13 +1,12 @@
 #include "core/basis/voxel_grid.h"
 
 #include <openvdb/openvdb.h>
-#include <tbb/parallel_pipeline.h>
-#include <tbb/task_arena.h>
 
 #include <chrono>
 #include <cmath>
 #include <mutex>
 
+#include "core/basis/detail_voxel_elements.h"
 #include "core/system/errors.h"
 #include "core/system/memory.h"
 #include "core/solve/evaluate.h"
@@ -28,52 +27,6 @@ void initializeOpenVdb() {
 
 openvdb::Coord toCoord(const VoxelCoord& v) { return openvdb::Coord(v[0], v[1], v[2]); }
 
-
-// Fragments of one chunk of faces, before their voxels have ids.
-struct ClippedChunk {
-  FaceId begin = 0, end = 0;
-  std::vector<VoxelCoord> voxel;
-  std::vector<FaceId> face;
-  std::vector<std::uint8_t> edgeMask;
-};
-
-void clipChunk(const TriangleMesh& mesh, const VoxelGridGeometry& grid, ClippedChunk& chunk) {
-  std::vector<VoxelPiece> pieces;
-  for (FaceId f = chunk.begin; f < chunk.end; ++f) {
-    const std::array<Vec3d, 3> g = faceGridCoords(mesh, grid, f);
-    clipTriangleToVoxels(g, grid.resolution, pieces);
-    const std::size_t before = chunk.face.size();
-    for (const VoxelPiece& piece : pieces) {
-      chunk.voxel.push_back(piece.voxel);
-      chunk.face.push_back(f);
-      chunk.edgeMask.push_back(voxelEdgeMask(g, piece.voxel));
-    }
-    if (!pieces.empty()) continue;
-    // Zero-area face: no integrals, but its edges still connect its neighbours. It gets a
-    // fragment in every voxel its edges run through (a few at most), else one at its centroid.
-    const VoxelCoord lo = grid.voxelOf(g[0].cwiseMin(g[1]).cwiseMin(g[2]));
-    const VoxelCoord hi = grid.voxelOf(g[0].cwiseMax(g[1]).cwiseMax(g[2]));
-    const std::int64_t count = std::int64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) *
-                               (hi[2] - lo[2] + 1);
-    if (count <= 64) {
-      for (std::int32_t z = lo[2]; z <= hi[2]; ++z)
-        for (std::int32_t y = lo[1]; y <= hi[1]; ++y)
-          for (std::int32_t x = lo[0]; x <= hi[0]; ++x) {
-            const std::uint8_t mask = voxelEdgeMask(g, {x, y, z});
-            if (mask == 0) continue;
-            chunk.voxel.push_back({x, y, z});
-            chunk.face.push_back(f);
-            chunk.edgeMask.push_back(mask);
-          }
-    }
-    if (chunk.face.size() == before) {
-      const VoxelCoord v = grid.voxelOf((g[0] + g[1] + g[2]) / 3.0);
-      chunk.voxel.push_back(v);
-      chunk.face.push_back(f);
-      chunk.edgeMask.push_back(voxelEdgeMask(g, v));
-    }
-  }
-}
 
 }  // namespace
 
@@ -141,46 +94,15 @@ VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topol
   const VoxelGridGeometry geometry =
       makeVoxelGrid(computeBoundingBox(mesh.positions), options.gridResolution);
   const FaceId nf = mesh.numFaces();
-  const FaceId chunkFaces = std::max<std::uint32_t>(options.chunkFaces, 1);
   std::vector<VoxelFragment> fragments;
   fragments.reserve(nf + nf / 2);
-  FaceId nextFace = 0;
-  const std::size_t tokens = 2 * std::size_t(tbb::this_task_arena::max_concurrency());
-  tbb::parallel_pipeline(
-      tokens,
-      tbb::make_filter<void, std::shared_ptr<ClippedChunk>>(
-          tbb::filter_mode::serial_in_order,
-          [&](tbb::flow_control& control) -> std::shared_ptr<ClippedChunk> {
-            if (nextFace >= nf) {
-              control.stop();
-              return nullptr;
-            }
-            auto chunk = std::make_shared<ClippedChunk>();
-            chunk->begin = nextFace;
-            chunk->end = nextFace = nf - nextFace > chunkFaces ? nextFace + chunkFaces : nf;
-            return chunk;
-          }) &
-          tbb::make_filter<std::shared_ptr<ClippedChunk>, std::shared_ptr<ClippedChunk>>(
-              tbb::filter_mode::parallel,
-              [&](std::shared_ptr<ClippedChunk> chunk) {
-                clipChunk(mesh, geometry, *chunk);
-                return chunk;
-              }) &
-          tbb::make_filter<std::shared_ptr<ClippedChunk>, void>(
-              tbb::filter_mode::serial_in_order, [&](std::shared_ptr<ClippedChunk> chunk) {
-                for (std::size_t i = 0; i < chunk->face.size(); ++i) {
-                  const std::uint32_t voxel = out.grid.insert(chunk->voxel[i]);
-                  if (voxel >= VoxelFragment::kMaxVoxels) {
-                    throw InputError("voxel basis: more than 2^29 voxels on the surface; use a coarser grid");
-                  }
-                  VoxelFragment fragment;
-                  fragment.face = chunk->face[i];
-                  fragment.voxel = voxel;
-                  fragment.edgeMask = chunk->edgeMask[i];
-                  fragments.push_back(fragment);
-                }
-                reportProgress(options.progress, "voxel clip", double(chunk->end) / nf);
-              }));
+  detail::clipFacesInOrder(
+      nf, options.chunkFaces,
+      [&](detail::ClippedChunk& chunk) {
+        detail::clipChunk(geometry, [&](FaceId f) { return faceGridCoords(mesh, geometry, f); }, chunk);
+      },
+      out.grid, [&](const VoxelFragment& fragment) { fragments.push_back(fragment); },
+      [&](const detail::ClippedChunk& chunk) { reportProgress(options.progress, "voxel clip", double(chunk.end) / nf); });
   // No shrink_to_fit: the reserve's unused tail was never touched (not resident), and the copy
   // would hold the fragments twice.
   // Ids in tree order: the elements of one 8^3 leaf block are contiguous, and the assembly takes

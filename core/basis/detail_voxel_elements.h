@@ -1,0 +1,209 @@
+#pragma once
+/// The voxel basis' per-face steps written once for the in-memory build (voxel_grid,
+/// voxel_basis) and the out-of-core one (stream/voxel_stream): clipping faces into voxel
+/// fragments, a voxel's elements (its fragments joined through shared non-cut edges) and their
+/// integrals. Templates over where a face's corners, neighbours and directions come from (the
+/// mesh in memory, or page caches of scratch files).
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
+#include "core/basis/voxel_basis.h"
+#include "core/basis/voxel_clip.h"
+#include "core/mesh/detail_union_find.h"
+#include "core/mesh/mesh.h"
+#include "core/system/errors.h"
+
+namespace seamvox::detail {
+
+/// Fragments of a range of faces, before their voxels have ids.
+struct ClippedChunk {
+  FaceId begin = 0, end = 0;
+  std::vector<VoxelCoord> voxel;
+  std::vector<FaceId> face;
+  std::vector<std::uint8_t> edgeMask;
+};
+
+/// Clips the chunk's faces; gridCorners(f): the face's corners in grid coordinates (as
+/// faceGridCoords computes them).
+template <class GridCorners>
+void clipChunk(const VoxelGridGeometry& grid, GridCorners&& gridCorners, ClippedChunk& chunk) {
+  std::vector<VoxelPiece> pieces;
+  for (FaceId f = chunk.begin; f < chunk.end; ++f) {
+    const std::array<Vec3d, 3> g = gridCorners(f);
+    clipTriangleToVoxels(g, grid.resolution, pieces);
+    const std::size_t before = chunk.face.size();
+    for (const VoxelPiece& piece : pieces) {
+      chunk.voxel.push_back(piece.voxel);
+      chunk.face.push_back(f);
+      chunk.edgeMask.push_back(voxelEdgeMask(g, piece.voxel));
+    }
+    if (!pieces.empty()) continue;
+    // Zero-area face: no integrals, but its edges still connect its neighbours. It gets a
+    // fragment in every voxel its edges run through (a few at most), else one at its centroid.
+    const VoxelCoord lo = grid.voxelOf(g[0].cwiseMin(g[1]).cwiseMin(g[2]));
+    const VoxelCoord hi = grid.voxelOf(g[0].cwiseMax(g[1]).cwiseMax(g[2]));
+    const std::int64_t count = std::int64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    if (count <= 64) {
+      for (std::int32_t z = lo[2]; z <= hi[2]; ++z)
+        for (std::int32_t y = lo[1]; y <= hi[1]; ++y)
+          for (std::int32_t x = lo[0]; x <= hi[0]; ++x) {
+            const std::uint8_t mask = voxelEdgeMask(g, {x, y, z});
+            if (mask == 0) continue;
+            chunk.voxel.push_back({x, y, z});
+            chunk.face.push_back(f);
+            chunk.edgeMask.push_back(mask);
+          }
+    }
+    if (chunk.face.size() == before) {
+      const VoxelCoord v = grid.voxelOf((g[0] + g[1] + g[2]) / 3.0);
+      chunk.voxel.push_back(v);
+      chunk.face.push_back(f);
+      chunk.edgeMask.push_back(voxelEdgeMask(g, v));
+    }
+  }
+}
+
+/// The chunk's fragments in order, each voxel registered in grid (grid.insert: ids of first
+/// appearance); sink(fragment). InputError past VoxelFragment::kMaxVoxels voxels.
+template <class Grid, class Sink>
+void registerChunk(const ClippedChunk& chunk, Grid& grid, Sink&& sink) {
+  for (std::size_t i = 0; i < chunk.face.size(); ++i) {
+    const std::uint32_t voxel = grid.insert(chunk.voxel[i]);
+    if (voxel >= VoxelFragment::kMaxVoxels) {
+      throw InputError("voxel basis: more than 2^29 voxels on the surface; use a coarser grid");
+    }
+    VoxelFragment fragment;
+    fragment.face = chunk.face[i];
+    fragment.voxel = voxel;
+    fragment.edgeMask = chunk.edgeMask[i];
+    sink(fragment);
+  }
+}
+
+/// Clips faces [0, numFaces) chunk by chunk through a TBB pipeline: clip(chunk) in parallel
+/// (clipChunk with the caller's corners), then in face order the chunk's fragments registered in
+/// grid and passed to sink, and done(chunk) (progress).
+template <class Clip, class Grid, class Sink, class Done>
+void clipFacesInOrder(std::uint64_t numFaces, std::uint32_t chunkFaces, Clip&& clip, Grid& grid, Sink&& sink,
+                      Done&& done) {
+  const std::uint64_t step = std::max<std::uint32_t>(chunkFaces, 1);
+  std::uint64_t nextFace = 0;
+  const std::size_t tokens = 2 * std::size_t(tbb::this_task_arena::max_concurrency());
+  tbb::parallel_pipeline(
+      tokens,
+      tbb::make_filter<void, std::shared_ptr<ClippedChunk>>(
+          tbb::filter_mode::serial_in_order,
+          [&](tbb::flow_control& control) -> std::shared_ptr<ClippedChunk> {
+            if (nextFace >= numFaces) {
+              control.stop();
+              return nullptr;
+            }
+            auto chunk = std::make_shared<ClippedChunk>();
+            chunk->begin = static_cast<FaceId>(nextFace);
+            nextFace = std::min(numFaces, nextFace + step);
+            chunk->end = static_cast<FaceId>(nextFace);
+            return chunk;
+          }) &
+          tbb::make_filter<std::shared_ptr<ClippedChunk>, std::shared_ptr<ClippedChunk>>(
+              tbb::filter_mode::parallel,
+              [&](std::shared_ptr<ClippedChunk> chunk) {
+                clip(*chunk);
+                return chunk;
+              }) &
+          tbb::make_filter<std::shared_ptr<ClippedChunk>, void>(
+              tbb::filter_mode::serial_in_order, [&](std::shared_ptr<ClippedChunk> chunk) {
+                registerChunk(*chunk, grid, sink);
+                done(*chunk);
+              }));
+}
+
+/// Dense labels 0.. of the union-find classes, in order of first appearance.
+inline std::uint32_t denseLabels(UnionFind& uf, std::vector<std::uint32_t>& label) {
+  const std::size_t n = uf.parent.size();
+  std::vector<std::uint32_t> rootLabel(n, kInvalidId);
+  label.resize(n);
+  std::uint32_t count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t r = uf.find(static_cast<std::uint32_t>(i));
+    if (rootLabel[r] == kInvalidId) rootLabel[r] = count++;
+    label[i] = rootLabel[r];
+  }
+  return count;
+}
+
+/// Position of key in the increasing list, kInvalidId when absent. Branch-free halving (the
+/// compiler emits conditional moves): the searches of element labelling hit unpredictable keys.
+inline std::uint32_t findSorted(const std::vector<FaceId>& sorted, FaceId key) {
+  if (sorted.empty()) return kInvalidId;
+  const FaceId* base = sorted.data();
+  std::size_t n = sorted.size();
+  while (n > 1) {
+    const std::size_t half = n / 2;
+    base = base[half] <= key ? base + half : base;
+    n -= half;
+  }
+  return *base == key ? static_cast<std::uint32_t>(base - sorted.data()) : kInvalidId;
+}
+
+/// Elements of one voxel: its fragments (faces increasing, their edge masks) joined through
+/// shared non-cut edges. opposite(c), isCut(c) of the cut surface. label[i]: the element of
+/// fragment i, numbered 0.. in order of first appearance; returns their number.
+template <class Opposite, class IsCut>
+std::uint32_t labelVoxelFragments(const std::vector<FaceId>& faces, const std::vector<std::uint8_t>& masks,
+                                  Opposite&& opposite, IsCut&& isCut, std::vector<std::uint32_t>& label) {
+  const std::uint32_t m = static_cast<std::uint32_t>(faces.size());
+  UnionFind uf(m);
+  for (std::uint32_t i = 0; i < m; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const CornerId c = 3 * faces[i] + j;
+      if (!(masks[i] >> j & 1) || isCut(c)) continue;
+      const CornerId o = opposite(c);
+      if (o == kInvalidId) continue;
+      const std::uint32_t i2 = findSorted(faces, cornerFace(o));
+      if (i2 == kInvalidId) continue;
+      if (masks[i2] >> (o % 3) & 1) uf.unite(i, i2);
+    }
+  }
+  return denseLabels(uf, label);
+}
+
+/// What the integrals need of a face: corners in world and grid coordinates, and the target
+/// direction (the combed field, cut.h) with the face's unit normal (zero on a zero-area face).
+struct FaceIntegrand {
+  std::array<Vec3d, 3> grid;
+  Vec3d direction, normal;
+};
+
+/// The combed direction rot^rotation(u) about the normal n.
+inline Vec3d combedDirection(Vec3d u, const Vec3d& n, std::uint8_t rotation) {
+  for (int k = 0; k < rotation % 4; ++k) u = n.cross(u);
+  return u;
+}
+
+/// Integrals of the elements of one voxel from its fragments (faces[i], element[i], elements
+/// first..last, in fragment order); integrand(f) gives a FaceIntegrand. Re-clips each fragment
+/// (no polygons are stored). sums: scratch space.
+template <class Integrand>
+void integrateVoxel(const VoxelCoord& voxel, double voxelSize, double edgeLength, const std::vector<FaceId>& faces,
+                    const std::vector<std::uint32_t>& element, std::uint32_t first, std::uint32_t last,
+                    Integrand&& integrand, std::vector<FragmentSums>& sums, VoxelIntegrals* records,
+                    std::array<double, 36>* normalStiffness) {
+  sums.assign(last - first + 1, FragmentSums{});
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const FaceIntegrand face = integrand(faces[i]);
+    if (face.normal.squaredNorm() == 0.0) continue;  // zero-area face: nothing to integrate
+    const ClipPolygon piece = clipTriangleToVoxel(face.grid, voxel);
+    accumulateFragment(piece, voxel, voxelSize, face.normal, face.direction, edgeLength, sums[element[i] - first]);
+  }
+  for (std::uint32_t e = first; e <= last; ++e) {
+    finishElement(sums[e - first], records[e - first], 0.0, normalStiffness[e - first].data());
+  }
+}
+
+}  // namespace seamvox::detail

@@ -1,0 +1,252 @@
+#include "stream/voxel_stream.h"
+
+#include <algorithm>
+#include <memory>
+
+#include "core/basis/detail_voxel_elements.h"
+#include "core/system/errors.h"
+#include "core/system/parallel.h"
+#include "core/system/stopwatch.h"
+#include "stream/external_sort.h"
+#include "stream/paged_corner_table.h"
+#include "stream/paged_reader.h"
+
+namespace seamvox {
+
+namespace {
+
+const char* const kStage = "voxel elements";
+
+/// A fragment on its way to its voxel: sorted by (voxel, fragment), i.e. by voxel and then by
+/// face, as the in-memory build visits a voxel's fragments.
+struct VoxelOrderRecord {
+  std::uint64_t key = 0;  ///< voxel << 32 | fragment
+  FaceId face = 0;
+  std::uint32_t edgeMask = 0;
+  bool operator<(const VoxelOrderRecord& o) const { return key < o.key; }
+};
+
+/// A fragment's element on its way back to face order.
+struct FragmentElementRecord {
+  std::uint32_t fragment = 0, element = 0;
+  bool operator<(const FragmentElementRecord& o) const { return fragment < o.fragment; }
+};
+
+/// The readers a block of voxels takes: the cut surface's neighbours and the faces' integrands.
+struct VoxelReaders {
+  PagedReader<CornerId> opposite;
+  PagedReader<std::uint8_t> cut;
+  PagedFacePoints points;
+  PagedReader<Vec3f> direction;
+  PagedReader<std::uint8_t> rotation;
+  std::uint64_t bytesRead() const {
+    return opposite.bytesRead() + cut.bytesRead() + points.bytesRead() + direction.bytesRead() + rotation.bytesRead();
+  }
+};
+
+std::array<Vec3d, 3> toGrid(const VoxelGridGeometry& geometry, const std::array<Vec3d, 3>& p) {
+  return {geometry.toGrid(p[0]), geometry.toGrid(p[1]), geometry.toGrid(p[2])};
+}
+
+BoundingBox scratchBoundingBox(ScratchFolder& folder, const ScratchFile& positions) {
+  BoundingBox box;
+  ScratchReader reader(folder, positions, kStage);
+  std::vector<Vec3f> block(std::size_t(1) << 16);
+  for (;;) {
+    const std::size_t bytes = reader.readUpTo(block.data(), block.size() * sizeof(Vec3f));
+    if (bytes == 0) break;
+    if (bytes % sizeof(Vec3f) != 0) throw IoError(positions.path + ": scratch positions end inside a record");
+    for (std::size_t i = 0; i < bytes / sizeof(Vec3f); ++i) {
+      const Vec3d q = block[i].cast<double>();
+      box.min = box.min.cwiseMin(q);
+      box.max = box.max.cwiseMax(q);
+    }
+  }
+  return box;
+}
+
+/// Clips every face (a pipeline: chunks in order, clipped in parallel, their voxels registered in
+/// order); writes the fragments with the voxels' ids of first appearance.
+ScratchFile clipFaces(ScratchFolder& folder, const CleanScratch& scratch, const VoxelBasisOptions& options,
+                      std::size_t cacheBytes, ScratchVoxelElements& out) {
+  ReaderPool<PagedFacePoints> pool(
+      [&] { return std::make_unique<PagedFacePoints>(scratch, scratch.positions, cacheBytes); });
+  ScratchWriter writer(folder, kStage);
+  detail::clipFacesInOrder(
+      scratch.numFaces, options.chunkFaces,
+      [&](detail::ClippedChunk& chunk) {
+        auto readers = pool.take();
+        detail::clipChunk(out.geometry, [&](FaceId f) { return toGrid(out.geometry, readers->points(f)); }, chunk);
+      },
+      out.grid, [&](const VoxelFragment& fragment) { writer.write(&fragment, sizeof(fragment)); },
+      [](const detail::ClippedChunk&) {});
+  pool.forEach([&](PagedFacePoints& r) { folder.countRead(kStage, r.bytesRead()); });
+  return writer.finish();
+}
+
+/// One voxel's fragments in a block: [begin, end) of the block's arrays.
+struct VoxelGroup {
+  std::uint32_t voxel = 0;
+  std::size_t begin = 0, end = 0;
+};
+
+/// A block of fragments sorted by voxel, whole voxels only.
+struct FragmentBlock {
+  std::vector<VoxelGroup> groups;
+  std::vector<FaceId> face;
+  std::vector<std::uint8_t> mask;
+  std::vector<std::uint32_t> fragment, element;
+  void clear() {
+    groups.clear(), face.clear(), mask.clear(), fragment.clear(), element.clear();
+  }
+};
+
+/// Elements and integrals of a block's voxels, numbered after the ones before.
+void buildBlockElements(FragmentBlock& block, ReaderPool<VoxelReaders>& pool, const VoxelBasisOptions& options,
+                        ScratchVoxelElements& out) {
+  const std::size_t numGroups = block.groups.size();
+  block.element.resize(block.face.size());
+  std::vector<std::uint32_t> count(numGroups);
+  parallelFor(numGroups, 64, [&](const IndexRange& range) {
+    auto r = pool.take();
+    std::vector<FaceId> faces;
+    std::vector<std::uint8_t> masks;
+    std::vector<std::uint32_t> label;
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      const VoxelGroup& group = block.groups[g];
+      faces.assign(block.face.begin() + group.begin, block.face.begin() + group.end);
+      masks.assign(block.mask.begin() + group.begin, block.mask.begin() + group.end);
+      count[g] = detail::labelVoxelFragments(
+          faces, masks, [&](CornerId c) { return r->opposite[c]; },
+          [&](CornerId c) { return CutCorners::isCutByte(r->cut[c]); }, label);
+      std::copy(label.begin(), label.end(), block.element.begin() + group.begin);
+    }
+  });
+  std::vector<std::uint32_t> base(numGroups);
+  for (std::size_t g = 0; g < numGroups; ++g) {
+    base[g] = static_cast<std::uint32_t>(out.elementVoxel.size());
+    if ((std::uint64_t(base[g]) + count[g]) * 8 >= kInvalidId) {
+      throw InputError("voxel basis: too many elements (more than " + std::to_string(base[g]) + "); use a coarser grid");
+    }
+    out.elementVoxel.insert(out.elementVoxel.end(), count[g], block.groups[g].voxel);
+    out.voxelElementStart[block.groups[g].voxel + 1] = base[g] + count[g];
+    for (std::size_t i = block.groups[g].begin; i < block.groups[g].end; ++i) block.element[i] += base[g];
+  }
+  out.records.resize(out.elementVoxel.size());
+  out.normalStiffness.resize(out.elementVoxel.size());
+  parallelFor(numGroups, 16, [&](const IndexRange& range) {
+    auto r = pool.take();
+    std::vector<FragmentSums> sums;
+    std::vector<FaceId> faces;
+    std::vector<std::uint32_t> element;
+    const auto integrand = [&](FaceId f) {
+      detail::FaceIntegrand face;
+      const std::array<Vec3d, 3> p = r->points.points(f);
+      face.grid = toGrid(out.geometry, p);
+      face.normal = faceNormal(p[0], p[1], p[2]);
+      face.direction = detail::combedDirection(r->direction[f].cast<double>(), face.normal, r->rotation[f]);
+      return face;
+    };
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      const VoxelGroup& group = block.groups[g];
+      if (count[g] == 0) continue;
+      faces.assign(block.face.begin() + group.begin, block.face.begin() + group.end);
+      element.assign(block.element.begin() + group.begin, block.element.begin() + group.end);
+      const std::uint32_t first = base[g], last = base[g] + count[g] - 1;
+      detail::integrateVoxel(out.grid.coords()[group.voxel], out.geometry.voxelSize, options.edgeLength, faces, element,
+                             first, last, integrand, sums, out.records.data() + first,
+                             out.normalStiffness.data() + first);
+    }
+  });
+}
+
+}  // namespace
+
+ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const CleanScratch& scratch,
+                                               const ScratchField& field, const ScratchCut& cut,
+                                               const VoxelBasisOptions& options, const StreamPassOptions& pass) {
+  const std::uint64_t nf = scratch.numFaces;
+  if (!(options.edgeLength > 0.0) || !std::isfinite(options.edgeLength)) {
+    throw InputError("voxel basis: edge length must be positive and finite");
+  }
+  if (field.directions.bytes != nf * sizeof(Vec3f) || cut.corners.bytes != 3 * nf || cut.faceRotation.bytes != nf) {
+    throw InputError("voxel basis: field or cut sizes do not match the mesh (" + std::to_string(nf) + " faces)");
+  }
+  ScratchVoxelElements out;
+  StageClock clock(out.stageSeconds);
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  ExternalSortOptions sort;
+  sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
+  sort.stage = kStage;
+
+  out.geometry = makeVoxelGrid(scratchBoundingBox(folder, scratch.positions), options.gridResolution);
+  clock.finish("bounds");
+  const ScratchFile raw = clipFaces(folder, scratch, options, cacheBytes, out);
+  clock.finish("clip");
+
+  // Ids in the tree's block order, as buildVoxelBasis numbers them; the fragments in face order
+  // with those ids, and by voxel for the elements.
+  const std::vector<std::uint32_t> remap = out.grid.orderByBlocks();
+  ExternalSorter<VoxelOrderRecord> byVoxel(folder, sort);
+  {
+    ScratchReader reader(folder, raw, kStage);
+    ScratchWriter writer(folder, kStage);
+    VoxelFragment fragment;
+    while (reader.read(&fragment, sizeof(fragment))) {
+      if (out.numFragments + 1 >= kInvalidId) {
+        throw InputError("voxel basis: more than 2^32 fragments; use a coarser grid");
+      }
+      fragment.voxel = remap[fragment.voxel];
+      writer.write(&fragment, sizeof(fragment));
+      byVoxel.add({std::uint64_t(fragment.voxel) << 32 | out.numFragments, fragment.face, fragment.edgeMask});
+      ++out.numFragments;
+    }
+    out.fragments = writer.finish();
+  }
+  folder.remove(raw);
+  byVoxel.finish();
+  clock.finish("sort");
+
+  out.voxelElementStart.assign(std::size_t(out.grid.size()) + 1, 0);
+  ReaderPool<VoxelReaders> pool([&] {
+    return std::unique_ptr<VoxelReaders>(new VoxelReaders{
+        PagedReader<CornerId>(scratch.opposite, cacheBytes), PagedReader<std::uint8_t>(cut.corners, cacheBytes),
+        PagedFacePoints(scratch, scratch.positions, cacheBytes), PagedReader<Vec3f>(field.directions, cacheBytes),
+        PagedReader<std::uint8_t>(cut.faceRotation, cacheBytes)});
+  });
+  ExternalSorter<FragmentElementRecord> byFragment(folder, sort);
+  const std::uint64_t blockRecords = std::max<std::uint64_t>(1, pass.blockRecords);
+  FragmentBlock block;
+  const auto flush = [&] {
+    buildBlockElements(block, pool, options, out);
+    for (std::size_t i = 0; i < block.face.size(); ++i) byFragment.add({block.fragment[i], block.element[i]});
+    block.clear();
+  };
+  VoxelOrderRecord record;
+  while (byVoxel.next(record)) {
+    const std::uint32_t voxel = static_cast<std::uint32_t>(record.key >> 32);
+    if (block.groups.empty() || block.groups.back().voxel != voxel) {
+      if (block.face.size() >= blockRecords) flush();
+      block.groups.push_back({voxel, block.face.size(), block.face.size()});
+    }
+    block.face.push_back(record.face);
+    block.mask.push_back(static_cast<std::uint8_t>(record.edgeMask));
+    block.fragment.push_back(static_cast<std::uint32_t>(record.key));
+    ++block.groups.back().end;
+  }
+  flush();
+  pool.forEach([&](VoxelReaders& r) { folder.countRead(kStage, r.bytesRead()); });
+  byFragment.finish();
+  clock.finish("elements");
+
+  {
+    ScratchWriter writer(folder, kStage);
+    FragmentElementRecord r;
+    while (byFragment.next(r)) writer.write(&r.element, sizeof(r.element));
+    out.fragmentElement = writer.finish();
+  }
+  clock.finish("order");
+  return out;
+}
+
+}  // namespace seamvox

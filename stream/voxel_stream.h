@@ -1,0 +1,45 @@
+#pragma once
+/// The voxel basis' elements out of core (DESIGN sections 6 and 12): the cleaned mesh's faces
+/// (clean_stream) clipped into voxel fragments by a TBB pipeline whose last stage registers the
+/// voxels in the sparse OpenVDB grid and writes the fragments to the scratch folder; the fragments
+/// sorted by voxel give each voxel's elements and their integrals, which stay in memory (grid-sized);
+/// the element of each fragment goes back to face order in a file. Equal, bit for bit, to
+/// buildVoxelBasis's elements and integrals on readCleanScratch's mesh with the same field and cut.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/basis/voxel_basis.h"
+#include "core/basis/voxel_grid.h"
+#include "stream/clean_stream.h"
+#include "stream/cut_stream.h"
+#include "stream/field_stream.h"
+#include "stream/scratch_folder.h"
+
+namespace seamvox {
+
+struct ScratchVoxelElements {
+  VoxelGridGeometry geometry;
+  VoxelGrid grid;                ///< voxel -> id, ids in the order of the tree's leaf blocks
+  ScratchFile fragments;         ///< VoxelFragment per fragment, by face (as buildVoxelBasis orders them)
+  ScratchFile fragmentElement;   ///< std::uint32_t per fragment: its element
+  std::uint64_t numFragments = 0;
+  std::vector<std::uint32_t> voxelElementStart;  ///< #voxels + 1: elements of voxel id v
+  std::vector<std::uint32_t> elementVoxel;       ///< #elements
+  std::vector<VoxelIntegrals> records;           ///< #elements, tangential (VoxelBasis::elementRecord)
+  std::vector<std::array<double, 36>> normalStiffness;  ///< #elements, the normal-derivative term, unweighted
+  /// Wall seconds of the passes: bounds, clip, sort, elements, order.
+  std::vector<std::pair<std::string, double>> stageSeconds;
+};
+
+/// Clips, sorts and integrates out of core (options: grid resolution and edge length; the
+/// clip chunks). Memory: the grid, the elements' records (about 600 bytes each), the sorts'
+/// and page caches' share, a block of fragments. InputError when the grid has more voxels or
+/// elements than the basis indexes (a coarser grid then); IoError naming the folder on a full disk.
+ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const CleanScratch& scratch,
+                                               const ScratchField& field, const ScratchCut& cut,
+                                               const VoxelBasisOptions& options, const StreamPassOptions& pass);
+
+}  // namespace seamvox

@@ -1,0 +1,128 @@
+// The out-of-core voxel elements (stream/voxel_stream) equal buildVoxelBasis's on the cleaned mesh
+// read back from the scratch, with the same field and cut: the same voxels and ids, the same
+// elements of every face's fragments, bit-equal integrals; with sorts that spill and blocks of a
+// few hundred fragments.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "core/basis/voxel_grid.h"
+#include "core/cut/cut.h"
+#include "core/field/field.h"
+#include "stream/cut_stream.h"
+#include "stream/field_stream.h"
+#include "stream/voxel_stream.h"
+#include "stream_testing.h"
+#include "test_meshes.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+using testing::forEachCleaned;
+using testing::NamedMeshes;
+
+const StreamPassOptions kTinyPass{1, 300};
+
+template <class T>
+std::vector<T> readRecords(ScratchFolder& folder, const ScratchFile& file) {
+  std::vector<T> out(file.bytes / sizeof(T));
+  ScratchReader reader(folder, file, "test");
+  if (!out.empty()) EXPECT_TRUE(reader.read(out.data(), out.size() * sizeof(T)));
+  return out;
+}
+
+void expectSameElements(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
+                        std::int32_t resolution) {
+  const ScratchField field = computeScratchField(folder, scratch, {}, {}, kTinyPass);
+  const ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, kTinyPass);
+  const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, kTinyPass);
+  CrossField inMemoryField;
+  inMemoryField.direction = testing::readPositions(folder, field.directions);
+  const CutResult inMemoryCut =
+      cutToDisk(cleaned.mesh, cleaned.topology, inMemoryField,
+                testing::inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
+  VoxelBasisOptions options;
+  options.gridResolution = resolution;
+  options.edgeLength = 0.02 * computeBoundingBox(cleaned.mesh.positions).extent().norm();
+  options.chunkFaces = 777;
+  const VoxelBuildResult expected = buildVoxelBasis(cleaned.mesh, cleaned.topology, inMemoryField, inMemoryCut, options);
+  const VoxelBasis& basis = *expected.basis;
+
+  const ScratchVoxelElements built = buildScratchVoxelElements(folder, scratch, field, cut, options, kTinyPass);
+  EXPECT_EQ(built.geometry.origin, basis.grid().origin);
+  EXPECT_EQ(built.geometry.voxelSize, basis.grid().voxelSize);
+  EXPECT_EQ(built.grid.coords(), basis.voxelCoords());
+  EXPECT_EQ(built.grid.blockStarts(), expected.grid.blockStarts());
+  EXPECT_EQ(built.voxelElementStart, basis.voxelElementStart());
+  ASSERT_EQ(built.elementVoxel.size(), basis.numElements());
+  std::size_t wrongVoxel = 0, wrongRecord = 0, wrongNormal = 0;
+  for (std::uint64_t e = 0; e < basis.numElements(); ++e) {
+    wrongVoxel += built.grid.coords()[built.elementVoxel[e]] != basis.elementVoxel(e);
+    wrongRecord += std::memcmp(&built.records[e], &basis.elementRecord(e), sizeof(VoxelIntegrals)) != 0;
+    wrongNormal += built.normalStiffness[e] != basis.elementNormalStiffness(e);
+  }
+  EXPECT_EQ(wrongVoxel, 0u);
+  EXPECT_EQ(wrongRecord, 0u);
+  EXPECT_EQ(wrongNormal, 0u);
+  EXPECT_GT(basis.numElements(), 50u);
+
+  const std::vector<VoxelFragment> fragments = readRecords<VoxelFragment>(folder, built.fragments);
+  const std::vector<std::uint32_t> element = readRecords<std::uint32_t>(folder, built.fragmentElement);
+  ASSERT_EQ(fragments.size(), built.numFragments);
+  ASSERT_EQ(element.size(), built.numFragments);
+  std::size_t next = 0, wrongFace = 0;
+  for (FaceId f = 0; f < cleaned.topology.numFaces(); ++f) {
+    std::vector<std::uint32_t> elements;
+    for (; next < fragments.size() && fragments[next].face == f; ++next) elements.push_back(element[next]);
+    wrongFace += elements != basis.faceElements(f);
+  }
+  EXPECT_EQ(next, fragments.size());
+  EXPECT_EQ(wrongFace, 0u);
+}
+
+TEST(VoxelStream, ElementsEqualTheInMemoryBasis) {
+  const NamedMeshes meshes = testing::stageTestMeshes(13);
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    for (const std::int32_t resolution : {16, 64}) {
+      SCOPED_TRACE("grid " + std::to_string(resolution));
+      expectSameElements(folder, scratch, cleaned, resolution);
+    }
+  });
+}
+
+// A scratch disk that fills while the elements are built (at the start, in the sorts, near the
+// end) is an IoError naming the folder, and nothing of the run stays on disk.
+TEST(VoxelStream, AFullScratchDiskIsAnErrorAndLeavesNothing) {
+  const TriangleMesh mesh = testing::generatedMesh(MeshKind::Scan, 6000);
+  testing::TempDir dir;
+  VoxelBasisOptions options;
+  options.gridResolution = 32;
+  options.edgeLength = 0.05;
+  std::uint64_t voxelBytes = 0;
+  for (const double share : {-1.0, 0.0, 0.5, 0.95}) {
+    SCOPED_TRACE(share);
+    {
+      ScratchFolder folder(dir.dir());
+      const CleanScratch scratch = testing::cleanIntoScratch(folder, mesh, 1 << 20);
+      const ScratchField field = computeScratchField(folder, scratch, {}, {}, kTinyPass);
+      const ScratchCut cut =
+          cutScratchToDisk(folder, scratch, computeScratchSingularities(folder, scratch, field, kTinyPass), kTinyPass);
+      const std::uint64_t before = folder.bytesWritten();
+      if (share < 0.0) {  // measure
+        buildScratchVoxelElements(folder, scratch, field, cut, options, kTinyPass);
+        voxelBytes = folder.bytesWritten() - before;
+        ASSERT_GT(voxelBytes, 0u);
+        continue;
+      }
+      folder.setWriteLimit(before + static_cast<std::uint64_t>(share * voxelBytes));
+      testing::expectScratchFull(folder, [&] { buildScratchVoxelElements(folder, scratch, field, cut, options, kTinyPass); });
+    }
+    EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));
+  }
+}
+
+}  // namespace
+}  // namespace seamvox
