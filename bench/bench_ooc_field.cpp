@@ -97,13 +97,14 @@ int main(int argc, char** argv) {
   std::printf("  components %u, seams %zu, seam edges %zu\n", cut.components, cut.seams.size(), seamEdges);
   VoxelBasisOptions voxelOptions;
   voxelOptions.edgeLength = merge.maxDistance;
-  const ScratchVoxelElements voxels =
-      buildScratchVoxelElements(folder, scratch, field, cut, voxelOptions, StreamPassOptions{budget});
+  const ScratchVoxelBasis voxels = buildScratchVoxelBasis(folder, scratch, field, cut, voxelOptions, StreamPassOptions{budget});
   auto t3e = Clock::now();
-  line("voxel elements (grid 128)", t3d, t3e);
+  line("voxel basis (grid 128)", t3d, t3e);
   for (const auto& [name, s] : voxels.stageSeconds) std::printf("  voxel: %-20s %8.2f s\n", name.c_str(), s);
-  std::printf("  voxels %u, fragments %llu, elements %zu\n", voxels.grid.size(), (unsigned long long)voxels.numFragments,
-              voxels.elementVoxel.size());
+  std::printf("  voxels %u, fragments %llu, elements %llu, domains %u, basis functions %u, seam adjacencies %zu\n",
+              voxels.grid.size(), (unsigned long long)voxels.numFragments,
+              (unsigned long long)voxels.basis->numElements(), voxels.basis->numDomains(),
+              voxels.basis->numBasisFunctions(), voxels.basis->adjacencies().size());
   t3 = t3e;
   for (const ScratchTraffic& t : folder.traffic()) {
     std::printf("  traffic %-24s read %9.1f MiB  written %9.1f MiB\n", t.stage.c_str(), mib(t.bytesRead),
@@ -159,14 +160,24 @@ int main(int argc, char** argv) {
     auto t10 = Clock::now();
     line("in memory: voxel basis", t9, t10);
     std::printf("  clip %.2f s, basis %.2f s\n", built.secondsClip, built.secondsBasis);
+    const VoxelBasis &got = *voxels.basis, &want = *built.basis;
     std::size_t wrong = 0;
-    for (std::uint64_t e = 0; e < built.basis->numElements() && e < voxels.records.size(); ++e) {
-      wrong += std::memcmp(&voxels.records[e], &built.basis->elementRecord(e), sizeof(VoxelIntegrals)) != 0 ||
-               voxels.normalStiffness[e] != built.basis->elementNormalStiffness(e);
+    for (std::uint64_t e = 0; e < want.numElements() && e < got.numElements(); ++e) {
+      ElementIntegrals a, b;
+      got.elementIntegrals(e, a);
+      want.elementIntegrals(e, b);
+      wrong += a.domain != b.domain || a.stiffness != b.stiffness || a.rhs != b.rhs;
     }
-    std::printf("  elements equal to the in-memory basis: %s (%llu; %zu integrals differ)\n",
-                built.basis->numElements() == voxels.records.size() && wrong == 0 ? "yes" : "NO",
-                (unsigned long long)built.basis->numElements(), wrong);
+    bool sameAdjacency = got.adjacencies().size() == want.adjacencies().size();
+    for (std::size_t i = 0; sameAdjacency && i < want.adjacencies().size(); ++i) {
+      sameAdjacency = got.adjacencies()[i].left == want.adjacencies()[i].left &&
+                      got.adjacencies()[i].right == want.adjacencies()[i].right &&
+                      got.adjacencies()[i].seam == want.adjacencies()[i].seam;
+    }
+    std::printf("  basis equal to the in-memory one: %s (%llu elements, %zu differ; domains %s; adjacency %s)\n",
+                got.numElements() == want.numElements() && wrong == 0 ? "yes" : "NO",
+                (unsigned long long)want.numElements(), wrong, got.domainBasis() == want.domainBasis() ? "equal" : "DIFFER",
+                sameAdjacency ? "equal" : "DIFFERS");
   }
   return 0;
 }

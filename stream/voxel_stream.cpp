@@ -52,15 +52,15 @@ BoundingBox scratchBoundingBox(ScratchFolder& folder, const ScratchFile& positio
   BoundingBox box;
   ScratchReader reader(folder, positions, kStage);
   std::vector<Vec3f> block(std::size_t(1) << 16);
-  for (;;) {
-    const std::size_t bytes = reader.readUpTo(block.data(), block.size() * sizeof(Vec3f));
-    if (bytes == 0) break;
-    if (bytes % sizeof(Vec3f) != 0) throw IoError(positions.path + ": scratch positions end inside a record");
-    for (std::size_t i = 0; i < bytes / sizeof(Vec3f); ++i) {
+  for (std::uint64_t left = positions.bytes / sizeof(Vec3f); left > 0;) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left, block.size()));
+    if (!reader.read(block.data(), n * sizeof(Vec3f))) throw IoError(positions.path + ": scratch positions end early");
+    for (std::size_t i = 0; i < n; ++i) {
       const Vec3d q = block[i].cast<double>();
       box.min = box.min.cwiseMin(q);
       box.max = box.max.cwiseMax(q);
     }
+    left -= n;
   }
   return box;
 }
@@ -190,9 +190,15 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
   ExternalSorter<VoxelOrderRecord> byVoxel(folder, sort);
   {
     ScratchReader reader(folder, raw, kStage);
-    ScratchWriter writer(folder, kStage);
+    ScratchWriter writer(folder, kStage), starts(folder, kStage);
+    std::uint64_t nextFace = 0;  // faces before it have their start written
+    const auto startFacesUpTo = [&](std::uint64_t end) {
+      const std::uint32_t start = static_cast<std::uint32_t>(out.numFragments);
+      for (; nextFace < end; ++nextFace) starts.write(&start, sizeof(start));
+    };
     VoxelFragment fragment;
     while (reader.read(&fragment, sizeof(fragment))) {
+      startFacesUpTo(std::uint64_t(fragment.face) + 1);
       if (out.numFragments + 1 >= kInvalidId) {
         throw InputError("voxel basis: more than 2^32 fragments; use a coarser grid");
       }
@@ -201,7 +207,9 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
       byVoxel.add({std::uint64_t(fragment.voxel) << 32 | out.numFragments, fragment.face, fragment.edgeMask});
       ++out.numFragments;
     }
+    startFacesUpTo(scratch.numFaces + 1);
     out.fragments = writer.finish();
+    out.faceFragmentStart = starts.finish();
   }
   folder.remove(raw);
   byVoxel.finish();
@@ -246,6 +254,71 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
     out.fragmentElement = writer.finish();
   }
   clock.finish("order");
+  return out;
+}
+
+ScratchVoxelBasis buildScratchVoxelBasis(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                                         const ScratchCut& cut, const VoxelBasisOptions& options,
+                                         const StreamPassOptions& pass) {
+  ScratchVoxelElements elements = buildScratchVoxelElements(folder, scratch, field, cut, options, pass);
+  ScratchVoxelBasis out;
+  out.stageSeconds = std::move(elements.stageSeconds);
+  StageClock clock(out.stageSeconds);
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  const std::uint64_t nf = scratch.numFaces;
+  const std::vector<VoxelCoord>& voxelCoords = elements.grid.coords();
+  detail::VoxelBasisParts parts;
+  parts.links.functions = detail::UnionFind(8 * elements.elementVoxel.size());
+  {
+    PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
+    PagedReader<std::uint8_t> cutBytes(cut.corners, cacheBytes);
+    PagedFacePoints points(scratch, scratch.positions, cacheBytes);
+    PagedReader<std::uint32_t> faceStart(elements.faceFragmentStart, cacheBytes), element(elements.fragmentElement, cacheBytes);
+    PagedReader<VoxelFragment> fragments(elements.fragments, cacheBytes);
+    const SeamIndex seamIndex(cut.seams, 3 * nf, [&](CornerId c) { return opposite[c]; });
+    const auto fragmentsOf = [&](FaceId f, std::vector<detail::FaceFragment>& into) {
+      into.clear();
+      const std::uint32_t end = faceStart[std::uint64_t(f) + 1];
+      for (std::uint32_t i = faceStart[f]; i < end; ++i) {
+        const VoxelFragment fr = fragments[i];
+        into.push_back({voxelCoords[fr.voxel], element[i], static_cast<std::uint8_t>(fr.edgeMask)});
+      }
+    };
+    ScratchReader ownFragments(folder, elements.fragments, kStage), ownElements(folder, elements.fragmentElement, kStage);
+    std::vector<detail::FaceFragment> mine, theirs;
+    std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;
+    VoxelFragment fr{};
+    std::uint32_t e = 0;
+    bool pending = ownFragments.read(&fr, sizeof(fr)) && ownElements.read(&e, sizeof(e));
+    for (FaceId f = 0; f < nf; ++f) {
+      mine.clear();
+      for (; pending && fr.face == f; pending = ownFragments.read(&fr, sizeof(fr)) && ownElements.read(&e, sizeof(e))) {
+        mine.push_back({voxelCoords[fr.voxel], e, static_cast<std::uint8_t>(fr.edgeMask)});
+      }
+      if (mine.empty()) continue;
+      detail::linkFaceFragments(
+          f, mine, toGrid(elements.geometry, points.points(f)), [&](CornerId c) { return opposite[c]; },
+          [&](CornerId c) { return CutCorners::isCutByte(cutBytes[c]); }, [&](CornerId c) { return seamIndex.find(c); },
+          fragmentsOf, theirs, sorted, parts.links);
+    }
+    folder.countRead(kStage, opposite.bytesRead() + cutBytes.bytesRead() + points.bytesRead() + faceStart.bytesRead() +
+                                 element.bytesRead() + fragments.bytesRead());
+  }
+  clock.finish("link");
+  parts.grid = elements.geometry;
+  parts.voxelCoords = voxelCoords;
+  parts.voxelElementStart = std::move(elements.voxelElementStart);
+  parts.elementVoxel = std::move(elements.elementVoxel);
+  parts.records = std::move(elements.records);
+  parts.normalStiffness = std::move(elements.normalStiffness);
+  out.basis = std::make_unique<VoxelBasis>(nullptr, std::move(parts), cut.seams, options);
+  out.basis->setVoxelBlocks(elements.grid.blockStarts());
+  clock.finish("domains");
+  out.grid = std::move(elements.grid);
+  out.fragments = elements.fragments;
+  out.fragmentElement = elements.fragmentElement;
+  out.faceFragmentStart = elements.faceFragmentStart;
+  out.numFragments = elements.numFragments;
   return out;
 }
 

@@ -7,6 +7,7 @@
 /// buildVoxelBasis's elements and integrals on readCleanScratch's mesh with the same field and cut.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -25,6 +26,7 @@ struct ScratchVoxelElements {
   VoxelGrid grid;                ///< voxel -> id, ids in the order of the tree's leaf blocks
   ScratchFile fragments;         ///< VoxelFragment per fragment, by face (as buildVoxelBasis orders them)
   ScratchFile fragmentElement;   ///< std::uint32_t per fragment: its element
+  ScratchFile faceFragmentStart;  ///< std::uint32_t per face and one more: its first fragment
   std::uint64_t numFragments = 0;
   std::vector<std::uint32_t> voxelElementStart;  ///< #voxels + 1: elements of voxel id v
   std::vector<std::uint32_t> elementVoxel;       ///< #elements
@@ -41,5 +43,22 @@ struct ScratchVoxelElements {
 ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const CleanScratch& scratch,
                                                const ScratchField& field, const ScratchCut& cut,
                                                const VoxelBasisOptions& options, const StreamPassOptions& pass);
+
+/// The whole voxel basis out of core: the elements (buildScratchVoxelElements), then the domains
+/// and seam links face by face (each face's fragments read in order, its neighbours' through page
+/// caches), then the grid-sized rest as VoxelBasis builds it. Equal to buildVoxelBasis's basis
+/// (domains, basis functions, seam adjacency, integrals); the basis holds no mesh: its per-face
+/// index stays in the files here.
+struct ScratchVoxelBasis {
+  std::unique_ptr<VoxelBasis> basis;
+  VoxelGrid grid;
+  ScratchFile fragments, fragmentElement, faceFragmentStart;
+  std::uint64_t numFragments = 0;
+  /// Wall seconds of the passes: those of the elements, then link and domains.
+  std::vector<std::pair<std::string, double>> stageSeconds;
+};
+ScratchVoxelBasis buildScratchVoxelBasis(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                                         const ScratchCut& cut, const VoxelBasisOptions& options,
+                                         const StreamPassOptions& pass);
 
 }  // namespace seamvox

@@ -11,6 +11,8 @@
 #include "core/basis/voxel_grid.h"
 #include "core/cut/cut.h"
 #include "core/field/field.h"
+#include "core/mesh/wedge_map.h"
+#include "core/system/errors.h"
 #include "stream/cut_stream.h"
 #include "stream/field_stream.h"
 #include "stream/voxel_stream.h"
@@ -34,24 +36,38 @@ std::vector<T> readRecords(ScratchFolder& folder, const ScratchFile& file) {
   return out;
 }
 
+// The field and cut out of core and the same in memory; the options of a grid.
+struct Inputs {
+  ScratchField field;
+  ScratchCut cut;
+  CrossField inMemoryField;
+  CutResult inMemoryCut;
+  VoxelBasisOptions options;
+};
+
+Inputs prepareInputs(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
+                     std::int32_t resolution) {
+  Inputs in;
+  in.field = computeScratchField(folder, scratch, {}, {}, kTinyPass);
+  const ScratchSingularities singularities = computeScratchSingularities(folder, scratch, in.field, kTinyPass);
+  in.cut = cutScratchToDisk(folder, scratch, singularities, kTinyPass);
+  in.inMemoryField.direction = testing::readPositions(folder, in.field.directions);
+  in.inMemoryCut = cutToDisk(cleaned.mesh, cleaned.topology, in.inMemoryField,
+                             testing::inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
+  in.options.gridResolution = resolution;
+  in.options.edgeLength = 0.02 * computeBoundingBox(cleaned.mesh.positions).extent().norm();
+  return in;
+}
+
 void expectSameElements(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
                         std::int32_t resolution) {
-  const ScratchField field = computeScratchField(folder, scratch, {}, {}, kTinyPass);
-  const ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, kTinyPass);
-  const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, kTinyPass);
-  CrossField inMemoryField;
-  inMemoryField.direction = testing::readPositions(folder, field.directions);
-  const CutResult inMemoryCut =
-      cutToDisk(cleaned.mesh, cleaned.topology, inMemoryField,
-                testing::inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
-  VoxelBasisOptions options;
-  options.gridResolution = resolution;
-  options.edgeLength = 0.02 * computeBoundingBox(cleaned.mesh.positions).extent().norm();
+  const Inputs in = prepareInputs(folder, scratch, cleaned, resolution);
+  VoxelBasisOptions options = in.options;
   options.chunkFaces = 777;
-  const VoxelBuildResult expected = buildVoxelBasis(cleaned.mesh, cleaned.topology, inMemoryField, inMemoryCut, options);
+  const VoxelBuildResult expected = buildVoxelBasis(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, options);
   const VoxelBasis& basis = *expected.basis;
 
-  const ScratchVoxelElements built = buildScratchVoxelElements(folder, scratch, field, cut, options, kTinyPass);
+  const ScratchVoxelElements built = buildScratchVoxelElements(folder, scratch, in.field, in.cut, options, kTinyPass);
   EXPECT_EQ(built.geometry.origin, basis.grid().origin);
   EXPECT_EQ(built.geometry.voxelSize, basis.grid().voxelSize);
   EXPECT_EQ(built.grid.coords(), basis.voxelCoords());
@@ -81,6 +97,56 @@ void expectSameElements(ScratchFolder& folder, const CleanScratch& scratch, cons
   }
   EXPECT_EQ(next, fragments.size());
   EXPECT_EQ(wrongFace, 0u);
+}
+
+// The whole basis: domains, basis functions, seam adjacency, blocks and integrals as assembled.
+void expectSameBasis(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
+                     std::int32_t resolution) {
+  const Inputs in = prepareInputs(folder, scratch, cleaned, resolution);
+  VoxelBasisOptions options = in.options;
+  options.minDomainWeight = 1e-3;  // some domains joined
+  const VoxelBuildResult expected = buildVoxelBasis(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, options);
+  const VoxelBasis& want = *expected.basis;
+  const ScratchVoxelBasis built = buildScratchVoxelBasis(folder, scratch, in.field, in.cut, options, kTinyPass);
+  const VoxelBasis& got = *built.basis;
+  EXPECT_GT(want.stats().joinedDomains, 0u);
+  EXPECT_EQ(got.stats().joinedDomains, want.stats().joinedDomains);
+  EXPECT_EQ(got.numBasisFunctions(), want.numBasisFunctions());
+  EXPECT_EQ(got.domainBasis(), want.domainBasis());
+  EXPECT_EQ(got.seamRotation(), want.seamRotation());
+  EXPECT_EQ(got.basisCorner(), want.basisCorner());
+  EXPECT_EQ(got.elementBlocks(), want.elementBlocks());
+  ASSERT_EQ(got.adjacencies().size(), want.adjacencies().size());
+  EXPECT_GT(want.adjacencies().size(), 0u);
+  std::size_t wrongAdjacency = 0, wrongElement = 0;
+  for (std::size_t i = 0; i < want.adjacencies().size(); ++i) {
+    const DomainAdjacency &a = got.adjacencies()[i], &b = want.adjacencies()[i];
+    wrongAdjacency += a.left != b.left || a.right != b.right || a.seam != b.seam;
+  }
+  ASSERT_EQ(got.numElements(), want.numElements());
+  for (std::uint64_t e = 0; e < want.numElements(); ++e) {
+    ElementIntegrals a, b;
+    got.elementIntegrals(e, a);
+    want.elementIntegrals(e, b);
+    wrongElement += a.count != b.count || a.domain != b.domain || a.stiffness != b.stiffness || a.rhs != b.rhs ||
+                    a.area != b.area;
+  }
+  EXPECT_EQ(wrongAdjacency, 0u);
+  EXPECT_EQ(wrongElement, 0u);
+  // No mesh in memory: evaluation is the caller's, from the files.
+  WedgeMap map;
+  EXPECT_THROW(got.evaluateCorners(std::vector<std::complex<double>>(got.numDomains()), map), InputError);
+  EXPECT_THROW(got.faceElements(0), InputError);
+}
+
+TEST(VoxelStream, BasisEqualsTheInMemoryBasis) {
+  const NamedMeshes meshes = testing::stageTestMeshes(19);
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    for (const std::int32_t resolution : {16, 64}) {
+      SCOPED_TRACE("grid " + std::to_string(resolution));
+      expectSameBasis(folder, scratch, cleaned, resolution);
+    }
+  });
 }
 
 TEST(VoxelStream, ElementsEqualTheInMemoryBasis) {

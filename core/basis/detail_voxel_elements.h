@@ -5,6 +5,7 @@
 /// integrals. Templates over where a face's corners, neighbours and directions come from (the
 /// mesh in memory, or page caches of scratch files).
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -15,6 +16,7 @@
 
 #include "core/basis/voxel_basis.h"
 #include "core/basis/voxel_clip.h"
+#include "core/cut/cut.h"
 #include "core/mesh/detail_union_find.h"
 #include "core/mesh/mesh.h"
 #include "core/system/errors.h"
@@ -205,5 +207,133 @@ void integrateVoxel(const VoxelCoord& voxel, double voxelSize, double edgeLength
     finishElement(sums[e - first], records[e - first], 0.0, normalStiffness[e - first].data());
   }
 }
+
+/// A seam link between element-function nodes 8 e + k on either side of a seam.
+struct SeamLink {
+  std::uint32_t left, right, seam;
+};
+
+/// The element functions (nodes 8 e + k) of one grid corner joined into domains, and the seam
+/// links between them.
+struct DomainLinks {
+  UnionFind functions{0};
+  std::vector<SeamLink> seamLinks;
+};
+
+/// A fragment as the linking sees it.
+struct FaceFragment {
+  VoxelCoord voxel;
+  std::uint32_t element = 0;
+  std::uint8_t edgeMask = 0;
+};
+
+inline VoxelCoord voxelDifference(const VoxelCoord& b, const VoxelCoord& a) {
+  return {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+}
+inline bool isNeighbourOffset(const VoxelCoord& d) {
+  return std::abs(d[0]) <= 1 && std::abs(d[1]) <= 1 && std::abs(d[2]) <= 1;
+}
+
+/// Calls f(k, k2) for every grid corner shared by voxels A and B = A + d: local index k in A,
+/// k2 in B (corner A + k == B + k2).
+template <class F>
+void forSharedCorners(const VoxelCoord& d, F&& f) {
+  for (int k = 0; k < 8; ++k) {
+    const int kx = (k & 1) - d[0], ky = ((k >> 1) & 1) - d[1], kz = ((k >> 2) & 1) - d[2];
+    if (kx < 0 || kx > 1 || ky < 0 || ky > 1 || kz < 0 || kz > 1) continue;
+    f(k, kx + 2 * ky + 4 * kz);
+  }
+}
+
+/// (a) One triangle meets a support (a convex box) in a convex, connected piece: its fragments in
+/// any two voxels of the support belong to the same domain. `sorted` is scratch space.
+inline void joinFacePieces(const std::vector<FaceFragment>& pieces, std::vector<std::pair<VoxelCoord, std::uint32_t>>& sorted,
+                           UnionFind& functions) {
+  sorted.clear();
+  for (const FaceFragment& piece : pieces) sorted.emplace_back(piece.voxel, piece.element);
+  std::sort(sorted.begin(), sorted.end());
+  for (const auto& [a, ea] : sorted) {
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const VoxelCoord b{a[0] + dx, a[1] + dy, a[2] + dz};
+          if (b <= a) continue;
+          const auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(b, std::uint32_t(0)));
+          if (it == sorted.end() || it->first != b) continue;
+          const std::uint32_t eb = it->second;
+          forSharedCorners({dx, dy, dz}, [&](int k, int k2) { functions.unite(8 * ea + k, 8 * eb + k2); });
+        }
+  }
+}
+
+/// Domains and seam links of face f's fragments (in face order, f after every face before):
+/// (a) its pieces joined (joinFacePieces); (b) two triangles across an edge meet in the support
+/// along the edge's piece: non-cut edges join their domains, seam edges make a seam link.
+/// g: f's corners in grid coordinates; opposite(c), isCut(c), seamSide(c) (SeamIndex::Side);
+/// neighbour(h, out) fills the fragments of face h.
+template <class Opposite, class IsCut, class SeamSide, class Neighbour>
+void linkFaceFragments(FaceId f, const std::vector<FaceFragment>& mine, const std::array<Vec3d, 3>& g,
+                       Opposite&& opposite, IsCut&& isCut, SeamSide&& seamSide, Neighbour&& neighbour,
+                       std::vector<FaceFragment>& theirs, std::vector<std::pair<VoxelCoord, std::uint32_t>>& sorted,
+                       DomainLinks& links) {
+  if (mine.size() >= 2) joinFacePieces(mine, sorted, links.functions);
+  for (const FaceFragment& fr : mine) {
+    const VoxelCoord& a = fr.voxel;
+    for (int j = 0; j < 3; ++j) {
+      const CornerId c = 3 * f + j;
+      if (!(fr.edgeMask >> j & 1)) continue;
+      const CornerId o = opposite(c);
+      if (o == kInvalidId || cornerFace(o) < f) continue;
+      const bool cut = isCut(c);
+      const SeamIndex::Side side = cut ? seamSide(c) : SeamIndex::Side{};
+      if (cut && side.seam == kInvalidId) continue;
+      const Vec3d& p = g[(j + 1) % 3];
+      const Vec3d& q = g[(j + 2) % 3];
+      neighbour(cornerFace(o), theirs);
+      for (const FaceFragment& other : theirs) {
+        if (!(other.edgeMask >> (o % 3) & 1)) continue;
+        const VoxelCoord& b = other.voxel;
+        const VoxelCoord d = voxelDifference(b, a);
+        if (!isNeighbourOffset(d)) continue;
+        if (d != VoxelCoord{0, 0, 0}) {
+          // The edge must run inside the shared face or line of the two voxels.
+          Vec3d lo, hi;
+          for (int x = 0; x < 3; ++x) {
+            lo[x] = std::max(a[x], b[x]);
+            hi[x] = std::min(a[x], b[x]) + 1;
+          }
+          if (!segmentOverlapsBox(p, q, lo, hi)) continue;
+        } else if (!cut) {
+          continue;  // same voxel, joined into one element already
+        }
+        const std::uint32_t ea = fr.element, eb = other.element;
+        forSharedCorners(d, [&](int k, int k2) {
+          if (!cut) {
+            links.functions.unite(8 * ea + k, 8 * eb + k2);
+          } else if (side.left) {
+            links.seamLinks.push_back({8 * ea + k, 8 * eb + k2, side.seam});
+          } else {
+            links.seamLinks.push_back({8 * eb + k2, 8 * ea + k, side.seam});
+          }
+        });
+      }
+    }
+  }
+}
+
+/// What a VoxelBasis is made of, built in memory (buildVoxelBasis) or out of core
+/// (stream/voxel_stream): elements by voxel with their integrals, and the links that make the
+/// domains. The per-face index (for evaluation and support faces) only in memory.
+struct VoxelBasisParts {
+  VoxelGridGeometry grid;
+  std::vector<VoxelCoord> voxelCoords;           // per voxel id
+  std::vector<std::uint32_t> voxelElementStart;  // #voxels + 1
+  std::vector<std::uint32_t> elementVoxel;       // #elements
+  std::vector<VoxelIntegrals> records;           // #elements, tangential stiffness
+  std::vector<std::array<double, 36>> normalStiffness;  // #elements, unweighted
+  DomainLinks links;
+  std::vector<std::uint32_t> faceFragmentStart;  // #F + 1, or empty (out of core)
+  std::vector<std::uint32_t> fragmentElement;    // #fragments, ordered by face, or empty
+};
 
 }  // namespace seamvox::detail

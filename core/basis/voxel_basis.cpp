@@ -16,25 +16,10 @@ namespace seamvox {
 namespace {
 
 using detail::denseLabels;
+using detail::DomainLinks;
+using detail::FaceFragment;
+using detail::SeamLink;
 using detail::UnionFind;
-
-VoxelCoord difference(const VoxelCoord& b, const VoxelCoord& a) {
-  return {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-}
-bool isNeighbourOffset(const VoxelCoord& d) {
-  return std::abs(d[0]) <= 1 && std::abs(d[1]) <= 1 && std::abs(d[2]) <= 1;
-}
-
-// Calls f(k, k2) for every grid corner shared by voxels A and B = A + d: local index k in A,
-// k2 in B (corner A + k == B + k2).
-template <class F>
-void forSharedCorners(const VoxelCoord& d, F&& f) {
-  for (int k = 0; k < 8; ++k) {
-    const int kx = (k & 1) - d[0], ky = ((k >> 1) & 1) - d[1], kz = ((k >> 2) & 1) - d[2];
-    if (kx < 0 || kx > 1 || ky < 0 || ky > 1 || kz < 0 || kz > 1) continue;
-    f(k, kx + 2 * ky + 4 * kz);
-  }
-}
 
 // Joins every domain (a class of element-function nodes 8 e + k) whose weight (sum of its nodes'
 // nodeWeight) is below minWeight to the heaviest other domain of the element holding most of its
@@ -77,10 +62,6 @@ std::uint32_t joinNegligibleDomains(UnionFind& functions, const std::vector<doub
   }
   return joined;
 }
-
-struct SeamLink {
-  std::uint32_t left, right, seam;  // element-function nodes 8 e + k
-};
 
 // Fragments per voxel (stable: ordered by face), as CSR.
 struct VoxelFragmentIndex {
@@ -227,107 +208,29 @@ void integrateFragments(const BasisInput& in, const VoxelFragmentIndex& byVoxel,
   });
 }
 
-// The element functions (nodes 8 e + k) of one grid corner, their domains being built, and the
-// seam links between them.
-struct DomainLinks {
-  UnionFind functions;
-  std::vector<SeamLink> seamLinks;
-};
-
-// (a) One triangle meets a support (a convex box) in a convex, connected piece: its fragments in
-// any two voxels of the support belong to the same domain. `sorted` is scratch space.
-void joinFacePieces(const BasisInput& in, const std::vector<std::uint32_t>& fragmentElement,
-                    std::uint32_t begin, std::uint32_t end,
-                    std::vector<std::pair<VoxelCoord, std::uint32_t>>& sorted,
-                    UnionFind& functions) {
-  sorted.clear();
-  for (std::uint32_t i = begin; i < end; ++i) {
-    sorted.emplace_back(in.voxelCoords[in.fragments[i].voxel], fragmentElement[i]);
-  }
-  std::sort(sorted.begin(), sorted.end());
-  for (const auto& [a, ea] : sorted) {
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const VoxelCoord b{a[0] + dx, a[1] + dy, a[2] + dz};
-          if (b <= a) continue;
-          const auto it = std::lower_bound(sorted.begin(), sorted.end(),
-                                           std::make_pair(b, std::uint32_t(0)));
-          if (it == sorted.end() || it->first != b) continue;
-          const std::uint32_t eb = it->second;
-          forSharedCorners({dx, dy, dz},
-                           [&](int k, int k2) { functions.unite(8 * ea + k, 8 * eb + k2); });
-        }
-  }
-}
-
-// (b) Two triangles across an edge meet in the support along the edge's piece: non-cut edges of
-// face f's fragment i join their domains, seam edges make a seam link.
-void linkFragmentEdges(const BasisInput& in, const SeamIndex& seamIndex,
-                       const std::vector<std::uint32_t>& faceFragmentStart,
-                       const std::vector<std::uint32_t>& fragmentElement, FaceId f,
-                       std::uint32_t i, DomainLinks& links) {
-  const std::vector<VoxelFragment>& fragments = in.fragments;
-  const VoxelFragment& fr = fragments[i];
-  const VoxelCoord& a = in.voxelCoords[fr.voxel];
-  const std::array<Vec3d, 3> g = faceGridCoords(in.mesh, in.grid, f);
-  for (int j = 0; j < 3; ++j) {
-    const CornerId c = 3 * f + j;
-    const CornerId o = in.topology.opposite(c);
-    if (!(fr.edgeMask >> j & 1) || o == kInvalidId || cornerFace(o) < f) continue;
-    const bool isCut = in.cut.corners.isCut(c);
-    const SeamIndex::Side side = isCut ? seamIndex.find(c) : SeamIndex::Side{};
-    if (isCut && side.seam == kInvalidId) continue;
-    const FaceId h = cornerFace(o);
-    const Vec3d& p = g[(j + 1) % 3];
-    const Vec3d& q = g[(j + 2) % 3];
-    for (std::uint32_t i2 = faceFragmentStart[h]; i2 < faceFragmentStart[h + 1]; ++i2) {
-      const VoxelFragment& other = fragments[i2];
-      if (!(other.edgeMask >> (o % 3) & 1)) continue;
-      const VoxelCoord& b = in.voxelCoords[other.voxel];
-      const VoxelCoord d = difference(b, a);
-      if (!isNeighbourOffset(d)) continue;
-      if (d != VoxelCoord{0, 0, 0}) {
-        // The edge must run inside the shared face or line of the two voxels.
-        Vec3d lo, hi;
-        for (int x = 0; x < 3; ++x) {
-          lo[x] = std::max(a[x], b[x]);
-          hi[x] = std::min(a[x], b[x]) + 1;
-        }
-        if (!segmentOverlapsBox(p, q, lo, hi)) continue;
-      } else if (!isCut) {
-        continue;  // same voxel, joined into one element already
-      }
-      const std::uint32_t ea = fragmentElement[i], eb = fragmentElement[i2];
-      forSharedCorners(d, [&](int k, int k2) {
-        if (!isCut) {
-          links.functions.unite(8 * ea + k, 8 * eb + k2);
-        } else if (side.left) {
-          links.seamLinks.push_back({8 * ea + k, 8 * eb + k2, side.seam});
-        } else {
-          links.seamLinks.push_back({8 * eb + k2, 8 * ea + k, side.seam});
-        }
-      });
-    }
-  }
-}
-
 // Domains: element functions of one grid corner joined inside its support, face by face; and
 // the seam links between domains.
-DomainLinks linkElementFunctions(const BasisInput& in,
-                                 const std::vector<std::uint32_t>& faceFragmentStart,
-                                 const std::vector<std::uint32_t>& fragmentElement,
-                                 std::uint32_t ne) {
+DomainLinks linkElementFunctions(const BasisInput& in, const std::vector<std::uint32_t>& faceFragmentStart,
+                                 const std::vector<std::uint32_t>& fragmentElement, std::uint32_t ne) {
   const SeamIndex seamIndex(in.topology, in.cut.seams);
   DomainLinks links{UnionFind(std::size_t(ne) * 8), {}};
+  const auto fragmentsOf = [&](FaceId f, std::vector<FaceFragment>& out) {
+    out.clear();
+    for (std::uint32_t i = faceFragmentStart[f]; i < faceFragmentStart[f + 1]; ++i) {
+      const VoxelFragment& fr = in.fragments[i];
+      out.push_back({in.voxelCoords[fr.voxel], fragmentElement[i], static_cast<std::uint8_t>(fr.edgeMask)});
+    }
+  };
+  std::vector<FaceFragment> mine, theirs;
   std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, element) of one face
   const std::uint32_t nf = in.topology.numFaces();
   for (FaceId f = 0; f < nf; ++f) {
-    const std::uint32_t begin = faceFragmentStart[f], end = faceFragmentStart[f + 1];
-    if (end - begin >= 2) joinFacePieces(in, fragmentElement, begin, end, sorted, links.functions);
-    for (std::uint32_t i = begin; i < end; ++i) {
-      linkFragmentEdges(in, seamIndex, faceFragmentStart, fragmentElement, f, i, links);
-    }
+    fragmentsOf(f, mine);
+    if (mine.empty()) continue;
+    detail::linkFaceFragments(
+        f, mine, faceGridCoords(in.mesh, in.grid, f), [&](CornerId c) { return in.topology.opposite(c); },
+        [&](CornerId c) { return in.cut.corners.isCut(c); }, [&](CornerId c) { return seamIndex.find(c); },
+        fragmentsOf, theirs, sorted, links);
   }
   return links;
 }
@@ -379,15 +282,13 @@ std::vector<VoxelCoord> cornersOfBasisFunctions(std::uint32_t numBasisFunctions,
   return corner;
 }
 
-}  // namespace
-
-VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
-                       const CutResult& cut, const VoxelGridGeometry& grid,
-                       std::vector<VoxelCoord> voxelCoords, std::vector<VoxelFragment> fragments,
-                       const VoxelBasisOptions& options)
-    : mesh_(mesh), grid_(grid), voxelCoords_(std::move(voxelCoords)) {
+// Elements, integrals and domain links of the fragments (ordered by face) over the voxels.
+detail::VoxelBasisParts buildParts(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                                   const CutResult& cut, const VoxelGridGeometry& grid,
+                                   std::vector<VoxelCoord> voxelCoords, const std::vector<VoxelFragment>& fragments,
+                                   const VoxelBasisOptions& options) {
   const std::uint32_t nf = topology.numFaces();
-  const std::uint32_t nv = static_cast<std::uint32_t>(voxelCoords_.size());
+  const std::uint32_t nv = static_cast<std::uint32_t>(voxelCoords.size());
   if (!(options.edgeLength > 0.0) || !std::isfinite(options.edgeLength)) {
     throw InputError("voxel basis: edge length must be positive and finite");
   }
@@ -399,26 +300,53 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   if (fragments.size() >= kInvalidId) {
     throw InputError("voxel basis: more than 2^32 fragments; use a coarser grid");
   }
-  const BasisInput in{mesh, topology, field, cut, grid_, voxelCoords_, fragments};
+  detail::VoxelBasisParts parts;
+  parts.grid = grid;
+  parts.voxelCoords = std::move(voxelCoords);
+  const BasisInput in{mesh, topology, field, cut, parts.grid, parts.voxelCoords, fragments};
   reportProgress(options.progress, "voxel basis", 0.0);
-  faceFragmentStart_ = indexFragmentsByFace(fragments, nf, nv);
+  parts.faceFragmentStart = indexFragmentsByFace(fragments, nf, nv);
   VoxelFragmentIndex byVoxel = indexFragmentsByVoxel(fragments, nv);
   Elements elements = buildElements(in, byVoxel);
-  fragmentElement_ = std::move(elements.fragmentElement);
-  voxelElementStart_ = std::move(elements.voxelElementStart);
-  elementVoxel_ = std::move(elements.elementVoxel);
+  parts.fragmentElement = std::move(elements.fragmentElement);
+  parts.voxelElementStart = std::move(elements.voxelElementStart);
+  parts.elementVoxel = std::move(elements.elementVoxel);
   reportProgress(options.progress, "voxel basis", 0.2);
 
-  records_.assign(numElements(), VoxelIntegrals{});
-  normalStiffness_.assign(numElements(), std::array<double, 36>{});
-  setRegularization(options.regularization);
-  integrateFragments(in, byVoxel, fragmentElement_, options.edgeLength, records_, normalStiffness_);
+  const std::size_t ne = parts.elementVoxel.size();
+  parts.records.assign(ne, VoxelIntegrals{});
+  parts.normalStiffness.assign(ne, std::array<double, 36>{});
+  integrateFragments(in, byVoxel, parts.fragmentElement, options.edgeLength, parts.records, parts.normalStiffness);
   byVoxel = {};
   reportProgress(options.progress, "voxel basis", 0.5);
 
-  DomainLinks links = linkElementFunctions(in, faceFragmentStart_, fragmentElement_,
-                                           static_cast<std::uint32_t>(numElements()));
+  parts.links = linkElementFunctions(in, parts.faceFragmentStart, parts.fragmentElement, static_cast<std::uint32_t>(ne));
   reportProgress(options.progress, "voxel basis", 0.8);
+  return parts;
+}
+
+}  // namespace
+
+VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                       const CutResult& cut, const VoxelGridGeometry& grid,
+                       std::vector<VoxelCoord> voxelCoords, std::vector<VoxelFragment> fragments,
+                       const VoxelBasisOptions& options)
+    : VoxelBasis(&mesh, buildParts(mesh, topology, field, cut, grid, std::move(voxelCoords), fragments, options),
+                 cut.seams, options) {}
+
+VoxelBasis::VoxelBasis(const TriangleMesh* mesh, detail::VoxelBasisParts parts, const std::vector<SeamCurve>& seams,
+                       const VoxelBasisOptions& options)
+    : mesh_(mesh), grid_(parts.grid), voxelCoords_(std::move(parts.voxelCoords)),
+      voxelElementStart_(std::move(parts.voxelElementStart)), elementVoxel_(std::move(parts.elementVoxel)),
+      records_(std::move(parts.records)), normalStiffness_(std::move(parts.normalStiffness)),
+      faceFragmentStart_(std::move(parts.faceFragmentStart)), fragmentElement_(std::move(parts.fragmentElement)) {
+  if (voxelElementStart_.size() != voxelCoords_.size() + 1 || voxelElementStart_.back() != elementVoxel_.size() ||
+      records_.size() != elementVoxel_.size() || normalStiffness_.size() != elementVoxel_.size() ||
+      parts.links.functions.parent.size() != 8 * elementVoxel_.size()) {
+    throw InputError("voxel basis: element parts of mismatched sizes");
+  }
+  setRegularization(options.regularization);
+  DomainLinks& links = parts.links;
   std::vector<std::uint8_t> joinedNode;
   joinedDomains_ = joinNegligibleDomains(links.functions, weighNodes(records_, normalStiffness_),
                                          options.minDomainWeight, joinedNode);
@@ -431,8 +359,15 @@ VoxelBasis::VoxelBasis(const TriangleMesh& mesh, const Topology& topology, const
   for (const SeamLink& link : links.seamLinks) {
     adjacencies.push_back({elementDomain_[link.left], elementDomain_[link.right], link.seam});
   }
-  setSeamAdjacencies(cut.seams, std::move(adjacencies));
+  setSeamAdjacencies(seams, std::move(adjacencies));
   reportProgress(options.progress, "voxel basis", 1.0);
+}
+
+const TriangleMesh& VoxelBasis::mesh() const {
+  if (!mesh_) {
+    throw InputError("voxel basis: built out of core, its faces are in the scratch folder (evaluate it there)");
+  }
+  return *mesh_;
 }
 
 std::uint32_t VoxelBasis::elementDomains(std::uint64_t e, std::uint32_t* out) const {
@@ -473,15 +408,17 @@ void VoxelBasis::elementIntegrals(std::uint64_t e, ElementIntegrals& out) const 
 }
 
 std::vector<std::uint32_t> VoxelBasis::faceElements(FaceId f) const {
+  (void)mesh();  // the per-face index is kept only with the mesh
   return {fragmentElement_.begin() + faceFragmentStart_[f],
           fragmentElement_.begin() + faceFragmentStart_[f + 1]};
 }
 
 std::uint32_t VoxelBasis::cornerElement(CornerId c) const {
+  const TriangleMesh& mesh = this->mesh();
   const FaceId f = cornerFace(c);
   const std::uint32_t begin = faceFragmentStart_[f], end = faceFragmentStart_[f + 1];
   if (begin == end) return kInvalidId;
-  const Vec3d x = grid_.toGrid(mesh_.position(mesh_.triangles[f][c % 3]));
+  const Vec3d x = grid_.toGrid(mesh.position(mesh.triangles[f][c % 3]));
   const VoxelCoord home = grid_.voxelOf(x);
   // The fragment in the vertex's own voxel, else the one whose voxel is nearest (a vertex on a
   // grid plane whose triangle lies on the lower side); ties go to the first, so the choice is
@@ -502,7 +439,7 @@ std::uint32_t VoxelBasis::cornerElement(CornerId c) const {
 
 void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coefficients,
                                  WedgeMap& cornerUV) const {
-  const std::uint32_t nf = static_cast<std::uint32_t>(faceFragmentStart_.size() - 1);
+  const std::uint32_t nf = mesh().numFaces();
   checkCorners(cornerUV, 3u * std::size_t(nf), "voxel basis evaluation");
   // One evaluation per wedge, at its smallest corner: the basis is continuous across the
   // non-cut edges inside a wedge.
@@ -514,7 +451,7 @@ void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coeffi
       const std::uint32_t e = cornerElement(c);
       if (e == kInvalidId) continue;
       const VoxelCoord& v = voxelCoords_[elementVoxel_[e]];
-      const Vec3d x = grid_.toGrid(mesh_.position(mesh_.triangles[cornerFace(c)][c % 3]));
+      const Vec3d x = grid_.toGrid(mesh().position(mesh().triangles[cornerFace(c)][c % 3]));
       const Vec3d t = (x - Vec3d(v[0], v[1], v[2])).cwiseMax(0.0).cwiseMin(1.0);
       double w[8];
       trilinearWeights(t, w);
@@ -526,6 +463,7 @@ void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coeffi
 }
 
 std::vector<FaceId> VoxelBasis::supportFaces(const std::vector<std::uint32_t>& basisFunctions) const {
+  (void)mesh();  // the per-face index is kept only with the mesh
   std::vector<std::uint8_t> marked(numBasisFunctions_, 0);
   for (std::uint32_t b : basisFunctions) {
     if (b < marked.size()) marked[b] = 1;
@@ -556,7 +494,7 @@ std::vector<FaceId> VoxelBasis::markedFaces(const Reduction& reduction) const {
 VoxelBasisStats VoxelBasis::stats() const {
   VoxelBasisStats s;
   s.voxels = voxelCoords_.size();
-  s.fragments = fragmentElement_.size();
+  s.fragments = fragmentElement_.size();  // 0 when built out of core
   s.elements = elementVoxel_.size();
   s.joinedDomains = joinedDomains_;
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };

@@ -16,6 +16,10 @@
 
 namespace seamvox {
 
+namespace detail {
+struct VoxelBasisParts;
+}
+
 struct VoxelBasisOptions {
   std::int32_t gridResolution = 128;  ///< voxels per axis: 64, 128, 256 or 512 (any 2^D, 4..1024)
   double edgeLength = 1.0;            ///< h: one unit of (u, v) is h on the surface
@@ -65,6 +69,12 @@ class VoxelBasis final : public Basis {
              std::vector<VoxelCoord> voxelCoords, std::vector<VoxelFragment> fragments,
              const VoxelBasisOptions& options = {});
 
+  /// From parts built elsewhere (detail/voxel_elements.h; the out-of-core build): mesh null when
+  /// the faces are not in memory (then evaluation, faceElements, cornerElement and the support
+  /// faces throw InputError: the caller evaluates from its own per-face files).
+  VoxelBasis(const TriangleMesh* mesh, detail::VoxelBasisParts parts, const std::vector<SeamCurve>& seams,
+             const VoxelBasisOptions& options);
+
   std::uint64_t numElements() const override { return elementVoxel_.size(); }
   std::uint32_t elementDomains(std::uint64_t e, std::uint32_t* out) const override;
   void elementIntegrals(std::uint64_t e, ElementIntegrals& out) const override;
@@ -108,7 +118,8 @@ class VoxelBasis final : public Basis {
   VoxelBasisStats stats() const;
 
  private:
-  const TriangleMesh& mesh_;
+  const TriangleMesh& mesh() const;
+  const TriangleMesh* mesh_ = nullptr;
   VoxelGridGeometry grid_;
   std::vector<VoxelCoord> voxelCoords_;           // per voxel id
   std::vector<std::uint32_t> voxelElementStart_;  // #voxels + 1

@@ -78,13 +78,17 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
   return cut;
 }
 
-SeamIndex::SeamIndex(const Topology& topology, const std::vector<SeamCurve>& seams) {
+SeamIndex::SeamIndex(const Topology& topology, const std::vector<SeamCurve>& seams)
+    : SeamIndex(seams, topology.numCorners(), [&](CornerId c) { return topology.opposite(c); }) {}
+
+SeamIndex::SeamIndex(const std::vector<SeamCurve>& seams, std::uint64_t numCorners,
+                     const std::function<CornerId(CornerId)>& opposite) {
   std::size_t n = 0;
   for (const SeamCurve& seam : seams) n += 2 * seam.corners.size();
   entries_.reserve(n);
   for (std::uint32_t id = 0; id < seams.size(); ++id) {
     for (CornerId c : seams[id].corners) {
-      const CornerId o = c < topology.numCorners() ? topology.opposite(c) : kInvalidId;
+      const CornerId o = c < numCorners ? opposite(c) : kInvalidId;
       if (o == kInvalidId) {
         throw InputError("seam " + std::to_string(id) + ": corner " + std::to_string(c) +
                          " is not on an interior edge");

@@ -12,6 +12,7 @@
 /// * Map across a seam (the solver's convention): crossing from the left face to the right face,
 ///   q_right = r q_left + t with r = i^(-k) = conj(i^k), k = seam.matching, t in Z + iZ.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/field/field.h"
@@ -79,6 +80,8 @@ class SeamIndex {
     bool left = false;                ///< the corner is one of the seam's (left) corners
   };
   SeamIndex(const Topology& topology, const std::vector<SeamCurve>& seams);
+  /// The same from an opposite-corner lookup over numCorners corners (a corner table out of core).
+  SeamIndex(const std::vector<SeamCurve>& seams, std::uint64_t numCorners, const std::function<CornerId(CornerId)>& opposite);
   /// Seam and side of the edge of corner c; boundary edges are cut but are on no seam.
   Side find(CornerId c) const;
   std::uint32_t seamOf(CornerId c) const { return find(c).seam; }
