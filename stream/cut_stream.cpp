@@ -44,12 +44,6 @@ struct PagedTraced {
   }
 };
 
-/// The finished cut file read as CutCorners.
-struct PagedCutCorners {
-  PagedReader<std::uint8_t>& bytes;
-  bool isCut(CornerId c) { return CutCorners::isCutByte(bytes[c]); }
-  std::uint8_t matching(CornerId c) { return CutCorners::matchingOfByte(bytes[c]); }
-};
 
 // The tree's front and the seams' walks move over the whole surface: larger caches than a
 // parallel pass's, one thread holding them.
@@ -108,12 +102,11 @@ ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, 
   clock.finish("comb");
 
   {
-    PagedReader<std::uint8_t> cutBytes(cut.corners, cacheBytes);
-    PagedCutCorners final{cutBytes};
+    PagedCutCorners cutCorners(cut.corners, cacheBytes);
     PagedTraced traced{workBytes};
     const auto isNode = [&](VertexId v) { return degree[v] != 2 || isCone(v) || table.isBoundaryVertex(v); };
-    detail::traceSeams(table, numVertices, numCorners, isNode, degree, traced, final, cut.seams);
-    folder.countRead(kStage, cutBytes.bytesRead());
+    detail::traceSeams(table, numVertices, numCorners, isNode, degree, traced, cutCorners, cut.seams);
+    folder.countRead(kStage, cutCorners.bytesRead());
   }
   clock.finish("seams");
 

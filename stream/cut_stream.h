@@ -10,6 +10,7 @@
 #include "core/cut/cut.h"
 #include "stream/clean_stream.h"
 #include "stream/field_stream.h"
+#include "stream/paged_reader.h"
 #include "stream/scratch_folder.h"
 
 namespace seamvox {
@@ -22,6 +23,18 @@ struct ScratchCut {
   std::uint32_t components = 0;
   /// Wall seconds of the passes: tree, prune, comb, seams.
   std::vector<std::pair<std::string, double>> stageSeconds;
+};
+
+/// The cut file (ScratchCut::corners) read through a page cache as CutCorners is read.
+class PagedCutCorners {
+ public:
+  PagedCutCorners(const ScratchFile& corners, std::size_t cacheBytes) : bytes_(corners, cacheBytes) {}
+  bool isCut(CornerId c) { return CutCorners::isCutByte(bytes_[c]); }
+  std::uint8_t matching(CornerId c) { return CutCorners::matchingOfByte(bytes_[c]); }
+  std::uint64_t bytesRead() const { return bytes_.bytesRead(); }
+
+ private:
+  PagedReader<std::uint8_t> bytes_;
 };
 
 /// Equal to cutToDisk on readCleanScratch's mesh with the singularities' matchings and cones:

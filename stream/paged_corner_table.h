@@ -19,6 +19,7 @@ class PagedCornerTable {
         vertexCorner_(scratch.vertexCorner, cacheBytes) {}
   VertexId vertex(CornerId c) { return faces_[c / 3].triangle[c % 3]; }
   CornerId opposite(CornerId c) { return opposite_[c]; }
+  CornerId vertexCorner(VertexId v) { return vertexCorner_[v]; }
   bool isIsolatedVertex(VertexId v) { return vertexCorner_[v] == kInvalidId; }
   bool isBoundaryVertex(VertexId v) {
     const CornerId c = vertexCorner_[v];

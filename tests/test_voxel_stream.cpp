@@ -4,7 +4,9 @@
 // few hundred fragments.
 #include <gtest/gtest.h>
 
+#include <complex>
 #include <cstring>
+#include <random>
 #include <filesystem>
 #include <string>
 
@@ -13,7 +15,9 @@
 #include "core/field/field.h"
 #include "core/mesh/wedge_map.h"
 #include "core/system/errors.h"
+#include "core/solve/evaluate.h"
 #include "stream/cut_stream.h"
+#include "stream/evaluate_stream.h"
 #include "stream/field_stream.h"
 #include "stream/voxel_stream.h"
 #include "stream_testing.h"
@@ -146,6 +150,47 @@ TEST(VoxelStream, BasisEqualsTheInMemoryBasis) {
       SCOPED_TRACE("grid " + std::to_string(resolution));
       expectSameBasis(folder, scratch, cleaned, resolution);
     }
+  });
+}
+
+// The map of random coefficients evaluated out of core: the same wedges (ids per corner) and
+// bit-equal values as buildCutWedges and evaluateCorners in memory.
+TEST(VoxelStream, MapEqualsTheInMemoryEvaluation) {
+  const NamedMeshes meshes = testing::stageTestMeshes(23);
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    const Inputs in = prepareInputs(folder, scratch, cleaned, 32);
+    const VoxelBuildResult expected =
+        buildVoxelBasis(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, in.options);
+    const ScratchVoxelBasis built = buildScratchVoxelBasis(folder, scratch, in.field, in.cut, in.options, kTinyPass);
+    std::mt19937 random(5);
+    std::uniform_real_distribution<double> uniform(-10.0, 10.0);
+    std::vector<std::complex<double>> coefficients(expected.basis->numDomains());
+    for (auto& q : coefficients) q = {uniform(random), uniform(random)};
+    WedgeMap map = buildCutWedges(cleaned.topology, in.inMemoryCut);
+    expected.basis->evaluateCorners(coefficients, map);
+    const ScratchMap streamed = evaluateScratchVoxelMap(folder, scratch, in.cut, built, coefficients, kTinyPass);
+    ASSERT_EQ(streamed.numWedges, map.numWedges());
+    const std::vector<std::uint32_t> cornerWedge = readRecords<std::uint32_t>(folder, streamed.cornerWedge);
+    const std::vector<Vec2d> values = readRecords<Vec2d>(folder, streamed.wedgeValues);
+    const std::vector<std::uint32_t> starts = readRecords<std::uint32_t>(folder, streamed.vertexWedgeStart);
+    ASSERT_EQ(cornerWedge.size(), map.size());
+    ASSERT_EQ(values.size(), map.numWedges());
+    ASSERT_EQ(starts.size(), std::size_t(cleaned.topology.numVertices()) + 1);
+    std::size_t wrongWedge = 0, wrongValue = 0, wrongVertex = 0, nonZero = 0;
+    for (CornerId c = 0; c < map.size(); ++c) {
+      wrongWedge += cornerWedge[c] != map.wedge(c);
+      const VertexId v = cleaned.topology.vertex(c);
+      wrongVertex += cornerWedge[c] < starts[v] || cornerWedge[c] >= starts[v + 1];
+    }
+    for (std::uint32_t w = 0; w < map.numWedges(); ++w) {
+      wrongValue += values[w] != map.wedgeValue(w);
+      nonZero += values[w] != Vec2d::Zero();
+    }
+    EXPECT_EQ(wrongWedge, 0u);
+    EXPECT_EQ(wrongVertex, 0u);
+    EXPECT_EQ(wrongValue, 0u);
+    EXPECT_EQ(nonZero, values.size());
+    EXPECT_GT(map.numWedges(), cleaned.topology.numVertices());  // seams split vertices
   });
 }
 

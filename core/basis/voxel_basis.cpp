@@ -416,30 +416,26 @@ std::vector<std::uint32_t> VoxelBasis::faceElements(FaceId f) const {
 std::uint32_t VoxelBasis::cornerElement(CornerId c) const {
   const TriangleMesh& mesh = this->mesh();
   const FaceId f = cornerFace(c);
-  const std::uint32_t begin = faceFragmentStart_[f], end = faceFragmentStart_[f + 1];
-  if (begin == end) return kInvalidId;
   const Vec3d x = grid_.toGrid(mesh.position(mesh.triangles[f][c % 3]));
-  const VoxelCoord home = grid_.voxelOf(x);
-  // The fragment in the vertex's own voxel, else the one whose voxel is nearest (a vertex on a
-  // grid plane whose triangle lies on the lower side); ties go to the first, so the choice is
-  // consistent.
-  std::uint32_t best = kInvalidId;
-  double bestDistance = 1e300;
-  for (std::uint32_t i = begin; i < end; ++i) {
-    const VoxelCoord& v = voxelCoords_[elementVoxel_[fragmentElement_[i]]];
-    if (v == home) return fragmentElement_[i];
-    double distance = 0.0;
-    for (int a = 0; a < 3; ++a) {
-      distance += std::pow(std::max({0.0, v[a] - x[a], x[a] - (v[a] + 1)}), 2);
-    }
-    if (distance < bestDistance) bestDistance = distance, best = fragmentElement_[i];
-  }
-  return best;
+  const std::uint32_t begin = faceFragmentStart_[f];
+  return nearestElement(x, faceFragmentStart_[f + 1] - begin, [&](std::uint32_t i) { return fragmentElement_[begin + i]; });
+}
+
+std::complex<double> VoxelBasis::evaluateAt(std::uint32_t e, const Vec3d& x,
+                                            const std::vector<std::complex<double>>& coefficients) const {
+  const VoxelCoord& v = voxelCoords_[elementVoxel_[e]];
+  const Vec3d t = (x - Vec3d(v[0], v[1], v[2])).cwiseMax(0.0).cwiseMin(1.0);
+  double w[8];
+  trilinearWeights(t, w);
+  std::complex<double> q = 0.0;
+  for (int k = 0; k < 8; ++k) q += w[k] * coefficients[elementDomain_[8 * e + k]];
+  return q;
 }
 
 void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coefficients,
                                  WedgeMap& cornerUV) const {
-  const std::uint32_t nf = mesh().numFaces();
+  const TriangleMesh& mesh = this->mesh();
+  const std::uint32_t nf = mesh.numFaces();
   checkCorners(cornerUV, 3u * std::size_t(nf), "voxel basis evaluation");
   // One evaluation per wedge, at its smallest corner: the basis is continuous across the
   // non-cut edges inside a wedge.
@@ -450,13 +446,8 @@ void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coeffi
       if (c == kInvalidId) continue;
       const std::uint32_t e = cornerElement(c);
       if (e == kInvalidId) continue;
-      const VoxelCoord& v = voxelCoords_[elementVoxel_[e]];
-      const Vec3d x = grid_.toGrid(mesh().position(mesh().triangles[cornerFace(c)][c % 3]));
-      const Vec3d t = (x - Vec3d(v[0], v[1], v[2])).cwiseMax(0.0).cwiseMin(1.0);
-      double w[8];
-      trilinearWeights(t, w);
-      std::complex<double> q = 0.0;
-      for (int k = 0; k < 8; ++k) q += w[k] * coefficients[elementDomain_[8 * e + k]];
+      const Vec3d x = grid_.toGrid(mesh.position(mesh.triangles[cornerFace(c)][c % 3]));
+      const std::complex<double> q = evaluateAt(e, x, coefficients);
       cornerUV.setWedgeValue(wedge, Vec2d(q.real(), q.imag()));
     }
   });

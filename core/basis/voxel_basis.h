@@ -5,7 +5,10 @@
 /// voxels around it) on the cut surface; seam adjacency joins the domains on either side of a
 /// seam inside the support. core/basis/voxel_grid.h builds it (buildVoxelBasis) from a triangle
 /// stream through the sparse OpenVDB grid; this class holds only flat per-element arrays.
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <complex>
 #include <cstdint>
 #include <vector>
 
@@ -105,6 +108,28 @@ class VoxelBasis final : public Basis {
   /// corner c (used for evaluation: the fragment of c's face whose voxel contains c's vertex).
   std::vector<std::uint32_t> faceElements(FaceId f) const;
   std::uint32_t cornerElement(CornerId c) const;
+  /// Of the elements of a face's fragments (count of them, element(i)), the one that holds grid
+  /// point x (a corner of the face): in x's own voxel, else the nearest voxel (a vertex on a grid
+  /// plane whose triangle lies on the lower side); ties go to the first. kInvalidId when none.
+  template <class Element>
+  std::uint32_t nearestElement(const Vec3d& x, std::uint32_t count, Element&& element) const {
+    const VoxelCoord home = grid_.voxelOf(x);
+    std::uint32_t best = kInvalidId;
+    double bestDistance = 1e300;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const std::uint32_t e = element(i);
+      const VoxelCoord& v = voxelCoords_[elementVoxel_[e]];
+      if (v == home) return e;
+      double distance = 0.0;
+      for (int a = 0; a < 3; ++a) {
+        distance += std::pow(std::max({0.0, v[a] - x[a], x[a] - (v[a] + 1)}), 2);
+      }
+      if (distance < bestDistance) bestDistance = distance, best = e;
+    }
+    return best;
+  }
+  /// The map at grid point x in element e from the domains' coefficients.
+  std::complex<double> evaluateAt(std::uint32_t e, const Vec3d& x, const std::vector<std::complex<double>>& coefficients) const;
   /// Grid corner of each basis function (of its larger part when negligible domains joined it).
   const std::vector<VoxelCoord>& basisCorner() const { return basisCorner_; }
 

@@ -1,39 +1,11 @@
 #include "core/solve/evaluate.h"
+#include "core/solve/detail_wedges.h"
 #include "core/system/parallel.h"
 
 
 namespace seamvox {
 
-namespace {
-
-/// Calls f(corner) for the corners of v counter-clockwise, starting just after a cut edge when v
-/// has one (at the fan's start on the boundary), and f(kInvalidId) after every cut edge crossed:
-/// the wedge boundaries.
-template <class F>
-void walkWedges(const Topology& topology, const CutCorners& corners, VertexId v, F&& f) {
-  CornerId start = topology.vertexCorner(v);
-  if (start == kInvalidId) return;
-  // The edge between corner c and ccw(c) is the edge of next(c) (topology.h).
-  if (topology.cw(start) != kInvalidId) {
-    const CornerId fanStart = start;
-    CornerId c = fanStart;
-    do {
-      if (corners.isCut(nextCorner(c))) {
-        start = topology.ccw(c);
-        break;
-      }
-      c = topology.ccw(c);
-    } while (c != fanStart);
-  }
-  CornerId c = start;
-  do {
-    f(c);
-    if (corners.isCut(nextCorner(c))) f(kInvalidId);
-    c = topology.ccw(c);
-  } while (c != kInvalidId && c != start);
-}
-
-}  // namespace
+using detail::walkWedges;
 
 WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
   const std::uint32_t nv = topology.numVertices();

@@ -1,0 +1,148 @@
+#include "stream/evaluate_stream.h"
+
+#include <algorithm>
+#include <memory>
+
+#include "core/solve/detail_wedges.h"
+#include "core/system/errors.h"
+#include "core/system/parallel.h"
+#include "stream/paged_corner_table.h"
+#include "stream/paged_reader.h"
+
+namespace seamvox {
+
+namespace {
+
+const char* const kStage = "evaluate";
+
+/// The readers a block of vertices takes: the fans and their cut, the corners' positions and
+/// faces' fragments.
+struct WedgeReaders {
+  PagedCornerTable table;
+  PagedCutCorners cut;
+  PagedReader<Vec3f> position;
+  PagedReader<std::uint32_t> faceStart, element;
+  std::uint64_t bytesRead() const {
+    return table.bytesRead() + cut.bytesRead() + position.bytesRead() + faceStart.bytesRead() + element.bytesRead();
+  }
+};
+
+/// Wedges of a block of vertices [first, first + count): per vertex its wedges and corners
+/// (prefix sums), per wedge its smallest corner, per corner its wedge.
+struct WedgeBlock {
+  std::vector<std::uint32_t> wedgeStart, cornerStart;  // count + 1, block-local
+  std::vector<CornerId> smallest;                      // per wedge
+  std::vector<std::pair<CornerId, std::uint32_t>> cornerWedge;  // block-local wedge
+  std::vector<Vec2d> values;                            // per wedge
+};
+
+void walkBlock(VertexId first, std::uint32_t count, ReaderPool<WedgeReaders>& pool, WedgeBlock& block) {
+  block.wedgeStart.assign(count + 1, 0);
+  block.cornerStart.assign(count + 1, 0);
+  parallelFor(count, 4096, [&](const IndexRange& range) {
+    auto r = pool.take();
+    for (std::uint32_t i = range.begin(); i != range.end(); ++i) {
+      std::uint32_t wedges = 0, corners = 0;
+      bool open = false;
+      detail::walkWedges(r->table, r->cut, first + i, [&](CornerId c) {
+        if (c == kInvalidId) {
+          open = false;
+          return;
+        }
+        ++corners;
+        if (!open) open = true, ++wedges;
+      });
+      block.wedgeStart[i + 1] = wedges;
+      block.cornerStart[i + 1] = corners;
+    }
+  });
+  for (std::uint32_t i = 0; i < count; ++i) {
+    block.wedgeStart[i + 1] += block.wedgeStart[i];
+    block.cornerStart[i + 1] += block.cornerStart[i];
+  }
+  block.smallest.assign(block.wedgeStart[count], kInvalidId);
+  block.cornerWedge.resize(block.cornerStart[count]);
+  parallelFor(count, 4096, [&](const IndexRange& range) {
+    auto r = pool.take();
+    for (std::uint32_t i = range.begin(); i != range.end(); ++i) {
+      std::uint32_t w = block.wedgeStart[i], k = block.cornerStart[i];
+      bool open = false;
+      detail::walkWedges(r->table, r->cut, first + i, [&](CornerId c) {
+        if (c == kInvalidId) {
+          if (open) ++w;
+          open = false;
+          return;
+        }
+        open = true;
+        block.cornerWedge[k++] = {c, w};
+        block.smallest[w] = std::min(block.smallest[w], c);
+      });
+    }
+  });
+}
+
+}  // namespace
+
+ScratchMap evaluateScratchVoxelMap(ScratchFolder& folder, const CleanScratch& scratch, const ScratchCut& cut,
+                                   const ScratchVoxelBasis& basis, const std::vector<std::complex<double>>& coefficients,
+                                   const StreamPassOptions& pass) {
+  const VoxelBasis& voxels = *basis.basis;
+  if (coefficients.size() != voxels.numDomains()) {
+    throw InputError("voxel map: " + std::to_string(coefficients.size()) + " coefficients for " +
+                     std::to_string(voxels.numDomains()) + " domains");
+  }
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  const VoxelGridGeometry& grid = voxels.grid();
+  ReaderPool<WedgeReaders> pool([&] {
+    return std::unique_ptr<WedgeReaders>(new WedgeReaders{
+        PagedCornerTable(scratch, cacheBytes), PagedCutCorners(cut.corners, cacheBytes),
+        PagedReader<Vec3f>(scratch.positions, cacheBytes), PagedReader<std::uint32_t>(basis.faceFragmentStart, cacheBytes),
+        PagedReader<std::uint32_t>(basis.fragmentElement, cacheBytes)});
+  });
+  ScratchMap out;
+  const ScratchFile cornerWedgeFile = folder.zeroFile(3 * scratch.numFaces * sizeof(std::uint32_t));
+  PagedArray<std::uint32_t> cornerWedge(folder, cornerWedgeFile, kStage, cacheBytes);
+  ScratchWriter starts(folder, kStage), values(folder, kStage);
+  const std::uint64_t blockVertices = std::max<std::uint64_t>(1, pass.blockRecords);
+  WedgeBlock block;
+  for (std::uint64_t first = 0; first < scratch.numVertices; first += blockVertices) {
+    const std::uint32_t count = static_cast<std::uint32_t>(std::min(blockVertices, scratch.numVertices - first));
+    walkBlock(static_cast<VertexId>(first), count, pool, block);
+    if (out.numWedges + block.smallest.size() >= kInvalidId) {
+      throw InputError("voxel map: more than 2^32 wedges");
+    }
+    // Each wedge evaluated at its smallest corner, as VoxelBasis::evaluateCorners does.
+    block.values.assign(block.smallest.size(), Vec2d::Zero());
+    parallelFor(block.smallest.size(), 4096, [&](const IndexRange& range) {
+      auto r = pool.take();
+      for (std::size_t w = range.begin(); w != range.end(); ++w) {
+        const CornerId c = block.smallest[w];
+        const FaceId f = cornerFace(c);
+        const Vec3d x = grid.toGrid(r->position[r->table.vertex(c)].cast<double>());
+        const std::uint32_t begin = r->faceStart[f], end = r->faceStart[std::uint64_t(f) + 1];
+        const std::uint32_t e = voxels.nearestElement(x, end - begin, [&](std::uint32_t i) { return r->element[begin + i]; });
+        if (e == kInvalidId) continue;
+        const std::complex<double> q = voxels.evaluateAt(e, x, coefficients);
+        block.values[w] = Vec2d(q.real(), q.imag());
+      }
+    });
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const std::uint32_t start = static_cast<std::uint32_t>(out.numWedges + block.wedgeStart[i]);
+      starts.write(&start, sizeof(start));
+    }
+    for (const auto& [c, w] : block.cornerWedge) cornerWedge.set(c, static_cast<std::uint32_t>(out.numWedges + w));
+    values.write(block.values.data(), block.values.size() * sizeof(Vec2d));
+    out.numWedges += block.smallest.size();
+  }
+  const std::uint32_t end = static_cast<std::uint32_t>(out.numWedges);
+  starts.write(&end, sizeof(end));
+  cornerWedge.flush();
+  pool.forEach([&](WedgeReaders& r) { folder.countRead(kStage, r.bytesRead()); });
+  folder.countRead(kStage, cornerWedge.bytesRead());
+  out.vertexWedgeStart = starts.finish();
+  out.wedgeValues = values.finish();
+  out.cornerWedge = cornerWedgeFile;
+  return out;
+}
+
+}  // namespace seamvox

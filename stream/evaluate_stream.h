@@ -1,0 +1,33 @@
+#pragma once
+/// The map of an out-of-core voxel basis evaluated at the corners of the cut mesh: the wedges of
+/// buildCutWedges (vertex by vertex) and VoxelBasis::evaluateCorners, from the scratch files of
+/// the cleaned mesh, the cut and the basis' per-face fragments.
+#include <complex>
+#include <cstdint>
+#include <vector>
+
+#include "stream/clean_stream.h"
+#include "stream/cut_stream.h"
+#include "stream/field_stream.h"
+#include "stream/scratch_folder.h"
+#include "stream/voxel_stream.h"
+
+namespace seamvox {
+
+/// A map in the scratch folder, wedges numbered as buildCutWedges numbers them.
+struct ScratchMap {
+  ScratchFile vertexWedgeStart;  ///< std::uint32_t per vertex and one more: its first wedge
+  ScratchFile cornerWedge;       ///< std::uint32_t per corner
+  ScratchFile wedgeValues;       ///< Vec2d per wedge: (u, v) in grid units
+  std::uint64_t numWedges = 0;
+};
+
+/// buildCutWedges and basis.evaluateCorners(coefficients) out of core: the wedges of a block of
+/// vertices walked (page caches), each evaluated once at its smallest corner, in parallel; the
+/// wedge values written in order, the corners' wedges through a write-back cache. Equal, bit for
+/// bit, to the in-memory map. coefficients: one per domain of the basis.
+ScratchMap evaluateScratchVoxelMap(ScratchFolder& folder, const CleanScratch& scratch, const ScratchCut& cut,
+                                   const ScratchVoxelBasis& basis, const std::vector<std::complex<double>>& coefficients,
+                                   const StreamPassOptions& pass);
+
+}  // namespace seamvox
