@@ -1,4 +1,4 @@
-// The out-of-core field, cut and voxel-element stages against the in-memory ones: wall time and peak resident
+// The out-of-core field, cut, voxel basis and Vox solve stages against the in-memory ones: wall time and peak resident
 // memory per step, scratch traffic, and with in-memory the directions, cones and cut that differ
 // (none expected). Steps run on the weld pass's faces (Morton order), as param's out-of-core path
 // will; cones merged within one default grid spacing (the diagonal over 100).
@@ -24,6 +24,7 @@
 #include "core/system/memory.h"
 #include "stream/clean_stream.h"
 #include "stream/cut_stream.h"
+#include "stream/voxel_solve_stream.h"
 #include "stream/voxel_stream.h"
 #include "stream/field_stream.h"
 #include "stream/mesh_stream.h"
@@ -97,7 +98,7 @@ int main(int argc, char** argv) {
   std::printf("  components %u, seams %zu, seam edges %zu\n", cut.components, cut.seams.size(), seamEdges);
   VoxelBasisOptions voxelOptions;
   voxelOptions.edgeLength = merge.maxDistance;
-  const ScratchVoxelBasis voxels = buildScratchVoxelBasis(folder, scratch, field, cut, voxelOptions, StreamPassOptions{budget});
+  ScratchVoxelBasis voxels = buildScratchVoxelBasis(folder, scratch, field, cut, voxelOptions, StreamPassOptions{budget});
   auto t3e = Clock::now();
   line("voxel basis (grid 128)", t3d, t3e);
   for (const auto& [name, s] : voxels.stageSeconds) std::printf("  voxel: %-20s %8.2f s\n", name.c_str(), s);
@@ -105,7 +106,14 @@ int main(int argc, char** argv) {
               voxels.grid.size(), (unsigned long long)voxels.numFragments,
               (unsigned long long)voxels.basis->numElements(), voxels.basis->numDomains(),
               voxels.basis->numBasisFunctions(), voxels.basis->adjacencies().size());
-  t3 = t3e;
+  const ScratchVoxelSolution solved =
+      solveScratchVoxelMap(folder, scratch, cut, voxels, RoundOptions{}, StreamPassOptions{budget});
+  auto t3f = Clock::now();
+  line("vox solve and evaluation", t3e, t3f);
+  std::printf("  constraints %u, determined %u, inconsistent %u, wedges %llu, factorizations failed %u\n",
+              solved.translationConstraints, solved.determinedBasis, solved.inconsistentBasis,
+              (unsigned long long)solved.map.numWedges, solved.failedAttempts);
+  t3 = t3f;
   for (const ScratchTraffic& t : folder.traffic()) {
     std::printf("  traffic %-24s read %9.1f MiB  written %9.1f MiB\n", t.stage.c_str(), mib(t.bytesRead),
                 mib(t.bytesWritten));
@@ -178,6 +186,21 @@ int main(int argc, char** argv) {
                 got.numElements() == want.numElements() && wrong == 0 ? "yes" : "NO",
                 (unsigned long long)want.numElements(), wrong, got.domainBasis() == want.domainBasis() ? "equal" : "DIFFER",
                 sameAdjacency ? "equal" : "DIFFERS");
+    ParamOptions param;
+    param.edgeLength = voxelOptions.edgeLength;
+    const VoxelParamResult vox = parameterizeMeshVoxel(cleaned.mesh, cleaned.topology, inMemory, cutExpected, param, 128);
+    auto t11 = Clock::now();
+    line("in memory: vox solve (whole)", t10, t11);
+    std::vector<Vec2d> values(solved.map.numWedges);
+    ScratchReader valueReader(folder, solved.map.wedgeValues, "bench");
+    if (!values.empty() && !valueReader.read(values.data(), values.size() * sizeof(Vec2d))) return 1;
+    double largestMap = 0.0;
+    for (std::uint32_t w = 0; w < vox.param.cornerUV.numWedges() && w < values.size(); ++w) {
+      largestMap = std::max(largestMap, (values[w] - vox.param.cornerUV.wedgeValue(w)).norm());
+    }
+    std::printf("  vox map: wedges %s, translations %s, largest difference %.3g\n",
+                vox.param.cornerUV.numWedges() == values.size() ? "equal" : "DIFFER",
+                vox.param.translations == solved.translations ? "equal" : "DIFFER", largestMap);
   }
   return 0;
 }

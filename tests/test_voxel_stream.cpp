@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <complex>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include "core/solve/evaluate.h"
 #include "stream/cut_stream.h"
 #include "stream/evaluate_stream.h"
+#include "stream/voxel_solve_stream.h"
 #include "stream/field_stream.h"
 #include "stream/voxel_stream.h"
 #include "stream_testing.h"
@@ -192,6 +194,69 @@ TEST(VoxelStream, MapEqualsTheInMemoryEvaluation) {
     EXPECT_EQ(nonZero, values.size());
     EXPECT_GT(map.numWedges(), cleaned.topology.numVertices());  // seams split vertices
   });
+}
+
+// The Vox solve out of core: the same seam constraints, translations and map (before any local
+// refinement) as parameterizeMeshVoxel on the cleaned mesh; the written map's seams are seamless.
+TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
+  const NamedMeshes meshes = testing::stageTestMeshes(29);
+  std::size_t consistentMeshes = 0;
+  forEachCleaned(meshes, [&](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    const Inputs in = prepareInputs(folder, scratch, cleaned, 32);
+    ParamOptions param;
+    param.edgeLength = in.options.edgeLength;
+    const VoxelParamResult expected =
+        parameterizeMeshVoxel(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, param, 32);
+    EXPECT_EQ(scratchSeamCycleConstraints(scratch, in.cut, kTinyPass),
+              seamCycleConstraints(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, param.edgeLength));
+    ScratchVoxelBasis basis = buildScratchVoxelBasis(folder, scratch, in.field, in.cut, in.options, kTinyPass);
+    const ScratchVoxelSolution solved = solveScratchVoxelMap(folder, scratch, in.cut, basis, RoundOptions{}, kTinyPass);
+    EXPECT_EQ(solved.translationConstraints, expected.param.translationConstraints);
+    EXPECT_EQ(solved.determinedBasis, expected.determinedBasis);
+    EXPECT_EQ(solved.inconsistentBasis, expected.inconsistentBasis);
+    EXPECT_EQ(solved.translations, expected.param.translations);
+    EXPECT_FALSE(solved.translations.empty());
+    const WedgeMap& map = expected.param.cornerUV;
+    ASSERT_EQ(solved.map.numWedges, map.numWedges());
+    const std::vector<std::uint32_t> cornerWedge = readRecords<std::uint32_t>(folder, solved.map.cornerWedge);
+    const std::vector<Vec2d> values = readRecords<Vec2d>(folder, solved.map.wedgeValues);
+    std::size_t wrongWedge = 0, far = 0;
+    double largest = 0.0;
+    for (CornerId c = 0; c < map.size(); ++c) wrongWedge += cornerWedge[c] != map.wedge(c);
+    for (std::uint32_t w = 0; w < map.numWedges(); ++w) {
+      const double d = (values[w] - map.wedgeValue(w)).norm();
+      largest = std::max(largest, d);
+      far += d > 1e-9;
+    }
+    EXPECT_EQ(wrongWedge, 0u);
+    EXPECT_EQ(far, 0u) << "largest difference " << largest;
+    // Seamless across the seams (q_right = r q_left + t) except where the voxel basis could not
+    // keep them (inconsistent basis functions near cones, which the local refinement re-solves)
+    std::size_t notSeamless = 0, pairs = 0;
+    const auto valueAt = [&](CornerId c) { return values[cornerWedge[c]]; };
+    for (std::uint32_t s = 0; s < in.inMemoryCut.seams.size(); ++s) {
+      const SeamCurve& seam = in.inMemoryCut.seams[s];
+      const std::complex<double> r = std::pow(std::complex<double>(0.0, -1.0), seam.matching % 4);
+      for (CornerId c : seam.corners) {
+        const CornerId o = cleaned.topology.opposite(c);
+        for (const auto& [left, right] : {std::make_pair(nextCorner(c), prevCorner(o)), std::make_pair(prevCorner(c), nextCorner(o))}) {
+          const Vec2d l = valueAt(left), rt = valueAt(right);
+          const std::complex<double> mapped = r * std::complex<double>(l[0], l[1]) + solved.translations[s];
+          notSeamless += std::abs(mapped - std::complex<double>(rt[0], rt[1])) > 1e-6;
+          ++pairs;
+        }
+      }
+    }
+    // (by construction: exactly seamless where no basis function is inconsistent).
+    EXPECT_GT(pairs, 0u);
+    if (expected.inconsistentBasis == 0) {
+      EXPECT_EQ(notSeamless, 0u);
+      ++consistentMeshes;
+    } else {
+      EXPECT_LT(notSeamless, pairs) << notSeamless << " of " << pairs;
+    }
+  });
+  EXPECT_GT(consistentMeshes, 0u);
 }
 
 TEST(VoxelStream, ElementsEqualTheInMemoryBasis) {

@@ -1,5 +1,7 @@
 #include "core/basis/basis.h"
 
+#include "core/basis/detail_hat_wedges.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -134,49 +136,6 @@ struct Wedges {
   std::vector<VertexId> basisVertex;
 };
 
-// Walks the fan of corners around v counter-clockwise; a cut edge (or the subset's border)
-// starts a new wedge. The first wedge of v makes v's basis function.
-void addFanWedges(const Topology& topology, const CutResult& cut,
-                  const std::vector<std::uint8_t>& inSubset, VertexId v,
-                  const std::vector<CornerId>& fan, Wedges& out) {
-  const std::size_t m = fan.size();
-  const bool closed = topology.ccw(fan.back()) == fan.front();
-  auto separated = [&](std::size_t j) {  // is there a wedge border just before fan[j]?
-    const CornerId before = j > 0 ? fan[j - 1] : fan[m - 1];
-    if (j == 0 && !closed) return true;
-    return cut.corners.isCut(nextCorner(before)) || !inSubset[cornerFace(before)] ||
-           !inSubset[cornerFace(fan[j])];
-  };
-  std::size_t start = 0;
-  for (std::size_t j = 0; j < m; ++j) {
-    if (separated(j)) {
-      start = j;
-      break;
-    }
-  }
-  bool anyDomain = false;
-  std::uint32_t current = kInvalidId;
-  for (std::size_t step = 0; step < m; ++step) {
-    const std::size_t j = (start + step) % m;
-    const CornerId c = fan[j];
-    if (!inSubset[cornerFace(c)]) {
-      current = kInvalidId;
-      continue;
-    }
-    if (current == kInvalidId || separated(j)) {
-      if (!anyDomain) {
-        out.basisVertex.push_back(v);
-        anyDomain = true;
-      }
-      current = static_cast<std::uint32_t>(out.domainBasis.size());
-      out.domainBasis.push_back(static_cast<std::uint32_t>(out.basisVertex.size() - 1));
-    }
-    out.cornerDomain[c] = current;
-  }
-}
-
-// Wedges of every vertex (of the subset's vertices when subsetVertices is not empty), in
-// increasing vertex order.
 Wedges buildWedges(const Topology& topology, const CutResult& cut,
                    const std::vector<std::uint8_t>& inSubset, bool wholeMesh,
                    const std::vector<VertexId>& subsetVertices) {
@@ -189,31 +148,13 @@ Wedges buildWedges(const Topology& topology, const CutResult& cut,
     fan.clear();
     topology.forEachCornerAround(v, [&](CornerId c) { fan.push_back(c); });
     if (fan.empty()) continue;
-    addFanWedges(topology, cut, inSubset, v, fan, out);
+    detail::addFanWedges(
+        topology, cut.corners, [&](FaceId f) { return inSubset[f] != 0; }, v, fan, out.domainBasis, out.basisVertex,
+        [&](CornerId c, std::uint32_t d) { out.cornerDomain[c] = d; });
   }
   return out;
 }
 
-// Seam adjacency: the wedges on either side of every seam edge inside the subset, at both of
-// its endpoints (unsorted). InputError on a seam along a boundary edge.
-std::vector<DomainAdjacency> collectSeamAdjacencies(const Topology& topology, const CutResult& cut,
-                                                    const std::vector<std::uint8_t>& inSubset,
-                                                    const std::vector<std::uint32_t>& cornerDomain) {
-  std::vector<DomainAdjacency> adjacencies;
-  for (std::uint32_t s = 0; s < cut.seams.size(); ++s) {
-    for (CornerId c : cut.seams[s].corners) {
-      const CornerId o = topology.opposite(c);
-      if (o == kInvalidId) {
-        throw InputError("hat basis: seam " + std::to_string(s) + " has boundary edge of corner " +
-                         std::to_string(c));
-      }
-      if (!inSubset[cornerFace(c)] || !inSubset[cornerFace(o)]) continue;
-      adjacencies.push_back({cornerDomain[nextCorner(c)], cornerDomain[prevCorner(o)], s});
-      adjacencies.push_back({cornerDomain[prevCorner(c)], cornerDomain[nextCorner(o)], s});
-    }
-  }
-  return adjacencies;
-}
 
 }  // namespace
 
@@ -249,7 +190,10 @@ HatBasis::HatBasis(const TriangleMesh& mesh, const Topology& topology, const Cro
   domainBasis_ = std::move(wedges.domainBasis);
   basisVertex_ = std::move(wedges.basisVertex);
   numBasisFunctions_ = static_cast<std::uint32_t>(basisVertex_.size());
-  setSeamAdjacencies(cut.seams, collectSeamAdjacencies(topology, cut, inSubset, cornerDomain_));
+  setSeamAdjacencies(cut.seams, detail::collectSeamAdjacencies(
+                                    cut.seams, [&](CornerId c) { return topology.opposite(c); },
+                                    [&](FaceId f) { return inSubset[f] != 0; },
+                                    [&](CornerId c) { return cornerDomain_[c]; }));
 }
 
 std::uint32_t HatBasis::elementDomains(std::uint64_t e, std::uint32_t* out) const {
@@ -297,6 +241,26 @@ void HatBasis::evaluateCorners(const std::vector<std::complex<double>>& coeffici
       cornerUV.setWedgeValue(cornerUV.wedge(3 * f + k), Vec2d(q.real(), q.imag()));
     }
   }
+}
+
+HatDomains::HatDomains(detail::SubsetWedges wedges, const std::vector<SeamCurve>& seams)
+    : faceDomains_(std::move(wedges.faceDomains)) {
+  domainBasis_ = std::move(wedges.domainBasis);
+  numBasisFunctions_ = static_cast<std::uint32_t>(wedges.basisVertex.size());
+  setSeamAdjacencies(seams, std::move(wedges.adjacencies));
+}
+
+std::uint32_t HatDomains::elementDomains(std::uint64_t e, std::uint32_t* out) const {
+  std::copy_n(faceDomains_[e].begin(), 3, out);
+  return 3;
+}
+
+void HatDomains::elementIntegrals(std::uint64_t, ElementIntegrals&) const {
+  throw InputError("hat domains: no integrals (the basis is built for its seam cycles only)");
+}
+
+void HatDomains::evaluateCorners(const std::vector<std::complex<double>>&, WedgeMap&) const {
+  throw InputError("hat domains: no evaluation (the basis is built for its seam cycles only)");
 }
 
 }  // namespace seamvox

@@ -14,6 +14,10 @@
 
 namespace seamvox {
 
+namespace detail {
+struct SubsetWedges;
+}
+
 /// Domain a crosses seam `seam` into domain b: the coefficients map as c_b = r_seam c_a + t_seam
 /// (left to right as in cut.h). a and b are domains of the same basis function (a == b allowed:
 /// a wedge touching both sides of a seam, e.g. at a seam tip).
@@ -140,5 +144,21 @@ class HatBasis final : public Basis {
 /// triangles give zeros.
 void hatTriangleIntegrals(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, const Vec3d& u,
                           double edgeLength, double stiffness[9], std::complex<double> rhs[3]);
+
+/// The hat basis' domains and seam adjacency on a face subset (detail::buildSubsetWedges, over
+/// any corner table: in memory or out of core), without integrals or evaluation (they throw
+/// InputError): what reduceBasis reads for the seam cycle constraints. Elements: the subset's
+/// faces in increasing order.
+class HatDomains final : public Basis {
+ public:
+  HatDomains(detail::SubsetWedges wedges, const std::vector<SeamCurve>& seams);
+  std::uint64_t numElements() const override { return faceDomains_.size(); }
+  std::uint32_t elementDomains(std::uint64_t e, std::uint32_t* out) const override;
+  void elementIntegrals(std::uint64_t e, ElementIntegrals& out) const override;
+  void evaluateCorners(const std::vector<std::complex<double>>& domainCoefficients, WedgeMap& cornerUV) const override;
+
+ private:
+  std::vector<std::array<std::uint32_t, 3>> faceDomains_;
+};
 
 }  // namespace seamvox

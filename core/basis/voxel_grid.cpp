@@ -119,6 +119,22 @@ VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topol
   return out;
 }
 
+SeamlessSolution solveVoxelSeamless(VoxelBasis& basis, const Reduction& reduction, const RoundOptions& options,
+                                    std::uint32_t& failedAttempts) {
+  // The reduction depends on domains and adjacency only, and the basis keeps the
+  // normal-derivative integrals apart: a stronger regularization only re-assembles and refactors.
+  for (;;) {
+    try {
+      return solveSeamless(basis, reduction, options);
+    } catch (const SolverError&) {
+      if (basis.regularization() >= kMaxVoxelRegularization) throw;
+      const double stronger = std::max(100.0 * basis.regularization(), 1e-7);
+      basis.setRegularization(std::min(stronger, kMaxVoxelRegularization));
+      ++failedAttempts;
+    }
+  }
+}
+
 VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology& topology,
                                        const CrossField& field, const CutResult& cut,
                                        const ParamOptions& options, std::int32_t gridResolution,
@@ -163,20 +179,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   roundOptions.greedy = options.greedyRounding;
   roundOptions.progress = options.progress;
   roundOptions.failsToFactor = options.failsToFactor;
-  // The reduction depends on domains and adjacency only, and the basis keeps the
-  // normal-derivative integrals apart: a stronger regularization only re-assembles and refactors.
-  SeamlessSolution solution;
-  for (;;) {
-    try {
-      solution = solveSeamless(basis, reduction, roundOptions);
-      break;
-    } catch (const SolverError&) {
-      if (basis.regularization() >= kMaxVoxelRegularization) throw;
-      const double stronger = std::max(100.0 * basis.regularization(), 1e-7);
-      basis.setRegularization(std::min(stronger, kMaxVoxelRegularization));
-      ++out.failedAttempts;
-    }
-  }
+  SeamlessSolution solution = solveVoxelSeamless(basis, reduction, roundOptions, out.failedAttempts);
   out.regularization = basis.regularization();
   // The factorizations leave many freed blocks in the heap (150 MB at grid 128): back to the
   // system before the map (20 bytes per face) is built next to the basis.

@@ -78,6 +78,11 @@ struct VoxelParamResult {
 };
 /// Strongest normal-derivative regularization the Vox solver retries with.
 constexpr double kMaxVoxelRegularization = 1e-3;
+
+/// solveSeamless, the basis' normal-derivative regularization raised (x100 from at least 1e-7, up
+/// to kMaxVoxelRegularization) while the factorization fails; failedAttempts counts the failures.
+SeamlessSolution solveVoxelSeamless(VoxelBasis& basis, const Reduction& reduction, const RoundOptions& options,
+                                    std::uint32_t& failedAttempts);
 /// The Vox solver. When CHOLMOD finds the system indefinite, it re-assembles and refactors with a
 /// 100x stronger regularization (up to kMaxVoxelRegularization; the basis is built once) before
 /// giving up with the last SolverError. minDomainWeight: VoxelBasisOptions's (< 0: its default).

@@ -1,5 +1,7 @@
 #include "core/solve/hat_solver.h"
 
+#include "core/basis/detail_hat_wedges.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -144,24 +146,12 @@ std::vector<GaussVector> closeSmallHoles(const TriangleMesh& mesh, const Topolog
   return std::move(holes.rows);
 }
 
-std::vector<GaussVector> seamCycleConstraints(const TriangleMesh& mesh, const Topology& topology,
-                                              const CrossField& field, const CutResult& cut,
-                                              double edgeLength) {
-  HatBasisOptions options;
-  options.edgeLength = edgeLength;
-  for (const SeamCurve& seam : cut.seams) {
-    for (CornerId c : seam.corners) {
-      for (CornerId end : {nextCorner(c), prevCorner(c)}) {
-        topology.forEachCornerAround(topology.vertex(end),
-                                     [&](CornerId around) { options.faces.push_back(around / 3); });
-      }
-    }
-  }
-  if (options.faces.empty()) return {};  // an empty subset would mean the whole mesh
-  std::sort(options.faces.begin(), options.faces.end());
-  options.faces.erase(std::unique(options.faces.begin(), options.faces.end()), options.faces.end());
-  const HatBasis basis(mesh, topology, field, cut, options);
-  return reduceBasis(basis).cycleConstraints;
+std::vector<GaussVector> seamCycleConstraints(const TriangleMesh&, const Topology& topology, const CrossField&,
+                                              const CutResult& cut, double) {
+  const std::vector<FaceId> faces = detail::facesAroundSeams(topology, cut.seams);
+  if (faces.empty()) return {};  // an empty subset would mean the whole mesh
+  const HatDomains domains(detail::buildSubsetWedges(topology, cut.corners, faces, cut.seams), cut.seams);
+  return reduceBasis(domains).cycleConstraints;
 }
 
 }  // namespace seamvox
