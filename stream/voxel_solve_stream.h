@@ -27,7 +27,15 @@ struct ScratchVoxelSolution {
   SeamlessStats stats;
   std::uint32_t translationConstraints = 0, determinedBasis = 0, inconsistentBasis = 0, failedAttempts = 0;
   double regularization = 0.0;  ///< the normal-derivative weight the solve succeeded with
+  /// markedBasisFunctions of the reduction: whose support the local refinement re-solves.
+  std::vector<std::uint32_t> markedBasis;
+  std::vector<std::uint32_t> inconsistentBasisFunctions;
 };
+
+/// VoxelBasis::supportFaces out of core: the faces holding a fragment of an element one of whose
+/// functions is given, increasing (from the per-face fragment files, read once in order).
+std::vector<FaceId> scratchSupportFaces(ScratchFolder& folder, const ScratchVoxelBasis& basis,
+                                        const std::vector<std::uint32_t>& basisFunctions);
 
 /// Constraints, reduction (no small-hole constraints), solveVoxelSeamless with options, and the
 /// map evaluated out of core. SolverError as the in-memory Vox solver's.

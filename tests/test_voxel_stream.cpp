@@ -215,6 +215,10 @@ TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
     EXPECT_EQ(solved.determinedBasis, expected.determinedBasis);
     EXPECT_EQ(solved.inconsistentBasis, expected.inconsistentBasis);
     EXPECT_EQ(solved.translations, expected.param.translations);
+    // The refinement's faces, and those of the inconsistent functions alone.
+    EXPECT_EQ(scratchSupportFaces(folder, basis, solved.markedBasis), expected.markedFaces);
+    EXPECT_EQ(scratchSupportFaces(folder, basis, solved.inconsistentBasisFunctions), expected.inconsistentFaces);
+    EXPECT_FALSE(expected.markedFaces.empty());
     EXPECT_FALSE(solved.translations.empty());
     const WedgeMap& map = expected.param.cornerUV;
     ASSERT_EQ(solved.map.numWedges, map.numWedges());

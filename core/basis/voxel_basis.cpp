@@ -453,8 +453,7 @@ void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coeffi
   });
 }
 
-std::vector<FaceId> VoxelBasis::supportFaces(const std::vector<std::uint32_t>& basisFunctions) const {
-  (void)mesh();  // the per-face index is kept only with the mesh
+std::vector<std::uint8_t> VoxelBasis::elementsTouching(const std::vector<std::uint32_t>& basisFunctions) const {
   std::vector<std::uint8_t> marked(numBasisFunctions_, 0);
   for (std::uint32_t b : basisFunctions) {
     if (b < marked.size()) marked[b] = 1;
@@ -463,6 +462,12 @@ std::vector<FaceId> VoxelBasis::supportFaces(const std::vector<std::uint32_t>& b
   for (std::size_t e = 0; e < elementVoxel_.size(); ++e) {
     for (int k = 0; k < 8; ++k) elementMarked[e] |= marked[domainBasis_[elementDomain_[8 * e + k]]];
   }
+  return elementMarked;
+}
+
+std::vector<FaceId> VoxelBasis::supportFaces(const std::vector<std::uint32_t>& basisFunctions) const {
+  (void)mesh();  // the per-face index is kept only with the mesh
+  const std::vector<std::uint8_t> elementMarked = elementsTouching(basisFunctions);
   std::vector<FaceId> faces;
   const std::uint32_t nf = static_cast<std::uint32_t>(faceFragmentStart_.size() - 1);
   for (FaceId f = 0; f < nf; ++f) {
@@ -476,10 +481,14 @@ std::vector<FaceId> VoxelBasis::supportFaces(const std::vector<std::uint32_t>& b
   return faces;
 }
 
-std::vector<FaceId> VoxelBasis::markedFaces(const Reduction& reduction) const {
+std::vector<std::uint32_t> markedBasisFunctions(const Reduction& reduction) {
   std::vector<std::uint32_t> basis = reduction.determinedBasis;
   basis.insert(basis.end(), reduction.inconsistentBasis.begin(), reduction.inconsistentBasis.end());
-  return supportFaces(basis);
+  return basis;
+}
+
+std::vector<FaceId> VoxelBasis::markedFaces(const Reduction& reduction) const {
+  return supportFaces(markedBasisFunctions(reduction));
 }
 
 VoxelBasisStats VoxelBasis::stats() const {

@@ -52,6 +52,10 @@ struct VoxelFragment {
   std::uint32_t edgeMask : 3;
 };
 
+/// The basis functions whose support the local refinement re-solves: the determined ones (their
+/// supports overlap cones) and the inconsistent ones (DESIGN sections 7 and 10).
+std::vector<std::uint32_t> markedBasisFunctions(const Reduction& reduction);
+
 /// Sizes of a built voxel basis (for reports and benchmarks).
 struct VoxelBasisStats {
   std::uint64_t voxels = 0, fragments = 0, elements = 0;
@@ -139,6 +143,8 @@ class VoxelBasis final : public Basis {
   std::vector<FaceId> markedFaces(const Reduction& reduction) const;
   /// Faces in the support of the given basis functions. Sorted, unique.
   std::vector<FaceId> supportFaces(const std::vector<std::uint32_t>& basisFunctions) const;
+  /// Per element: 1 when one of its functions is one of the given basis functions.
+  std::vector<std::uint8_t> elementsTouching(const std::vector<std::uint32_t>& basisFunctions) const;
 
   VoxelBasisStats stats() const;
 
