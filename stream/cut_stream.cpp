@@ -48,7 +48,7 @@ struct PagedTraced {
 // The tree's front and the seams' walks move over the whole surface: larger caches than a
 // parallel pass's, one thread holding them.
 std::size_t cutCacheBytes(std::uint64_t memoryBytes) {
-  return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 12, std::uint64_t(1) << 15, std::uint64_t(1) << 25));
+  return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 32, std::uint64_t(1) << 15, std::uint64_t(1) << 28));
 }
 
 }  // namespace

@@ -30,16 +30,19 @@ PageCache::PageCache(const ScratchFile& file, std::size_t recordBytes, std::size
                   std::to_string(recordBytes) + "-byte records");
   }
   numRecords_ = file.bytes / recordBytes;
-  // Powers of two (records per page, pages in the cache): a lookup is a shift, a mask and a compare.
+  // Powers of two (records per page, pages in the cache): a lookup is a shift, a mask and two
+  // compares. Two ways per set, the older one replaced: pages of a moving front (a breadth-first
+  // walk over the surface) that fall on one set no longer evict each other at once.
   while ((std::size_t(2) << pageShift_) * recordBytes <= kPageBytes) ++pageShift_;
   pageRecords_ = std::size_t(1) << pageShift_;
   pageBytes_ = pageRecords_ * recordBytes;
   const std::uint64_t pagesInFile = (numRecords_ + pageRecords_ - 1) / pageRecords_;
   const std::uint64_t wanted = std::min<std::uint64_t>(pagesInFile, std::max<std::size_t>(2, cacheBytes / pageBytes_));
-  std::size_t slots = 1;
+  std::size_t slots = 2;  // one set of two ways at least
   while (slots < wanted) slots *= 2;
-  slotMask_ = slots - 1;
+  setMask_ = slots / 2 - 1;
   tags_.assign(slots, kNoPage);
+  older_.assign(slots / 2, 0);
   data_.resize(slots * pageBytes_);
   fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) throw IoError(path_ + ": cannot open a scratch file (" + std::strerror(errno) + ")");
@@ -54,7 +57,7 @@ const char* PageCache::record(std::uint64_t i) { return slotFor(i); }
 char* PageCache::recordForWrite(std::uint64_t i) {
   if (!updater_) throw IoError(path_ + ": a write through a read-only page cache");
   char* at = slotFor(i);
-  dirty_[static_cast<std::size_t>(i >> pageShift_) & slotMask_] = 1;
+  dirty_[lastSlot_] = 1;
   return at;
 }
 
@@ -76,8 +79,21 @@ char* PageCache::slotFor(std::uint64_t i) {
                   std::to_string(numRecords_) + " records");
   }
   const std::uint64_t page = i >> pageShift_;
-  const std::size_t slot = static_cast<std::size_t>(page) & slotMask_;
-  char* base = tags_[slot] == page ? data_.data() + slot * pageBytes_ : load(page, slot);
+  const std::size_t set = static_cast<std::size_t>(page) & setMask_;
+  std::size_t slot = 2 * set;
+  char* base;
+  if (tags_[slot] == page) {
+    base = data_.data() + slot * pageBytes_;
+    older_[set] = 1;
+  } else if (tags_[slot + 1] == page) {
+    base = data_.data() + ++slot * pageBytes_;
+    older_[set] = 0;
+  } else {
+    slot += older_[set];
+    base = load(page, slot);
+    older_[set] ^= 1;
+  }
+  lastSlot_ = slot;
   return base + (i & (pageRecords_ - 1)) * recordBytes_;
 }
 

@@ -16,7 +16,7 @@
 
 namespace seamvox {
 
-/// Direct-mapped cache of fixed-size records of one file.
+/// Two-way set-associative cache of fixed-size records of one file.
 class PageCache {
  public:
   /// cacheBytes: what the pages may hold (rounded up to a power of two of pages, at least two).
@@ -44,11 +44,12 @@ class PageCache {
   ScratchUpdater* updater_ = nullptr;
   std::string path_;
   int fd_ = -1;
-  std::size_t recordBytes_ = 0, pageRecords_ = 0, pageBytes_ = 0, slotMask_ = 0;
+  std::size_t recordBytes_ = 0, pageRecords_ = 0, pageBytes_ = 0, setMask_ = 0, lastSlot_ = 0;
   unsigned pageShift_ = 0;
   std::uint64_t numRecords_ = 0, bytesRead_ = 0;
   std::vector<std::uint64_t> tags_;
   std::vector<std::uint8_t> dirty_;
+  std::vector<std::uint8_t> older_;  // per set of two slots: the way replaced next
   std::vector<char> data_;
 };
 

@@ -260,13 +260,13 @@ TEST_F(OocRender, FullScratchDiskNamesTheFolderAndLeavesNothing) {
 TEST_F(OocRender, MapsWithoutUVAndTruncatedMapsAreClearErrors) {
   testing::TempDir scratch;
   std::string log;
-  EXPECT_EQ(testing::runSeamvox("render " + path("sphere.ply") + " -o " + path("d.png") + " --memory-budget 1K --scratch " + scratch.dir(), &log), 1) << log;
+  EXPECT_EQ(testing::runSeamvox("render " + path("sphere.ply") + " -o " + path("e.png") + " --memory-budget 1K --scratch " + scratch.dir(), &log), 1) << log;
   EXPECT_NE(log.find("texture coordinates"), std::string::npos) << log;
   const std::string whole = testing::readFile(path("sphere-map.ply"));
   testing::writeFile(path("cut.ply"), whole.substr(0, whole.size() / 2 + 5));
-  EXPECT_EQ(testing::runSeamvox("render " + path("cut.ply") + " -o " + path("d.png") + " --memory-budget 1K --scratch " + scratch.dir(), &log), 1) << log;
+  EXPECT_EQ(testing::runSeamvox("render " + path("cut.ply") + " -o " + path("e.png") + " --memory-budget 1K --scratch " + scratch.dir(), &log), 1) << log;
   EXPECT_NE(log.find(path("cut.ply")), std::string::npos) << log;
-  EXPECT_FALSE(fs::exists(path("d.png")));
+  EXPECT_FALSE(fs::exists(path("e.png")));
   EXPECT_TRUE(fs::is_empty(scratch.dir()));
 }
 
