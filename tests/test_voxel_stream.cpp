@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <complex>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -15,10 +16,12 @@
 #include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/mesh/wedge_map.h"
+#include "core/refine/refine.h"
 #include "core/system/errors.h"
 #include "core/solve/evaluate.h"
 #include "stream/cut_stream.h"
 #include "stream/evaluate_stream.h"
+#include "stream/refine_stream.h"
 #include "stream/voxel_solve_stream.h"
 #include "stream/field_stream.h"
 #include "stream/voxel_stream.h"
@@ -196,6 +199,32 @@ TEST(VoxelStream, MapEqualsTheInMemoryEvaluation) {
   });
 }
 
+void expectSameRegion(const RegionMesh& got, const RegionMesh& want) {
+  EXPECT_EQ(got.faceOrigin, want.faceOrigin);
+  EXPECT_EQ(got.vertexOrigin, want.vertexOrigin);
+  EXPECT_EQ(got.vertexFree, want.vertexFree);
+  EXPECT_EQ(got.seamOrigin, want.seamOrigin);
+  EXPECT_EQ(got.mesh.positions, want.mesh.positions);
+  EXPECT_EQ(got.mesh.triangles, want.mesh.triangles);
+  EXPECT_EQ(got.field.direction, want.field.direction);
+  EXPECT_EQ(got.cut.corners.bytes(), want.cut.corners.bytes());
+  EXPECT_EQ(got.cut.faceRotation, want.cut.faceRotation);
+  EXPECT_EQ(got.cut.cones, want.cut.cones);
+  ASSERT_EQ(got.cut.seams.size(), want.cut.seams.size());
+  for (std::size_t s = 0; s < want.cut.seams.size(); ++s) {
+    EXPECT_EQ(got.cut.seams[s].corners, want.cut.seams[s].corners);
+    EXPECT_EQ(got.cut.seams[s].start, want.cut.seams[s].start);
+    EXPECT_EQ(got.cut.seams[s].end, want.cut.seams[s].end);
+  }
+  ASSERT_EQ(got.topology.numCorners(), want.topology.numCorners());
+  std::size_t wrong = 0;
+  for (CornerId c = 0; c < want.topology.numCorners(); ++c) wrong += got.topology.opposite(c) != want.topology.opposite(c);
+  for (VertexId v = 0; v < want.topology.numVertices(); ++v) wrong += got.topology.vertexCorner(v) != want.topology.vertexCorner(v);
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GT(want.topology.numFaces(), 0u);
+  EXPECT_LT(std::count(want.vertexFree.begin(), want.vertexFree.end(), 1), std::ptrdiff_t(want.vertexFree.size()));
+}
+
 // The Vox solve out of core: the same seam constraints, translations and map (before any local
 // refinement) as parameterizeMeshVoxel on the cleaned mesh; the written map's seams are seamless.
 TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
@@ -219,6 +248,13 @@ TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
     EXPECT_EQ(scratchSupportFaces(folder, basis, solved.markedBasis), expected.markedFaces);
     EXPECT_EQ(scratchSupportFaces(folder, basis, solved.inconsistentBasisFunctions), expected.inconsistentFaces);
     EXPECT_FALSE(expected.markedFaces.empty());
+    // The refinement's region paged in equals the one cut out of the mesh in memory.
+    // (a part of the marked faces and a ring: the region has a border of locked vertices).
+    const std::vector<FaceId> seeds(expected.markedFaces.begin(), expected.markedFaces.begin() + expected.markedFaces.size() / 8);
+    const std::vector<FaceId> region = growFaces(cleaned.topology, seeds, 1);
+    const RegionMesh want = extractRegion(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, region);
+    const RegionMesh got = extractScratchRegion(scratch, in.field, in.cut, region, kTinyPass);
+    expectSameRegion(got, want);
     EXPECT_FALSE(solved.translations.empty());
     const WedgeMap& map = expected.param.cornerUV;
     ASSERT_EQ(solved.map.numWedges, map.numWedges());

@@ -1,5 +1,7 @@
 #include "core/refine/refine.h"
 
+#include "core/refine/detail_region.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -286,21 +288,6 @@ std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology&
 
 namespace {
 
-/// Whole-mesh faces and corners to their ids in a region (regionFaces sorted); kInvalidId outside.
-struct RegionIndex {
-  const std::vector<FaceId>& regionFaces;
-  std::uint32_t subFace(FaceId f) const {
-    const auto it = std::lower_bound(regionFaces.begin(), regionFaces.end(), f);
-    return it != regionFaces.end() && *it == f ? static_cast<std::uint32_t>(it - regionFaces.begin())
-                                               : kInvalidId;
-  }
-  CornerId subCorner(CornerId c) const {
-    if (c == kInvalidId) return kInvalidId;
-    const std::uint32_t i = subFace(cornerFace(c));
-    return i == kInvalidId ? kInvalidId : 3 * i + c % 3;
-  }
-};
-
 void checkRegionInput(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                       const CutResult& cut, const std::vector<FaceId>& regionFaces) {
   const FaceId nf = topology.numFaces();
@@ -315,118 +302,15 @@ void checkRegionInput(const TriangleMesh& mesh, const Topology& topology, const 
   }
 }
 
-/// Sub vertices: one per fan piece of region corners around each whole-mesh vertex (filling
-/// out.vertexOrigin and out.vertexFree); a piece reaching a face outside the region is locked.
-/// Returns the sub vertex of every region corner; vertexCorner gets one corner per sub vertex.
-std::vector<VertexId> regionVertices(const Topology& topology, const RegionIndex& index, RegionMesh& out,
-                                     std::vector<CornerId>& vertexCorner) {
-  const std::vector<FaceId>& regionFaces = index.regionFaces;
-  const std::uint32_t rf = static_cast<std::uint32_t>(regionFaces.size());
-  std::vector<VertexId> cornerVertex(3u * rf, kInvalidId);
-  for (CornerId sc = 0; sc < 3u * rf; ++sc) {
-    if (cornerVertex[sc] != kInvalidId) continue;
-    const CornerId start = 3 * regionFaces[sc / 3] + sc % 3;
-    // Most clockwise corner of the piece; a piece reaching a face outside the region is locked.
-    CornerId first = start;
-    bool free = true;
-    for (;;) {
-      const CornerId before = topology.cw(first);
-      if (before == kInvalidId) break;
-      if (before == start) break;  // closed fan, all in the region
-      if (index.subFace(cornerFace(before)) == kInvalidId) {
-        free = false;
-        break;
-      }
-      first = before;
-    }
-    const VertexId id = static_cast<VertexId>(out.vertexOrigin.size());
-    CornerId c = first;
-    for (;;) {
-      const CornerId sc2 = index.subCorner(c);  // in the region by construction
-      if (sc2 == kInvalidId) break;
-      cornerVertex[sc2] = id;
-      const CornerId after = topology.ccw(c);
-      if (after == kInvalidId || after == first) break;
-      if (index.subFace(cornerFace(after)) == kInvalidId) {
-        free = false;
-        break;
-      }
-      c = after;
-    }
-    out.vertexOrigin.push_back(topology.vertex(start));
-    out.vertexFree.push_back(free ? 1 : 0);
-    vertexCorner.push_back(index.subCorner(first));
-  }
-  return cornerVertex;
-}
-
-/// Seams: the edges with both faces in the region, in curve order, under local ids; and the
-/// region's cones.
-void regionSeamsAndCones(const Topology& topology, const CutResult& cut, const RegionIndex& index,
-                         RegionMesh& out) {
-  const TriangleMesh& sub = out.mesh;
-  CutResult& subCut = out.cut;
-  for (std::uint32_t s = 0; s < cut.seams.size(); ++s) {
-    SeamCurve local;
-    local.matching = cut.seams[s].matching;
-    for (CornerId c : cut.seams[s].corners) {
-      const CornerId sc = index.subCorner(c), so = index.subCorner(topology.opposite(c));
-      if (sc == kInvalidId || so == kInvalidId) continue;
-      local.corners.push_back(sc);
-    }
-    if (local.corners.empty()) continue;
-    local.start = sub.triangles[local.corners.front() / 3][nextCorner(local.corners.front()) % 3];
-    local.end = sub.triangles[local.corners.back() / 3][prevCorner(local.corners.back()) % 3];
-    subCut.seams.push_back(std::move(local));
-    out.seamOrigin.push_back(s);
-  }
-  const std::uint32_t nv = static_cast<std::uint32_t>(out.vertexOrigin.size());
-  for (VertexId v = 0; v < nv; ++v) {
-    if (std::binary_search(cut.cones.begin(), cut.cones.end(), out.vertexOrigin[v])) {
-      subCut.cones.push_back(v);
-    }
-  }
-}
-
 }  // namespace
 
 RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
                          const CrossField& field, const CutResult& cut,
                          const std::vector<FaceId>& regionFaces) {
   checkRegionInput(mesh, topology, field, cut, regionFaces);
-  RegionMesh out;
-  out.faceOrigin = regionFaces;
-  const std::uint32_t rf = static_cast<std::uint32_t>(regionFaces.size());
-  const RegionIndex index{regionFaces};
-  std::vector<CornerId> vertexCorner;
-  const std::vector<VertexId> cornerVertex = regionVertices(topology, index, out, vertexCorner);
-
-  // Faces, field and cut corners copied under local ids.
-  const std::uint32_t nv = static_cast<std::uint32_t>(out.vertexOrigin.size());
-  TriangleMesh& sub = out.mesh;
-  sub.positions.resize(nv);
-  for (VertexId v = 0; v < nv; ++v) sub.positions[v] = mesh.positions[out.vertexOrigin[v]];
-  sub.triangles.resize(rf);
-  std::vector<CornerId> opposite(3u * rf);
-  out.field.direction.resize(rf);
-  CutResult& subCut = out.cut;
-  subCut.corners = CutCorners(3u * rf, false);
-  subCut.faceRotation.resize(rf);
-  for (std::uint32_t i = 0; i < rf; ++i) {
-    const FaceId f = regionFaces[i];
-    out.field.direction[i] = field.direction[f];
-    subCut.faceRotation[i] = cut.faceRotation[f];
-    for (int k = 0; k < 3; ++k) {
-      const CornerId c = 3 * f + k, sc = 3 * i + k;
-      sub.triangles[i][k] = cornerVertex[sc];
-      opposite[sc] = index.subCorner(topology.opposite(c));
-      subCut.corners.setCut(sc, cut.corners.isCut(c) || opposite[sc] == kInvalidId);
-      subCut.corners.setMatching(sc, cut.corners.matching(c));
-    }
-  }
-  regionSeamsAndCones(topology, cut, index, out);
-  out.topology = Topology::fromParts(sub.triangles, std::move(opposite), std::move(vertexCorner));
-  return out;
+  return detail::extractRegionFrom(
+      topology, [&](VertexId v) { return mesh.positions[v]; }, [&](FaceId f) { return field.direction[f]; },
+      [&](FaceId f) { return cut.faceRotation[f]; }, cut.corners, cut.seams, cut.cones, regionFaces);
 }
 
 namespace {
