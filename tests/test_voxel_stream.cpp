@@ -21,6 +21,9 @@
 #include "core/solve/evaluate.h"
 #include "stream/cut_stream.h"
 #include "stream/evaluate_stream.h"
+#include "io/atomic_file.h"
+#include "io/mesh_io.h"
+#include "io/scratch_map_writer.h"
 #include "stream/refine_stream.h"
 #include "stream/voxel_solve_stream.h"
 #include "stream/field_stream.h"
@@ -196,6 +199,25 @@ TEST(VoxelStream, MapEqualsTheInMemoryEvaluation) {
     EXPECT_EQ(wrongValue, 0u);
     EXPECT_EQ(nonZero, values.size());
     EXPECT_GT(map.numWedges(), cleaned.topology.numVertices());  // seams split vertices
+    // Written chunk by chunk from the files: the bytes writeMesh writes for the mesh in memory.
+    TriangleMesh mesh;
+    mesh.positions = cleaned.mesh.positions;
+    mesh.triangles = cleaned.mesh.triangles;
+    mesh.cornerUV = map;
+    testing::TempDir dir;
+    for (const char* name : {"map.ply", "map.obj", "map.off", "ascii.ply"}) {
+      SCOPED_TRACE(name);
+      WriteOptions options;
+      options.binary = std::string(name) != "ascii.ply";
+      const std::string want = dir.dir() + "/want-" + name, got = dir.dir() + "/got-" + name;
+      writeMesh(want, mesh, options);
+      AtomicFile file(got);
+      writeScratchMap(file, folder, scratch, streamed, options, kTinyPass);
+      file.commit();
+      const std::string wantBytes = testing::readFile(want), gotBytes = testing::readFile(got);
+      EXPECT_GT(wantBytes.size(), 1000u);
+      EXPECT_TRUE(wantBytes == gotBytes) << wantBytes.size() << " against " << gotBytes.size() << " bytes";
+    }
   });
 }
 
