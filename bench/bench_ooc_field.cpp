@@ -62,9 +62,12 @@ int main(int argc, char** argv) {
   const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
   auto t1 = Clock::now();
   line("weld pass", t0, t1);
+  for (const auto& [name, s] : welded.census.stageSeconds) std::printf("  weld: %-21s %8.2f s\n", name.c_str(), s);
   const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, budget);
   auto t2 = Clock::now();
   line("clean", t1, t2);
+  for (const auto& [name, s] : scratch.stageSeconds) std::printf("  clean: %-20s %8.2f s\n", name.c_str(), s);
+  std::fflush(stdout);
   const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), StreamPassOptions{budget});
   auto t3 = Clock::now();
   line("field (proxy)", t2, t3);

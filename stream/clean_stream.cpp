@@ -14,7 +14,10 @@
 #include "core/mesh/detail_union_find.h"
 #include "core/mesh/topology.h"
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 #include "stream/external_sort.h"
+#include "stream/paged_corner_table.h"
+#include "stream/paged_reader.h"
 
 namespace seamvox {
 
@@ -51,16 +54,6 @@ struct CornerPair {
   CornerId corner, other;
   bool operator<(const CornerPair& o) const { return corner < o.corner; }
 };
-
-/// An edge length at a vertex, sorted by vertex then length (12 bytes: six per face are sorted).
-#pragma pack(push, 4)
-struct VertexValue {
-  VertexId vertex;
-  double value;
-  bool operator<(const VertexValue& o) const { return vertex != o.vertex ? vertex < o.vertex : value < o.value; }
-};
-#pragma pack(pop)
-static_assert(sizeof(VertexValue) == 12, "packed");
 
 /// A boundary vertex's position and input vertex.
 struct BoundaryPoint {
@@ -521,6 +514,48 @@ class CleanPass {
     }
   }
 
+  /// Per vertex the median of its edge lengths into typical, and a file of the shortest, in
+  /// vertex order: each vertex's fan walked through page caches of the final corner table, in
+  /// parallel over blocks of vertices.
+  ScratchFile measureVertexEdges(std::vector<double>& typical) {
+    const std::size_t cacheBytes = pageCacheBytes(sort_.memoryBytes);
+    struct Readers {
+      PagedCornerTable table;
+      PagedReader<Vec3f> positions;
+    };
+    ReaderPool<Readers> pool([&] {
+      return std::unique_ptr<Readers>(
+          new Readers{PagedCornerTable(out_, cacheBytes), PagedReader<Vec3f>(out_.positions, cacheBytes)});
+    });
+    ScratchWriter shortestOut(folder_, "clean: measure");
+    const std::uint64_t nv = out_.numVertices, blockVertices = std::uint64_t(1) << 16;
+    std::vector<double> shortest;
+    for (std::uint64_t first = 0; first < nv; first += blockVertices) {
+      const std::size_t count = static_cast<std::size_t>(std::min(blockVertices, nv - first));
+      shortest.assign(count, 0.0);
+      parallelFor(count, 1024, [&](const IndexRange& range) {
+        auto r = pool.take();
+        std::vector<double> values;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const VertexId v = static_cast<VertexId>(first + i);
+          values.clear();
+          const Vec3d p = r->positions[v].cast<double>();
+          r->table.forEachCornerAround(v, [&](CornerId c) {
+            values.push_back((r->positions[r->table.vertex(nextCorner(c))].cast<double>() - p).norm());
+            values.push_back((r->positions[r->table.vertex(prevCorner(c))].cast<double>() - p).norm());
+          });
+          if (values.empty()) continue;
+          std::sort(values.begin(), values.end());
+          typical[v] = values[values.size() / 2];
+          shortest[i] = values.front();
+        }
+      });
+      shortestOut.write(shortest.data(), count * sizeof(double));
+    }
+    pool.forEach([&](Readers& r) { folder_.countRead("clean: measure", r.table.bytesRead() + r.positions.bytesRead()); });
+    return shortestOut.finish();
+  }
+
   /// cleanMesh's last counts: zero-area faces, boundary vertices at the position of another of
   /// another origin (cracks), spikes and the bounding box diagonal without them.
   void measure() {
@@ -532,30 +567,11 @@ class CleanPass {
       while (in.read(&p, sizeof p)) box.min = box.min.cwiseMin(p.cast<double>()), box.max = box.max.cwiseMax(p.cast<double>());
     }
     const double tiny = 1e-14 * box.diagonal() * box.diagonal();
-    // Edge lengths at each vertex: two per corner, as forEachEdgeLength gives them.
-    ExternalSorter<VertexValue> lengths(folder_, sortOptions("clean: measure"));
-    forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&p)[3]) {
-      r.zeroAreaFaces += 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm() <= tiny;
-      for (int k = 0; k < 3; ++k) {
-        lengths.add({t[k], (p[(k + 1) % 3] - p[k]).norm()});
-        lengths.add({t[k], (p[(k + 2) % 3] - p[k]).norm()});
-      }
-    });
-    lengths.finish();
-    // Per vertex: the median (typical, kept) and the shortest (a file, in vertex order).
+    // Per vertex, the lengths of the two edges of each of its corners (as forEachEdgeLength gives
+    // them) by a walk around its fan: the median (typical, kept) and the shortest (a file, in
+    // vertex order).
     std::vector<double> typical(out_.numVertices, 0.0);
-    ScratchWriter shortestOut(folder_, "clean: measure");
-    std::vector<double> values;
-    VertexValue next{};
-    bool more = lengths.next(next);
-    while (more) {
-      const VertexId v = next.vertex;
-      values.clear();
-      for (; more && next.vertex == v; more = lengths.next(next)) values.push_back(next.value);
-      typical[v] = values[values.size() / 2];
-      shortestOut.write(&values.front(), sizeof(double));
-    }
-    const ScratchFile shortestFile = shortestOut.finish();
+    const ScratchFile shortestFile = measureVertexEdges(typical);
     // Around each vertex, its neighbours' typical lengths: a spike's shortest edge is over
     // kSpikeRatio times their median, so over kSpikeRatio times their least. The least first
     // (as a float rounded down: a superset of the candidates), then the values around the few
@@ -565,7 +581,8 @@ class CleanPass {
       const float f = static_cast<float>(x);
       return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
     };
-    forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&)[3]) {
+    forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&p)[3]) {
+      r.zeroAreaFaces += 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm() <= tiny;
       for (int k = 0; k < 3; ++k) {
         least[t[k]] = std::min({least[t[k]], below(typical[t[(k + 1) % 3]]), below(typical[t[(k + 2) % 3]])});
       }
@@ -623,7 +640,7 @@ class CleanPass {
     points.finish();
     std::vector<BoundaryPoint> same;
     BoundaryPoint point{};
-    more = points.next(point);
+    bool more = points.next(point);
     while (more) {
       same.assign(1, point);
       while ((more = points.next(point)) && point.p[0] == same[0].p[0] && point.p[1] == same[0].p[1] &&
