@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <tuple>
 #include <unordered_map>
@@ -53,6 +54,16 @@ struct EdgeSideLess {
 struct CornerPair {
   CornerId corner, other;
   bool operator<(const CornerPair& o) const { return corner < o.corner; }
+};
+
+/// A thread's readers of the cleaned mesh's vertex passes.
+struct VertexReaders {
+  PagedCornerTable table;
+  PagedReader<Vec3f> positions;
+  std::unique_ptr<PagedReader<double>> perVertex;  // a value per vertex, when a pass reads one
+  std::uint64_t bytesRead() const {
+    return table.bytesRead() + positions.bytesRead() + (perVertex ? perVertex->bytesRead() : 0);
+  }
 };
 
 /// A boundary vertex's position and input vertex.
@@ -514,46 +525,93 @@ class CleanPass {
     }
   }
 
-  /// Per vertex the median of its edge lengths into typical, and a file of the shortest, in
-  /// vertex order: each vertex's fan walked through page caches of the final corner table, in
-  /// parallel over blocks of vertices.
-  ScratchFile measureVertexEdges(std::vector<double>& typical) {
+  /// For blocks of 64K vertices: start(first, count), then visit(readers, first + i, i) for each
+  /// of its vertices in parallel (a per-thread set of readers: the final corner table, the
+  /// positions and, when given, a file of one double per vertex), then finish(count).
+  template <class Start, class Visit, class Finish>
+  void forEachVertexInBlocks(const ScratchFile* perVertex, Start&& start, Visit&& visit, Finish&& finish) {
     const std::size_t cacheBytes = pageCacheBytes(sort_.memoryBytes);
-    struct Readers {
-      PagedCornerTable table;
-      PagedReader<Vec3f> positions;
-    };
-    ReaderPool<Readers> pool([&] {
-      return std::unique_ptr<Readers>(
-          new Readers{PagedCornerTable(out_, cacheBytes), PagedReader<Vec3f>(out_.positions, cacheBytes)});
+    ReaderPool<VertexReaders> pool([&] {
+      return std::unique_ptr<VertexReaders>(new VertexReaders{
+          PagedCornerTable(out_, cacheBytes), PagedReader<Vec3f>(out_.positions, cacheBytes),
+          perVertex ? std::make_unique<PagedReader<double>>(*perVertex, cacheBytes) : nullptr});
     });
-    ScratchWriter shortestOut(folder_, "clean: measure");
     const std::uint64_t nv = out_.numVertices, blockVertices = std::uint64_t(1) << 16;
-    std::vector<double> shortest;
     for (std::uint64_t first = 0; first < nv; first += blockVertices) {
       const std::size_t count = static_cast<std::size_t>(std::min(blockVertices, nv - first));
-      shortest.assign(count, 0.0);
+      start(first, count);
       parallelFor(count, 1024, [&](const IndexRange& range) {
         auto r = pool.take();
         std::vector<double> values;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const VertexId v = static_cast<VertexId>(first + i);
-          values.clear();
-          const Vec3d p = r->positions[v].cast<double>();
-          r->table.forEachCornerAround(v, [&](CornerId c) {
-            values.push_back((r->positions[r->table.vertex(nextCorner(c))].cast<double>() - p).norm());
-            values.push_back((r->positions[r->table.vertex(prevCorner(c))].cast<double>() - p).norm());
-          });
-          if (values.empty()) continue;
-          std::sort(values.begin(), values.end());
-          typical[v] = values[values.size() / 2];
-          shortest[i] = values.front();
-        }
+        for (std::size_t i = range.begin(); i != range.end(); ++i) visit(*r, static_cast<VertexId>(first + i), i, values);
       });
-      shortestOut.write(shortest.data(), count * sizeof(double));
+      finish(count);
     }
-    pool.forEach([&](Readers& r) { folder_.countRead("clean: measure", r.table.bytesRead() + r.positions.bytesRead()); });
-    return shortestOut.finish();
+    pool.forEach([&](VertexReaders& r) { folder_.countRead("clean: measure", r.bytesRead()); });
+  }
+
+  /// Spikes (cleanMesh's count), by walks around the fans: per vertex the lengths of the two
+  /// edges of each of its corners (as forEachEdgeLength gives them), their median (typical, to a
+  /// file) and least (shortest); then a vertex whose shortest edge is over kSpikeRatio times the
+  /// least and the median of its neighbours' typical lengths, that median positive. Increasing.
+  std::vector<VertexId> findSpikes() {
+    ScratchWriter typicalOut(folder_, "clean: measure"), shortestOut(folder_, "clean: measure");
+    std::vector<double> typical, shortest;
+    forEachVertexInBlocks(
+        nullptr,
+        [&](std::uint64_t, std::size_t count) {
+          typical.assign(count, 0.0);
+          shortest.assign(count, 0.0);
+        },
+        [&](VertexReaders& r, VertexId v, std::size_t i, std::vector<double>& values) {
+          values.clear();
+          const Vec3d p = r.positions[v].cast<double>();
+          r.table.forEachCornerAround(v, [&](CornerId c) {
+            values.push_back((r.positions[r.table.vertex(nextCorner(c))].cast<double>() - p).norm());
+            values.push_back((r.positions[r.table.vertex(prevCorner(c))].cast<double>() - p).norm());
+          });
+          if (values.empty()) return;
+          std::sort(values.begin(), values.end());
+          typical[i] = values[values.size() / 2];
+          shortest[i] = values.front();
+        },
+        [&](std::size_t count) {
+          typicalOut.write(typical.data(), count * sizeof(double));
+          shortestOut.write(shortest.data(), count * sizeof(double));
+        });
+    const ScratchFile typicalFile = typicalOut.finish(), shortestFile = shortestOut.finish();
+    std::vector<VertexId> spikes;
+    std::mutex spikesMutex;
+    {
+      ScratchReader shortestIn(folder_, shortestFile, "clean: measure");
+      forEachVertexInBlocks(
+          &typicalFile,
+          [&](std::uint64_t, std::size_t count) {
+            shortest.resize(count);
+            if (!shortestIn.read(shortest.data(), count * sizeof(double))) {
+              throw IoError(shortestFile.path + ": scratch file ends early");
+            }
+          },
+          [&](VertexReaders& r, VertexId v, std::size_t i, std::vector<double>& around) {
+            around.clear();
+            r.table.forEachCornerAround(v, [&](CornerId c) {
+              around.push_back((*r.perVertex)[r.table.vertex(nextCorner(c))]);
+              around.push_back((*r.perVertex)[r.table.vertex(prevCorner(c))]);
+            });
+            if (around.empty()) return;
+            std::sort(around.begin(), around.end());
+            const double scale = around[around.size() / 2];
+            if (shortest[i] > kSpikeRatio * around.front() && scale > 0.0 && shortest[i] > kSpikeRatio * scale) {
+              std::lock_guard<std::mutex> lock(spikesMutex);
+              spikes.push_back(v);
+            }
+          },
+          [](std::size_t) {});
+    }
+    folder_.remove(typicalFile);
+    folder_.remove(shortestFile);
+    std::sort(spikes.begin(), spikes.end());
+    return spikes;
   }
 
   /// cleanMesh's last counts: zero-area faces, boundary vertices at the position of another of
@@ -567,55 +625,10 @@ class CleanPass {
       while (in.read(&p, sizeof p)) box.min = box.min.cwiseMin(p.cast<double>()), box.max = box.max.cwiseMax(p.cast<double>());
     }
     const double tiny = 1e-14 * box.diagonal() * box.diagonal();
-    // Per vertex, the lengths of the two edges of each of its corners (as forEachEdgeLength gives
-    // them) by a walk around its fan: the median (typical, kept) and the shortest (a file, in
-    // vertex order).
-    std::vector<double> typical(out_.numVertices, 0.0);
-    const ScratchFile shortestFile = measureVertexEdges(typical);
-    // Around each vertex, its neighbours' typical lengths: a spike's shortest edge is over
-    // kSpikeRatio times their median, so over kSpikeRatio times their least. The least first
-    // (as a float rounded down: a superset of the candidates), then the values around the few
-    // candidates only.
-    std::vector<float> least(out_.numVertices, std::numeric_limits<float>::infinity());
-    const auto below = [](double x) {
-      const float f = static_cast<float>(x);
-      return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
-    };
-    forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&p)[3]) {
+    forEachPlacedFace("clean: measure", [&](FaceId, const Triangle&, const Vec3d (&p)[3]) {
       r.zeroAreaFaces += 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm() <= tiny;
-      for (int k = 0; k < 3; ++k) {
-        least[t[k]] = std::min({least[t[k]], below(typical[t[(k + 1) % 3]]), below(typical[t[(k + 2) % 3]])});
-      }
     });
-    std::unordered_map<VertexId, std::pair<double, std::vector<double>>> candidates;  // shortest, values around
-    {
-      ScratchReader shortestIn(folder_, shortestFile, "clean: measure");
-      double shortest = 0.0;
-      for (VertexId v = 0; shortestIn.read(&shortest, sizeof shortest); ++v) {
-        if (shortest > kSpikeRatio * double(least[v])) candidates[v].first = shortest;
-      }
-    }
-    folder_.remove(shortestFile);
-    std::vector<float>().swap(least);
-    std::vector<VertexId> spikes;
-    if (!candidates.empty()) {
-      forEachPlacedFace("clean: measure", [&](FaceId, const Triangle& t, const Vec3d (&)[3]) {
-        for (int k = 0; k < 3; ++k) {
-          const auto it = candidates.find(t[k]);
-          if (it == candidates.end()) continue;
-          it->second.second.push_back(typical[t[(k + 1) % 3]]);
-          it->second.second.push_back(typical[t[(k + 2) % 3]]);
-        }
-      });
-      for (auto& [v, entry] : candidates) {
-        std::vector<double>& around = entry.second;
-        std::sort(around.begin(), around.end());
-        const double shortest = entry.first, scale = around[around.size() / 2];
-        if (shortest > kSpikeRatio * around.front() && scale > 0.0 && shortest > kSpikeRatio * scale) spikes.push_back(v);
-      }
-      std::sort(spikes.begin(), spikes.end());
-    }
-    std::vector<double>().swap(typical);
+    const std::vector<VertexId> spikes = findSpikes();
     r.spikeVertices = spikes.size();
     // Boundary points at one position with two origins, and the box without the spikes.
     ExternalSorter<BoundaryPoint> points(folder_, sortOptions("clean: measure"));

@@ -6,9 +6,9 @@
 /// and the vertices written to the scratch folder by external sorts of edge and corner records.
 /// Equal to cleanMesh on the weld pass's faces in the weld pass's (Morton) order, their vertices numbered
 /// in the order the faces first name them (a vertex near its faces in the files). Memory: the
-/// sorts' limit, 4 bytes per welded vertex while ids are renumbered, and only when the input
-/// needs them, 5 bytes per face for the orientation and 8 for the pieces of edges shared by more
-/// than two faces.
+/// sorts' limit, 4 bytes per welded vertex while ids are renumbered, 1 per vertex (open fans), and
+/// only when the input needs them, 5 bytes per face for the orientation and 8 for the pieces of
+/// edges shared by more than two faces. The spike count walks the fans through page caches.
 #include <cstdint>
 #include <string>
 #include <utility>
