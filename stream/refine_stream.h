@@ -7,6 +7,7 @@
 #include "core/refine/refine.h"
 #include "stream/clean_stream.h"
 #include "stream/cut_stream.h"
+#include "stream/evaluate_stream.h"
 #include "stream/field_stream.h"
 
 namespace seamvox {
@@ -15,5 +16,14 @@ namespace seamvox {
 /// regionFaces: increasing face ids (InputError otherwise). Cost: the region times the valence.
 RegionMesh extractScratchRegion(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                                 const std::vector<FaceId>& regionFaces, const StreamPassOptions& pass);
+
+/// selectRefineRegion on the out-of-core map (evaluate_stream): options.markedFaces, the faces the
+/// map collapses or flips (with options.seedFromMap; one pass over the faces, their corners'
+/// wedges in order, positions and values through page caches), then options.rings rings of
+/// neighbours by fan walks. Equal to selectRefineRegion in memory, with its counts in stats.
+/// Memory: the region. InputError on a marked face out of range or a bad edge length.
+std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
+                                              const RefineOptions& options, const StreamPassOptions& pass,
+                                              RefineStats* stats = nullptr);
 
 }  // namespace seamvox

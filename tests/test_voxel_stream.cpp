@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <tuple>
 #include <filesystem>
 #include <string>
 
@@ -252,6 +253,7 @@ void expectSameRegion(const RegionMesh& got, const RegionMesh& want) {
 TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
   const NamedMeshes meshes = testing::stageTestMeshes(29);
   std::size_t consistentMeshes = 0;
+  std::uint64_t seededFromMap = 0;
   forEachCleaned(meshes, [&](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
     const Inputs in = prepareInputs(folder, scratch, cleaned, 32);
     ParamOptions param;
@@ -277,6 +279,23 @@ TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
     const RegionMesh want = extractRegion(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, region);
     const RegionMesh got = extractScratchRegion(scratch, in.field, in.cut, region, kTinyPass);
     expectSameRegion(got, want);
+    // The refinement region selected from the map out of core: the same faces and counts.
+    for (const bool fromMap : {true, false}) {
+      for (const std::uint32_t rings : {1u, 3u}) {
+        SCOPED_TRACE(std::string(fromMap ? "seeds from the map" : "marked only") + ", rings " + std::to_string(rings));
+        RefineOptions refine;
+        refine.edgeLength = param.edgeLength;
+        refine.markedFaces = expected.markedFaces;
+        refine.seedFromMap = fromMap;
+        refine.rings = rings;
+        RefineStats a, b;
+        const std::vector<FaceId> inMemory = selectRefineRegion(cleaned.mesh, cleaned.topology, expected.param.cornerUV, refine, &a);
+        EXPECT_EQ(selectScratchRefineRegion(folder, scratch, solved.map, refine, kTinyPass, &b), inMemory);
+        EXPECT_EQ(std::make_tuple(b.markedFaces, b.collapsedFaces, b.flippedFaces, b.regionFaces),
+                  std::make_tuple(a.markedFaces, a.collapsedFaces, a.flippedFaces, a.regionFaces));
+        if (fromMap) seededFromMap += a.collapsedFaces + a.flippedFaces;
+      }
+    }
     EXPECT_FALSE(solved.translations.empty());
     const WedgeMap& map = expected.param.cornerUV;
     ASSERT_EQ(solved.map.numWedges, map.numWedges());
@@ -319,6 +338,7 @@ TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
     }
   });
   EXPECT_GT(consistentMeshes, 0u);
+  EXPECT_GT(seededFromMap, 0u);  // some faces collapsed or flipped
 }
 
 TEST(VoxelStream, ElementsEqualTheInMemoryBasis) {

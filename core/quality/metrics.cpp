@@ -40,8 +40,11 @@ EdgeSides edgeSides(const WedgeMap& uv, CornerId c, CornerId o) {
 
 double parameterAreaRatio(const TriangleMesh& mesh, FaceId f, const std::array<Vec2d, 3>& q, double edgeLength) {
   const Triangle& t = mesh.triangles[f];
-  const Vec3d p0 = mesh.position(t[0]);
-  const double area = 0.5 * (mesh.position(t[1]) - p0).cross(mesh.position(t[2]) - p0).norm();
+  return parameterAreaRatio({mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])}, q, edgeLength);
+}
+
+double parameterAreaRatio(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q, double edgeLength) {
+  const double area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm();
   const Vec2d a = q[1] - q[0], b = q[2] - q[0];
   const double uvArea = 0.5 * (a.x() * b.y() - a.y() * b.x());
   return uvArea * (edgeLength * edgeLength) / area;

@@ -56,6 +56,8 @@ double parameterAreaRatio(const TriangleMesh& mesh, const WedgeMap& cornerUV, Fa
                           double edgeLength);
 /// The same with face f's corner values given (q[k] at corner 3 f + k).
 double parameterAreaRatio(const TriangleMesh& mesh, FaceId f, const std::array<Vec2d, 3>& q, double edgeLength);
+/// The same from the face's corner positions p and values q.
+double parameterAreaRatio(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q, double edgeLength);
 
 /// Two cones whose corners are this close in (u, v) (grid units) coincide.
 constexpr double kCoincidentConeDistance = 1e-9;

@@ -42,9 +42,11 @@ enum FaceFlag : std::uint8_t { kOutside = 0, kMarked = 1, kCollapsed = 2, kFlipp
 // (non-finite values included), kFlipped when negative.
 FaceFlag classifyFace(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f,
                       double threshold, double edgeLength) {
-  const double ratio = parameterAreaRatio(mesh, uv, f, edgeLength);
-  if (std::isnan(ratio) || ratio >= threshold) return kOutside;  // NaN: zero-area face, no energy
-  return ratio < 0.0 ? kFlipped : kCollapsed;
+  switch (classifyRefineSeed(parameterAreaRatio(mesh, uv, f, edgeLength), threshold)) {
+    case RefineSeed::Collapsed: return kCollapsed;
+    case RefineSeed::Flipped: return kFlipped;
+    default: return kOutside;
+  }
 }
 
 bool isSortedUnique(const std::vector<FaceId>& faces) {
@@ -118,12 +120,7 @@ std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topo
   reportProgress(options.progress, "refine region", 0.5);
   addRings(topology, region, options.rings, flag, region);
   counts.regionFaces = region.size();
-  if (stats) {
-    stats->markedFaces = counts.markedFaces;
-    stats->collapsedFaces = counts.collapsedFaces;
-    stats->flippedFaces = counts.flippedFaces;
-    stats->regionFaces = counts.regionFaces;
-  }
+  copyRegionCounts(counts, stats);
   reportProgress(options.progress, "refine region", 1.0);
   return region;
 }
@@ -277,6 +274,19 @@ std::vector<std::vector<FaceId>> splitRegion(const Topology& topology, const std
   std::vector<std::vector<FaceId>> out(groups);
   for (std::uint32_t i = 0; i < n; ++i) out[groupOf[sets.find(i)]].push_back(faces[i]);
   return out;
+}
+
+void copyRegionCounts(const RefineStats& counts, RefineStats* stats) {
+  if (!stats) return;
+  stats->markedFaces = counts.markedFaces;
+  stats->collapsedFaces = counts.collapsedFaces;
+  stats->flippedFaces = counts.flippedFaces;
+  stats->regionFaces = counts.regionFaces;
+}
+
+RefineSeed classifyRefineSeed(double ratio, double threshold) {
+  if (std::isnan(ratio) || ratio >= threshold) return RefineSeed::None;  // NaN: zero-area face, no energy
+  return ratio < 0.0 ? RefineSeed::Flipped : RefineSeed::Collapsed;
 }
 
 std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology& topology,

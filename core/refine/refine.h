@@ -98,6 +98,13 @@ struct RefineStats {
   std::uint64_t unresolvedFaces = 0;
 };
 
+/// How a face's parameterAreaRatio seeds the refinement region: collapsed below the threshold,
+/// flipped when negative; a NaN ratio (a zero-area face, no energy) does not.
+enum class RefineSeed : std::uint8_t { None, Collapsed, Flipped };
+RefineSeed classifyRefineSeed(double ratio, double threshold);
+/// selectRefineRegion's counts (marked, collapsed, flipped and region faces) into stats, when given.
+void copyRegionCounts(const RefineStats& counts, RefineStats* stats);
+
 /// A corner a refinement solved: its whole-mesh id and value; free when its vertex was free in
 /// some solve (a RefineResult holds only those).
 struct RefinedCorner {
