@@ -618,12 +618,7 @@ class CleanPass {
   /// another origin (cracks), spikes and the bounding box diagonal without them.
   void measure() {
     CleanReport& r = out_.report;
-    BoundingBox box;
-    {
-      ScratchReader in(folder_, out_.positions, "clean: measure");
-      Vec3f p;
-      while (in.read(&p, sizeof p)) box.min = box.min.cwiseMin(p.cast<double>()), box.max = box.max.cwiseMax(p.cast<double>());
-    }
+    const BoundingBox box = scratchBoundingBox(folder_, out_.positions, "clean: measure");
     const double tiny = 1e-14 * box.diagonal() * box.diagonal();
     forEachPlacedFace("clean: measure", [&](FaceId, const Triangle&, const Vec3d (&p)[3]) {
       r.zeroAreaFaces += 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm() <= tiny;
@@ -751,6 +746,22 @@ ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& sc
   std::stable_sort(comps.begin(), comps.end(), [](const ComponentInfo& a, const ComponentInfo& b) { return a.faces > b.faces; });
   result.components = std::move(comps);
   return result;
+}
+
+BoundingBox scratchBoundingBox(ScratchFolder& folder, const ScratchFile& positions, const std::string& stage) {
+  BoundingBox box;
+  ScratchReader reader(folder, positions, stage);
+  std::vector<Vec3f> block(std::size_t(1) << 16);
+  for (std::uint64_t left = positions.bytes / sizeof(Vec3f); left > 0;) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left, block.size()));
+    if (!reader.read(block.data(), n * sizeof(Vec3f))) throw IoError(positions.path + ": scratch positions end early");
+    for (std::size_t i = 0; i < n; ++i) {
+      box.min = box.min.cwiseMin(block[i].cast<double>());
+      box.max = box.max.cwiseMax(block[i].cast<double>());
+    }
+    left -= n;
+  }
+  return box;
 }
 
 CleanResult readCleanScratch(ScratchFolder& folder, const CleanScratch& scratch) {

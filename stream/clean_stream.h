@@ -53,6 +53,10 @@ CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded,
 /// streamed from the scratch. Memory: 4 bytes per face and per vertex (union-finds).
 ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch);
 
+/// The bounding box of a file of Vec3f positions (a cleaned mesh's, or its smoothed surface),
+/// read in order; its bytes counted under stage. IoError when the file ends inside a record.
+BoundingBox scratchBoundingBox(ScratchFolder& folder, const ScratchFile& positions, const std::string& stage);
+
 /// The scratch read back whole, as cleanMesh returns its result (faceOrigin: input faces).
 CleanResult readCleanScratch(ScratchFolder& folder, const CleanScratch& scratch);
 

@@ -158,20 +158,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   if (nf == 0) return out;
 
   // Cells of the surface's face centroids, sorted by cell.
-  BoundingBox box;
-  {
-    ScratchReader reader(folder, surface, "field: cells");
-    const std::uint64_t numVertices = surface.bytes / sizeof(Vec3f);
-    std::vector<Vec3f> chunk;
-    for (std::uint64_t first = 0; first < numVertices; first += blockFaces) {
-      chunk.resize(std::min(blockFaces, numVertices - first));
-      if (!reader.read(chunk.data(), chunk.size() * sizeof(Vec3f))) throw IoError(surface.path + ": scratch positions end early");
-      for (const Vec3f& p : chunk) {
-        box.min = box.min.cwiseMin(p.cast<double>());
-        box.max = box.max.cwiseMax(p.cast<double>());
-      }
-    }
-  }
+  const BoundingBox box = scratchBoundingBox(folder, surface, "field: cells");
   const detail::ProxyCells cells = detail::proxyCells(box, proxy.gridResolution);
   ScratchFile cellFaces;
   {

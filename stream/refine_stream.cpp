@@ -63,7 +63,6 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
     std::size_t nextMarked = 0;
     for (FaceId f = 0; faces.read(&face, sizeof face); ++f) {
       if (!wedges.read(w, sizeof w)) throw IoError(map.cornerWedge.path + ": scratch file ends early");
-      while (nextMarked < marked.size() && marked[nextMarked] < f) seeds.push_back(marked[nextMarked++]);
       if (nextMarked < marked.size() && marked[nextMarked] == f) {
         seeds.push_back(marked[nextMarked++]);
         continue;

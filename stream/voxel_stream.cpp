@@ -48,23 +48,6 @@ std::array<Vec3d, 3> toGrid(const VoxelGridGeometry& geometry, const std::array<
   return {geometry.toGrid(p[0]), geometry.toGrid(p[1]), geometry.toGrid(p[2])};
 }
 
-BoundingBox scratchBoundingBox(ScratchFolder& folder, const ScratchFile& positions) {
-  BoundingBox box;
-  ScratchReader reader(folder, positions, kStage);
-  std::vector<Vec3f> block(std::size_t(1) << 16);
-  for (std::uint64_t left = positions.bytes / sizeof(Vec3f); left > 0;) {
-    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left, block.size()));
-    if (!reader.read(block.data(), n * sizeof(Vec3f))) throw IoError(positions.path + ": scratch positions end early");
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3d q = block[i].cast<double>();
-      box.min = box.min.cwiseMin(q);
-      box.max = box.max.cwiseMax(q);
-    }
-    left -= n;
-  }
-  return box;
-}
-
 /// Clips every face (a pipeline: chunks in order, clipped in parallel, their voxels registered in
 /// order); writes the fragments with the voxels' ids of first appearance.
 ScratchFile clipFaces(ScratchFolder& folder, const CleanScratch& scratch, const VoxelBasisOptions& options,
@@ -179,7 +162,7 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
   sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
   sort.stage = kStage;
 
-  out.geometry = makeVoxelGrid(scratchBoundingBox(folder, scratch.positions), options.gridResolution);
+  out.geometry = makeVoxelGrid(scratchBoundingBox(folder, scratch.positions, kStage), options.gridResolution);
   clock.finish("bounds");
   const ScratchFile raw = clipFaces(folder, scratch, options, cacheBytes, out);
   clock.finish("clip");
