@@ -1,5 +1,6 @@
 #include "core/refine/refine.h"
 
+#include "core/refine/detail_refine.h"
 #include "core/refine/detail_region.h"
 
 #include <tbb/blocked_range.h>
@@ -49,12 +50,7 @@ FaceFlag classifyFace(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f,
   }
 }
 
-bool isSortedUnique(const std::vector<FaceId>& faces) {
-  for (std::size_t i = 1; i < faces.size(); ++i) {
-    if (faces[i] <= faces[i - 1]) return false;
-  }
-  return true;
-}
+using detail::isSortedUnique;
 
 // Every face sharing a vertex with the frontier joins the region (flag kRing), rings times.
 void addRings(const Topology& topology, std::vector<FaceId> frontier, std::uint32_t rings,
@@ -125,155 +121,17 @@ std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topo
   return region;
 }
 
-// Collapsed and flipped faces by MapQuality's criteria.
-struct FaceCounts {
-  std::uint64_t collapsed = 0, collapsedAtCones = 0, flipped = 0;
-  void add(const TriangleMesh& mesh, const WedgeMap& uv, FaceId f, double ratio,
-           const std::vector<std::uint8_t>& isCone) {
-    add(mesh, f, {uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]}, ratio, isCone);
-  }
-  void add(const TriangleMesh& mesh, FaceId f, const std::array<Vec2d, 3>& q, double ratio,
-           const std::vector<std::uint8_t>& isCone) {
-    if (std::abs(ratio) < kCollapsedAreaFraction) {
-      ++collapsed;
-      collapsedAtCones += collapsesBetweenCones(mesh, f, q, isCone);
-    } else if (ratio < 0.0) {
-      ++flipped;
-    }
-  }
-};
-
-using SolvedCorner = RefinedCorner;  // a whole-mesh corner solved by some round
-
-/// The input of a region solve: the corners solved so far where there are any, else the map.
-WedgeMap regionInput(const RegionMesh& region, const WedgeMap& cornerUV,
-                     const std::vector<SolvedCorner>& current) {
-  const std::uint32_t rf = region.topology.numFaces();
-  std::vector<Vec2d> values(3u * rf);
-  for (std::uint32_t i = 0; i < rf; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const CornerId c = 3 * region.faceOrigin[i] + k;
-      const auto it = std::lower_bound(current.begin(), current.end(), c,
-                                       [](const SolvedCorner& s, CornerId x) { return s.corner < x; });
-      values[3 * i + k] = it != current.end() && it->corner == c ? it->uv : cornerUV[c];
-    }
-  }
-  return WedgeMap::fromCorners(region.mesh.triangles, values);
-}
-
-/// A region's solved corners under whole-mesh ids, in increasing corner order (sub faces follow
-/// the whole mesh's order), written from `out` on.
-void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, SolvedCorner* out) {
-  for (CornerId c = 0; c < solved.cornerUV.size(); ++c) {
-    out[c] = {solved.cornerUV[c], 3 * region.faceOrigin[c / 3] + c % 3,
-              region.vertexFree[region.mesh.triangles[c / 3][c % 3]] != 0};
-  }
-}
-
-/// Records solved corners (sorted by corner) in `current` (sorted by corner; these values replace
-/// older ones, a corner stays free once freed). Corners seen before are updated in place and new
-/// ones merged in within the spare capacity where it suffices: no second copy of `current`,
-/// which holds every corner of a region of millions of faces.
-void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& current) {
-  if (current.empty()) {
-    current = std::move(fresh);
-    return;
-  }
-  const auto byCorner = [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; };
-  std::vector<SolvedCorner> added;
-  for (const SolvedCorner& s : fresh) {
-    const auto it = std::lower_bound(current.begin(), current.end(), s, byCorner);
-    if (it != current.end() && it->corner == s.corner) {
-      *it = {s.uv, s.corner, s.free || it->free};
-    } else {
-      added.push_back(s);
-    }
-  }
-  const std::size_t old = current.size();
-  current.insert(current.end(), added.begin(), added.end());
-  std::inplace_merge(current.begin(), current.begin() + old, current.end(), byCorner);
-}
-
-/// growFaces, with the faces outside the region so far flagged kRing.
-std::vector<FaceId> growPatch(const Topology& topology, std::vector<FaceId> frontier,
-                              std::uint32_t rings, std::vector<std::uint8_t>& flag) {
-  std::vector<FaceId> patch = growFaces(topology, std::move(frontier), rings);
-  for (FaceId f : patch) {
-    if (flag[f] == kOutside) flag[f] = kRing;
-  }
-  return patch;
-}
-
 }  // namespace
 
 std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> frontier,
                               std::uint32_t rings) {
-  std::vector<FaceId> patch = frontier;
-  std::sort(patch.begin(), patch.end());
-  patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
-  std::vector<VertexId> seen;  // vertices expanded, sorted
-  for (std::uint32_t ring = 0; ring < rings && !frontier.empty(); ++ring) {
-    // The frontier's vertices not expanded yet, each once (a vertex has about six frontier faces).
-    std::vector<VertexId> fresh;
-    fresh.reserve(3 * frontier.size());
-    for (FaceId f : frontier) {
-      for (int k = 0; k < 3; ++k) fresh.push_back(topology.vertex(3 * f + k));
-    }
-    std::sort(fresh.begin(), fresh.end());
-    fresh.erase(std::unique(fresh.begin(), fresh.end()), fresh.end());
-    std::vector<VertexId> unseen;
-    std::set_difference(fresh.begin(), fresh.end(), seen.begin(), seen.end(), std::back_inserter(unseen));
-    std::vector<FaceId> added;
-    for (VertexId v : unseen) {
-      topology.forEachCornerAround(v, [&](CornerId c) {
-        const FaceId g = cornerFace(c);
-        if (!std::binary_search(patch.begin(), patch.end(), g)) added.push_back(g);
-      });
-    }
-    std::vector<VertexId> expanded;
-    expanded.reserve(seen.size() + unseen.size());
-    std::merge(seen.begin(), seen.end(), unseen.begin(), unseen.end(), std::back_inserter(expanded));
-    seen = std::move(expanded);
-    std::sort(added.begin(), added.end());
-    added.erase(std::unique(added.begin(), added.end()), added.end());
-    std::vector<FaceId> grown;
-    grown.reserve(patch.size() + added.size());
-    std::merge(patch.begin(), patch.end(), added.begin(), added.end(), std::back_inserter(grown));
-    patch = std::move(grown);
-    frontier = std::move(added);
-  }
-  return patch;
+  return detail::growFacesIn(topology, std::move(frontier), rings);
 }
 
 std::vector<std::vector<FaceId>> splitRegion(const Topology& topology, const std::vector<FaceId>& faces,
                                              std::size_t groupFaces) {
   if (!isSortedUnique(faces)) throw InputError("refine: region faces must be sorted and unique");
-  const std::uint32_t n = static_cast<std::uint32_t>(faces.size());
-  std::vector<std::pair<VertexId, std::uint32_t>> byVertex;
-  byVertex.reserve(3u * static_cast<std::size_t>(n));
-  for (std::uint32_t i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) byVertex.push_back({topology.vertex(3 * faces[i] + k), i});
-  }
-  std::sort(byVertex.begin(), byVertex.end());
-  detail::UnionFind sets(n);
-  for (std::size_t j = 1; j < byVertex.size(); ++j) {
-    if (byVertex[j].first == byVertex[j - 1].first) sets.unite(byVertex[j - 1].second, byVertex[j].second);
-  }
-  // A component's root is its first face (unite keeps the smaller id): groups in face order.
-  std::vector<std::uint32_t> size(n, 0);
-  for (std::uint32_t i = 0; i < n; ++i) ++size[sets.find(i)];
-  std::vector<std::uint32_t> groupOf(n, 0);
-  std::size_t filled = 0;
-  std::uint32_t groups = 0;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    if (sets.find(i) != i) continue;
-    if (groups == 0 || filled >= groupFaces) ++groups, filled = 0;
-    groupOf[i] = groups - 1;
-    filled += size[i];
-  }
-  std::vector<std::vector<FaceId>> out(groups);
-  for (std::uint32_t i = 0; i < n; ++i) out[groupOf[sets.find(i)]].push_back(faces[i]);
-  return out;
+  return detail::splitRegionIn(topology, faces, groupFaces);
 }
 
 void copyRegionCounts(const RefineStats& counts, RefineStats* stats) {
@@ -685,19 +543,39 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
   return out;
 }
 
-namespace {
+namespace detail {
 
-/// One flag per vertex: 1 on the cut's cones. Throws InputError for a cone out of range.
-std::vector<std::uint8_t> coneFlags(const TriangleMesh& mesh, const CutResult& cut) {
-  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
-  for (VertexId v : cut.cones) {
-    if (v >= mesh.numVertices()) {
-      throw InputError("refine: cone " + std::to_string(v) + " out of range (" +
-                       std::to_string(mesh.numVertices()) + " vertices)");
-    }
-    isCone[v] = 1;
+/// A region's solved corners under whole-mesh ids, in increasing corner order (sub faces follow
+/// the whole mesh's order), written from `out` on.
+void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, SolvedCorner* out) {
+  for (CornerId c = 0; c < solved.cornerUV.size(); ++c) {
+    out[c] = {solved.cornerUV[c], 3 * region.faceOrigin[c / 3] + c % 3,
+              region.vertexFree[region.mesh.triangles[c / 3][c % 3]] != 0};
   }
-  return isCone;
+}
+
+/// Records solved corners (sorted by corner) in `current` (sorted by corner; these values replace
+/// older ones, a corner stays free once freed). Corners seen before are updated in place and new
+/// ones merged in within the spare capacity where it suffices: no second copy of `current`,
+/// which holds every corner of a region of millions of faces.
+void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& current) {
+  if (current.empty()) {
+    current = std::move(fresh);
+    return;
+  }
+  const auto byCorner = [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; };
+  std::vector<SolvedCorner> added;
+  for (const SolvedCorner& s : fresh) {
+    const auto it = std::lower_bound(current.begin(), current.end(), s, byCorner);
+    if (it != current.end() && it->corner == s.corner) {
+      *it = {s.uv, s.corner, s.free || it->free};
+    } else {
+      added.push_back(s);
+    }
+  }
+  const std::size_t old = current.size();
+  current.insert(current.end(), added.begin(), added.end());
+  std::inplace_merge(current.begin(), current.begin() + old, current.end(), byCorner);
 }
 
 /// Measures a solved region into figures; returns its bad faces touching a locked vertex (whole-
@@ -713,7 +591,7 @@ std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSo
   const std::uint32_t rf = region.topology.numFaces();
   for (std::uint32_t i = 0; i < rf; ++i) {
     const double ratio = parameterAreaRatio(region.mesh, solved.cornerUV, i, h);
-    inRegion.add(region.mesh, solved.cornerUV, i, ratio, subCone);
+    inRegion.add(ratio, [&] { return collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone); });
     if (std::isnan(ratio) || ratio >= collapseThreshold) continue;
     const Triangle& t = region.mesh.triangles[i];
     const bool locked = !region.vertexFree[t[0]] || !region.vertexFree[t[1]] || !region.vertexFree[t[2]];
@@ -729,165 +607,6 @@ std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSo
   return border;
 }
 
-/// Whole-map counts into stats: every face ever solved (flag set) with the refined values, every
-/// other face as in the input. Returns the refined faces, sorted.
-std::vector<FaceId> measureRefinedMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
-                                      const std::vector<SolvedCorner>& current, const std::vector<std::uint8_t>& flag,
-                                      const std::vector<std::uint8_t>& isCone, const RefineOptions& options,
-                                      RefineStats& stats) {
-  const double h = options.edgeLength;
-  std::vector<FaceId> touched;
-  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
-    if (flag[f] != kOutside) touched.push_back(f);
-  }
-  stats.regionFaces = touched.size();
-  // Every corner of a solved face is in `current` (a solve records all its region's corners), and
-  // both are sorted: one walk pairs them.
-  FaceCounts inside;
-  auto it = current.begin();
-  for (FaceId f : touched) {
-    std::array<Vec2d, 3> q;
-    for (int k = 0; k < 3; ++k) {
-      const CornerId c = 3 * f + k;
-      while (it != current.end() && it->corner < c) ++it;
-      q[k] = it != current.end() && it->corner == c ? it->uv : cornerUV[c];
-    }
-    inside.add(mesh, f, q, parameterAreaRatio(mesh, f, q, h), isCone);
-  }
-  // Faces never solved keep the input map. With the map's own faces seeded (voxloc), selectFlagged
-  // put every face below the collapse threshold in the region: none outside is collapsed or
-  // flipped.
-  FaceCounts outside;
-  if (!options.seedFromMap || options.collapseThreshold < kCollapsedAreaFraction) {
-    outside = tbb::parallel_reduce(
-        tbb::blocked_range<FaceId>(0, mesh.numFaces(), 1u << 14), FaceCounts(),
-        [&](const tbb::blocked_range<FaceId>& range, FaceCounts counts) {
-          for (FaceId f = range.begin(); f != range.end(); ++f) {
-            if (flag[f] != kOutside) continue;
-            counts.add(mesh, cornerUV, f, parameterAreaRatio(mesh, cornerUV, f, h), isCone);
-          }
-          return counts;
-        },
-        [](FaceCounts a, const FaceCounts& b) {
-          a.collapsed += b.collapsed, a.collapsedAtCones += b.collapsedAtCones, a.flipped += b.flipped;
-          return a;
-        });
-  }
-  stats.collapsedAfter = outside.collapsed + inside.collapsed;
-  stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
-  stats.flippedAfter = outside.flipped + inside.flipped;
-  return touched;
-}
-
-/// The result: the corners of every vertex freed in some solve with their latest values, the
-/// seams whose translation changed, and the freed and locked vertex counts.
-void collectRefinement(const Topology& topology, std::uint32_t numVertices, std::vector<SolvedCorner> current,
-                       const std::vector<FaceId>& touched, const std::vector<Complex>& currentT,
-                       const std::vector<Complex>& seamT, RefineResult& out) {
-  RefineStats& stats = out.stats;
-  // The free corners, kept in place: the result takes the array itself.
-  current.erase(std::remove_if(current.begin(), current.end(), [](const SolvedCorner& s) { return !s.free; }),
-                current.end());
-  out.corners = std::move(current);
-  std::vector<VertexId> freed;
-  freed.reserve(out.corners.size());
-  for (const SolvedCorner& s : out.corners) freed.push_back(topology.vertex(s.corner));
-  std::sort(freed.begin(), freed.end());
-  freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
-  stats.freeVertices = static_cast<std::uint32_t>(freed.size());
-  std::vector<VertexId> around;  // vertices of every refined face
-  around.reserve(3 * touched.size());
-  for (FaceId f : touched) {
-    for (int k = 0; k < 3; ++k) around.push_back(topology.vertex(3 * f + k));
-  }
-  std::sort(around.begin(), around.end());
-  around.erase(std::unique(around.begin(), around.end()), around.end());
-  stats.lockedVertices = static_cast<std::uint32_t>(around.size() - freed.size());
-  stats.refinedVertexFraction = numVertices ? double(freed.size()) / numVertices : 0.0;
-  for (std::uint32_t j = 0; j < currentT.size(); ++j) {
-    if (currentT[j] == seamT[j]) continue;
-    out.seams.push_back(j);
-    out.seamT.push_back(currentT[j]);
-  }
-}
-
-/// One round: the region's groups of components extracted, solved and measured on their own, in
-/// parallel; their corners merged into `current` and their translations into currentT. Returns
-/// the bad faces touching a locked vertex (the next round's seeds), sorted. `largest` keeps the
-/// system figures of the largest group solved so far; figures sums the groups.
-std::vector<FaceId> solveRound(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
-                               const CutResult& cut, const WedgeMap& cornerUV, const std::vector<FaceId>& faces,
-                               const RefineOptions& options, std::vector<SolvedCorner>& current,
-                               std::vector<Complex>& currentT, RefineRound& figures, bool& collapsedAtBorder,
-                               RefineStats& largest, RefineStats& stats) {
-  struct GroupResult {
-    std::vector<std::pair<std::uint32_t, Complex>> seams;
-    std::vector<FaceId> border;
-    RefineRound figures;
-    RefineStats system;
-    bool collapsedAtBorder = false;
-    double secondsExtract = 0.0, secondsSolve = 0.0;
-  };
-  const std::vector<std::vector<FaceId>> groups = splitRegion(topology, faces, std::max<std::size_t>(1, options.groupFaces));
-  std::vector<GroupResult> results(groups.size());
-  // Every group's corners go straight into one array (group g from 3 x its first face's rank),
-  // with room for a quarter more: the later rounds' patches merge their new corners into that
-  // spare capacity, which is not resident until written.
-  std::vector<std::size_t> offset(groups.size() + 1, 0);
-  for (std::size_t g = 0; g < groups.size(); ++g) offset[g + 1] = offset[g] + 3 * groups[g].size();
-  std::vector<SolvedCorner> fresh;
-  fresh.reserve(offset.back() + offset.back() / 4);
-  fresh.resize(offset.back());
-  const double h = options.edgeLength;
-  parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
-    GroupResult& r = results[g];
-    auto lap = std::chrono::steady_clock::now();
-    const RegionMesh region = extractRegion(mesh, topology, field, cut, groups[g]);
-    WedgeMap regionUV = regionInput(region, cornerUV, current);
-    std::vector<Complex> regionT(region.seamOrigin.size());
-    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
-    const std::uint32_t numFree = static_cast<std::uint32_t>(
-        std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
-    r.figures.freeVertices = numFree;
-    r.secondsExtract = secondsSince(lap);
-    lap = std::chrono::steady_clock::now();
-    RegionSolution solved;
-    if (numFree > 0) {
-      solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
-    } else {
-      solved.cornerUV = std::move(regionUV);
-      solved.seamT = std::move(regionT);
-    }
-    r.secondsSolve = secondsSince(lap);
-    writeSolvedCorners(region, solved, fresh.data() + offset[g]);
-    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
-    r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
-  });
-  // Groups are disjoint in faces, corners and (seams among free vertices) translations: merging
-  // them in any order gives the same map.
-  std::vector<FaceId> border;
-  for (GroupResult& r : results) {
-    for (const auto& [seam, t] : r.seams) currentT[seam] = t;
-    border.insert(border.end(), r.border.begin(), r.border.end());
-    figures.freeVertices += r.figures.freeVertices;
-    figures.unknowns += r.system.unknowns;
-    figures.collapsed += r.figures.collapsed;
-    figures.collapsedAtCones += r.figures.collapsedAtCones;
-    figures.flipped += r.figures.flipped;
-    collapsedAtBorder = collapsedAtBorder || r.collapsedAtBorder;
-    stats.secondsExtract += r.secondsExtract;
-    stats.secondsSolve += r.secondsSolve;
-    if (r.system.unknowns > 0 && r.system.unknowns >= largest.unknowns) largest = r.system;
-    stats.solves += r.system.unknowns > 0;
-  }
-  tbb::parallel_sort(fresh.begin(), fresh.end(), [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; });
-  mergeSolved(std::move(fresh), current);
-  std::sort(border.begin(), border.end());
-  figures.borderFaces = border.size();
-  return border;
-}
-
-/// stats takes the system figures of the largest solve.
 void keepLargestSolve(const RefineStats& largest, RefineStats& stats) {
   stats.unknowns = largest.unknowns;
   stats.freeTranslations = largest.freeTranslations;
@@ -898,7 +617,85 @@ void keepLargestSolve(const RefineStats& largest, RefineStats& stats) {
   stats.factorPeakBytes = largest.factorPeakBytes;
 }
 
+void collectChangedSeams(const std::vector<Complex>& currentT, const std::vector<Complex>& seamT, RefineResult& out) {
+  for (std::uint32_t j = 0; j < currentT.size(); ++j) {
+    if (currentT[j] == seamT[j]) continue;
+    out.seams.push_back(j);
+    out.seamT.push_back(currentT[j]);
+  }
+}
+
+}  // namespace detail
+
+namespace {
+
+/// The whole mesh and its map in memory as detail::refineRounds reads them.
+class MeshSource {
+ public:
+  MeshSource(const TriangleMesh& mesh, const Topology& topology, const CrossField& field, const CutResult& cut,
+             const WedgeMap& cornerUV)
+      : mesh_(mesh), topology_(topology), field_(field), cut_(cut), cornerUV_(cornerUV) {}
+  /// What one thread of a round reads: here the source itself.
+  struct Readers {
+    const MeshSource* source;
+    Readers* operator->() { return this; }
+    Readers& operator*() { return *this; }
+    RegionMesh extract(const std::vector<FaceId>& faces) const {
+      return extractRegion(source->mesh_, source->topology_, source->field_, source->cut_, faces);
+    }
+    Vec2d value(CornerId c) const { return source->cornerUV_[c]; }
+  };
+  Readers groupReaders() const { return {this}; }
+  const Topology& table() const { return topology_; }
+  std::uint32_t numVertices() const { return mesh_.numVertices(); }
+  const Triangle& triangle(FaceId f) const { return mesh_.triangles[f]; }
+  std::array<Vec3d, 3> points(FaceId f) const {
+    const Triangle& t = mesh_.triangles[f];
+    return {mesh_.position(t[0]), mesh_.position(t[1]), mesh_.position(t[2])};
+  }
+  Vec2d value(CornerId c) const { return cornerUV_[c]; }
+  detail::FaceCounts countOutside(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
+                                  double h) const {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<FaceId>(0, mesh_.numFaces(), 1u << 14), detail::FaceCounts(),
+        [&](const tbb::blocked_range<FaceId>& range, detail::FaceCounts counts) {
+          auto next = std::lower_bound(touched.begin(), touched.end(), range.begin());
+          for (FaceId f = range.begin(); f != range.end(); ++f) {
+            if (next != touched.end() && *next == f) {
+              ++next;
+              continue;
+            }
+            const std::array<Vec2d, 3> q{cornerUV_[3 * f], cornerUV_[3 * f + 1], cornerUV_[3 * f + 2]};
+            counts.add(parameterAreaRatio(points(f), q, h),
+                       [&] { return detail::collapsesBetweenListedCones(mesh_.triangles[f], q, cones); });
+          }
+          return counts;
+        },
+        [](detail::FaceCounts a, const detail::FaceCounts& b) { return a += b; });
+  }
+
+ private:
+  const TriangleMesh& mesh_;
+  const Topology& topology_;
+  const CrossField& field_;
+  const CutResult& cut_;
+  const WedgeMap& cornerUV_;
+};
+
 }  // namespace
+
+std::vector<VertexId> listedCones(const std::vector<VertexId>& cones, std::uint64_t numVertices) {
+  std::vector<VertexId> out = cones;
+  for (VertexId v : out) {
+    if (v >= numVertices) {
+      throw InputError("refine: cone " + std::to_string(v) + " out of range (" + std::to_string(numVertices) +
+                       " vertices)");
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
 
 RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,
@@ -910,52 +707,13 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                      std::to_string(cut.seams.size()) + " seams");
   }
   RefineResult out;
-  RefineStats& stats = out.stats;
-  auto lap = std::chrono::steady_clock::now();
-  std::vector<std::uint8_t> flag;
-  std::vector<FaceId> faces = selectFlagged(mesh, topology, cornerUV, options, flag, &stats);
-  stats.secondsRegion = secondsSince(lap);
-  const std::vector<std::uint8_t> isCone = coneFlags(mesh, cut);
-
-  // Rounds: solve the region from the input map; then, while faces stay bad at the locked border,
-  // solve a patch around them (rings doubling) from the map as refined so far. `current` holds
-  // every corner solved so far (sorted by corner; the latest solve wins), currentT the seams.
-  const std::uint32_t maxRounds = std::max(1u, options.maxRounds);
-  std::uint64_t seeds = stats.markedFaces + stats.collapsedFaces + stats.flippedFaces;
-  std::vector<SolvedCorner> current;
-  std::vector<Complex> currentT = seamT;
-  RefineStats largest;  // system figures of the largest solve
-  for (std::uint32_t round = 0; !faces.empty(); ++round) {
-    const auto roundStart = std::chrono::steady_clock::now();
-    RefineRound figures;
-    figures.seedFaces = seeds;
-    figures.regionFaces = faces.size();
-    bool collapsedAtBorder = false;  // a border face below the threshold but not flipped
-    std::vector<FaceId> border = solveRound(mesh, topology, field, cut, cornerUV, faces, options, current,
-                                            currentT, figures, collapsedAtBorder, largest, stats);
-    figures.seconds = secondsSince(roundStart);
-    stats.totalUnknowns = std::max<std::uint64_t>(stats.totalUnknowns, figures.unknowns);
-    stats.rounds.push_back(figures);
-    reportProgress(options.progress, "refine", double(round + 1) / maxRounds);
-    if (border.empty() || round + 1 >= maxRounds) break;
-    // Another solve pays while it removes collapses, or while the border shrinks fast. Flipped
-    // faces that stay at the border round after round are the map's own flips near cones (hat has
-    // them too); chasing them cost 3 extra solves and 27% of the time of a 22M-face run for 32 of
-    // 8174 flips.
-    if (!collapsedAtBorder && 2 * border.size() > seeds) break;
-    seeds = border.size();
-    // Rings double each round: damage that outlasts a round usually spreads further out. The
-    // patch is solved on its own, the rest of the map (refined or not) locked around it.
-    faces = growPatch(topology, std::move(border), std::max(1u, options.rings) << std::min(round, 4u), flag);
-  }
-  releaseFreedMemory();  // the groups' regions and factors, before the results are gathered
-  if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
-  if (largest.unknowns > 0) keepLargestSolve(largest, stats);
-  const std::vector<FaceId> touched =
-      measureRefinedMap(mesh, cornerUV, current, flag, isCone, options, stats);
-  collectRefinement(topology, mesh.numVertices(), std::move(current), touched, currentT, seamT, out);
+  std::vector<FaceId> faces = selectRefineRegion(mesh, topology, cornerUV, options, &out.stats);
+  out.stats.secondsRegion = secondsSince(start);
+  const std::vector<VertexId> cones = listedCones(cut.cones, mesh.numVertices());
+  MeshSource source(mesh, topology, field, cut, cornerUV);
+  detail::refineRounds(source, cones, seamT, options, std::move(faces), out);
   reportProgress(options.progress, "refine", 1.0);
-  stats.secondsTotal = secondsSince(start);
+  out.stats.secondsTotal = secondsSince(start);
   return out;
 }
 

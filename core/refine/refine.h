@@ -184,9 +184,13 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<double>& faceWeight = {}, double coneWeightRadius = 0.0,
                            bool keepTranslations = false);
 
+/// The cut's cones as an increasing list (duplicates dropped). InputError for a cone at or above
+/// numVertices.
+std::vector<VertexId> listedCones(const std::vector<VertexId>& cones, std::uint64_t numVertices);
+
 /// The whole stage: select, extract, solve, re-detect and grow (rounds, above). cornerUV is the
-/// input map (3 #F), seamT its rounded translation per seam of cut (Gaussian integers). Holds one
-/// byte per face and per vertex of the whole mesh besides the region. Throws InputError on bad
+/// input map (3 #F), seamT its rounded translation per seam of cut (Gaussian integers). Holds the
+/// region and, while it selects the first region, one byte per face. Throws InputError on bad
 /// sizes.
 RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const CrossField& field, const CutResult& cut,

@@ -1,0 +1,357 @@
+#pragma once
+/// The rounds of refineNearCones written once for the mesh in memory and for the out-of-core map
+/// (stream/refine_stream): templates over a source of the whole mesh and its map. A source gives,
+/// on the calling thread, table() (vertex, forEachCornerAround), numVertices(), triangle(f),
+/// points(f) (corner positions in double), value(c) (the input map at corner c) and
+/// countOutside(touched, cones, h) (FaceCounts of the faces not in `touched`, input map); and
+/// groupReaders(), an object for one thread with extract(faces) (a RegionMesh as extractRegion
+/// cuts it) and value(c). Whole-mesh state stays out: the faces ever solved are a sorted list.
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <iterator>
+#include <vector>
+
+#include "core/mesh/detail_union_find.h"
+#include "core/quality/metrics.h"
+#include "core/refine/refine.h"
+#include "core/system/memory.h"
+#include "core/system/parallel.h"
+#include "core/system/stopwatch.h"
+
+namespace seamvox::detail {
+
+using SolvedCorner = RefinedCorner;  // a whole-mesh corner solved by some round
+
+/// Collapsed and flipped faces by MapQuality's criteria.
+struct FaceCounts {
+  std::uint64_t collapsed = 0, collapsedAtCones = 0, flipped = 0;
+  /// betweenCones() (collapsesBetweenCones) is asked only of a collapsed face.
+  template <class BetweenCones>
+  void add(double ratio, BetweenCones&& betweenCones) {
+    if (std::abs(ratio) < kCollapsedAreaFraction) {
+      ++collapsed;
+      collapsedAtCones += betweenCones();
+    } else if (ratio < 0.0) {
+      ++flipped;
+    }
+  }
+  FaceCounts& operator+=(const FaceCounts& b) {
+    collapsed += b.collapsed, collapsedAtCones += b.collapsedAtCones, flipped += b.flipped;
+    return *this;
+  }
+};
+
+/// collapsesBetweenCones with the cones as an increasing list of vertex ids.
+inline bool collapsesBetweenListedCones(const Triangle& t, const std::array<Vec2d, 3>& q,
+                                        const std::vector<VertexId>& cones) {
+  const auto isCone = [&](VertexId v) { return std::binary_search(cones.begin(), cones.end(), v); };
+  for (int k = 0; k < 3; ++k) {
+    const int l = (k + 1) % 3;
+    if (isCone(t[k]) && isCone(t[l]) && (q[k] - q[l]).norm() <= kCoincidentConeDistance) return true;
+  }
+  return false;
+}
+
+inline bool isSortedUnique(const std::vector<FaceId>& faces) {
+  return std::adjacent_find(faces.begin(), faces.end(), [](FaceId a, FaceId b) { return a >= b; }) == faces.end();
+}
+
+/// growFaces over any corner table.
+template <class Table>
+std::vector<FaceId> growFacesIn(Table& topology, std::vector<FaceId> frontier, std::uint32_t rings) {
+  std::vector<FaceId> patch = frontier;
+  std::sort(patch.begin(), patch.end());
+  patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
+  std::vector<VertexId> seen;  // vertices expanded, sorted
+  for (std::uint32_t ring = 0; ring < rings && !frontier.empty(); ++ring) {
+    // The frontier's vertices not expanded yet, each once (a vertex has about six frontier faces).
+    std::vector<VertexId> fresh;
+    fresh.reserve(3 * frontier.size());
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) fresh.push_back(topology.vertex(3 * f + k));
+    }
+    std::sort(fresh.begin(), fresh.end());
+    fresh.erase(std::unique(fresh.begin(), fresh.end()), fresh.end());
+    std::vector<VertexId> unseen;
+    std::set_difference(fresh.begin(), fresh.end(), seen.begin(), seen.end(), std::back_inserter(unseen));
+    std::vector<FaceId> added;
+    for (VertexId v : unseen) {
+      topology.forEachCornerAround(v, [&](CornerId c) {
+        const FaceId g = cornerFace(c);
+        if (!std::binary_search(patch.begin(), patch.end(), g)) added.push_back(g);
+      });
+    }
+    std::vector<VertexId> expanded;
+    expanded.reserve(seen.size() + unseen.size());
+    std::merge(seen.begin(), seen.end(), unseen.begin(), unseen.end(), std::back_inserter(expanded));
+    seen = std::move(expanded);
+    std::sort(added.begin(), added.end());
+    added.erase(std::unique(added.begin(), added.end()), added.end());
+    std::vector<FaceId> grown;
+    grown.reserve(patch.size() + added.size());
+    std::merge(patch.begin(), patch.end(), added.begin(), added.end(), std::back_inserter(grown));
+    patch = std::move(grown);
+    frontier = std::move(added);
+  }
+  return patch;
+}
+
+/// splitRegion over any corner table (faces sorted and unique: the caller checks).
+template <class Table>
+std::vector<std::vector<FaceId>> splitRegionIn(Table& topology, const std::vector<FaceId>& faces,
+                                               std::size_t groupFaces) {
+  const std::uint32_t n = static_cast<std::uint32_t>(faces.size());
+  std::vector<std::pair<VertexId, std::uint32_t>> byVertex;
+  byVertex.reserve(3u * static_cast<std::size_t>(n));
+  for (std::uint32_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) byVertex.push_back({topology.vertex(3 * faces[i] + k), i});
+  }
+  std::sort(byVertex.begin(), byVertex.end());
+  UnionFind sets(n);
+  for (std::size_t j = 1; j < byVertex.size(); ++j) {
+    if (byVertex[j].first == byVertex[j - 1].first) sets.unite(byVertex[j - 1].second, byVertex[j].second);
+  }
+  // A component's root is its first face (unite keeps the smaller id): groups in face order.
+  std::vector<std::uint32_t> size(n, 0);
+  for (std::uint32_t i = 0; i < n; ++i) ++size[sets.find(i)];
+  std::vector<std::uint32_t> groupOf(n, 0);
+  std::size_t filled = 0;
+  std::uint32_t groups = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (sets.find(i) != i) continue;
+    if (groups == 0 || filled >= groupFaces) ++groups, filled = 0;
+    groupOf[i] = groups - 1;
+    filled += size[i];
+  }
+  std::vector<std::vector<FaceId>> out(groups);
+  for (std::uint32_t i = 0; i < n; ++i) out[groupOf[sets.find(i)]].push_back(faces[i]);
+  return out;
+}
+
+/// The input of a region solve: the corners solved so far where there are any, else the map
+/// (value(c) of the reader).
+template <class Reader>
+WedgeMap regionInput(const RegionMesh& region, Reader& map, const std::vector<SolvedCorner>& current) {
+  const std::uint32_t rf = region.topology.numFaces();
+  std::vector<Vec2d> values(3u * rf);
+  for (std::uint32_t i = 0; i < rf; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const CornerId c = 3 * region.faceOrigin[i] + k;
+      const auto it = std::lower_bound(current.begin(), current.end(), c,
+                                       [](const SolvedCorner& s, CornerId x) { return s.corner < x; });
+      values[3 * i + k] = it != current.end() && it->corner == c ? it->uv : map.value(c);
+    }
+  }
+  return WedgeMap::fromCorners(region.mesh.triangles, values);
+}
+
+/// A region's solved corners under whole-mesh ids, in increasing corner order, from `out` on.
+void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, SolvedCorner* out);
+/// Records solved corners (sorted by corner) in `current` (sorted; these values replace older
+/// ones, a corner stays free once freed), merging within its spare capacity where it suffices.
+void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& current);
+/// Measures a solved region into figures; returns its bad faces touching a locked vertex (whole-
+/// mesh ids: they seed the next round). collapsedAtBorder: one of them is below the threshold
+/// but not flipped.
+std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSolution& solved, double h,
+                                        double collapseThreshold, RefineRound& figures, bool& collapsedAtBorder);
+/// stats takes the system figures of the largest solve.
+void keepLargestSolve(const RefineStats& largest, RefineStats& stats);
+/// The seams whose translation changed (currentT against seamT) into out.
+void collectChangedSeams(const std::vector<std::complex<double>>& currentT,
+                         const std::vector<std::complex<double>>& seamT, RefineResult& out);
+
+/// One round: the region's groups of components extracted, solved and measured on their own, in
+/// parallel; their corners merged into `current` and their translations into currentT. Returns
+/// the bad faces touching a locked vertex (the next round's seeds), sorted. `largest` keeps the
+/// system figures of the largest group solved so far; figures sums the groups.
+template <class Source>
+std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces, const RefineOptions& options,
+                               std::vector<SolvedCorner>& current, std::vector<std::complex<double>>& currentT,
+                               RefineRound& figures, bool& collapsedAtBorder, RefineStats& largest, RefineStats& stats) {
+  using Complex = std::complex<double>;
+  struct GroupResult {
+    std::vector<std::pair<std::uint32_t, Complex>> seams;
+    std::vector<FaceId> border;
+    RefineRound figures;
+    RefineStats system;
+    bool collapsedAtBorder = false;
+    double secondsExtract = 0.0, secondsSolve = 0.0;
+  };
+  const std::vector<std::vector<FaceId>> groups =
+      splitRegionIn(source.table(), faces, std::max<std::size_t>(1, options.groupFaces));
+  std::vector<GroupResult> results(groups.size());
+  // Every group's corners go straight into one array (group g from 3 x its first face's rank),
+  // with room for a quarter more: the later rounds' patches merge their new corners into that
+  // spare capacity, which is not resident until written.
+  std::vector<std::size_t> offset(groups.size() + 1, 0);
+  for (std::size_t g = 0; g < groups.size(); ++g) offset[g + 1] = offset[g] + 3 * groups[g].size();
+  std::vector<SolvedCorner> fresh;
+  fresh.reserve(offset.back() + offset.back() / 4);
+  fresh.resize(offset.back());
+  const double h = options.edgeLength;
+  parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
+    GroupResult& r = results[g];
+    auto lap = std::chrono::steady_clock::now();
+    auto readers = source.groupReaders();
+    const RegionMesh region = readers->extract(groups[g]);
+    WedgeMap regionUV = regionInput(region, *readers, current);
+    std::vector<Complex> regionT(region.seamOrigin.size());
+    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
+    const std::uint32_t numFree = static_cast<std::uint32_t>(
+        std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
+    r.figures.freeVertices = numFree;
+    r.secondsExtract = secondsSince(lap);
+    lap = std::chrono::steady_clock::now();
+    RegionSolution solved;
+    if (numFree > 0) {
+      solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
+    } else {
+      solved.cornerUV = std::move(regionUV);
+      solved.seamT = std::move(regionT);
+    }
+    r.secondsSolve = secondsSince(lap);
+    writeSolvedCorners(region, solved, fresh.data() + offset[g]);
+    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
+    r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
+  });
+  // Groups are disjoint in faces, corners and (seams among free vertices) translations: merging
+  // them in any order gives the same map.
+  std::vector<FaceId> border;
+  for (GroupResult& r : results) {
+    for (const auto& [seam, t] : r.seams) currentT[seam] = t;
+    border.insert(border.end(), r.border.begin(), r.border.end());
+    figures.freeVertices += r.figures.freeVertices;
+    figures.unknowns += r.system.unknowns;
+    figures.collapsed += r.figures.collapsed;
+    figures.collapsedAtCones += r.figures.collapsedAtCones;
+    figures.flipped += r.figures.flipped;
+    collapsedAtBorder = collapsedAtBorder || r.collapsedAtBorder;
+    stats.secondsExtract += r.secondsExtract;
+    stats.secondsSolve += r.secondsSolve;
+    if (r.system.unknowns > 0 && r.system.unknowns >= largest.unknowns) largest = r.system;
+    stats.solves += r.system.unknowns > 0;
+  }
+  tbb::parallel_sort(fresh.begin(), fresh.end(), [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; });
+  mergeSolved(std::move(fresh), current);
+  std::sort(border.begin(), border.end());
+  figures.borderFaces = border.size();
+  return border;
+}
+
+/// Whole-map counts into stats: every face ever solved (`touched`, sorted) with the refined
+/// values, every other face as in the input.
+template <class Source>
+void measureRefinedMap(Source& source, const std::vector<FaceId>& touched, const std::vector<SolvedCorner>& current,
+                       const std::vector<VertexId>& cones, const RefineOptions& options, RefineStats& stats) {
+  const double h = options.edgeLength;
+  stats.regionFaces = touched.size();
+  // Every corner of a solved face is in `current` (a solve records all its region's corners), and
+  // both are sorted: one walk pairs them.
+  FaceCounts inside;
+  auto it = current.begin();
+  for (FaceId f : touched) {
+    std::array<Vec2d, 3> q;
+    for (int k = 0; k < 3; ++k) {
+      const CornerId c = 3 * f + k;
+      while (it != current.end() && it->corner < c) ++it;
+      q[k] = it != current.end() && it->corner == c ? it->uv : source.value(c);
+    }
+    const Triangle t = source.triangle(f);
+    inside.add(parameterAreaRatio(source.points(f), q, h), [&] { return collapsesBetweenListedCones(t, q, cones); });
+  }
+  // Faces never solved keep the input map. With the map's own faces seeded (voxloc), the first
+  // region held every face below the collapse threshold: none outside is collapsed or flipped.
+  FaceCounts outside;
+  if (!options.seedFromMap || options.collapseThreshold < kCollapsedAreaFraction) {
+    outside = source.countOutside(touched, cones, h);
+  }
+  stats.collapsedAfter = outside.collapsed + inside.collapsed;
+  stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
+  stats.flippedAfter = outside.flipped + inside.flipped;
+}
+
+/// The result: the corners of every vertex freed in some solve with their latest values, and the
+/// freed and locked vertex counts.
+template <class Table>
+void collectRefinement(Table& topology, std::uint32_t numVertices, std::vector<SolvedCorner> current,
+                       const std::vector<FaceId>& touched, RefineResult& out) {
+  RefineStats& stats = out.stats;
+  // The free corners, kept in place: the result takes the array itself.
+  current.erase(std::remove_if(current.begin(), current.end(), [](const SolvedCorner& s) { return !s.free; }),
+                current.end());
+  out.corners = std::move(current);
+  std::vector<VertexId> freed;
+  freed.reserve(out.corners.size());
+  for (const SolvedCorner& s : out.corners) freed.push_back(topology.vertex(s.corner));
+  std::sort(freed.begin(), freed.end());
+  freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
+  stats.freeVertices = static_cast<std::uint32_t>(freed.size());
+  std::vector<VertexId> around;  // vertices of every refined face
+  around.reserve(3 * touched.size());
+  for (FaceId f : touched) {
+    for (int k = 0; k < 3; ++k) around.push_back(topology.vertex(3 * f + k));
+  }
+  std::sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
+  stats.lockedVertices = static_cast<std::uint32_t>(around.size() - freed.size());
+  stats.refinedVertexFraction = numVertices ? double(freed.size()) / numVertices : 0.0;
+}
+
+/// refineNearCones after the first region is selected (`faces`, with its counts in out.stats):
+/// the rounds, the measures and the result. cones: the cut's, increasing.
+template <class Source>
+void refineRounds(Source& source, const std::vector<VertexId>& cones, const std::vector<std::complex<double>>& seamT,
+                  const RefineOptions& options, std::vector<FaceId> faces, RefineResult& out) {
+  RefineStats& stats = out.stats;
+  // Rounds: solve the region from the input map; then, while faces stay bad at the locked border,
+  // solve a patch around them (rings doubling) from the map as refined so far. `current` holds
+  // every corner solved so far (sorted by corner; the latest solve wins), currentT the seams,
+  // `touched` every face solved so far (sorted).
+  const std::uint32_t maxRounds = std::max(1u, options.maxRounds);
+  std::uint64_t seeds = stats.markedFaces + stats.collapsedFaces + stats.flippedFaces;
+  std::vector<SolvedCorner> current;
+  std::vector<std::complex<double>> currentT = seamT;
+  std::vector<FaceId> touched = faces;
+  RefineStats largest;  // system figures of the largest solve
+  for (std::uint32_t round = 0; !faces.empty(); ++round) {
+    const auto roundStart = std::chrono::steady_clock::now();
+    RefineRound figures;
+    figures.seedFaces = seeds;
+    figures.regionFaces = faces.size();
+    bool collapsedAtBorder = false;  // a border face below the threshold but not flipped
+    std::vector<FaceId> border =
+        solveRound(source, faces, options, current, currentT, figures, collapsedAtBorder, largest, stats);
+    figures.seconds = secondsSince(roundStart);
+    stats.totalUnknowns = std::max<std::uint64_t>(stats.totalUnknowns, figures.unknowns);
+    stats.rounds.push_back(figures);
+    reportProgress(options.progress, "refine", double(round + 1) / maxRounds);
+    if (border.empty() || round + 1 >= maxRounds) break;
+    // Another solve pays while it removes collapses, or while the border shrinks fast. Flipped
+    // faces that stay at the border round after round are the map's own flips near cones (hat has
+    // them too); chasing them cost 3 extra solves and 27% of the time of a 22M-face run for 32 of
+    // 8174 flips.
+    if (!collapsedAtBorder && 2 * border.size() > seeds) break;
+    seeds = border.size();
+    // Rings double each round: damage that outlasts a round usually spreads further out. The
+    // patch is solved on its own, the rest of the map (refined or not) locked around it.
+    faces = growFacesIn(source.table(), std::move(border), std::max(1u, options.rings) << std::min(round, 4u));
+    std::vector<FaceId> merged;
+    merged.reserve(touched.size() + faces.size());
+    std::set_union(touched.begin(), touched.end(), faces.begin(), faces.end(), std::back_inserter(merged));
+    touched = std::move(merged);
+  }
+  releaseFreedMemory();  // the groups' regions and factors, before the results are gathered
+  if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
+  if (largest.unknowns > 0) keepLargestSolve(largest, stats);
+  measureRefinedMap(source, touched, current, cones, options, stats);
+  collectRefinement(source.table(), source.numVertices(), std::move(current), touched, out);
+  collectChangedSeams(currentT, seamT, out);
+}
+
+}  // namespace seamvox::detail
