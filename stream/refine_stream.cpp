@@ -1,33 +1,70 @@
 #include "stream/refine_stream.h"
 
 #include <algorithm>
+#include <array>
+#include <chrono>
+#include <memory>
 #include <cmath>
 #include <string>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "core/quality/metrics.h"
+#include "core/refine/detail_refine.h"
 #include "core/refine/detail_region.h"
 #include "core/system/errors.h"
+#include "core/system/stopwatch.h"
 #include "stream/paged_corner_table.h"
 #include "stream/paged_reader.h"
 
 namespace seamvox {
 
+namespace {
+
+/// What extractScratchRegion reads, through page caches: one set per thread.
+struct RegionReaders {
+  PagedCornerTable table;
+  PagedReader<Vec3f> positions, directions;
+  PagedReader<std::uint8_t> rotations;
+  PagedCutCorners corners;
+  const ScratchCut& cut;
+  RegionReaders(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& c, std::size_t cacheBytes)
+      : table(scratch, cacheBytes), positions(scratch.positions, cacheBytes), directions(field.directions, cacheBytes),
+        rotations(c.faceRotation, cacheBytes), corners(c.corners, cacheBytes), cut(c) {}
+  RegionMesh extract(const std::vector<FaceId>& regionFaces) {
+    return detail::extractRegionFrom(
+        table, [&](VertexId v) { return positions[v]; }, [&](FaceId f) { return directions[f]; },
+        [&](FaceId f) { return rotations[f]; }, corners, cut.seams, cut.cones, regionFaces);
+  }
+  std::uint64_t bytesRead() const {
+    return table.bytesRead() + positions.bytesRead() + directions.bytesRead() + rotations.bytesRead() +
+           corners.bytesRead();
+  }
+};
+
+/// The out-of-core map's value at a corner: its wedge, then the wedge's value.
+struct MapValues {
+  PagedReader<std::uint32_t> cornerWedge;
+  PagedReader<Vec2d> values;
+  MapValues(const ScratchMap& map, std::size_t cacheBytes)
+      : cornerWedge(map.cornerWedge, cacheBytes), values(map.wedgeValues, cacheBytes) {}
+  Vec2d value(CornerId c) { return values[cornerWedge[c]]; }
+  std::uint64_t bytesRead() const { return cornerWedge.bytesRead() + values.bytesRead(); }
+};
+
+void checkRegionFaces(const std::vector<FaceId>& regionFaces, std::uint64_t numFaces) {
+  if (!detail::isSortedUnique(regionFaces) || (!regionFaces.empty() && regionFaces.back() >= numFaces)) {
+    throw InputError("refine: region faces must be increasing face ids below " + std::to_string(numFaces));
+  }
+}
+
+}  // namespace
+
 RegionMesh extractScratchRegion(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                                 const std::vector<FaceId>& regionFaces, const StreamPassOptions& pass) {
-  const bool sorted = std::adjacent_find(regionFaces.begin(), regionFaces.end(),
-                                         [](FaceId a, FaceId b) { return a >= b; }) == regionFaces.end();
-  if (!sorted || (!regionFaces.empty() && regionFaces.back() >= scratch.numFaces)) {
-    throw InputError("refine: region faces must be increasing face ids below " + std::to_string(scratch.numFaces));
-  }
-  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
-  PagedCornerTable table(scratch, cacheBytes);
-  PagedReader<Vec3f> positions(scratch.positions, cacheBytes), directions(field.directions, cacheBytes);
-  PagedReader<std::uint8_t> rotations(cut.faceRotation, cacheBytes);
-  PagedCutCorners corners(cut.corners, cacheBytes);
-  return detail::extractRegionFrom(
-      table, [&](VertexId v) { return positions[v]; }, [&](FaceId f) { return directions[f]; },
-      [&](FaceId f) { return rotations[f]; }, corners, cut.seams, cut.cones, regionFaces);
+  checkRegionFaces(regionFaces, scratch.numFaces);
+  RegionReaders readers(scratch, field, cut, pageCacheBytes(pass.memoryBytes));
+  return readers.extract(regionFaces);
 }
 
 std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
@@ -104,6 +141,189 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
   counts.regionFaces = region.size();
   copyRegionCounts(counts, stats);
   return region;
+}
+
+namespace {
+
+/// The out-of-core mesh and map as detail::refineRounds reads them: page caches on the calling
+/// thread, and a pool of reader sets for the region solves that run in parallel.
+class ScratchRefineSource {
+ public:
+  /// One thread's readers: a region's mesh and the map's values.
+  struct GroupReaders : RegionReaders, MapValues {
+    GroupReaders(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut, const ScratchMap& map,
+                 std::size_t cacheBytes)
+        : RegionReaders(scratch, field, cut, cacheBytes), MapValues(map, cacheBytes) {}
+  };
+
+  ScratchRefineSource(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                      const ScratchCut& cut, const ScratchMap& map, const StreamPassOptions& pass)
+      : folder_(folder), scratch_(scratch), map_(map), cacheBytes_(pageCacheBytes(pass.memoryBytes)),
+        table_(scratch, cacheBytes_), points_(scratch, scratch.positions, cacheBytes_), values_(map, cacheBytes_),
+        pool_([&scratch, &field, &cut, &map, bytes = cacheBytes_] {
+          return std::make_unique<GroupReaders>(scratch, field, cut, map, bytes);
+        }) {}
+
+  ReaderPool<GroupReaders>::Lease groupReaders() { return pool_.take(); }
+  PagedCornerTable& table() { return table_; }
+  std::uint32_t numVertices() const { return static_cast<std::uint32_t>(scratch_.numVertices); }
+  Triangle triangle(FaceId f) { return points_.triangle(f); }
+  std::array<Vec3d, 3> points(FaceId f) { return points_.points(f); }
+  Vec2d value(CornerId c) { return values_.value(c); }
+
+  /// One pass over the faces and their corners' wedges in order, skipping `touched`.
+  detail::FaceCounts countOutside(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones, double h) {
+    detail::FaceCounts counts;
+    ScratchReader faces(folder_, scratch_.faces, "refine"), wedges(folder_, map_.cornerWedge, "refine");
+    CleanFace face;
+    std::uint32_t w[3];
+    auto next = touched.begin();
+    for (FaceId f = 0; faces.read(&face, sizeof face); ++f) {
+      if (!wedges.read(w, sizeof w)) throw IoError(map_.cornerWedge.path + ": scratch file ends early");
+      if (next != touched.end() && *next == f) {
+        ++next;
+        continue;
+      }
+      const std::array<Vec2d, 3> q{values_.values[w[0]], values_.values[w[1]], values_.values[w[2]]};
+      counts.add(parameterAreaRatio(points_.points(face.triangle), q, h),
+                 [&] { return detail::collapsesBetweenListedCones(face.triangle, q, cones); });
+    }
+    return counts;
+  }
+
+  std::uint64_t bytesRead() {
+    std::uint64_t bytes = table_.bytesRead() + points_.bytesRead() + values_.bytesRead();
+    pool_.forEach([&](GroupReaders& r) { bytes += r.RegionReaders::bytesRead() + r.MapValues::bytesRead(); });
+    return bytes;
+  }
+
+ private:
+  ScratchFolder& folder_;
+  const CleanScratch& scratch_;
+  const ScratchMap& map_;
+  std::size_t cacheBytes_;
+  PagedCornerTable table_;
+  PagedFacePoints points_;
+  MapValues values_;
+  ReaderPool<GroupReaders> pool_;
+};
+
+}  // namespace
+
+RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                                    const ScratchCut& cut, const ScratchMap& map,
+                                    const std::vector<std::complex<double>>& seamT, const RefineOptions& options,
+                                    const StreamPassOptions& pass) {
+  const auto start = std::chrono::steady_clock::now();
+  if (seamT.size() != cut.seams.size()) {
+    throw InputError("refine: " + std::to_string(seamT.size()) + " translations for " +
+                     std::to_string(cut.seams.size()) + " seams");
+  }
+  RefineResult out;
+  std::vector<FaceId> faces = selectScratchRefineRegion(folder, scratch, map, options, pass, &out.stats);
+  out.stats.secondsRegion = secondsSince(start);
+  const std::vector<VertexId> cones = listedCones(cut.cones, scratch.numVertices);
+  ScratchRefineSource source(folder, scratch, field, cut, map, pass);
+  detail::refineRounds(source, cones, seamT, options, std::move(faces), out);
+  folder.countRead("refine", source.bytesRead());
+  reportProgress(options.progress, "refine", 1.0);
+  out.stats.secondsTotal = secondsSince(start);
+  return out;
+}
+
+namespace {
+
+/// WedgeMap::assign of the refinement's corners (sorted, unique) on the out-of-core map, after
+/// their wedges took the values in place: a wedge only part of whose corners changed is split,
+/// one new wedge per new value, appended. The wedges' corner counts come from one pass over the
+/// corners' wedges. Returns the appended values.
+std::vector<Vec2d> splitScratchWedges(ScratchFolder& folder, const RefineResult& refinement, const ScratchMap& map,
+                                      PagedArray<std::uint32_t>& cornerWedge, PagedArray<Vec2d>& values) {
+  // Per touched wedge: its corners in the refinement, and in the whole map.
+  std::unordered_map<std::uint32_t, std::pair<std::uint64_t, std::uint64_t>> count;
+  for (const RefinedCorner& r : refinement.corners) ++count[cornerWedge[r.corner]].first;
+  {
+    ScratchReader wedges(folder, map.cornerWedge, "refine");
+    std::uint32_t w = 0;
+    while (wedges.read(&w, sizeof w)) {
+      const auto it = count.find(w);
+      if (it != count.end()) ++it->second.second;
+    }
+  }
+  std::unordered_map<std::uint32_t, std::vector<std::pair<Vec2d, std::uint32_t>>> made;
+  std::vector<Vec2d> appended;
+  for (const RefinedCorner& r : refinement.corners) {
+    const std::uint32_t w = cornerWedge[r.corner];
+    auto& options = made[w];
+    const auto found = std::find_if(options.begin(), options.end(), [&](const auto& o) { return o.first == r.uv; });
+    if (found != options.end()) {
+      cornerWedge.set(r.corner, found->second);
+      continue;
+    }
+    const auto& n = count[w];
+    std::uint32_t target = w;
+    if (options.empty() && n.first == n.second) {
+      values.set(w, r.uv);
+    } else if (!(values[w] == r.uv && n.first != n.second)) {  // else: unchanged on a partly given wedge
+      target = static_cast<std::uint32_t>(map.numWedges + appended.size());
+      appended.push_back(r.uv);
+    }
+    options.emplace_back(r.uv, target);
+    cornerWedge.set(r.corner, target);
+  }
+  return appended;
+}
+
+}  // namespace
+
+void applyScratchRefinement(ScratchFolder& folder, const RefineResult& refinement, ScratchMap& map,
+                            std::vector<std::complex<double>>* translations, const StreamPassOptions& pass) {
+  if (translations) {
+    for (std::size_t k = 0; k < refinement.seams.size(); ++k) {
+      if (refinement.seams[k] >= translations->size()) {
+        throw InputError("refine: seam " + std::to_string(refinement.seams[k]) + " out of range (" +
+                         std::to_string(translations->size()) + " seams)");
+      }
+    }
+  }
+  const std::uint64_t numCorners = map.cornerWedge.bytes / sizeof(std::uint32_t);
+  for (const RefinedCorner& r : refinement.corners) {
+    if (r.corner >= numCorners) {
+      throw InputError("refine: corner " + std::to_string(r.corner) + " out of range (" + std::to_string(numCorners) +
+                       " corners)");
+    }
+  }
+  if (translations) {
+    for (std::size_t k = 0; k < refinement.seams.size(); ++k) (*translations)[refinement.seams[k]] = refinement.seamT[k];
+  }
+  if (refinement.corners.empty()) return;
+  std::vector<Vec2d> appended;
+  {
+    const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+    PagedArray<std::uint32_t> cornerWedge(folder, map.cornerWedge, "refine", cacheBytes);
+    PagedArray<Vec2d> values(folder, map.wedgeValues, "refine", cacheBytes);
+    // A free vertex's wedges change whole and keep their ids (applyRefinement): values in place.
+    for (const RefinedCorner& r : refinement.corners) values.set(cornerWedge[r.corner], r.uv);
+    const bool whole = std::all_of(refinement.corners.begin(), refinement.corners.end(),
+                                   [&](const RefinedCorner& r) { return values[cornerWedge[r.corner]] == r.uv; });
+    if (!whole) appended = splitScratchWedges(folder, refinement, map, cornerWedge, values);
+    values.flush();
+    cornerWedge.flush();
+    folder.countRead("refine", cornerWedge.bytesRead() + values.bytesRead());
+  }
+  if (appended.empty()) return;
+  // The split wedges' values after the others: the values file copied with them appended.
+  ScratchWriter writer(folder, "refine");
+  {
+    ScratchReader old(folder, map.wedgeValues, "refine");
+    std::vector<char> buffer(std::size_t(1) << 20);
+    while (const std::size_t n = old.readUpTo(buffer.data(), buffer.size())) writer.write(buffer.data(), n);
+  }
+  writer.write(appended.data(), appended.size() * sizeof(Vec2d));
+  const ScratchFile grown = writer.finish();
+  folder.remove(map.wedgeValues);
+  map.wedgeValues = grown;
+  map.numWedges += appended.size();
 }
 
 }  // namespace seamvox

@@ -2,6 +2,7 @@
 /// The local refinement's regions paged in from the scratch folder: the region's faces, their
 /// vertices' fans, positions, field and cut read through page caches into a RegionMesh, as
 /// extractRegion cuts it out of a mesh in memory.
+#include <complex>
 #include <vector>
 
 #include "core/refine/refine.h"
@@ -25,5 +26,22 @@ RegionMesh extractScratchRegion(const CleanScratch& scratch, const ScratchField&
 std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
                                               const RefineOptions& options, const StreamPassOptions& pass,
                                               RefineStats* stats = nullptr);
+
+/// refineNearCones on the out-of-core map: the first region by selectScratchRefineRegion, then the
+/// same rounds (core/refine/detail_refine.h) with the regions paged in (a set of page caches per
+/// thread) and the map read through page caches. Equal to refineNearCones on readCleanScratch's
+/// mesh, field, cut and the map in memory. Memory: the regions and their solves.
+RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                                    const ScratchCut& cut, const ScratchMap& map,
+                                    const std::vector<std::complex<double>>& seamT, const RefineOptions& options,
+                                    const StreamPassOptions& pass);
+
+/// applyRefinement on the out-of-core map: the refined corners' wedges take their values in place
+/// (a wedge whose corners disagree is split as WedgeMap::assign splits it, the new wedges appended
+/// and map.numWedges grown; vertexWedgeStart then no longer lists them), and the re-solved
+/// translations go into `translations` when given. InputError on a corner or seam out of range,
+/// before anything changes.
+void applyScratchRefinement(ScratchFolder& folder, const RefineResult& refinement, ScratchMap& map,
+                            std::vector<std::complex<double>>* translations, const StreamPassOptions& pass);
 
 }  // namespace seamvox

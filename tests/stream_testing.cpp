@@ -2,6 +2,7 @@
 
 #include <memory>
 
+#include "core/cut/cut.h"
 #include "core/synth/generate.h"
 #include "stream/mesh_stream.h"
 #include "stream/welded_scratch.h"
@@ -58,6 +59,20 @@ NamedMeshes stageTestMeshes(std::uint32_t damageSeed) {
           {"damaged", damagedMesh(damageSeed)},
           {"torus and islands", concatMeshes({torusMesh(60, 40), icosphereMesh(2),
                                               moebiusStrip(16, Vec3f(4.0f, 0.0f, 0.0f))})}};
+}
+
+StageInputs prepareStageInputs(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
+                               std::int32_t resolution, const StreamPassOptions& pass) {
+  StageInputs in;
+  in.field = computeScratchField(folder, scratch, {}, {}, pass);
+  const ScratchSingularities singularities = computeScratchSingularities(folder, scratch, in.field, pass);
+  in.cut = cutScratchToDisk(folder, scratch, singularities, pass);
+  in.inMemoryField.direction = readPositions(folder, in.field.directions);
+  in.inMemoryCut = cutToDisk(cleaned.mesh, cleaned.topology, in.inMemoryField,
+                             inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
+  in.options.gridResolution = resolution;
+  in.options.edgeLength = 0.02 * computeBoundingBox(cleaned.mesh.positions).extent().norm();
+  return in;
 }
 
 }  // namespace seamvox::testing

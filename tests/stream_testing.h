@@ -9,13 +9,39 @@
 
 #include "core/mesh/clean.h"
 #include "core/mesh/mesh.h"
+#include "core/basis/voxel_basis.h"
+#include "core/cut/cut.h"
 #include "core/field/field.h"
+#include "stream/cut_stream.h"
 #include "stream/clean_stream.h"
 #include "stream/field_stream.h"
 #include "stream/scratch_folder.h"
 #include "testing.h"
 
 namespace seamvox::testing {
+
+/// A scratch file's records.
+template <class T>
+std::vector<T> readRecords(ScratchFolder& folder, const ScratchFile& file) {
+  std::vector<T> out(file.bytes / sizeof(T));
+  ScratchReader reader(folder, file, "test");
+  if (!out.empty()) EXPECT_TRUE(reader.read(out.data(), out.size() * sizeof(T)));
+  return out;
+}
+
+/// The field and cut out of core and the same in memory; the voxel options of a grid.
+struct StageInputs {
+  ScratchField field;
+  ScratchCut cut;
+  CrossField inMemoryField;
+  CutResult inMemoryCut;
+  VoxelBasisOptions options;
+};
+
+/// The field, singularities and cut out of core with `pass`, the cut in memory from the same
+/// singularities, and an edge length of 2% of the diagonal.
+StageInputs prepareStageInputs(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
+                               std::int32_t resolution, const StreamPassOptions& pass);
 
 /// The mesh welded (memory stream, blocks of 997 faces) and cleaned into the folder.
 CleanScratch cleanIntoScratch(ScratchFolder& folder, const TriangleMesh& mesh, std::uint64_t memoryBytes);

@@ -41,35 +41,12 @@ using testing::NamedMeshes;
 
 const StreamPassOptions kTinyPass{1, 300};
 
-template <class T>
-std::vector<T> readRecords(ScratchFolder& folder, const ScratchFile& file) {
-  std::vector<T> out(file.bytes / sizeof(T));
-  ScratchReader reader(folder, file, "test");
-  if (!out.empty()) EXPECT_TRUE(reader.read(out.data(), out.size() * sizeof(T)));
-  return out;
-}
-
-// The field and cut out of core and the same in memory; the options of a grid.
-struct Inputs {
-  ScratchField field;
-  ScratchCut cut;
-  CrossField inMemoryField;
-  CutResult inMemoryCut;
-  VoxelBasisOptions options;
-};
+using testing::readRecords;
+using Inputs = testing::StageInputs;
 
 Inputs prepareInputs(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
                      std::int32_t resolution) {
-  Inputs in;
-  in.field = computeScratchField(folder, scratch, {}, {}, kTinyPass);
-  const ScratchSingularities singularities = computeScratchSingularities(folder, scratch, in.field, kTinyPass);
-  in.cut = cutScratchToDisk(folder, scratch, singularities, kTinyPass);
-  in.inMemoryField.direction = testing::readPositions(folder, in.field.directions);
-  in.inMemoryCut = cutToDisk(cleaned.mesh, cleaned.topology, in.inMemoryField,
-                             testing::inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
-  in.options.gridResolution = resolution;
-  in.options.edgeLength = 0.02 * computeBoundingBox(cleaned.mesh.positions).extent().norm();
-  return in;
+  return testing::prepareStageInputs(folder, scratch, cleaned, resolution, kTinyPass);
 }
 
 void expectSameElements(ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned,
