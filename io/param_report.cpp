@@ -154,7 +154,9 @@ void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportConte
   j.key("write").value(stageSeconds(c.stages, "write")).key("total").value(c.totalSeconds);
   j.endObject();
   j.key("peakResidentBytes").value(c.peakBytes);
-  if (c.memoryBudget > 0) {
+  if (c.memoryPathJson) {
+    c.memoryPathJson(j);
+  } else if (c.memoryBudget > 0) {
     j.key("path").value(std::string("in-memory"));
     j.key("memoryBudget").value(c.memoryBudget).key("estimatedBytes").value(c.estimatedBytes);
     j.key("fieldBytesOnDisk").value(c.fieldBytesOnDisk);

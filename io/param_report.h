@@ -2,6 +2,7 @@
 /// The JSON report of a parameterization (`seamvox param --report`, jobs, bench): one writer for
 /// every key, so the command, the library user and the readers see the same figures.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,8 @@ struct ParamReportContext {
   std::uint64_t memoryBudget = 0, estimatedBytes = 0;
   /// Bytes of the field's directions kept on disk while the map was built (0: none).
   std::uint64_t fieldBytesOnDisk = 0;
+  /// When set, writes the memory path's keys (out of core: its scratch) instead of the in-memory ones.
+  std::function<void(JsonWriter&)> memoryPathJson;
 };
 
 /// The context of a run with these options measured by meter (its stages so far): the settings,

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "core/pipeline/parameterize.h"
+#include "core/solve/param_solver.h"
 #include "core/synth/render.h"
 #include "core/system/errors.h"
 #include "io/field_io.h"
@@ -13,6 +14,9 @@
 #include "io/png_io.h"
 #include "io/polygon_io.h"
 #include "core/system/memory_budget.h"
+#include "io/json.h"
+#include "io/scratch_map_writer.h"
+#include "stream/param_stream.h"
 #include "stream/scratch_direction_store.h"
 #include "stream/scratch_folder.h"
 #include "tools/cli.h"
@@ -27,6 +31,7 @@ struct ParamCommand {
   std::optional<std::string> reportPath, renderPath, quadsPath;
   PipelineOptions options;
   MemoryOptions memory;
+  bool outOfCore = false;  ///< --out-of-core: whatever the estimate
 };
 
 ParamCommand parseParamArgs(Args& args) {
@@ -68,6 +73,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.closeHoles = args.number("close-holes", c.quadsPath ? kCloseHoleCells : 0.0, 0.0, 1000.0);
   o.progress = makeProgress(args.flag("quiet"));
   c.memory = parseMemoryOptions(args);
+  c.outOfCore = args.flag("out-of-core");
   args.finish(1);
   if (c.renderPath) requirePngPath("--render", *c.renderPath);
   if (c.quadsPath && formatFromPath(*c.quadsPath) != MeshFormat::Obj && formatFromPath(*c.quadsPath) != MeshFormat::Ply) {
@@ -169,6 +175,151 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   std::printf("\n");
 }
 
+/// The options the out-of-core path does not have yet, as the user gave them.
+std::vector<std::string> optionsWithoutOutOfCorePath(const ParamCommand& c) {
+  std::vector<std::string> out;
+  const PipelineOptions& o = c.options;
+  if (o.solver.solver == ParamSolver::Hat) out.push_back("--solver hat (one global solve over every vertex)");
+  if (c.fieldSource != "auto" && c.fieldSource != "proxy") out.push_back("--field " + c.fieldSource);
+  if (o.features.alignBoundary) out.push_back("--align-boundary");
+  if (!o.features.autoFeatureAngle && o.features.featureAngle > 0.0) out.push_back("--feature-angle");
+  if (o.closeHoles > 0.0) out.push_back("--close-holes");
+  if (c.quadsPath) out.push_back("--quads (run seamvox quads on the output)");
+  if (c.renderPath) out.push_back("--render (run seamvox render on the output)");
+  if (o.dropUnsolved) out.push_back("--drop-unsolved");
+  if (o.greedyRounding) out.push_back("--greedy");
+  if (o.clean.reorderMinFaces == std::numeric_limits<std::uint32_t>::max()) {
+    out.push_back("--keep-order (the output is in spatial order)");
+  }
+  if (formatFromPath(c.output) == MeshFormat::Draco) out.push_back("a .drc output (Draco encodes whole meshes: write .ply or .obj)");
+  return out;
+}
+
+/// Budget of the out-of-core passes besides the program and the grid-sized system.
+constexpr std::uint64_t kMinimumPassBytes = std::uint64_t(64) << 20;
+
+/// The out-of-core run's figures as the in-memory pipeline reports them (its mesh empty).
+PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver solver) {
+  PipelineResult r;
+  r.size.faces = static_cast<std::uint32_t>(s.faces);
+  r.size.vertices = static_cast<std::uint32_t>(s.vertices);
+  r.size.wedges = static_cast<std::uint32_t>(s.wedges);
+  r.size.mapBytes = 3 * s.faces * sizeof(std::uint32_t) + s.wedges * sizeof(Vec2d);  // its scratch files
+  r.cleanReport = s.cleanReport;
+  r.inputFaces = static_cast<std::uint32_t>(s.inputFaces);
+  r.fieldMethod = "proxy";
+  r.edgeLength = s.edgeLength;
+  r.diagonal = s.diagonal;
+  r.cones = s.cones;
+  r.coneIndex4 = s.coneIndex4;
+  r.seams = s.seams;
+  r.conesBeforeMerge = s.conesBeforeMerge;
+  r.merged = s.merged;
+  r.conePasses = 1;
+  SolverResult& solved = r.solved;
+  solved.solver = solver;
+  solved.solverReason = "out of core, the voxel basis (the hat basis needs the whole mesh in memory)";
+  solved.param.stats = s.solve;
+  solved.param.translationConstraints = s.translationConstraints;
+  solved.param.basisFunctions = static_cast<std::uint32_t>(s.basisFunctions);
+  solved.param.domains = static_cast<std::uint32_t>(s.domains);
+  solved.basisStats.elements = s.elements;
+  solved.basisStats.fragments = s.fragments;
+  solved.determinedBasis = s.determinedBasis;
+  solved.inconsistentBasis = s.inconsistentBasis;
+  solved.failedAttempts = s.failedAttempts;
+  solved.voxelRetryReason = s.voxelRetryReason;
+  solved.markedFaces = s.markedFaces;
+  solved.refined = s.refined;
+  solved.refine = s.refine;
+  r.seamQuality = s.seamQuality;
+  r.mapQuality = s.mapQuality;
+  return r;
+}
+
+/// param above the memory budget (or with --out-of-core): every stage streams through the
+/// scratch folder (stream/param_stream); the grid-sized system and the passes' buffers stay
+/// within the budget.
+int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, AtomicFile& meshFile,
+                      AtomicFile* reportFile, MemoryPath& memoryPath, std::uint64_t faces) {
+  const std::vector<std::string> missing = optionsWithoutOutOfCorePath(c);
+  if (!missing.empty()) {
+    std::string list;
+    for (const std::string& option : missing) list += (list.empty() ? "" : ", ") + option;
+    throw InputError(c.input + ": param runs out of core here (" +
+                     (c.outOfCore ? std::string("--out-of-core") : "its estimate " + formatByteSize(memoryPath.estimate) +
+                                                                       " is above the --memory-budget of " +
+                                                                       formatByteSize(memoryPath.budget)) +
+                     "), and that path has no " + list + " yet; leave them out, or give a larger --memory-budget if "
+                     "the machine has it");
+  }
+  const std::int32_t grid = c.options.solver.gridResolution;
+  const auto fixedBytes = [](std::int32_t g) { return estimateParamPeakBytes(0, ParamSolver::VoxLoc, g); };
+  if (memoryPath.budget < fixedBytes(grid) + kMinimumPassBytes) {
+    std::string fits = "no grid of 32 or more voxels per axis fits within it";
+    for (const std::int32_t g : {256, 128, 64, 32}) {
+      if (g < grid && fixedBytes(g) + kMinimumPassBytes <= memoryPath.budget) {
+        fits = "--grid " + std::to_string(g) + " fits within it";
+        break;
+      }
+    }
+    throw InputError(c.input + ": param out of core needs a --memory-budget of at least " +
+                     formatByteSize(fixedBytes(grid) + kMinimumPassBytes) + " at --grid " + std::to_string(grid) +
+                     " (the grid-sized system stays in memory), got " + formatByteSize(memoryPath.budget) + "; " + fits);
+  }
+  memoryPath.outOfCore = true;
+  // About the cleaned mesh, the field, the cut and the map on disk at once (bench/RESULTS.md).
+  ScratchFolder folder(c.memory.scratch, 160 * faces);
+  StageMeter meter;
+  StreamParamOptions options;
+  options.memoryBytes = memoryPath.budget - fixedBytes(grid);
+  options.weld = c.options.clean.weldVertices;
+  options.spacing = c.options.spacing;
+  options.mergeCones = c.options.mergeCones;
+  options.gridResolution = grid;
+  const ParamSolver solver = c.options.solver.solver == ParamSolver::Vox ? ParamSolver::Vox : ParamSolver::VoxLoc;
+  options.voxLoc = solver == ParamSolver::VoxLoc;
+  options.refine = c.options.solver.refine;
+  options.refine.coneWeightRadius = c.options.coneWeightRadius;
+  options.progress = c.options.progress;
+  options.meter = &meter;
+  options.writeMap = [&](const CleanScratch& scratch, const ScratchMap& map) {
+    writeScratchMap(meshFile, folder, scratch, map, WriteOptions{}, StreamPassOptions{options.memoryBytes});
+  };
+  StreamParamResult streamed;
+  try {
+    streamed = parameterizeOutOfCore(stream, folder, options);
+  } catch (...) {
+    rethrowWithContext(c.input);
+  }
+  memoryPath.recordScratch(folder);
+  memoryPath.peakBytes = meter.peakBytes();
+  const PipelineResult r = figuresOfOutOfCoreRun(streamed, solver);
+  printSummary(c, r, meter);
+  if (c.options.untangle) {
+    std::printf("foldover repair: not run (the out-of-core path has none yet): %llu flipped faces left\n",
+                static_cast<unsigned long long>(r.mapQuality.flipped));
+  }
+  std::printf("%s\n", describeMemoryPath(memoryPath).c_str());
+  if (c.reportPath) {
+    ParamReportContext context = paramReportContext(c.options, meter, c.input, c.output, c.solverName, c.fieldSource);
+    context.memoryPathJson = [&](JsonWriter& j) {
+      writeMemoryPathJson(j, memoryPath, false);
+      j.key("notRunOutOfCore").beginArray();
+      if (c.options.untangle) j.value(std::string("untangle"));
+      j.value(std::string("further cone passes")).endArray();
+    };
+    const std::string json = paramReportJson(r, context);
+    if (reportFile) {
+      reportFile->write(json);
+    } else {
+      writeTextOutput("-", json);
+    }
+  }
+  outputs.commit();
+  return 0;
+}
+
 int runParam(Args& args) {
   ParamCommand c = parseParamArgs(args);
   // Every output is staged now (a missing folder fails before the work) and committed together.
@@ -177,9 +328,8 @@ int runParam(Args& args) {
   AtomicFile* reportFile = c.reportPath && *c.reportPath != "-" ? &outputs.add(*c.reportPath) : nullptr;
   AtomicFile* renderFile = c.renderPath ? &outputs.add(*c.renderPath) : nullptr;
   AtomicFile* quadsFile = c.quadsPath ? &outputs.add(*c.quadsPath) : nullptr;
-  // The estimate from the header's counts, before anything is read: param runs in memory only,
-  // so a mesh that would not fit the budget is refused now instead of exceeding it later.
-  // One stream for both (a pipe is read once).
+  // The estimate from the header's counts, before anything is read: a mesh that would not fit
+  // the budget in memory goes out of core. One stream for both (a pipe is read once).
   MemoryPath memoryPath;
   memoryPath.budget = c.memory.budget;
   const std::unique_ptr<MeshStream> stream = openMeshStream(c.input);
@@ -194,23 +344,18 @@ int runParam(Args& args) {
       return estimateParamPeakBytes(counts.faces, c.options.solver.solver, c.options.solver.gridResolution, fieldOnDisk);
     };
     memoryPath.estimate = estimate(false);
+    // Only a count the header declares is trusted: OBJ's is guessed from the file size (up to
+    // twice too high) and a pipe's is unknown, so those stay in memory.
+    declared = stream->declaredFaces() > 0 || stream->expectedTriangles() > 0;
+    const bool fieldOnDiskFits = estimate(true) <= memoryPath.budget;
+    if (c.outOfCore || (declared && memoryPath.estimate > memoryPath.budget && !fieldOnDiskFits)) {
+      return runParamOutOfCore(c, *stream, outputs, meshFile, reportFile, memoryPath, counts.faces);
+    }
     if (memoryPath.estimate > memoryPath.budget && estimate(true) < memoryPath.estimate) {
       memoryPath.estimate = estimate(true);
       scratch = std::make_unique<ScratchFolder>(c.memory.scratch, 12 * counts.faces);
       directionStore = std::make_unique<ScratchDirectionStore>(*scratch);
       c.options.directionStore = directionStore.get();
-    }
-    // Only a count the header declares is trusted: OBJ's is guessed from the file size (up to
-    // twice too high) and a pipe's is unknown, so those are never refused.
-    declared = stream->declaredFaces() > 0 || stream->expectedTriangles() > 0;
-    if (declared && memoryPath.estimate > memoryPath.budget) {
-      throw InputError(c.input + ": param needs about " + formatByteSize(memoryPath.estimate) + " in memory for " +
-                       std::to_string(counts.faces) + " faces" +
-                       (directionStore ? " (with its field's directions on disk while the map is built)" : "") +
-                       ", above the --memory-budget of " +
-                       formatByteSize(memoryPath.budget) + (c.memory.budgetGiven ? "" : " (the default: 3/4 of the available memory)") +
-                       "; param has no out-of-core path yet: give a larger --memory-budget if the machine has it, "
-                       "or split the scan into tiles (seamvox jobs)");
     }
   }
   StageMeter meter;
@@ -340,10 +485,16 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      at tiny holes let the map follow the field more closely)\n"
                  "  --quiet             no progress on stderr\n"
                  SEAMVOX_MEMORY_HELP
-                 "                        param runs in memory only: a mesh whose estimated peak\n"
-                 "                        (from the header's counts) exceeds the budget is refused\n"
-                 "                        before it is read\n",
-                 {"greedy", "no-untangle", "weld", "keep-order", "drop-unsolved", "align-boundary"},
+                 "                        a mesh whose estimated in-memory peak (from the header's\n"
+                 "                        counts) exceeds the budget runs out of core: every stage\n"
+                 "                        streams through the scratch folder, the grid-sized system\n"
+                 "                        and the passes' buffers stay within the budget (at least\n"
+                 "                        632M at --grid 128). That path writes the mesh in spatial\n"
+                 "                        order with its map (.ply or .obj) and has no foldover\n"
+                 "                        repair, further cone passes, --quads, --render,\n"
+                 "                        --close-holes, features or hat solver yet\n"
+                 "  --out-of-core         take the out-of-core path whatever the estimate\n",
+                 {"greedy", "no-untangle", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
                  &runParam});
 
 }  // namespace seamvox::cli

@@ -49,10 +49,10 @@ std::string describeMemoryPath(const MemoryPath& path) {
       out += ", " + t.stage + " " + formatByteSize(t.bytesWritten) + " written / " + formatByteSize(t.bytesRead) + " read";
     }
   }
-  return out + "; peak memory " + formatByteSize(peakResidentBytes());
+  return out + "; peak memory " + formatByteSize(path.peakBytes ? path.peakBytes : peakResidentBytes());
 }
 
-void writeMemoryPathJson(JsonWriter& j, const MemoryPath& path) {
+void writeMemoryPathJson(JsonWriter& j, const MemoryPath& path, bool withPeak) {
   j.key("path").value(std::string(path.outOfCore ? "out-of-core" : "in-memory"));
   j.key("memoryBudget").value(path.budget).key("estimatedBytes").value(path.estimate);
   if (path.outOfCore) {
@@ -65,7 +65,7 @@ void writeMemoryPathJson(JsonWriter& j, const MemoryPath& path) {
     }
     j.endArray().endObject();
   }
-  j.key("peakResidentBytes").value(peakResidentBytes());
+  if (withPeak) j.key("peakResidentBytes").value(peakResidentBytes());
 }
 
 }  // namespace seamvox::cli

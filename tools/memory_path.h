@@ -20,6 +20,9 @@ struct MemoryPath {
   std::uint64_t budget = 0, estimate = 0;
   std::vector<ScratchTraffic> traffic;  ///< scratch bytes per stage (out of core)
   std::uint64_t scratchPeakBytes = 0;
+  /// The run's peak resident size when a StageMeter measured it (its stages reset the kernel's
+  /// high-water mark); 0: read VmHWM.
+  std::uint64_t peakBytes = 0;
   /// Takes the traffic and peak of a finished scratch folder.
   void recordScratch(const ScratchFolder& scratch);
 };
@@ -40,7 +43,7 @@ void refuseDracoInputAboveBudget(const std::string& path, std::uint64_t budget, 
 /// "path out of core: estimate ... above the budget ...; scratch peak ...; stage W written / R read, ...; peak memory ...".
 std::string describeMemoryPath(const MemoryPath& path);
 /// The same as JSON keys "path", "memoryBudget", "estimatedBytes", "scratch" (out of core),
-/// "peakResidentBytes" of the object being written.
-void writeMemoryPathJson(JsonWriter& json, const MemoryPath& path);
+/// and with withPeak "peakResidentBytes", of the object being written.
+void writeMemoryPathJson(JsonWriter& json, const MemoryPath& path, bool withPeak = true);
 
 }  // namespace seamvox::cli

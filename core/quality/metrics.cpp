@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <functional>
 #include <limits>
 
 #include "core/system/errors.h"
@@ -70,20 +71,24 @@ bool collapsesBetweenCones(const TriangleMesh& mesh, const WedgeMap& cornerUV, F
   return collapsesBetweenCones(mesh, f, {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]}, isCone);
 }
 
-SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
-                         const WedgeMap& cornerUV) {
-  checkSizes(mesh, cornerUV);
+SeamQuality measureSeams(const std::vector<SeamCurve>& seams, const SeamCornerValue& value,
+                         const std::function<CornerId(CornerId)>& opposite,
+                         const std::function<double(CornerId)>& edgeLength) {
   SeamQuality out;
-  out.seams = static_cast<std::uint32_t>(cut.seams.size());
-  for (const SeamCurve& seam : cut.seams) {
+  out.seams = static_cast<std::uint32_t>(seams.size());
+  const auto sides = [&](CornerId c) {
+    const CornerId o = opposite(c);
+    return EdgeSides{toComplex(value(nextCorner(c))), toComplex(value(prevCorner(o))), toComplex(value(prevCorner(c))),
+                     toComplex(value(nextCorner(o)))};
+  };
+  for (const SeamCurve& seam : seams) {
     if (seam.corners.empty()) continue;
     const Complex r = unitPower(-static_cast<int>(seam.matching)).toComplex();
-    const CornerId first = seam.corners.front();
-    const EdgeSides s0 = edgeSides(cornerUV, first, topology.opposite(first));
+    const EdgeSides s0 = sides(seam.corners.front());
     const Complex t = s0.rightA - r * s0.leftA;
     out.maxIntegerDistance = std::max(out.maxIntegerDistance, gaussianIntegerDistance(t));
     for (CornerId c : seam.corners) {
-      const EdgeSides s = edgeSides(cornerUV, c, topology.opposite(c));
+      const EdgeSides s = sides(c);
       const double res = std::max(std::abs(s.rightA - (r * s.leftA + t)),
                                   std::abs(s.rightB - (r * s.leftB + t)));
       if (res > out.maxResidual || out.worstEdgeCorner == kInvalidId) {
@@ -91,10 +96,18 @@ SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, con
         out.maxResidual = res;
       }
       ++out.seamEdges;
-      out.seamLength += edgeLength3d(mesh, topology, c);
+      out.seamLength += edgeLength(c);
     }
   }
   return out;
+}
+
+SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
+                         const WedgeMap& cornerUV) {
+  checkSizes(mesh, cornerUV);
+  return measureSeams(
+      cut.seams, [&](CornerId c) { return cornerUV[c]; }, [&](CornerId c) { return topology.opposite(c); },
+      [&](CornerId c) { return edgeLength3d(mesh, topology, c); });
 }
 
 namespace {
@@ -149,15 +162,10 @@ struct FaceFigures {
   double gw() const { return gu.dot(u) + gv.dot(v); }  // Re<G, w>
 };
 
-// Area, gradient and nearest cross direction of face f (zero gradient on a zero-area face; no
-// direction without a field).
-FaceFigures measureFace(const TriangleMesh& mesh, const WedgeMap& cornerUV, const CrossField* field,
-                        FaceId f) {
+// Area, gradient and nearest cross direction of a face from its corners' positions p and values
+// q (zero gradient on a zero-area face; no direction without one).
+FaceFigures measureFace(const Vec3d p[3], const Complex q[3], const Vec3d* direction) {
   FaceFigures out;
-  const Triangle& t = mesh.triangles[f];
-  const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
-  const Complex q[3] = {toComplex(cornerUV[3 * f]), toComplex(cornerUV[3 * f + 1]),
-                        toComplex(cornerUV[3 * f + 2])};
   const Vec3d normal = (p[1] - p[0]).cross(p[2] - p[0]);
   const double twiceArea = normal.norm();
   out.area = 0.5 * twiceArea;
@@ -168,8 +176,8 @@ FaceFigures measureFace(const TriangleMesh& mesh, const WedgeMap& cornerUV, cons
     out.gu += q[k].real() * g;
     out.gv += q[k].imag() * g;
   }
-  if (field) {
-    Vec3d u = field->at(f);
+  if (direction) {
+    Vec3d u = *direction;
     u -= n * n.dot(u);
     const double len = u.norm();
     if (len > 0.0) {
@@ -183,6 +191,17 @@ FaceFigures measureFace(const TriangleMesh& mesh, const WedgeMap& cornerUV, cons
     }
   }
   return out;
+}
+
+FaceFigures measureFace(const TriangleMesh& mesh, const WedgeMap& cornerUV, const CrossField* field,
+                        FaceId f) {
+  const Triangle& t = mesh.triangles[f];
+  const Vec3d p[3] = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+  const Complex q[3] = {toComplex(cornerUV[3 * f]), toComplex(cornerUV[3 * f + 1]),
+                        toComplex(cornerUV[3 * f + 2])};
+  if (!field) return measureFace(p, q, nullptr);
+  const Vec3d direction = field->at(f);
+  return measureFace(p, q, &direction);
 }
 
 struct MapSums {
@@ -320,6 +339,35 @@ MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                                   ? std::sqrt(sums.error / sums.target)
                                   : std::numeric_limits<double>::quiet_NaN();
   countFlippedFaces(mesh, cornerUV, h, cones, field, topology, out);
+  return out;
+}
+
+MapQualitySums::Kind MapQualitySums::add(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q,
+                                         const Vec3d* direction) {
+  const Complex c[3] = {toComplex(q[0]), toComplex(q[1]), toComplex(q[2])};
+  const FaceFigures x = measureFace(p.data(), c, direction);
+  error_ += x.area * ((x.gu - x.u / h_).squaredNorm() + (x.gv - x.v / h_).squaredNorm());
+  target_ += x.area * (x.u.squaredNorm() + x.v.squaredNorm()) / (h_ * h_);
+  hasField_ = hasField_ || direction;
+  ++out_.faces;
+  const double ratio = parameterAreaRatio(p, q, h_);
+  if (std::abs(ratio) < kCollapsedAreaFraction) {
+    ++out_.collapsed;
+    return Kind::Collapsed;
+  }
+  if (ratio < 0.0) {
+    ++out_.flipped;
+    return Kind::Flipped;
+  }
+  return Kind::Fine;
+}
+
+MapQuality MapQualitySums::finish() const {
+  MapQuality out = out_;
+  out.edgeLength = h_;
+  out.relativeGradientError =
+      hasField_ && target_ > 0.0 ? std::sqrt(error_ / target_) : std::numeric_limits<double>::quiet_NaN();
+  out.flippedFraction = out.faces ? static_cast<double>(out.flipped) / out.faces : 0.0;
   return out;
 }
 

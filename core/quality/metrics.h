@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/cut/cut.h"
@@ -29,6 +30,12 @@ struct SeamQuality {
 /// and q_right = r q_left + t is checked at both ends of every edge.
 SeamQuality measureSeams(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                          const WedgeMap& cornerUV);
+/// The same from accessors (a mesh out of core): value(c) the map at corner c, opposite(c), and
+/// edgeLength(c) the 3D length of corner c's edge.
+using SeamCornerValue = std::function<Vec2d(CornerId)>;
+SeamQuality measureSeams(const std::vector<SeamCurve>& seams, const SeamCornerValue& value,
+                         const std::function<CornerId(CornerId)>& opposite,
+                         const std::function<double(CornerId)>& edgeLength);
 
 /// The fit of one seam edge from its two sides' UVs at its ends A and B (q' on the right side):
 /// the r in {1, i, -1, -i} with the smallest residual |q'_B - (r q_B + t)| for t = q'_A - r q_A
@@ -113,5 +120,25 @@ struct MapQuality {
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
                       const std::vector<VertexId>* cones = nullptr, const Topology* topology = nullptr);
+
+/// measureMap with a given h for a mesh read face by face (out of core): the same per-face terms,
+/// summed in the order given. The caller counts collapsedAtCones and flippedFolded by the kind
+/// add() returns.
+class MapQualitySums {
+ public:
+  enum class Kind { Fine, Collapsed, Flipped };
+  explicit MapQualitySums(double edgeLength) : h_(edgeLength) {}
+  /// A face's corner positions and values and its field direction (null: no field).
+  Kind add(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q, const Vec3d* direction);
+  void countCollapsedAtCones() { ++out_.collapsedAtCones; }
+  void countFolded() { ++out_.flippedFolded; }
+  MapQuality finish() const;
+
+ private:
+  double h_;
+  double error_ = 0.0, target_ = 0.0;
+  bool hasField_ = false;
+  MapQuality out_;
+};
 
 }  // namespace seamvox

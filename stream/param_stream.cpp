@@ -1,0 +1,201 @@
+#include "stream/param_stream.h"
+
+#include <algorithm>
+#include <array>
+#include <memory>
+#include <optional>
+
+#include "core/basis/voxel_basis.h"
+#include "core/field/field_proxy.h"
+#include "core/solve/param_solver.h"
+#include "core/system/errors.h"
+#include "stream/cut_stream.h"
+#include "stream/field_stream.h"
+#include "stream/paged_corner_table.h"
+#include "stream/paged_reader.h"
+#include "stream/refine_stream.h"
+#include "stream/voxel_solve_stream.h"
+#include "stream/voxel_stream.h"
+#include "stream/welded_scratch.h"
+
+namespace seamvox {
+
+namespace {
+
+/// The voxel basis and its Vox solve; when the system cannot be factored, built again with the
+/// B-splines that barely touch the surface joined to a neighbour (as the in-memory voxel solvers).
+struct VoxStage {
+  ScratchVoxelBasis basis;
+  ScratchVoxelSolution solved;
+};
+
+VoxStage solveVox(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
+                  VoxelBasisOptions basisOptions, const RoundOptions& round, const StreamPassOptions& pass,
+                  StageMeter& meter, std::string& retryReason) {
+  VoxStage out;
+  try {
+    out.basis = buildScratchVoxelBasis(folder, scratch, field, cut, basisOptions, pass);
+    meter.finish("basis");
+    out.solved = solveScratchVoxelMap(folder, scratch, cut, out.basis, round, pass);
+  } catch (const SolverError& first) {
+    for (const ScratchFile* file : {&out.basis.fragments, &out.basis.fragmentElement, &out.basis.faceFragmentStart}) {
+      if (!file->path.empty()) folder.remove(*file);
+    }
+    out = VoxStage();
+    basisOptions.minDomainWeight = kRetryMinDomainWeight;
+    out.basis = buildScratchVoxelBasis(folder, scratch, field, cut, basisOptions, pass);
+    out.solved = solveScratchVoxelMap(folder, scratch, cut, out.basis, round, pass);
+    retryReason = first.what();
+  }
+  meter.finish("solve");
+  return out;
+}
+
+/// measureSeams and measureMap (with the field, h given, no cones) of the out-of-core map: the
+/// seams' edges through page caches, the faces in order with their corners' wedges and
+/// directions read alongside; a flipped face is tested against the smoothed surface.
+void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                       const ScratchCut& cut, const ScratchMap& map, double h, const StreamPassOptions& pass,
+                       StreamParamResult& r) {
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  PagedFacePoints points(scratch, scratch.positions, cacheBytes);
+  PagedReader<Vec2d> values(map.wedgeValues, cacheBytes);
+  {
+    PagedReader<std::uint32_t> cornerWedge(map.cornerWedge, cacheBytes);
+    PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
+    r.seamQuality = measureSeams(
+        cut.seams, [&](CornerId c) { return values[cornerWedge[c]]; }, [&](CornerId c) { return opposite[c]; },
+        [&](CornerId c) {
+          const Triangle t = points.triangle(cornerFace(c));
+          const std::array<Vec3d, 3> p = points.points(t);
+          return (p[(c + 1) % 3] - p[(c + 2) % 3]).norm();
+        });
+    folder.countRead("metrics", cornerWedge.bytesRead() + opposite.bytesRead());
+  }
+  std::optional<PagedReader<Vec3f>> smooth;
+  if (field.framePositions.bytes > 0) smooth.emplace(field.framePositions, cacheBytes);
+  MapQualitySums sums(h);
+  ScratchReader faces(folder, scratch.faces, "metrics"), wedges(folder, map.cornerWedge, "metrics"),
+      directions(folder, field.directions, "metrics");
+  CleanFace face;
+  std::uint32_t w[3];
+  Vec3f direction;
+  while (faces.read(&face, sizeof face)) {
+    if (!wedges.read(w, sizeof w) || !directions.read(&direction, sizeof direction)) {
+      throw IoError(map.cornerWedge.path + ": scratch file ends early");
+    }
+    const Triangle& t = face.triangle;
+    const std::array<Vec3d, 3> p = points.points(t);
+    const Vec3d u = direction.cast<double>();
+    if (sums.add(p, {values[w[0]], values[w[1]], values[w[2]]}, &u) != MapQualitySums::Kind::Flipped || !smooth) continue;
+    // faceFoldedIn3D: the face's normal against the same face on the smoothed surface.
+    const Vec3d a = (*smooth)[t[0]].cast<double>(), b = (*smooth)[t[1]].cast<double>(), c = (*smooth)[t[2]].cast<double>();
+    if ((p[1] - p[0]).cross(p[2] - p[0]).dot((b - a).cross(c - a)) < 0.0) sums.countFolded();
+  }
+  r.mapQuality = sums.finish();
+  folder.countRead("metrics", points.bytesRead() + values.bytesRead() + (smooth ? smooth->bytesRead() : 0));
+}
+
+}  // namespace
+
+StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folder, const StreamParamOptions& options) {
+  if (!options.writeMap) throw InputError("param out of core: no writer for the map");
+  std::unique_ptr<StageMeter> ownMeter;
+  if (!options.meter) ownMeter = std::make_unique<StageMeter>();
+  StageMeter& meter = options.meter ? *options.meter : *ownMeter;
+  const StreamPassOptions pass{options.memoryBytes};
+  StreamParamResult r;
+
+  WeldStreamOptions weld;
+  weld.weld = options.weld;
+  weld.memoryBytes = options.memoryBytes;
+  const CleanScratch scratch = [&] {
+    const WeldStreamResult welded = weldMeshStream(stream, folder, weld);
+    r.inputFaces = welded.census.inputFaces;
+    meter.finish("weld");
+    CleanScratch cleaned = cleanWeldedMesh(folder, welded.scratch, welded.census, options.memoryBytes);
+    folder.remove(welded.scratch.faces);
+    folder.remove(welded.scratch.positions);
+    return cleaned;
+  }();
+  r.cleanReport = scratch.report;
+  r.faces = scratch.numFaces;
+  r.vertices = scratch.numVertices;
+  meter.finish("clean");
+  reportProgress(options.progress, "clean", 1.0);
+
+  // h from the diagonal without spikes, as the in-memory pipeline takes it.
+  r.diagonal = scratch.report.diagonalWithoutSpikes;
+  r.edgeLength = options.spacing.spacing(r.diagonal);
+  const double h = r.edgeLength;
+  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), pass);
+  r.fieldElements = field.elements;
+  meter.finish("field");
+  reportProgress(options.progress, "field", 1.0);
+
+  ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, pass);
+  r.conesBeforeMerge = static_cast<std::uint32_t>(singularities.cones.size());
+  ConeMergeOptions merge;
+  merge.maxDistance = options.mergeCones * h;
+  r.merged = mergeScratchCones(folder, scratch, singularities, merge, pass);
+  const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, pass);
+  folder.remove(singularities.matching);
+  r.cones = cut.cones;
+  std::sort(r.cones.begin(), r.cones.end());
+  for (VertexId v : r.cones) {
+    const auto it = std::lower_bound(singularities.index4.begin(), singularities.index4.end(), std::make_pair(v, INT32_MIN));
+    r.coneIndex4.push_back(it != singularities.index4.end() && it->first == v ? it->second : 0);
+  }
+  r.seams = static_cast<std::uint32_t>(cut.seams.size());
+  r.components = cut.components;
+  meter.finish("cut");
+  reportProgress(options.progress, "cut", 1.0);
+
+  VoxelBasisOptions basisOptions;
+  basisOptions.gridResolution = options.gridResolution;
+  basisOptions.edgeLength = h;
+  basisOptions.progress = options.progress;
+  RoundOptions round;
+  round.progress = options.progress;
+  VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason);
+  ScratchVoxelSolution& solved = vox.solved;
+  r.solve = solved.stats;
+  r.translationConstraints = solved.translationConstraints;
+  r.determinedBasis = solved.determinedBasis;
+  r.inconsistentBasis = solved.inconsistentBasis;
+  r.failedAttempts = solved.failedAttempts;
+  r.domains = vox.basis.basis->numDomains();
+  r.basisFunctions = vox.basis.basis->numBasisFunctions();
+  r.elements = vox.basis.basis->numElements();
+  r.fragments = vox.basis.numFragments;
+
+  // voxloc refines near cones and wherever the map collapses or flips; vox only where its
+  // reduction left basis functions inconsistent (as parameterizeMeshWithSolver).
+  std::vector<FaceId> seeds =
+      scratchSupportFaces(folder, vox.basis, options.voxLoc ? solved.markedBasis : solved.inconsistentBasisFunctions);
+  vox.basis = ScratchVoxelBasis();  // the grid-sized basis, before the local solves
+  r.markedFaces = seeds.size();
+  if (options.voxLoc || !seeds.empty()) {
+    RefineOptions refine = options.refine;
+    refine.edgeLength = h;
+    refine.markedFaces = std::move(seeds);
+    refine.seedFromMap = options.voxLoc;
+    if (!options.voxLoc) refine.maxRounds = 1;
+    if (!refine.progress) refine.progress = options.progress;
+    const RefineResult refinement =
+        refineScratchNearCones(folder, scratch, field, cut, solved.map, solved.translations, refine, pass);
+    applyScratchRefinement(folder, refinement, solved.map, &solved.translations, pass);
+    r.refined = true;
+    r.refine = refinement.stats;
+    meter.finish("refine");
+  }
+  r.wedges = solved.map.numWedges;
+
+  options.writeMap(scratch, solved.map);
+  meter.finish("write");
+  measureScratchMap(folder, scratch, field, cut, solved.map, h, pass, r);
+  meter.finish("metrics");
+  return r;
+}
+
+}  // namespace seamvox
