@@ -183,7 +183,7 @@ std::vector<std::string> optionsWithoutOutOfCorePath(const ParamCommand& c) {
   if (c.fieldSource != "auto" && c.fieldSource != "proxy") out.push_back("--field " + c.fieldSource);
   if (o.features.alignBoundary) out.push_back("--align-boundary");
   if (!o.features.autoFeatureAngle && o.features.featureAngle > 0.0) out.push_back("--feature-angle");
-  if (o.closeHoles > 0.0) out.push_back("--close-holes");
+  if (o.closeHoles > 0.0 && !c.quadsPath) out.push_back("--close-holes");
   if (c.quadsPath) out.push_back("--quads (run seamvox quads on the output)");
   if (c.renderPath) out.push_back("--render (run seamvox render on the output)");
   if (o.dropUnsolved) out.push_back("--drop-unsolved");

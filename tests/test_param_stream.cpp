@@ -1,0 +1,135 @@
+// param out of core (stream/param_stream, `param --out-of-core` or above the budget): the file it
+// writes is byte for byte the one the in-memory pipeline writes with the same stages (proxy field,
+// voxloc, one cone pass, no foldover repair) on the mesh as the out-of-core path cleans it; `seamvox check` agrees with its
+// verdict; the report says which path ran; what the path lacks and budgets below the grid-sized
+// system are refused by name; a full scratch disk is an error that leaves nothing behind.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "core/system/errors.h"
+#include "io/json_reader.h"
+#include "io/mesh_io.h"
+#include "stream/mesh_stream.h"
+#include "stream/param_stream.h"
+#include "stream_testing.h"
+#include "test_meshes.h"
+#include "testing.h"
+
+namespace seamvox {
+namespace {
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+std::string run(const std::string& arguments, int code) {
+  std::string output;
+  EXPECT_EQ(testing::runSeamvox(arguments, &output), code) << "seamvox " << arguments << "\n" << output;
+  return output;
+}
+
+// A closed noisy scan with holes, the damaged mesh (non-manifold edges and vertices, duplicate
+// and flipped faces) and a torus with islands (a sphere and a Moebius strip).
+TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
+  const testing::NamedMeshes meshes = testing::stageTestMeshes(43);
+  for (const auto& [name, mesh] : meshes) {
+    SCOPED_TRACE(name);
+    testing::TempDir dir;
+    ASSERT_TRUE(std::filesystem::create_directory(dir.path("scratch")));
+    writeMesh(dir.path("in.ply"), mesh);
+    // The mesh as the out-of-core path cleans it, in its order: what the in-memory pipeline gets.
+    {
+      ScratchFolder folder(dir.dir());
+      const CleanScratch scratch = testing::cleanIntoScratch(folder, mesh, std::uint64_t(1) << 20);
+      writeMesh(dir.path("clean.ply"), readCleanScratch(folder, scratch).mesh);
+    }
+    const std::string settings = " --grid 32 --cells 20 --quiet --no-untangle";
+    const std::string inMemory = run("param " + dir.path("clean.ply") + " -o " + dir.path("mem.ply") +
+                                         " --solver voxloc --field proxy" + settings,
+                                     0);
+    const std::string outOfCore =
+        run("param " + dir.path("in.ply") + " -o " + dir.path("ooc.ply") + " --out-of-core --memory-budget 150M" +
+                settings + " --scratch " + dir.path("scratch") + " --report " + dir.path("r.json"),
+            0);
+    EXPECT_TRUE(testing::readFile(dir.path("ooc.ply")) == testing::readFile(dir.path("mem.ply"))) << inMemory << outOfCore;
+    EXPECT_TRUE(contains(outOfCore, "path out of core")) << outOfCore;
+    EXPECT_TRUE(contains(inMemory, "path in memory")) << inMemory;
+    // The same verdict from param and from check on the written file.
+    const bool seamless = contains(outOfCore, ": seamless");
+    EXPECT_TRUE(seamless || contains(outOfCore, "NOT seamless")) << outOfCore;
+    const std::string checked = run("check " + dir.path("ooc.ply"), seamless ? 0 : 1);
+    EXPECT_EQ(contains(checked, "NOT seamless"), !seamless) << checked;
+    const JsonValue report = parseJson(testing::readFile(dir.path("r.json")));
+    EXPECT_EQ(report["path"].text, "out-of-core");
+    EXPECT_GT(report.numberAt("scratch.peakBytes"), 0.0);
+    EXPECT_TRUE(std::filesystem::is_empty(dir.path("scratch"))) << "scratch left behind";
+  }
+}
+
+TEST(ParamStream, WhatThePathLacksAndTooSmallBudgetsAreRefusedByName) {
+  testing::TempDir dir;
+  writeMesh(dir.path("in.ply"), testing::generatedMesh(MeshKind::Scan, 3000));
+  const std::string common = "param " + dir.path("in.ply") + " --out-of-core --quiet";
+  const struct {
+    std::string options, named;
+  } lacking[] = {{"--solver hat", "--solver hat"},
+                 {"--quads " + dir.path("q.obj"), "--quads"},
+                 {"--render " + dir.path("r.png"), "--render"},
+                 {"--field smooth", "--field smooth"},
+                 {"--close-holes 2", "--close-holes"},
+                 {"--keep-order", "--keep-order"}};
+  for (const auto& c : lacking) {
+    const std::string out = run(common + " -o " + dir.path("o.ply") + " " + c.options, 1);
+    EXPECT_TRUE(contains(out, "that path has no") && contains(out, c.named)) << out;
+    EXPECT_TRUE(contains(out, dir.path("in.ply"))) << out;
+  }
+  EXPECT_TRUE(contains(run(common + " -o " + dir.path("o.drc"), 1), ".drc output"));
+  // The grid-sized system stays in memory: the minimum budget, and the grid that fits.
+  std::string out = run(common + " -o " + dir.path("o.ply") + " --memory-budget 300M", 1);
+  EXPECT_TRUE(contains(out, "at least 632.0 MiB at --grid 128")) << out;
+  EXPECT_TRUE(contains(out, "--grid 64 fits within it")) << out;
+  out = run(common + " -o " + dir.path("o.ply") + " --memory-budget 100M", 1);
+  EXPECT_TRUE(contains(out, "no grid of 32 or more voxels per axis fits")) << out;
+  for (const char* name : {"o.ply", "o.drc", "q.obj", "r.png"}) EXPECT_FALSE(std::filesystem::exists(dir.path(name))) << name;
+}
+
+// A scratch disk that fills at any point of the run is an IoError naming the folder; the map is
+// not written and the folder is empty afterwards.
+TEST(ParamStream, AFullScratchDiskIsAnErrorAndNothingIsWritten) {
+  const auto mesh = std::make_shared<const TriangleMesh>(testing::generatedMesh(MeshKind::Scan, 6000));
+  testing::TempDir dir;
+  StreamParamOptions options;
+  options.memoryBytes = std::uint64_t(8) << 20;
+  options.gridResolution = 16;
+  options.spacing.cells = 20;
+  bool written = false;
+  options.writeMap = [&](const CleanScratch&, const ScratchMap&) { written = true; };
+  std::uint64_t total = 0;
+  {
+    ScratchFolder folder(dir.dir());
+    const std::unique_ptr<MeshStream> stream = makeMemoryStream("scan", mesh, 997);
+    const StreamParamResult r = parameterizeOutOfCore(*stream, folder, options);
+    total = folder.bytesWritten();
+    EXPECT_TRUE(written);
+    EXPECT_TRUE(r.isSeamless());
+    EXPECT_GT(r.refine.rounds.size(), 0u);
+  }
+  ASSERT_GT(total, 0u);
+  for (const double share : {0.01, 0.3, 0.6, 0.95}) {
+    SCOPED_TRACE(share);
+    written = false;
+    {
+      ScratchFolder folder(dir.dir());
+      folder.setWriteLimit(static_cast<std::uint64_t>(share * total));
+      const std::unique_ptr<MeshStream> stream = makeMemoryStream("scan", mesh, 997);
+      testing::expectScratchFull(folder, [&] { parameterizeOutOfCore(*stream, folder, options); });
+    }
+    EXPECT_FALSE(written);
+    EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));
+  }
+}
+
+}  // namespace
+}  // namespace seamvox
