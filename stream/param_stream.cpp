@@ -14,6 +14,7 @@
 #include "stream/paged_corner_table.h"
 #include "stream/paged_reader.h"
 #include "stream/refine_stream.h"
+#include "stream/untangle_stream.h"
 #include "stream/voxel_solve_stream.h"
 #include "stream/voxel_stream.h"
 #include "stream/welded_scratch.h"
@@ -188,6 +189,17 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     r.refined = true;
     r.refine = refinement.stats;
     meter.finish("refine");
+  }
+  if (options.untangle) {
+    UntangleOptions untangle = options.untangleOptions;
+    untangle.edgeLength = h;
+    if (!untangle.progress) untangle.progress = options.progress;
+    const ScratchUntangleStats repaired =
+        untangleScratchFlips(folder, scratch, field, cut, solved.map, solved.translations, untangle, pass);
+    r.untangled = true;
+    r.untangle = repaired.untangle;
+    r.untangleWindowFaces = repaired.windowFaces;
+    meter.finish("untangle");
   }
   r.wedges = solved.map.numWedges;
 

@@ -1,10 +1,10 @@
 #pragma once
 /// param out of core: the mesh streamed once into a scratch folder and every stage a pass over
 /// scratch files within a memory budget (weld and clean, proxy field, cones, cut, voxel basis, Vox
-/// solve, local refinement, measures), the map written chunk by chunk. Each stage equals its
-/// in-memory counterpart (the stream_* tests), so the map is the in-memory pipeline's on the
-/// cleaned mesh with the proxy field, one cone pass and no foldover repair (the steps not yet
-/// built out of core; the result says so).
+/// solve, local refinement, foldover repair in a window around the flips, measures), the map
+/// written chunk by chunk. Each stage equals its in-memory counterpart (the stream_* tests), so the
+/// map is the in-memory pipeline's on the cleaned mesh with the proxy field and one cone pass
+/// (further passes are not built out of core).
 #include <complex>
 #include <cstdint>
 #include <functional>
@@ -17,6 +17,7 @@
 #include "core/pipeline/grid_spacing.h"
 #include "core/quality/metrics.h"
 #include "core/refine/refine.h"
+#include "core/refine/untangle.h"
 #include "core/solve/seamless_solve.h"
 #include "core/system/memory.h"
 #include "core/system/progress.h"
@@ -38,9 +39,12 @@ struct StreamParamOptions {
   /// basis functions the reduction left inconsistent (one round).
   bool voxLoc = true;
   RefineOptions refine;  ///< rings, rounds, cone weight (edgeLength and the seeds are set here)
+  /// Foldover repair after the refinement (untangleScratchFlips; edgeLength set here).
+  bool untangle = true;
+  UntangleOptions untangleOptions;
   ProgressFn progress;
-  /// Stages are closed on it when given: weld, clean, field, cut, basis, solve, refine, write,
-  /// metrics.
+  /// Stages are closed on it when given: weld, clean, field, cut, basis, solve, refine, untangle,
+  /// write, metrics.
   StageMeter* meter = nullptr;
   /// Writes the map once it is final (e.g. writeScratchMap into the output file), before the
   /// measures; required.
@@ -65,6 +69,9 @@ struct StreamParamResult {
   std::uint64_t markedFaces = 0;
   bool refined = false;
   RefineStats refine;
+  bool untangled = false;
+  UntangleStats untangle;
+  std::uint64_t untangleWindowFaces = 0;  ///< faces paged in around the flips
   SeamQuality seamQuality;
   MapQuality mapQuality;  ///< gradient error against the proxy field; flips folded in 3D on its smoothed surface
   bool isSeamless() const { return seamQuality.isSeamless(); }

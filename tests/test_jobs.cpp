@@ -104,6 +104,15 @@ TEST(JobSchedule, FirstPendingJobThatFitsTheBudget) {
   EXPECT_EQ(estimateJobPeakBytes(20000000, {}), estimateParamPeakBytes(20000000, ParamSolver::Auto, 128));
   // Vertex properties count three times (read, gathered by cleaning, written).
   EXPECT_EQ(estimateJobPeakBytes(1000, hat, 4000000), estimateJobPeakBytes(1000, hat) + 12000000);
+  // What a job holds: its estimate when that fits the budget; else the whole budget, where param
+  // runs out of core, when it holds that path's grid-sized system; else nothing (it fails).
+  EXPECT_EQ(jobOutOfCoreMinimumBytes(vox256), outOfCoreMinimumBytes(256));
+  EXPECT_EQ(jobOutOfCoreMinimumBytes({}), outOfCoreMinimumBytes(kDefaultGridResolution));
+  EXPECT_LT(outOfCoreMinimumBytes(64), outOfCoreMinimumBytes(128));
+  EXPECT_EQ(reserveJobMemory(300, 500, 1000), 300u);
+  EXPECT_EQ(reserveJobMemory(3000, 500, 1000), 1000u);
+  EXPECT_EQ(reserveJobMemory(3000, 1500, 1000), 0u);
+  EXPECT_EQ(reserveJobMemory(1000, 1500, 1000), 1000u);
 }
 
 /// A generated sphere cut into three tiles by face centroid x, each tile with its own vertices.
@@ -258,7 +267,22 @@ TEST(JobsCommand, JobsOverTheBudgetFailWithoutRunning) {
   EXPECT_EQ(batch.run("--memory-budget 0.001", &log), 6) << log;
   const std::string csv = readFile(batch.dir.path("out/summary.csv"));
   EXPECT_THAT(csv, HasSubstr("exceeds the memory budget"));
+  EXPECT_THAT(csv, HasSubstr("param's out-of-core path needs at least"));
   EXPECT_FALSE(fs::exists(batch.dir.path("out/m0.drc")));
+}
+
+// Each job's param gets what the job holds of the budget as its own --memory-budget (its estimate
+// here), so param's choice of path and the runner's schedule follow one rule.
+TEST(JobsCommand, ParamGetsTheJobsShareOfTheBudget) {
+  Batch batch;
+  std::string log;
+  fs::remove(batch.dir.path("in/broken.ply"));
+  EXPECT_EQ(batch.run("--memory-budget 4G", &log), 0) << log;
+  for (const char* name : {"m0", "m1", "m2"}) {
+    const JsonValue report = parseJson(readFile(batch.dir.path(std::string("out/") + name + ".json")));
+    EXPECT_EQ(report.textAt("param.path"), "in-memory") << name;
+    EXPECT_EQ(report.numberAt("param.memoryBudget"), report.numberAt("estimatedPeakBytes")) << name;
+  }
 }
 
 // The estimate counts an input's vertex properties: the same mesh with ten double properties per

@@ -195,9 +195,6 @@ std::vector<std::string> optionsWithoutOutOfCorePath(const ParamCommand& c) {
   return out;
 }
 
-/// Budget of the out-of-core passes besides the program and the grid-sized system.
-constexpr std::uint64_t kMinimumPassBytes = std::uint64_t(64) << 20;
-
 /// The out-of-core run's figures as the in-memory pipeline reports them (its mesh empty).
 PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver solver) {
   PipelineResult r;
@@ -232,6 +229,8 @@ PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver sol
   solved.markedFaces = s.markedFaces;
   solved.refined = s.refined;
   solved.refine = s.refine;
+  r.untangled = s.untangled;
+  r.untangle = s.untangle;
   r.seamQuality = s.seamQuality;
   r.mapQuality = s.mapQuality;
   return r;
@@ -255,16 +254,16 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
   }
   const std::int32_t grid = c.options.solver.gridResolution;
   const auto fixedBytes = [](std::int32_t g) { return estimateParamPeakBytes(0, ParamSolver::VoxLoc, g); };
-  if (memoryPath.budget < fixedBytes(grid) + kMinimumPassBytes) {
+  if (memoryPath.budget < outOfCoreMinimumBytes(grid)) {
     std::string fits = "no grid of 32 or more voxels per axis fits within it";
     for (const std::int32_t g : {256, 128, 64, 32}) {
-      if (g < grid && fixedBytes(g) + kMinimumPassBytes <= memoryPath.budget) {
+      if (g < grid && outOfCoreMinimumBytes(g) <= memoryPath.budget) {
         fits = "--grid " + std::to_string(g) + " fits within it";
         break;
       }
     }
     throw InputError(c.input + ": param out of core needs a --memory-budget of at least " +
-                     formatByteSize(fixedBytes(grid) + kMinimumPassBytes) + " at --grid " + std::to_string(grid) +
+                     formatByteSize(outOfCoreMinimumBytes(grid)) + " at --grid " + std::to_string(grid) +
                      " (the grid-sized system stays in memory), got " + formatByteSize(memoryPath.budget) + "; " + fits);
   }
   memoryPath.outOfCore = true;
@@ -281,6 +280,9 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
   options.voxLoc = solver == ParamSolver::VoxLoc;
   options.refine = c.options.solver.refine;
   options.refine.coneWeightRadius = c.options.coneWeightRadius;
+  options.untangle = c.options.untangle;
+  options.untangleOptions = c.options.untangleOptions;
+  options.untangleOptions.coneWeightRadius = c.options.coneWeightRadius;
   options.progress = c.options.progress;
   options.meter = &meter;
   options.writeMap = [&](const CleanScratch& scratch, const ScratchMap& map) {
@@ -296,18 +298,17 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
   memoryPath.peakBytes = meter.peakBytes();
   const PipelineResult r = figuresOfOutOfCoreRun(streamed, solver);
   printSummary(c, r, meter);
-  if (c.options.untangle) {
-    std::printf("foldover repair: not run (the out-of-core path has none yet): %llu flipped faces left\n",
-                static_cast<unsigned long long>(r.mapQuality.flipped));
+  if (streamed.untangled) {
+    std::printf("foldover repair out of core: %llu faces paged in around the flips\n",
+                static_cast<unsigned long long>(streamed.untangleWindowFaces));
   }
   std::printf("%s\n", describeMemoryPath(memoryPath).c_str());
   if (c.reportPath) {
     ParamReportContext context = paramReportContext(c.options, meter, c.input, c.output, c.solverName, c.fieldSource);
     context.memoryPathJson = [&](JsonWriter& j) {
       writeMemoryPathJson(j, memoryPath, false);
-      j.key("notRunOutOfCore").beginArray();
-      if (c.options.untangle) j.value(std::string("untangle"));
-      j.value(std::string("further cone passes")).endArray();
+      j.key("untangleWindowFaces").value(streamed.untangleWindowFaces);
+      j.key("notRunOutOfCore").beginArray().value(std::string("further cone passes")).endArray();
     };
     const std::string json = paramReportJson(r, context);
     if (reportFile) {
@@ -490,9 +491,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                        streams through the scratch folder, the grid-sized system\n"
                  "                        and the passes' buffers stay within the budget (at least\n"
                  "                        632M at --grid 128). That path writes the mesh in spatial\n"
-                 "                        order with its map (.ply or .obj) and has no foldover\n"
-                 "                        repair, further cone passes, --quads, --render,\n"
-                 "                        --close-holes, features or hat solver yet\n"
+                 "                        order with its map (.ply or .obj) and has no further cone\n"
+                 "                        passes, --quads, --render, --close-holes, features or hat\n"
+                 "                        solver yet\n"
                  "  --out-of-core         take the out-of-core path whatever the estimate\n",
                  {"greedy", "no-untangle", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
                  &runParam});

@@ -227,6 +227,7 @@ PreparedJob prepareJob(const JobSpec& spec, const std::string& outputDir) {
   h = hashBytes(spec.format.data(), spec.format.size(), h);
   job.stamp = hex(h);
   job.estimateBytes = estimateJobPeakBytes(faces, spec.paramArgs, propertyBytes);
+  job.outOfCoreMinimumBytes = jobOutOfCoreMinimumBytes(spec.paramArgs);
   job.upToDate = fs::exists(job.reportPath) &&
                  readText(job.reportPath).find("\"stamp\": \"" + job.stamp + "\"") != std::string::npos;
   for (const std::string& output : job.outputs) job.upToDate = job.upToDate && fs::exists(output);
@@ -274,6 +275,13 @@ JobOutcome runJob(const PreparedJob& job, const RunnerOptions& options) {
       std::vector<std::string> args = {options.executable, "param", input, "-o", output,
                                        "--report", paramReport, "--quiet", "--threads", threads};
       args.insert(args.end(), job.spec.paramArgs.begin(), job.spec.paramArgs.end());
+      // The job's share of the budget is param's own budget: above its estimate it runs out of core.
+      const bool budgetGiven = std::find(job.spec.paramArgs.begin(), job.spec.paramArgs.end(), "--memory-budget") !=
+                               job.spec.paramArgs.end();
+      if (job.reserveBytes > 0 && !budgetGiven) {
+        args.push_back("--memory-budget");
+        args.push_back(std::to_string(job.reserveBytes));
+      }
       step(args, "param");
     };
     if (job.spec.tiled) {
@@ -337,17 +345,24 @@ JobOutcome runJob(const PreparedJob& job, const RunnerOptions& options) {
   return outcome;
 }
 
+std::string budgetRefusal(const PreparedJob& job, std::uint64_t budgetBytes) {
+  return "estimated peak " + std::to_string(job.estimateBytes >> 20) + " MiB exceeds the memory budget of " +
+         std::to_string(budgetBytes >> 20) + " MiB, and param's out-of-core path needs at least " +
+         std::to_string(job.outOfCoreMinimumBytes >> 20) + " MiB at the job's grid";
+}
+
 std::vector<JobOutcome> runJobsLocally(const std::vector<PreparedJob>& jobs, std::uint32_t workers,
                                        std::uint64_t budgetBytes, const RunnerOptions& options) {
   std::vector<JobOutcome> outcomes(jobs.size());
   std::vector<std::size_t> pending;
+  std::vector<std::uint64_t> reserve(jobs.size(), 0);
   for (std::size_t i = 0; i < jobs.size(); ++i) {
-    if (jobs[i].estimateBytes > budgetBytes) {
+    reserve[i] = reserveJobMemory(jobs[i].estimateBytes, jobs[i].outOfCoreMinimumBytes, budgetBytes);
+    if (reserve[i] == 0) {
       JobOutcome& o = outcomes[i];
       o.name = jobs[i].spec.name;
       o.estimateBytes = jobs[i].estimateBytes;
-      o.error = "estimated peak " + std::to_string(jobs[i].estimateBytes >> 20) +
-                " MiB exceeds the memory budget of " + std::to_string(budgetBytes >> 20) + " MiB";
+      o.error = budgetRefusal(jobs[i], budgetBytes);
     } else {
       pending.push_back(i);
     }
@@ -362,7 +377,7 @@ std::vector<JobOutcome> runJobsLocally(const std::vector<PreparedJob>& jobs, std
     std::int64_t pick = -1;
     if (running < std::max<std::uint32_t>(1, workers) && !pending.empty()) {
       std::vector<std::uint64_t> estimates;
-      for (const std::size_t i : pending) estimates.push_back(jobs[i].estimateBytes);
+      for (const std::size_t i : pending) estimates.push_back(reserve[i]);
       pick = pickNextJob(estimates, runningBytes, budgetBytes);
     }
     if (pick < 0) {
@@ -371,13 +386,15 @@ std::vector<JobOutcome> runJobsLocally(const std::vector<PreparedJob>& jobs, std
     }
     const std::size_t index = pending[static_cast<std::size_t>(pick)];
     pending.erase(pending.begin() + pick);
-    runningBytes += jobs[index].estimateBytes;
+    runningBytes += reserve[index];
     ++running;
     threads.emplace_back([&, index] {
-      JobOutcome outcome = runJob(jobs[index], options);
+      PreparedJob job = jobs[index];
+      job.reserveBytes = reserve[index];
+      JobOutcome outcome = runJob(job, options);
       std::lock_guard<std::mutex> guard(mutex);
       outcomes[index] = std::move(outcome);
-      runningBytes -= jobs[index].estimateBytes;
+      runningBytes -= reserve[index];
       --running;
       finished.notify_all();
     });

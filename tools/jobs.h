@@ -34,7 +34,11 @@ struct PreparedJob {
   std::string reportPath;
   std::vector<std::string> outputs;
   std::string stamp;  ///< hash of the inputs' sizes and bytes, the options and the format
-  std::uint64_t estimateBytes = 0;
+  std::uint64_t estimateBytes = 0;  ///< param's in-memory estimate (estimateJobPeakBytes)
+  std::uint64_t outOfCoreMinimumBytes = 0;  ///< param's out-of-core minimum at the job's grid
+  /// What the job holds of the budget while it runs (reserveJobMemory), given to param as its
+  /// --memory-budget (0: param's own default); above the estimate param runs out of core.
+  std::uint64_t reserveBytes = 0;
   bool upToDate = false;  ///< report and outputs exist and the report carries this stamp
 };
 
@@ -43,6 +47,8 @@ PreparedJob describeJob(const JobSpec& spec, const std::string& outputDir);
 /// Hashes the inputs, estimates the peak and checks for an up-to-date earlier run. Never throws
 /// for unreadable inputs (the job then fails when it runs).
 PreparedJob prepareJob(const JobSpec& spec, const std::string& outputDir);
+/// Why a job cannot run within the budget (reserveJobMemory gave 0).
+std::string budgetRefusal(const PreparedJob& job, std::uint64_t budgetBytes);
 /// The outcome recorded in an up-to-date job's report (status Skipped).
 JobOutcome skippedOutcome(const PreparedJob& job);
 

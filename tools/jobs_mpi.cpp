@@ -58,13 +58,13 @@ std::vector<JobOutcome> handOutJobs(const std::vector<JobSpec>& specs, const std
   std::deque<std::size_t> queue;
   for (std::size_t i = 0; i < specs.size(); ++i) {
     jobs.push_back(prepareJob(specs[i], outputDir));
+    jobs[i].reserveBytes = reserveJobMemory(jobs[i].estimateBytes, jobs[i].outOfCoreMinimumBytes, budgetBytes);
     if (jobs[i].upToDate && !force) {
       outcomes[i] = skippedOutcome(jobs[i]);
-    } else if (jobs[i].estimateBytes > budgetBytes) {
+    } else if (jobs[i].reserveBytes == 0) {
       outcomes[i].name = specs[i].name;
       outcomes[i].estimateBytes = jobs[i].estimateBytes;
-      outcomes[i].error = "estimated peak " + std::to_string(jobs[i].estimateBytes >> 20) +
-                          " MiB exceeds the memory budget of " + std::to_string(budgetBytes >> 20) + " MiB";
+      outcomes[i].error = budgetRefusal(jobs[i], budgetBytes);
     } else {
       queue.push_back(i);
     }
@@ -85,7 +85,8 @@ std::vector<JobOutcome> handOutJobs(const std::vector<JobSpec>& specs, const std
     }
     const std::size_t index = queue.front();
     queue.pop_front();
-    sendText(std::to_string(index) + "\n" + jobs[index].stamp + "\n" + std::to_string(jobs[index].estimateBytes),
+    sendText(std::to_string(index) + "\n" + jobs[index].stamp + "\n" + std::to_string(jobs[index].estimateBytes) +
+                 "\n" + std::to_string(jobs[index].reserveBytes),
              source, kJob);
   }
   return outcomes;
@@ -101,11 +102,12 @@ void runHandedJobs(const std::vector<JobSpec>& specs, const std::string& outputD
     std::size_t index = 0;
     PreparedJob job;
     std::string stamp;
-    std::uint64_t estimate = 0;
-    in >> index >> stamp >> estimate;
+    std::uint64_t estimate = 0, reserve = 0;
+    in >> index >> stamp >> estimate >> reserve;
     job = describeJob(specs.at(index), outputDir);
     job.stamp = stamp;
     job.estimateBytes = estimate;
+    job.reserveBytes = reserve;
     sendText(std::to_string(index) + "\n" + serializeOutcome(runJob(job, options)), 0, kResult);
   }
 }

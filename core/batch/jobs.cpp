@@ -192,6 +192,16 @@ std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::s
   return bytes + 3 * propertyBytes;
 }
 
+std::uint64_t jobOutOfCoreMinimumBytes(const std::vector<std::string>& paramArgs) {
+  const int grid = std::atoi(optionValue(paramArgs, "--grid", "128").c_str());
+  return outOfCoreMinimumBytes(grid >= 4 && grid <= 1024 ? grid : kDefaultGridResolution);
+}
+
+std::uint64_t reserveJobMemory(std::uint64_t estimate, std::uint64_t outOfCoreMinimum, std::uint64_t budget) {
+  if (estimate <= budget) return estimate;
+  return outOfCoreMinimum <= budget ? budget : 0;
+}
+
 std::int64_t pickNextJob(const std::vector<std::uint64_t>& pendingEstimates, std::uint64_t runningBytes,
                          std::uint64_t budget) {
   for (std::size_t i = 0; i < pendingEstimates.size(); ++i) {

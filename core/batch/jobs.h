@@ -53,6 +53,14 @@ Manifest parseManifest(const std::string& text, const std::string& source, const
 std::uint64_t estimateJobPeakBytes(std::uint64_t faces, const std::vector<std::string>& paramArgs,
                                    std::uint64_t propertyBytes = 0);
 
+/// The smallest budget of param's out-of-core path for the job's --grid (outOfCoreMinimumBytes).
+std::uint64_t jobOutOfCoreMinimumBytes(const std::vector<std::string>& paramArgs);
+
+/// The memory a job reserves under the budget, by param's own rule: its estimate when that fits;
+/// else the whole budget, in which param takes its out-of-core path, when the budget holds that
+/// path (outOfCoreMinimum); else 0: the job cannot run within the budget.
+std::uint64_t reserveJobMemory(std::uint64_t estimate, std::uint64_t outOfCoreMinimum, std::uint64_t budget);
+
 /// The scheduling rule: the first pending job (in order) whose estimate fits next to the running
 /// ones (runningBytes + estimate <= budget), or -1 when none fits now. A job larger than the whole
 /// budget is the caller's to fail (it could never start).

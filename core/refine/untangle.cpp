@@ -361,8 +361,8 @@ bool becameWorse(int before, int now) {
 // before (they would only cost gradient error).
 std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                       WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
-                                      std::uint32_t passes) {
-  std::vector<std::uint8_t> fixed(topology.numVertices(), 0);
+                                      std::uint32_t passes, const std::vector<std::uint8_t>* pinned) {
+  std::vector<std::uint8_t> fixed = pinned ? *pinned : std::vector<std::uint8_t>(topology.numVertices(), 0);
   for (VertexId c : cut.cones) fixed[c] = 1;
   // Only faces flipped at the start change state here (folded ones stay kFolded): no copies of
   // the states (a byte per face each).
@@ -724,8 +724,8 @@ constexpr std::uint64_t kJointEvaluations = 100'000'000;
 // patches.
 std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                               WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
-                              std::uint32_t maxRings) {
-  std::vector<std::uint8_t> fixed(topology.numVertices(), 0);
+                              std::uint32_t maxRings, const std::vector<std::uint8_t>* pinned) {
+  std::vector<std::uint8_t> fixed = pinned ? *pinned : std::vector<std::uint8_t>(topology.numVertices(), 0);
   for (VertexId c : cut.cones) fixed[c] = 1;
   const auto badness = [&](FaceId f) { return faceBadness(mesh, cornerUV, f, h); };
   std::uint32_t movedVertices = 0;
@@ -797,7 +797,12 @@ struct GroupRepair {
 GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                         const CutResult& cut, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
                         const std::vector<FaceId>& faces, const UntangleOptions& options) {
-  const RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
+  RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
+  if (options.pinnedVertices) {
+    for (VertexId v = 0; v < region.vertexOrigin.size(); ++v) {
+      if ((*options.pinnedVertices)[region.vertexOrigin[v]]) region.vertexFree[v] = 0;
+    }
+  }
   std::vector<Vec2d> values(3 * faces.size());
   for (std::size_t i = 0; i < faces.size(); ++i) {
     for (int k = 0; k < 3; ++k) values[3 * i + k] = cornerUV[3 * faces[i] + k];
@@ -906,6 +911,10 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     throw InputError("untangle: " + std::to_string(only->size()) + " face flags for " +
                      std::to_string(nf) + " faces");
   }
+  if (options.pinnedVertices && options.pinnedVertices->size() != mesh.numVertices()) {
+    throw InputError("untangle: " + std::to_string(options.pinnedVertices->size()) + " vertex flags for " +
+                     std::to_string(mesh.numVertices()) + " vertices");
+  }
   classifyAll();
   UntangleStats stats;
   for (FaceId f = 0; f < nf; ++f) stats.flippedBefore += state[f] != kFine;
@@ -954,10 +963,10 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   }
   if (options.relocationPasses > 0) {
     stats.relocatedVertices =
-        relocateFlippedVertices(mesh, topology, cut, cornerUV, state, h, options.relocationPasses);
+        relocateFlippedVertices(mesh, topology, cut, cornerUV, state, h, options.relocationPasses, options.pinnedVertices);
   }
   if (options.jointRings >= 2) {
-    stats.jointVertices = untangleJointly(mesh, topology, cut, cornerUV, state, h, options.jointRings);
+    stats.jointVertices = untangleJointly(mesh, topology, cut, cornerUV, state, h, options.jointRings, options.pinnedVertices);
   }
   // The last steps re-measure only the faces they watch: the figures come from the whole map, as
   // the quality measure's do.

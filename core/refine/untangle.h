@@ -54,6 +54,9 @@ struct UntangleOptions {
   /// When given (one flag per face): only the flipped faces marked here are repaired and counted,
   /// the others are taken as fine (a repair near a few cones, before deciding on another pass).
   const std::vector<std::uint8_t>* onlyFaces = nullptr;
+  /// When given (one flag per vertex): vertices never moved, by any step (the border of a window
+  /// cut out of a larger mesh, whose faces outside keep their values).
+  const std::vector<std::uint8_t>* pinnedVertices = nullptr;
   ProgressFn progress;
 };
 

@@ -49,6 +49,10 @@ std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested,
   return program + static_cast<std::uint64_t>(520.0 * kMiB * scale * scale) + (fieldOnDisk ? 70 : 78) * faces;
 }
 
+std::uint64_t outOfCoreMinimumBytes(std::int32_t gridResolution) {
+  return estimateParamPeakBytes(0, ParamSolver::VoxLoc, gridResolution) + (std::uint64_t(64) << 20);
+}
+
 void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason) {
   const std::uint64_t needed = faces * kHatBytesPerFace;
   if (availableBytes == 0 || needed <= availableBytes) return;

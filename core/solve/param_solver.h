@@ -57,6 +57,9 @@ void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, con
 /// estimate is 1.6% above it there).
 std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution,
                                      bool fieldOnDisk = false);
+/// The smallest budget of param's out-of-core path at a grid: the program and the grid-sized
+/// system (as estimateParamPeakBytes counts them) and 64 MiB for the passes' sorts and caches.
+std::uint64_t outOfCoreMinimumBytes(std::int32_t gridResolution);
 
 /// VoxelBasisOptions::minDomainWeight of the voxel solver's second attempt, when the first could
 /// not factor its system even at kMaxVoxelRegularization: on a noisy 50M-face scan B-splines that

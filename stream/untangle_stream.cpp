@@ -1,0 +1,169 @@
+#include "stream/untangle_stream.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "core/quality/metrics.h"
+#include "core/refine/detail_refine.h"
+#include "core/refine/detail_region.h"
+#include "core/system/errors.h"
+#include "stream/paged_corner_table.h"
+#include "stream/paged_reader.h"
+#include "stream/refine_stream.h"
+
+namespace seamvox {
+
+namespace {
+
+/// The faces the map flips (collapsed ones apart, as untangleFlips counts them) and the mean
+/// length of their edges, by one pass over the faces and their corners' wedges.
+std::vector<FaceId> flippedFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map, double h,
+                                 std::size_t cacheBytes, double& meanEdge) {
+  PagedFacePoints points(scratch, scratch.positions, cacheBytes);
+  PagedReader<Vec2d> values(map.wedgeValues, cacheBytes);
+  ScratchReader faces(folder, scratch.faces, "untangle"), wedges(folder, map.cornerWedge, "untangle");
+  std::vector<FaceId> flipped;
+  double edges = 0.0;
+  CleanFace face;
+  std::uint32_t w[3];
+  for (FaceId f = 0; faces.read(&face, sizeof face); ++f) {
+    if (!wedges.read(w, sizeof w)) throw IoError(map.cornerWedge.path + ": scratch file ends early");
+    const std::array<Vec3d, 3> p = points.points(face.triangle);
+    if (!isFlippedRatio(parameterAreaRatio(p, {values[w[0]], values[w[1]], values[w[2]]}, h))) continue;
+    flipped.push_back(f);
+    for (int k = 0; k < 3; ++k) edges += (p[(k + 1) % 3] - p[k]).norm();
+  }
+  meanEdge = flipped.empty() ? 0.0 : edges / (3.0 * flipped.size());
+  folder.countRead("untangle", points.bytesRead() + values.bytesRead());
+  return flipped;
+}
+
+/// The window as untangleFlips sees the whole mesh: sub vertices in the order of their mesh ids
+/// (the repair's Gauss-Seidel passes and joint patches go in vertex order) and every free
+/// vertex's fan starting at the mesh's own start corner (the order its fan is summed in).
+void alignWindowWithMesh(RegionMesh& w, PagedCornerTable& table) {
+  const std::uint32_t nv = static_cast<std::uint32_t>(w.vertexOrigin.size());
+  std::vector<VertexId> order(nv);
+  for (VertexId v = 0; v < nv; ++v) order[v] = v;
+  std::stable_sort(order.begin(), order.end(), [&](VertexId a, VertexId b) { return w.vertexOrigin[a] < w.vertexOrigin[b]; });
+  std::vector<VertexId> renamed(nv);
+  for (VertexId v = 0; v < nv; ++v) renamed[order[v]] = v;
+  const detail::RegionIndex index{w.faceOrigin};
+  std::vector<Vec3f> positions(nv);
+  std::vector<VertexId> origin(nv);
+  std::vector<std::uint8_t> free(nv);
+  std::vector<CornerId> vertexCorner(nv);
+  for (VertexId v = 0; v < nv; ++v) {
+    const VertexId old = order[v];
+    positions[v] = w.mesh.positions[old];
+    origin[v] = w.vertexOrigin[old];
+    free[v] = w.vertexFree[old];
+    vertexCorner[v] = w.topology.vertexCorner(old);
+    if (free[v]) {  // its whole fan is in the window: start where the mesh starts it
+      const CornerId own = index.subCorner(table.vertexCorner(origin[v]));
+      if (own != kInvalidId) vertexCorner[v] = own;
+    }
+  }
+  std::vector<CornerId> opposite(w.topology.numCorners());
+  for (CornerId c = 0; c < opposite.size(); ++c) opposite[c] = w.topology.opposite(c);
+  for (Triangle& t : w.mesh.triangles) {
+    for (VertexId& v : t) v = renamed[v];
+  }
+  for (VertexId& c : w.cut.cones) c = renamed[c];
+  std::sort(w.cut.cones.begin(), w.cut.cones.end());
+  for (SeamCurve& seam : w.cut.seams) {
+    if (seam.start != kInvalidId) seam.start = renamed[seam.start];
+    if (seam.end != kInvalidId) seam.end = renamed[seam.end];
+  }
+  w.mesh.positions = std::move(positions);
+  w.vertexOrigin = std::move(origin);
+  w.vertexFree = std::move(free);
+  w.topology = Topology::fromParts(w.mesh.triangles, std::move(opposite), std::move(vertexCorner));
+}
+
+}  // namespace
+
+ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                                          const ScratchCut& cut, ScratchMap& map,
+                                          std::vector<std::complex<double>>& seamT, const UntangleOptions& options,
+                                          const StreamPassOptions& pass) {
+  const double h = options.edgeLength;
+  if (!(h > 0.0) || !std::isfinite(h) || options.onlyFaces || options.pinnedVertices) {
+    throw InputError("untangle: the out-of-core repair needs a positive edge length and no face or vertex flags");
+  }
+  if (seamT.size() != cut.seams.size()) {
+    throw InputError("untangle: " + std::to_string(seamT.size()) + " translations for " +
+                     std::to_string(cut.seams.size()) + " seams");
+  }
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  ScratchUntangleStats out;
+  double meanEdge = 0.0;
+  const std::vector<FaceId> flipped = flippedFaces(folder, scratch, map, h, cacheBytes, meanEdge);
+  if (flipped.empty()) return out;
+
+  // The window: the rings of every patch round (as untangleFlips sizes them: a round's seeds lie
+  // in the patches before it) and of the joint step, halved while the window is too large.
+  std::uint32_t rings = (options.jointRings >= 2 ? options.jointRings : 0) + 1;
+  for (std::uint32_t round = 0; round < std::min(options.maxRounds, 8u); ++round) {
+    const double radius = options.patchRadius * double(1u << round);
+    rings += static_cast<std::uint32_t>(std::clamp(meanEdge > 0.0 ? std::ceil(radius * h / meanEdge) : 2.0, 2.0, 64.0));
+  }
+  const std::uint64_t cap = std::max<std::uint64_t>(8 * options.minPatchFaces, pass.memoryBytes >> 10);
+  std::vector<FaceId> window;
+  {
+    PagedCornerTable table(scratch, cacheBytes);
+    window = detail::growFacesIn(table, flipped, rings);
+    while (window.size() > cap && rings > 2) {
+      rings = std::max(2u, rings / 2);
+      window = detail::growFacesIn(table, flipped, rings);
+    }
+    folder.countRead("untangle", table.bytesRead());
+  }
+  out.windowFaces = window.size();
+  out.windowRings = rings;
+  RegionMesh w = extractScratchRegion(scratch, field, cut, window, pass);
+  {
+    PagedCornerTable table(scratch, cacheBytes);
+    alignWindowWithMesh(w, table);
+    folder.countRead("untangle", table.bytesRead());
+  }
+  std::vector<Vec2d> values(3 * window.size());
+  {
+    PagedReader<std::uint32_t> cornerWedge(map.cornerWedge, cacheBytes);
+    PagedReader<Vec2d> wedgeValues(map.wedgeValues, cacheBytes);
+    for (std::size_t c = 0; c < values.size(); ++c) values[c] = wedgeValues[cornerWedge[3 * window[c / 3] + c % 3]];
+    if (field.framePositions.bytes > 0) {  // the smoothed surface tells faces folded in 3D
+      PagedReader<Vec3f> smooth(field.framePositions, cacheBytes);
+      for (VertexId v : w.vertexOrigin) w.field.framePositions.push_back(smooth[v]);
+      folder.countRead("untangle", smooth.bytesRead());
+    }
+    folder.countRead("untangle", cornerWedge.bytesRead() + wedgeValues.bytesRead());
+  }
+  WedgeMap uv = WedgeMap::fromCorners(w.mesh.triangles, values);
+  std::vector<std::complex<double>> windowT(w.seamOrigin.size());
+  for (std::size_t j = 0; j < windowT.size(); ++j) windowT[j] = seamT[w.seamOrigin[j]];
+  // The border keeps its values: its faces outside the window hold them too.
+  std::vector<std::uint8_t> pinned(w.vertexFree.size());
+  for (std::size_t v = 0; v < pinned.size(); ++v) pinned[v] = !w.vertexFree[v];
+  UntangleOptions local = options;
+  local.pinnedVertices = &pinned;
+  local.maxPatchFraction = options.maxPatchFraction * double(scratch.numFaces) / double(window.size());
+  out.untangle = untangleFlips(w.mesh, w.topology, w.field, w.cut, uv, windowT, local);
+
+  // The moved corners (free vertices only) and re-rounded translations back into the map.
+  RefineResult moved;
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    if (uv[c] != values[c]) moved.corners.push_back({uv[c], CornerId(3 * window[c / 3] + c % 3), true});
+  }
+  for (std::size_t j = 0; j < windowT.size(); ++j) {
+    if (windowT[j] == seamT[w.seamOrigin[j]]) continue;
+    moved.seams.push_back(w.seamOrigin[j]);
+    moved.seamT.push_back(windowT[j]);
+  }
+  applyScratchRefinement(folder, moved, map, &seamT, pass);
+  return out;
+}
+
+}  // namespace seamvox

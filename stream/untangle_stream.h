@@ -1,0 +1,35 @@
+#pragma once
+/// The foldover repair (core/refine/untangle) of an out-of-core map: the faces it flips found by
+/// one pass, a window of rings around them paged in (stream/refine_stream's readers) as a mesh of
+/// its own, untangleFlips run there with the window's border pinned (its faces outside keep
+/// their values, so the map stays seamless), and the moved corners written back in place.
+#include <complex>
+#include <cstdint>
+#include <vector>
+
+#include "core/refine/untangle.h"
+#include "stream/clean_stream.h"
+#include "stream/cut_stream.h"
+#include "stream/evaluate_stream.h"
+#include "stream/field_stream.h"
+
+namespace seamvox {
+
+/// Window figures besides untangleFlips' own (flips before and after are the whole map's: the
+/// window holds every flipped face).
+struct ScratchUntangleStats {
+  UntangleStats untangle;
+  std::uint64_t windowFaces = 0;
+  std::uint32_t windowRings = 0;
+};
+
+/// Repairs the flips of map (seamT per seam of cut, updated where a seam inside a patch
+/// re-rounded). options.edgeLength is h; options.onlyFaces and pinnedVertices must be unset. The
+/// window holds rings enough for every patch round and the joint step, fewer (halved) when it
+/// would exceed max(8 minPatchFaces, pass.memoryBytes / 1 KiB) faces. Memory: the window.
+ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                                          const ScratchCut& cut, ScratchMap& map,
+                                          std::vector<std::complex<double>>& seamT, const UntangleOptions& options,
+                                          const StreamPassOptions& pass);
+
+}  // namespace seamvox
