@@ -233,6 +233,7 @@ PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver sol
   r.untangle = s.untangle;
   r.seamQuality = s.seamQuality;
   r.mapQuality = s.mapQuality;
+  r.components.count = s.components;  // the cut's; no per-component figures out of core
   return r;
 }
 
