@@ -28,17 +28,24 @@ def read_runs(folder):
                 for line in f:
                     if "Maximum resident set size" in line:
                         peak = max(peak, int(line.split()[-1]) * 1024)
-        # The field's directions go to the scratch file once per cone pass and are read back once.
+        # In memory the field's directions go to the scratch file once per cone pass and are read
+        # back once; out of core every stage's traffic is in the report.
         disk = r.get("fieldBytesOnDisk", 0)
+        stages = r.get("scratch", {}).get("stages", [])
+        written = sum(t["bytesWritten"] for t in stages) if stages else disk
+        read = sum(t["bytesRead"] for t in stages) if stages else disk
+        outOfCore = r.get("path") == "out-of-core"
         runs.append({
             "faces": r["faces"],
             "seconds": r["seconds"]["total"],
             "peak": peak,
             "budget": r.get("memoryBudget", 0),
             "estimate": r.get("estimatedBytes", 0),
-            "written": disk,
-            "read": disk,
+            "written": written,
+            "read": read,
+            "scratchPeak": r.get("scratch", {}).get("peakBytes", disk),
             "onDisk": disk > 0,
+            "path": "out of core" if outOfCore else "memory, field on disk" if disk > 0 else "memory",
             "passes": r.get("conePasses", 0),
             "cones": r.get("cones", 0),
             "flips": r.get("quality", {}).get("flipped", 0),
@@ -57,13 +64,13 @@ def markdown(runs, command):
         command,
         "```",
         "",
-        "| faces | time s | s per M faces | peak GiB | B per face | estimate GiB | budget GiB | field on disk | scratch written / read GiB | cone passes | cones | flips | seamless |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| faces | time s | s per M faces | peak GiB | B per face | estimate GiB | budget GiB | path | scratch peak GiB | scratch written / read GiB | cone passes | cones | flips | seamless |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in runs:
-        lines.append("| %.1fM | %.1f | %.2f | %.2f | %.1f | %.2f | %.2f | %s | %.2f / %.2f | %d | %d | %d | %s |" % (
+        lines.append("| %.1fM | %.1f | %.2f | %.2f | %.1f | %.2f | %.2f | %s | %.2f | %.2f / %.2f | %d | %d | %d | %s |" % (
             r["faces"] / 1e6, r["seconds"], r["seconds"] / (r["faces"] / 1e6), r["peak"] / GIB,
-            r["peak"] / r["faces"], r["estimate"] / GIB, r["budget"] / GIB, "yes" if r["onDisk"] else "no",
+            r["peak"] / r["faces"], r["estimate"] / GIB, r["budget"] / GIB, r["path"], r["scratchPeak"] / GIB,
             r["written"] / GIB, r["read"] / GIB, r["passes"], r["cones"], r["flips"], "yes" if r["seamless"] else "NO"))
     if len(runs) >= 2:
         a, b = runs[-2], runs[-1]
@@ -90,10 +97,11 @@ def main():
     if not runs:
         sys.exit("no runs in " + a.runs)
     with open(a.csv, "w") as f:
-        f.write("faces,seconds,peak_bytes,estimate_bytes,budget_bytes,field_on_disk,scratch_written,scratch_read,cone_passes,cones\n")
+        f.write("faces,seconds,peak_bytes,estimate_bytes,budget_bytes,field_on_disk,out_of_core,scratch_peak,scratch_written,scratch_read,cone_passes,cones\n")
         for r in runs:
-            f.write("%d,%.3f,%d,%d,%d,%d,%d,%d,%d,%d\n" % (r["faces"], r["seconds"], r["peak"], r["estimate"], r["budget"],
-                                                      r["onDisk"], r["written"], r["read"], r["passes"], r["cones"]))
+            f.write("%d,%.3f,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d\n" % (r["faces"], r["seconds"], r["peak"], r["estimate"], r["budget"],
+                                                            r["onDisk"], r["path"] == "out of core", r["scratchPeak"],
+                                                            r["written"], r["read"], r["passes"], r["cones"]))
     with open(a.md, "w") as f:
         f.write(markdown(runs, a.command))
     sys.stdout.write(markdown(runs, a.command))

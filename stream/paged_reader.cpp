@@ -52,8 +52,6 @@ PageCache::~PageCache() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-const char* PageCache::record(std::uint64_t i) { return slotFor(i); }
-
 char* PageCache::recordForWrite(std::uint64_t i) {
   if (!updater_) throw IoError(path_ + ": a write through a read-only page cache");
   char* at = slotFor(i);

@@ -27,8 +27,27 @@ class PageCache {
   ~PageCache();
   PageCache(const PageCache&) = delete;
   PageCache& operator=(const PageCache&) = delete;
-  /// Record i (IoError past the end); valid until the next call.
-  const char* record(std::uint64_t i);
+  /// Record i (IoError past the end); valid until the next call. A hit is resolved here, inline
+  /// (the field's sweeps and the cut look up billions of records at 100M faces).
+  const char* record(std::uint64_t i) {
+    const std::uint64_t page = i >> pageShift_;
+    const std::size_t set = static_cast<std::size_t>(page) & setMask_;
+    const std::size_t slot = 2 * set;
+    if (i < numRecords_) {
+      const std::size_t offset = static_cast<std::size_t>(i & (pageRecords_ - 1)) * recordBytes_;
+      if (tags_[slot] == page) {
+        older_[set] = 1;
+        lastSlot_ = slot;
+        return data_.data() + slot * pageBytes_ + offset;
+      }
+      if (tags_[slot + 1] == page) {
+        older_[set] = 0;
+        lastSlot_ = slot + 1;
+        return data_.data() + (slot + 1) * pageBytes_ + offset;
+      }
+    }
+    return slotFor(i);
+  }
   /// Record i of a writable cache, its page marked changed; valid until the next call.
   char* recordForWrite(std::uint64_t i);
   /// Writes the changed pages back (a writable cache's changes are lost without it).
