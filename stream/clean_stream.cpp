@@ -371,8 +371,8 @@ class CleanPass {
     ScratchWriter starts(folder_, "clean: fans");
     moved_ = std::make_unique<ExternalSorter<CornerPair>>(folder_, sortOptions("clean: fans"));
     ExternalSorter<CornerPair>& moved = *moved_;
+    std::vector<VertexId> copyBoundary;  // the copies with an open fan (their ids follow the others')
     std::vector<CornerId> copyStarts;
-    std::vector<std::uint8_t> copyBoundary;
     std::vector<VertexId> copyOf;
     std::vector<CornerAround> group;
     CornerAround next{};
@@ -388,12 +388,12 @@ class CleanPass {
         const CornerId start = mostClockwise(group, fans.size() == 1 ? fans[i].back() : fans[i].front());
         const bool open = clockwiseOf(group, start) == kInvalidId;
         if (i == 0) {
-          boundary_.push_back(open);
+          if (open) boundary_.push_back(group[0].vertex);
           starts.write(&start, sizeof start);
           continue;
         }
+        if (open) copyBoundary.push_back(copy);
         copyStarts.push_back(start);
-        copyBoundary.push_back(open);
         copyOf.push_back(group[0].vertex);
         for (const CornerId c : fans[i]) moved.add({c, copy});
         ++copy;
@@ -632,10 +632,13 @@ class CleanPass {
       ScratchReader positions(folder_, out_.positions, "clean: measure"), origin(folder_, out_.vertexOrigin, "clean: measure");
       Vec3f p;
       VertexId from = 0;
-      std::size_t nextSpike = 0;
+      std::size_t nextSpike = 0, nextBoundary = 0;
       for (VertexId v = 0; positions.read(&p, sizeof p); ++v) {
         if (!origin.read(&from, sizeof from)) throw IoError(out_.vertexOrigin.path + ": scratch file ends early");
-        if (boundary_[v]) points.add({{p.x(), p.y(), p.z()}, from});
+        if (nextBoundary < boundary_.size() && boundary_[nextBoundary] == v) {
+          ++nextBoundary;
+          points.add({{p.x(), p.y(), p.z()}, from});
+        }
         if (nextSpike < spikes.size() && spikes[nextSpike] == v) {
           ++nextSpike;
           continue;
@@ -657,7 +660,7 @@ class CleanPass {
       }
       if (same.back().origin != same.front().origin) r.unweldedBoundaryVertices += same.size();
     }
-    std::vector<std::uint8_t>().swap(boundary_);
+    std::vector<VertexId>().swap(boundary_);
   }
 
   ScratchFolder& folder_;
@@ -670,7 +673,7 @@ class CleanPass {
   std::unique_ptr<ExternalSorter<CornerPair>> moved_;  // corners moved to a copy of their vertex
   std::vector<std::uint8_t> flip_;  // per face, when the orientation changed any
   std::uint64_t multiEdges_ = 0;
-  std::vector<std::uint8_t> boundary_;  // per vertex: its fan is open
+  std::vector<VertexId> boundary_;  // the vertices whose fan is open, increasing
 };
 
 template <class T>
