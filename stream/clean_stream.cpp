@@ -37,6 +37,17 @@ struct EdgeSide {
   std::uint32_t forward;  ///< runs lo -> hi
 };
 /// A kept vertex: its new id, welded id and position (20 bytes).
+/// A corner (its index in the Morton order of the faces) at its welded vertex; and a vertex's
+/// first corner or new id, for the renumbering by sorts.
+struct VertexCorner {
+  std::uint32_t vertex = 0, corner = 0;
+  bool operator<(const VertexCorner& o) const { return std::tie(vertex, corner) < std::tie(o.vertex, o.corner); }
+};
+struct CornerValue {
+  std::uint32_t corner = 0, value = 0;
+  bool operator<(const CornerValue& o) const { return corner < o.corner; }
+};
+
 struct NumberedVertex {
   std::uint32_t id = 0, origin = 0;
   float position[3] = {0.0f, 0.0f, 0.0f};  // plain floats: written as bytes
@@ -95,9 +106,13 @@ CornerId flippedCorner(CornerId c) {
 
 class CleanPass {
  public:
-  CleanPass(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census, std::uint64_t memoryBytes)
+  CleanPass(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census, std::uint64_t memoryBytes,
+            bool renumberBySorts)
       : folder_(folder), welded_(welded) {
     sort_.memoryBytes = std::max(kMinimumSortBytes, memoryBytes / 2);
+    // New vertex ids in memory (4 B per welded vertex) while they fit half the sorts' share (a
+    // quarter of memoryBytes: 200 MB at 100M faces in a 2 GiB budget), else by sorts.
+    renumberBySorts_ = renumberBySorts || 4 * welded.numVertices > sort_.memoryBytes / 2;
     out_.numFaces = welded.numFaces;
     out_.report = weldCleanReport(census);
   }
@@ -126,6 +141,7 @@ class CleanPass {
   /// dropUnreferencedVertices on vertices so numbered); their positions and input ids, put in
   /// that order by a sort.
   void renumberVertices() {
+    if (renumberBySorts_) return renumberVerticesBySorts();
     newId_.assign(welded_.numVertices, kInvalidId);
     WeldedFaceReader faces(folder_, welded_, "clean: vertices");
     std::vector<WeldedFace> chunk;
@@ -152,6 +168,12 @@ class CleanPass {
       }
     }
     sorter.finish();
+    writeNumberedVertices(sorter, n);
+  }
+
+  /// The numbered vertices (by new id) into the positions and input-id files.
+  template <class Sorter>
+  void writeNumberedVertices(Sorter& sorter, std::uint32_t n) {
     ScratchWriter positions(folder_, "clean: vertices"), origin(folder_, "clean: vertices");
     NumberedVertex record;
     while (sorter.next(record)) {
@@ -163,16 +185,105 @@ class CleanPass {
     out_.numVertices = n;
   }
 
+  /// renumberVertices without 4 B per welded vertex in memory (a mesh whose ids do not fit): the
+  /// corners sorted by vertex give each vertex its first corner; the vertices sorted by that are
+  /// numbered in order; the new ids joined back to the corners by vertex, then sorted by corner
+  /// into a file readFaces reads alongside the faces. The same ids as in memory.
+  void renumberVerticesBySorts() {
+    const char* stage = "clean: vertices";
+    ExternalSorter<VertexCorner> byVertex(folder_, sortOptions(stage));
+    {
+      WeldedFaceReader faces(folder_, welded_, stage);
+      std::vector<WeldedFace> chunk;
+      std::uint32_t corner = 0;
+      while (faces.next(chunk, kChunkFaces)) {
+        for (const WeldedFace& f : chunk) {
+          for (const VertexId v : f.triangle) byVertex.add({v, corner++});
+        }
+      }
+    }
+    byVertex.finish();
+    // Per vertex (increasing): its first corner; its corners kept in a file for the join.
+    ExternalSorter<NumberedVertex, NumberedVertexLess> byFirstCorner(folder_, sortOptions(stage));
+    ScratchWriter cornersByVertex(folder_, stage);
+    {
+      ScratchReader positions(folder_, welded_.positions, stage);
+      NumberedVertex record;
+      VertexCorner c;
+      VertexId at = 0;  // the next welded vertex whose position is to be read
+      bool more = byVertex.next(c);
+      while (more) {
+        const VertexCorner first = c;
+        for (; at <= first.vertex; ++at) {
+          if (!positions.read(&record.position, sizeof record.position)) {
+            throw IoError(welded_.positions.path + ": scratch positions end early");
+          }
+        }
+        record.id = first.corner;  // ordered by first corner; numbered when read back
+        record.origin = first.vertex;
+        byFirstCorner.add(record);
+        do {
+          cornersByVertex.write(&c, sizeof c);
+        } while ((more = byVertex.next(c)) && c.vertex == first.vertex);
+      }
+    }
+    const ScratchFile corners = cornersByVertex.finish();
+    byFirstCorner.finish();
+    // Numbered in first-corner order; the (vertex, new id) pairs back in vertex order.
+    ExternalSorter<VertexCorner> newIdByVertex(folder_, sortOptions(stage));
+    std::uint32_t n = 0;
+    {
+      ScratchWriter positions(folder_, stage), origin(folder_, stage);
+      NumberedVertex record;
+      while (byFirstCorner.next(record)) {
+        positions.write(&record.position, sizeof record.position);
+        origin.write(&record.origin, sizeof record.origin);
+        newIdByVertex.add({record.origin, n++});
+      }
+      positions_ = positions.finish();
+      out_.vertexOrigin = origin.finish();
+      out_.numVertices = n;
+    }
+    newIdByVertex.finish();
+    // Each corner's new id, by corner.
+    ExternalSorter<CornerValue> byCorner(folder_, sortOptions(stage));
+    {
+      ScratchReader in(folder_, corners, stage);
+      VertexCorner c, id{};
+      bool haveId = newIdByVertex.next(id);
+      while (in.read(&c, sizeof c)) {
+        while (haveId && id.vertex < c.vertex) haveId = newIdByVertex.next(id);
+        if (!haveId || id.vertex != c.vertex) throw IoError(corners.path + ": a vertex without a new id");
+        byCorner.add({c.corner, id.corner});
+      }
+    }
+    folder_.remove(corners);
+    byCorner.finish();
+    ScratchWriter cornerIds(folder_, stage);
+    CornerValue c;
+    while (byCorner.next(c)) cornerIds.write(&c.value, sizeof c.value);
+    cornerNewId_ = cornerIds.finish();
+  }
+
   /// The faces on the new ids (a scratch file) and their edges' sides into a sort.
   void readFaces() {
     edges_ = std::make_unique<ExternalSorter<EdgeSide, EdgeSideLess>>(folder_, sortOptions("clean: edges"));
     WeldedFaceReader faces(folder_, welded_, "clean: faces");
     ScratchWriter out(folder_, "clean: faces");
+    std::unique_ptr<ScratchReader> cornerIds;
+    if (renumberBySorts_) cornerIds = std::make_unique<ScratchReader>(folder_, cornerNewId_, "clean: faces");
     std::vector<WeldedFace> chunk;
     CornerId corner = 0;
     while (faces.next(chunk, kChunkFaces)) {
       for (const WeldedFace& f : chunk) {
-        CleanFace face{{newId_[f.triangle[0]], newId_[f.triangle[1]], newId_[f.triangle[2]]}, f.face};
+        CleanFace face{{}, f.face};
+        if (cornerIds) {
+          if (!cornerIds->read(face.triangle.data(), sizeof face.triangle)) {
+            throw IoError(cornerNewId_.path + ": scratch file ends early");
+          }
+        } else {
+          face.triangle = {newId_[f.triangle[0]], newId_[f.triangle[1]], newId_[f.triangle[2]]};
+        }
         out.write(&face, sizeof face);
         for (int k = 0; k < 3; ++k, ++corner) {
           const VertexId a = face.triangle[(k + 1) % 3], b = face.triangle[(k + 2) % 3];
@@ -181,6 +292,10 @@ class CleanPass {
       }
     }
     std::vector<std::uint32_t>().swap(newId_);
+    if (cornerIds) {
+      cornerIds.reset();
+      folder_.remove(cornerNewId_);
+    }
     faces_ = out.finish();
     edges_->finish();
     // The sorted sides are read twice more: kept in a file.
@@ -668,6 +783,8 @@ class CleanPass {
   ExternalSortOptions sort_;
   CleanScratch out_;
   std::vector<VertexId> newId_;
+  bool renumberBySorts_ = false;
+  ScratchFile cornerNewId_;  // with renumberBySorts_: each corner's new vertex id, in face order
   ScratchFile positions_, faces_, sortedEdges_;
   std::unique_ptr<ExternalSorter<EdgeSide, EdgeSideLess>> edges_;
   std::unique_ptr<ExternalSorter<CornerPair>> moved_;  // corners moved to a copy of their vertex
@@ -687,8 +804,8 @@ std::vector<T> readWhole(ScratchFolder& folder, const ScratchFile& file, std::ui
 }  // namespace
 
 CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
-                             std::uint64_t memoryBytes) {
-  return CleanPass(folder, welded, census, memoryBytes).run();
+                             std::uint64_t memoryBytes, bool renumberBySorts) {
+  return CleanPass(folder, welded, census, memoryBytes, renumberBySorts).run();
 }
 
 ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch) {

@@ -44,9 +44,11 @@ struct CleanScratch {
 };
 
 /// Cleans the weld pass's output (kept in folder) into folder. memoryBytes: the sorts' share.
-/// Throws IoError (scratch, a full disk) naming the folder.
+/// The vertices are renumbered in memory (4 B per welded vertex) while that fits a quarter of
+/// memoryBytes, else by four sorts (renumberBySorts: so even when it fits; tests). Throws IoError
+/// (scratch, a full disk) naming the folder.
 CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
-                             std::uint64_t memoryBytes);
+                             std::uint64_t memoryBytes, bool renumberBySorts = false);
 
 /// The cleaned mesh's components as computeComponents gives them (joined through glued edges, by
 /// decreasing face count, ties in the order of their first faces; faceComponent left empty),

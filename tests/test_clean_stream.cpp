@@ -28,7 +28,7 @@ struct Cleaned {
   std::uint64_t edgeSortWritten = 0, sortedEdgeBytes = 0;  // runs spilled: more than the sorted file
 };
 
-Cleaned cleanBothWays(const TriangleMesh& mesh, std::uint64_t memoryBytes) {
+Cleaned cleanBothWays(const TriangleMesh& mesh, std::uint64_t memoryBytes, bool renumberBySorts = false) {
   testing::TempDir dir;
   ScratchFolder folder(dir.dir());
   const std::unique_ptr<MeshStream> stream =
@@ -36,7 +36,7 @@ Cleaned cleanBothWays(const TriangleMesh& mesh, std::uint64_t memoryBytes) {
   WeldStreamOptions weld;
   weld.memoryBytes = memoryBytes;
   const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
-  const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, memoryBytes);
+  const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, memoryBytes, renumberBySorts);
   Cleaned out;
   out.streamed = readCleanScratch(folder, scratch);
   out.streamedComponents = cleanedComponents(folder, scratch);
@@ -115,7 +115,8 @@ void expectEqual(const Cleaned& c) {
 TEST(CleanStream, EqualsCleanMeshOnClosedAndHoledMeshes) {
   for (const MeshKind kind : {MeshKind::Sphere, MeshKind::Scan}) {
     SCOPED_TRACE(static_cast<int>(kind));
-    const Cleaned c = cleanBothWays(testing::withOneTriangleHoles(testing::generatedMesh(kind, 40000), 53), 1);
+    const Cleaned c = cleanBothWays(testing::withOneTriangleHoles(testing::generatedMesh(kind, 40000), 53), 1,
+                                    kind == MeshKind::Scan);
     expectEqual(c);
     EXPECT_EQ(c.streamed.report.nonManifoldEdges, 0u);
     EXPECT_GT(c.edgeSortWritten, c.sortedEdgeBytes) << "the edge sort was meant to spill runs to disk";
@@ -125,8 +126,11 @@ TEST(CleanStream, EqualsCleanMeshOnClosedAndHoledMeshes) {
 TEST(CleanStream, EqualsCleanMeshOnNonManifoldAndNonOrientableMeshes) {
   for (const std::uint32_t seed : {1u, 2u, 3u}) {
     SCOPED_TRACE(seed);
-    for (const std::uint64_t memory : {std::uint64_t(1), std::uint64_t(64) << 20}) {
-      const Cleaned c = cleanBothWays(testing::damagedMesh(seed), memory);
+    // The vertices renumbered in memory and by sorts (as when their ids do not fit the budget).
+    for (const auto& [memory, bySorts] : {std::make_pair(std::uint64_t(1), false), std::make_pair(std::uint64_t(1), true),
+                                          std::make_pair(std::uint64_t(64) << 20, false)}) {
+      SCOPED_TRACE(bySorts ? "renumbered by sorts" : "renumbered in memory");
+      const Cleaned c = cleanBothWays(testing::damagedMesh(seed), memory, bySorts);
       expectEqual(c);
       // Every kind of repair happened.
       EXPECT_GT(c.inMemory.report.nonManifoldEdges, 12u);
