@@ -168,17 +168,20 @@ class CleanPass {
       }
     }
     sorter.finish();
-    writeNumberedVertices(sorter, n);
+    writeNumberedVertices(sorter, [](VertexId, std::uint32_t) {});
   }
 
-  /// The numbered vertices (by new id) into the positions and input-id files.
-  template <class Sorter>
-  void writeNumberedVertices(Sorter& sorter, std::uint32_t n) {
+  /// The numbered vertices, in the sorter's order, into the positions and input-id files: new
+  /// ids 0, 1, ... in that order, each given to numbered(welded id, new id).
+  template <class Sorter, class Numbered>
+  void writeNumberedVertices(Sorter& sorter, Numbered&& numbered) {
     ScratchWriter positions(folder_, "clean: vertices"), origin(folder_, "clean: vertices");
     NumberedVertex record;
+    std::uint32_t n = 0;
     while (sorter.next(record)) {
       positions.write(&record.position, sizeof record.position);
       origin.write(&record.origin, sizeof record.origin);
+      numbered(record.origin, n++);
     }
     positions_ = positions.finish();
     out_.vertexOrigin = origin.finish();
@@ -231,19 +234,7 @@ class CleanPass {
     byFirstCorner.finish();
     // Numbered in first-corner order; the (vertex, new id) pairs back in vertex order.
     ExternalSorter<VertexCorner> newIdByVertex(folder_, sortOptions(stage));
-    std::uint32_t n = 0;
-    {
-      ScratchWriter positions(folder_, stage), origin(folder_, stage);
-      NumberedVertex record;
-      while (byFirstCorner.next(record)) {
-        positions.write(&record.position, sizeof record.position);
-        origin.write(&record.origin, sizeof record.origin);
-        newIdByVertex.add({record.origin, n++});
-      }
-      positions_ = positions.finish();
-      out_.vertexOrigin = origin.finish();
-      out_.numVertices = n;
-    }
+    writeNumberedVertices(byFirstCorner, [&](VertexId v, std::uint32_t id) { newIdByVertex.add({v, id}); });
     newIdByVertex.finish();
     // Each corner's new id, by corner.
     ExternalSorter<CornerValue> byCorner(folder_, sortOptions(stage));

@@ -145,4 +145,21 @@ ScratchMap evaluateScratchVoxelMap(ScratchFolder& folder, const CleanScratch& sc
   return out;
 }
 
+ScratchMapFaces::ScratchMapFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
+                                 const std::string& stage, std::size_t cacheBytes)
+    : map_(map), points_(scratch, scratch.positions, cacheBytes), values_(map.wedgeValues, cacheBytes),
+      faces_(folder, scratch.faces, stage), wedges_(folder, map.cornerWedge, stage) {}
+
+bool ScratchMapFaces::next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std::array<Vec2d, 3>& q) {
+  CleanFace face;
+  if (!faces_.read(&face, sizeof face)) return false;
+  std::uint32_t w[3];
+  if (!wedges_.read(w, sizeof w)) throw IoError(map_.cornerWedge.path + ": scratch file ends early");
+  f = next_++;
+  t = face.triangle;
+  p = points_.points(t);
+  q = {values_[w[0]], values_[w[1]], values_[w[2]]};
+  return true;
+}
+
 }  // namespace seamvox

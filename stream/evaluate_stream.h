@@ -2,13 +2,17 @@
 /// The map of an out-of-core voxel basis evaluated at the corners of the cut mesh: the wedges of
 /// buildCutWedges (vertex by vertex) and VoxelBasis::evaluateCorners, from the scratch files of
 /// the cleaned mesh, the cut and the basis' per-face fragments.
+#include <array>
 #include <complex>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "stream/clean_stream.h"
 #include "stream/cut_stream.h"
 #include "stream/field_stream.h"
+#include "stream/paged_corner_table.h"
+#include "stream/paged_reader.h"
 #include "stream/scratch_folder.h"
 #include "stream/voxel_stream.h"
 
@@ -20,6 +24,26 @@ struct ScratchMap {
   ScratchFile cornerWedge;       ///< std::uint32_t per corner
   ScratchFile wedgeValues;       ///< Vec2d per wedge: (u, v) in grid units
   std::uint64_t numWedges = 0;
+};
+
+/// The faces of the cleaned mesh in order with their corners' positions (in double) and map
+/// values: the faces and the corners' wedges read in order, positions and values through page
+/// caches. The passes that measure or seed from the whole out-of-core map read it so.
+class ScratchMapFaces {
+ public:
+  ScratchMapFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map, const std::string& stage,
+                  std::size_t cacheBytes);
+  /// The next face; false after the last (IoError when the map's file ends first).
+  bool next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std::array<Vec2d, 3>& q);
+  /// Bytes the page caches read (the sequential reads count themselves).
+  std::uint64_t cacheBytesRead() const { return points_.bytesRead() + values_.bytesRead(); }
+
+ private:
+  const ScratchMap& map_;
+  PagedFacePoints points_;
+  PagedReader<Vec2d> values_;
+  ScratchReader faces_, wedges_;
+  FaceId next_ = 0;
 };
 
 /// buildCutWedges and basis.evaluateCorners(coefficients) out of core: the wedges of a block of

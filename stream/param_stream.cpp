@@ -59,9 +59,9 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
                        const ScratchCut& cut, const ScratchMap& map, double h, const StreamPassOptions& pass,
                        StreamParamResult& r) {
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
-  PagedFacePoints points(scratch, scratch.positions, cacheBytes);
-  PagedReader<Vec2d> values(map.wedgeValues, cacheBytes);
   {
+    PagedFacePoints points(scratch, scratch.positions, cacheBytes);
+    PagedReader<Vec2d> values(map.wedgeValues, cacheBytes);
     PagedReader<std::uint32_t> cornerWedge(map.cornerWedge, cacheBytes);
     PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
     r.seamQuality = measureSeams(
@@ -71,30 +71,26 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
           const std::array<Vec3d, 3> p = points.points(t);
           return (p[(c + 1) % 3] - p[(c + 2) % 3]).norm();
         });
-    folder.countRead("metrics", cornerWedge.bytesRead() + opposite.bytesRead());
+    folder.countRead("metrics", points.bytesRead() + values.bytesRead() + cornerWedge.bytesRead() + opposite.bytesRead());
   }
   std::optional<PagedReader<Vec3f>> smooth;
   if (field.framePositions.bytes > 0) smooth.emplace(field.framePositions, cacheBytes);
   MapQualitySums sums(h);
-  ScratchReader faces(folder, scratch.faces, "metrics"), wedges(folder, map.cornerWedge, "metrics"),
-      directions(folder, field.directions, "metrics");
-  CleanFace face;
-  std::uint32_t w[3];
+  ScratchMapFaces faces(folder, scratch, map, "metrics", cacheBytes);
+  ScratchReader directions(folder, field.directions, "metrics");
+  FaceId f = 0;
+  Triangle t;
+  std::array<Vec3d, 3> p;
+  std::array<Vec2d, 3> q;
   Vec3f direction;
-  while (faces.read(&face, sizeof face)) {
-    if (!wedges.read(w, sizeof w) || !directions.read(&direction, sizeof direction)) {
-      throw IoError(map.cornerWedge.path + ": scratch file ends early");
-    }
-    const Triangle& t = face.triangle;
-    const std::array<Vec3d, 3> p = points.points(t);
+  while (faces.next(f, t, p, q)) {
+    if (!directions.read(&direction, sizeof direction)) throw IoError(field.directions.path + ": scratch file ends early");
     const Vec3d u = direction.cast<double>();
-    if (sums.add(p, {values[w[0]], values[w[1]], values[w[2]]}, &u) != MapQualitySums::Kind::Flipped || !smooth) continue;
-    // faceFoldedIn3D: the face's normal against the same face on the smoothed surface.
-    const Vec3d a = (*smooth)[t[0]].cast<double>(), b = (*smooth)[t[1]].cast<double>(), c = (*smooth)[t[2]].cast<double>();
-    if ((p[1] - p[0]).cross(p[2] - p[0]).dot((b - a).cross(c - a)) < 0.0) sums.countFolded();
+    if (sums.add(p, q, &u) != MapQualitySums::Kind::Flipped || !smooth) continue;
+    if (faceFoldedIn3D(p, (*smooth)[t[0]], (*smooth)[t[1]], (*smooth)[t[2]])) sums.countFolded();
   }
   r.mapQuality = sums.finish();
-  folder.countRead("metrics", points.bytesRead() + values.bytesRead() + (smooth ? smooth->bytesRead() : 0));
+  folder.countRead("metrics", faces.cacheBytesRead() + (smooth ? smooth->bytesRead() : 0));
 }
 
 }  // namespace

@@ -92,29 +92,24 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   PagedCornerTable table(scratch, cacheBytes);
   if (options.seedFromMap) {
-    PagedReader<Vec3f> positions(scratch.positions, cacheBytes);
-    PagedReader<Vec2d> values(map.wedgeValues, cacheBytes);
-    ScratchReader faces(folder, scratch.faces, "refine region"), wedges(folder, map.cornerWedge, "refine region");
-    CleanFace face;
-    std::uint32_t w[3];
+    ScratchMapFaces faces(folder, scratch, map, "refine region", cacheBytes);
+    FaceId f = 0;
+    Triangle t;
+    std::array<Vec3d, 3> p;
+    std::array<Vec2d, 3> q;
     std::size_t nextMarked = 0;
-    for (FaceId f = 0; faces.read(&face, sizeof face); ++f) {
-      if (!wedges.read(w, sizeof w)) throw IoError(map.cornerWedge.path + ": scratch file ends early");
+    while (faces.next(f, t, p, q)) {
       if (nextMarked < marked.size() && marked[nextMarked] == f) {
         seeds.push_back(marked[nextMarked++]);
         continue;
       }
-      const Triangle& t = face.triangle;
-      const RefineSeed seed = classifyRefineSeed(
-          parameterAreaRatio({positions[t[0]].cast<double>(), positions[t[1]].cast<double>(), positions[t[2]].cast<double>()},
-                             {values[w[0]], values[w[1]], values[w[2]]}, options.edgeLength),
-          options.collapseThreshold);
+      const RefineSeed seed = classifyRefineSeed(parameterAreaRatio(p, q, options.edgeLength), options.collapseThreshold);
       if (seed == RefineSeed::None) continue;
       seeds.push_back(f);
       counts.collapsedFaces += seed == RefineSeed::Collapsed;
       counts.flippedFaces += seed == RefineSeed::Flipped;
     }
-    folder.countRead("refine region", positions.bytesRead() + values.bytesRead());
+    folder.countRead("refine region", faces.cacheBytesRead());
   } else {
     seeds = marked;
   }
@@ -174,20 +169,20 @@ class ScratchRefineSource {
   /// One pass over the faces and their corners' wedges in order, skipping `touched`.
   detail::FaceCounts countOutside(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones, double h) {
     detail::FaceCounts counts;
-    ScratchReader faces(folder_, scratch_.faces, "refine"), wedges(folder_, map_.cornerWedge, "refine");
-    CleanFace face;
-    std::uint32_t w[3];
+    ScratchMapFaces faces(folder_, scratch_, map_, "refine", cacheBytes_);
+    FaceId f = 0;
+    Triangle t;
+    std::array<Vec3d, 3> p;
+    std::array<Vec2d, 3> q;
     auto next = touched.begin();
-    for (FaceId f = 0; faces.read(&face, sizeof face); ++f) {
-      if (!wedges.read(w, sizeof w)) throw IoError(map_.cornerWedge.path + ": scratch file ends early");
+    while (faces.next(f, t, p, q)) {
       if (next != touched.end() && *next == f) {
         ++next;
         continue;
       }
-      const std::array<Vec2d, 3> q{values_.values[w[0]], values_.values[w[1]], values_.values[w[2]]};
-      counts.add(parameterAreaRatio(points_.points(face.triangle), q, h),
-                 [&] { return detail::collapsesBetweenListedCones(face.triangle, q, cones); });
+      counts.add(parameterAreaRatio(p, q, h), [&] { return detail::collapsesBetweenListedCones(t, q, cones); });
     }
+    folder_.countRead("refine", faces.cacheBytesRead());
     return counts;
   }
 

@@ -21,22 +21,20 @@ namespace {
 /// length of their edges, by one pass over the faces and their corners' wedges.
 std::vector<FaceId> flippedFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map, double h,
                                  std::size_t cacheBytes, double& meanEdge) {
-  PagedFacePoints points(scratch, scratch.positions, cacheBytes);
-  PagedReader<Vec2d> values(map.wedgeValues, cacheBytes);
-  ScratchReader faces(folder, scratch.faces, "untangle"), wedges(folder, map.cornerWedge, "untangle");
+  ScratchMapFaces faces(folder, scratch, map, "untangle", cacheBytes);
   std::vector<FaceId> flipped;
   double edges = 0.0;
-  CleanFace face;
-  std::uint32_t w[3];
-  for (FaceId f = 0; faces.read(&face, sizeof face); ++f) {
-    if (!wedges.read(w, sizeof w)) throw IoError(map.cornerWedge.path + ": scratch file ends early");
-    const std::array<Vec3d, 3> p = points.points(face.triangle);
-    if (!isFlippedRatio(parameterAreaRatio(p, {values[w[0]], values[w[1]], values[w[2]]}, h))) continue;
+  FaceId f = 0;
+  Triangle t;
+  std::array<Vec3d, 3> p;
+  std::array<Vec2d, 3> q;
+  while (faces.next(f, t, p, q)) {
+    if (!isFlippedRatio(parameterAreaRatio(p, q, h))) continue;
     flipped.push_back(f);
     for (int k = 0; k < 3; ++k) edges += (p[(k + 1) % 3] - p[k]).norm();
   }
   meanEdge = flipped.empty() ? 0.0 : edges / (3.0 * flipped.size());
-  folder.countRead("untangle", points.bytesRead() + values.bytesRead());
+  folder.countRead("untangle", faces.cacheBytesRead());
   return flipped;
 }
 

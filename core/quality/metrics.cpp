@@ -290,12 +290,16 @@ namespace {
 // faceFoldedIn3D with the smoothed corners given.
 bool foldedAgainst(const TriangleMesh& mesh, FaceId f, const Vec3f& sa, const Vec3f& sb, const Vec3f& sc) {
   const Triangle& t = mesh.triangles[f];
-  const Vec3d n = (mesh.position(t[1]) - mesh.position(t[0])).cross(mesh.position(t[2]) - mesh.position(t[0]));
-  const Vec3d a = sa.cast<double>(), b = sb.cast<double>(), c = sc.cast<double>();
-  return n.dot((b - a).cross(c - a)) < 0.0;
+  return faceFoldedIn3D({mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])}, sa, sb, sc);
 }
 
 }  // namespace
+
+bool faceFoldedIn3D(const std::array<Vec3d, 3>& p, const Vec3f& sa, const Vec3f& sb, const Vec3f& sc) {
+  const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+  const Vec3d a = sa.cast<double>(), b = sb.cast<double>(), c = sc.cast<double>();
+  return n.dot((b - a).cross(c - a)) < 0.0;
+}
 
 bool faceFoldedIn3D(const TriangleMesh& mesh, const std::vector<Vec3f>& smooth, FaceId f) {
   const Triangle& t = mesh.triangles[f];

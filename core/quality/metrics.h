@@ -87,6 +87,8 @@ bool collapsesBetweenCones(const TriangleMesh& mesh, FaceId f, const std::array<
 /// surface (same triangles, positions `smooth`, e.g. CrossField::framePositions): the face is
 /// folded in 3D, and a map that follows the smooth surface flips it.
 bool faceFoldedIn3D(const TriangleMesh& mesh, const std::vector<Vec3f>& smooth, FaceId f);
+/// The same from the face's corner positions p and its corners on the smoothed surface.
+bool faceFoldedIn3D(const std::array<Vec3d, 3>& p, const Vec3f& sa, const Vec3f& sb, const Vec3f& sc);
 
 /// faceFoldedIn3D for each of `faces` against the field's smoothed surface: its framePositions,
 /// or when they were released (releaseFramePositions) the same positions recomputed around these
