@@ -290,7 +290,7 @@ class CleanPass {
     faces_ = out.finish();
     edges_->finish();
     // The sorted sides are read twice more: kept in a file.
-    ScratchWriter sorted(folder_, "clean: edges");
+    ScratchWriter sorted(folder_, "clean: edges", std::size_t(1) << 20, edges_->size() * sizeof(EdgeSide));
     EdgeSide side{};
     while (edges_->next(side)) sorted.write(&side, sizeof side);
     edges_.reset();

@@ -25,7 +25,8 @@ ExternalMerge::~ExternalMerge() {
 }
 
 void ExternalMerge::writeRun(const void* records, std::size_t count) {
-  ScratchWriter writer(scratch_, options_.stage, std::min<std::size_t>(readBuffer_ * 4, count * recordBytes_ + 1));
+  ScratchWriter writer(scratch_, options_.stage, std::min<std::size_t>(readBuffer_ * 4, count * recordBytes_ + 1),
+                       count * recordBytes_);
   writer.write(records, count * recordBytes_);
   runs_.push_back(writer.finish());
   ++written_;
@@ -47,7 +48,9 @@ ScratchFile ExternalMerge::mergeRuns(std::size_t first, std::size_t count) {
     }
   }
   if (count == runs_.size() && first == 0) return {};  // the final pass: next() pops it
-  ScratchWriter writer(scratch_, options_.stage, readBuffer_ * 4);
+  std::uint64_t bytes = 0;
+  for (std::size_t i = first; i < first + count; ++i) bytes += runs_[i].bytes;
+  ScratchWriter writer(scratch_, options_.stage, readBuffer_ * 4, bytes);
   std::vector<char> record(recordBytes_);
   while (pop(record.data())) writer.write(record.data(), recordBytes_);
   for (const auto& source : sources_) scratch_.remove(source->file);

@@ -51,7 +51,38 @@ ScratchFile ScratchFolder::zeroFile(std::uint64_t bytes) {
 }
 
 void ScratchFolder::remove(const ScratchFile& file) {
-  if (::unlink(file.path.c_str()) == 0) onDisk_ -= std::min(onDisk_, file.bytes);
+  if (file.path.empty()) return;
+  std::lock_guard<std::mutex> lock(freeMutex_);
+  // Kept: up to 1 GiB and half the bytes in use besides, the smallest given up first.
+  free_.push_back(file);
+  freeBytes_ += file.bytes;
+  const std::uint64_t keep = (std::uint64_t(1) << 30) + (onDisk_ - std::min(onDisk_, freeBytes_)) / 2;
+  std::sort(free_.begin(), free_.end(), [](const ScratchFile& a, const ScratchFile& b) { return a.bytes > b.bytes; });
+  while (!free_.empty() && (freeBytes_ > keep || free_.back().bytes == 0)) {
+    const ScratchFile dropped = free_.back();
+    free_.pop_back();
+    freeBytes_ -= dropped.bytes;
+    if (::unlink(dropped.path.c_str()) == 0) onDisk_ -= std::min(onDisk_, dropped.bytes);
+  }
+}
+
+ScratchFile ScratchFolder::reuse(std::uint64_t expectedBytes) {
+  std::lock_guard<std::mutex> lock(freeMutex_);
+  if (free_.empty()) return {};
+  // free_ runs from the largest file down. A known size takes the smallest file that holds it,
+  // and none when that is over twice the size (a larger writer may come for it).
+  auto it = free_.begin();
+  while (expectedBytes > 0 && std::next(it) != free_.end() && std::next(it)->bytes >= expectedBytes) ++it;
+  if (expectedBytes > 0 && it->bytes > 2 * expectedBytes) return {};
+  const ScratchFile file = *it;
+  free_.erase(it);
+  freeBytes_ -= file.bytes;
+  return file;
+}
+
+void ScratchFolder::shrink(std::uint64_t bytes) {
+  std::lock_guard<std::mutex> lock(freeMutex_);
+  onDisk_ -= std::min(onDisk_, bytes);
 }
 
 ScratchTraffic& ScratchFolder::stage(const std::string& name) {
@@ -64,11 +95,12 @@ ScratchTraffic& ScratchFolder::stage(const std::string& name) {
 
 void ScratchFolder::countRead(const std::string& name, std::uint64_t bytes) { stage(name).bytesRead += bytes; }
 
-void ScratchFolder::countWrite(const std::string& name, std::uint64_t bytes, bool grows) {
+void ScratchFolder::countWrite(const std::string& name, std::uint64_t bytes, std::uint64_t growth) {
   if (written_ + bytes > writeLimit_) throwDiskFull(path_, bytes, "write limit of the test hook");
   stage(name).bytesWritten += bytes;
   written_ += bytes;
-  if (grows) onDisk_ += bytes;
+  std::lock_guard<std::mutex> lock(freeMutex_);
+  onDisk_ += growth;
   peakOnDisk_ = std::max(peakOnDisk_, onDisk_);
 }
 
@@ -79,8 +111,19 @@ void ScratchFolder::throwDiskFull(const std::string& file, std::uint64_t failedB
                 " written, at " + file + ": " + need + "; free space there or choose another folder with --scratch DIR");
 }
 
-ScratchWriter::ScratchWriter(ScratchFolder& folder, std::string stage, std::size_t bufferBytes)
-    : folder_(folder), stage_(std::move(stage)), path_(folder.newFilePath()), buffer_(std::max<std::size_t>(bufferBytes, 4096)) {
+ScratchWriter::ScratchWriter(ScratchFolder& folder, std::string stage, std::size_t bufferBytes, std::uint64_t expectedBytes)
+    : folder_(folder), stage_(std::move(stage)), buffer_(std::max<std::size_t>(bufferBytes, 4096)) {
+  const ScratchFile old = folder.reuse(expectedBytes);
+  if (!old.path.empty()) {
+    fd_ = ::open(old.path.c_str(), O_WRONLY | O_CLOEXEC);  // overwritten from the start
+    if (fd_ >= 0) {
+      path_ = old.path;
+      reused_ = old.bytes;
+      return;
+    }
+    folder.shrink(old.bytes);  // gone: not on disk any more
+  }
+  path_ = folder.newFilePath();
   fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd_ < 0) throw IoError(path_ + ": cannot create a scratch file (" + std::strerror(errno) + ")");
 }
@@ -106,7 +149,8 @@ ScratchFile ScratchWriter::written() {
 
 void ScratchWriter::flush() {
   if (used_ == 0) return;
-  folder_.countWrite(stage_, used_);
+  const std::uint64_t end = bytes_ + used_, had = std::max(bytes_, reused_);
+  folder_.countWrite(stage_, used_, end > had ? end - had : 0);
   std::size_t done = 0;
   while (done < used_) {
     const ssize_t n = ::write(fd_, buffer_.data() + done, used_ - done);
@@ -122,6 +166,13 @@ void ScratchWriter::flush() {
 
 ScratchFile ScratchWriter::finish() {
   flush();
+  if (reused_ > bytes_) {  // the older bytes past this file's end
+    if (::ftruncate(fd_, static_cast<off_t>(bytes_)) != 0) {
+      throw IoError(path_ + ": cannot truncate a scratch file (" + std::strerror(errno) + ")");
+    }
+    folder_.shrink(reused_ - bytes_);
+    reused_ = bytes_;
+  }
   if (::close(fd_) != 0) {
     fd_ = -1;
     if (errno == ENOSPC || errno == EDQUOT) folder_.throwDiskFull(path_, 0, std::strerror(errno));
@@ -132,7 +183,9 @@ ScratchFile ScratchWriter::finish() {
 }
 
 ScratchReader::ScratchReader(ScratchFolder& folder, const ScratchFile& file, std::string stage, std::size_t bufferBytes)
-    : folder_(&folder), stage_(std::move(stage)), path_(file.path), buffer_(std::max<std::size_t>(bufferBytes, 64)) {
+    : folder_(&folder), stage_(std::move(stage)), path_(file.path),
+      buffer_(static_cast<std::size_t>(std::clamp<std::uint64_t>(file.bytes, 64, std::max<std::size_t>(bufferBytes, 64)))),
+      left_(file.bytes) {
   fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) throw IoError(path_ + ": cannot open a scratch file (" + std::strerror(errno) + ")");
 }
@@ -143,7 +196,7 @@ ScratchReader::~ScratchReader() {
 
 ScratchReader::ScratchReader(ScratchReader&& other) noexcept
     : folder_(other.folder_), stage_(std::move(other.stage_)), path_(std::move(other.path_)), fd_(other.fd_),
-      buffer_(std::move(other.buffer_)), begin_(other.begin_), end_(other.end_) {
+      buffer_(std::move(other.buffer_)), begin_(other.begin_), end_(other.end_), left_(other.left_) {
   other.fd_ = -1;
 }
 
@@ -151,12 +204,15 @@ bool ScratchReader::refill() {
   if (begin_ < end_) std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
   end_ -= begin_;
   begin_ = 0;
+  const std::size_t wanted = static_cast<std::size_t>(std::min<std::uint64_t>(buffer_.size() - end_, left_));
+  if (wanted == 0) return false;
   for (;;) {
-    const ssize_t n = ::read(fd_, buffer_.data() + end_, buffer_.size() - end_);
+    const ssize_t n = ::read(fd_, buffer_.data() + end_, wanted);
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) throw IoError(path_ + ": cannot read a scratch file (" + std::strerror(errno) + ")");
     folder_->countRead(stage_, static_cast<std::uint64_t>(n));
     end_ += static_cast<std::size_t>(n);
+    left_ -= static_cast<std::uint64_t>(n);
     return n > 0;
   }
 }
@@ -228,7 +284,7 @@ void ScratchUpdater::readAt(std::uint64_t offset, void* out, std::size_t bytes) 
 
 void ScratchUpdater::writeAt(std::uint64_t offset, const void* data, std::size_t bytes) {
   if (offset + bytes > bytes_) throw IoError(path_ + ": a write in place past the end of a scratch file");
-  folder_.countWrite(stage_, bytes, false);  // in place: the file does not grow
+  folder_.countWrite(stage_, bytes, 0);  // in place: the file does not grow
   const char* from = static_cast<const char*>(data);
   std::size_t done = 0;
   while (done < bytes) {

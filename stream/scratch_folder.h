@@ -3,10 +3,13 @@
 /// with a unique name and removed with everything in it on success, on failure (the destructor
 /// runs while an exception unwinds) and on SIGINT/SIGTERM (io/interrupt_cleanup). Plain read and
 /// write calls through fixed buffers (no mmap: resident memory stays what the buffers hold);
-/// bytes read and written are counted per stage. A full disk (ENOSPC, EDQUOT, a short write) is
+/// bytes read and written are counted per stage. A removed file is kept for the next writer to
+/// overwrite (up to a share of the folder's bytes): its pages are still in the kernel's cache,
+/// where a new file's pages must be allocated, which costs more than the copy itself. A full disk (ENOSPC, EDQUOT, a short write) is
 /// an IoError naming the folder and the bytes the run needs.
 #include <atomic>
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -39,12 +42,22 @@ class ScratchFolder {
   /// A new file of `bytes` zero bytes, sparse (the disk fills as pages are written in place), counted
   /// on disk at its full size.
   ScratchFile zeroFile(std::uint64_t bytes);
-  /// Removes a finished file now (its bytes leave bytesOnDisk).
+  /// Removes a finished file now: unlinked, or kept for a later writer to overwrite (its bytes
+  /// stay in bytesOnDisk until then).
   void remove(const ScratchFile& file);
+  /// A removed file for a new writer to overwrite (path empty when there is none): the smallest
+  /// one of at least expectedBytes, else the largest; the writer truncates it to what it wrote.
+  ScratchFile reuse(std::uint64_t expectedBytes);
+  /// Bytes a writer gave back by truncating a reused file.
+  void shrink(std::uint64_t bytes);
 
   /// Per stage, in the order the stages first read or wrote.
   const std::vector<ScratchTraffic>& traffic() const { return traffic_; }
   std::uint64_t bytesOnDisk() const { return onDisk_; }
+  /// Of bytesOnDisk, the removed files' kept for reuse.
+  std::uint64_t bytesKeptForReuse() const { return freeBytes_; }
+  /// Of bytesOnDisk, the files not removed.
+  std::uint64_t bytesInUse() const { return onDisk_ - freeBytes_; }
   std::uint64_t peakBytesOnDisk() const { return peakOnDisk_; }
   std::uint64_t bytesWritten() const { return written_; }
 
@@ -53,9 +66,9 @@ class ScratchFolder {
 
   // Bookkeeping of ScratchWriter / ScratchReader.
   void countRead(const std::string& stage, std::uint64_t bytes);
-  /// Counts a write about to happen (grows: it appends to a file); throws the disk-full IoError
-  /// when the test limit is reached.
-  void countWrite(const std::string& stage, std::uint64_t bytes, bool grows = true);
+  /// Counts a write about to happen, of which growth bytes extend a file on disk; throws the
+  /// disk-full IoError when the test limit is reached.
+  void countWrite(const std::string& stage, std::uint64_t bytes, std::uint64_t growth);
   [[noreturn]] void throwDiskFull(const std::string& file, std::uint64_t failedBytes, const char* reason) const;
 
  private:
@@ -68,12 +81,17 @@ class ScratchFolder {
   std::vector<ScratchTraffic> traffic_;
   std::uint64_t onDisk_ = 0, peakOnDisk_ = 0, written_ = 0;
   std::uint64_t writeLimit_ = ~std::uint64_t(0);
+  std::mutex freeMutex_;
+  std::vector<ScratchFile> free_;  ///< removed files kept for reuse
+  std::uint64_t freeBytes_ = 0;
 };
 
 /// Writes one new scratch file through a buffer.
 class ScratchWriter {
  public:
-  ScratchWriter(ScratchFolder& folder, std::string stage, std::size_t bufferBytes = std::size_t(1) << 20);
+  /// expectedBytes: the file's size when known (0: unknown), to pick a removed file to overwrite.
+  ScratchWriter(ScratchFolder& folder, std::string stage, std::size_t bufferBytes = std::size_t(1) << 20,
+                std::uint64_t expectedBytes = 0);
   ~ScratchWriter();
   ScratchWriter(const ScratchWriter&) = delete;
   ScratchWriter& operator=(const ScratchWriter&) = delete;
@@ -91,9 +109,11 @@ class ScratchWriter {
   std::vector<char> buffer_;
   std::size_t used_ = 0;
   std::uint64_t bytes_ = 0;
+  std::uint64_t reused_ = 0;  ///< bytes of the removed file this one overwrites
 };
 
-/// Reads a finished scratch file through a buffer.
+/// Reads a finished scratch file through a buffer, up to the file's bytes (a reused file may hold
+/// older bytes past them while it is written).
 class ScratchReader {
  public:
   ScratchReader(ScratchFolder& folder, const ScratchFile& file, std::string stage,
@@ -114,6 +134,7 @@ class ScratchReader {
   int fd_ = -1;
   std::vector<char> buffer_;
   std::size_t begin_ = 0, end_ = 0;
+  std::uint64_t left_ = 0;  ///< bytes of the file not yet read into the buffer
 };
 
 /// Reads exactly `bytes` at offset of the open file fd (named path in errors): IoError when it

@@ -393,7 +393,7 @@ class WeldPass {
     }
     folder_.remove(placedFaces_);
     sorter.finish();
-    ScratchWriter out(folder_, "morton");
+    ScratchWriter out(folder_, "morton", std::size_t(1) << 20, sorter.size() * sizeof(WeldedFace));
     WeldedFace face;
     while (sorter.next(face)) out.write(&face, sizeof face);
     result_.scratch.faces = out.finish();

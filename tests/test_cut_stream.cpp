@@ -30,7 +30,7 @@ void expectSameCut(ScratchFolder& folder, const CleanScratch& scratch, const Cle
   field.direction.assign(cleaned.topology.numFaces(), Vec3f(1.0f, 0.0f, 0.0f));  // cutToDisk reads its size only
   const CutResult expected =
       cutToDisk(cleaned.mesh, cleaned.topology, field, testing::inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
-  const std::uint64_t onDisk = folder.bytesOnDisk();
+  const std::uint64_t onDisk = folder.bytesInUse();
   const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, kTinyPass);
   EXPECT_EQ(readBytes(folder, cut.corners), expected.corners.bytes());
   EXPECT_EQ(readBytes(folder, cut.faceRotation), expected.faceRotation);
@@ -43,7 +43,7 @@ void expectSameCut(ScratchFolder& folder, const CleanScratch& scratch, const Cle
   }
   EXPECT_EQ(cut.cones, expected.cones);
   // The working files are gone: the cut and the rotations are what it leaves.
-  EXPECT_EQ(folder.bytesOnDisk(), onDisk + cut.corners.bytes + cut.faceRotation.bytes);
+  EXPECT_EQ(folder.bytesInUse(), onDisk + cut.corners.bytes + cut.faceRotation.bytes);
 }
 
 // Singularities of the proxy field computed out of core, with and without merging.

@@ -124,7 +124,7 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
       geometry.smoothingIterations = v.smoothing;
       const CrossField expected = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, proxy, geometry);
       // 1 byte: sorts spill at once and every cache holds two pages; blocks of 1000 faces.
-      const std::uint64_t filesBefore = folder.bytesOnDisk();
+      const std::uint64_t filesBefore = folder.bytesInUse();
       const ScratchField streamed = computeScratchField(folder, scratch, proxy, geometry, StreamPassOptions{1, 1000});
       EXPECT_EQ(countDiffering(readPositions(folder, streamed.directions), expected.direction), 0u)
           << "directions differ";
@@ -136,7 +136,7 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
       EXPECT_GT(streamed.elements, 0u);
       if (v.sweeps > 0) EXPECT_GE(streamed.colours, 2u);
       // Only the results stay: every intermediate file was removed.
-      EXPECT_EQ(folder.bytesOnDisk() - filesBefore, streamed.directions.bytes + streamed.framePositions.bytes);
+      EXPECT_EQ(folder.bytesInUse() - filesBefore, streamed.directions.bytes + streamed.framePositions.bytes);
       folder.remove(streamed.directions);
       if (v.smoothing > 0) folder.remove(streamed.framePositions);
     }
