@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
+#include <thread>
 
 #include "core/system/errors.h"
 #include "core/system/memory_budget.h"
@@ -111,8 +114,120 @@ void ScratchFolder::throwDiskFull(const std::string& file, std::uint64_t failedB
                 " written, at " + file + ": " + need + "; free space there or choose another folder with --scratch DIR");
 }
 
+namespace detail {
+
+/// A read or write of one buffer at an offset, done by the scratch I/O thread.
+struct ScratchIoRequest {
+  int fd = -1;
+  char* data = nullptr;
+  std::size_t bytes = 0;
+  std::uint64_t offset = 0;
+  bool write = false;
+  // Set by the I/O thread:
+  std::size_t done = 0;  ///< bytes read (fewer at the end of the file) or written
+  int error = 0;         ///< errno of a failed call; a write that wrote nothing: ENOSPC-like short write
+  bool shortWrite = false;
+  bool finished = false;
+};
+
+}  // namespace detail
+
+namespace {
+
+using detail::ScratchIoRequest;
+
+/// One thread for every reader's and writer's system calls, in the order they are handed over:
+/// the passes are mostly one thread each, so their kernel copies run on the other core.
+class ScratchIoThread {
+ public:
+  static ScratchIoThread& instance() {
+    static ScratchIoThread thread;
+    return thread;
+  }
+  void submit(const std::shared_ptr<ScratchIoRequest>& request) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      queue_.push_back(request);
+    }
+    work_.notify_one();
+  }
+  void wait(const ScratchIoRequest& request) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [&] { return request.finished; });
+  }
+
+ private:
+  ScratchIoThread() : thread_([this] { run(); }) {}
+  ~ScratchIoThread() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    work_.notify_one();
+    thread_.join();
+  }
+  void run() {
+    for (;;) {
+      std::shared_ptr<ScratchIoRequest> request;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        work_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+        if (queue_.empty()) return;
+        request = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      perform(*request);
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        request->finished = true;
+      }
+      done_.notify_all();
+    }
+  }
+  static void perform(ScratchIoRequest& r) {
+    while (r.done < r.bytes) {
+      const off_t at = static_cast<off_t>(r.offset + r.done);
+      const ssize_t n = r.write ? ::pwrite(r.fd, r.data + r.done, r.bytes - r.done, at)
+                                : ::pread(r.fd, r.data + r.done, r.bytes - r.done, at);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) {
+        r.error = errno;
+        return;
+      }
+      if (n == 0) {  // the end of the file, or a disk that took nothing
+        r.shortWrite = r.write;
+        return;
+      }
+      r.done += static_cast<std::size_t>(n);
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable work_, done_;
+  std::deque<std::shared_ptr<ScratchIoRequest>> queue_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+std::shared_ptr<ScratchIoRequest> submitIo(int fd, char* data, std::size_t bytes, std::uint64_t offset, bool write) {
+  auto request = std::make_shared<ScratchIoRequest>();
+  request->fd = fd;
+  request->data = data;
+  request->bytes = bytes;
+  request->offset = offset;
+  request->write = write;
+  ScratchIoThread::instance().submit(request);
+  return request;
+}
+
+/// Half of a buffer size, at least minimum.
+std::size_t halfBuffer(std::size_t bytes, std::size_t minimum) { return std::max<std::size_t>(bytes / 2, minimum); }
+
+}  // namespace
+
 ScratchWriter::ScratchWriter(ScratchFolder& folder, std::string stage, std::size_t bufferBytes, std::uint64_t expectedBytes)
-    : folder_(folder), stage_(std::move(stage)), buffer_(std::max<std::size_t>(bufferBytes, 4096)) {
+    : folder_(folder), stage_(std::move(stage)) {
+  buffers_[0].resize(halfBuffer(bufferBytes, 4096));
   const ScratchFile old = folder.reuse(expectedBytes);
   if (!old.path.empty()) {
     fd_ = ::open(old.path.c_str(), O_WRONLY | O_CLOEXEC);  // overwritten from the start
@@ -129,43 +244,53 @@ ScratchWriter::ScratchWriter(ScratchFolder& folder, std::string stage, std::size
 }
 
 ScratchWriter::~ScratchWriter() {
+  if (pending_) ScratchIoThread::instance().wait(*pending_);
   if (fd_ >= 0) ::close(fd_);
 }
 
 void ScratchWriter::write(const void* data, std::size_t bytes) {
   const char* from = static_cast<const char*>(data);
   while (bytes > 0) {
-    if (used_ == buffer_.size()) flush();
-    const std::size_t n = std::min(bytes, buffer_.size() - used_);
-    std::memcpy(buffer_.data() + used_, from, n);
+    std::vector<char>& buffer = buffers_[current_];
+    if (used_ == buffer.size()) flush();
+    const std::size_t n = std::min(bytes, buffers_[current_].size() - used_);
+    std::memcpy(buffers_[current_].data() + used_, from, n);
     used_ += n, from += n, bytes -= n;
   }
 }
 
 ScratchFile ScratchWriter::written() {
   flush();
+  settle();
   return ScratchFile{path_, bytes_};
+}
+
+void ScratchWriter::settle() {
+  if (!pending_) return;
+  ScratchIoThread::instance().wait(*pending_);
+  const std::shared_ptr<ScratchIoRequest> r = std::move(pending_);
+  pending_.reset();
+  const std::size_t left = r->bytes - r->done;
+  if (r->error == ENOSPC || r->error == EDQUOT) folder_.throwDiskFull(path_, left, std::strerror(r->error));
+  if (r->error != 0) throw IoError(path_ + ": cannot write a scratch file (" + std::strerror(r->error) + ")");
+  if (r->shortWrite) folder_.throwDiskFull(path_, left, "short write");
 }
 
 void ScratchWriter::flush() {
   if (used_ == 0) return;
   const std::uint64_t end = bytes_ + used_, had = std::max(bytes_, reused_);
   folder_.countWrite(stage_, used_, end > had ? end - had : 0);
-  std::size_t done = 0;
-  while (done < used_) {
-    const ssize_t n = ::write(fd_, buffer_.data() + done, used_ - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0 && (errno == ENOSPC || errno == EDQUOT)) folder_.throwDiskFull(path_, used_ - done, std::strerror(errno));
-    if (n < 0) throw IoError(path_ + ": cannot write a scratch file (" + std::strerror(errno) + ")");
-    if (n == 0) folder_.throwDiskFull(path_, used_ - done, "short write");
-    done += static_cast<std::size_t>(n);
-  }
+  settle();  // the other buffer is free again
+  pending_ = submitIo(fd_, buffers_[current_].data(), used_, bytes_, true);
   bytes_ += used_;
   used_ = 0;
+  current_ ^= 1;
+  if (buffers_[current_].size() != buffers_[current_ ^ 1].size()) buffers_[current_].resize(buffers_[current_ ^ 1].size());
 }
 
 ScratchFile ScratchWriter::finish() {
   flush();
+  settle();
   if (reused_ > bytes_) {  // the older bytes past this file's end
     if (::ftruncate(fd_, static_cast<off_t>(bytes_)) != 0) {
       throw IoError(path_ + ": cannot truncate a scratch file (" + std::strerror(errno) + ")");
@@ -183,38 +308,56 @@ ScratchFile ScratchWriter::finish() {
 }
 
 ScratchReader::ScratchReader(ScratchFolder& folder, const ScratchFile& file, std::string stage, std::size_t bufferBytes)
-    : folder_(&folder), stage_(std::move(stage)), path_(file.path),
-      buffer_(static_cast<std::size_t>(std::clamp<std::uint64_t>(file.bytes, 64, std::max<std::size_t>(bufferBytes, 64)))),
-      left_(file.bytes) {
+    : folder_(&folder), stage_(std::move(stage)), path_(file.path), bytes_(file.bytes) {
+  const std::size_t half = static_cast<std::size_t>(std::clamp<std::uint64_t>(file.bytes, 32, halfBuffer(bufferBytes, 32)));
+  buffers_[0].resize(half);
+  buffers_[1].resize(file.bytes > half ? half : 0);  // a file that fits one buffer needs no second
   fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) throw IoError(path_ + ": cannot open a scratch file (" + std::strerror(errno) + ")");
+  current_ = 1;  // the first read goes into buffer 0
+  requestNext();
 }
 
 ScratchReader::~ScratchReader() {
+  if (pending_) ScratchIoThread::instance().wait(*pending_);
   if (fd_ >= 0) ::close(fd_);
 }
 
 ScratchReader::ScratchReader(ScratchReader&& other) noexcept
     : folder_(other.folder_), stage_(std::move(other.stage_)), path_(std::move(other.path_)), fd_(other.fd_),
-      buffer_(std::move(other.buffer_)), begin_(other.begin_), end_(other.end_), left_(other.left_) {
+      buffers_{std::move(other.buffers_[0]), std::move(other.buffers_[1])}, current_(other.current_),
+      pending_(std::move(other.pending_)), begin_(other.begin_), end_(other.end_), requested_(other.requested_),
+      bytes_(other.bytes_) {
   other.fd_ = -1;
+  other.pending_.reset();
+}
+
+void ScratchReader::requestNext() {
+  // Into the buffer not being read (current_ is the one the caller has finished).
+  const int next = current_ ^ 1;
+  const std::size_t bytes = static_cast<std::size_t>(std::min<std::uint64_t>(buffers_[next].size(), bytes_ - requested_));
+  if (bytes == 0) return;
+  pending_ = submitIo(fd_, buffers_[next].data(), bytes, requested_, false);
+  requested_ += bytes;
 }
 
 bool ScratchReader::refill() {
-  if (begin_ < end_) std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
-  end_ -= begin_;
+  if (!pending_) return false;
+  ScratchIoThread::instance().wait(*pending_);
+  const std::shared_ptr<ScratchIoRequest> r = std::move(pending_);
+  pending_.reset();
+  if (r->error != 0) throw IoError(path_ + ": cannot read a scratch file (" + std::strerror(r->error) + ")");
+  folder_->countRead(stage_, r->done);
+  current_ ^= 1;
   begin_ = 0;
-  const std::size_t wanted = static_cast<std::size_t>(std::min<std::uint64_t>(buffer_.size() - end_, left_));
-  if (wanted == 0) return false;
-  for (;;) {
-    const ssize_t n = ::read(fd_, buffer_.data() + end_, wanted);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw IoError(path_ + ": cannot read a scratch file (" + std::strerror(errno) + ")");
-    folder_->countRead(stage_, static_cast<std::uint64_t>(n));
-    end_ += static_cast<std::size_t>(n);
-    left_ -= static_cast<std::uint64_t>(n);
-    return n > 0;
+  end_ = r->done;
+  if (r->done < r->bytes) {
+    requested_ = bytes_;  // the file ends early (it changed): nothing more to read
+  } else {
+    if (buffers_[current_ ^ 1].empty()) buffers_[current_ ^ 1].resize(buffers_[current_].size());
+    requestNext();
   }
+  return end_ > 0;
 }
 
 bool ScratchReader::read(void* out, std::size_t bytes) {
@@ -226,7 +369,7 @@ bool ScratchReader::read(void* out, std::size_t bytes) {
       throw IoError(path_ + ": scratch file ends inside a record (it changed while it was read)");
     }
     const std::size_t n = std::min(bytes - done, end_ - begin_);
-    std::memcpy(to + done, buffer_.data() + begin_, n);
+    std::memcpy(to + done, buffers_[current_].data() + begin_, n);
     begin_ += n, done += n;
   }
   return true;
@@ -235,7 +378,7 @@ bool ScratchReader::read(void* out, std::size_t bytes) {
 std::size_t ScratchReader::readUpTo(void* out, std::size_t bytes) {
   if (begin_ == end_ && !refill()) return 0;
   const std::size_t n = std::min(bytes, end_ - begin_);
-  std::memcpy(out, buffer_.data() + begin_, n);
+  std::memcpy(out, buffers_[current_].data() + begin_, n);
   begin_ += n;
   return n;
 }

@@ -9,6 +9,7 @@
 /// an IoError naming the folder and the bytes the run needs.
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -86,7 +87,12 @@ class ScratchFolder {
   std::uint64_t freeBytes_ = 0;
 };
 
-/// Writes one new scratch file through a buffer.
+namespace detail {
+struct ScratchIoRequest;
+}
+
+/// Writes one new scratch file through two buffers: one fills while the other is written by the
+/// scratch I/O thread (the kernel's copy overlaps the caller's work; the memory is bufferBytes).
 class ScratchWriter {
  public:
   /// expectedBytes: the file's size when known (0: unknown), to pick a removed file to overwrite.
@@ -103,16 +109,21 @@ class ScratchWriter {
 
  private:
   void flush();
+  /// Waits for the write in flight; its failure thrown as the disk-full or I/O error.
+  void settle();
   ScratchFolder& folder_;
   std::string stage_, path_;
   int fd_ = -1;
-  std::vector<char> buffer_;
+  std::vector<char> buffers_[2];
+  int current_ = 0;
+  std::shared_ptr<detail::ScratchIoRequest> pending_;
   std::size_t used_ = 0;
-  std::uint64_t bytes_ = 0;
+  std::uint64_t bytes_ = 0;   ///< handed to the I/O thread
   std::uint64_t reused_ = 0;  ///< bytes of the removed file this one overwrites
 };
 
-/// Reads a finished scratch file through a buffer, up to the file's bytes (a reused file may hold
+/// Reads a finished scratch file through two buffers, the next one read ahead by the scratch I/O
+/// thread while the caller works on the other; up to the file's bytes (a reused file may hold
 /// older bytes past them while it is written).
 class ScratchReader {
  public:
@@ -129,12 +140,15 @@ class ScratchReader {
 
  private:
   bool refill();
+  void requestNext();
   ScratchFolder* folder_;
   std::string stage_, path_;
   int fd_ = -1;
-  std::vector<char> buffer_;
+  std::vector<char> buffers_[2];
+  int current_ = 0;
+  std::shared_ptr<detail::ScratchIoRequest> pending_;  ///< the read into the other buffer
   std::size_t begin_ = 0, end_ = 0;
-  std::uint64_t left_ = 0;  ///< bytes of the file not yet read into the buffer
+  std::uint64_t requested_ = 0, bytes_ = 0;  ///< offset of the next read, the file's bytes
 };
 
 /// Reads exactly `bytes` at offset of the open file fd (named path in errors): IoError when it
