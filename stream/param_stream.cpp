@@ -110,7 +110,9 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     const WeldStreamResult welded = weldMeshStream(stream, folder, weld);
     r.inputFaces = welded.census.inputFaces;
     meter.finish("weld");
+    for (const auto& [name, seconds] : welded.census.stageSeconds) r.passSeconds.emplace_back("weld: " + name, seconds);
     CleanScratch cleaned = cleanWeldedMesh(folder, welded.scratch, welded.census, options.memoryBytes);
+    for (const auto& [name, seconds] : cleaned.stageSeconds) r.passSeconds.emplace_back("clean: " + name, seconds);
     folder.remove(welded.scratch.faces);
     folder.remove(welded.scratch.positions);
     return cleaned;
@@ -127,6 +129,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   const double h = r.edgeLength;
   const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), pass);
   r.fieldElements = field.elements;
+  for (const auto& [name, seconds] : field.stageSeconds) r.passSeconds.emplace_back("field: " + name, seconds);
   meter.finish("field");
   reportProgress(options.progress, "field", 1.0);
 

@@ -208,10 +208,12 @@ class WeldPass {
     faceSort_->finish();
     components_ = std::make_unique<detail::UnionFind>(welded_);
     edgeSort_ = std::make_unique<ExternalSorter<EdgeRecord, EdgeLess>>(folder_, sortOptions("edges"));
-    // Positions that fit half the memory (besides the union-find) are read whole later and the
-    // kept faces wait in a file; otherwise the corners are joined with them by two sorts.
+    // Positions that fit three quarters of the memory with the union-find are read whole later
+    // (nothing else is held then: the sorts before have ended, the Morton sort comes after) and
+    // the kept faces wait in a file; otherwise the corners are joined with them by two sorts.
     const std::uint64_t unionFind = std::uint64_t(welded_) * sizeof(std::uint32_t);
-    positionsInMemory_ = !options_.joinPositions && unionFind + welded_ * sizeof(Vec3f) <= options_.memoryBytes / 2;
+    positionsInMemory_ =
+        !options_.joinPositions && unionFind + welded_ * sizeof(Vec3f) <= options_.memoryBytes / 4 * 3;
     if (positionsInMemory_) {
       keptFaces_ = std::make_unique<ScratchWriter>(folder_, "positions");
     } else {

@@ -72,6 +72,9 @@ TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
       const JsonValue report = parseJson(testing::readFile(dir.path("r.json")));
       EXPECT_EQ(report["path"].text, "out-of-core");
       EXPECT_GT(report.numberAt("scratch.peakBytes"), 0.0);
+      for (const char* pass : {"passSeconds.weld: read", "passSeconds.clean: faces", "passSeconds.field: sweeps"}) {
+        EXPECT_GE(report.numberAt(pass), 0.0) << pass;
+      }
       repairs += report.numberAt("untangle.flippedBefore") > 0.0;
     }
     EXPECT_TRUE(std::filesystem::is_empty(dir.path("scratch"))) << "scratch left behind";

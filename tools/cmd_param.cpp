@@ -309,6 +309,9 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
     context.memoryPathJson = [&](JsonWriter& j) {
       writeMemoryPathJson(j, memoryPath, false);
       j.key("untangleWindowFaces").value(streamed.untangleWindowFaces);
+      j.key("passSeconds").beginObject();
+      for (const auto& [name, seconds] : streamed.passSeconds) j.key(name).value(seconds);
+      j.endObject();
       j.key("notRunOutOfCore").beginArray().value(std::string("further cone passes")).endArray();
     };
     const std::string json = paramReportJson(r, context);
