@@ -784,14 +784,6 @@ class CleanPass {
   std::vector<VertexId> boundary_;  // the vertices whose fan is open, increasing
 };
 
-template <class T>
-std::vector<T> readWhole(ScratchFolder& folder, const ScratchFile& file, std::uint64_t count) {
-  std::vector<T> out(count);
-  ScratchReader in(folder, file, "clean: read");
-  if (count > 0 && !in.read(out.data(), count * sizeof(T))) throw IoError(file.path + ": scratch file ends early");
-  return out;
-}
-
 }  // namespace
 
 CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
@@ -877,17 +869,17 @@ BoundingBox scratchBoundingBox(ScratchFolder& folder, const ScratchFile& positio
 
 CleanResult readCleanScratch(ScratchFolder& folder, const CleanScratch& scratch) {
   CleanResult r;
-  const std::vector<CleanFace> faces = readWhole<CleanFace>(folder, scratch.faces, scratch.numFaces);
+  const std::vector<CleanFace> faces = readWholeScratch<CleanFace>(folder, scratch.faces, scratch.numFaces, "clean: read");
   r.mesh.triangles.resize(faces.size());
   r.faceOrigin.resize(faces.size());
   for (std::size_t f = 0; f < faces.size(); ++f) {
     r.mesh.triangles[f] = faces[f].triangle;
     r.faceOrigin[f] = faces[f].inputFace;
   }
-  r.mesh.positions = readWhole<Vec3f>(folder, scratch.positions, scratch.numVertices);
-  r.vertexOrigin = readWhole<VertexId>(folder, scratch.vertexOrigin, scratch.numVertices);
-  r.topology = Topology::viewParts(r.mesh.triangles, readWhole<CornerId>(folder, scratch.opposite, 3 * scratch.numFaces),
-                                   readWhole<CornerId>(folder, scratch.vertexCorner, scratch.numVertices));
+  r.mesh.positions = readWholeScratch<Vec3f>(folder, scratch.positions, scratch.numVertices, "clean: read");
+  r.vertexOrigin = readWholeScratch<VertexId>(folder, scratch.vertexOrigin, scratch.numVertices, "clean: read");
+  r.topology = Topology::viewParts(r.mesh.triangles, readWholeScratch<CornerId>(folder, scratch.opposite, 3 * scratch.numFaces, "clean: read"),
+                                   readWholeScratch<CornerId>(folder, scratch.vertexCorner, scratch.numVertices, "clean: read"));
   r.report = scratch.report;
   return r;
 }

@@ -316,32 +316,43 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
     clock.finish("colour");
 
     // One pass per sweep and colour, in place: a colour's faces read only faces of other colours
-    // (as the in-memory sweep's parallel loop over that colour does), so the cached pages of the
-    // directions stay right for every face read, and only that colour's faces are written back.
+    // (as the in-memory sweep's parallel loop over that colour does), so the directions they read
+    // stay right while that colour's are rewritten. The directions are held in memory when they
+    // fit three quarters of the pass's memory, else read and written back through the file.
+    const bool held = nf * sizeof(Vec3f) <= pass.memoryBytes / 4 * 3;
+    std::vector<Vec3f> all;
+    if (held) all = readWholeScratch<Vec3f>(folder, direction, nf, "field: sweeps");
     struct SweepReaders {
       PagedReader<CornerId> opposite;
-      PagedReader<Vec3f> normal, direction;
+      PagedReader<Vec3f> normal;
+      std::unique_ptr<PagedReader<Vec3f>> direction;
     };
     std::vector<Vec3f> block, normals;
     std::vector<std::uint8_t> colours;
     for (std::int32_t sweep = 0; sweep < proxy.smoothingSweeps; ++sweep) {
       for (std::uint32_t k = 0; k < out.colours; ++k) {
         ReaderPool<SweepReaders> pool([&] {
-          return std::unique_ptr<SweepReaders>(new SweepReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes),
-                                                                PagedReader<Vec3f>(sweepNormal, cacheBytes),
-                                                                PagedReader<Vec3f>(direction, cacheBytes)});
+          auto r = std::unique_ptr<SweepReaders>(new SweepReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes),
+                                                                  PagedReader<Vec3f>(sweepNormal, cacheBytes), nullptr});
+          if (!held) r->direction = std::make_unique<PagedReader<Vec3f>>(direction, cacheBytes);
+          return r;
         });
-        ScratchUpdater directions(folder, direction, "field: sweeps");
+        std::unique_ptr<ScratchUpdater> directions;
+        if (!held) directions = std::make_unique<ScratchUpdater>(folder, direction, "field: sweeps");
         ScratchReader colourReader(folder, colour, "field: sweeps"), normalReader(folder, sweepNormal, "field: sweeps");
         for (std::uint64_t first = 0; first < nf; first += blockFaces) {
           const std::uint64_t count = std::min(blockFaces, nf - first);
-          block.resize(count);
           normals.resize(count);
           colours.resize(count);
           if (!colourReader.read(colours.data(), count) || !normalReader.read(normals.data(), count * sizeof(Vec3f))) {
             throw IoError(colour.path + ": scratch colours or normals end early");
           }
-          directions.readAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+          Vec3f* own = all.data() + first;
+          if (!held) {
+            block.resize(count);
+            directions->readAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+            own = block.data();
+          }
           parallelFor(count, 4096, [&](const IndexRange& range) {
             auto r = pool.take();
             for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
@@ -356,20 +367,25 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
                 const Vec3f normal = r->normal[cornerFace(o)];
                 if (detail::isZero(normal)) continue;
                 neighbourNormal[n] = normal;
-                neighbourDirection[n++] = r->direction[cornerFace(o)].cast<double>();
+                neighbourDirection[n++] = (held ? all[cornerFace(o)] : (*r->direction)[cornerFace(o)]).cast<double>();
               }
               Vec3d swept;
-              if (detail::sweptDirection(normals[i], block[i].cast<double>(), neighbourNormal, neighbourDirection, n, swept)) {
-                block[i] = swept.cast<float>();
+              if (detail::sweptDirection(normals[i], own[i].cast<double>(), neighbourNormal, neighbourDirection, n, swept)) {
+                own[i] = swept.cast<float>();
               }
             }
           });
-          directions.writeAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+          if (!held) directions->writeAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
         }
         pool.forEach([&](SweepReaders& r) {
-          folder.countRead("field: sweeps", r.opposite.bytesRead() + r.normal.bytesRead() + r.direction.bytesRead());
+          folder.countRead("field: sweeps", r.opposite.bytesRead() + r.normal.bytesRead() +
+                                                (r.direction ? r.direction->bytesRead() : 0));
         });
       }
+    }
+    if (held) {
+      ScratchUpdater(folder, direction, "field: sweeps").writeAt(0, all.data(), all.size() * sizeof(Vec3f));
+      std::vector<Vec3f>().swap(all);
     }
     folder.remove(colour);
     clock.finish("sweeps");

@@ -101,17 +101,18 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   if (!options.meter) ownMeter = std::make_unique<StageMeter>();
   StageMeter& meter = options.meter ? *options.meter : *ownMeter;
   const StreamPassOptions pass{options.memoryBytes};
+  const StreamPassOptions early{std::max(options.memoryBytes, options.earlyMemoryBytes)};
   StreamParamResult r;
 
   WeldStreamOptions weld;
   weld.weld = options.weld;
-  weld.memoryBytes = options.memoryBytes;
+  weld.memoryBytes = early.memoryBytes;
   const CleanScratch scratch = [&] {
     const WeldStreamResult welded = weldMeshStream(stream, folder, weld);
     r.inputFaces = welded.census.inputFaces;
     meter.finish("weld");
     for (const auto& [name, seconds] : welded.census.stageSeconds) r.passSeconds.emplace_back("weld: " + name, seconds);
-    CleanScratch cleaned = cleanWeldedMesh(folder, welded.scratch, welded.census, options.memoryBytes);
+    CleanScratch cleaned = cleanWeldedMesh(folder, welded.scratch, welded.census, early.memoryBytes);
     for (const auto& [name, seconds] : cleaned.stageSeconds) r.passSeconds.emplace_back("clean: " + name, seconds);
     folder.remove(welded.scratch.faces);
     folder.remove(welded.scratch.positions);
@@ -127,18 +128,18 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   r.diagonal = scratch.report.diagonalWithoutSpikes;
   r.edgeLength = options.spacing.spacing(r.diagonal);
   const double h = r.edgeLength;
-  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), pass);
+  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), early);
   r.fieldElements = field.elements;
   for (const auto& [name, seconds] : field.stageSeconds) r.passSeconds.emplace_back("field: " + name, seconds);
   meter.finish("field");
   reportProgress(options.progress, "field", 1.0);
 
-  ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, pass);
+  ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, early);
   r.conesBeforeMerge = static_cast<std::uint32_t>(singularities.cones.size());
   ConeMergeOptions merge;
   merge.maxDistance = options.mergeCones * h;
-  r.merged = mergeScratchCones(folder, scratch, singularities, merge, pass);
-  const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, pass);
+  r.merged = mergeScratchCones(folder, scratch, singularities, merge, early);
+  const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, early);
   folder.remove(singularities.matching);
   r.cones = cut.cones;
   std::sort(r.cones.begin(), r.cones.end());

@@ -31,6 +31,9 @@ namespace seamvox {
 struct StreamParamOptions {
   /// What the sorts, page caches and blocks may hold; the grid-sized system comes on top.
   std::uint64_t memoryBytes = std::uint64_t(1) << 30;
+  /// What the passes before the voxel basis (weld, cleaning, field, cut) may hold: the grid-sized
+  /// system does not exist yet (0: memoryBytes).
+  std::uint64_t earlyMemoryBytes = 0;
   bool weld = false;  ///< join vertices at exactly equal positions (CleanOptions::weldVertices)
   GridSpacing spacing;
   double mergeCones = kConeMergeFraction;  ///< in grid spacings (PipelineOptions::mergeCones)

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "core/system/errors.h"
+
 namespace seamvox {
 
 /// Scratch traffic of one stage.
@@ -150,6 +152,15 @@ class ScratchReader {
   std::size_t begin_ = 0, end_ = 0;
   std::uint64_t requested_ = 0, bytes_ = 0;  ///< offset of the next read, the file's bytes
 };
+
+/// A whole scratch file of count records of T, in memory (IoError when the file is shorter).
+template <class T>
+std::vector<T> readWholeScratch(ScratchFolder& folder, const ScratchFile& file, std::uint64_t count, std::string stage) {
+  std::vector<T> out(count);
+  ScratchReader in(folder, file, std::move(stage));
+  if (count > 0 && !in.read(out.data(), count * sizeof(T))) throw IoError(file.path + ": scratch file ends early");
+  return out;
+}
 
 /// Reads exactly `bytes` at offset of the open file fd (named path in errors): IoError when it
 /// cannot, or when the file ends first (it changed while it was read).

@@ -114,18 +114,20 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
     std::uint32_t smoothing;
   };
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
-    for (const Variant v : {Variant{128, 4, 3}, Variant{16, 4, 3}, Variant{32, 0, 3}, Variant{64, 2, 0}}) {
+    for (const Variant v : {Variant{128, 4, 3}, Variant{16, 4, 3}, Variant{32, 0, 3}, Variant{64, 2, 0}})
+    for (const std::uint64_t memory : {std::uint64_t(1), std::uint64_t(1) << 30}) {
       SCOPED_TRACE("grid " + std::to_string(v.grid) + ", sweeps " + std::to_string(v.sweeps) + ", smoothing " +
-                   std::to_string(v.smoothing));
+                   std::to_string(v.smoothing) + ", memory " + std::to_string(memory));
       ProxyFieldOptions proxy;
       proxy.gridResolution = v.grid;
       proxy.smoothingSweeps = v.sweeps;
       FieldGeometryOptions geometry;
       geometry.smoothingIterations = v.smoothing;
       const CrossField expected = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, proxy, geometry);
-      // 1 byte: sorts spill at once and every cache holds two pages; blocks of 1000 faces.
+      // 1 byte: sorts spill at once, every cache holds two pages and the sweeps go through the
+      // file; 1 GiB: the sweeps' directions held in memory. Blocks of 1000 faces.
       const std::uint64_t filesBefore = folder.bytesInUse();
-      const ScratchField streamed = computeScratchField(folder, scratch, proxy, geometry, StreamPassOptions{1, 1000});
+      const ScratchField streamed = computeScratchField(folder, scratch, proxy, geometry, StreamPassOptions{memory, 1000});
       EXPECT_EQ(countDiffering(readPositions(folder, streamed.directions), expected.direction), 0u)
           << "directions differ";
       if (v.smoothing > 0) {

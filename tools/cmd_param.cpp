@@ -273,6 +273,7 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
   StageMeter meter;
   StreamParamOptions options;
   options.memoryBytes = memoryPath.budget - fixedBytes(grid);
+  options.earlyMemoryBytes = memoryPath.budget - outOfCoreProgramBytes();
   options.weld = c.options.clean.weldVertices;
   options.spacing = c.options.spacing;
   options.mergeCones = c.options.mergeCones;

@@ -40,14 +40,20 @@ SolverChoice chooseParamSolver(ParamSolver requested, std::uint64_t numFaces,
   return {hat ? ParamSolver::Hat : ParamSolver::VoxLoc, text};
 }
 
+namespace {
+constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20;
+}
+
 std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution,
                                      bool fieldOnDisk) {
   constexpr std::uint64_t kMiB = std::uint64_t(1) << 20;
-  const std::uint64_t program = 48 * kMiB;
+  const std::uint64_t program = kProgramBytes;
   if (chooseParamSolver(requested, faces, gridResolution).solver == ParamSolver::Hat) return program + 1400 * faces;
   const double scale = double(gridResolution) / kDefaultGridResolution;
   return program + static_cast<std::uint64_t>(520.0 * kMiB * scale * scale) + (fieldOnDisk ? 70 : 78) * faces;
 }
+
+std::uint64_t outOfCoreProgramBytes() { return kProgramBytes + (std::uint64_t(64) << 20); }
 
 std::uint64_t outOfCoreMinimumBytes(std::int32_t gridResolution) {
   return estimateParamPeakBytes(0, ParamSolver::VoxLoc, gridResolution) + (std::uint64_t(64) << 20);

@@ -60,6 +60,9 @@ std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested,
 /// The smallest budget of param's out-of-core path at a grid: the program and the grid-sized
 /// system (as estimateParamPeakBytes counts them) and 64 MiB for the passes' sorts and caches.
 std::uint64_t outOfCoreMinimumBytes(std::int32_t gridResolution);
+/// Of estimateParamPeakBytes, the program's part and a margin of 64 MiB: what the out-of-core
+/// passes before the grid-sized system may not use of the budget.
+std::uint64_t outOfCoreProgramBytes();
 
 /// VoxelBasisOptions::minDomainWeight of the voxel solver's second attempt, when the first could
 /// not factor its system even at kMaxVoxelRegularization: on a noisy 50M-face scan B-splines that
