@@ -1,11 +1,14 @@
 #include "stream/scratch_folder.h"
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <condition_variable>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <thread>
@@ -53,8 +56,37 @@ ScratchFile ScratchFolder::zeroFile(std::uint64_t bytes) {
   return {path, bytes};
 }
 
+namespace {
+
+/// Whether this process still has the file open: a reader alive after the file's removal keeps
+/// reading it (as an unlinked file) and must not see another writer's bytes. Unknown: true.
+bool openInThisProcess(const std::string& path) {
+  struct stat target {};
+  if (::stat(path.c_str(), &target) != 0) return false;
+  DIR* dir = ::opendir("/proc/self/fd");
+  if (!dir) return true;
+  bool open = false;
+  while (const dirent* entry = ::readdir(dir)) {
+    if (entry->d_name[0] == '.') continue;
+    struct stat s {};
+    if (::fstat(std::atoi(entry->d_name), &s) == 0 && s.st_ino == target.st_ino && s.st_dev == target.st_dev) {
+      open = true;
+      break;
+    }
+  }
+  ::closedir(dir);
+  return open;
+}
+
+}  // namespace
+
 void ScratchFolder::remove(const ScratchFile& file) {
   if (file.path.empty()) return;
+  if (openInThisProcess(file.path)) {  // unlinked, as its readers expect
+    std::lock_guard<std::mutex> lock(freeMutex_);
+    if (::unlink(file.path.c_str()) == 0) onDisk_ -= std::min(onDisk_, file.bytes);
+    return;
+  }
   std::lock_guard<std::mutex> lock(freeMutex_);
   // Kept: up to 1 GiB and half the bytes in use besides, the smallest given up first.
   free_.push_back(file);
@@ -140,11 +172,18 @@ using detail::ScratchIoRequest;
 /// the passes are mostly one thread each, so their kernel copies run on the other core.
 class ScratchIoThread {
  public:
+  /// Never destroyed: the thread waits for work until the process ends (a forked child, which
+  /// has no such thread, does its reads and writes itself).
   static ScratchIoThread& instance() {
-    static ScratchIoThread thread;
-    return thread;
+    static ScratchIoThread* thread = new ScratchIoThread;
+    return *thread;
   }
   void submit(const std::shared_ptr<ScratchIoRequest>& request) {
+    if (::getpid() != pid_) {  // a forked child has no I/O thread: done here
+      perform(*request);
+      request->finished = true;
+      return;
+    }
     {
       std::lock_guard<std::mutex> lock(mutex_);
       queue_.push_back(request);
@@ -152,27 +191,19 @@ class ScratchIoThread {
     work_.notify_one();
   }
   void wait(const ScratchIoRequest& request) {
+    if (::getpid() != pid_) return;  // done in submit
     std::unique_lock<std::mutex> lock(mutex_);
     done_.wait(lock, [&] { return request.finished; });
   }
 
  private:
-  ScratchIoThread() : thread_([this] { run(); }) {}
-  ~ScratchIoThread() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_ = true;
-    }
-    work_.notify_one();
-    thread_.join();
-  }
+  ScratchIoThread() : pid_(::getpid()), thread_([this] { run(); }) {}
   void run() {
     for (;;) {
       std::shared_ptr<ScratchIoRequest> request;
       {
         std::unique_lock<std::mutex> lock(mutex_);
-        work_.wait(lock, [&] { return stop_ || !queue_.empty(); });
-        if (queue_.empty()) return;
+        work_.wait(lock, [&] { return !queue_.empty(); });
         request = std::move(queue_.front());
         queue_.pop_front();
       }
@@ -205,7 +236,7 @@ class ScratchIoThread {
   std::mutex mutex_;
   std::condition_variable work_, done_;
   std::deque<std::shared_ptr<ScratchIoRequest>> queue_;
-  bool stop_ = false;
+  pid_t pid_;  ///< the process the thread runs in
   std::thread thread_;
 };
 

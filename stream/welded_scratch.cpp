@@ -169,14 +169,16 @@ class WeldPass {
     welded_ = next;
     result_.census.weldedVertices = n - next;
     // A vertex keeps its place when it is its cluster's first: its welded id is the count so far.
-    ScratchReader in(folder_, inputPositions_, "weld");
     ScratchWriter out(folder_, "weld");
-    Vec3f p;
-    std::uint32_t written = 0;
-    for (std::uint32_t v = 0; in.read(&p, sizeof p); ++v) {
-      if (weldId_[v] == written) {
-        out.write(&p, sizeof p);
-        ++written;
+    {
+      ScratchReader in(folder_, inputPositions_, "weld");
+      Vec3f p;
+      std::uint32_t written = 0;
+      for (std::uint32_t v = 0; in.read(&p, sizeof p); ++v) {
+        if (weldId_[v] == written) {
+          out.write(&p, sizeof p);
+          ++written;
+        }
       }
     }
     folder_.remove(inputPositions_);
@@ -330,14 +332,16 @@ class WeldPass {
     }
     const ScratchFile kept = keptFaces_->finish();
     keptFaces_.reset();
-    ScratchReader in(folder_, kept, "positions");
-    WeldedFace face;
-    while (in.read(&face.face, sizeof face.face) && in.read(&face.triangle, sizeof face.triangle)) {
-      for (int k = 0; k < 3; ++k) {
-        const Vec3f& p = positions[face.triangle[k]];
-        face.corners[k] = {p.x(), p.y(), p.z()};
+    {
+      ScratchReader in(folder_, kept, "positions");
+      WeldedFace face;
+      while (in.read(&face.face, sizeof face.face) && in.read(&face.triangle, sizeof face.triangle)) {
+        for (int k = 0; k < 3; ++k) {
+          const Vec3f& p = positions[face.triangle[k]];
+          face.corners[k] = {p.x(), p.y(), p.z()};
+        }
+        add(face);
       }
-      add(face);
     }
     folder_.remove(kept);
   }

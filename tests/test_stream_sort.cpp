@@ -193,6 +193,25 @@ TEST(ScratchFolder, ARemovedFileIsOverwrittenByTheNextWriterAndReadOnlyToItsNewE
   EXPECT_EQ(scratch.bytesOnDisk(), 24000u + 20000u);
 }
 
+TEST(ScratchFolder, AFileRemovedWhileItsReaderIsOpenIsNotOverwritten) {
+  testing::TempDir dir;
+  ScratchFolder scratch(dir.dir());
+  ScratchWriter writer(scratch, "write", 4096);
+  for (std::uint32_t i = 0; i < 10000; ++i) writer.write(&i, sizeof i);
+  const ScratchFile file = writer.finish();
+  ScratchReader reader(scratch, file, "read", 64);
+  scratch.remove(file);  // the reader still reads it
+  EXPECT_EQ(scratch.bytesKeptForReuse(), 0u);
+  EXPECT_EQ(scratch.bytesOnDisk(), 0u);
+  ScratchWriter other(scratch, "write", 4096);
+  for (std::uint32_t i = 0; i < 10000; ++i) other.write(&i, sizeof i);  // the same size
+  const ScratchFile second = other.finish();
+  EXPECT_NE(second.path, file.path);
+  std::uint32_t x = 0, n = 0;
+  while (reader.read(&x, sizeof x)) ASSERT_EQ(x, n++);
+  EXPECT_EQ(n, 10000u);
+}
+
 TEST(ScratchFolder, ARecordCutShortIsAnError) {
   testing::TempDir dir;
   ScratchFolder scratch(dir.dir());
