@@ -20,8 +20,13 @@ ExternalMerge::ExternalMerge(ScratchFolder& scratch, std::size_t recordBytes, Le
 }
 
 ExternalMerge::~ExternalMerge() {
+  removeSources();
+  for (const ScratchFile& run : runs_) scratch_.remove(run);
+}
+
+void ExternalMerge::removeSources() {
   // Readers closed first: a closed file can be overwritten by the next writer.
-  std::vector<ScratchFile> files = runs_;
+  std::vector<ScratchFile> files;
   for (const auto& source : sources_) files.push_back(source->file);
   sources_.clear();
   for (const ScratchFile& file : files) scratch_.remove(file);
@@ -56,10 +61,7 @@ ScratchFile ExternalMerge::mergeRuns(std::size_t first, std::size_t count) {
   ScratchWriter writer(scratch_, options_.stage, readBuffer_ * 4, bytes);
   std::vector<char> record(recordBytes_);
   while (pop(record.data())) writer.write(record.data(), recordBytes_);
-  std::vector<ScratchFile> merged;
-  for (const auto& source : sources_) merged.push_back(source->file);
-  sources_.clear();  // readers closed, then the files removed
-  for (const ScratchFile& file : merged) scratch_.remove(file);
+  removeSources();
   return writer.finish();
 }
 

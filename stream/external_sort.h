@@ -48,6 +48,8 @@ class ExternalMerge {
  private:
   struct Source;
   ScratchFile mergeRuns(std::size_t first, std::size_t count);
+  /// Closes the merged runs' readers, then removes their files.
+  void removeSources();
   bool pop(void* out);
 
   ScratchFolder& scratch_;

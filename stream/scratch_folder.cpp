@@ -82,22 +82,21 @@ bool openInThisProcess(const std::string& path) {
 
 void ScratchFolder::remove(const ScratchFile& file) {
   if (file.path.empty()) return;
-  if (openInThisProcess(file.path)) {  // unlinked, as its readers expect
-    std::lock_guard<std::mutex> lock(freeMutex_);
-    if (::unlink(file.path.c_str()) == 0) onDisk_ -= std::min(onDisk_, file.bytes);
-    return;
-  }
+  const bool unlinkNow = file.bytes == 0 || openInThisProcess(file.path);  // open: as its readers expect
   std::lock_guard<std::mutex> lock(freeMutex_);
+  auto unlinkFile = [&](const ScratchFile& f) {
+    if (::unlink(f.path.c_str()) == 0) onDisk_ -= std::min(onDisk_, f.bytes);
+  };
+  if (unlinkNow) return unlinkFile(file);
   // Kept: up to 1 GiB and half the bytes in use besides, the smallest given up first.
   free_.push_back(file);
   freeBytes_ += file.bytes;
   const std::uint64_t keep = (std::uint64_t(1) << 30) + (onDisk_ - std::min(onDisk_, freeBytes_)) / 2;
   std::sort(free_.begin(), free_.end(), [](const ScratchFile& a, const ScratchFile& b) { return a.bytes > b.bytes; });
-  while (!free_.empty() && (freeBytes_ > keep || free_.back().bytes == 0)) {
-    const ScratchFile dropped = free_.back();
+  while (freeBytes_ > keep) {
+    freeBytes_ -= free_.back().bytes;
+    unlinkFile(free_.back());
     free_.pop_back();
-    freeBytes_ -= dropped.bytes;
-    if (::unlink(dropped.path.c_str()) == 0) onDisk_ -= std::min(onDisk_, dropped.bytes);
   }
 }
 
@@ -156,9 +155,9 @@ struct ScratchIoRequest {
   std::uint64_t offset = 0;
   bool write = false;
   // Set by the I/O thread:
-  std::size_t done = 0;  ///< bytes read (fewer at the end of the file) or written
-  int error = 0;         ///< errno of a failed call; a write that wrote nothing: ENOSPC-like short write
-  bool shortWrite = false;
+  std::size_t done = 0;     ///< bytes read (fewer at the end of the file) or written
+  int error = 0;            ///< errno of a failed call
+  bool shortWrite = false;  ///< a write call that wrote nothing (a full disk)
   bool finished = false;
 };
 
@@ -258,7 +257,7 @@ std::size_t halfBuffer(std::size_t bytes, std::size_t minimum) { return std::max
 
 ScratchWriter::ScratchWriter(ScratchFolder& folder, std::string stage, std::size_t bufferBytes, std::uint64_t expectedBytes)
     : folder_(folder), stage_(std::move(stage)) {
-  buffers_[0].resize(halfBuffer(bufferBytes, 4096));
+  for (std::vector<char>& buffer : buffers_) buffer.resize(halfBuffer(bufferBytes, 4096));
   const ScratchFile old = folder.reuse(expectedBytes);
   if (!old.path.empty()) {
     fd_ = ::open(old.path.c_str(), O_WRONLY | O_CLOEXEC);  // overwritten from the start
@@ -282,8 +281,7 @@ ScratchWriter::~ScratchWriter() {
 void ScratchWriter::write(const void* data, std::size_t bytes) {
   const char* from = static_cast<const char*>(data);
   while (bytes > 0) {
-    std::vector<char>& buffer = buffers_[current_];
-    if (used_ == buffer.size()) flush();
+    if (used_ == buffers_[current_].size()) flush();
     const std::size_t n = std::min(bytes, buffers_[current_].size() - used_);
     std::memcpy(buffers_[current_].data() + used_, from, n);
     used_ += n, from += n, bytes -= n;
@@ -316,7 +314,6 @@ void ScratchWriter::flush() {
   bytes_ += used_;
   used_ = 0;
   current_ ^= 1;
-  if (buffers_[current_].size() != buffers_[current_ ^ 1].size()) buffers_[current_].resize(buffers_[current_ ^ 1].size());
 }
 
 ScratchFile ScratchWriter::finish() {

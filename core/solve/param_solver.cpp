@@ -42,6 +42,7 @@ SolverChoice chooseParamSolver(ParamSolver requested, std::uint64_t numFaces,
 
 namespace {
 constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20;
+constexpr std::uint64_t kOutOfCorePassBytes = std::uint64_t(64) << 20;  ///< the least the passes get
 }
 
 std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested, std::int32_t gridResolution,
@@ -53,10 +54,10 @@ std::uint64_t estimateParamPeakBytes(std::uint64_t faces, ParamSolver requested,
   return program + static_cast<std::uint64_t>(520.0 * kMiB * scale * scale) + (fieldOnDisk ? 70 : 78) * faces;
 }
 
-std::uint64_t outOfCoreProgramBytes() { return kProgramBytes + (std::uint64_t(64) << 20); }
+std::uint64_t outOfCoreProgramBytes() { return kProgramBytes + kOutOfCorePassBytes; }
 
 std::uint64_t outOfCoreMinimumBytes(std::int32_t gridResolution) {
-  return estimateParamPeakBytes(0, ParamSolver::VoxLoc, gridResolution) + (std::uint64_t(64) << 20);
+  return estimateParamPeakBytes(0, ParamSolver::VoxLoc, gridResolution) + kOutOfCorePassBytes;
 }
 
 void checkHatFallbackFits(std::uint64_t faces, std::uint64_t availableBytes, const std::string& reason) {
