@@ -12,13 +12,13 @@
 #include <unordered_map>
 #include <vector>
 
-#include "core/mesh/detail_union_find.h"
 #include "core/mesh/topology.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 #include "stream/external_sort.h"
 #include "stream/paged_corner_table.h"
 #include "stream/paged_reader.h"
+#include "stream/scratch_union_find.h"
 
 namespace seamvox {
 
@@ -107,9 +107,15 @@ CornerId flippedCorner(CornerId c) {
 class CleanPass {
  public:
   CleanPass(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census, std::uint64_t memoryBytes,
-            bool renumberBySorts)
+            bool renumberBySorts, bool setsOnDisk)
       : folder_(folder), welded_(welded) {
     sort_.memoryBytes = std::max(kMinimumSortBytes, memoryBytes / 2);
+    // Per-face sets and flags within shares of the memory (on disk beyond them; tests: always):
+    // the orientation's union-find alone (half), then the flips (an eighth) for the rest of the
+    // cleaning and the pieces' union-find (a quarter) beside the gluing's sort.
+    orientBytes_ = setsOnDisk ? 0 : memoryBytes / 2;
+    flipBytes_ = setsOnDisk ? 0 : memoryBytes / 8;
+    piecesBytes_ = setsOnDisk ? 0 : memoryBytes / 4;
     // New vertex ids in memory (4 B per welded vertex) while they fit half the sorts' share (a
     // quarter of memoryBytes: 200 MB at 100M faces in a 2 GiB budget), else by sorts.
     renumberBySorts_ = renumberBySorts || 4 * welded.numVertices > sort_.memoryBytes / 2;
@@ -130,6 +136,7 @@ class CleanPass {
     }
     out_.report.outputVertices = out_.numVertices;
     out_.report.outputFaces = out_.numFaces;
+    out_.setsOnDisk = setsOnDisk_ || (flip_ && flip_->onDisk());
     return std::move(out_);
   }
 
@@ -323,21 +330,23 @@ class CleanPass {
       if (sides.size() > 2) ++multiEdges_;
     });
     if (clashes == 0) return;
-    detail::ParityUnionFind faces(out_.numFaces);
+    ScratchParityUnionFind faces(folder_, out_.numFaces, orientBytes_, "clean: orient");
     forEachEdge("clean: orient", [&](const std::vector<EdgeSide>& sides) {
       if (sides.size() != 2) return;
       faces.unite(sides[0].corner / 3, sides[1].corner / 3, sides[0].forward == sides[1].forward);
     });
-    flip_ = faces.majorityFlips();
-    for (const std::uint8_t f : flip_) out_.report.flippedFaces += f;
+    flip_ = std::make_unique<ScratchArray<std::uint8_t>>(folder_, out_.numFaces, flipBytes_, "clean: orient");
+    faces.majorityFlips(*flip_);
+    for (FaceId f = 0; f < out_.numFaces; ++f) out_.report.flippedFaces += flip_->get(f);
+    setsOnDisk_ |= faces.onDisk();
   }
 
   /// The sides of an edge after the flips: corners renamed, directions turned, by corner again.
-  void applyFlips(std::vector<EdgeSide>& sides) const {
-    if (flip_.empty()) return;
+  void applyFlips(std::vector<EdgeSide>& sides) {
+    if (!flip_) return;
     bool changed = false;
     for (EdgeSide& s : sides) {
-      if (!flip_[s.corner / 3]) continue;
+      if (!flip_->get(s.corner / 3)) continue;
       s.corner = flippedCorner(s.corner);
       s.forward ^= 1;
       changed = true;
@@ -350,8 +359,8 @@ class CleanPass {
   /// directions are glued, pairs between large pieces first, then the most aligned normals.
   void glue() {
     ExternalSorter<CornerPair> pairs(folder_, sortOptions("clean: glue"));
-    std::unique_ptr<detail::UnionFind> pieces;
-    if (multiEdges_ > 0) pieces = std::make_unique<detail::UnionFind>(out_.numFaces);
+    std::unique_ptr<ScratchUnionFind> pieces;
+    if (multiEdges_ > 0) pieces = std::make_unique<ScratchUnionFind>(folder_, out_.numFaces, piecesBytes_, "clean: glue");
     std::vector<std::vector<EdgeSide>> multi;
     forEachEdge("clean: glue", [&](std::vector<EdgeSide>& sides) {
       applyFlips(sides);
@@ -367,6 +376,7 @@ class CleanPass {
       }
     });
     if (!multi.empty()) pairMultiEdges(multi, *pieces, pairs);
+    if (pieces) setsOnDisk_ |= pieces->onDisk();
     pieces.reset();
     pairs.finish();
     ScratchWriter out(folder_, "clean: glue");
@@ -398,13 +408,13 @@ class CleanPass {
       WeldedFace w;
       in.readAt(std::uint64_t(f) * sizeof(WeldedFace), &w, sizeof w);
       Vec3d p[3] = {w.corner(0).cast<double>(), w.corner(1).cast<double>(), w.corner(2).cast<double>()};
-      if (!flip_.empty() && flip_[f]) std::swap(p[1], p[2]);
+      if (flip_ && flip_->get(f)) std::swap(p[1], p[2]);
       normal[f] = gluingNormal(p[0], p[1], p[2]);
     }
     return normal;
   }
 
-  void pairMultiEdges(const std::vector<std::vector<EdgeSide>>& multi, detail::UnionFind& pieces,
+  void pairMultiEdges(const std::vector<std::vector<EdgeSide>>& multi, ScratchUnionFind& pieces,
                       ExternalSorter<CornerPair>& pairs) {
     // Per face, its piece's size (capped): counted per root.
     std::unordered_map<std::uint32_t, std::uint32_t> wanted;
@@ -537,8 +547,8 @@ class CleanPass {
     return out.finish();
   }
 
-  Triangle oriented(FaceId f, Triangle t) const {
-    if (!flip_.empty() && flip_[f]) std::swap(t[1], t[2]);
+  Triangle oriented(FaceId f, Triangle t) {
+    if (flip_ && flip_->get(f)) std::swap(t[1], t[2]);
     return t;
   }
 
@@ -625,7 +635,7 @@ class CleanPass {
       for (const WeldedFace& w : chunk) {
         if (!faces.read(&face, sizeof face)) throw IoError(out_.faces.path + ": scratch faces end early");
         Vec3d p[3] = {w.corner(0).cast<double>(), w.corner(1).cast<double>(), w.corner(2).cast<double>()};
-        if (!flip_.empty() && flip_[f]) std::swap(p[1], p[2]);
+        if (flip_ && flip_->get(f)) std::swap(p[1], p[2]);
         visit(f++, face.triangle, p);
       }
     }
@@ -779,7 +789,9 @@ class CleanPass {
   ScratchFile positions_, faces_, sortedEdges_;
   std::unique_ptr<ExternalSorter<EdgeSide, EdgeSideLess>> edges_;
   std::unique_ptr<ExternalSorter<CornerPair>> moved_;  // corners moved to a copy of their vertex
-  std::vector<std::uint8_t> flip_;  // per face, when the orientation changed any
+  std::unique_ptr<ScratchArray<std::uint8_t>> flip_;  // per face, when the orientation changed any
+  std::uint64_t orientBytes_ = 0, flipBytes_ = 0, piecesBytes_ = 0;
+  bool setsOnDisk_ = false;
   std::uint64_t multiEdges_ = 0;
   std::vector<VertexId> boundary_;  // the vertices whose fan is open, increasing
 };
@@ -787,14 +799,14 @@ class CleanPass {
 }  // namespace
 
 CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
-                             std::uint64_t memoryBytes, bool renumberBySorts) {
-  return CleanPass(folder, welded, census, memoryBytes, renumberBySorts).run();
+                             std::uint64_t memoryBytes, bool renumberBySorts, bool setsOnDisk) {
+  return CleanPass(folder, welded, census, memoryBytes, renumberBySorts, setsOnDisk).run();
 }
 
-ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch) {
+ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch, std::uint64_t memoryBytes) {
   const std::uint64_t nf = scratch.numFaces, nv = scratch.numVertices;
   // Faces joined through glued edges; a component's id in the order of its smallest face.
-  detail::UnionFind faces(nf);
+  ScratchUnionFind faces(folder, nf, memoryBytes / 2, "components");
   {
     ScratchReader opposite(folder, scratch.opposite, "components");
     CornerId o;
@@ -809,7 +821,7 @@ ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& sc
     if (root == f) id[f] = static_cast<std::uint32_t>(comps.size()), comps.emplace_back();
     ++comps[id.at(root)].faces;
   }
-  const auto componentOf = [&](FaceId f) -> ComponentInfo& { return comps[id.at(faces.parent[f])]; };
+  const auto componentOf = [&](FaceId f) -> ComponentInfo& { return comps[id.at(faces.find(f))]; };
   {
     ScratchReader starts(folder, scratch.vertexCorner, "components");
     CornerId c;
@@ -819,7 +831,7 @@ ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& sc
   }
   // Edges: one per glued pair and per boundary corner. Boundary loops: the cycles of boundary
   // edges (every boundary vertex has one edge in and one out), as sets of vertices joined by them.
-  detail::UnionFind loops(nv);
+  ScratchUnionFind loops(folder, nv, memoryBytes / 4, "components");
   const auto forEachCorner = [&](auto&& visit) {
     ScratchReader triangles(folder, scratch.faces, "components"), opposite(folder, scratch.opposite, "components");
     CleanFace face;
@@ -833,12 +845,12 @@ ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& sc
     if (o == kInvalidId) loops.unite(a, b);
     if (o == kInvalidId || c < o) ++componentOf(c / 3).edges;
   });
-  std::vector<std::uint8_t> counted(nv, 0);
+  ScratchArray<std::uint8_t> counted(folder, nv, memoryBytes / 8, "components");
   forEachCorner([&](CornerId c, CornerId o, VertexId a, VertexId) {
     if (o != kInvalidId) return;
-    std::uint8_t& seen = counted[loops.find(a)];
-    if (!seen) ++componentOf(c / 3).boundaryLoops;
-    seen = 1;
+    const std::uint32_t loop = loops.find(a);
+    if (!counted.get(loop)) ++componentOf(c / 3).boundaryLoops;
+    counted.set(loop, 1);
   });
   ComponentsResult result;
   for (ComponentInfo& info : comps) {

@@ -6,9 +6,10 @@
 /// and the vertices written to the scratch folder by external sorts of edge and corner records.
 /// Equal to cleanMesh on the weld pass's faces in the weld pass's (Morton) order, their vertices numbered
 /// in the order the faces first name them (a vertex near its faces in the files). Memory: the
-/// sorts' limit, 4 bytes per welded vertex while ids are renumbered, 1 per vertex (open fans), and
-/// only when the input needs them, 5 bytes per face for the orientation and 8 for the pieces of
-/// edges shared by more than two faces. The spike count walks the fans through page caches.
+/// sorts' limit, 4 bytes per welded vertex while ids are renumbered, 4 per boundary vertex (open
+/// fans), and only when the input needs them, the union-finds of the orientation and of the
+/// pieces of edges shared by more than two faces (4 bytes per face) and 1 byte per face for the
+/// flips, each on disk beyond its share. The spike count walks the fans through page caches.
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -39,21 +40,25 @@ struct CleanScratch {
   /// cleanMesh's counts: welded, degenerate, duplicate and unreferenced from the weld pass, then
   /// non-manifold edges and vertices and flipped faces (the others 0 for now).
   CleanReport report;
+  bool setsOnDisk = false;  ///< a per-face union-find or the flips did not fit its share of the memory
   /// Wall seconds of the passes: vertices, faces, orient, glue, fans, write, measure.
   std::vector<std::pair<std::string, double>> stageSeconds;
 };
 
-/// Cleans the weld pass's output (kept in folder) into folder. memoryBytes: the sorts' share.
-/// The vertices are renumbered in memory (4 B per welded vertex) while that fits a quarter of
-/// memoryBytes, else by four sorts (renumberBySorts: so even when it fits; tests). Throws IoError
+/// Cleans the weld pass's output (kept in folder) into folder within memoryBytes. The vertices
+/// are renumbered in memory (4 B per welded vertex) while that fits a quarter of memoryBytes,
+/// else by four sorts (renumberBySorts: so even when it fits; tests). The per-face union-finds
+/// and flips go on disk beyond their shares (setsOnDisk: always; tests). Throws IoError
 /// (scratch, a full disk) naming the folder.
 CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
-                             std::uint64_t memoryBytes, bool renumberBySorts = false);
+                             std::uint64_t memoryBytes, bool renumberBySorts = false, bool setsOnDisk = false);
 
 /// The cleaned mesh's components as computeComponents gives them (joined through glued edges, by
 /// decreasing face count, ties in the order of their first faces; faceComponent left empty),
-/// streamed from the scratch. Memory: 4 bytes per face and per vertex (union-finds).
-ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch);
+/// streamed from the scratch. Memory: the union-finds of the faces and of the boundary vertices
+/// (4 bytes each) within half and a quarter of memoryBytes, on disk beyond; about 40 bytes per
+/// component.
+ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch, std::uint64_t memoryBytes);
 
 /// The bounding box of a file of Vec3f positions (a cleaned mesh's, or its smoothed surface),
 /// read in order; its bytes counted under stage. IoError when the file ends inside a record.

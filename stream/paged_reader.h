@@ -112,6 +112,46 @@ class PagedArray {
   PageCache cache_;
 };
 
+/// n records of T, all zero bytes at first: in memory while they fit memoryBytes, else in a
+/// sparse scratch file (removed with the array) changed through a page cache of memoryBytes. For
+/// per-face or per-vertex state that must not grow with the mesh beyond its share of a budget.
+template <class T>
+class ScratchArray {
+ public:
+  ScratchArray(ScratchFolder& folder, std::uint64_t n, std::uint64_t memoryBytes, const std::string& stage)
+      : folder_(folder), size_(n) {
+    if (n * sizeof(T) <= memoryBytes) {
+      memory_.resize(n);  // value-initialized: zero bytes for plain records
+      return;
+    }
+    file_ = folder.zeroFile(n * sizeof(T));
+    paged_ = std::make_unique<PagedArray<T>>(folder, file_, stage, memoryBytes);
+  }
+  ~ScratchArray() {
+    paged_.reset();
+    if (!file_.path.empty()) folder_.remove(file_);
+  }
+  ScratchArray(const ScratchArray&) = delete;
+  ScratchArray& operator=(const ScratchArray&) = delete;
+  T get(std::uint64_t i) { return paged_ ? (*paged_)[i] : memory_[i]; }
+  void set(std::uint64_t i, const T& value) {
+    if (paged_) {
+      paged_->set(i, value);
+    } else {
+      memory_[i] = value;
+    }
+  }
+  std::uint64_t size() const { return size_; }
+  bool onDisk() const { return paged_ != nullptr; }
+
+ private:
+  ScratchFolder& folder_;
+  std::uint64_t size_ = 0;
+  std::vector<T> memory_;
+  ScratchFile file_;
+  std::unique_ptr<PagedArray<T>> paged_;
+};
+
 /// Sets of readers for the blocks of a parallel loop: a block takes one (made on first need) and
 /// gives it back when done, so at most one set per thread exists.
 template <class Set>

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <unordered_map>
 
-#include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
 #include "stream/external_sort.h"
+#include "stream/scratch_union_find.h"
 
 namespace seamvox {
 namespace {
@@ -84,12 +84,79 @@ struct ComponentCount {
   std::uint64_t faces = 0, vertices = 0, edges = 0, loops = 0;
 };
 
+/// Boundary loops as sets of boundary vertices joined by their boundary edges: a map of the
+/// boundary vertices while it fits memoryBytes, then a ScratchUnionFind over every vertex with a
+/// flag per boundary vertex (a mesh of many holes or unwelded faces). The same loops either way.
+class LoopSets {
+ public:
+  LoopSets(ScratchFolder& folder, std::uint64_t numVertices, std::uint64_t memoryBytes)
+      : folder_(folder), numVertices_(numVertices), memoryBytes_(memoryBytes) {}
+
+  void join(std::uint32_t a, std::uint32_t b) {
+    if (sets_) {
+      flags_->set(a, 1), flags_->set(b, 1);
+      sets_->unite(a, b);
+      return;
+    }
+    const std::uint32_t ra = findInMap(a), rb = findInMap(b);
+    if (ra != rb) map_[std::max(ra, rb)] = std::min(ra, rb);
+    if (map_.size() * kMapEntryBytes > memoryBytes_) moveToSets();
+  }
+  /// visit(v) for one vertex v of each loop.
+  template <class Visit>
+  void forEachLoop(Visit&& visit) {
+    if (!sets_) {
+      for (const auto& entry : map_) {
+        if (findInMap(entry.first) == entry.first) visit(entry.first);
+      }
+      return;
+    }
+    for (std::uint32_t v = 0; v < numVertices_; ++v) {
+      if (flags_->get(v) && sets_->find(v) == v) visit(v);
+    }
+  }
+  bool onDisk() const { return sets_ && sets_->onDisk(); }
+
+ private:
+  static constexpr std::uint64_t kMapEntryBytes = 48;  // a node, its bucket and the allocator's share
+
+  std::uint32_t findInMap(std::uint32_t v) {  // with path halving
+    auto it = map_.emplace(v, v).first;
+    while (it->second != v) {
+      const std::uint32_t grandparent = map_.find(it->second)->second;
+      it->second = grandparent;
+      v = grandparent;
+      it = map_.find(v);
+    }
+    return v;
+  }
+  void moveToSets() {
+    const std::uint64_t share = memoryBytes_ / 5;  // a byte of flags per 4 of links
+    sets_ = std::make_unique<ScratchUnionFind>(folder_, numVertices_, 4 * share, "weld: loops");
+    flags_ = std::make_unique<ScratchArray<std::uint8_t>>(folder_, numVertices_, share, "weld: loops");
+    for (const auto& [v, parent] : map_) {
+      flags_->set(v, 1);
+      sets_->unite(v, parent);
+    }
+    std::unordered_map<std::uint32_t, std::uint32_t>().swap(map_);
+  }
+
+  ScratchFolder& folder_;
+  std::uint64_t numVertices_, memoryBytes_;
+  std::unordered_map<std::uint32_t, std::uint32_t> map_;  // boundary vertex -> parent
+  std::unique_ptr<ScratchUnionFind> sets_;
+  std::unique_ptr<ScratchArray<std::uint8_t>> flags_;
+};
+
 /// The passes of weldMeshStream, in order; each reads what the one before wrote.
 class WeldPass {
  public:
   WeldPass(MeshStream& stream, ScratchFolder& folder, const WeldStreamOptions& options)
       : stream_(stream), folder_(folder), options_(options), name_(stream.name()) {
     sort_.memoryBytes = std::max(kMinimumSortBytes, options.memoryBytes / 3);
+    // The sets (components, boundary loops): a quarter each, alongside at most two sorts; tests
+    // put them on disk with a small cache.
+    setsBytes_ = options.setsOnDisk ? 0 : options.memoryBytes / 4;
   }
 
   WeldStreamResult run() {
@@ -208,12 +275,12 @@ class WeldPass {
   /// to their sorts.
   void dropDuplicateFaces() {
     faceSort_->finish();
-    components_ = std::make_unique<detail::UnionFind>(welded_);
+    components_ = std::make_unique<ScratchUnionFind>(folder_, welded_, setsBytes_, "weld: components");
     edgeSort_ = std::make_unique<ExternalSorter<EdgeRecord, EdgeLess>>(folder_, sortOptions("edges"));
     // Positions that fit three quarters of the memory with the union-find are read whole later
     // (nothing else is held then: the sorts before have ended, the Morton sort comes after) and
     // the kept faces wait in a file; otherwise the corners are joined with them by two sorts.
-    const std::uint64_t unionFind = std::uint64_t(welded_) * sizeof(std::uint32_t);
+    const std::uint64_t unionFind = std::min<std::uint64_t>(welded_ * sizeof(std::uint32_t), setsBytes_);
     positionsInMemory_ =
         !options_.joinPositions && unionFind + welded_ * sizeof(Vec3f) <= options_.memoryBytes / 4 * 3;
     if (positionsInMemory_) {
@@ -255,17 +322,7 @@ class WeldPass {
   void countEdges() {
     edgeSort_->finish();
     WeldCensus& c = result_.census;
-    std::unordered_map<std::uint32_t, std::uint32_t> loop;  // boundary vertex -> parent
-    auto findLoop = [&](std::uint32_t v) {  // with path halving
-      auto it = loop.emplace(v, v).first;
-      while (it->second != v) {
-        const std::uint32_t grandparent = loop.find(it->second)->second;
-        it->second = grandparent;
-        v = grandparent;
-        it = loop.find(v);
-      }
-      return v;
-    };
+    LoopSets loops(folder_, welded_, setsBytes_);
     EdgeRecord r{}, group{};
     std::uint32_t faces = 0, forward = 0;
     auto close = [&] {
@@ -274,8 +331,7 @@ class WeldPass {
       ++counts_[components_->find(group.lo)].edges;
       if (faces == 1) {
         ++c.boundaryEdges;
-        const std::uint32_t a = findLoop(group.lo), b = findLoop(group.hi);
-        if (a != b) loop[std::max(a, b)] = std::min(a, b);
+        loops.join(group.lo, group.hi);
       } else if (faces == 2) {
         ++(forward == 1 ? c.manifoldEdges : c.clashEdges);
       } else {
@@ -293,11 +349,11 @@ class WeldPass {
     }
     close();
     edgeSort_.reset();
-    for (const auto& entry : loop) {
-      if (findLoop(entry.first) != entry.first) continue;
+    loops.forEachLoop([&](std::uint32_t v) {
       ++c.boundaryLoops;
-      ++counts_[components_->find(entry.first)].loops;
-    }
+      ++counts_[components_->find(v)].loops;
+    });
+    result_.census.setsOnDisk = components_->onDisk() || loops.onDisk();
   }
 
   /// Pass 6: the kept faces with their corner positions, in a file; the bounding box of the
@@ -448,7 +504,8 @@ class WeldPass {
   std::unique_ptr<ExternalSorter<CornerRecord, ByVertexLess>> cornerSort_;
   std::unique_ptr<ScratchWriter> keptFaces_;  ///< face and triangle, when positionsInMemory_
   bool positionsInMemory_ = false;
-  std::unique_ptr<detail::UnionFind> components_;
+  std::uint64_t setsBytes_ = 0;
+  std::unique_ptr<ScratchUnionFind> components_;
   std::unordered_map<std::uint32_t, ComponentCount> counts_;  ///< by union-find root
 };
 

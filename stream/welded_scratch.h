@@ -6,9 +6,11 @@
 /// welded triangles with their corner positions sorted by the Morton code of their centroid (a
 /// spatially coherent order) and the welded positions, stays in the scratch folder for the next
 /// streamed stage (WeldedFaceReader). Memory: the sorts' limit, plus 4 bytes per vertex for the
-/// weld map (while faces are renumbered) and then for the union-find of the components, plus
-/// about 40 bytes per component and per boundary vertex; the welded positions (12 bytes per
-/// vertex) are read whole when they fit half the limit, else joined with the corners by sorts.
+/// weld map (while faces are renumbered); the union-finds of the components and boundary loops
+/// (4 bytes per vertex, the loops' a map of the boundary vertices while it is small) within a
+/// quarter of the limit each, beyond it on disk through page caches; about 110 bytes per
+/// component; the welded positions (12 bytes per vertex) read whole when they fit, else joined
+/// with the corners by sorts.
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -40,6 +42,8 @@ struct WeldStreamOptions {
   std::uint64_t memoryBytes = std::uint64_t(256) << 20;
   /// Tests: join the positions by sorts even when they fit.
   bool joinPositions = false;
+  /// Tests: the union-finds of the components and boundary loops on disk even when they fit.
+  bool setsOnDisk = false;
 };
 
 /// What the weld pass found: the figures `seamvox info` prints, out of core.
@@ -52,6 +56,7 @@ struct WeldCensus {
   /// direction (orientation clash), more than two (non-manifold).
   std::uint64_t edges = 0, boundaryEdges = 0, manifoldEdges = 0, clashEdges = 0, nonManifoldEdges = 0;
   std::uint32_t boundaryLoops = 0;
+  bool setsOnDisk = false;  ///< the components' or the loops' union-find did not fit its share
   /// Connected through shared vertices (cleanMesh splits non-manifold vertices and edges first:
   /// equal on meshes without them); by decreasing face count, then vertices.
   std::vector<ComponentInfo> components;

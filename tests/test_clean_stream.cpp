@@ -26,6 +26,7 @@ struct Cleaned {
   CleanResult streamed, inMemory;
   ComponentsResult streamedComponents;
   std::uint64_t edgeSortWritten = 0, sortedEdgeBytes = 0;  // runs spilled: more than the sorted file
+  bool weldSetsOnDisk = false, cleanSetsOnDisk = false;     // the union-finds beyond their shares
 };
 
 Cleaned cleanBothWays(const TriangleMesh& mesh, std::uint64_t memoryBytes, bool renumberBySorts = false) {
@@ -39,7 +40,9 @@ Cleaned cleanBothWays(const TriangleMesh& mesh, std::uint64_t memoryBytes, bool 
   const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, memoryBytes, renumberBySorts);
   Cleaned out;
   out.streamed = readCleanScratch(folder, scratch);
-  out.streamedComponents = cleanedComponents(folder, scratch);
+  out.streamedComponents = cleanedComponents(folder, scratch, memoryBytes);
+  out.weldSetsOnDisk = welded.census.setsOnDisk;
+  out.cleanSetsOnDisk = scratch.setsOnDisk;
   for (const ScratchTraffic& t : folder.traffic()) {
     if (t.stage == "clean: edges") out.edgeSortWritten = t.bytesWritten;
   }
@@ -132,6 +135,10 @@ TEST(CleanStream, EqualsCleanMeshOnNonManifoldAndNonOrientableMeshes) {
       SCOPED_TRACE(bySorts ? "renumbered by sorts" : "renumbered in memory");
       const Cleaned c = cleanBothWays(testing::damagedMesh(seed), memory, bySorts);
       expectEqual(c);
+      // The union-finds of the weld and cleaning (components, loops, orientation, pieces) and the
+      // flips in memory within a budget, on disk through page caches beyond it.
+      EXPECT_EQ(c.weldSetsOnDisk, memory == 1);
+      EXPECT_EQ(c.cleanSetsOnDisk, memory == 1);
       // Every kind of repair happened.
       EXPECT_GT(c.inMemory.report.nonManifoldEdges, 12u);
       EXPECT_GE(c.inMemory.report.nonManifoldVertices, 8u);

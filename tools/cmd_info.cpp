@@ -42,7 +42,7 @@ MeshSummary summarizeOutOfCore(const std::string& path, MeshStream& stream, cons
   const CleanScratch cleaned = cleanWeldedMesh(scratch, result.scratch, result.census, weld.memoryBytes);
   const double cleanSeconds = secondsSince(cleanStart);
   const auto componentsStart = std::chrono::steady_clock::now();
-  ComponentsResult components = cleanedComponents(scratch, cleaned);
+  ComponentsResult components = cleanedComponents(scratch, cleaned, weld.memoryBytes);
   const double componentsSeconds = secondsSince(componentsStart);
   MeshSummary summary = summarizeCensus(path, result.census, cleaned.report, std::move(components), secondsSince(start));
   summary.stageSeconds.emplace_back("clean", cleanSeconds);
@@ -106,9 +106,9 @@ SEAMVOX_COMMAND({"info", "read and clean a mesh; print its components, genus and
                  "cleaned by external sorts in the scratch folder (about 200 B per face at the peak):\n"
                  "welding of equal positions (no --weld-tolerance), degenerate and duplicate faces,\n"
                  "orientation, edges of more than two faces paired and non-manifold vertices split as\n"
-                 "in memory, spikes, then the components (4 B per face and per vertex in memory, 5 B\n"
-                 "per face more when faces are reoriented): the same figures as in memory, and the\n"
-                 "input's edges by their faces.\n"
+                 "in memory, spikes, then the components (union-finds of 4 B per face or vertex,\n"
+                 "held in memory within shares of the budget and on disk beyond them): the same\n"
+                 "figures as in memory, and the input's edges by their faces.\n"
                  SEAMVOX_MEMORY_HELP,
                  {"json", "weld"},
                  &runInfo});

@@ -6,22 +6,87 @@
 #include <cstdint>
 #include <numeric>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace seamvox::detail {
 
+/// The steps of the union-finds below over any store of links (parentOf(x), setParent(x, p)):
+/// find with path halving; unite keeps the smaller root (false when a and b were joined).
+template <class Links>
+std::uint32_t findRoot(Links& links, std::uint32_t x) {
+  for (std::uint32_t up = links.parentOf(x); up != x; up = links.parentOf(x)) {
+    const std::uint32_t grandparent = links.parentOf(up);
+    links.setParent(x, grandparent);
+    x = grandparent;
+  }
+  return x;
+}
+template <class Links>
+bool uniteRoots(Links& links, std::uint32_t a, std::uint32_t b) {
+  a = findRoot(links, a), b = findRoot(links, b);
+  if (a == b) return false;
+  links.setParent(std::max(a, b), std::min(a, b));
+  return true;
+}
+
 struct UnionFind {
   std::vector<std::uint32_t> parent;
   explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
+  std::uint32_t find(std::uint32_t x) { return findRoot(*this, x); }
+  void unite(std::uint32_t a, std::uint32_t b) { uniteRoots(*this, a, b); }
+  std::uint32_t parentOf(std::uint32_t x) const { return parent[x]; }
+  void setParent(std::uint32_t x, std::uint32_t p) { parent[x] = p; }
 };
+
+/// The steps of a union-find with parities over any store of links (parentOf(x), parityOf(x),
+/// setLink(x, parent, parity)); ParityUnionFind says what they mean.
+template <class Links>
+std::uint32_t findRootWithParity(Links& links, std::uint32_t x) {
+  std::uint32_t root = x;
+  std::uint8_t total = 0;
+  for (std::uint32_t up = links.parentOf(root); up != root; up = links.parentOf(root)) {
+    total ^= links.parityOf(root);
+    root = up;
+  }
+  // Path compression: every entry on the path points at the root with its own parity.
+  for (std::uint32_t up = links.parentOf(x); up != root; up = links.parentOf(x)) {
+    const std::uint8_t own = links.parityOf(x);
+    links.setLink(x, root, total);
+    total ^= own;
+    x = up;
+  }
+  return root;
+}
+template <class Links>
+bool uniteWithParity(Links& links, std::uint32_t a, std::uint32_t b, std::uint8_t relation) {
+  const std::uint32_t ra = findRootWithParity(links, a), rb = findRootWithParity(links, b);
+  const std::uint8_t pa = a != ra ? links.parityOf(a) : 0, pb = b != rb ? links.parityOf(b) : 0;
+  if (ra == rb) return (pa ^ pb) == relation;
+  links.setLink(std::max(ra, rb), std::min(ra, rb), pa ^ pb ^ relation);
+  return true;
+}
+/// Per entry x < n, flips.set(x, whether it flips): its parity against its set's smallest id,
+/// the whole set turned over when that flips most of it. flips starts all zero.
+template <class Links, class Flips>
+void majorityFlips(Links& links, std::uint64_t n, Flips& flips) {
+  std::unordered_map<std::uint32_t, std::array<std::uint64_t, 2>> tally;  // per root: flipped, entries
+  for (std::uint32_t x = 0; x < n; ++x) {
+    const std::uint32_t root = findRootWithParity(links, x);
+    const std::uint8_t flip = root == x ? 0 : links.parityOf(x);
+    if (flip) flips.set(x, 1), ++tally[root][0];
+  }
+  if (tally.empty()) return;
+  // After the finds every entry links to its root.
+  for (std::uint32_t x = 0; x < n; ++x) {
+    const auto it = tally.find(links.parentOf(x));
+    if (it != tally.end()) ++it->second[1];
+  }
+  for (std::uint32_t x = 0; x < n; ++x) {
+    const auto it = tally.find(links.parentOf(x));
+    if (it != tally.end() && 2 * it->second[0] > it->second[1]) flips.set(x, flips.get(x) ^ 1);
+  }
+}
 
 /// Union-find whose entries carry a parity against their root: flip(a) xor flip(b) = relation.
 /// The root is a component's smallest id, as in detail::UnionFind.
@@ -32,53 +97,23 @@ struct ParityUnionFind {
     for (std::uint32_t i = 0; i < n; ++i) parent[i] = i;
   }
   /// The root of x; x's parity is then against it.
-  std::uint32_t find(std::uint32_t x) {
-    std::uint32_t root = x;
-    std::uint8_t total = 0;
-    while (parent[root] != root) total ^= parity[root], root = parent[root];
-    // Path compression: every entry on the path points at the root with its own parity.
-    while (parent[x] != root) {
-      const std::uint32_t next = parent[x];
-      const std::uint8_t own = parity[x];
-      parent[x] = root;
-      parity[x] = total;
-      total ^= own;
-      x = next;
-    }
-    return root;
-  }
+  std::uint32_t find(std::uint32_t x) { return findRootWithParity(*this, x); }
   /// False when a and b are joined already with the other parity (a non-orientable loop).
-  bool unite(std::uint32_t a, std::uint32_t b, std::uint8_t relation) {
-    const std::uint32_t ra = find(a), rb = find(b);
-    const std::uint8_t pa = parity[a] * (a != ra), pb = parity[b] * (b != rb);
-    if (ra == rb) return (pa ^ pb) == relation;
-    const std::uint32_t lo = std::min(ra, rb), hi = std::max(ra, rb);
-    parent[hi] = lo;
-    parity[hi] = pa ^ pb ^ relation;
-    return true;
-  }
+  bool unite(std::uint32_t a, std::uint32_t b, std::uint8_t relation) { return uniteWithParity(*this, a, b, relation); }
   /// Per entry, whether it flips: its parity against its set's smallest id, the whole set turned
   /// over when that flips most of it (a component keeps the orientation most of its faces have).
   std::vector<std::uint8_t> majorityFlips() {
-    const std::size_t n = parent.size();
-    std::vector<std::uint8_t> flip(n, 0);
-    std::unordered_map<std::uint32_t, std::array<std::uint64_t, 2>> tally;  // per root: flipped, entries
-    for (std::uint32_t x = 0; x < n; ++x) {
-      const std::uint32_t root = find(x);
-      flip[x] = root == x ? 0 : parity[x];
-      if (flip[x]) ++tally[root][0];
-    }
-    if (tally.empty()) return flip;
-    for (std::uint32_t x = 0; x < n; ++x) {
-      const auto it = tally.find(parent[x]);
-      if (it != tally.end()) ++it->second[1];
-    }
-    for (std::uint32_t x = 0; x < n; ++x) {
-      const auto it = tally.find(parent[x]);
-      if (it != tally.end() && 2 * it->second[0] > it->second[1]) flip[x] ^= 1;
-    }
-    return flip;
+    struct Flips {
+      std::vector<std::uint8_t> flip;
+      std::uint8_t get(std::uint32_t x) const { return flip[x]; }
+      void set(std::uint32_t x, std::uint8_t v) { flip[x] = v; }
+    } flips{std::vector<std::uint8_t>(parent.size(), 0)};
+    detail::majorityFlips(*this, parent.size(), flips);
+    return std::move(flips.flip);
   }
+  std::uint32_t parentOf(std::uint32_t x) const { return parent[x]; }
+  std::uint8_t parityOf(std::uint32_t x) const { return parity[x]; }
+  void setLink(std::uint32_t x, std::uint32_t p, std::uint8_t relation) { parent[x] = p, parity[x] = relation; }
 };
 
 }  // namespace seamvox::detail
