@@ -5,6 +5,7 @@
 
 #include "core/system/errors.h"
 #include "io/detail_mesh_io.h"
+#include "stream/paged_reader.h"
 
 namespace seamvox {
 
@@ -43,9 +44,14 @@ struct ChunkedMeshWriter::State {
   OutputBuffer direct;
   std::unique_ptr<ScratchBody> vertexBody, faceBody, texcoordBody;  // null: straight into the file
   std::uint64_t vertices = 0, faces = 0;
-  // OBJ with UVs: every vertex's first (u, v) and its vt number (kInvalidId: no corner yet).
-  std::vector<std::uint32_t> firstTexcoord;
-  std::vector<Vec2d> firstUV;
+  // OBJ with UVs: every vertex's first (u, v) and its vt number plus one (0: no corner yet). With
+  // the counts known, a ScratchArray within layout.memoryBytes (on disk beyond); else growing.
+  struct FirstCorner {
+    double u = 0.0, v = 0.0;
+    std::uint32_t texcoord = 0, unused = 0;
+  };
+  std::vector<FirstCorner> firstGrowing;
+  std::unique_ptr<ScratchArray<FirstCorner>> firstCounted;
   std::uint32_t texcoords = 0;
   bool uvDecided = false;  ///< counts known: from the layout; else by the first triangles
 
@@ -54,9 +60,9 @@ struct ChunkedMeshWriter::State {
     withUV = options.writeUV && chunkHasUV && format != MeshFormat::Off;
     if (!withUV || format != MeshFormat::Obj) return;
     texcoordBody = std::make_unique<ScratchBody>(*scratch, "write");
-    firstTexcoord.resize(vertices, kInvalidId);
-    firstUV.resize(vertices);
+    firstGrowing.resize(vertices);
   }
+  FirstCorner firstCorner(VertexId v) { return firstCounted ? firstCounted->get(v) : firstGrowing[v]; }
 
   State(AtomicFile& f, ChunkedMeshLayout l, const WriteOptions& o, ScratchFolder* s)
       : file(f), layout(std::move(l)), options(o), scratch(s), format(formatFromPath(f.path())), direct(f) {}
@@ -75,13 +81,18 @@ struct ChunkedMeshWriter::State {
                            std::to_string(v) + ": OBJ with texture coordinates is written out of core only from " +
                            "inputs that give vertices before the faces using them");
         }
-        if (firstTexcoord[v] != kInvalidId && uv == firstUV[v]) {
-          texcoord[k] = firstTexcoord[v];
+        const FirstCorner first = firstCorner(v);
+        if (first.texcoord != 0 && uv == Vec2d(first.u, first.v)) {
+          texcoord[k] = first.texcoord - 1;
           continue;
         }
-        if (firstTexcoord[v] == kInvalidId) {
-          firstTexcoord[v] = texcoords;
-          firstUV[v] = uv;
+        if (first.texcoord == 0) {
+          const FirstCorner now{uv.x(), uv.y(), texcoords + 1};
+          if (firstCounted) {
+            firstCounted->set(v, now);
+          } else {
+            firstGrowing[v] = now;
+          }
         }
         detail::putObjTexcoord(texcoordBody->out, uv);
         texcoord[k] = texcoords++;
@@ -116,7 +127,11 @@ ChunkedMeshWriter::ChunkedMeshWriter(AtomicFile& file, ChunkedMeshLayout layout,
   if (s.format == MeshFormat::Obj) {
     s.direct.put("# written by seamvox\n");
     if (!s.layout.countsKnown || s.withUV) s.faceBody = std::make_unique<ScratchBody>(*scratch, "write");
-    if (s.layout.countsKnown && s.withUV) s.texcoordBody = std::make_unique<ScratchBody>(*scratch, "write");
+    if (s.layout.countsKnown && s.withUV) {
+      s.texcoordBody = std::make_unique<ScratchBody>(*scratch, "write");
+      s.firstCounted = std::make_unique<ScratchArray<State::FirstCorner>>(*scratch, s.layout.vertices,
+                                                                          s.layout.memoryBytes, "write");
+    }
     return;
   }
   if (s.layout.countsKnown) {
@@ -158,10 +173,11 @@ void ChunkedMeshWriter::write(const MeshChunk& chunk) {
       default: detail::putObjVertices(s.vertexOut(), chunk.positions, chunk.attributes, 0, n); break;
     }
     s.vertices += n;
-    if (s.texcoordBody) {
-      s.firstTexcoord.resize(s.vertices, kInvalidId);
-      s.firstUV.resize(s.vertices);
+    if (s.firstCounted && s.vertices > s.layout.vertices) {
+      throw InputError(s.file.path() + ": more vertices (" + std::to_string(s.vertices) + ") than announced (" +
+                       std::to_string(s.layout.vertices) + ")");
     }
+    if (s.texcoordBody && !s.firstCounted) s.firstGrowing.resize(s.vertices);
   }
   if (chunk.triangles.empty()) return;
   if (!s.uvDecided) s.decideUV(!chunk.cornerUV.empty());

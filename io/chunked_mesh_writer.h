@@ -23,11 +23,15 @@ struct ChunkedMeshLayout {
   /// no scratch. Otherwise the bodies wait in scratch until finish().
   bool countsKnown = false;
   std::uint64_t vertices = 0, faces = 0;
+  /// OBJ with UVs and counts known: the per-vertex first corners (24 B per vertex) are held in
+  /// memory up to this, on disk through a page cache of this size beyond it.
+  std::uint64_t memoryBytes = ~std::uint64_t(0);
 };
 
 /// Writes chunks of a mesh stream (vertices numbered on from firstVertex) into an open output
 /// whose path names the format; the caller commits it after finish(). Memory: output buffers,
-/// plus 20 bytes per vertex for OBJ with UVs (each vertex's first (u, v) and vt number).
+/// plus for OBJ with UVs each vertex's first (u, v) and vt number (24 bytes per vertex; within
+/// layout.memoryBytes when the counts are known).
 class ChunkedMeshWriter {
  public:
   /// scratch: where bodies wait (needed unless countsKnown). Throws InputError for Draco and for

@@ -13,8 +13,9 @@
 namespace seamvox {
 
 /// Vertices from the scratch positions, then faces with their corners' wedge values (a page
-/// cache over the values); the caller commits file. Memory: a chunk, the writer's buffers (and
-/// 20 B per vertex for OBJ), the cache.
+/// cache over the values); the caller commits file. Memory: a chunk, the writer's buffers, the
+/// cache, and for OBJ the vertices' first corners (24 B per vertex) within a quarter of
+/// pass.memoryBytes, on disk beyond it.
 void writeScratchMap(AtomicFile& file, ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
                      const WriteOptions& options, const StreamPassOptions& pass);
 
