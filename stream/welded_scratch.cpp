@@ -28,6 +28,12 @@ struct PositionLess {
   }
 };
 
+/// An input vertex and the lowest input vertex at its position, sorted by the first.
+struct VertexPair {
+  std::uint32_t vertex, other;
+  bool operator<(const VertexPair& o) const { return vertex < o.vertex; }
+};
+
 /// A welded face for the duplicate sort: faces with the same vertex set sort together, the
 /// lowest input index (the one cleanMesh keeps) first.
 struct FaceRecord {
@@ -211,7 +217,10 @@ class WeldPass {
   }
 
   /// Pass 2: welded id per input vertex (clusters numbered by their lowest input id) and the
-  /// welded positions (the lowest input id's).
+  /// welded positions (the lowest input id's). The clusters come from the position sort; each
+  /// vertex's lowest id goes back to input order through a sort by id, so that the welded ids
+  /// are numbered in one pass in input order, the lowest id's looked up behind (the ids within a
+  /// share of the memory, on disk beyond it).
   void weldVertices() {
     const std::uint64_t n = result_.census.inputVertices;
     if (!weldSort_) {
@@ -219,35 +228,39 @@ class WeldPass {
       result_.scratch.positions = inputPositions_;
       return;
     }
-    weldId_.resize(n);
+    ExternalSorter<VertexPair> byId(folder_, sortOptions("weld"));
     weldSort_->finish();
-    PositionRecord r{}, first{};
-    bool any = false;
-    while (weldSort_->next(r)) {
-      if (!any || r.x != first.x || r.y != first.y || r.z != first.z) first = r;
-      any = true;
-      weldId_[r.id] = first.id;
+    {
+      PositionRecord r{}, first{};
+      bool any = false;
+      while (weldSort_->next(r)) {
+        if (!any || r.x != first.x || r.y != first.y || r.z != first.z) first = r;
+        any = true;
+        byId.add({r.id, first.id});
+      }
     }
     weldSort_.reset();
+    byId.finish();
+    weldId_ = std::make_unique<ScratchArray<std::uint32_t>>(folder_, n, setsBytes_, "weld");
     std::uint32_t next = 0;
-    for (std::uint32_t v = 0; v < n; ++v) {
-      weldId_[v] = weldId_[v] == v ? next++ : weldId_[weldId_[v]];
-    }
-    welded_ = next;
-    result_.census.weldedVertices = n - next;
     // A vertex keeps its place when it is its cluster's first: its welded id is the count so far.
     ScratchWriter out(folder_, "weld");
     {
       ScratchReader in(folder_, inputPositions_, "weld");
       Vec3f p;
-      std::uint32_t written = 0;
-      for (std::uint32_t v = 0; in.read(&p, sizeof p); ++v) {
-        if (weldId_[v] == written) {
+      VertexPair pair{};
+      for (std::uint32_t v = 0; byId.next(pair); ++v) {
+        if (pair.vertex != v || !in.read(&p, sizeof p)) throw IoError(inputPositions_.path + ": weld records out of step");
+        if (pair.other == v) {
+          weldId_->set(v, next++);
           out.write(&p, sizeof p);
-          ++written;
+        } else {
+          weldId_->set(v, weldId_->get(pair.other));
         }
       }
     }
+    welded_ = next;
+    result_.census.weldedVertices = n - next;
     folder_.remove(inputPositions_);
     result_.scratch.positions = out.finish();
   }
@@ -258,8 +271,8 @@ class WeldPass {
     ScratchReader in(folder_, inputTriangles_, "faces");
     Triangle t;
     for (std::uint32_t f = 0; in.read(&t, sizeof t); ++f) {
-      if (!weldId_.empty()) {
-        for (VertexId& v : t) v = weldId_[v];
+      if (weldId_) {
+        for (VertexId& v : t) v = weldId_->get(v);
       }
       if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
         ++result_.census.degenerateFaces;
@@ -267,7 +280,7 @@ class WeldPass {
       }
       faceSort_->add({sortedVertices(t), f, t});
     }
-    std::vector<std::uint32_t>().swap(weldId_);
+    weldId_.reset();
     folder_.remove(inputTriangles_);
   }
 
@@ -497,7 +510,7 @@ class WeldPass {
   WeldStreamResult result_;
   std::uint64_t welded_ = 0;
   ScratchFile inputPositions_, inputTriangles_, placedFaces_;
-  std::vector<std::uint32_t> weldId_;  ///< input vertex -> welded id (empty: no welding)
+  std::unique_ptr<ScratchArray<std::uint32_t>> weldId_;  ///< input vertex -> welded id (null: no welding)
   std::unique_ptr<ExternalSorter<PositionRecord, PositionLess>> weldSort_;
   std::unique_ptr<ExternalSorter<FaceRecord, SameVerticesLess>> faceSort_;
   std::unique_ptr<ExternalSorter<EdgeRecord, EdgeLess>> edgeSort_;

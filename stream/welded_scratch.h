@@ -5,10 +5,10 @@
 /// their two vertices, components by union-find, boundary loops, bounding box). Its output, the
 /// welded triangles with their corner positions sorted by the Morton code of their centroid (a
 /// spatially coherent order) and the welded positions, stays in the scratch folder for the next
-/// streamed stage (WeldedFaceReader). Memory: the sorts' limit, plus 4 bytes per vertex for the
-/// weld map (while faces are renumbered); the union-finds of the components and boundary loops
-/// (4 bytes per vertex, the loops' a map of the boundary vertices while it is small) within a
-/// quarter of the limit each, beyond it on disk through page caches; about 110 bytes per
+/// streamed stage (WeldedFaceReader). Memory: the sorts' limit, plus the weld map (4 bytes per
+/// input vertex while faces are renumbered) and the union-finds of the components and boundary loops
+/// (4 bytes per vertex, the loops' a map of the boundary vertices while it is small), each
+/// within a quarter of the limit, beyond it on disk through page caches; about 110 bytes per
 /// component; the welded positions (12 bytes per vertex) read whole when they fit, else joined
 /// with the corners by sorts.
 #include <array>
@@ -42,7 +42,8 @@ struct WeldStreamOptions {
   std::uint64_t memoryBytes = std::uint64_t(256) << 20;
   /// Tests: join the positions by sorts even when they fit.
   bool joinPositions = false;
-  /// Tests: the union-finds of the components and boundary loops on disk even when they fit.
+  /// Tests: the weld map and the union-finds of the components and boundary loops on disk even
+  /// when they fit.
   bool setsOnDisk = false;
 };
 

@@ -288,6 +288,7 @@ TEST(WeldedScratch, FacesInMortonOrderAreTheFacesCleanMeshKeepsOnWeldedVertices)
   const WeldStreamResult result = weldMeshStream(*stream, folder, weld);
   EXPECT_EQ(result.census.weldedVertices, cleaned.report.weldedVertices);
   EXPECT_EQ(result.census.faces, cleaned.mesh.numFaces());
+  EXPECT_EQ(result.census.setsOnDisk, join) << "the weld map and sets on disk exactly with the smallest memory";
   EXPECT_EQ(result.scratch.numVertices, mesh->numVertices() - cleaned.report.weldedVertices);
   bool spilled = false;
   for (const ScratchTraffic& t : folder.traffic()) spilled |= t.stage == "morton" && t.bytesRead >= 2 * sizeof(WeldedFace) * result.census.faces;
