@@ -7,7 +7,6 @@
 #include <cmath>
 #include <string>
 #include <unordered_map>
-#include <unordered_set>
 
 #include "core/quality/metrics.h"
 #include "core/refine/detail_refine.h"
@@ -113,26 +112,10 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
   } else {
     seeds = marked;
   }
-  // Rings: every face sharing a vertex with the frontier, options.rings times.
-  std::unordered_set<FaceId> inRegion(seeds.begin(), seeds.end());
-  std::unordered_set<VertexId> vertexSeen;
-  std::vector<FaceId> region = seeds, frontier = seeds;
-  for (std::uint32_t ring = 0; ring < options.rings && !frontier.empty(); ++ring) {
-    std::vector<FaceId> added;
-    for (FaceId f : frontier) {
-      for (int k = 0; k < 3; ++k) {
-        const VertexId v = table.vertex(3 * f + k);
-        if (!vertexSeen.insert(v).second) continue;
-        table.forEachCornerAround(v, [&](CornerId c) {
-          if (inRegion.insert(cornerFace(c)).second) added.push_back(cornerFace(c));
-        });
-      }
-    }
-    region.insert(region.end(), added.begin(), added.end());
-    frontier = std::move(added);
-  }
+  // Rings: every face sharing a vertex with the frontier, options.rings times (sorted lists, about
+  // 8 B per region face: the region grows with the faces per cell at a fixed grid).
+  const std::vector<FaceId> region = detail::growFacesIn(table, std::move(seeds), options.rings);
   folder.countRead("refine region", table.bytesRead());
-  std::sort(region.begin(), region.end());
   counts.regionFaces = region.size();
   copyRegionCounts(counts, stats);
   return region;
