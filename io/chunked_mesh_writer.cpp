@@ -63,6 +63,13 @@ struct ChunkedMeshWriter::State {
     firstGrowing.resize(vertices);
   }
   FirstCorner firstCorner(VertexId v) { return firstCounted ? firstCounted->get(v) : firstGrowing[v]; }
+  void setFirstCorner(VertexId v, const FirstCorner& first) {
+    if (firstCounted) {
+      firstCounted->set(v, first);
+    } else {
+      firstGrowing[v] = first;
+    }
+  }
 
   State(AtomicFile& f, ChunkedMeshLayout l, const WriteOptions& o, ScratchFolder* s)
       : file(f), layout(std::move(l)), options(o), scratch(s), format(formatFromPath(f.path())), direct(f) {}
@@ -86,14 +93,7 @@ struct ChunkedMeshWriter::State {
           texcoord[k] = first.texcoord - 1;
           continue;
         }
-        if (first.texcoord == 0) {
-          const FirstCorner now{uv.x(), uv.y(), texcoords + 1};
-          if (firstCounted) {
-            firstCounted->set(v, now);
-          } else {
-            firstGrowing[v] = now;
-          }
-        }
+        if (first.texcoord == 0) setFirstCorner(v, {uv.x(), uv.y(), texcoords + 1});
         detail::putObjTexcoord(texcoordBody->out, uv);
         texcoord[k] = texcoords++;
       }

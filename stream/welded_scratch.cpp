@@ -104,16 +104,15 @@ class LoopSets {
       sets_->unite(a, b);
       return;
     }
-    const std::uint32_t ra = findInMap(a), rb = findInMap(b);
-    if (ra != rb) map_[std::max(ra, rb)] = std::min(ra, rb);
+    detail::uniteRoots(map_, a, b);
     if (map_.size() * kMapEntryBytes > memoryBytes_) moveToSets();
   }
   /// visit(v) for one vertex v of each loop.
   template <class Visit>
   void forEachLoop(Visit&& visit) {
     if (!sets_) {
-      for (const auto& entry : map_) {
-        if (findInMap(entry.first) == entry.first) visit(entry.first);
+      for (const auto& entry : map_.parent) {
+        if (detail::findRoot(map_, entry.first) == entry.first) visit(entry.first);
       }
       return;
     }
@@ -126,30 +125,28 @@ class LoopSets {
  private:
   static constexpr std::uint64_t kMapEntryBytes = 48;  // a node, its bucket and the allocator's share
 
-  std::uint32_t findInMap(std::uint32_t v) {  // with path halving
-    auto it = map_.emplace(v, v).first;
-    while (it->second != v) {
-      const std::uint32_t grandparent = map_.find(it->second)->second;
-      it->second = grandparent;
-      v = grandparent;
-      it = map_.find(v);
-    }
-    return v;
-  }
+  /// The union-find's links over the boundary vertices seen so far (a vertex enters as its own root).
+  struct MapLinks {
+    std::unordered_map<std::uint32_t, std::uint32_t> parent;
+    std::uint32_t parentOf(std::uint32_t x) { return parent.emplace(x, x).first->second; }
+    void setParent(std::uint32_t x, std::uint32_t p) { parent[x] = p; }
+    std::size_t size() const { return parent.size(); }
+  };
+
   void moveToSets() {
     const std::uint64_t share = memoryBytes_ / 5;  // a byte of flags per 4 of links
     sets_ = std::make_unique<ScratchUnionFind>(folder_, numVertices_, 4 * share, "weld: loops");
     flags_ = std::make_unique<ScratchArray<std::uint8_t>>(folder_, numVertices_, share, "weld: loops");
-    for (const auto& [v, parent] : map_) {
+    for (const auto& [v, parent] : map_.parent) {
       flags_->set(v, 1);
       sets_->unite(v, parent);
     }
-    std::unordered_map<std::uint32_t, std::uint32_t>().swap(map_);
+    MapLinks().parent.swap(map_.parent);
   }
 
   ScratchFolder& folder_;
   std::uint64_t numVertices_, memoryBytes_;
-  std::unordered_map<std::uint32_t, std::uint32_t> map_;  // boundary vertex -> parent
+  MapLinks map_;  // boundary vertex -> parent, while the map fits
   std::unique_ptr<ScratchUnionFind> sets_;
   std::unique_ptr<ScratchArray<std::uint8_t>> flags_;
 };
