@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <memory>
 #include <cmath>
+#include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
@@ -123,31 +124,81 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
 
 namespace {
 
+void applyScratchCorners(ScratchFolder& folder, const std::vector<RefinedCorner>& corners, ScratchMap& map,
+                         const StreamPassOptions& pass);
+
 /// The out-of-core mesh and map as detail::refineRounds reads them: page caches on the calling
-/// thread, and a pool of reader sets for the region solves that run in parallel.
+/// thread, and a pool of reader sets for the region solves that run in parallel. Each batch's
+/// free corners go into the scratch map as soon as it is solved (the map is then the latest
+/// values), so what a round holds is one batch of corners (a share of the memory), not the
+/// region's; per vertex a freed/seen flag (ScratchArray within a share) for the counts.
 class ScratchRefineSource {
  public:
-  /// One thread's readers: a region's mesh and the map's values.
-  struct GroupReaders : RegionReaders, MapValues {
-    GroupReaders(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut, const ScratchMap& map,
+  /// One thread's readers: a region's mesh and the map's values (rebuilt after every batch).
+  struct GroupReaders : RegionReaders {
+    MapValues map;
+    GroupReaders(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut, const ScratchMap& m,
                  std::size_t cacheBytes)
-        : RegionReaders(scratch, field, cut, cacheBytes), MapValues(map, cacheBytes) {}
+        : RegionReaders(scratch, field, cut, cacheBytes), map(m, cacheBytes) {}
   };
 
   ScratchRefineSource(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
-                      const ScratchCut& cut, const ScratchMap& map, const StreamPassOptions& pass)
-      : folder_(folder), scratch_(scratch), map_(map), cacheBytes_(pageCacheBytes(pass.memoryBytes)),
-        table_(scratch, cacheBytes_), points_(scratch, scratch.positions, cacheBytes_), values_(map, cacheBytes_),
-        pool_([&scratch, &field, &cut, &map, bytes = cacheBytes_] {
-          return std::make_unique<GroupReaders>(scratch, field, cut, map, bytes);
-        }) {}
+                      const ScratchCut& cut, ScratchMap& map, const StreamPassOptions& pass)
+      : folder_(folder), scratch_(scratch), field_(field), cut_(cut), map_(map), pass_(pass),
+        cacheBytes_(pageCacheBytes(pass.memoryBytes)), table_(scratch, cacheBytes_),
+        points_(scratch, scratch.positions, cacheBytes_),
+        flags_(folder, scratch.numVertices, pass.memoryBytes / 16, "refine") {
+    openMap();
+  }
 
-  ReaderPool<GroupReaders>::Lease groupReaders() { return pool_.take(); }
+  ReaderPool<GroupReaders>::Lease groupReaders() { return pool_->take(); }
   PagedCornerTable& table() { return table_; }
   std::uint32_t numVertices() const { return static_cast<std::uint32_t>(scratch_.numVertices); }
   Triangle triangle(FaceId f) { return points_.triangle(f); }
   std::array<Vec3d, 3> points(FaceId f) { return points_.points(f); }
-  Vec2d value(CornerId c) { return values_.value(c); }
+  Vec2d value(CornerId c) { return values_->value(c); }
+
+  Vec2d latest(GroupReaders& readers, CornerId c) { return readers.map.value(c); }
+  /// An eighth of the memory in solved corners at once.
+  std::size_t batchCorners() const {
+    return static_cast<std::size_t>(std::max<std::uint64_t>(1, pass_.memoryBytes / 8 / sizeof(detail::SolvedCorner)));
+  }
+  void record(std::vector<detail::SolvedCorner> fresh) {
+    fresh.erase(std::remove_if(fresh.begin(), fresh.end(), [](const detail::SolvedCorner& s) { return !s.free; }),
+                fresh.end());
+    for (const detail::SolvedCorner& s : fresh) {
+      const VertexId v = table_.vertex(s.corner);
+      const std::uint8_t flag = flags_.get(v);
+      if (!(flag & kFreed)) flags_.set(v, flag | kFreed), ++freed_;
+    }
+    closeMap();  // the readers' cached pages of the map are stale once it changes
+    applyScratchCorners(folder_, fresh, map_, pass_);
+    openMap();
+  }
+  detail::FaceCounts countTouched(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones, double h) {
+    detail::FaceCounts counts;
+    for (FaceId f : touched) {
+      const std::array<Vec2d, 3> q{value(3 * f), value(3 * f + 1), value(3 * f + 2)};
+      const Triangle t = triangle(f);
+      counts.add(parameterAreaRatio(points(f), q, h), [&] { return detail::collapsesBetweenListedCones(t, q, cones); });
+    }
+    return counts;
+  }
+  /// The corners are in the map already: the result keeps the vertex counts only.
+  void collect(const std::vector<FaceId>& touched, RefineResult& out) {
+    std::uint64_t around = 0;  // vertices of the solved faces; the freed ones among them
+    for (FaceId f : touched) {
+      for (int k = 0; k < 3; ++k) {
+        const VertexId v = table_.vertex(3 * f + k);
+        const std::uint8_t flag = flags_.get(v);
+        if (!(flag & kSeen)) flags_.set(v, flag | kSeen), ++around;
+      }
+    }
+    RefineStats& stats = out.stats;
+    stats.freeVertices = static_cast<std::uint32_t>(freed_);
+    stats.lockedVertices = static_cast<std::uint32_t>(around - freed_);
+    stats.refinedVertexFraction = scratch_.numVertices ? double(freed_) / double(scratch_.numVertices) : 0.0;
+  }
 
   /// One pass over the faces and their corners' wedges in order, skipping `touched`.
   detail::FaceCounts countOutside(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones, double h) {
@@ -169,27 +220,46 @@ class ScratchRefineSource {
     return counts;
   }
 
-  std::uint64_t bytesRead() {
-    std::uint64_t bytes = table_.bytesRead() + points_.bytesRead() + values_.bytesRead();
-    pool_.forEach([&](GroupReaders& r) { bytes += r.RegionReaders::bytesRead() + r.MapValues::bytesRead(); });
-    return bytes;
-  }
+  std::uint64_t bytesRead() { return table_.bytesRead() + points_.bytesRead() + closedBytes_ + openBytes(); }
 
  private:
+  static constexpr std::uint8_t kFreed = 1, kSeen = 2;
+  std::uint64_t openBytes() {
+    std::uint64_t bytes = values_ ? values_->bytesRead() : 0;
+    if (pool_) {
+      pool_->forEach([&](GroupReaders& r) { bytes += r.RegionReaders::bytesRead() + r.map.bytesRead(); });
+    }
+    return bytes;
+  }
+  void openMap() {
+    values_.emplace(map_, cacheBytes_);
+    pool_.emplace([this] { return std::make_unique<GroupReaders>(scratch_, field_, cut_, map_, cacheBytes_); });
+  }
+  void closeMap() {
+    closedBytes_ += openBytes();
+    pool_.reset();
+    values_.reset();
+  }
+
   ScratchFolder& folder_;
   const CleanScratch& scratch_;
-  const ScratchMap& map_;
+  const ScratchField& field_;
+  const ScratchCut& cut_;
+  ScratchMap& map_;
+  StreamPassOptions pass_;
   std::size_t cacheBytes_;
   PagedCornerTable table_;
   PagedFacePoints points_;
-  MapValues values_;
-  ReaderPool<GroupReaders> pool_;
+  ScratchArray<std::uint8_t> flags_;
+  std::uint64_t freed_ = 0, closedBytes_ = 0;
+  std::optional<MapValues> values_;
+  std::optional<ReaderPool<GroupReaders>> pool_;
 };
 
 }  // namespace
 
 RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
-                                    const ScratchCut& cut, const ScratchMap& map,
+                                    const ScratchCut& cut, ScratchMap& map,
                                     const std::vector<std::complex<double>>& seamT, const RefineOptions& options,
                                     const StreamPassOptions& pass) {
   const auto start = std::chrono::steady_clock::now();
@@ -211,15 +281,16 @@ RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& s
 
 namespace {
 
-/// WedgeMap::assign of the refinement's corners (sorted, unique) on the out-of-core map, after
-/// their wedges took the values in place: a wedge only part of whose corners changed is split,
-/// one new wedge per new value, appended. The wedges' corner counts come from one pass over the
-/// corners' wedges. Returns the appended values.
-std::vector<Vec2d> splitScratchWedges(ScratchFolder& folder, const RefineResult& refinement, const ScratchMap& map,
-                                      PagedArray<std::uint32_t>& cornerWedge, PagedArray<Vec2d>& values) {
+/// WedgeMap::assign of refined corners (sorted, unique) on the out-of-core map, after their
+/// wedges took the values in place: a wedge only part of whose corners changed is split, one new
+/// wedge per new value, appended. The wedges' corner counts come from one pass over the corners'
+/// wedges. Returns the appended values.
+std::vector<Vec2d> splitScratchWedges(ScratchFolder& folder, const std::vector<RefinedCorner>& corners,
+                                      const ScratchMap& map, PagedArray<std::uint32_t>& cornerWedge,
+                                      PagedArray<Vec2d>& values) {
   // Per touched wedge: its corners in the refinement, and in the whole map.
   std::unordered_map<std::uint32_t, std::pair<std::uint64_t, std::uint64_t>> count;
-  for (const RefinedCorner& r : refinement.corners) ++count[cornerWedge[r.corner]].first;
+  for (const RefinedCorner& r : corners) ++count[cornerWedge[r.corner]].first;
   {
     ScratchReader wedges(folder, map.cornerWedge, "refine");
     std::uint32_t w = 0;
@@ -230,7 +301,7 @@ std::vector<Vec2d> splitScratchWedges(ScratchFolder& folder, const RefineResult&
   }
   std::unordered_map<std::uint32_t, std::vector<std::pair<Vec2d, std::uint32_t>>> made;
   std::vector<Vec2d> appended;
-  for (const RefinedCorner& r : refinement.corners) {
+  for (const RefinedCorner& r : corners) {
     const std::uint32_t w = cornerWedge[r.corner];
     auto& options = made[w];
     const auto found = std::find_if(options.begin(), options.end(), [&](const auto& o) { return o.first == r.uv; });
@@ -250,6 +321,40 @@ std::vector<Vec2d> splitScratchWedges(ScratchFolder& folder, const RefineResult&
     cornerWedge.set(r.corner, target);
   }
   return appended;
+}
+
+/// The corners' values into the map (ids checked by the caller): wedges in place, split where
+/// their corners disagree, the split wedges' values appended to a copy of the values file.
+void applyScratchCorners(ScratchFolder& folder, const std::vector<RefinedCorner>& corners, ScratchMap& map,
+                         const StreamPassOptions& pass) {
+  if (corners.empty()) return;
+  std::vector<Vec2d> appended;
+  {
+    const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+    PagedArray<std::uint32_t> cornerWedge(folder, map.cornerWedge, "refine", cacheBytes);
+    PagedArray<Vec2d> values(folder, map.wedgeValues, "refine", cacheBytes);
+    // A free vertex's wedges change whole and keep their ids (applyRefinement): values in place.
+    for (const RefinedCorner& r : corners) values.set(cornerWedge[r.corner], r.uv);
+    const bool whole = std::all_of(corners.begin(), corners.end(),
+                                   [&](const RefinedCorner& r) { return values[cornerWedge[r.corner]] == r.uv; });
+    if (!whole) appended = splitScratchWedges(folder, corners, map, cornerWedge, values);
+    values.flush();
+    cornerWedge.flush();
+    folder.countRead("refine", cornerWedge.bytesRead() + values.bytesRead());
+  }
+  if (appended.empty()) return;
+  // The split wedges' values after the others: the values file copied with them appended.
+  ScratchWriter writer(folder, "refine");
+  {
+    ScratchReader old(folder, map.wedgeValues, "refine");
+    std::vector<char> buffer(std::size_t(1) << 20);
+    while (const std::size_t n = old.readUpTo(buffer.data(), buffer.size())) writer.write(buffer.data(), n);
+  }
+  writer.write(appended.data(), appended.size() * sizeof(Vec2d));
+  const ScratchFile grown = writer.finish();
+  folder.remove(map.wedgeValues);
+  map.wedgeValues = grown;
+  map.numWedges += appended.size();
 }
 
 }  // namespace
@@ -274,34 +379,7 @@ void applyScratchRefinement(ScratchFolder& folder, const RefineResult& refinemen
   if (translations) {
     for (std::size_t k = 0; k < refinement.seams.size(); ++k) (*translations)[refinement.seams[k]] = refinement.seamT[k];
   }
-  if (refinement.corners.empty()) return;
-  std::vector<Vec2d> appended;
-  {
-    const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
-    PagedArray<std::uint32_t> cornerWedge(folder, map.cornerWedge, "refine", cacheBytes);
-    PagedArray<Vec2d> values(folder, map.wedgeValues, "refine", cacheBytes);
-    // A free vertex's wedges change whole and keep their ids (applyRefinement): values in place.
-    for (const RefinedCorner& r : refinement.corners) values.set(cornerWedge[r.corner], r.uv);
-    const bool whole = std::all_of(refinement.corners.begin(), refinement.corners.end(),
-                                   [&](const RefinedCorner& r) { return values[cornerWedge[r.corner]] == r.uv; });
-    if (!whole) appended = splitScratchWedges(folder, refinement, map, cornerWedge, values);
-    values.flush();
-    cornerWedge.flush();
-    folder.countRead("refine", cornerWedge.bytesRead() + values.bytesRead());
-  }
-  if (appended.empty()) return;
-  // The split wedges' values after the others: the values file copied with them appended.
-  ScratchWriter writer(folder, "refine");
-  {
-    ScratchReader old(folder, map.wedgeValues, "refine");
-    std::vector<char> buffer(std::size_t(1) << 20);
-    while (const std::size_t n = old.readUpTo(buffer.data(), buffer.size())) writer.write(buffer.data(), n);
-  }
-  writer.write(appended.data(), appended.size() * sizeof(Vec2d));
-  const ScratchFile grown = writer.finish();
-  folder.remove(map.wedgeValues);
-  map.wedgeValues = grown;
-  map.numWedges += appended.size();
+  applyScratchCorners(folder, refinement.corners, map, pass);
 }
 
 }  // namespace seamvox

@@ -27,12 +27,17 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
                                               const RefineOptions& options, const StreamPassOptions& pass,
                                               RefineStats* stats = nullptr);
 
-/// refineNearCones on the out-of-core map: the first region by selectScratchRefineRegion, then the
-/// same rounds (core/refine/detail_refine.h) with the regions paged in (a set of page caches per
-/// thread) and the map read through page caches. Equal to refineNearCones on readCleanScratch's
-/// mesh, field, cut and the map in memory. Memory: the regions and their solves.
+/// refineNearCones and applyRefinement's corners on the out-of-core map: the first region by
+/// selectScratchRefineRegion, then the same rounds (core/refine/detail_refine.h) with the regions
+/// paged in (a set of page caches per thread) and the map read through page caches. The groups
+/// of a round are solved a batch at a time (an eighth of pass.memoryBytes in solved corners), and
+/// each batch's free corners go into `map` at once (as applyScratchRefinement applies them). The
+/// result has no corners: its translations still go in with applyScratchRefinement. The map,
+/// translations and figures equal those of refineNearCones and applyRefinement in memory.
+/// Memory: a batch of corners, the solves, the face lists of the region and a flag per vertex
+/// (within a sixteenth of pass.memoryBytes, else on disk).
 RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
-                                    const ScratchCut& cut, const ScratchMap& map,
+                                    const ScratchCut& cut, ScratchMap& map,
                                     const std::vector<std::complex<double>>& seamT, const RefineOptions& options,
                                     const StreamPassOptions& pass);
 

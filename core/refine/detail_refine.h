@@ -2,10 +2,15 @@
 /// The rounds of refineNearCones written once for the mesh in memory and for the out-of-core map
 /// (stream/refine_stream): templates over a source of the whole mesh and its map. A source gives,
 /// on the calling thread, table() (vertex, forEachCornerAround), numVertices(), triangle(f),
-/// points(f) (corner positions in double), value(c) (the input map at corner c) and
-/// countOutside(touched, cones, h) (FaceCounts of the faces not in `touched`, input map); and
-/// groupReaders(), an object for one thread with extract(faces) (a RegionMesh as extractRegion
-/// cuts it) and value(c). Whole-mesh state stays out: the faces ever solved are a sorted list.
+/// points(f) (corner positions in double) and countOutside(touched, cones, h) (FaceCounts of the
+/// faces not in `touched`, input map); groupReaders(), an object for one thread with
+/// extract(faces) (a RegionMesh as extractRegion cuts it) and value(c) (the map at corner c).
+/// The solved corners live in the source: latest(readers, c) (corner c as solved so far, else the
+/// input map; read by the threads of a batch), batchCorners() (the most solved corners held at
+/// once), record(fresh) (a batch's corners, sorted by corner: they replace older values, a corner
+/// stays free once freed), countTouched(touched, cones, h) (FaceCounts of the solved faces with
+/// their latest values) and collect(touched, out) (the result's corners and vertex counts).
+/// Whole-mesh state stays out: the faces ever solved are a sorted list.
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -133,21 +138,37 @@ std::vector<std::vector<FaceId>> splitRegionIn(Table& topology, const std::vecto
   return out;
 }
 
-/// The input of a region solve: the corners solved so far where there are any, else the map
-/// (value(c) of the reader).
-template <class Reader>
-WedgeMap regionInput(const RegionMesh& region, Reader& map, const std::vector<SolvedCorner>& current) {
+/// The input of a region solve: the corners as solved so far, else the map (source.latest).
+template <class Source, class Readers>
+WedgeMap regionInput(const RegionMesh& region, Source& source, Readers& readers) {
   const std::uint32_t rf = region.topology.numFaces();
   std::vector<Vec2d> values(3u * rf);
   for (std::uint32_t i = 0; i < rf; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const CornerId c = 3 * region.faceOrigin[i] + k;
-      const auto it = std::lower_bound(current.begin(), current.end(), c,
-                                       [](const SolvedCorner& s, CornerId x) { return s.corner < x; });
-      values[3 * i + k] = it != current.end() && it->corner == c ? it->uv : map.value(c);
-    }
+    for (int k = 0; k < 3; ++k) values[3 * i + k] = source.latest(readers, 3 * region.faceOrigin[i] + k);
   }
   return WedgeMap::fromCorners(region.mesh.triangles, values);
+}
+
+/// The value of corner c in `current` (sorted by corner) if solved, else value(c).
+template <class Value>
+Vec2d solvedOr(const std::vector<SolvedCorner>& current, CornerId c, Value&& value) {
+  const auto it = std::lower_bound(current.begin(), current.end(), c,
+                                   [](const SolvedCorner& s, CornerId x) { return s.corner < x; });
+  return it != current.end() && it->corner == c ? it->uv : value(c);
+}
+
+/// Consecutive runs of groups (sizes in faces) holding at most maxCorners corners each (a larger
+/// group alone): the first group of every run, then groups.size().
+inline std::vector<std::size_t> groupBatches(const std::vector<std::vector<FaceId>>& groups, std::size_t maxCorners) {
+  std::vector<std::size_t> start{0};
+  std::size_t corners = 0;
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    const std::size_t n = 3 * groups[g].size();
+    if (g > start.back() && corners + n > maxCorners) start.push_back(g), corners = 0;
+    corners += n;
+  }
+  start.push_back(groups.size());
+  return start;
 }
 
 /// A region's solved corners under whole-mesh ids, in increasing corner order, from `out` on.
@@ -167,13 +188,16 @@ void collectChangedSeams(const std::vector<std::complex<double>>& currentT,
                          const std::vector<std::complex<double>>& seamT, RefineResult& out);
 
 /// One round: the region's groups of components extracted, solved and measured on their own, in
-/// parallel; their corners merged into `current` and their translations into currentT. Returns
-/// the bad faces touching a locked vertex (the next round's seeds), sorted. `largest` keeps the
-/// system figures of the largest group solved so far; figures sums the groups.
+/// parallel, a batch of groups at a time (source.batchCorners()); each batch's corners recorded in
+/// the source and the round's translations in currentT. Groups are disjoint in faces, corners,
+/// vertices and (seams among free vertices) translations, so a batch never reads another batch's
+/// corners: batch by batch gives the map that one batch of all the groups gives. Returns the bad faces touching a
+/// locked vertex (the next round's seeds), sorted. `largest` keeps the system figures of the
+/// largest group solved so far; figures sums the groups.
 template <class Source>
 std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces, const RefineOptions& options,
-                               std::vector<SolvedCorner>& current, std::vector<std::complex<double>>& currentT,
-                               RefineRound& figures, bool& collapsedAtBorder, RefineStats& largest, RefineStats& stats) {
+                               std::vector<std::complex<double>>& currentT, RefineRound& figures,
+                               bool& collapsedAtBorder, RefineStats& largest, RefineStats& stats) {
   using Complex = std::complex<double>;
   struct GroupResult {
     std::vector<std::pair<std::uint32_t, Complex>> seams;
@@ -186,42 +210,49 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
   const std::vector<std::vector<FaceId>> groups =
       splitRegionIn(source.table(), faces, std::max<std::size_t>(1, options.groupFaces));
   std::vector<GroupResult> results(groups.size());
-  // Every group's corners go straight into one array (group g from 3 x its first face's rank),
-  // with room for a quarter more: the later rounds' patches merge their new corners into that
-  // spare capacity, which is not resident until written.
-  std::vector<std::size_t> offset(groups.size() + 1, 0);
-  for (std::size_t g = 0; g < groups.size(); ++g) offset[g + 1] = offset[g] + 3 * groups[g].size();
-  std::vector<SolvedCorner> fresh;
-  fresh.reserve(offset.back() + offset.back() / 4);
-  fresh.resize(offset.back());
   const double h = options.edgeLength;
-  parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
-    GroupResult& r = results[g];
-    auto lap = std::chrono::steady_clock::now();
-    auto readers = source.groupReaders();
-    const RegionMesh region = readers->extract(groups[g]);
-    WedgeMap regionUV = regionInput(region, *readers, current);
-    std::vector<Complex> regionT(region.seamOrigin.size());
-    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
-    const std::uint32_t numFree = static_cast<std::uint32_t>(
-        std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
-    r.figures.freeVertices = numFree;
-    r.secondsExtract = secondsSince(lap);
-    lap = std::chrono::steady_clock::now();
-    RegionSolution solved;
-    if (numFree > 0) {
-      solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
-    } else {
-      solved.cornerUV = std::move(regionUV);
-      solved.seamT = std::move(regionT);
-    }
-    r.secondsSolve = secondsSince(lap);
-    writeSolvedCorners(region, solved, fresh.data() + offset[g]);
-    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
-    r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
-  });
-  // Groups are disjoint in faces, corners and (seams among free vertices) translations: merging
-  // them in any order gives the same map.
+  const std::vector<std::size_t> batches = groupBatches(groups, std::max<std::size_t>(1, source.batchCorners()));
+  for (std::size_t b = 0; b + 1 < batches.size(); ++b) {
+    // The batch's corners go straight into one array (group after group, 3 per face), with room
+    // for a quarter more: in memory, the later rounds' patches merge their new corners into that
+    // spare capacity, which is not resident until written.
+    const std::size_t first = batches[b], count = batches[b + 1] - first;
+    std::vector<std::size_t> offset(count + 1, 0);
+    for (std::size_t i = 0; i < count; ++i) offset[i + 1] = offset[i] + 3 * groups[first + i].size();
+    std::vector<SolvedCorner> fresh;
+    fresh.reserve(offset.back() + offset.back() / 4);
+    fresh.resize(offset.back());
+    parallelForEach(count, 1, [&](std::uint64_t i) {
+      const std::size_t g = first + i;
+      GroupResult& r = results[g];
+      auto lap = std::chrono::steady_clock::now();
+      auto readers = source.groupReaders();
+      const RegionMesh region = readers->extract(groups[g]);
+      WedgeMap regionUV = regionInput(region, source, *readers);
+      std::vector<Complex> regionT(region.seamOrigin.size());
+      for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
+      const std::uint32_t numFree = static_cast<std::uint32_t>(
+          std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
+      r.figures.freeVertices = numFree;
+      r.secondsExtract = secondsSince(lap);
+      lap = std::chrono::steady_clock::now();
+      RegionSolution solved;
+      if (numFree > 0) {
+        solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
+      } else {
+        solved.cornerUV = std::move(regionUV);
+        solved.seamT = std::move(regionT);
+      }
+      r.secondsSolve = secondsSince(lap);
+      writeSolvedCorners(region, solved, fresh.data() + offset[i]);
+      for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
+      r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
+    });
+    tbb::parallel_sort(fresh.begin(), fresh.end(), [](const SolvedCorner& x, const SolvedCorner& y) { return x.corner < y.corner; });
+    source.record(std::move(fresh));
+    ++stats.batches;
+  }
+  // Merging the groups' translations and figures in any order gives the same result.
   std::vector<FaceId> border;
   for (GroupResult& r : results) {
     for (const auto& [seam, t] : r.seams) currentT[seam] = t;
@@ -237,8 +268,6 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     if (r.system.unknowns > 0 && r.system.unknowns >= largest.unknowns) largest = r.system;
     stats.solves += r.system.unknowns > 0;
   }
-  tbb::parallel_sort(fresh.begin(), fresh.end(), [](const SolvedCorner& a, const SolvedCorner& b) { return a.corner < b.corner; });
-  mergeSolved(std::move(fresh), current);
   std::sort(border.begin(), border.end());
   figures.borderFaces = border.size();
   return border;
@@ -247,12 +276,27 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
 /// Whole-map counts into stats: every face ever solved (`touched`, sorted) with the refined
 /// values, every other face as in the input.
 template <class Source>
-void measureRefinedMap(Source& source, const std::vector<FaceId>& touched, const std::vector<SolvedCorner>& current,
-                       const std::vector<VertexId>& cones, const RefineOptions& options, RefineStats& stats) {
+void measureRefinedMap(Source& source, const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
+                       const RefineOptions& options, RefineStats& stats) {
   const double h = options.edgeLength;
   stats.regionFaces = touched.size();
-  // Every corner of a solved face is in `current` (a solve records all its region's corners), and
-  // both are sorted: one walk pairs them.
+  const FaceCounts inside = source.countTouched(touched, cones, h);
+  // Faces never solved keep the input map. With the map's own faces seeded (voxloc), the first
+  // region held every face below the collapse threshold: none outside is collapsed or flipped.
+  FaceCounts outside;
+  if (!options.seedFromMap || options.collapseThreshold < kCollapsedAreaFraction) {
+    outside = source.countOutside(touched, cones, h);
+  }
+  stats.collapsedAfter = outside.collapsed + inside.collapsed;
+  stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
+  stats.flippedAfter = outside.flipped + inside.flipped;
+}
+
+/// FaceCounts of the faces in `touched` (sorted) with the values of `current` (sorted by corner,
+/// holding every corner of those faces: a solve records all its region's corners).
+template <class Source>
+FaceCounts countSolvedFaces(Source& source, const std::vector<FaceId>& touched,
+                            const std::vector<SolvedCorner>& current, const std::vector<VertexId>& cones, double h) {
   FaceCounts inside;
   auto it = current.begin();
   for (FaceId f : touched) {
@@ -265,15 +309,7 @@ void measureRefinedMap(Source& source, const std::vector<FaceId>& touched, const
     const Triangle t = source.triangle(f);
     inside.add(parameterAreaRatio(source.points(f), q, h), [&] { return collapsesBetweenListedCones(t, q, cones); });
   }
-  // Faces never solved keep the input map. With the map's own faces seeded (voxloc), the first
-  // region held every face below the collapse threshold: none outside is collapsed or flipped.
-  FaceCounts outside;
-  if (!options.seedFromMap || options.collapseThreshold < kCollapsedAreaFraction) {
-    outside = source.countOutside(touched, cones, h);
-  }
-  stats.collapsedAfter = outside.collapsed + inside.collapsed;
-  stats.collapsedAtConesAfter = outside.collapsedAtCones + inside.collapsedAtCones;
-  stats.flippedAfter = outside.flipped + inside.flipped;
+  return inside;
 }
 
 /// The result: the corners of every vertex freed in some solve with their latest values, and the
@@ -310,12 +346,11 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
                   const RefineOptions& options, std::vector<FaceId> faces, RefineResult& out) {
   RefineStats& stats = out.stats;
   // Rounds: solve the region from the input map; then, while faces stay bad at the locked border,
-  // solve a patch around them (rings doubling) from the map as refined so far. `current` holds
-  // every corner solved so far (sorted by corner; the latest solve wins), currentT the seams,
-  // `touched` every face solved so far (sorted).
+  // solve a patch around them (rings doubling) from the map as refined so far. The source holds
+  // every corner solved so far (the latest solve wins), currentT the seams, `touched` every face
+  // solved so far (sorted).
   const std::uint32_t maxRounds = std::max(1u, options.maxRounds);
   std::uint64_t seeds = stats.markedFaces + stats.collapsedFaces + stats.flippedFaces;
-  std::vector<SolvedCorner> current;
   std::vector<std::complex<double>> currentT = seamT;
   std::vector<FaceId> touched = faces;
   RefineStats largest;  // system figures of the largest solve
@@ -326,7 +361,7 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
     figures.regionFaces = faces.size();
     bool collapsedAtBorder = false;  // a border face below the threshold but not flipped
     std::vector<FaceId> border =
-        solveRound(source, faces, options, current, currentT, figures, collapsedAtBorder, largest, stats);
+        solveRound(source, faces, options, currentT, figures, collapsedAtBorder, largest, stats);
     figures.seconds = secondsSince(roundStart);
     stats.totalUnknowns = std::max<std::uint64_t>(stats.totalUnknowns, figures.unknowns);
     stats.rounds.push_back(figures);
@@ -349,8 +384,8 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
   releaseFreedMemory();  // the groups' regions and factors, before the results are gathered
   if (!stats.rounds.empty()) stats.unresolvedFaces = stats.rounds.back().borderFaces;
   if (largest.unknowns > 0) keepLargestSolve(largest, stats);
-  measureRefinedMap(source, touched, current, cones, options, stats);
-  collectRefinement(source.table(), source.numVertices(), std::move(current), touched, out);
+  measureRefinedMap(source, touched, cones, options, stats);
+  source.collect(touched, out);
   collectChangedSeams(currentT, seamT, out);
 }
 

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <string>
 
 #include "core/basis/basis.h"
@@ -654,6 +655,21 @@ class MeshSource {
     return {mesh_.position(t[0]), mesh_.position(t[1]), mesh_.position(t[2])};
   }
   Vec2d value(CornerId c) const { return cornerUV_[c]; }
+
+  // The solved corners, held whole and sorted by corner: one batch per round.
+  Vec2d latest(const Readers&, CornerId c) const {
+    return detail::solvedOr(current_, c, [this](CornerId x) { return cornerUV_[x]; });
+  }
+  std::size_t batchCorners() const { return std::numeric_limits<std::size_t>::max(); }
+  void record(std::vector<detail::SolvedCorner> fresh) { detail::mergeSolved(std::move(fresh), current_); }
+  detail::FaceCounts countTouched(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
+                                  double h) const {
+    return detail::countSolvedFaces(*this, touched, current_, cones, h);
+  }
+  void collect(const std::vector<FaceId>& touched, RefineResult& out) {
+    detail::collectRefinement(topology_, mesh_.numVertices(), std::move(current_), touched, out);
+  }
+
   detail::FaceCounts countOutside(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
                                   double h) const {
     return tbb::parallel_reduce(
@@ -680,6 +696,7 @@ class MeshSource {
   const CrossField& field_;
   const CutResult& cut_;
   const WedgeMap& cornerUV_;
+  std::vector<detail::SolvedCorner> current_;
 };
 
 }  // namespace

@@ -80,6 +80,9 @@ struct RefineStats {
   double refinedVertexFraction = 0.0;  ///< freeVertices / #V
   /// Each round solves its region in groups of whole components (splitRegion), each on its own.
   std::uint32_t solves = 0;          ///< group solves over all rounds
+  /// Batches of groups solved and recorded at once, over all rounds (one per round in memory;
+  /// out of core a batch holds at most a share of the memory in solved corners).
+  std::uint32_t batches = 0;
   std::uint64_t totalUnknowns = 0;   ///< unknowns summed over the groups of the largest round
   /// System figures (unknowns to factorPeakBytes) of the largest group solve.
   std::uint32_t unknowns = 0;  ///< size of the local system
