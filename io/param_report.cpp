@@ -27,6 +27,7 @@ void writeSystem(JsonWriter& j, const PipelineResult& r) {
   j.key("nonUnitConstraints").value(U64{st.nonUnitConstraints});
   j.key("pinnedFirstSolve").value(U64{st.pinnedFirst});
   j.key("pinnedSecondSolve").value(U64{st.pinnedSecond});
+  j.key("componentsSolvedApart").value(U64{st.componentsApart});
   j.key("matrixNonzeros").value(st.systemNonzeros);
   j.key("factorNonzeros").value(st.factorNonzeros);
   j.key("factorBytes").value(st.factorBytes);

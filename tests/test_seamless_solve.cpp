@@ -11,12 +11,15 @@
 
 #include "core/basis/basis.h"
 #include "core/basis/reduce.h"
+#include "core/basis/voxel_basis.h"
+#include "core/basis/voxel_grid.h"
 #include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/quality/metrics.h"
 #include "core/solve/assemble.h"
 #include "core/solve/evaluate.h"
 #include "core/solve/seamless_solve.h"
+#include "core/system/errors.h"
 #include "tests/test_meshes.h"
 
 namespace seamvox {
@@ -150,6 +153,88 @@ TEST(SeamlessSolve, SecondSolveMinimisesTheEnergyWithIntegerTranslations) {
     x[pick(rng)] += Complex(value(rng), value(rng));
     EXPECT_GE(energy(x), best - 1e-9 * std::abs(best));
   }
+}
+
+// A torus and small islands: flat two-triangle specks (axis-aligned and tilted), a strip of 2 x 1
+// cells and a closed octahedron-like icosphere.
+TriangleMesh torusWithSpecks() {
+  std::vector<TriangleMesh> parts{testing::torusMesh(24, 12)};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> at(-2.5f, 2.5f);
+  for (int k = 0; k < 12; ++k) {
+    TriangleMesh speck = testing::gridMesh(k % 3 == 0 ? 2 : 1, 1, 0.04);
+    const Vec3f shift(at(rng), at(rng), 1.2f + 0.1f * k);
+    for (Vec3f& p : speck.positions) {
+      if (k % 2) p = Vec3f(p[0], 0.6f * p[1], 0.8f * p[1] + 0.3f * p[0]);  // tilted
+      p += shift;
+    }
+    parts.push_back(speck);
+  }
+  TriangleMesh ball = testing::icosphereMesh(0);
+  for (Vec3f& p : ball.positions) p = 0.05f * p + Vec3f(0.0f, 0.0f, -1.5f);
+  parts.push_back(ball);
+  return testing::concatMeshes(parts);
+}
+
+// The system couples no two components: each small one solved on its own gives the global
+// solve's unknowns, pins and translations.
+TEST(SeamlessSolve, SmallComponentsSolvedApartGiveTheGlobalSolution) {
+  const testing::CutSurface c = testing::makeCutSurface(torusWithSpecks());
+  HatBasisOptions options;
+  options.edgeLength = 0.35;
+  const HatBasis basis(c.s.mesh, c.s.topology, c.field, c.cut, options);
+  const Reduction reduction = reduceBasis(basis);
+  ASSERT_EQ(reduction.numComponents, 14u);
+  RoundOptions global;
+  global.solveApart = false;
+  const SeamlessSolution all = solveSeamless(basis, reduction, global);
+  const SeamlessSolution apart = solveSeamless(basis, reduction);
+  EXPECT_EQ(all.stats.componentsApart, 0u);
+  EXPECT_GE(apart.stats.componentsApart, 12u);  // the specks; the torus has translations
+  EXPECT_TRUE(apart.unsolvedComponents.empty());
+  EXPECT_EQ(apart.stats.pinnedFirst, all.stats.pinnedFirst);
+  EXPECT_EQ(apart.stats.pinnedSecond, all.stats.pinnedSecond);
+  EXPECT_EQ(apart.translations, all.translations);
+  ASSERT_EQ(apart.unknowns.size(), all.unknowns.size());
+  double largest = 0.0;
+  for (std::size_t j = 0; j < all.unknowns.size(); ++j) largest = std::max(largest, std::abs(apart.unknowns[j] - all.unknowns[j]));
+  EXPECT_LT(largest, 1e-9);
+  WedgeMap uv = buildCutWedges(c.s.topology, c.cut);
+  evaluateMap(basis, reduction, apart.unknowns, uv);
+  EXPECT_TRUE(measureSeams(c.s.mesh, c.s.topology, c.cut, uv).isSeamless(1e-8));
+}
+
+// Flat specks in the voxel basis without regularization: the trilinear functions that vanish on
+// their plane make their blocks singular. Each such component is left unsolved by its own
+// block; the rest is the global solve's, and without dropUnsolvable the solve fails naming it.
+TEST(SeamlessSolve, SingularSmallBlocksAreLeftUnsolvedApart) {
+  const testing::CutSurface c = testing::makeCutSurface(torusWithSpecks());
+  VoxelBasisOptions options;
+  options.gridResolution = 16;
+  options.edgeLength = 0.35;
+  options.regularization = 0.0;
+  const VoxelBuildResult built = buildVoxelBasis(c.s.mesh, c.s.topology, c.field, c.cut, options);
+  const Reduction reduction = reduceBasis(*built.basis);
+  const SeamlessSolution apart = solveSeamless(*built.basis, reduction);
+  EXPECT_GT(apart.stats.componentsApart, 0u);
+  ASSERT_FALSE(apart.unsolvedComponents.empty());
+  for (const std::string& reason : apart.unsolvedReasons) EXPECT_NE(reason.find("solved apart"), std::string::npos) << reason;
+  RoundOptions global;
+  global.solveApart = false;
+  const SeamlessSolution all = solveSeamless(*built.basis, reduction, global);
+  // The torus (the component with the most unknowns) is the same either way.
+  std::vector<std::uint32_t> count(reduction.numComponents, 0);
+  for (std::uint32_t j = 0; j < reduction.numUnknowns(); ++j) ++count[reduction.unknownComponent[j]];
+  const std::uint32_t torus = static_cast<std::uint32_t>(std::max_element(count.begin(), count.end()) - count.begin());
+  double largest = 0.0;
+  for (std::uint32_t j = 0; j < reduction.numUnknowns(); ++j) {
+    if (reduction.unknownComponent[j] == torus) largest = std::max(largest, std::abs(apart.unknowns[j] - all.unknowns[j]));
+  }
+  EXPECT_LT(largest, 1e-9);
+  EXPECT_EQ(apart.translations, all.translations);
+  RoundOptions strict;
+  strict.dropUnsolvable = false;
+  EXPECT_THROW(solveSeamless(*built.basis, reduction, strict), SolverError);
 }
 
 }  // namespace

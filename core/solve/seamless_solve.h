@@ -27,6 +27,9 @@ struct RoundOptions {
   /// Test hook: a component (not the largest) for which it returns true, given its number of
   /// unknowns, is left unsolved as if it could not be factored (dropUnsolvable's path).
   std::function<bool(std::uint32_t unknowns)> failsToFactor;
+  /// Components of at most 64 unknowns without translations are solved on their own, each its
+  /// dense block, outside the global factorization (a scan's specks); false: all in it (tests).
+  bool solveApart = true;
   /// Coordinates held on integer iso-lines in the last solve (line_constraints.h; feature curves),
   /// when set and not empty; their figures go to lineStats.
   const std::vector<LineConstraint>* lines = nullptr;
@@ -43,6 +46,9 @@ struct SeamlessStats {
   std::uint32_t anchoredComponents = 0;
   /// Components left unsolved (SeamlessSolution::unsolvedComponents): mapped to the point 0.
   std::uint32_t unsolvedComponents = 0;
+  /// Small components without translations solved on their own (dense), outside the global
+  /// factorization; their pins are in pinnedFirst and pinnedSecond.
+  std::uint32_t componentsApart = 0;
   std::uint64_t systemNonzeros = 0;      ///< lower triangle of K
   std::uint64_t factorNonzeros = 0;      ///< largest factor
   std::uint64_t factorBytes = 0;         ///< largest factor
