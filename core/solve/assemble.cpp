@@ -48,8 +48,9 @@ constexpr std::size_t kFlushTriplets = 1u << 21;
 /// Elements per range when the basis has no blocks of its own.
 constexpr std::uint64_t kRangeElements = 4096;
 /// Chunks the assembly is split into, whatever the thread count: each level of their merge is a
-/// pass over all nonzeros, so few, enough for a few cores.
-constexpr std::uint64_t kChunks = 8;
+/// pass over all nonzeros, so few, enough for a few cores; kFewChunks above
+/// AssembleOptions::fewChunksAbove unknowns.
+constexpr std::uint64_t kChunks = 8, kFewChunks = 2;
 
 }  // namespace
 
@@ -74,7 +75,7 @@ LinearSystem assembleSystem(const Basis& basis, const Reduction& reduction,
     blocks.push_back(ne);
   }
   const std::uint64_t ranges = blocks.size() - 1;
-  const std::uint64_t chunks = std::min<std::uint64_t>(kChunks, ranges);
+  const std::uint64_t chunks = std::min<std::uint64_t>(std::uint64_t(n) > options.fewChunksAbove ? kFewChunks : kChunks, ranges);
   std::vector<Accumulator> parts(chunks);
   const auto assembleRange = [&](Accumulator& acc, std::uint64_t begin, std::uint64_t end) {
     ElementIntegrals el;

@@ -25,6 +25,10 @@ struct LinearSystem {
 
 struct AssembleOptions {
   ProgressFn progress;
+  /// Above this many unknowns the elements are summed in 2 chunks instead of 8: each chunk holds
+  /// a right-hand side and column starts of every unknown (a scan with a million specks has 10^7
+  /// of them; a grid-sized system about 10^5). Tests lower it.
+  std::uint64_t fewChunksAbove = std::uint64_t(1) << 21;
 };
 
 /// Sums the element integrals through the map P in parallel (TBB; thread-local accumulation,
