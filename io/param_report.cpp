@@ -49,6 +49,7 @@ void writeVoxel(JsonWriter& j, const SolverResult& s, std::int32_t grid) {
   j.key("conePositions").value(U64{s.determinedBasis});
   j.key("inconsistentBasis").value(U64{s.inconsistentBasis});
   j.key("markedFaces").value(s.markedFaces);
+  j.key("islandFaces").value(s.islandFaces);
   j.endObject();
 }
 

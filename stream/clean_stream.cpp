@@ -1,5 +1,7 @@
 #include "stream/clean_stream.h"
 
+#include "core/basis/islands.h"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -861,6 +863,20 @@ ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& sc
   std::stable_sort(comps.begin(), comps.end(), [](const ComponentInfo& a, const ComponentInfo& b) { return a.faces > b.faces; });
   result.components = std::move(comps);
   return result;
+}
+
+std::vector<FaceId> scratchIslandFaces(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t maxFaces,
+                                       std::uint64_t memoryBytes) {
+  ScratchUnionFind faces(folder, scratch.numFaces, memoryBytes / 2, "islands");
+  {
+    ScratchReader opposite(folder, scratch.opposite, "islands");
+    CornerId o;
+    for (CornerId c = 0; opposite.read(&o, sizeof o); ++c) {
+      if (o != kInvalidId && c < o) faces.unite(c / 3, o / 3);
+    }
+  }
+  ScratchArray<std::uint32_t> counts(folder, scratch.numFaces, memoryBytes / 4, "islands");
+  return detail::islandFacesOf(scratch.numFaces, faces, counts, maxFaces);
 }
 
 BoundingBox scratchBoundingBox(ScratchFolder& folder, const ScratchFile& positions, const std::string& stage) {

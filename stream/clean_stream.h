@@ -60,6 +60,12 @@ CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded,
 /// component.
 ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch, std::uint64_t memoryBytes);
 
+/// islandFaces (core/basis/islands.h) of the cleaned mesh: one pass over the glued edges into a
+/// union-find of the faces (within half of memoryBytes, on disk beyond) and counts at the roots
+/// (a quarter). Memory: those and 4 bytes per island face.
+std::vector<FaceId> scratchIslandFaces(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t maxFaces,
+                                       std::uint64_t memoryBytes);
+
 /// The bounding box of a file of Vec3f positions (a cleaned mesh's, or its smoothed surface),
 /// read in order; its bytes counted under stage. IoError when the file ends inside a record.
 BoundingBox scratchBoundingBox(ScratchFolder& folder, const ScratchFile& positions, const std::string& stage);

@@ -1,5 +1,8 @@
 #include "stream/param_stream.h"
 
+#include "core/basis/islands.h"
+#include "core/basis/voxel_grid.h"
+
 #include <algorithm>
 #include <array>
 #include <memory>
@@ -156,6 +159,8 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   basisOptions.gridResolution = options.gridResolution;
   basisOptions.edgeLength = h;
   basisOptions.progress = options.progress;
+  basisOptions.leftOut = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes);
+  r.islandFaces = basisOptions.leftOut.size();
   RoundOptions round;
   round.progress = options.progress;
   VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason);
@@ -172,8 +177,10 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
 
   // voxloc refines near cones and wherever the map collapses or flips; vox only where its
   // reduction left basis functions inconsistent (as parameterizeMeshWithSolver).
-  std::vector<FaceId> seeds =
-      scratchSupportFaces(folder, vox.basis, options.voxLoc ? solved.markedBasis : solved.inconsistentBasisFunctions);
+  // The islands are mapped by the local hat solve: every face of theirs seeds it.
+  std::vector<FaceId> seeds = withFaces(
+      scratchSupportFaces(folder, vox.basis, options.voxLoc ? solved.markedBasis : solved.inconsistentBasisFunctions),
+      basisOptions.leftOut);
   vox.basis = ScratchVoxelBasis();  // the grid-sized basis, before the local solves
   r.markedFaces = seeds.size();
   if (options.voxLoc || !seeds.empty()) {

@@ -68,6 +68,7 @@ struct StreamParamResult {
   SeamlessStats solve;
   std::uint32_t translationConstraints = 0, determinedBasis = 0, inconsistentBasis = 0, failedAttempts = 0;
   std::uint64_t domains = 0, basisFunctions = 0, elements = 0, fragments = 0;
+  std::uint64_t islandFaces = 0;  ///< faces of the islands, left out of the voxel basis
   std::string voxelRetryReason;  ///< why the basis was built a second time (empty: once)
   std::uint64_t markedFaces = 0;
   bool refined = false;

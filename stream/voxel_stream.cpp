@@ -59,7 +59,8 @@ ScratchFile clipFaces(ScratchFolder& folder, const CleanScratch& scratch, const 
       scratch.numFaces, options.chunkFaces,
       [&](detail::ClippedChunk& chunk) {
         auto readers = pool.take();
-        detail::clipChunk(out.geometry, [&](FaceId f) { return toGrid(out.geometry, readers->points(f)); }, chunk);
+        detail::clipChunk(out.geometry, [&](FaceId f) { return toGrid(out.geometry, readers->points(f)); }, chunk,
+                          options.leftOut);
       },
       out.grid, [&](const VoxelFragment& fragment) { writer.write(&fragment, sizeof(fragment)); },
       [](const detail::ClippedChunk&) {});

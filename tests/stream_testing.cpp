@@ -1,9 +1,13 @@
 #include "stream_testing.h"
 
+#include <gtest/gtest.h>
+
 #include <memory>
 
+#include "core/basis/islands.h"
 #include "core/cut/cut.h"
 #include "core/synth/generate.h"
+#include "stream/clean_stream.h"
 #include "stream/mesh_stream.h"
 #include "stream/welded_scratch.h"
 #include "test_meshes.h"
@@ -72,6 +76,9 @@ StageInputs prepareStageInputs(ScratchFolder& folder, const CleanScratch& scratc
                              inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
   in.options.gridResolution = resolution;
   in.options.edgeLength = 0.02 * computeBoundingBox(cleaned.mesh.positions).extent().norm();
+  // The islands, left out of the voxel basis as parameterizeMeshVoxel leaves them out.
+  in.options.leftOut = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes);
+  EXPECT_EQ(in.options.leftOut, islandFaces(cleaned.topology));
   return in;
 }
 

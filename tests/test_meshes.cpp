@@ -109,6 +109,26 @@ TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts) {
   return out;
 }
 
+TriangleMesh torusWithIslands(int n, int m, int specks, double cell, int ballLevels, float ballRadius,
+                              std::uint32_t seed) {
+  std::vector<TriangleMesh> parts{torusMesh(n, m)};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> at(-2.0f, 2.0f);
+  for (int k = 0; k < specks; ++k) {
+    TriangleMesh speck = gridMesh(2, 1 + k % 2, cell);
+    const Vec3f shift(at(rng), at(rng), 1.2f + 0.1f * k);
+    for (Vec3f& p : speck.positions) {
+      if (k % 2) p = Vec3f(p[0], 0.6f * p[1], 0.8f * p[1] + 0.3f * p[0]);
+      p += shift;
+    }
+    parts.push_back(speck);
+  }
+  TriangleMesh ball = icosphereMesh(ballLevels);
+  for (Vec3f& p : ball.positions) p = ballRadius * p + Vec3f(0.0f, 0.0f, -1.4f);
+  parts.push_back(ball);
+  return concatMeshes(parts);
+}
+
 Surface makeSurface(TriangleMesh mesh) {
   Surface s;
   s.topology = Topology::build(mesh.triangles, mesh.numVertices());

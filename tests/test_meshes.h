@@ -22,6 +22,11 @@ TriangleMesh cylinderMesh(int n, int m, double radius = 1.0, double height = 2.0
 TriangleMesh generatedMesh(MeshKind kind, std::uint64_t faces);
 /// Concatenates meshes into one with several components.
 TriangleMesh concatMeshes(const std::vector<TriangleMesh>& parts);
+/// torusMesh(n, m) and islands: `specks` flat grids of 2 x 1 or 2 x 2 cells of size `cell` at
+/// random places above it (seed; the odd ones tilted, the even ones level), then an icosphere of
+/// `ballLevels` levels and radius `ballRadius` below it (cones and seams of its own).
+TriangleMesh torusWithIslands(int n, int m, int specks, double cell, int ballLevels, float ballRadius,
+                              std::uint32_t seed);
 /// The same surface with its vertices and faces in a random order (seeded).
 TriangleMesh shuffledMesh(const TriangleMesh& mesh, std::uint32_t seed);
 /// The mesh with one face in every `every` removed where none of its vertices touches a removed

@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "core/basis/islands.h"
 #include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/quality/metrics.h"
@@ -134,6 +135,47 @@ TEST(ParamSolver, VoxelSolversCloseABasisStageBeforeTheSolve) {
     if (result.refined) expected.push_back("refine");
     EXPECT_EQ(names, expected) << paramSolverName(chosen);
     EXPECT_EQ(result.refined, chosen == ParamSolver::VoxLoc) << paramSolverName(chosen);
+  }
+}
+
+TEST(ParamSolver, IslandsAreLeftOutOfTheVoxelBasisAndMappedByTheLocalHatSolve) {
+  const testing::CutSurface t = testing::makeCutSurface(testing::torusWithIslands(30, 12, 6, 0.08, 2, 0.3f, 7));
+  const std::uint32_t torusFaces = 2 * 30 * 12;
+  const std::vector<FaceId> islands = islandFaces(t.s.topology);
+  ASSERT_EQ(islands.size(), t.s.mesh.numFaces() - torusFaces);  // all but the largest component
+  EXPECT_EQ(islands.front(), torusFaces);
+  EXPECT_TRUE(islandFaces(t.s.topology, 3).empty());  // no component that small
+  ParamOptions options;
+  options.edgeLength = 0.1;
+  const ParamResult hat = parameterizeMesh(t.s.mesh, t.s.topology, t.field, t.cut, options);
+  for (ParamSolver chosen : {ParamSolver::Vox, ParamSolver::VoxLoc}) {
+    SCOPED_TRACE(paramSolverName(chosen));
+    SolverOptions solverOptions;
+    solverOptions.solver = chosen;
+    solverOptions.gridResolution = 16;
+    const SolverResult result =
+        parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, options, solverOptions);
+    EXPECT_EQ(result.solver, chosen);
+    EXPECT_EQ(result.islandFaces, islands.size());
+    EXPECT_TRUE(result.refined);
+    EXPECT_GE(result.markedFaces, islands.size());
+    const WedgeMap& uv = result.param.cornerUV;
+    EXPECT_TRUE(measureSeams(t.s.mesh, t.s.topology, t.cut, uv).isSeamless(1e-8));
+    // The islands are mapped whole by the local hat solve: none of their triangles collapsed or
+    // flipped, and the specks (no cones: one linear solve) have the hat solver's triangles up to
+    // a shift. The ball's cones and translations are placed by the local solve's own rounding.
+    const FaceId ballFaces = 320, specks = t.s.mesh.numFaces() - ballFaces;
+    double largest = 0.0;
+    std::size_t bad = 0;
+    for (FaceId f : islands) {
+      bad += parameterAreaRatio(t.s.mesh, uv, f, options.edgeLength) < 0.1;
+      for (int k = 1; k < 3 && f < specks; ++k) {
+        const Vec2d got = uv[3 * f + k] - uv[3 * f], want = hat.cornerUV[3 * f + k] - hat.cornerUV[3 * f];
+        largest = std::max(largest, (got - want).norm());
+      }
+    }
+    EXPECT_EQ(bad, 0u);
+    EXPECT_LT(largest, 1e-9);
   }
 }
 

@@ -227,6 +227,7 @@ PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver sol
   solved.failedAttempts = s.failedAttempts;
   solved.voxelRetryReason = s.voxelRetryReason;
   solved.markedFaces = s.markedFaces;
+  solved.islandFaces = s.islandFaces;
   solved.refined = s.refined;
   solved.refine = s.refine;
   r.untangled = s.untangled;

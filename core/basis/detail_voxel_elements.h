@@ -31,12 +31,18 @@ struct ClippedChunk {
   std::vector<std::uint8_t> edgeMask;
 };
 
-/// Clips the chunk's faces; gridCorners(f): the face's corners in grid coordinates (as
-/// faceGridCoords computes them).
+/// Clips the chunk's faces but those in `leftOut` (increasing: the islands, islands.h);
+/// gridCorners(f): the face's corners in grid coordinates (as faceGridCoords computes them).
 template <class GridCorners>
-void clipChunk(const VoxelGridGeometry& grid, GridCorners&& gridCorners, ClippedChunk& chunk) {
+void clipChunk(const VoxelGridGeometry& grid, GridCorners&& gridCorners, ClippedChunk& chunk,
+               const std::vector<FaceId>& leftOut = {}) {
   std::vector<VoxelPiece> pieces;
+  auto skip = std::lower_bound(leftOut.begin(), leftOut.end(), chunk.begin);
   for (FaceId f = chunk.begin; f < chunk.end; ++f) {
+    if (skip != leftOut.end() && *skip == f) {
+      ++skip;
+      continue;
+    }
     const std::array<Vec3d, 3> g = gridCorners(f);
     clipTriangleToVoxels(g, grid.resolution, pieces);
     const std::size_t before = chunk.face.size();

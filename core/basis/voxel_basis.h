@@ -39,6 +39,9 @@ struct VoxelBasisOptions {
   /// hair across a grid plane) would make the system singular to working precision; joined, they
   /// lose their own coefficient only where they are almost zero. 0 = off.
   double minDomainWeight = 1e-9;
+  /// Faces given no fragments (increasing): the islands (islands.h), mapped by the local hat
+  /// solve instead; the basis, its system and the voxel map leave them out (their corners 0).
+  std::vector<FaceId> leftOut;
   ProgressFn progress;
 };
 

@@ -1,4 +1,5 @@
 #include "core/basis/voxel_grid.h"
+#include "core/basis/islands.h"
 
 #include <openvdb/openvdb.h>
 
@@ -99,7 +100,8 @@ VoxelBuildResult buildVoxelBasis(const TriangleMesh& mesh, const Topology& topol
   detail::clipFacesInOrder(
       nf, options.chunkFaces,
       [&](detail::ClippedChunk& chunk) {
-        detail::clipChunk(geometry, [&](FaceId f) { return faceGridCoords(mesh, geometry, f); }, chunk);
+        detail::clipChunk(geometry, [&](FaceId f) { return faceGridCoords(mesh, geometry, f); }, chunk,
+                          options.leftOut);
       },
       out.grid, [&](const VoxelFragment& fragment) { fragments.push_back(fragment); },
       [&](const detail::ClippedChunk& chunk) { reportProgress(options.progress, "voxel clip", double(chunk.end) / nf); });
@@ -135,6 +137,13 @@ SeamlessSolution solveVoxelSeamless(VoxelBasis& basis, const Reduction& reductio
   }
 }
 
+std::vector<FaceId> withFaces(const std::vector<FaceId>& faces, const std::vector<FaceId>& more) {
+  std::vector<FaceId> out;
+  out.reserve(faces.size() + more.size());
+  std::set_union(faces.begin(), faces.end(), more.begin(), more.end(), std::back_inserter(out));
+  return out;
+}
+
 VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology& topology,
                                        const CrossField& field, const CutResult& cut,
                                        const ParamOptions& options, std::int32_t gridResolution,
@@ -150,6 +159,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   basisOptions.edgeLength = options.edgeLength;
   basisOptions.progress = options.progress;
   if (minDomainWeight >= 0.0) basisOptions.minDomainWeight = minDomainWeight;
+  basisOptions.leftOut = islandFaces(topology);
   start = std::chrono::steady_clock::now();
   VoxelBuildResult built = buildVoxelBasis(mesh, topology, field, cut, basisOptions);
   VoxelBasis& basis = *built.basis;
@@ -171,8 +181,10 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   param.secondsReduce = secondsSince(start);
   out.determinedBasis = static_cast<std::uint32_t>(reduction.determinedBasis.size());
   out.inconsistentBasis = static_cast<std::uint32_t>(reduction.inconsistentBasis.size());
-  out.markedFaces = basis.markedFaces(reduction);
-  out.inconsistentFaces = basis.supportFaces(reduction.inconsistentBasis);
+  // The islands are mapped by the local hat solve: every face of theirs is marked for it.
+  out.islandFaces = basisOptions.leftOut.size();
+  out.markedFaces = withFaces(basis.markedFaces(reduction), basisOptions.leftOut);
+  out.inconsistentFaces = withFaces(basis.supportFaces(reduction.inconsistentBasis), basisOptions.leftOut);
   out.invisibleTranslations = reduction.invisibleTranslations;
 
   RoundOptions roundOptions;

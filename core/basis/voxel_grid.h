@@ -68,6 +68,8 @@ struct VoxelParamResult {
   std::vector<FaceId> markedFaces;
   /// The triangles of inconsistent basis functions alone: where the voxel map is not seamless.
   std::vector<FaceId> inconsistentFaces;
+  /// Faces of the islands (islands.h), left out of the basis; in both lists above.
+  std::uint64_t islandFaces = 0;
   VoxelBasisStats basisStats;
   std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
   /// Normal-derivative regularization the solve succeeded with (VoxelBasisOptions), and how many
@@ -86,6 +88,9 @@ SeamlessSolution solveVoxelSeamless(VoxelBasis& basis, const Reduction& reductio
 /// The Vox solver. When CHOLMOD finds the system indefinite, it re-assembles and refactors with a
 /// 100x stronger regularization (up to kMaxVoxelRegularization; the basis is built once) before
 /// giving up with the last SolverError. minDomainWeight: VoxelBasisOptions's (< 0: its default).
+/// The union of two increasing face lists.
+std::vector<FaceId> withFaces(const std::vector<FaceId>& faces, const std::vector<FaceId>& more);
+
 VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology& topology,
                                        const CrossField& field, const CutResult& cut,
                                        const ParamOptions& options,

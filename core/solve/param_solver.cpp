@@ -128,6 +128,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   out.determinedBasis = vox.determinedBasis;
   out.inconsistentBasis = vox.inconsistentBasis;
   out.markedFaces = vox.markedFaces.size();
+  out.islandFaces = vox.islandFaces;
   // voxloc refines near cones and wherever the map collapses or flips; vox only where its
   // reduction left basis functions inconsistent, the one place the voxel map is not seamless.
   const bool voxLoc = choice.solver == ParamSolver::VoxLoc;

@@ -97,7 +97,8 @@ struct SolverResult {
   std::string solverReason;              ///< why that one (chooseParamSolver, or the fallback)
   VoxelBasisStats basisStats;  ///< vox, voxloc
   std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
-  std::uint64_t markedFaces = 0;  ///< faces of marked voxel basis functions
+  std::uint64_t markedFaces = 0;  ///< faces of marked voxel basis functions, and of the islands
+  std::uint64_t islandFaces = 0;  ///< faces of the islands (islands.h), mapped by the local hat solve
   bool refined = false;  ///< the local refinement ran (voxloc; vox on inconsistent basis functions)
   RefineStats refine;
   /// vox/voxloc: regularization the voxel solve succeeded with and failed factorizations before.
