@@ -93,6 +93,8 @@ void writeRefine(JsonWriter& j, const RefineStats& refine, const ParamReportCont
   j.key("collapsedBeyondConesAfter").value(refine.collapsedAfter - refine.collapsedAtConesAfter);
   j.key("flippedAfter").value(refine.flippedAfter);
   j.key("unresolvedFaces").value(refine.unresolvedFaces);
+  j.key("failedSolves").value(U64{refine.failedSolves});
+  j.key("failedSolveReason").value(refine.failedSolveReason);
   j.key("maxRounds").value(U64{c.maxRounds});
   writeRefineRounds(j, refine);
   j.endObject();

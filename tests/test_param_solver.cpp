@@ -179,5 +179,26 @@ TEST(ParamSolver, IslandsAreLeftOutOfTheVoxelBasisAndMappedByTheLocalHatSolve) {
   }
 }
 
+TEST(ParamSolver, ALocalSolveThatCannotBeFactoredFallsBackToTheHatSolver) {
+  const FieldTorus t;
+  const ParamResult hat = parameterizeMesh(t.s.mesh, t.s.topology, t.field, t.cut, t.options());
+  SolverOptions solverOptions;
+  solverOptions.solver = ParamSolver::VoxLoc;
+  solverOptions.gridResolution = 16;
+  solverOptions.refine.groupFails = [](FaceId) { return true; };
+  const SolverResult result =
+      parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, t.options(), solverOptions);
+  EXPECT_EQ(result.solver, ParamSolver::Hat);
+  EXPECT_NE(result.fallbackReason.find("local refinement"), std::string::npos) << result.fallbackReason;
+  EXPECT_NE(result.fallbackReason.find("test hook"), std::string::npos) << result.fallbackReason;
+  EXPECT_GT(result.refine.failedSolves, 0u);
+  EXPECT_FALSE(result.refined);
+  ASSERT_EQ(result.param.cornerUV.size(), hat.cornerUV.size());
+  std::size_t different = 0;
+  for (CornerId c = 0; c < hat.cornerUV.size(); ++c) different += result.param.cornerUV[c] != hat.cornerUV[c];
+  EXPECT_EQ(different, 0u);
+  EXPECT_TRUE(measureSeams(t.s.mesh, t.s.topology, t.cut, result.param.cornerUV).isSeamless(1e-8));
+}
+
 }  // namespace
 }  // namespace seamvox

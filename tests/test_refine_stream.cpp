@@ -36,6 +36,7 @@ void expectSameStats(const RefineStats& got, const RefineStats& want) {
             std::make_tuple(want.freeVertices, want.lockedVertices, want.solves, want.totalUnknowns, want.unknowns));
   EXPECT_EQ(std::make_tuple(got.collapsedAfter, got.collapsedAtConesAfter, got.flippedAfter, got.unresolvedFaces),
             std::make_tuple(want.collapsedAfter, want.collapsedAtConesAfter, want.flippedAfter, want.unresolvedFaces));
+  EXPECT_EQ(std::make_tuple(got.failedSolves, got.failedSolveReason), std::make_tuple(want.failedSolves, want.failedSolveReason));
   EXPECT_EQ(got.refinedVertexFraction, want.refinedVertexFraction);
   ASSERT_EQ(got.rounds.size(), want.rounds.size());
   for (std::size_t k = 0; k < want.rounds.size(); ++k) {
@@ -74,6 +75,7 @@ struct Case {
   double collapseThreshold;
   std::uint32_t rings;
   bool damaged = false;
+  bool failSome = false;  // every third group's solve fails: it keeps its input map
 };
 
 // Moves the values of every corner of some vertices far off in both maps (as the refinement's
@@ -102,7 +104,7 @@ void damageMaps(ScratchFolder& folder, const Topology& topology, WedgeMap& map, 
 // faces stay at the region's border and later rounds grow patches around them.
 TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
   const NamedMeshes meshes = testing::stageTestMeshes(31);
-  std::uint64_t solves = 0, laterRounds = 0, outsideCounted = 0, batched = 0;
+  std::uint64_t solves = 0, laterRounds = 0, outsideCounted = 0, batched = 0, failedSolves = 0;
   forEachCleaned(meshes, [&](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
     const testing::StageInputs in = testing::prepareStageInputs(folder, scratch, cleaned, 32, kTinyPass);
     ParamOptions param;
@@ -111,7 +113,8 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
         parameterizeMeshVoxel(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, param, 32);
     ScratchVoxelBasis basis = buildScratchVoxelBasis(folder, scratch, in.field, in.cut, in.options, kTinyPass);
     for (const Case& c : {Case{"voxloc", true, 0.1, 1}, Case{"vox", false, 0.1, 1}, Case{"voxloc, no collapses", true, 0.0, 1},
-                         Case{"voxloc, no rings", true, 0.1, 0}, Case{"voxloc, damaged map", true, 0.1, 0, true}}) {
+                         Case{"voxloc, no rings", true, 0.1, 0}, Case{"voxloc, damaged map", true, 0.1, 0, true},
+                         Case{"voxloc, failed solves", true, 0.1, 1, false, true}}) {
       SCOPED_TRACE(c.name);
       // A fresh Vox map each time: applying changes it.
       ScratchVoxelSolution solved = solveScratchVoxelMap(folder, scratch, in.cut, basis, RoundOptions{}, kTinyPass);
@@ -127,11 +130,14 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
       options.maxRounds = c.voxLoc ? 6 : 1;
       options.rings = c.rings;
       options.groupFaces = 200;  // several groups solved in parallel, each with its own page caches
+      if (c.failSome) options.groupFails = [](FaceId first) { return first % 3 == 0; };
       const RefineResult want = refineNearCones(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut,
                                                 inMemoryMap, expected.param.translations, options);
       const RefineResult got = refineScratchNearCones(folder, scratch, in.field, in.cut, solved.map,
                                                       solved.translations, options, kTinyPass);
       expectSameResult(got, want);
+      failedSolves += want.stats.failedSolves;
+      if (c.failSome) EXPECT_NE(want.stats.failedSolveReason.find("test hook"), std::string::npos);
       EXPECT_EQ(want.stats.batches, want.stats.rounds.size());
       batched += got.stats.batches > want.stats.batches;  // several batches a round, each applied at once
       solves += want.stats.solves;
@@ -150,6 +156,7 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
   EXPECT_GT(solves, 3u);
   EXPECT_GT(laterRounds, 0u);  // a border that needed another round somewhere
   EXPECT_GT(batched, 0u);
+  EXPECT_GT(failedSolves, 0u);
   EXPECT_GT(outsideCounted, 0u);
 }
 

@@ -121,6 +121,10 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(refine.regionFaces),
                 static_cast<unsigned long long>(refine.totalUnknowns), refine.solves, refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
+    if (refine.failedSolves > 0) {
+      std::printf("refined: %u local solves could not be factored and kept the voxel map there (first: %s)\n",
+                  refine.failedSolves, refine.failedSolveReason.c_str());
+    }
   }
   if (r.untangled) {
     std::printf("foldover repair: flipped %llu -> %llu (%llu folded in 3D), %llu patch faces, %u solves, "

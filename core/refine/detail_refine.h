@@ -19,11 +19,13 @@
 #include <cmath>
 #include <complex>
 #include <iterator>
+#include <string>
 #include <vector>
 
 #include "core/mesh/detail_union_find.h"
 #include "core/quality/metrics.h"
 #include "core/refine/refine.h"
+#include "core/system/errors.h"
 #include "core/system/memory.h"
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"
@@ -206,6 +208,7 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     RefineStats system;
     bool collapsedAtBorder = false;
     double secondsExtract = 0.0, secondsSolve = 0.0;
+    std::string failure;  // the solve's SolverError: the group keeps its input map
   };
   const std::vector<std::vector<FaceId>> groups =
       splitRegionIn(source.table(), faces, std::max<std::size_t>(1, options.groupFaces));
@@ -238,13 +241,27 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
       lap = std::chrono::steady_clock::now();
       RegionSolution solved;
       if (numFree > 0) {
-        solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
-      } else {
+        try {
+          if (options.groupFails && options.groupFails(groups[g].front())) {
+            throw SolverError("refine: group of face " + std::to_string(groups[g].front()) + " failed (test hook)");
+          }
+          solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
+        } catch (const SolverError& e) {
+          r.failure = e.what();
+          r.system = RefineStats();
+        }
+      }
+      if (numFree == 0 || !r.failure.empty()) {
         solved.cornerUV = std::move(regionUV);
         solved.seamT = std::move(regionT);
       }
       r.secondsSolve = secondsSince(lap);
       writeSolvedCorners(region, solved, fresh.data() + offset[i]);
+      if (!r.failure.empty()) {
+        // The input values, recorded as locked: nothing of the group changes.
+        for (std::size_t k = offset[i]; k < offset[i + 1]; ++k) fresh[k].free = false;
+        r.figures.freeVertices = 0;
+      }
       for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
       r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
     });
@@ -267,6 +284,7 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     stats.secondsSolve += r.secondsSolve;
     if (r.system.unknowns > 0 && r.system.unknowns >= largest.unknowns) largest = r.system;
     stats.solves += r.system.unknowns > 0;
+    if (!r.failure.empty() && stats.failedSolves++ == 0) stats.failedSolveReason = r.failure;
   }
   std::sort(border.begin(), border.end());
   figures.borderFaces = border.size();

@@ -22,6 +22,8 @@
 /// On the shared meshes these are the only collapsed faces left, in the hat map as well.
 #include <complex>
 #include <cstdint>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "core/basis/basis.h"
@@ -52,6 +54,9 @@ struct RefineOptions {
   /// A round's region is solved in groups of whole components of at least this many faces
   /// (splitRegion), in parallel: a group's factor stays near 40 MB at the default.
   std::size_t groupFaces = std::size_t(1) << 15;
+  /// Test hook: a group whose first face it returns true for fails its solve as an indefinite
+  /// system would (RefineStats::failedSolves).
+  std::function<bool(FaceId firstFace)> groupFails;
   ProgressFn progress;
 };
 
@@ -99,6 +104,10 @@ struct RefineStats {
   /// Last round's borderFaces: 0 unless maxRounds ran out or the rounds stopped paying (only
   /// flipped faces left at the border, and no fewer than half as many as the round before).
   std::uint64_t unresolvedFaces = 0;
+  /// Group solves whose system could not be factored (zero-area and needle faces can make a
+  /// region's hat system indefinite): the group keeps its input map; the first one's message.
+  std::uint32_t failedSolves = 0;
+  std::string failedSolveReason;
 };
 
 /// How a face's parameterAreaRatio seeds the refinement region: collapsed below the threshold,

@@ -145,6 +145,18 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     out.refined = true;
     out.refine = refinement.stats;
     if (solverOptions.meter) solverOptions.meter->finish("refine");
+    // A local solve that could not be factored left its region as the voxel map made it (not
+    // seamless where functions were inconsistent): the hat solver maps the whole mesh instead
+    // when it fits in memory; else the map stays, its verdict measured and reported.
+    const std::uint64_t available = availableMemoryBytes();
+    if (out.refine.failedSolves > 0 && (available == 0 || mesh.numFaces() * kHatBytesPerFace <= available)) {
+      out.fallbackReason = "local refinement: " + out.refine.failedSolveReason;
+      out.solver = ParamSolver::Hat;
+      out.solverReason = "a local solve of the voxel map's refinement could not be factored";
+      out.refined = false;
+      out.param = parameterizeMesh(mesh, topology, field, cut, options);
+      if (solverOptions.meter) solverOptions.meter->finish("solve");
+    }
   }
   return out;
 }
