@@ -209,11 +209,55 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     bool collapsedAtBorder = false;
     double secondsExtract = 0.0, secondsSolve = 0.0;
     std::string failure;  // the solve's SolverError: the group keeps its input map
+    std::uint64_t unknowns = 0;  // over the group's solves (several when solved again by parts)
+    std::uint32_t solves = 0;
   };
   const std::vector<std::vector<FaceId>> groups =
       splitRegionIn(source.table(), faces, std::max<std::size_t>(1, options.groupFaces));
   std::vector<GroupResult> results(groups.size());
   const double h = options.edgeLength;
+  // One group's region extracted, solved from the map as refined so far and measured; its
+  // corners written to out (3 per face, in face order). A solve that cannot be factored leaves
+  // the group's input values, recorded as locked (nothing of it changes), and its message.
+  const auto solveGroup = [&](const std::vector<FaceId>& groupFaces, SolvedCorner* out, GroupResult& r) {
+    auto lap = std::chrono::steady_clock::now();
+    auto readers = source.groupReaders();
+    const RegionMesh region = readers->extract(groupFaces);
+    WedgeMap regionUV = regionInput(region, source, *readers);
+    std::vector<Complex> regionT(region.seamOrigin.size());
+    for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
+    const std::uint32_t numFree = static_cast<std::uint32_t>(
+        std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
+    r.figures.freeVertices = numFree;
+    r.secondsExtract = secondsSince(lap);
+    lap = std::chrono::steady_clock::now();
+    RegionSolution solved;
+    if (numFree > 0) {
+      try {
+        if (options.groupFails && options.groupFails(groupFaces.front())) {
+          throw SolverError("refine: group of face " + std::to_string(groupFaces.front()) + " failed (test hook)");
+        }
+        solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
+      } catch (const SolverError& e) {
+        r.failure = e.what();
+        r.system = RefineStats();
+      }
+    }
+    if (numFree == 0 || !r.failure.empty()) {
+      solved.cornerUV = std::move(regionUV);
+      solved.seamT = std::move(regionT);
+    }
+    r.secondsSolve = secondsSince(lap);
+    r.unknowns = r.system.unknowns;
+    r.solves = r.system.unknowns > 0;
+    writeSolvedCorners(region, solved, out);
+    if (!r.failure.empty()) {
+      for (std::size_t k = 0; k < 3 * groupFaces.size(); ++k) out[k].free = false;
+      r.figures.freeVertices = 0;
+    }
+    for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
+    r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
+  };
   const std::vector<std::size_t> batches = groupBatches(groups, std::max<std::size_t>(1, source.batchCorners()));
   for (std::size_t b = 0; b + 1 < batches.size(); ++b) {
     // The batch's corners go straight into one array (group after group, 3 per face), with room
@@ -226,45 +270,45 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     fresh.reserve(offset.back() + offset.back() / 4);
     fresh.resize(offset.back());
     parallelForEach(count, 1, [&](std::uint64_t i) {
-      const std::size_t g = first + i;
-      GroupResult& r = results[g];
-      auto lap = std::chrono::steady_clock::now();
-      auto readers = source.groupReaders();
-      const RegionMesh region = readers->extract(groups[g]);
-      WedgeMap regionUV = regionInput(region, source, *readers);
-      std::vector<Complex> regionT(region.seamOrigin.size());
-      for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = currentT[region.seamOrigin[j]];
-      const std::uint32_t numFree = static_cast<std::uint32_t>(
-          std::count(region.vertexFree.begin(), region.vertexFree.end(), std::uint8_t(1)));
-      r.figures.freeVertices = numFree;
-      r.secondsExtract = secondsSince(lap);
-      lap = std::chrono::steady_clock::now();
-      RegionSolution solved;
-      if (numFree > 0) {
-        try {
-          if (options.groupFails && options.groupFails(groups[g].front())) {
-            throw SolverError("refine: group of face " + std::to_string(groups[g].front()) + " failed (test hook)");
-          }
-          solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
-        } catch (const SolverError& e) {
-          r.failure = e.what();
-          r.system = RefineStats();
-        }
-      }
-      if (numFree == 0 || !r.failure.empty()) {
-        solved.cornerUV = std::move(regionUV);
-        solved.seamT = std::move(regionT);
-      }
-      r.secondsSolve = secondsSince(lap);
-      writeSolvedCorners(region, solved, fresh.data() + offset[i]);
-      if (!r.failure.empty()) {
-        // The input values, recorded as locked: nothing of the group changes.
-        for (std::size_t k = offset[i]; k < offset[i + 1]; ++k) fresh[k].free = false;
-        r.figures.freeVertices = 0;
-      }
-      for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
-      r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
+      solveGroup(groups[first + i], fresh.data() + offset[i], results[first + i]);
     });
+    // A group whose solve failed is solved again component by component: only the components
+    // that fail alone keep their input map (a zero-area sliver split off by the cleaning made a
+    // whole group of cone neighbourhoods fail).
+    for (std::size_t i = 0; i < count; ++i) {
+      GroupResult& r = results[first + i];
+      const std::vector<FaceId>& group = groups[first + i];
+      if (r.failure.empty()) continue;
+      const std::vector<std::vector<FaceId>> parts = splitRegionIn(source.table(), group, 1);
+      if (parts.size() < 2) continue;
+      std::vector<GroupResult> sub(parts.size());
+      std::vector<std::vector<SolvedCorner>> corners(parts.size());
+      parallelForEach(parts.size(), 1, [&](std::uint64_t k) {
+        corners[k].resize(3 * parts[k].size());
+        solveGroup(parts[k], corners[k].data(), sub[k]);
+      });
+      r = GroupResult();
+      for (std::size_t k = 0; k < parts.size(); ++k) {
+        for (std::size_t j = 0; j < parts[k].size(); ++j) {
+          const std::size_t rank = std::lower_bound(group.begin(), group.end(), parts[k][j]) - group.begin();
+          std::copy_n(corners[k].data() + 3 * j, 3, fresh.data() + offset[i] + 3 * rank);
+        }
+        GroupResult& p = sub[k];
+        r.seams.insert(r.seams.end(), p.seams.begin(), p.seams.end());
+        r.border.insert(r.border.end(), p.border.begin(), p.border.end());
+        r.figures.freeVertices += p.figures.freeVertices;
+        r.figures.collapsed += p.figures.collapsed;
+        r.figures.collapsedAtCones += p.figures.collapsedAtCones;
+        r.figures.flipped += p.figures.flipped;
+        if (p.system.unknowns >= r.system.unknowns) r.system = p.system;
+        r.unknowns += p.unknowns;
+        r.solves += p.solves;
+        r.collapsedAtBorder = r.collapsedAtBorder || p.collapsedAtBorder;
+        r.secondsExtract += p.secondsExtract;
+        r.secondsSolve += p.secondsSolve;
+        if (r.failure.empty()) r.failure = p.failure;
+      }
+    }
     tbb::parallel_sort(fresh.begin(), fresh.end(), [](const SolvedCorner& x, const SolvedCorner& y) { return x.corner < y.corner; });
     source.record(std::move(fresh));
     ++stats.batches;
@@ -275,7 +319,7 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     for (const auto& [seam, t] : r.seams) currentT[seam] = t;
     border.insert(border.end(), r.border.begin(), r.border.end());
     figures.freeVertices += r.figures.freeVertices;
-    figures.unknowns += r.system.unknowns;
+    figures.unknowns += r.unknowns;
     figures.collapsed += r.figures.collapsed;
     figures.collapsedAtCones += r.figures.collapsedAtCones;
     figures.flipped += r.figures.flipped;
@@ -283,7 +327,7 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     stats.secondsExtract += r.secondsExtract;
     stats.secondsSolve += r.secondsSolve;
     if (r.system.unknowns > 0 && r.system.unknowns >= largest.unknowns) largest = r.system;
-    stats.solves += r.system.unknowns > 0;
+    stats.solves += r.solves;
     if (!r.failure.empty() && stats.failedSolves++ == 0) stats.failedSolveReason = r.failure;
   }
   std::sort(border.begin(), border.end());

@@ -1,5 +1,7 @@
 #include "core/solve/param_solver.h"
 
+#include "core/quality/metrics.h"
+
 #include <cstdio>
 #include <string>
 
@@ -145,11 +147,13 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     out.refined = true;
     out.refine = refinement.stats;
     if (solverOptions.meter) solverOptions.meter->finish("refine");
-    // A local solve that could not be factored left its region as the voxel map made it (not
-    // seamless where functions were inconsistent): the hat solver maps the whole mesh instead
-    // when it fits in memory; else the map stays, its verdict measured and reported.
+    // A local solve that could not be factored left its components as the voxel map made them
+    // (not seamless where functions were inconsistent there): when the map is then not seamless,
+    // the hat solver maps the whole mesh instead if it fits in memory; else the map stays, its
+    // verdict measured and reported.
     const std::uint64_t available = availableMemoryBytes();
-    if (out.refine.failedSolves > 0 && (available == 0 || mesh.numFaces() * kHatBytesPerFace <= available)) {
+    if (out.refine.failedSolves > 0 && !measureSeams(mesh, topology, cut, out.param.cornerUV).isSeamless() &&
+        (available == 0 || mesh.numFaces() * kHatBytesPerFace <= available)) {
       out.fallbackReason = "local refinement: " + out.refine.failedSolveReason;
       out.solver = ParamSolver::Hat;
       out.solverReason = "a local solve of the voxel map's refinement could not be factored";
