@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <memory>
 #include <optional>
 
@@ -12,6 +13,7 @@
 #include "core/field/field_proxy.h"
 #include "core/solve/param_solver.h"
 #include "core/system/errors.h"
+#include "core/system/stopwatch.h"
 #include "stream/cut_stream.h"
 #include "stream/field_stream.h"
 #include "stream/paged_corner_table.h"
@@ -159,8 +161,10 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   basisOptions.gridResolution = options.gridResolution;
   basisOptions.edgeLength = h;
   basisOptions.progress = options.progress;
+  const auto islandsStart = std::chrono::steady_clock::now();
   basisOptions.leftOut = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes);
   r.islandFaces = basisOptions.leftOut.size();
+  r.passSeconds.emplace_back("basis: islands", secondsSince(islandsStart));
   RoundOptions round;
   round.progress = options.progress;
   VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason);
