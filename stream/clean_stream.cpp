@@ -805,17 +805,25 @@ CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded,
   return CleanPass(folder, welded, census, memoryBytes, renumberBySorts, setsOnDisk).run();
 }
 
+namespace {
+
+/// Joins the faces of every glued edge (one pass over the opposite corners).
+void uniteGluedFaces(ScratchFolder& folder, const CleanScratch& scratch, ScratchUnionFind& faces,
+                     const std::string& stage) {
+  ScratchReader opposite(folder, scratch.opposite, stage);
+  CornerId o;
+  for (CornerId c = 0; opposite.read(&o, sizeof o); ++c) {
+    if (o != kInvalidId && c < o) faces.unite(c / 3, o / 3);
+  }
+}
+
+}  // namespace
+
 ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& scratch, std::uint64_t memoryBytes) {
   const std::uint64_t nf = scratch.numFaces, nv = scratch.numVertices;
   // Faces joined through glued edges; a component's id in the order of its smallest face.
   ScratchUnionFind faces(folder, nf, memoryBytes / 2, "components");
-  {
-    ScratchReader opposite(folder, scratch.opposite, "components");
-    CornerId o;
-    for (CornerId c = 0; opposite.read(&o, sizeof o); ++c) {
-      if (o != kInvalidId && c < o) faces.unite(c / 3, o / 3);
-    }
-  }
+  uniteGluedFaces(folder, scratch, faces, "components");
   std::unordered_map<std::uint32_t, std::uint32_t> id;  // root face -> component
   std::vector<ComponentInfo> comps;
   for (FaceId f = 0; f < nf; ++f) {
@@ -868,13 +876,7 @@ ComponentsResult cleanedComponents(ScratchFolder& folder, const CleanScratch& sc
 std::vector<FaceId> scratchIslandFaces(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t maxFaces,
                                        std::uint64_t memoryBytes) {
   ScratchUnionFind faces(folder, scratch.numFaces, memoryBytes / 2, "islands");
-  {
-    ScratchReader opposite(folder, scratch.opposite, "islands");
-    CornerId o;
-    for (CornerId c = 0; opposite.read(&o, sizeof o); ++c) {
-      if (o != kInvalidId && c < o) faces.unite(c / 3, o / 3);
-    }
-  }
+  uniteGluedFaces(folder, scratch, faces, "islands");
   ScratchArray<std::uint32_t> counts(folder, scratch.numFaces, memoryBytes / 4, "islands");
   return detail::islandFacesOf(scratch.numFaces, faces, counts, maxFaces);
 }

@@ -176,13 +176,7 @@ class ScratchRefineSource {
     openMap();
   }
   detail::FaceCounts countTouched(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones, double h) {
-    detail::FaceCounts counts;
-    for (FaceId f : touched) {
-      const std::array<Vec2d, 3> q{value(3 * f), value(3 * f + 1), value(3 * f + 2)};
-      const Triangle t = triangle(f);
-      counts.add(parameterAreaRatio(points(f), q, h), [&] { return detail::collapsesBetweenListedCones(t, q, cones); });
-    }
-    return counts;
+    return detail::countFaces(*this, touched, cones, h, [this](CornerId c) { return value(c); });
   }
   /// The corners are in the map already: the result keeps the vertex counts only.
   void collect(const std::vector<FaceId>& touched, RefineResult& out) {

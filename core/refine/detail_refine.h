@@ -354,24 +354,30 @@ void measureRefinedMap(Source& source, const std::vector<FaceId>& touched, const
   stats.flippedAfter = outside.flipped + inside.flipped;
 }
 
-/// FaceCounts of the faces in `touched` (sorted) with the values of `current` (sorted by corner,
-/// holding every corner of those faces: a solve records all its region's corners).
+/// FaceCounts of the faces in `touched` (sorted), their corners' values from valueOf(c), asked in
+/// increasing corner order.
+template <class Source, class ValueOf>
+FaceCounts countFaces(Source& source, const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
+                      double h, ValueOf&& valueOf) {
+  FaceCounts counts;
+  for (FaceId f : touched) {
+    const std::array<Vec2d, 3> q{valueOf(3 * f), valueOf(3 * f + 1), valueOf(3 * f + 2)};
+    const Triangle t = source.triangle(f);
+    counts.add(parameterAreaRatio(source.points(f), q, h), [&] { return collapsesBetweenListedCones(t, q, cones); });
+  }
+  return counts;
+}
+
+/// countFaces with the values of `current` (sorted by corner, holding every corner of those faces:
+/// a solve records all its region's corners), else the source's: one walk pairs them.
 template <class Source>
 FaceCounts countSolvedFaces(Source& source, const std::vector<FaceId>& touched,
                             const std::vector<SolvedCorner>& current, const std::vector<VertexId>& cones, double h) {
-  FaceCounts inside;
   auto it = current.begin();
-  for (FaceId f : touched) {
-    std::array<Vec2d, 3> q;
-    for (int k = 0; k < 3; ++k) {
-      const CornerId c = 3 * f + k;
-      while (it != current.end() && it->corner < c) ++it;
-      q[k] = it != current.end() && it->corner == c ? it->uv : source.value(c);
-    }
-    const Triangle t = source.triangle(f);
-    inside.add(parameterAreaRatio(source.points(f), q, h), [&] { return collapsesBetweenListedCones(t, q, cones); });
-  }
-  return inside;
+  return countFaces(source, touched, cones, h, [&](CornerId c) {
+    while (it != current.end() && it->corner < c) ++it;
+    return it != current.end() && it->corner == c ? it->uv : source.value(c);
+  });
 }
 
 /// The result: the corners of every vertex freed in some solve with their latest values, and the
