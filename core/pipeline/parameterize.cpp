@@ -91,30 +91,6 @@ std::vector<std::pair<VertexId, VertexId>> mergeableCoincidentCones(
   return pairs;
 }
 
-/// Cone pairs the map put on one point within maxDistance of each other along edges
-/// (coincidentCones), mergeable, with a face still flipped within maxDistance of one of them.
-std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
-    const PipelineResult& r, const std::vector<VertexId>& cones,
-    const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
-  const WedgeMap& map = r.solved.param.cornerUV;
-  std::vector<Vec3d> flipped;  // centroids
-  for (FaceId f = 0; f < r.mesh.numFaces(); ++f) {
-    if (isFlippedRatio(parameterAreaRatio(r.mesh, map, f, r.edgeLength))) {
-      const Triangle& t = r.mesh.triangles[f];
-      flipped.push_back((r.mesh.position(t[0]) + r.mesh.position(t[1]) + r.mesh.position(t[2])) / 3.0);
-    }
-  }
-  const auto nearFlip = [&](VertexId v) {
-    const Vec3d p = r.mesh.position(v);
-    return std::any_of(flipped.begin(), flipped.end(), [&](const Vec3d& q) { return (q - p).norm() <= maxDistance; });
-  };
-  std::vector<std::pair<VertexId, VertexId>> pairs;
-  for (const auto& [a, b] : coincidentCones(r.mesh, r.topology, cones, map, maxDistance)) {
-    if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b)) && (nearFlip(a) || nearFlip(b))) pairs.push_back({a, b});
-  }
-  return pairs;
-}
-
 /// Per face: its centroid within maxDistance of a cone of `pairs`.
 std::vector<std::uint8_t> facesNearCones(const TriangleMesh& mesh,
                                          const std::vector<std::pair<VertexId, VertexId>>& pairs, double maxDistance) {
@@ -129,6 +105,41 @@ std::vector<std::uint8_t> facesNearCones(const TriangleMesh& mesh,
     }
   });
   return near;
+}
+
+/// Cone pairs the map put on one point within maxDistance of each other along edges
+/// (coincidentCones), mergeable, with a face still flipped within maxDistance of one of them. The
+/// pairs come first (a few cones' wedges): only faces whose centroid lies that close to one of
+/// their cones are measured, and none when there is no pair.
+std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
+    const PipelineResult& r, const std::vector<VertexId>& cones,
+    const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
+  const auto candidates = mergeableCoincidentCones(r.mesh, r.topology, cones, coneIndex,
+                                                   r.solved.param.cornerUV, maxDistance);
+  if (candidates.empty()) return {};
+  const std::vector<std::uint8_t> near = facesNearCones(r.mesh, candidates, maxDistance);
+  const WedgeMap& map = r.solved.param.cornerUV;
+  std::vector<std::uint8_t> flipped(r.mesh.numFaces(), 0);
+  parallelFor(r.mesh.numFaces(), 1u << 14, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      flipped[f] = near[f] && isFlippedRatio(parameterAreaRatio(r.mesh, map, f, r.edgeLength));
+    }
+  });
+  std::vector<Vec3d> centroids;
+  for (FaceId f = 0; f < r.mesh.numFaces(); ++f) {
+    if (!flipped[f]) continue;
+    const Triangle& t = r.mesh.triangles[f];
+    centroids.push_back((r.mesh.position(t[0]) + r.mesh.position(t[1]) + r.mesh.position(t[2])) / 3.0);
+  }
+  const auto nearFlip = [&](VertexId v) {
+    const Vec3d p = r.mesh.position(v);
+    return std::any_of(centroids.begin(), centroids.end(), [&](const Vec3d& q) { return (q - p).norm() <= maxDistance; });
+  };
+  std::vector<std::pair<VertexId, VertexId>> pairs;
+  for (const auto& [a, b] : candidates) {
+    if (nearFlip(a) || nearFlip(b)) pairs.push_back({a, b});
+  }
+  return pairs;
 }
 
 /// Curves of `features` the map could not hold on integer iso-lines without squeezing faces (two

@@ -899,13 +899,29 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   const double h = options.edgeLength;
   std::vector<std::uint8_t> state(nf, kFine);
   const std::vector<std::uint8_t>* only = options.onlyFaces;
+  auto classify = [&](FaceId f) {
+    return only && !(*only)[f] ? kFine : stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
+  };
   auto classifyAll = [&] {
     parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-      for (FaceId f = range.begin(); f != range.end(); ++f) {
-        state[f] = only && !(*only)[f] ? kFine : stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
-      }
+      for (FaceId f = range.begin(); f != range.end(); ++f) state[f] = classify(f);
     });
     markFolded(mesh, topology, field, state, [](FaceId f) { return f; });
+  };
+  // After a round only the patch's faces can change: every corner it assigns belongs to a free
+  // vertex, whose whole fan is in the patch.
+  auto classifyPatch = [&](const std::vector<FaceId>& patch) {
+    parallelFor(patch.size(), 1u << 12, [&](const IndexRange& range) {
+      for (std::uint64_t i = range.begin(); i != range.end(); ++i) state[patch[i]] = classify(patch[i]);
+    });
+    std::vector<FaceId> flipped;
+    for (FaceId f : patch) {
+      if (state[f] == kFlipped) flipped.push_back(f);
+    }
+    const std::vector<std::uint8_t> folded = facesFoldedIn3D(mesh, &topology, &field, flipped);
+    for (std::size_t k = 0; k < flipped.size(); ++k) {
+      if (folded[k]) state[flipped[k]] = kFolded;
+    }
   };
   if (only && only->size() != nf) {
     throw InputError("untangle: " + std::to_string(only->size()) + " face flags for " +
@@ -958,7 +974,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
       repair = GroupRepair();
     }
     cornerUV.assign(corners, uv);
-    classifyAll();
+    classifyPatch(patch);
     reportProgress(options.progress, "untangle", double(round + 1) / options.maxRounds);
   }
   if (options.relocationPasses > 0) {
