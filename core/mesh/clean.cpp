@@ -312,13 +312,12 @@ double median(std::vector<double>& values) {
   return *middle;
 }
 
-/// Calls f(length) for every edge at v (the two edges of each corner around it).
+/// Calls f(squared length) for every edge at v (the two edges of each corner around it).
 template <class F>
-void forEachEdgeLength(const TriangleMesh& mesh, const Topology& topology, VertexId v, F&& f) {
+void forEachSquaredEdgeLength(const TriangleMesh& mesh, const Topology& topology, VertexId v, F&& f) {
+  const Vec3d p = mesh.position(v);
   topology.forEachCornerAround(v, [&](CornerId c) {
-    for (CornerId other : {nextCorner(c), prevCorner(c)}) {
-      f((mesh.position(topology.vertex(other)) - mesh.position(v)).norm());
-    }
+    for (CornerId other : {nextCorner(c), prevCorner(c)}) f((mesh.position(topology.vertex(other)) - p).squaredNorm());
   });
 }
 
@@ -333,9 +332,11 @@ std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology
     for (VertexId v = r.begin(); v != r.end(); ++v) {
       if (topology.isIsolatedVertex(v)) continue;
       lengths.clear();
-      forEachEdgeLength(mesh, topology, v, [&](double length) { lengths.push_back(length); });
-      shortest[v] = *std::min_element(lengths.begin(), lengths.end());
-      typical[v] = median(lengths);
+      // Squared: the root is monotone and correctly rounded, so the root of the least and of
+      // the median squared length is the least and the median length, two roots per vertex.
+      forEachSquaredEdgeLength(mesh, topology, v, [&](double squared) { lengths.push_back(squared); });
+      shortest[v] = std::sqrt(*std::min_element(lengths.begin(), lengths.end()));
+      typical[v] = std::sqrt(median(lengths));
     }
   });
   std::vector<std::uint8_t> spike(nv, 0);
