@@ -684,14 +684,15 @@ class CleanPass {
         [&](VertexReaders& r, VertexId v, std::size_t i, std::vector<double>& values) {
           values.clear();
           const Vec3d p = r.positions[v].cast<double>();
+          // Squared lengths, two roots per vertex: the same values (see findSpikeVertices).
           r.table.forEachCornerAround(v, [&](CornerId c) {
-            values.push_back((r.positions[r.table.vertex(nextCorner(c))].cast<double>() - p).norm());
-            values.push_back((r.positions[r.table.vertex(prevCorner(c))].cast<double>() - p).norm());
+            values.push_back((r.positions[r.table.vertex(nextCorner(c))].cast<double>() - p).squaredNorm());
+            values.push_back((r.positions[r.table.vertex(prevCorner(c))].cast<double>() - p).squaredNorm());
           });
           if (values.empty()) return;
           std::sort(values.begin(), values.end());
-          typical[i] = values[values.size() / 2];
-          shortest[i] = values.front();
+          typical[i] = std::sqrt(values[values.size() / 2]);
+          shortest[i] = std::sqrt(values.front());
         },
         [&](std::size_t count) {
           typicalOut.write(typical.data(), count * sizeof(double));

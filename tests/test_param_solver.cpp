@@ -37,6 +37,45 @@ TEST(ParamSolver, NamesRoundTrip) {
   }
 }
 
+TEST(ParamSolver, AutoPicksHatUpToItsLimitAndCountsTheSolvesOfAFeatureAlignedMap) {
+  EXPECT_EQ(chooseParamSolver(ParamSolver::Auto, kAutoHatMaxFacesGrid128, 128).solver, ParamSolver::Hat);
+  EXPECT_EQ(chooseParamSolver(ParamSolver::Auto, kAutoHatMaxFacesGrid128 + 1, 128).solver, ParamSolver::VoxLoc);
+  // The voxel system grows as the grid's square.
+  EXPECT_EQ(chooseParamSolver(ParamSolver::Auto, 4 * kAutoHatMaxFacesGrid128, 256).solver, ParamSolver::Hat);
+  EXPECT_EQ(chooseParamSolver(ParamSolver::Auto, kAutoHatMaxFacesGrid128 / 4 + 1, 64).solver, ParamSolver::VoxLoc);
+  // Feature curves to align: the hat limit divided by the solves an aligned map takes.
+  const std::uint64_t featureLimit = kAutoHatMaxFacesGrid128 / kAutoFeatureSolves;
+  EXPECT_EQ(chooseParamSolver(ParamSolver::Auto, featureLimit, 128, true).solver, ParamSolver::Hat);
+  const SolverChoice above = chooseParamSolver(ParamSolver::Auto, featureLimit + 1, 128, true);
+  EXPECT_EQ(above.solver, ParamSolver::VoxLoc);
+  EXPECT_NE(above.reason.find("feature curves"), std::string::npos) << above.reason;
+  EXPECT_NE(above.reason.find("only --solver hat aligns the curves"), std::string::npos) << above.reason;
+  EXPECT_EQ(chooseParamSolver(ParamSolver::Auto, featureLimit + 1, 128, false).solver, ParamSolver::Hat);
+  // An asked-for solver is kept whatever the size.
+  const SolverChoice asked = chooseParamSolver(ParamSolver::Hat, 100 * kAutoHatMaxFacesGrid128, 128, true);
+  EXPECT_EQ(asked.solver, ParamSolver::Hat);
+  EXPECT_EQ(asked.reason, "asked for");
+}
+
+TEST(ParamSolver, AutoSeesTheFeatureCurvesOfTheSolve) {
+  // 2880 faces at grid 16: below the hat limit (400K / 64), above it with curves to align (/ 5).
+  const testing::CutSurface t = testing::makeCutSurface(testing::torusMesh(60, 24));
+  const std::uint64_t limit = kAutoHatMaxFacesGrid128 / 64;
+  ASSERT_GT(t.s.mesh.numFaces(), limit / kAutoFeatureSolves);
+  ASSERT_LE(t.s.mesh.numFaces(), limit);
+  ParamOptions options;
+  options.edgeLength = 0.3;
+  SolverOptions solverOptions;
+  solverOptions.gridResolution = 16;
+  EXPECT_EQ(parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, options, solverOptions).solver,
+            ParamSolver::Hat);
+  const std::vector<CornerId> featureCorners{0, 1};
+  options.featureCorners = &featureCorners;
+  const SolverResult aligned = parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, options, solverOptions);
+  EXPECT_EQ(aligned.solver, ParamSolver::VoxLoc) << aligned.solverReason;
+  EXPECT_NE(aligned.solverReason.find("feature curves"), std::string::npos) << aligned.solverReason;
+}
+
 TEST(ParamSolver, UnfactorableVoxelSystemFallsBackToTheHatSolver) {
   const FieldTorus t;
   const ParamResult hat = parameterizeMesh(t.s.mesh, t.s.topology, t.field, t.cut, t.options());

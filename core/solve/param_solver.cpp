@@ -28,18 +28,25 @@ ParamSolver parseParamSolver(const std::string& name) {
 }
 
 SolverChoice chooseParamSolver(ParamSolver requested, std::uint64_t numFaces,
-                               std::int32_t gridResolution) {
+                               std::int32_t gridResolution, bool alignsFeatures) {
   if (requested != ParamSolver::Auto) return {requested, "asked for"};
   const double scale = double(gridResolution) / 128.0;
-  const auto limit = static_cast<std::uint64_t>(double(kAutoHatMaxFacesGrid128) * scale * scale);
+  const double solves = alignsFeatures ? double(kAutoFeatureSolves) : 1.0;
+  const auto limit = static_cast<std::uint64_t>(double(kAutoHatMaxFacesGrid128) * scale * scale / solves);
   const bool hat = numFaces <= limit;
-  char text[200];
-  std::snprintf(text, sizeof text, "%llu faces, %s %llu: the %s system is smaller than the %s",
-                static_cast<unsigned long long>(numFaces), hat ? "at most" : "more than",
-                static_cast<unsigned long long>(limit),
-                hat ? "hat (one unknown per vertex)" : ("voxel (grid " + std::to_string(gridResolution) + ")").c_str(),
-                hat ? ("voxel one (grid " + std::to_string(gridResolution) + ")").c_str() : "hat one (one unknown per vertex)");
-  return {hat ? ParamSolver::Hat : ParamSolver::VoxLoc, text};
+  const std::string grid = "grid " + std::to_string(gridResolution);
+  std::string reason = std::to_string(numFaces) + " faces" + (alignsFeatures ? " with feature curves" : "") +
+                       (hat ? ", at most " : ", more than ") + std::to_string(limit) + ": the ";
+  if (alignsFeatures) {
+    reason += hat ? "feature-aligned hat map (about " + std::to_string(kAutoFeatureSolves) +
+                        " hat solves) is cheaper than the voxel one (" + grid + ")"
+                  : "voxel (" + grid + ") map is cheaper than a feature-aligned hat map (about " +
+                        std::to_string(kAutoFeatureSolves) + " hat solves); only --solver hat aligns the curves";
+  } else {
+    reason += hat ? "hat (one unknown per vertex) system is smaller than the voxel one (" + grid + ")"
+                  : "voxel (" + grid + ") system is smaller than the hat one (one unknown per vertex)";
+  }
+  return {hat ? ParamSolver::Hat : ParamSolver::VoxLoc, reason};
 }
 
 namespace {
@@ -79,7 +86,8 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
                                         const SolverOptions& solverOptions) {
   SolverResult out;
   const SolverChoice choice =
-      chooseParamSolver(solverOptions.solver, mesh.numFaces(), solverOptions.gridResolution);
+      chooseParamSolver(solverOptions.solver, mesh.numFaces(), solverOptions.gridResolution,
+                        options.featureCorners && !options.featureCorners->empty());
   out.solver = choice.solver;
   out.solverReason = choice.reason;
   if (choice.solver == ParamSolver::Hat) {

@@ -25,19 +25,25 @@ const char* paramSolverName(ParamSolver solver);
 ParamSolver parseParamSolver(const std::string& name);
 
 /// Largest mesh Auto solves with the hat basis at grid 128. The hat system has one unknown per
-/// vertex, the voxel one about one per occupied grid corner (fixed by the grid); the scaling study
-/// (bench/RESULTS.md) measured voxloc128 faster from 270K faces (fertility) and 410K (armadillo).
-constexpr std::uint64_t kAutoHatMaxFacesGrid128 = 300000;
+/// vertex, the voxel one about one per occupied grid corner (fixed by the grid); bench/RESULTS.md
+/// (session 25) measured the two equal within 20% from 350K to 420K faces: hat faster on the
+/// subdivided armadillo (346K) and a generated scan (399K), voxloc on the subdivided lilium (422K).
+constexpr std::uint64_t kAutoHatMaxFacesGrid128 = 400000;
+/// Hat solves a feature-aligned hat map costs (the first, then those that release the curves the
+/// map collapsed; the field aligned too): 4-5 on the subdivided shared meshes, where voxloc was
+/// already faster from 94K faces. Auto divides its hat limit by this when curves are to be aligned.
+constexpr std::uint64_t kAutoFeatureSolves = 5;
 
 struct SolverChoice {
   ParamSolver solver = ParamSolver::VoxLoc;  ///< never Auto
   std::string reason;                        ///< one sentence for reports
 };
 /// Resolves Auto by the face count against kAutoHatMaxFacesGrid128 scaled by (grid / 128)^2 (the
-/// occupied corners of a surface grow as the square of the grid); other solvers are kept, with
-/// "asked for" as the reason.
+/// occupied corners of a surface grow as the square of the grid), divided by kAutoFeatureSolves
+/// when feature curves are to be aligned (only the hat solver aligns them: the reason says so);
+/// other solvers are kept, with "asked for" as the reason.
 SolverChoice chooseParamSolver(ParamSolver requested, std::uint64_t numFaces,
-                               std::int32_t gridResolution);
+                               std::int32_t gridResolution, bool alignsFeatures = false);
 
 /// Memory the hat solve needs per face beyond the mesh, field and cut, rounded up from the scaling
 /// study (bench/RESULTS.md: 0.99-1.15 KB per face of whole-process peak from 1.4M to 9.2M faces).
