@@ -288,8 +288,8 @@ class WeldPass {
     components_ = std::make_unique<ScratchUnionFind>(folder_, welded_, setsBytes_, "weld: components");
     edgeSort_ = std::make_unique<ExternalSorter<EdgeRecord, EdgeLess>>(folder_, sortOptions("edges"));
     // Positions that fit three quarters of the memory with the union-find are read whole later
-    // (nothing else is held then: the sorts before have ended, the Morton sort comes after) and
-    // the kept faces wait in a file; otherwise the corners are joined with them by two sorts.
+    // (the sorts before have ended; the Morton sort, fed from them, gets the rest of the memory)
+    // and the kept faces wait in a file; otherwise the corners are joined with them by two sorts.
     const std::uint64_t unionFind = std::min<std::uint64_t>(welded_ * sizeof(std::uint32_t), setsBytes_);
     positionsInMemory_ =
         !options_.joinPositions && unionFind + welded_ * sizeof(Vec3f) <= options_.memoryBytes / 4 * 3;
@@ -366,50 +366,49 @@ class WeldPass {
     result_.census.setsOnDisk = components_->onDisk() || loops.onDisk();
   }
 
-  /// Pass 6: the kept faces with their corner positions, in a file; the bounding box of the
-  /// referenced vertices.
+  /// Pass 6: the bounding box of the referenced vertices. Positions held in memory stay for the
+  /// Morton pass, which places the kept faces' corners itself; otherwise the kept faces with their
+  /// corner positions go to a file.
   void placeCorners() {
-    ScratchWriter out(folder_, "positions");
     BoundingBox& box = result_.census.box;
-    auto add = [&](WeldedFace& face) {
+    auto include = [&](const WeldedFace& face) {
       for (int k = 0; k < 3; ++k) {
         const Vec3d p = face.corner(k).cast<double>();
         box.min = box.min.cwiseMin(p);
         box.max = box.max.cwiseMax(p);
       }
-      out.write(&face, sizeof face);
     };
     if (positionsInMemory_) {
-      placeCornersFromMemory(add);
-    } else {
-      joinCornersWithPositions(add);
+      positions_.resize(welded_);
+      ScratchReader in(folder_, result_.scratch.positions, "positions");
+      if (welded_ > 0 && !in.read(positions_.data(), positions_.size() * sizeof(Vec3f))) {
+        throw IoError(result_.scratch.positions.path + ": welded positions end early");
+      }
+      keptFile_ = keptFaces_->finish();
+      keptFaces_.reset();
+      forEachKeptFace("positions", include);
+      return;
     }
+    ScratchWriter out(folder_, "positions");
+    joinCornersWithPositions([&](WeldedFace& face) {
+      include(face);
+      out.write(&face, sizeof face);
+    });
     placedFaces_ = out.finish();
   }
 
-  template <class Add>
-  void placeCornersFromMemory(Add&& add) {
-    std::vector<Vec3f> positions(welded_);
-    {
-      ScratchReader in(folder_, result_.scratch.positions, "positions");
-      if (welded_ > 0 && !in.read(positions.data(), positions.size() * sizeof(Vec3f))) {
-        throw IoError(result_.scratch.positions.path + ": welded positions end early");
+  /// The kept faces (their file) with their corners placed from the positions in memory.
+  template <class Visit>
+  void forEachKeptFace(const char* stage, Visit&& visit) {
+    ScratchReader in(folder_, keptFile_, stage);
+    WeldedFace face;
+    while (in.read(&face.face, sizeof face.face) && in.read(&face.triangle, sizeof face.triangle)) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3f& p = positions_[face.triangle[k]];
+        face.corners[k] = {p.x(), p.y(), p.z()};
       }
+      visit(face);
     }
-    const ScratchFile kept = keptFaces_->finish();
-    keptFaces_.reset();
-    {
-      ScratchReader in(folder_, kept, "positions");
-      WeldedFace face;
-      while (in.read(&face.face, sizeof face.face) && in.read(&face.triangle, sizeof face.triangle)) {
-        for (int k = 0; k < 3; ++k) {
-          const Vec3f& p = positions[face.triangle[k]];
-          face.corners[k] = {p.x(), p.y(), p.z()};
-        }
-        add(face);
-      }
-    }
-    folder_.remove(kept);
   }
 
   /// Corners sorted by vertex, joined with the positions read along their file, then regrouped
@@ -450,20 +449,34 @@ class WeldPass {
   void sortByMorton() {
     WeldCensus& c = result_.census;
     const double diagonal = c.box.diagonal(), tiny = 1e-14 * diagonal * diagonal;
-    ExternalSorter<WeldedFace, MortonLess> sorter(folder_, sortOptions("morton"));
-    {
+    // Beside positions held in memory the sort gets what they and the union-find leave of the
+    // memory (at most its third).
+    ExternalSortOptions options = sortOptions("morton");
+    if (positionsInMemory_) {
+      const std::uint64_t held = positions_.size() * sizeof(Vec3f) +
+                                 std::min<std::uint64_t>(welded_ * sizeof(std::uint32_t), setsBytes_);
+      options.memoryBytes = std::max(kMinimumSortBytes, std::min(options.memoryBytes,
+                                                                 options_.memoryBytes - std::min(options_.memoryBytes, held)));
+    }
+    ExternalSorter<WeldedFace, MortonLess> sorter(folder_, options);
+    auto take = [&](WeldedFace& face) {
+      const Vec3d a = face.corner(0).cast<double>(), b = face.corner(1).cast<double>(),
+                  d = face.corner(2).cast<double>();
+      c.zeroAreaFaces += 0.5 * (b - a).cross(d - a).norm() <= tiny;
+      face.morton = mortonCode((a + b + d) / 3.0, c.box);
+      ++counts_[components_->find(face.triangle[0])].faces;
+      sorter.add(face);
+    };
+    if (positionsInMemory_) {
+      forEachKeptFace("morton", take);
+      std::vector<Vec3f>().swap(positions_);
+      folder_.remove(keptFile_);
+    } else {
       ScratchReader in(folder_, placedFaces_, "morton");
       WeldedFace face;
-      while (in.read(&face, sizeof face)) {
-        const Vec3d a = face.corner(0).cast<double>(), b = face.corner(1).cast<double>(),
-                    d = face.corner(2).cast<double>();
-        c.zeroAreaFaces += 0.5 * (b - a).cross(d - a).norm() <= tiny;
-        face.morton = mortonCode((a + b + d) / 3.0, c.box);
-        ++counts_[components_->find(face.triangle[0])].faces;
-        sorter.add(face);
-      }
+      while (in.read(&face, sizeof face)) take(face);
+      folder_.remove(placedFaces_);
     }
-    folder_.remove(placedFaces_);
     sorter.finish();
     ScratchWriter out(folder_, "morton", std::size_t(1) << 20, sorter.size() * sizeof(WeldedFace));
     WeldedFace face;
@@ -513,6 +526,8 @@ class WeldPass {
   std::unique_ptr<ExternalSorter<EdgeRecord, EdgeLess>> edgeSort_;
   std::unique_ptr<ExternalSorter<CornerRecord, ByVertexLess>> cornerSort_;
   std::unique_ptr<ScratchWriter> keptFaces_;  ///< face and triangle, when positionsInMemory_
+  ScratchFile keptFile_;                      ///< what keptFaces_ wrote
+  std::vector<Vec3f> positions_;              ///< welded positions, from pass 6 to 7 when in memory
   bool positionsInMemory_ = false;
   std::uint64_t setsBytes_ = 0;
   std::unique_ptr<ScratchUnionFind> components_;
