@@ -400,6 +400,76 @@ TEST_F(RefineSphere, TranslationsAmongFreeVerticesAreSolvedAgain) {
   EXPECT_EQ(map.flipped, 0u);
 }
 
+TEST_F(RefineSphere, InPlaceBatchesGiveTheWholeRefinementsMapAndFigures) {
+  // The damaged map grown over several rounds in small groups, and the wrong translations of a
+  // region holding every seam: written into the map a batch at a time (one group per batch, and
+  // the default) it must be the map refineNearCones returns and applyRefinement writes.
+  const Scene& s = *scene_;
+  WedgeMap damaged;
+  damageAroundCones(s, 2, damaged);
+  const HatBasis basis(s.mesh(), s.topology(), s.field, s.cut);
+  const Reduction reduction = reduceBasis(basis);
+  std::vector<Complex> wrong = s.hat.translations;
+  for (std::uint32_t j = 0; j < wrong.size(); ++j) {
+    for (const auto& [column, u] : reduction.seamTranslation[j]) {
+      if (column == 0) wrong[j] += u.toComplex() * Complex(2, 1);
+    }
+  }
+  struct Case {
+    const char* name;
+    const WedgeMap* map;
+    const std::vector<Complex>* t;
+    std::uint32_t rings;
+    bool failSome;
+  };
+  for (const Case& c : {Case{"damaged, rounds", &damaged, &s.hat.translations, 0, false},
+                        Case{"damaged, some groups failing", &damaged, &s.hat.translations, 1, true},
+                        Case{"wrong translations", &s.hat.cornerUV, &wrong, 1, false}}) {
+    SCOPED_TRACE(c.name);
+    RefineOptions options;
+    options.edgeLength = s.options.edgeLength;
+    options.rings = c.rings;
+    options.maxRounds = 8;
+    options.groupFaces = 64;
+    if (c.map == &s.hat.cornerUV) {
+      for (FaceId f = 0; f < s.mesh().numFaces(); f += 2) options.markedFaces.push_back(f);
+    }
+    if (c.failSome) options.groupFails = [](FaceId first) { return first % 3 == 0; };
+    const RefineResult whole = refineNearCones(s.mesh(), s.topology(), s.field, s.cut, *c.map, *c.t, options);
+    WedgeMap expected = *c.map;
+    std::vector<Complex> expectedT = *c.t;
+    applyRefinement(whole, expected, &expectedT);
+    ASSERT_GT(whole.stats.freeVertices, 0u);
+    for (const std::size_t batch : {std::size_t(1), std::size_t(1) << 22}) {
+      WedgeMap map = *c.map;
+      std::vector<Complex> t = *c.t;
+      const RefineResult inPlace =
+          refineNearConesInPlace(s.mesh(), s.topology(), s.field, s.cut, map, t, options, batch);
+      EXPECT_TRUE(inPlace.corners.empty());
+      ASSERT_EQ(map.size(), expected.size());
+      EXPECT_EQ(map.numWedges(), expected.numWedges());
+      std::size_t differing = 0;
+      for (CornerId k = 0; k < map.size(); ++k) differing += map[k] != expected[k];
+      EXPECT_EQ(differing, 0u) << "batch " << batch;
+      EXPECT_EQ(t, expectedT);
+      EXPECT_EQ(inPlace.stats.freeVertices, whole.stats.freeVertices);
+      EXPECT_EQ(inPlace.stats.lockedVertices, whole.stats.lockedVertices);
+      EXPECT_EQ(inPlace.stats.regionFaces, whole.stats.regionFaces);
+      EXPECT_EQ(inPlace.stats.failedSolves, whole.stats.failedSolves);
+      EXPECT_EQ(inPlace.stats.collapsedAfter, whole.stats.collapsedAfter);
+      EXPECT_EQ(inPlace.stats.flippedAfter, whole.stats.flippedAfter);
+      ASSERT_EQ(inPlace.stats.rounds.size(), whole.stats.rounds.size());
+      for (std::size_t r = 0; r < whole.stats.rounds.size(); ++r) {
+        EXPECT_EQ(inPlace.stats.rounds[r].borderFaces, whole.stats.rounds[r].borderFaces);
+        EXPECT_EQ(inPlace.stats.rounds[r].flipped, whole.stats.rounds[r].flipped);
+      }
+      if (batch == 1 && c.map == &damaged) EXPECT_GT(inPlace.stats.batches, whole.stats.batches);
+    }
+    if (c.failSome) EXPECT_GT(whole.stats.failedSolves, 0u);
+    if (c.map == &damaged && !c.failSome) EXPECT_GE(whole.stats.rounds.size(), 2u);
+  }
+}
+
 TEST_F(RefineSphere, ExtractedRegionIsAManifoldSubMeshWithIndexMaps) {
   const Scene& s = *scene_;
   const Topology& topology = s.topology();

@@ -630,15 +630,38 @@ void collectChangedSeams(const std::vector<Complex>& currentT, const std::vector
 
 namespace {
 
-/// The whole mesh and its map in memory as detail::refineRounds reads them.
-class MeshSource {
+/// Every corner of a free vertex is in a refinement (all its faces were solved), with one value
+/// per wedge (the region's cut keeps every seam around a free vertex): each wedge changes whole
+/// and keeps its id, so the values go in place, without WedgeMap::assign's pass over the whole
+/// map. Should two corners of a wedge disagree, assign splits it.
+void applyRefinedCorners(const std::vector<RefinedCorner>& refined, WedgeMap& cornerUV) {
+  for (const RefinedCorner& r : refined) {
+    if (r.corner >= cornerUV.size()) {
+      throw InputError("refine: corner " + std::to_string(r.corner) + " out of range (" +
+                       std::to_string(cornerUV.size()) + " corners)");
+    }
+    cornerUV.setWedgeValue(cornerUV.wedge(r.corner), r.uv);
+  }
+  for (const RefinedCorner& r : refined) {
+    if (cornerUV[r.corner] == r.uv) continue;
+    std::vector<CornerId> corners;
+    std::vector<Vec2d> values;
+    for (const RefinedCorner& x : refined) corners.push_back(x.corner), values.push_back(x.uv);
+    cornerUV.assign(corners, values);
+    return;
+  }
+}
+
+/// The whole mesh and its map in memory as detail::refineRounds reads them: the reads both
+/// in-memory sources share.
+class MeshReads {
  public:
-  MeshSource(const TriangleMesh& mesh, const Topology& topology, const CrossField& field, const CutResult& cut,
-             const WedgeMap& cornerUV)
+  MeshReads(const TriangleMesh& mesh, const Topology& topology, const CrossField& field, const CutResult& cut,
+            const WedgeMap& cornerUV)
       : mesh_(mesh), topology_(topology), field_(field), cut_(cut), cornerUV_(cornerUV) {}
   /// What one thread of a round reads: here the source itself.
   struct Readers {
-    const MeshSource* source;
+    const MeshReads* source;
     Readers* operator->() { return this; }
     Readers& operator*() { return *this; }
     RegionMesh extract(const std::vector<FaceId>& faces) const {
@@ -655,20 +678,6 @@ class MeshSource {
     return {mesh_.position(t[0]), mesh_.position(t[1]), mesh_.position(t[2])};
   }
   Vec2d value(CornerId c) const { return cornerUV_[c]; }
-
-  // The solved corners, held whole and sorted by corner: one batch per round.
-  Vec2d latest(const Readers&, CornerId c) const {
-    return detail::solvedOr(current_, c, [this](CornerId x) { return cornerUV_[x]; });
-  }
-  std::size_t batchCorners() const { return std::numeric_limits<std::size_t>::max(); }
-  void record(std::vector<detail::SolvedCorner> fresh) { detail::mergeSolved(std::move(fresh), current_); }
-  detail::FaceCounts countTouched(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
-                                  double h) const {
-    return detail::countSolvedFaces(*this, touched, current_, cones, h);
-  }
-  void collect(const std::vector<FaceId>& touched, RefineResult& out) {
-    detail::collectRefinement(topology_, mesh_.numVertices(), std::move(current_), touched, out);
-  }
 
   detail::FaceCounts countOutside(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
                                   double h) const {
@@ -690,13 +699,78 @@ class MeshSource {
         [](detail::FaceCounts a, const detail::FaceCounts& b) { return a += b; });
   }
 
- private:
+ protected:
   const TriangleMesh& mesh_;
   const Topology& topology_;
   const CrossField& field_;
   const CutResult& cut_;
   const WedgeMap& cornerUV_;
+};
+
+/// The input map kept as it is: the solved corners held whole and sorted by corner, one batch
+/// per round, returned in the result.
+class MeshSource : public MeshReads {
+ public:
+  using MeshReads::MeshReads;
+  Vec2d latest(const Readers&, CornerId c) const {
+    return detail::solvedOr(current_, c, [this](CornerId x) { return cornerUV_[x]; });
+  }
+  std::size_t batchCorners() const { return std::numeric_limits<std::size_t>::max(); }
+  void record(std::vector<detail::SolvedCorner> fresh) { detail::mergeSolved(std::move(fresh), current_); }
+  detail::FaceCounts countTouched(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
+                                  double h) const {
+    return detail::countSolvedFaces(*this, touched, current_, cones, h);
+  }
+  void collect(const std::vector<FaceId>& touched, RefineResult& out) {
+    detail::collectRefinement(topology_, mesh_.numVertices(), std::move(current_), touched, out);
+  }
+
+ private:
   std::vector<detail::SolvedCorner> current_;
+};
+
+/// The map written in place a batch at a time (refineNearConesInPlace): later batches and rounds
+/// read it, and one flag byte per vertex counts the freed and the locked vertices.
+class InPlaceSource : public MeshReads {
+ public:
+  InPlaceSource(const TriangleMesh& mesh, const Topology& topology, const CrossField& field, const CutResult& cut,
+                WedgeMap& cornerUV, std::size_t batchCorners)
+      : MeshReads(mesh, topology, field, cut, cornerUV), map_(cornerUV), batch_(batchCorners),
+        flags_(mesh.numVertices(), 0) {}
+  Vec2d latest(const Readers&, CornerId c) const { return cornerUV_[c]; }
+  std::size_t batchCorners() const { return batch_; }
+  void record(std::vector<detail::SolvedCorner> fresh) {
+    fresh.erase(std::remove_if(fresh.begin(), fresh.end(), [](const detail::SolvedCorner& s) { return !s.free; }),
+                fresh.end());
+    for (const detail::SolvedCorner& s : fresh) {
+      std::uint8_t& flag = flags_[topology_.vertex(s.corner)];
+      if (!(flag & kFreed)) flag |= kFreed, ++freed_;
+    }
+    applyRefinedCorners(fresh, map_);
+  }
+  detail::FaceCounts countTouched(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
+                                  double h) const {
+    return detail::countFaces(*this, touched, cones, h, [this](CornerId c) { return cornerUV_[c]; });
+  }
+  void collect(const std::vector<FaceId>& touched, RefineResult& out) {
+    std::uint64_t around = 0;  // vertices of the solved faces
+    for (FaceId f : touched) {
+      for (int k = 0; k < 3; ++k) {
+        std::uint8_t& flag = flags_[topology_.vertex(3 * f + k)];
+        if (!(flag & kSeen)) flag |= kSeen, ++around;
+      }
+    }
+    out.stats.freeVertices = static_cast<std::uint32_t>(freed_);
+    out.stats.lockedVertices = static_cast<std::uint32_t>(around - freed_);
+    out.stats.refinedVertexFraction = mesh_.numVertices() ? double(freed_) / mesh_.numVertices() : 0.0;
+  }
+
+ private:
+  static constexpr std::uint8_t kFreed = 1, kSeen = 2;
+  WedgeMap& map_;
+  std::size_t batch_;
+  std::vector<std::uint8_t> flags_;
+  std::uint64_t freed_ = 0;
 };
 
 }  // namespace
@@ -734,6 +808,29 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
   return out;
 }
 
+RefineResult refineNearConesInPlace(const TriangleMesh& mesh, const Topology& topology,
+                                    const CrossField& field, const CutResult& cut, WedgeMap& cornerUV,
+                                    std::vector<Complex>& seamT, const RefineOptions& options,
+                                    std::size_t batchCorners) {
+  const auto start = std::chrono::steady_clock::now();
+  if (seamT.size() != cut.seams.size()) {
+    throw InputError("refine: " + std::to_string(seamT.size()) + " translations for " +
+                     std::to_string(cut.seams.size()) + " seams");
+  }
+  RefineResult out;
+  std::vector<FaceId> faces = selectRefineRegion(mesh, topology, cornerUV, options, &out.stats);
+  out.stats.secondsRegion = secondsSince(start);
+  const std::vector<VertexId> cones = listedCones(cut.cones, mesh.numVertices());
+  {
+    InPlaceSource source(mesh, topology, field, cut, cornerUV, std::max<std::size_t>(1, batchCorners));
+    detail::refineRounds(source, cones, seamT, options, std::move(faces), out);
+  }
+  for (std::size_t k = 0; k < out.seams.size(); ++k) seamT[out.seams[k]] = out.seamT[k];
+  reportProgress(options.progress, "refine", 1.0);
+  out.stats.secondsTotal = secondsSince(start);
+  return out;
+}
+
 void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
                      std::vector<Complex>* translations) {
   if (translations) {
@@ -745,25 +842,7 @@ void applyRefinement(const RefineResult& refinement, WedgeMap& cornerUV,
       (*translations)[refinement.seams[k]] = refinement.seamT[k];
     }
   }
-  // Every corner of a free vertex is in the refinement (all its faces were solved), with one value
-  // per wedge (the region's cut keeps every seam around a free vertex): each wedge changes whole
-  // and keeps its id, so the values go in place, without WedgeMap::assign's pass over the whole
-  // map. Should two corners of a wedge disagree, assign splits it.
-  for (const RefinedCorner& r : refinement.corners) {
-    if (r.corner >= cornerUV.size()) {
-      throw InputError("refine: corner " + std::to_string(r.corner) + " out of range (" +
-                       std::to_string(cornerUV.size()) + " corners)");
-    }
-    cornerUV.setWedgeValue(cornerUV.wedge(r.corner), r.uv);
-  }
-  for (const RefinedCorner& r : refinement.corners) {
-    if (cornerUV[r.corner] == r.uv) continue;
-    std::vector<CornerId> corners;
-    std::vector<Vec2d> values;
-    for (const RefinedCorner& x : refinement.corners) corners.push_back(x.corner), values.push_back(x.uv);
-    cornerUV.assign(corners, values);
-    return;
-  }
+  applyRefinedCorners(refinement.corners, cornerUV);
 }
 
 }  // namespace seamvox

@@ -210,6 +210,15 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const std::vector<std::complex<double>>& seamT,
                              const RefineOptions& options = {});
 
+/// refineNearCones then applyRefinement, with the solved corners written into cornerUV a batch
+/// at a time (at most batchCorners, 24 bytes each, held at once) instead of held until the end:
+/// later batches and rounds read the map itself, as the out-of-core refinement does. The same
+/// map and translations; the result's corners are left empty.
+RefineResult refineNearConesInPlace(const TriangleMesh& mesh, const Topology& topology,
+                                    const CrossField& field, const CutResult& cut, WedgeMap& cornerUV,
+                                    std::vector<std::complex<double>>& seamT, const RefineOptions& options = {},
+                                    std::size_t batchCorners = std::size_t(1) << 22);
+
 /// Writes a refinement's corner values into a whole-mesh map (3 #F; a free vertex's wedges
 /// change whole and keep their ids) and, when given, its re-solved translations into the per-seam
 /// translations.

@@ -149,9 +149,9 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     refineOptions.seedFromMap = voxLoc;
     if (!voxLoc) refineOptions.maxRounds = 1;
     if (!refineOptions.progress) refineOptions.progress = options.progress;
-    const RefineResult refinement = refineNearCones(mesh, topology, field, cut, out.param.cornerUV,
-                                                    out.param.translations, refineOptions);
-    applyRefinement(refinement, out.param.cornerUV, &out.param.translations);
+    // The solved corners go into the map a batch at a time (at most 96 MB of them held).
+    const RefineResult refinement = refineNearConesInPlace(mesh, topology, field, cut, out.param.cornerUV,
+                                                           out.param.translations, refineOptions);
     out.refined = true;
     out.refine = refinement.stats;
     if (solverOptions.meter) solverOptions.meter->finish("refine");
