@@ -4,7 +4,7 @@
 # default memory budget, then a CSV and a markdown table (bench/ooc_series.py) with the slope
 # between the two largest sizes extrapolated to 1G faces, and a log-log PNG plot of time and peak
 # against faces (bench_scaling_report, built with the project: the runs are linked there as
-# scan_L<k>_voxloc128.json, the solver every size above 300K faces runs).
+# scan_L<k>_voxloc128.json, the solver every size above 400K faces runs).
 #
 #   bash bench/ooc_series.sh [--sizes "1000000 2000000 ..."] [--cache DIR] [--out DIR]
 #                            [--seamvox PATH] [--reporter PATH] [--budget SIZE] [--noise A]

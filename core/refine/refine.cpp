@@ -788,30 +788,13 @@ std::vector<VertexId> listedCones(const std::vector<VertexId>& cones, std::uint6
   return out;
 }
 
-RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
-                             const CrossField& field, const CutResult& cut,
-                             const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
-                             const RefineOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  if (seamT.size() != cut.seams.size()) {
-    throw InputError("refine: " + std::to_string(seamT.size()) + " translations for " +
-                     std::to_string(cut.seams.size()) + " seams");
-  }
-  RefineResult out;
-  std::vector<FaceId> faces = selectRefineRegion(mesh, topology, cornerUV, options, &out.stats);
-  out.stats.secondsRegion = secondsSince(start);
-  const std::vector<VertexId> cones = listedCones(cut.cones, mesh.numVertices());
-  MeshSource source(mesh, topology, field, cut, cornerUV);
-  detail::refineRounds(source, cones, seamT, options, std::move(faces), out);
-  reportProgress(options.progress, "refine", 1.0);
-  out.stats.secondsTotal = secondsSince(start);
-  return out;
-}
+namespace {
 
-RefineResult refineNearConesInPlace(const TriangleMesh& mesh, const Topology& topology,
-                                    const CrossField& field, const CutResult& cut, WedgeMap& cornerUV,
-                                    std::vector<Complex>& seamT, const RefineOptions& options,
-                                    std::size_t batchCorners) {
+/// refineNearCones' steps around the rounds, with the source makeSource(cornerUV) gives.
+template <class MakeSource>
+RefineResult refineWith(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
+                        const WedgeMap& cornerUV, const std::vector<Complex>& seamT, const RefineOptions& options,
+                        MakeSource&& makeSource) {
   const auto start = std::chrono::steady_clock::now();
   if (seamT.size() != cut.seams.size()) {
     throw InputError("refine: " + std::to_string(seamT.size()) + " translations for " +
@@ -822,12 +805,32 @@ RefineResult refineNearConesInPlace(const TriangleMesh& mesh, const Topology& to
   out.stats.secondsRegion = secondsSince(start);
   const std::vector<VertexId> cones = listedCones(cut.cones, mesh.numVertices());
   {
-    InPlaceSource source(mesh, topology, field, cut, cornerUV, std::max<std::size_t>(1, batchCorners));
+    auto source = makeSource();
     detail::refineRounds(source, cones, seamT, options, std::move(faces), out);
   }
-  for (std::size_t k = 0; k < out.seams.size(); ++k) seamT[out.seams[k]] = out.seamT[k];
   reportProgress(options.progress, "refine", 1.0);
   out.stats.secondsTotal = secondsSince(start);
+  return out;
+}
+
+}  // namespace
+
+RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
+                             const CrossField& field, const CutResult& cut,
+                             const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
+                             const RefineOptions& options) {
+  return refineWith(mesh, topology, cut, cornerUV, seamT, options,
+                    [&] { return MeshSource(mesh, topology, field, cut, cornerUV); });
+}
+
+RefineResult refineNearConesInPlace(const TriangleMesh& mesh, const Topology& topology,
+                                    const CrossField& field, const CutResult& cut, WedgeMap& cornerUV,
+                                    std::vector<Complex>& seamT, const RefineOptions& options,
+                                    std::size_t batchCorners) {
+  RefineResult out = refineWith(mesh, topology, cut, cornerUV, seamT, options, [&] {
+    return InPlaceSource(mesh, topology, field, cut, cornerUV, std::max<std::size_t>(1, batchCorners));
+  });
+  for (std::size_t k = 0; k < out.seams.size(); ++k) seamT[out.seams[k]] = out.seamT[k];
   return out;
 }
 
