@@ -320,6 +320,27 @@ TEST(Features, AutoFeatureAngleTurnsCreasesOnForACadModelOnly) {
     EXPECT_EQ(r.featureAngle, 0.0);
     EXPECT_EQ(r.features.creaseEdges, 0u);
   }
+  // Only where the solver aligns curves: at grid 16 the automatic solver takes hat for a
+  // feature-aligned map up to 400K / 64 / 5 = 1250 faces, for a plain one up to 6250; a
+  // 4800-face box gets the plain hat map without looking for creases, unless hat is asked for.
+  {
+    PipelineOptions coarse = options;
+    coarse.solver.solver = ParamSolver::Auto;
+    coarse.solver.gridResolution = 16;
+    const TriangleMesh bigBox = boxMesh(20, 1.0);
+    ASSERT_GT(bigBox.numFaces(), kAutoHatMaxFacesGrid128 / 64 / kAutoFeatureSolves);
+    const PipelineResult automatic = parameterize(bigBox, coarse);
+    EXPECT_FALSE(automatic.featureAngleAuto);
+    EXPECT_EQ(automatic.features.creaseEdges, 0u);
+    EXPECT_EQ(automatic.solved.solver, ParamSolver::Hat);
+    EXPECT_EQ(automatic.featureCurves.aligned, 0u);
+    EXPECT_TRUE(automatic.isSeamless());
+    coarse.solver.solver = ParamSolver::Hat;
+    const PipelineResult hat = parameterize(bigBox, coarse);
+    EXPECT_TRUE(hat.featureAngleAuto);
+    EXPECT_EQ(hat.featureCurves.total, 12u);
+    EXPECT_GT(hat.featureCurves.aligned, 0u);
+  }
   // Given explicitly (even 0), the angle is used as it is.
   options.features.autoFeatureAngle = false;
   const PipelineResult off = parameterize(boxMesh(8, 1.0), options);

@@ -290,7 +290,7 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "(header `1 F`, one `x y z` line per input face; see io/field_io.h), which\n"
                  "`seamvox param --field FIELD` reads back.\n"
                  "\n"
-                 "  --field auto      smooth up to 1M faces, proxy above (default)\n"
+                 "  --field auto      smooth up to 400K faces, proxy above (default)\n"
                  "  --field smooth    one solve over all faces (exact; up to a few million faces)\n"
                  "  --field proxy     solved on a coarse grid proxy, then smoothed on the faces\n"
                  "                    (linear time and memory; massive meshes; no --curvature)\n"

@@ -42,9 +42,12 @@ enum class FieldMethod {
   Direct,  ///< computeSmoothestField: one CHOLMOD solve over all faces
   Proxy,   ///< computeProxyField
 };
-/// Largest mesh Auto solves directly. Measured at 1M faces: direct 39 s and 976 MB, proxy 5.6 s and
-/// 181 MB with the same cones; the direct solve grows superlinearly beyond (bench/RESULTS.md).
-constexpr std::uint32_t kDirectFieldMaxFaces = 1000000;
+/// Largest mesh Auto solves directly: the hat solver's limit (kAutoHatMaxFacesGrid128). Above it
+/// the default solver is voxloc, which aligns no feature curves, so the direct field's creases go
+/// unused while it costs most of the run: 4.3 of 6.3 s at 422K faces (lilium subdivided), 9.0 of
+/// 12.2 s at 576K (fertility), against 0.4-0.6 s for the proxy at the same or lower gradient error
+/// (bench/RESULTS.md, session 25); at 1M faces the direct field took 39 s, the proxy 5.6 s.
+constexpr std::uint32_t kDirectFieldMaxFaces = 400000;
 /// Direct or Proxy: Auto resolved by the face count.
 FieldMethod resolveFieldMethod(FieldMethod method, std::uint32_t numFaces);
 /// "auto", "direct", "proxy".

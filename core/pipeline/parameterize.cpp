@@ -420,11 +420,15 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   r.cleanReport = clean.report;
   meter.finish("clean");
 
-  // Only the direct field follows creases: above its size (or with an imported field) the
-  // automatic choice would cost a pass over every edge for curves nothing aligns.
+  // Only the direct field follows creases and only the hat solver holds them: the automatic
+  // feature angle runs where both would (not above the direct field's size, with an imported
+  // field, or where the solver, counting the feature-aligned map's solves, is not hat); otherwise
+  // it would cost a pass over every edge and an aligned field for curves nothing aligns.
   FeatureOptions asked = options.features;
   asked.autoFeatureAngle = asked.autoFeatureAngle && options.field.importedPerInputFace.empty() &&
-                           resolveFieldMethod(options.field.method, r.mesh.numFaces()) == FieldMethod::Direct;
+                           resolveFieldMethod(options.field.method, r.mesh.numFaces()) == FieldMethod::Direct &&
+                           chooseParamSolver(options.solver.solver, r.mesh.numFaces(), options.solver.gridResolution,
+                                             true).solver == ParamSolver::Hat;
   const FeatureOptions featureOptions = resolveFeatureAngle(r.mesh, r.topology, asked, r.featureAngleAuto);
   r.featureAngle = featureOptions.featureAngle;
   r.features = findFeatures(r.mesh, r.topology, featureOptions);
