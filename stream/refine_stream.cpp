@@ -147,7 +147,7 @@ class ScratchRefineSource {
       : folder_(folder), scratch_(scratch), field_(field), cut_(cut), map_(map), pass_(pass),
         cacheBytes_(pageCacheBytes(pass.memoryBytes)), table_(scratch, cacheBytes_),
         points_(scratch, scratch.positions, cacheBytes_),
-        flags_(folder, scratch.numVertices, pass.memoryBytes / 16, "refine") {
+        flags_(folder, scratch.numVertices, pass.memoryBytes / 16, "refine"), tally_(flags_) {
     openMap();
   }
 
@@ -166,11 +166,7 @@ class ScratchRefineSource {
   void record(std::vector<detail::SolvedCorner> fresh) {
     fresh.erase(std::remove_if(fresh.begin(), fresh.end(), [](const detail::SolvedCorner& s) { return !s.free; }),
                 fresh.end());
-    for (const detail::SolvedCorner& s : fresh) {
-      const VertexId v = table_.vertex(s.corner);
-      const std::uint8_t flag = flags_.get(v);
-      if (!(flag & kFreed)) flags_.set(v, flag | kFreed), ++freed_;
-    }
+    tally_.addFreed(table_, fresh);
     closeMap();  // the readers' cached pages of the map are stale once it changes
     applyScratchCorners(folder_, fresh, map_, pass_);
     openMap();
@@ -180,18 +176,7 @@ class ScratchRefineSource {
   }
   /// The corners are in the map already: the result keeps the vertex counts only.
   void collect(const std::vector<FaceId>& touched, RefineResult& out) {
-    std::uint64_t around = 0;  // vertices of the solved faces; the freed ones among them
-    for (FaceId f : touched) {
-      for (int k = 0; k < 3; ++k) {
-        const VertexId v = table_.vertex(3 * f + k);
-        const std::uint8_t flag = flags_.get(v);
-        if (!(flag & kSeen)) flags_.set(v, flag | kSeen), ++around;
-      }
-    }
-    RefineStats& stats = out.stats;
-    stats.freeVertices = static_cast<std::uint32_t>(freed_);
-    stats.lockedVertices = static_cast<std::uint32_t>(around - freed_);
-    stats.refinedVertexFraction = scratch_.numVertices ? double(freed_) / double(scratch_.numVertices) : 0.0;
+    tally_.collect(table_, touched, scratch_.numVertices, out);
   }
 
   /// One pass over the faces and their corners' wedges in order, skipping `touched`.
@@ -217,7 +202,6 @@ class ScratchRefineSource {
   std::uint64_t bytesRead() { return table_.bytesRead() + points_.bytesRead() + closedBytes_ + openBytes(); }
 
  private:
-  static constexpr std::uint8_t kFreed = 1, kSeen = 2;
   std::uint64_t openBytes() {
     std::uint64_t bytes = values_ ? values_->bytesRead() : 0;
     if (pool_) {
@@ -245,7 +229,8 @@ class ScratchRefineSource {
   PagedCornerTable table_;
   PagedFacePoints points_;
   ScratchArray<std::uint8_t> flags_;
-  std::uint64_t freed_ = 0, closedBytes_ = 0;
+  detail::VertexTally<ScratchArray<std::uint8_t>> tally_;
+  std::uint64_t closedBytes_ = 0;
   std::optional<MapValues> values_;
   std::optional<ReaderPool<GroupReaders>> pool_;
 };

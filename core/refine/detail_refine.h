@@ -380,6 +380,44 @@ FaceCounts countSolvedFaces(Source& source, const std::vector<FaceId>& touched,
   });
 }
 
+/// The vertex counts of a source that writes its solved corners into the map (no corner list to
+/// count them from): one flag byte per vertex in a store with get(v) and set(v, flag).
+template <class Flags>
+class VertexTally {
+ public:
+  explicit VertexTally(Flags& flags) : flags_(flags) {}
+  /// The vertices of a batch's free corners.
+  template <class Table>
+  void addFreed(Table& table, const std::vector<SolvedCorner>& fresh) {
+    for (const SolvedCorner& s : fresh) {
+      if (!s.free) continue;
+      const VertexId v = table.vertex(s.corner);
+      const std::uint8_t flag = flags_.get(v);
+      if (!(flag & kFreed)) flags_.set(v, flag | kFreed), ++freed_;
+    }
+  }
+  /// The freed and locked counts (locked: the other vertices of the solved faces) into out.stats.
+  template <class Table>
+  void collect(Table& table, const std::vector<FaceId>& touched, std::uint64_t numVertices, RefineResult& out) {
+    std::uint64_t around = 0;
+    for (FaceId f : touched) {
+      for (int k = 0; k < 3; ++k) {
+        const VertexId v = table.vertex(3 * f + k);
+        const std::uint8_t flag = flags_.get(v);
+        if (!(flag & kSeen)) flags_.set(v, flag | kSeen), ++around;
+      }
+    }
+    out.stats.freeVertices = static_cast<std::uint32_t>(freed_);
+    out.stats.lockedVertices = static_cast<std::uint32_t>(around - freed_);
+    out.stats.refinedVertexFraction = numVertices ? double(freed_) / double(numVertices) : 0.0;
+  }
+
+ private:
+  static constexpr std::uint8_t kFreed = 1, kSeen = 2;
+  Flags& flags_;
+  std::uint64_t freed_ = 0;
+};
+
 /// The result: the corners of every vertex freed in some solve with their latest values, and the
 /// freed and locked vertex counts.
 template <class Table>

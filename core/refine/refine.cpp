@@ -729,6 +729,13 @@ class MeshSource : public MeshReads {
   std::vector<detail::SolvedCorner> current_;
 };
 
+/// One byte per vertex in memory, as VertexTally reads it.
+struct VertexFlags {
+  std::vector<std::uint8_t> bytes;
+  std::uint8_t get(VertexId v) const { return bytes[v]; }
+  void set(VertexId v, std::uint8_t flag) { bytes[v] = flag; }
+};
+
 /// The map written in place a batch at a time (refineNearConesInPlace): later batches and rounds
 /// read it, and one flag byte per vertex counts the freed and the locked vertices.
 class InPlaceSource : public MeshReads {
@@ -736,16 +743,14 @@ class InPlaceSource : public MeshReads {
   InPlaceSource(const TriangleMesh& mesh, const Topology& topology, const CrossField& field, const CutResult& cut,
                 WedgeMap& cornerUV, std::size_t batchCorners)
       : MeshReads(mesh, topology, field, cut, cornerUV), map_(cornerUV), batch_(batchCorners),
-        flags_(mesh.numVertices(), 0) {}
+        flags_{std::vector<std::uint8_t>(mesh.numVertices(), 0)}, tally_(flags_) {}
+  InPlaceSource(const InPlaceSource&) = delete;  // the tally refers to flags_
   Vec2d latest(const Readers&, CornerId c) const { return cornerUV_[c]; }
   std::size_t batchCorners() const { return batch_; }
   void record(std::vector<detail::SolvedCorner> fresh) {
     fresh.erase(std::remove_if(fresh.begin(), fresh.end(), [](const detail::SolvedCorner& s) { return !s.free; }),
                 fresh.end());
-    for (const detail::SolvedCorner& s : fresh) {
-      std::uint8_t& flag = flags_[topology_.vertex(s.corner)];
-      if (!(flag & kFreed)) flag |= kFreed, ++freed_;
-    }
+    tally_.addFreed(topology_, fresh);
     applyRefinedCorners(fresh, map_);
   }
   detail::FaceCounts countTouched(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones,
@@ -753,24 +758,14 @@ class InPlaceSource : public MeshReads {
     return detail::countFaces(*this, touched, cones, h, [this](CornerId c) { return cornerUV_[c]; });
   }
   void collect(const std::vector<FaceId>& touched, RefineResult& out) {
-    std::uint64_t around = 0;  // vertices of the solved faces
-    for (FaceId f : touched) {
-      for (int k = 0; k < 3; ++k) {
-        std::uint8_t& flag = flags_[topology_.vertex(3 * f + k)];
-        if (!(flag & kSeen)) flag |= kSeen, ++around;
-      }
-    }
-    out.stats.freeVertices = static_cast<std::uint32_t>(freed_);
-    out.stats.lockedVertices = static_cast<std::uint32_t>(around - freed_);
-    out.stats.refinedVertexFraction = mesh_.numVertices() ? double(freed_) / mesh_.numVertices() : 0.0;
+    tally_.collect(topology_, touched, mesh_.numVertices(), out);
   }
 
  private:
-  static constexpr std::uint8_t kFreed = 1, kSeen = 2;
   WedgeMap& map_;
   std::size_t batch_;
-  std::vector<std::uint8_t> flags_;
-  std::uint64_t freed_ = 0;
+  VertexFlags flags_;
+  detail::VertexTally<VertexFlags> tally_;
 };
 
 }  // namespace
