@@ -107,6 +107,9 @@ ChunkedMeshWriter::ChunkedMeshWriter(AtomicFile& file, ChunkedMeshLayout layout,
     : state_(std::make_unique<State>(file, std::move(layout), options, scratch)) {
   State& s = *state_;
   const std::string& path = file.path();
+  if (s.format == MeshFormat::Stl) {
+    throw InputError(path + ": STL is read, not written (it holds no texture coordinates): write PLY, OBJ or OFF");
+  }
   if (s.format == MeshFormat::Draco || s.format == MeshFormat::Unknown) {
     throw InputError(path + ": Draco encodes a whole mesh at once and cannot be written chunk by chunk; "
                      "write PLY, OBJ or OFF instead (or raise --memory-budget)");

@@ -224,6 +224,7 @@ double normalizedColor(const VertexProperty& property, VertexId v);
 std::unique_ptr<MeshStream> openPlyStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
 std::unique_ptr<MeshStream> openObjStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
 std::unique_ptr<MeshStream> openOffStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
+std::unique_ptr<MeshStream> openStlStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
 void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
 // Pieces of the PLY, OFF and OBJ writers, shared with ChunkedMeshWriter (the same bytes).
 void putPlyHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces, const VertexAttributes& attributes,

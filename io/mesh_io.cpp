@@ -303,13 +303,26 @@ MeshFormat formatFromPath(const std::string& path) {
   if (extension == "obj") return MeshFormat::Obj;
   if (extension == "off") return MeshFormat::Off;
   if (extension == "drc") return MeshFormat::Draco;
+  if (extension == "stl") return MeshFormat::Stl;
   return MeshFormat::Unknown;
 }
+
+bool isWritableFormat(MeshFormat format) { return format != MeshFormat::Unknown && format != MeshFormat::Stl; }
 
 namespace {
 
 [[noreturn]] void throwUnknownFormat(const std::string& path) {
-  throw IoError(path + ": unknown mesh format (the extension must be .ply, .obj, .off or .drc)");
+  throw IoError(path + ": unknown mesh format (the extension must be .ply, .obj, .off, .drc or, to read, .stl)");
+}
+
+/// Before anything is written: a known format that can be written.
+void checkOutputFormat(const std::string& path) {
+  const MeshFormat format = formatFromPath(path);
+  if (format == MeshFormat::Stl) {
+    throw IoError(path + ": STL is read, not written (it holds no texture coordinates and no shared vertices): "
+                         "write .ply, .obj, .off or .drc");
+  }
+  if (format == MeshFormat::Unknown) throwUnknownFormat(path);
 }
 
 }  // namespace
@@ -325,6 +338,7 @@ std::unique_ptr<MeshStream> openMeshStream(const std::string& path, const ReadOp
   switch (format) {
     case MeshFormat::Ply: return detail::openPlyStream(std::move(in), options);
     case MeshFormat::Obj: return detail::openObjStream(std::move(in), options);
+    case MeshFormat::Stl: return detail::openStlStream(std::move(in), options);
     default: return detail::openOffStream(std::move(in), options);
   }
 }
@@ -367,7 +381,7 @@ void checkWritable(const std::string& path, const TriangleMesh& mesh) {
 }  // namespace
 
 void writeMesh(const std::string& path, const TriangleMesh& mesh, const WriteOptions& options) {
-  if (formatFromPath(path) == MeshFormat::Unknown) throwUnknownFormat(path);  // before a file
+  checkOutputFormat(path);  // before a file
   AtomicFile file(path);
   writeMesh(file, mesh, options);
   file.commit();
@@ -385,8 +399,8 @@ void writeMesh(AtomicFile& file, TriangleMesh&& mesh, const WriteOptions& option
 
 void writeMesh(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
   const std::string& path = file.path();
+  checkOutputFormat(path);
   const MeshFormat format = formatFromPath(path);
-  if (format == MeshFormat::Unknown) throwUnknownFormat(path);
   checkWritable(path, mesh);
   const std::vector<std::string> dropped = droppedVertexProperties(mesh, format);
   if (!dropped.empty()) {

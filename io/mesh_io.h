@@ -1,6 +1,7 @@
 #pragma once
 /// Reading and writing triangle meshes: PLY (ascii, binary little/big endian, faces and
-/// tristrips), OBJ, OFF, Draco, with per-vertex properties (TriangleMesh::attributes) where the
+/// tristrips), OBJ, OFF, Draco, and reading STL (binary and ASCII; its per-corner vertices
+/// welded at equal positions), with per-vertex properties (TriangleMesh::attributes) where the
 /// format holds them. Errors name the file, the line or element, and the problem.
 /// Inputs are regular files or pipes (a named FIFO, /dev/stdin when piped: read as a stream; a
 /// Draco file is buffered whole, up to 4 GiB); folders, devices and sockets are refused. Text
@@ -17,9 +18,11 @@ namespace seamvox {
 
 class AtomicFile;
 
-enum class MeshFormat { Unknown, Ply, Obj, Off, Draco };
-/// Format from the file extension (case-insensitive): .ply .obj .off .drc.
+enum class MeshFormat { Unknown, Ply, Obj, Off, Draco, Stl };
+/// Format from the file extension (case-insensitive): .ply .obj .off .drc .stl.
 MeshFormat formatFromPath(const std::string& path);
+/// The formats meshes are written in (all but STL, which holds no texture coordinates).
+bool isWritableFormat(MeshFormat format);
 
 /// Receives one line naming a file and what of it a reader or writer cannot keep.
 using WarningFn = std::function<void(const std::string&)>;

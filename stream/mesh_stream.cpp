@@ -1,6 +1,7 @@
 #include "stream/mesh_stream.h"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 
 #include "core/system/errors.h"
@@ -59,7 +60,99 @@ void StreamChecker::finish() const {
   }
 }
 
+namespace {
+
+/// Vertices at exactly equal positions (-0 as +0) made one, numbered by first appearance: the
+/// welding of a stream whose faces' corners are vertices of their own (STL). An open-addressing
+/// table of vertex ids (4 bytes per slot, at most half full) over the welded positions.
+class ExactWeld {
+ public:
+  ExactWeld(std::vector<Vec3f>& positions, std::uint64_t expectedVertices) : positions_(positions) {
+    std::size_t slots = 1024;
+    while (slots < 2 * expectedVertices) slots *= 2;
+    slots_.assign(slots, kInvalidId);
+  }
+
+  VertexId add(const Vec3f& p) {
+    std::size_t i = hashOf(p) & (slots_.size() - 1);
+    while (slots_[i] != kInvalidId) {
+      if (positions_[slots_[i]] == p) return slots_[i];
+      i = (i + 1) & (slots_.size() - 1);
+    }
+    const VertexId id = static_cast<VertexId>(positions_.size());
+    positions_.push_back(p);
+    slots_[i] = id;
+    if (2 * positions_.size() > slots_.size()) grow();
+    return id;
+  }
+
+ private:
+  static std::size_t hashOf(const Vec3f& p) {
+    std::uint64_t h = 0x9E3779B97F4A7C15ull;
+    for (int k = 0; k < 3; ++k) {
+      const float x = p[k] + 0.0f;  // -0 + 0 = +0: equal floats hash alike
+      std::uint32_t bits;
+      std::memcpy(&bits, &x, 4);
+      h = (h ^ bits) * 0xFF51AFD7ED558CCDull;
+      h ^= h >> 32;
+    }
+    return static_cast<std::size_t>(h);
+  }
+
+  void grow() {
+    slots_.assign(2 * slots_.size(), kInvalidId);
+    for (VertexId v = 0; v < positions_.size(); ++v) {
+      std::size_t i = hashOf(positions_[v]) & (slots_.size() - 1);
+      while (slots_[i] != kInvalidId) i = (i + 1) & (slots_.size() - 1);
+      slots_[i] = v;
+    }
+  }
+
+  std::vector<Vec3f>& positions_;
+  std::vector<VertexId> slots_;
+};
+
+/// collectMesh for a stream of corner vertices: each chunk's triangles refer to its own positions.
+TriangleMesh collectWelded(MeshStream& stream) {
+  TriangleMesh mesh;
+  const std::uint64_t faces = std::min<std::uint64_t>(stream.expectedTriangles(), std::numeric_limits<std::uint32_t>::max());
+  // A closed surface has about half as many vertices as faces.
+  mesh.positions.reserve(static_cast<std::size_t>(faces / 2 + 16));
+  mesh.triangles.reserve(static_cast<std::size_t>(faces));
+  ExactWeld weld(mesh.positions, faces / 2);
+  StreamChecker checker(stream.name());
+  MeshChunk chunk;
+  std::vector<VertexId> welded;
+  while (stream.next(chunk)) {
+    checker.check(chunk);
+    if (checker.hasUV() || !chunk.attributes.properties.empty()) {
+      throw InputError(stream.name() + ": a stream of per-corner vertices with texture coordinates or vertex "
+                                       "properties cannot be welded");
+    }
+    welded.resize(chunk.positions.size());
+    for (std::size_t i = 0; i < chunk.positions.size(); ++i) welded[i] = weld.add(chunk.positions[i]);
+    for (const Triangle& t : chunk.triangles) {
+      Triangle out;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint64_t local = std::uint64_t(t[k]) - chunk.firstVertex;
+        if (t[k] < chunk.firstVertex || local >= welded.size()) {
+          throw InputError(stream.name() + ": face " + std::to_string(mesh.triangles.size()) +
+                           " refers to a vertex outside its own chunk in a stream of per-corner vertices");
+        }
+        out[k] = welded[local];
+      }
+      mesh.triangles.push_back(out);
+    }
+  }
+  checker.finish();
+  mesh.weldedAtRead = checker.vertices() - mesh.positions.size();
+  return mesh;
+}
+
+}  // namespace
+
 TriangleMesh collectMesh(MeshStream& stream) {
+  if (stream.cornerVertices()) return collectWelded(stream);
   constexpr std::uint64_t kMaxIds = std::numeric_limits<std::uint32_t>::max();
   TriangleMesh mesh;
   // Readers check declared counts against the file size, so these hints are safe to reserve.

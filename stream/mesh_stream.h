@@ -47,6 +47,10 @@ class MeshStream {
   virtual std::uint64_t declaredFaces() const { return 0; }
   /// Triangles to reserve room for: a hint that may be inexact (0 when unknown).
   virtual std::uint64_t expectedTriangles() const { return declaredFaces(); }
+  /// True when every face's corners are vertices of their own (STL): vertices at equal positions
+  /// are one vertex, joined by the consumer (collectMesh, the out-of-core weld pass). Each chunk's
+  /// triangles then refer only to its own positions.
+  virtual bool cornerVertices() const { return false; }
 };
 
 /// The checks collectMesh makes, for passes that consume a stream chunk by chunk without
@@ -77,7 +81,8 @@ class StreamChecker {
 };
 
 /// Drains a stream into one TriangleMesh (validating every index against the final vertex
-/// count), vertex attributes concatenated. Only the chunk buffer is held besides the result.
+/// count), vertex attributes concatenated; a stream of corner vertices welded at exactly equal
+/// positions (-0 as +0), vertices numbered by first appearance. Only the chunk buffer is held besides the result.
 TriangleMesh collectMesh(MeshStream& stream);
 
 /// A stream over a mesh held in memory: its vertices (and their attributes), then its triangles

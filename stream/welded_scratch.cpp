@@ -156,6 +156,7 @@ class WeldPass {
  public:
   WeldPass(MeshStream& stream, ScratchFolder& folder, const WeldStreamOptions& options)
       : stream_(stream), folder_(folder), options_(options), name_(stream.name()) {
+    options_.weld = options_.weld || stream.cornerVertices();  // STL: its corners are welded always
     sort_.memoryBytes = std::max(kMinimumSortBytes, options.memoryBytes / 3);
     // The sets (components, boundary loops): a quarter each, alongside at most two sorts; tests
     // put them on disk with a small cache.

@@ -37,7 +37,7 @@ struct WeldedFace {
 };
 
 struct WeldStreamOptions {
-  bool weld = false;  ///< join vertices at exactly equal positions (the lowest input id keeps its place first)
+  bool weld = false;  ///< join vertices at exactly equal positions (the lowest input id keeps its place first); always for a stream of corner vertices (STL)
   /// For the sorts (each of the up to three alive: a third) and the positions when they fit half.
   std::uint64_t memoryBytes = std::uint64_t(256) << 20;
   /// Tests: join the positions by sorts even when they fit.

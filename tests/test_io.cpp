@@ -79,20 +79,7 @@ void expectSameMesh(const TriangleMesh& a, const TriangleMesh& b, bool compareUV
   }
 }
 
-/// Runs f and returns the message of the exception of type E it must throw.
-template <class E>
-std::string messageOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-    return "";
-  }
-  ADD_FAILURE() << "no exception";
-  return "";
-}
+using testing::messageOf;
 
 // --- round trips --------------------------------------------------------------------------------
 
@@ -846,7 +833,7 @@ TEST(MeshIo, MalformedInputNamesFileLocationAndProblem) {
       {"f.off", "OFF\n3000000000000 1 0\n0 0 0\n", true, {"line 2", "truncated or its header is wrong"}},
       {"g.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", false, {"no faces"}},
       {"h.off", "", false, {"not an OFF file"}},
-      {"mesh.stl", "solid\n", true, {"unknown mesh format"}},
+      {"mesh.stp", "solid\n", true, {"unknown mesh format"}},
   };
   for (const BadCase& bad : cases) {
     SCOPED_TRACE(bad.file);

@@ -36,15 +36,7 @@ std::vector<std::string> fakeGlob(const std::string& pattern) {
   return {pattern};
 }
 
-template <class E, class F>
-std::string messageOf(F&& f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  }
-  return "(no exception)";
-}
+using testing::messageOf;
 
 TEST(JobManifest, DirectivesDefaultsGlobsAndTiles) {
   const std::string text =

@@ -1,5 +1,8 @@
 #pragma once
 /// Helpers shared by the test suites: shared-data lookup, temporary folders, running the CLI.
+#include <gtest/gtest.h>
+
+#include <exception>
 #include <functional>
 #include <memory>
 #include <string>
@@ -46,6 +49,22 @@ std::string seamvoxBinary();
 /// Names of the files under dir (recursively) that are unfinished outputs ("<name>.tmp-<pid>").
 std::vector<std::string> temporaryFilesIn(const std::string& dir);
 
+/// Runs f and returns the message of the exception of type E it must throw (a test failure when it
+/// throws another type or nothing).
+template <class E>
+std::string messageOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+    return "";
+  }
+  ADD_FAILURE() << "no exception";
+  return "";
+}
+
 /// Writes bytes to a file (for malformed-input tests).
 void writeFile(const std::string& path, const std::string& bytes);
 std::string readFile(const std::string& path);
@@ -56,6 +75,7 @@ class UndeclaredStream final : public MeshStream {
   explicit UndeclaredStream(std::unique_ptr<MeshStream> inner) : inner_(std::move(inner)) {}
   bool next(MeshChunk& chunk) override { return inner_->next(chunk); }
   const std::string& name() const override { return inner_->name(); }
+  bool cornerVertices() const override { return inner_->cornerVertices(); }
 
  private:
   std::unique_ptr<MeshStream> inner_;

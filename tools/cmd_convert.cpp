@@ -120,8 +120,8 @@ void printRatio(const TriangleMesh& mesh, const std::string& output, std::uint64
 int runConvert(Args& args) {
   const std::string input = args.positional(0, "the input mesh (seamvox convert IN OUT)");
   const std::string output = args.positional(1, "the output mesh (seamvox convert IN OUT)");
-  if (formatFromPath(output) == MeshFormat::Unknown) {
-    throw UsageError("unknown output format (use .ply, .obj, .off or .drc): " + output);
+  if (!isWritableFormat(formatFromPath(output))) {
+    throw UsageError("unknown output format (use .ply, .obj, .off or .drc; STL is read only): " + output);
   }
   WriteOptions options;
   const std::int64_t uvBits = args.integer("uv-bits", options.dracoUVBits, 0, 23);  // 0: lossless
@@ -149,6 +149,11 @@ int runConvert(Args& args) {
     throw UsageError(output + ": Draco encodes a whole mesh at once: about " + formatByteSize(path.estimate) +
                      " in memory, above the --memory-budget of " + formatByteSize(memory.budget) +
                      "; convert to .ply, .obj or .off (streamed within the budget), or raise --memory-budget");
+  }
+  if (path.outOfCore && stream->cornerVertices()) {
+    throw UsageError(input + ": STL keeps every facet's corners apart; convert welds them in memory, about " +
+                     formatByteSize(path.estimate) + ", above the --memory-budget of " + formatByteSize(memory.budget) +
+                     "; raise --memory-budget (param and info weld STL out of core)");
   }
   if (path.outOfCore && ratio) {
     throw UsageError("--ratio writes the whole mesh a second time in memory: about " + formatByteSize(path.estimate) +
@@ -178,11 +183,12 @@ int runConvert(Args& args) {
 
 }  // namespace
 
-SEAMVOX_COMMAND({"convert", "convert a mesh between PLY, OBJ, OFF and Draco (UVs kept)",
+SEAMVOX_COMMAND({"convert", "convert a mesh between PLY, OBJ, OFF and Draco, or from STL (UVs kept)",
                  "usage: seamvox convert IN OUT [--uv-bits K] [--position-bits B] [--no-uv]\n"
                  "                       [--ascii] [--ratio]\n"
                  "\n"
-                 "Reads IN and writes OUT; the extensions pick the formats (.ply .obj .off .drc).\n"
+                 "Reads IN and writes OUT; the extensions pick the formats (.ply .obj .off .drc; .stl,\n"
+                 "binary or ASCII, is read, its facets' corners welded at equal positions).\n"
                  "Per-corner texture coordinates are kept (OFF cannot hold them: a warning says so),\n"
                  "and so are vertex properties (colors, normals, scalars) where OUT can hold them:\n"
                  "PLY and Draco all, OBJ red green blue (v x y z r g b), OFF none; a warning names\n"

@@ -65,8 +65,8 @@ int runGen(Args& args) {
   options.progress = makeProgress(args.flag("quiet"));
   const MemoryOptions memory = parseMemoryOptions(args);
   args.finish(1);
-  if (formatFromPath(*output) == MeshFormat::Unknown) {
-    throw UsageError("cannot tell the format of '" + *output + "' (use .ply .obj .off .drc)");
+  if (!isWritableFormat(formatFromPath(*output))) {
+    throw UsageError("cannot write '" + *output + "' (use .ply .obj .off .drc; STL is read only)");
   }
 
   MemoryPath path;

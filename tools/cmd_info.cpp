@@ -90,7 +90,7 @@ int runInfo(Args& args) {
 SEAMVOX_COMMAND({"info", "read and clean a mesh; print its components, genus and fixes",
                  "usage: seamvox info MESH [--json] [--report FILE] [--weld [--weld-tolerance D]]\n"
                  "\n"
-                 "Reads MESH (.ply .obj .off .drc), cleans it as every seamvox stage does and prints\n"
+                 "Reads MESH (.ply .obj .off .drc .stl), cleans it as every seamvox stage does and prints\n"
                  "vertices, faces, connected components (the largest with faces, vertices, boundary\n"
                  "loops, Euler characteristic and genus), boundary loops, what cleaning fixed, the\n"
                  "bounding box, read/clean time and peak memory.\n"

@@ -40,8 +40,9 @@ ParamCommand parseParamArgs(Args& args) {
   const auto output = args.value("output");
   if (!output) throw UsageError("missing -o OUT (.obj, .ply or .drc)");
   c.output = *output;
-  if (formatFromPath(c.output) == MeshFormat::Unknown || formatFromPath(c.output) == MeshFormat::Off) {
-    throw UsageError("output must be .obj, .ply or .drc (OFF has no texture coordinates): " + c.output);
+  const MeshFormat outputFormat = formatFromPath(c.output);
+  if (outputFormat != MeshFormat::Obj && outputFormat != MeshFormat::Ply && outputFormat != MeshFormat::Draco) {
+    throw UsageError("output must be .obj, .ply or .drc (OFF and STL have no texture coordinates): " + c.output);
   }
   PipelineOptions& o = c.options;
   c.solverName = args.value("solver", "auto");
@@ -442,7 +443,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                     [--quads Q.obj|.ply] [--close-holes C] [--align-boundary]\n"
                  "                     [--feature-angle DEG]\n"
                  "\n"
-                 "Reads and cleans MESH, computes (or reads) a cross field, cuts through its cones and\n"
+                 "Reads and cleans MESH (.ply .obj .off .drc, or .stl, binary or ASCII, its facets'\n"
+                 "corners welded at equal positions), computes (or reads) a cross field, cuts through\n"
+                 "its cones and\n"
                  "writes per-corner (u, v) in grid units: across every seam q' = r q + t with r a\n"
                  "quarter turn and t an integer vector, and grad q follows the field with spacing H.\n"
                  "\n"

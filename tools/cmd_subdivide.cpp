@@ -80,8 +80,8 @@ int runSubdivide(Args& args) {
   const ProgressFn progress = makeProgress(args.flag("quiet"));
   const MemoryOptions memory = parseMemoryOptions(args);
   args.finish(1);
-  if (formatFromPath(*output) == MeshFormat::Unknown) {
-    throw UsageError("cannot tell the format of '" + *output + "' (use .ply .obj .off .drc)");
+  if (!isWritableFormat(formatFromPath(*output))) {
+    throw UsageError("cannot write '" + *output + "' (use .ply .obj .off .drc; STL is read only)");
   }
   checkOutputPaths({{"MESH", path}, {"--field", fieldIn.value_or("")}},
                    {{"-o", *output}, {"--field-out", fieldOut.value_or("")}});

@@ -402,7 +402,8 @@ void dropUnreferencedVertices(TriangleMesh& mesh, std::vector<VertexId>& vertexO
     vertexOrigin.push_back(v);
     ++n;
   }
-  report.unreferencedVertices = mesh.numVertices() - n - report.weldedVertices;
+  // The vertices welded at read time are not in the mesh; those welded here still are.
+  report.unreferencedVertices = mesh.numVertices() - n - (report.weldedVertices - mesh.weldedAtRead);
   mesh.positions.resize(n);
   mesh.positions.shrink_to_fit();
   parallelForEach(mesh.triangles.size(), 4096, [&](std::uint64_t f) {
@@ -565,7 +566,8 @@ double diagonalWithout(const TriangleMesh& mesh, const std::vector<VertexId>& sp
 CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   CleanResult result;
   CleanReport& report = result.report;
-  report.inputVertices = mesh.numVertices();
+  report.inputVertices = mesh.numVertices() + mesh.weldedAtRead;
+  report.weldedVertices = mesh.weldedAtRead;
   report.inputFaces = mesh.numFaces();
   checkInput(mesh);
   reportProgress(options.progress, "cleaning", 0.0);
@@ -589,6 +591,7 @@ CleanResult cleanMesh(TriangleMesh mesh, const CleanOptions& options) {
   reportProgress(options.progress, "cleaning", 0.3);
 
   dropUnreferencedVertices(mesh, result.vertexOrigin, report);
+  mesh.weldedAtRead = 0;  // counted: the cleaned mesh is its own input
   if (report.reordered) {
     for (VertexId& v : result.vertexOrigin) v = inputOrder[v];
     std::vector<VertexId>().swap(inputOrder);

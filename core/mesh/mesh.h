@@ -24,6 +24,9 @@ struct TriangleMesh {
   /// Per-vertex properties read with the mesh (colors, normals, scalars), #V values each or none;
   /// they follow every vertex edit and are written where the output format can hold them.
   VertexAttributes attributes;
+  /// Vertices of the file joined while it was read (STL's per-facet corners at equal positions):
+  /// cleanMesh counts them as input vertices welded, as the out-of-core weld pass does.
+  std::uint64_t weldedAtRead = 0;
 
   std::uint32_t numVertices() const { return static_cast<std::uint32_t>(positions.size()); }
   std::uint32_t numFaces() const { return static_cast<std::uint32_t>(triangles.size()); }
