@@ -257,5 +257,24 @@ TEST(StlParam, MapsAnStlAsTheSameMeshFromPly) {
   }
 }
 
+// The memory estimate counts STL's welded vertices (about half the faces), not its corners.
+TEST(StlParam, TheMemoryEstimateCountsWeldedVertices) {
+  TempDir dir;
+  // Large enough for the vertices to weigh in the estimate (corners counted: 9% more).
+  const TriangleMesh mesh = testing::torusMesh(400, 200);
+  writeMesh(dir.path("m.ply"), mesh);
+  testing::writeFile(dir.path("m.stl"), binaryStl(mesh, "b"));
+  const auto estimate = [&](const std::string& name) {
+    std::string output;
+    EXPECT_EQ(testing::runSeamvox("info " + dir.path(name) + " --json", &output), 0) << output;
+    const std::size_t at = output.find("\"estimatedBytes\":");
+    EXPECT_NE(at, std::string::npos) << output;
+    return at == std::string::npos ? 0.0 : std::stod(output.substr(at + 17));
+  };
+  const double ply = estimate("m.ply"), stl = estimate("m.stl");
+  EXPECT_GT(ply, 0.0);
+  EXPECT_NEAR(stl / ply, 1.0, 0.01);
+}
+
 }  // namespace
 }  // namespace seamvox

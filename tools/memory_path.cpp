@@ -13,7 +13,8 @@ namespace seamvox::cli {
 MeshCounts guessMeshCounts(const std::string& path, const MeshStream& stream) {
   MeshCounts counts;
   counts.faces = stream.declaredFaces() ? stream.declaredFaces() : stream.expectedTriangles();
-  counts.vertices = stream.declaredVertices();
+  // STL declares its facets' corners; about half as many vertices as faces stay once welded.
+  counts.vertices = stream.cornerVertices() ? 0 : stream.declaredVertices();
   struct stat info {};
   if (counts.faces == 0 && ::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode)) {
     counts.faces = static_cast<std::uint64_t>(info.st_size) / (formatFromPath(path) == MeshFormat::Draco ? 1 : 20);
