@@ -139,7 +139,7 @@ ChunkedMeshWriter::ChunkedMeshWriter(AtomicFile& file, ChunkedMeshLayout layout,
   }
   if (s.layout.countsKnown) {
     if (s.format == MeshFormat::Ply) {
-      detail::putPlyHeader(s.direct, s.layout.vertices, s.layout.faces, s.layout.attributes, s.withUV, options.binary);
+      detail::putPlyHeader(s.direct, s.layout.vertices, s.layout.faces, s.layout.attributes, s.withUV, options.binary, s.layout.origin);
     } else {
       detail::putOffHeader(s.direct, s.layout.vertices, s.layout.faces);
     }
@@ -167,13 +167,15 @@ void ChunkedMeshWriter::write(const MeshChunk& chunk) {
       throw InputError(s.file.path() + ": vertices with the properties " + chunk.attributes.describe() +
                        " in a mesh written with " + s.layout.attributes.describe());
     }
+    // Headers written at the end take the origin of the stream's positions (a reader's chunks).
+    if (!s.layout.countsKnown && s.vertices == 0) s.layout.origin = chunk.origin;
     const std::size_t n = chunk.positions.size();
     switch (s.format) {
       case MeshFormat::Ply:
-        detail::putPlyVertices(s.vertexOut(), chunk.positions, chunk.attributes, 0, n, s.options.binary);
+        detail::putPlyVertices(s.vertexOut(), chunk.positions, chunk.attributes, 0, n, s.options.binary, s.layout.origin);
         break;
-      case MeshFormat::Off: detail::putOffVertices(s.vertexOut(), chunk.positions.data(), n); break;
-      default: detail::putObjVertices(s.vertexOut(), chunk.positions, chunk.attributes, 0, n); break;
+      case MeshFormat::Off: detail::putOffVertices(s.vertexOut(), chunk.positions.data(), n, s.layout.origin); break;
+      default: detail::putObjVertices(s.vertexOut(), chunk.positions, chunk.attributes, 0, n, s.layout.origin); break;
     }
     s.vertices += n;
     if (s.firstCounted && s.vertices > s.layout.vertices) {
@@ -214,7 +216,7 @@ void ChunkedMeshWriter::finish() {
   }
   if (s.vertexBody) {
     if (s.format == MeshFormat::Ply) {
-      detail::putPlyHeader(s.direct, s.vertices, s.faces, s.layout.attributes, s.withUV, s.options.binary);
+      detail::putPlyHeader(s.direct, s.vertices, s.faces, s.layout.attributes, s.withUV, s.options.binary, s.layout.origin);
     } else {
       detail::putOffHeader(s.direct, s.vertices, s.faces);
     }

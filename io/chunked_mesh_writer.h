@@ -23,6 +23,9 @@ struct ChunkedMeshLayout {
   /// no scratch. Otherwise the bodies wait in scratch until finish().
   bool countsKnown = false;
   std::uint64_t vertices = 0, faces = 0;
+  /// TriangleMesh::origin of the chunks' positions (written at origin + position); without the
+  /// counts known, that of the first chunk with positions instead.
+  Vec3d origin = Vec3d::Zero();
   /// OBJ with UVs and counts known: the per-vertex first corners (24 B per vertex) are held in
   /// memory up to this, on disk through a page cache of this size beyond it.
   std::uint64_t memoryBytes = ~std::uint64_t(0);

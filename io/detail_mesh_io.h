@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -90,6 +91,38 @@ class InputFile {
   char lineEnd_ = 0;  ///< '\n' or '\r' once the first line was read
 };
 
+/// TriangleMesh::origin while a file is read: originFor its first vertex (or a forced one).
+/// Positions are then kept relative to it, computed from the file's values in double precision.
+class OriginShift {
+ public:
+  OriginShift() = default;
+  /// With a forced origin (ReadOptions::origin), the first vertex decides nothing.
+  explicit OriginShift(const std::optional<Vec3d>& forced) {
+    if (!forced) return;
+    decided_ = true;
+    active_ = !forced->isZero(0.0);
+    origin_ = *forced;
+  }
+  /// True while the readers must hand over coordinates as doubles (before the first vertex, and
+  /// with an origin); otherwise their floats are the positions, as read without an origin.
+  bool needsDoubles() const { return !decided_ || active_; }
+  /// The position of the file's point x (values as doubles) or, without an origin, f (as floats).
+  Vec3f relative(const Vec3d& x, const Vec3f& f) {
+    if (!decided_) {
+      decided_ = true;
+      origin_ = originFor(x);
+      active_ = !origin_.isZero(0.0);
+    }
+    if (!active_) return f;
+    return (x - origin_).cast<float>();
+  }
+  const Vec3d& origin() const { return origin_; }
+
+ private:
+  bool decided_ = false, active_ = false;
+  Vec3d origin_ = Vec3d::Zero();
+};
+
 /// Cuts the next whitespace-separated token off the front of text ("" when none is left).
 inline std::string_view nextToken(std::string_view& text) {
   std::size_t i = 0;
@@ -139,6 +172,14 @@ inline bool parseNumber(std::string_view token, T& value) {
     }
   }
   return false;
+}
+
+/// A coordinate token as a float and, when shift needs it, as a double (else the float's value).
+/// False on garbage.
+inline bool parseCoordinate(std::string_view token, const OriginShift& shift, float& f, double& d) {
+  if (!parseNumber(token, f)) return false;
+  d = f;
+  return !shift.needsDoubles() || parseNumber(token, d);
 }
 
 /// Buffered output into an AtomicFile (or any sink of bytes): numbers are formatted with
@@ -226,20 +267,22 @@ std::unique_ptr<MeshStream> openObjStream(std::unique_ptr<InputFile> in, const R
 std::unique_ptr<MeshStream> openOffStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
 std::unique_ptr<MeshStream> openStlStream(std::unique_ptr<InputFile> in, const ReadOptions& options);
 void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options);
-// Pieces of the PLY, OFF and OBJ writers, shared with ChunkedMeshWriter (the same bytes).
+// Pieces of the PLY, OFF and OBJ writers, shared with ChunkedMeshWriter (the same bytes). The
+// positions are written at origin + position (TriangleMesh::origin): as floats when the origin is
+// zero, else in double precision (PLY: double x, y, z).
 void putPlyHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces, const VertexAttributes& attributes,
-                  bool withUV, bool binary);
+                  bool withUV, bool binary, const Vec3d& origin);
 /// Vertices [begin, end) of positions, with their values in attributes (indexed alike).
 void putPlyVertices(OutputBuffer& out, const std::vector<Vec3f>& positions, const VertexAttributes& attributes,
-                    std::size_t begin, std::size_t end, bool binary);
+                    std::size_t begin, std::size_t end, bool binary, const Vec3d& origin);
 /// count triangles; uv: 3 (u, v) per triangle, or null for none.
 void putPlyFaces(OutputBuffer& out, const Triangle* triangles, const Vec2d* uv, std::size_t count, bool binary);
 void putOffHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces);
-void putOffVertices(OutputBuffer& out, const Vec3f* positions, std::size_t count);
+void putOffVertices(OutputBuffer& out, const Vec3f* positions, std::size_t count, const Vec3d& origin);
 void putOffFaces(OutputBuffer& out, const Triangle* triangles, std::size_t count);
 /// `v x y z [r g b]` lines of vertices [begin, end) (colors when attributes has them).
 void putObjVertices(OutputBuffer& out, const std::vector<Vec3f>& positions, const VertexAttributes& attributes,
-                    std::size_t begin, std::size_t end);
+                    std::size_t begin, std::size_t end, const Vec3d& origin);
 /// `f a b c` lines without texture coordinates.
 void putObjFaces(OutputBuffer& out, const Triangle* triangles, std::size_t count);
 /// A `vt u v` line.

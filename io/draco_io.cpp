@@ -379,10 +379,18 @@ std::unique_ptr<draco::Mesh> buildDracoMesh(const TriangleMesh& mesh, bool withU
     if (owned) owned->cornerUV.clear();
     std::vector<std::uint32_t>().swap(points.wedgeOfPoint);
   }
-  draco::PointAttribute* position = built->attribute(addDracoAttribute(
-      *built, draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, mesh.numVertices(), false));
+  // Far from zero (TriangleMesh::origin) the positions are float64 at origin + position.
+  const bool shifted = !mesh.origin.isZero(0.0);
+  draco::PointAttribute* position = built->attribute(
+      addDracoAttribute(*built, draco::GeometryAttribute::POSITION, 3, shifted ? draco::DT_FLOAT64 : draco::DT_FLOAT32,
+                        mesh.numVertices(), false));
   for (std::uint32_t v = 0; v < mesh.numVertices(); ++v) {
-    position->SetAttributeValue(draco::AttributeValueIndex(v), mesh.positions[v].data());
+    if (shifted) {
+      const Vec3d world = mesh.origin + mesh.positions[v].cast<double>();
+      position->SetAttributeValue(draco::AttributeValueIndex(v), world.data());
+    } else {
+      position->SetAttributeValue(draco::AttributeValueIndex(v), mesh.positions[v].data());
+    }
   }
   const std::uint32_t numVertices = mesh.numVertices();
   if (owned) std::vector<Vec3f>().swap(owned->positions);
@@ -425,7 +433,14 @@ void writeDracoMesh(AtomicFile& file, const TriangleMesh& mesh, const WriteOptio
     throw InputError(file.path() + ": Draco position bits must be between 0 (lossless) and 30");
   }
   const UVLattice lattice = withUV ? chooseUVLattice(mesh, options) : UVLattice{};
-  encodeDraco(file, buildDracoMesh(mesh, withUV, lattice, owned), lattice, options);
+  WriteOptions used = options;
+  if (!mesh.origin.isZero(0.0) && options.dracoPositionBits > 0) {
+    // Draco quantizes float32 positions only; far from zero they are float64, kept lossless.
+    detail::warn(options.warn, file.path() + ": the mesh lies far from zero: its positions are written as lossless float64, "
+                                     "not quantized to " + std::to_string(options.dracoPositionBits) + " bits");
+    used.dracoPositionBits = 0;
+  }
+  encodeDraco(file, buildDracoMesh(mesh, withUV, lattice, owned), lattice, used);
 }
 
 }  // namespace
@@ -469,16 +484,19 @@ TriangleMesh readDraco(const std::string& path, const ReadOptions& options) {
     throw InputError(path + ": more vertices than 32-bit ids allow");
   }
   mesh.positions.resize(vertices.pointOfVertex.size());
+  OriginShift shift(options.origin);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    float p[3] = {0.0f, 0.0f, 0.0f};
-    if (!position->ConvertValue<float>(draco::AttributeValueIndex(vertices.positionOfVertex[v]), 3, p)) {
+    double p[3] = {0.0, 0.0, 0.0};
+    if (!position->ConvertValue<double>(draco::AttributeValueIndex(vertices.positionOfVertex[v]), 3, p)) {
       throw InputError(path + ": vertex " + std::to_string(v) + ": unreadable position");
     }
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+    const Vec3d exact(p[0], p[1], p[2]);
+    mesh.positions[v] = shift.relative(exact, exact.cast<float>());
+    if (!mesh.positions[v].allFinite()) {
       throw InputError(path + ": vertex " + std::to_string(v) + ": coordinate is NaN or infinite");
     }
-    mesh.positions[v] = Vec3f(p[0], p[1], p[2]);
   }
+  mesh.origin = shift.origin();
   readVertexValues(kept, vertices.pointOfVertex, mesh.attributes);
   mesh.triangles.resize(source->num_faces());
   WedgeMapBuilder uv;

@@ -8,6 +8,7 @@
 /// files may start with a UTF-8 byte order mark and end lines in LF, CRLF or CR alone.
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,9 @@ struct ReadOptions {
   /// A pipe is opened without blocking; reading fails (IoError) when no writer sends data or
   /// closes it within this time, instead of waiting forever in open().
   double pipeWaitSeconds = 10.0;
+  /// The origin positions are kept relative to (TriangleMesh::origin) instead of the one the first
+  /// vertex decides: tiles of one site read about one origin weld exactly.
+  std::optional<Vec3d> origin;
   /// Told what is read but not kept (PLY face properties other than vertex_indices and texcoord,
   /// list properties of vertices, other elements; Draco attributes of 64-bit types). Empty:
   /// printed on stderr.

@@ -17,7 +17,8 @@ class ObjReader final : public MeshStream {
       : in_(std::move(in)),
         readUV_(options.readUV),
         limit_(std::max<std::size_t>(options.chunkTriangles, 1)),
-        warn_(options.warn) {}
+        warn_(options.warn),
+        shift_(options.origin) {}
 
   bool next(MeshChunk& chunk) override {
     chunk.clear();
@@ -50,13 +51,19 @@ class ObjReader final : public MeshStream {
   }
 
   void readVertex(std::string_view line, MeshChunk& chunk) {
-    Vec3f p;
+    Vec3f f;
+    Vec3d d;
+    std::string_view tokens[3];
     for (int k = 0; k < 3; ++k) {
-      const std::string_view token = nextToken(line);
+      const std::string_view token = tokens[k] = nextToken(line);
       if (token.empty()) fail("vertex has fewer than 3 coordinates");
-      if (!parseNumber(token, p[k])) fail("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
-      if (!std::isfinite(p[k])) fail("vertex coordinate '" + std::string(token.substr(0, 40)) + "' is NaN or infinite (or beyond float range)");
+      if (!parseCoordinate(token, shift_, f[k], d[k])) fail("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
     }
+    const Vec3f p = shift_.relative(d, f);
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(p[k])) fail("vertex coordinate '" + std::string(tokens[k].substr(0, 40)) + "' is NaN or infinite (or beyond float range)");
+    }
+    chunk.origin = shift_.origin();
     if (vertices_ + 1 >= std::numeric_limits<std::uint32_t>::max()) {
       fail("more vertices than 32-bit ids allow");
     }
@@ -198,6 +205,7 @@ class ObjReader final : public MeshStream {
   bool readUV_;
   std::size_t limit_;
   WarningFn warn_;
+  OriginShift shift_;
   bool done_ = false;
   bool colors_ = false, warnedColors_ = false, warnedNormals_ = false;
   VertexAttributes colorLayout_;  ///< red, green, blue without values
@@ -216,13 +224,18 @@ std::unique_ptr<MeshStream> openObjStream(std::unique_ptr<InputFile> in, const R
 }
 
 void putObjVertices(OutputBuffer& out, const std::vector<Vec3f>& positions, const VertexAttributes& attributes,
-                    std::size_t begin, std::size_t end) {
+                    std::size_t begin, std::size_t end, const Vec3d& origin) {
   // Colors as the common `v x y z r g b` extension, in [0, 1] (other properties: writeMesh warns).
   std::vector<std::size_t> color = colorProperties(attributes);
   color.resize(std::min<std::size_t>(color.size(), 3));
   for (std::size_t v = begin; v < end; ++v) {
     out.put("v ");
-    out.putRow(positions[v].data(), 3, color.empty() ? '\n' : ' ');
+    if (origin.isZero(0.0)) {
+      out.putRow(positions[v].data(), 3, color.empty() ? '\n' : ' ');
+    } else {
+      const Vec3d world = origin + positions[v].cast<double>();
+      out.putRow(world.data(), 3, color.empty() ? '\n' : ' ');
+    }
     if (color.empty()) continue;
     float rgb[3];
     for (int k = 0; k < 3; ++k) {
@@ -258,7 +271,7 @@ void writeObj(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& op
   const bool withUV = options.writeUV && mesh.hasUV();
   OutputBuffer out(file);
   out.put("# written by seamvox\n");
-  putObjVertices(out, mesh.positions, mesh.attributes, 0, mesh.positions.size());
+  putObjVertices(out, mesh.positions, mesh.attributes, 0, mesh.positions.size(), mesh.origin);
   if (!withUV) {
     putObjFaces(out, mesh.triangles.data(), mesh.triangles.size());
     out.flush();

@@ -13,7 +13,7 @@ namespace {
 class OffReader final : public MeshStream {
  public:
   OffReader(std::unique_ptr<InputFile> in, const ReadOptions& options)
-      : in_(std::move(in)), limit_(std::max<std::size_t>(options.chunkTriangles, 1)) {
+      : in_(std::move(in)), limit_(std::max<std::size_t>(options.chunkTriangles, 1)), shift_(options.origin) {
     readHeader();
   }
 
@@ -114,15 +114,23 @@ class OffReader final : public MeshStream {
   }
 
   void readVertex(std::string_view line, MeshChunk& chunk) {
-    Vec3f p;
+    Vec3f f;
+    Vec3d d;
+    std::string_view tokens[3];
     for (int k = 0; k < dimension_; ++k) {
       const std::string_view token = nextToken(line);
       if (token.empty()) fail("vertex has fewer than " + std::to_string(dimension_) + " coordinates");
       float value;
-      if (!parseNumber(token, value)) fail("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
-      if (!std::isfinite(value)) fail("vertex coordinate '" + std::string(token.substr(0, 40)) + "' is NaN or infinite (or beyond float range)");
-      if (k < 3) p[k] = value;
+      double exact;
+      if (!parseCoordinate(token, shift_, value, exact)) fail("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
+      if (k >= 3 && !std::isfinite(value)) fail("vertex coordinate '" + std::string(token.substr(0, 40)) + "' is NaN or infinite (or beyond float range)");
+      if (k < 3) f[k] = value, d[k] = exact, tokens[k] = token;
     }
+    const Vec3f p = shift_.relative(d, f);
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(p[k])) fail("vertex coordinate '" + std::string(tokens[k].substr(0, 40)) + "' is NaN or infinite (or beyond float range)");
+    }
+    chunk.origin = shift_.origin();
     chunk.positions.push_back(p);
     ++verticesRead_;
   }
@@ -152,6 +160,7 @@ class OffReader final : public MeshStream {
 
   std::unique_ptr<InputFile> in_;
   std::size_t limit_;
+  OriginShift shift_;
   int dimension_ = 3;
   std::uint64_t numVertices_ = 0, numFaces_ = 0;
   std::uint64_t verticesRead_ = 0, facesRead_ = 0;
@@ -172,8 +181,15 @@ void putOffHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces
   out.put(" 0\n");
 }
 
-void putOffVertices(OutputBuffer& out, const Vec3f* positions, std::size_t count) {
-  for (std::size_t v = 0; v < count; ++v) out.putRow(positions[v].data(), 3);
+void putOffVertices(OutputBuffer& out, const Vec3f* positions, std::size_t count, const Vec3d& origin) {
+  if (origin.isZero(0.0)) {
+    for (std::size_t v = 0; v < count; ++v) out.putRow(positions[v].data(), 3);
+    return;
+  }
+  for (std::size_t v = 0; v < count; ++v) {
+    const Vec3d world = origin + positions[v].cast<double>();
+    out.putRow(world.data(), 3);
+  }
 }
 
 void putOffFaces(OutputBuffer& out, const Triangle* triangles, std::size_t count) {
@@ -186,7 +202,7 @@ void putOffFaces(OutputBuffer& out, const Triangle* triangles, std::size_t count
 void writeOff(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions&) {
   OutputBuffer out(file);
   putOffHeader(out, mesh.positions.size(), mesh.triangles.size());
-  putOffVertices(out, mesh.positions.data(), mesh.positions.size());
+  putOffVertices(out, mesh.positions.data(), mesh.positions.size(), mesh.origin);
   putOffFaces(out, mesh.triangles.data(), mesh.triangles.size());
   out.flush();
 }

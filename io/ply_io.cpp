@@ -251,9 +251,15 @@ class BinarySource {
     return p;
   }
   double real(PlyType t) { return loadReal(t, take(sizeOf(t)), swap_); }
-  float coordinate(PlyType t) {
-    if (t == PlyType::Float32) return loadRaw<float>(take(4), swap_);
-    return static_cast<float>(real(t));
+  /// A coordinate as the float it was read as, and as the double the file holds.
+  void coordinate(PlyType t, bool, float& f, double& d) {
+    if (t == PlyType::Float32) {
+      f = loadRaw<float>(take(4), swap_);
+      d = f;
+      return;
+    }
+    d = real(t);
+    f = static_cast<float>(d);
   }
   bool integer(PlyType t, std::int64_t& value) {
     const char* p = take(sizeOf(t));
@@ -319,12 +325,17 @@ class AsciiSource {
     if (!parseNumber(t, value)) bad(t);
     return value;
   }
-  float coordinate(PlyType type) {
-    if (type == PlyType::Float64) return static_cast<float>(real(type));
+  /// A coordinate as the float it was read as, and (when asked for) as the double the file holds.
+  void coordinate(PlyType type, bool wantDouble, float& f, double& d) {
+    if (type == PlyType::Float64) {
+      d = real(type);
+      f = static_cast<float>(d);
+      return;
+    }
     const std::string_view t = token();
-    float value;
-    if (!parseNumber(t, value)) bad(t);
-    return value;
+    if (!parseNumber(t, f)) bad(t);
+    d = f;
+    if (wantDouble && !parseNumber(t, d)) bad(t);
   }
   bool integer(PlyType type, std::int64_t& value) {
     if (isFloating(type)) return integral(real(type), value);
@@ -379,6 +390,7 @@ class PlyReader final : public MeshStream {
       : in_(std::move(in)),
         header_(std::move(header)),
         source_(source),
+        shift_(options.origin),
         limit_(std::max<std::size_t>(options.chunkTriangles, 1)) {
     bool hasStrips = false;
     for (const PlyElement& e : header_.elements) {
@@ -459,21 +471,25 @@ class PlyReader final : public MeshStream {
     if (chunk.attributes.properties.size() != layout_.properties.size()) chunk.attributes = layout_.emptyCopy();
     std::vector<VertexProperty>& attributes = chunk.attributes.properties;
     while (instance_ < e.count && chunk.positions.size() < limit_) {
-      Vec3f p;
+      Vec3f f;
+      Vec3d d;
       for (std::size_t k = 0; k < numProperties; ++k) {
         const PlyProperty& prop = e.properties[k];
         const int ik = static_cast<int>(k);
         if (ik == e.x || ik == e.y || ik == e.z) {
-          p[ik == e.x ? 0 : ik == e.y ? 1 : 2] = source_.coordinate(prop.type);
+          const int axis = ik == e.x ? 0 : ik == e.y ? 1 : 2;
+          source_.coordinate(prop.type, shift_.needsDoubles(), f[axis], d[axis]);
         } else if (e.kept[k] >= 0) {
           source_.value(prop.type, attributes[e.kept[k]].bytes);
         } else {
           skipProperty(prop);
         }
       }
+      const Vec3f p = shift_.relative(d, f);
       if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
         throw Fault{false, "vertex coordinate is NaN or infinite (or beyond float range)"};
       }
+      chunk.origin = shift_.origin();
       chunk.positions.push_back(p);
       ++verticesRead_;
       ++instance_;
@@ -608,6 +624,7 @@ class PlyReader final : public MeshStream {
   PlyHeader header_;
   VertexAttributes layout_;  ///< the kept vertex properties, without values
   Source source_;
+  OriginShift shift_;
   std::size_t limit_;
   bool withUV_ = false;
   std::uint64_t vertexCount_ = 0, faceCount_ = 0, verticesRead_ = 0;
@@ -682,13 +699,14 @@ void putTextValue(OutputBuffer& out, const VertexProperty& p, std::size_t v) {
 }  // namespace
 
 void putPlyHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces, const VertexAttributes& attributes,
-                  bool withUV, bool binary) {
+                  bool withUV, bool binary, const Vec3d& origin) {
   const bool wideIndices = vertices > std::uint64_t(std::numeric_limits<std::int32_t>::max());
   out.put("ply\nformat ");
   out.put(binary ? "binary_little_endian" : "ascii");
   out.put(" 1.0\ncomment written by seamvox\nelement vertex ");
   out.putNumber(vertices);
-  out.put("\nproperty float x\nproperty float y\nproperty float z\n");
+  out.put(origin.isZero(0.0) ? "\nproperty float x\nproperty float y\nproperty float z\n"
+                              : "\nproperty double x\nproperty double y\nproperty double z\n");
   for (const VertexProperty& p : attributes.properties) {
     out.put("property ");
     out.put(scalarTypeName(p.type));
@@ -705,20 +723,34 @@ void putPlyHeader(OutputBuffer& out, std::uint64_t vertices, std::uint64_t faces
 }
 
 void putPlyVertices(OutputBuffer& out, const std::vector<Vec3f>& positions, const VertexAttributes& attributes,
-                    std::size_t begin, std::size_t end, bool binary) {
+                    std::size_t begin, std::size_t end, bool binary, const Vec3d& origin) {
   const std::vector<VertexProperty>& properties = attributes.properties;
+  const bool shifted = !origin.isZero(0.0);
   if (binary) {
     for (std::size_t v = begin; v < end; ++v) {
       const Vec3f& p = positions[v];
-      out.putLittle(p[0]);
-      out.putLittle(p[1]);
-      out.putLittle(p[2]);
+      if (shifted) {
+        const Vec3d world = origin + p.cast<double>();
+        out.putLittle(world[0]);
+        out.putLittle(world[1]);
+        out.putLittle(world[2]);
+      } else {
+        out.putLittle(p[0]);
+        out.putLittle(p[1]);
+        out.putLittle(p[2]);
+      }
       for (const VertexProperty& property : properties) putLittleValue(out, property, v);
     }
     return;
   }
   for (std::size_t v = begin; v < end; ++v) {
-    out.putRow(positions[v].data(), 3, properties.empty() ? '\n' : ' ');
+    const char last = properties.empty() ? '\n' : ' ';
+    if (shifted) {
+      const Vec3d world = origin + positions[v].cast<double>();
+      out.putRow(world.data(), 3, last);
+    } else {
+      out.putRow(positions[v].data(), 3, last);
+    }
     for (std::size_t k = 0; k < properties.size(); ++k) {
       putTextValue(out, properties[k], v);
       out.put(k + 1 < properties.size() ? ' ' : '\n');
@@ -750,8 +782,8 @@ void putPlyFaces(OutputBuffer& out, const Triangle* triangles, const Vec2d* uv, 
 void writePly(AtomicFile& file, const TriangleMesh& mesh, const WriteOptions& options) {
   const bool withUV = options.writeUV && mesh.hasUV();
   OutputBuffer out(file);
-  putPlyHeader(out, mesh.positions.size(), mesh.triangles.size(), mesh.attributes, withUV, options.binary);
-  putPlyVertices(out, mesh.positions, mesh.attributes, 0, mesh.positions.size(), options.binary);
+  putPlyHeader(out, mesh.positions.size(), mesh.triangles.size(), mesh.attributes, withUV, options.binary, mesh.origin);
+  putPlyVertices(out, mesh.positions, mesh.attributes, 0, mesh.positions.size(), options.binary, mesh.origin);
   // Faces in blocks whose corner UVs are gathered from the wedge map.
   constexpr std::size_t kBlock = 1 << 14;
   std::vector<Vec2d> uv;

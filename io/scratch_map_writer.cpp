@@ -21,6 +21,7 @@ void writeScratchMap(AtomicFile& file, ScratchFolder& folder, const CleanScratch
   layout.hasUV = true;
   layout.vertices = scratch.numVertices;
   layout.faces = scratch.numFaces;
+  layout.origin = scratch.origin;
   layout.memoryBytes = pass.memoryBytes / 4;
   ChunkedMeshWriter writer(file, layout, options, &folder);
   const std::uint64_t chunkRecords = std::max<std::uint64_t>(1, pass.blockRecords);

@@ -52,7 +52,8 @@ bool secondLineIsAscii(const char* data, std::size_t n) {
 class StlReader final : public MeshStream {
  public:
   StlReader(std::unique_ptr<InputFile> in, const ReadOptions& options)
-      : in_(std::move(in)), limit_(std::max<std::size_t>(options.chunkTriangles, 1)), warn_(options.warn) {
+      : in_(std::move(in)), limit_(std::max<std::size_t>(options.chunkTriangles, 1)), warn_(options.warn),
+        shift_(options.origin) {
     detectEncoding();
   }
 
@@ -116,14 +117,19 @@ class StlReader final : public MeshStream {
     }
   }
 
-  void addFacet(const float* p, MeshChunk& chunk, std::uint64_t facet) {
-    for (int k = 0; k < 9; ++k) {
-      if (!std::isfinite(p[k])) {
+  /// A facet of corners f (floats) or d (doubles, when the shift needs them; else null).
+  void addFacet(const float* f, const double* d, MeshChunk& chunk, std::uint64_t facet) {
+    Vec3f p[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3f corner(f[3 * k], f[3 * k + 1], f[3 * k + 2]);
+      p[k] = shift_.relative(d ? Vec3d(d[3 * k], d[3 * k + 1], d[3 * k + 2]) : corner.cast<double>(), corner);
+      if (!p[k].allFinite()) {
         throw InputError(in_->path() + ": facet " + std::to_string(facet) + " has a NaN or infinite coordinate");
       }
     }
+    chunk.origin = shift_.origin();
     const VertexId first = static_cast<VertexId>(3 * facesRead_);
-    for (int k = 0; k < 3; ++k) chunk.positions.emplace_back(p[3 * k], p[3 * k + 1], p[3 * k + 2]);
+    for (int k = 0; k < 3; ++k) chunk.positions.push_back(p[k]);
     chunk.triangles.push_back({first, first + 1, first + 2});
     ++facesRead_;
   }
@@ -143,7 +149,7 @@ class StlReader final : public MeshStream {
         warnedAttribute_ = true;
         warn(warn_, in_->path() + ": the facets' attribute bytes (a colour in some writers) are not kept");
       }
-      addFacet(p, chunk, facesRead_);
+      addFacet(p, nullptr, chunk, facesRead_);
       in_->advance(kFacetBytes);
     }
     if (facesRead_ == numFaces_ && !in_->isRegular() && in_->ensure(1)) {
@@ -195,6 +201,7 @@ class StlReader final : public MeshStream {
       if (!takeKeyword(line, "facet")) failAtLine("expected 'facet' or 'endsolid'");
       expectLine("outer", "loop");
       corners_.clear();
+      exact_.clear();
       for (;;) {
         if (!contentLine(line)) {
           throw IoError(in_->path() + ": the file ends early (truncated) within facet " + std::to_string(facesRead_) +
@@ -203,14 +210,18 @@ class StlReader final : public MeshStream {
         if (takeKeyword(line, "endloop")) break;
         if (!takeKeyword(line, "vertex")) failAtLine("expected 'vertex' or 'endloop'");
         Vec3f p;
+        Vec3d x;
         for (int k = 0; k < 3; ++k) {
           const std::string_view token = nextToken(line);
-          if (!parseNumber(token, p[k])) failAtLine("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
-          if (!std::isfinite(p[k])) {
-            failAtLine("vertex coordinate '" + std::string(token.substr(0, 40)) + "' is NaN or infinite (or beyond float range)");
+          if (!parseCoordinate(token, shift_, p[k], x[k])) {
+            failAtLine("bad vertex coordinate '" + std::string(token.substr(0, 40)) + "'");
+          }
+          if (!std::isfinite(x[k])) {
+            failAtLine("vertex coordinate '" + std::string(token.substr(0, 40)) + "' is NaN or infinite");
           }
         }
         corners_.push_back(p);
+        exact_.push_back(x);
       }
       expectLine("endfacet");
       if (corners_.size() < 3) {
@@ -219,14 +230,20 @@ class StlReader final : public MeshStream {
       }
       // A polygon facet (not standard, written by a few tools) is split into a fan.
       for (std::size_t k = 2; k < corners_.size(); ++k) {
-        const Vec3f& a = corners_[0];
-        const Vec3f& b = corners_[k - 1];
-        const Vec3f& c = corners_[k];
-        const float p[9] = {a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]};
+        float f[9];
+        double d[9];
+        for (int i = 0; i < 3; ++i) {
+          const std::size_t corner = i == 0 ? 0 : k - 2 + i;
+          for (int j = 0; j < 3; ++j) f[3 * i + j] = corners_[corner][j], d[3 * i + j] = exact_[corner][j];
+        }
         if (3 * (facesRead_ + 1) >= std::numeric_limits<std::uint32_t>::max()) {
           failAtLine("more facet corners than 32-bit ids allow");
         }
-        addFacet(p, chunk, facesRead_);
+        try {
+          addFacet(f, d, chunk, facesRead_);
+        } catch (const InputError&) {
+          failAtLine("a vertex coordinate is beyond float range");
+        }
       }
     }
   }
@@ -234,10 +251,12 @@ class StlReader final : public MeshStream {
   std::unique_ptr<InputFile> in_;
   std::size_t limit_;
   WarningFn warn_;
+  OriginShift shift_;
   bool binary_ = false;
   std::uint64_t numFaces_ = 0, facesRead_ = 0;
   bool inSolid_ = false, sawSolid_ = false, ended_ = false, warnedAttribute_ = false;
   std::vector<Vec3f> corners_;
+  std::vector<Vec3d> exact_;
 };
 
 }  // namespace

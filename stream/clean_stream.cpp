@@ -122,6 +122,7 @@ class CleanPass {
     // quarter of memoryBytes: 200 MB at 100M faces in a 2 GiB budget), else by sorts.
     renumberBySorts_ = renumberBySorts || 4 * welded.numVertices > sort_.memoryBytes / 2;
     out_.numFaces = welded.numFaces;
+    out_.origin = census.origin;
     out_.report = weldCleanReport(census);
   }
 
@@ -908,6 +909,7 @@ CleanResult readCleanScratch(ScratchFolder& folder, const CleanScratch& scratch)
     r.faceOrigin[f] = faces[f].inputFace;
   }
   r.mesh.positions = readWholeScratch<Vec3f>(folder, scratch.positions, scratch.numVertices, "clean: read");
+  r.mesh.origin = scratch.origin;
   r.vertexOrigin = readWholeScratch<VertexId>(folder, scratch.vertexOrigin, scratch.numVertices, "clean: read");
   r.topology = Topology::viewParts(r.mesh.triangles, readWholeScratch<CornerId>(folder, scratch.opposite, 3 * scratch.numFaces, "clean: read"),
                                    readWholeScratch<CornerId>(folder, scratch.vertexCorner, scratch.numVertices, "clean: read"));

@@ -37,6 +37,7 @@ struct CleanScratch {
   ScratchFile positions;     ///< Vec3f per vertex; the copies of split vertices after the others
   ScratchFile vertexOrigin;  ///< input vertex id per vertex
   std::uint64_t numFaces = 0, numVertices = 0;
+  Vec3d origin = Vec3d::Zero();  ///< TriangleMesh::origin of the positions
   /// cleanMesh's counts: welded, degenerate, duplicate and unreferenced from the weld pass, then
   /// non-manifold edges and vertices and flipped faces (the others 0 for now).
   CleanReport report;

@@ -23,6 +23,8 @@ void StreamChecker::check(const MeshChunk& chunk) {
     } catch (const InputError& e) {
       throw InputError(name_ + ": " + e.what());
     }
+    if (vertices_ == 0) origin_ = chunk.origin;
+    if (chunk.origin != origin_) throw InputError(name_ + ": stream chunks have positions about different origins");
   }
   vertices_ += chunk.positions.size();
   if (chunk.triangles.empty()) return;
@@ -146,6 +148,7 @@ TriangleMesh collectWelded(MeshStream& stream) {
   }
   checker.finish();
   mesh.weldedAtRead = checker.vertices() - mesh.positions.size();
+  mesh.origin = checker.origin();
   return mesh;
 }
 
@@ -187,6 +190,7 @@ TriangleMesh collectMesh(MeshStream& stream) {
   }
   if (checker.hasUV()) mesh.cornerUV = uv.finish();
   checker.finish();
+  mesh.origin = checker.origin();
   return mesh;
 }
 
@@ -201,6 +205,7 @@ class MemoryStream final : public MeshStream {
     chunk.clear();
     const TriangleMesh& m = *mesh_;
     chunk.firstVertex = static_cast<std::uint32_t>(vertex_);
+    chunk.origin = m.origin;
     if (vertex_ < m.positions.size()) {
       const std::size_t end = std::min(m.positions.size(), vertex_ + chunk_);
       chunk.positions.assign(m.positions.begin() + vertex_, m.positions.begin() + end);

@@ -24,11 +24,14 @@ struct MeshChunk {
   /// Per-vertex properties of this chunk's positions (the same names and types in every chunk
   /// of a stream; no properties when the source has none).
   VertexAttributes attributes;
+  /// TriangleMesh::origin of the positions (the same in every chunk of a stream).
+  Vec3d origin = Vec3d::Zero();
   void clear() {
     positions.clear();
     triangles.clear();
     cornerUV.clear();
     attributes.clearValues();
+    origin = Vec3d::Zero();
   }
 };
 
@@ -67,6 +70,8 @@ class StreamChecker {
   std::uint64_t vertices() const { return vertices_; }
   std::uint64_t faces() const { return faces_; }
   bool hasUV() const { return withUV_; }
+  /// The origin of the stream's positions (that of its first chunk with positions).
+  const Vec3d& origin() const { return origin_; }
 
  private:
   struct Record {
@@ -77,6 +82,7 @@ class StreamChecker {
   std::string name_;
   std::uint64_t vertices_ = 0, faces_ = 0;
   bool uvDecided_ = false, withUV_ = false;
+  Vec3d origin_ = Vec3d::Zero();
   std::vector<Record> records_;  ///< increasing largest ids
 };
 

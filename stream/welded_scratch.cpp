@@ -207,6 +207,7 @@ class WeldPass {
       triangles.write(chunk.triangles.data(), chunk.triangles.size() * sizeof(Triangle));
     }
     checker.finish();
+    result_.census.origin = checker.origin();
     result_.census.inputVertices = checker.vertices();
     result_.census.inputFaces = checker.faces();
     if (checker.faces() == 0) throw InputError(name_ + ": the mesh has no faces");

@@ -61,7 +61,8 @@ struct WeldCensus {
   /// Connected through shared vertices (cleanMesh splits non-manifold vertices and edges first:
   /// equal on meshes without them); by decreasing face count, then vertices.
   std::vector<ComponentInfo> components;
-  BoundingBox box;
+  BoundingBox box;              ///< of the positions, about origin
+  Vec3d origin = Vec3d::Zero();  ///< TriangleMesh::origin of the stream's positions
   VertexAttributes properties;  ///< names and types of the vertex properties read
   /// Wall seconds of the passes: read, weld, faces, duplicates, edges, positions, morton, components.
   std::vector<std::pair<std::string, double>> stageSeconds;

@@ -308,10 +308,15 @@ TEST(JobsCommand, EstimatesCountVertexProperties) {
   EXPECT_NEAR(estimateBytes("props") - estimateBytes("plain"), expected, 2.0) << csv;
 }
 
-TEST(JobsCommand, TilesAreParameterizedAsOneSeamlessSurface) {
+// Near zero, and far from it as a georeferenced site is (its tiles then keep one origin).
+class TiledJobs : public ::testing::TestWithParam<bool> {};
+
+TEST_P(TiledJobs, TilesAreParameterizedAsOneSeamlessSurface) {
   TempDir dir;
   const TriangleMesh mesh = generatedSphere(3000);
-  const std::vector<TriangleMesh> tiles = cutIntoTiles(mesh);
+  std::vector<TriangleMesh> tiles = cutIntoTiles(mesh);
+  const Vec3d offset = GetParam() ? Vec3d(512000.0, 4123000.0, 100.0) : Vec3d::Zero();
+  for (TriangleMesh& tile : tiles) tile.origin = offset;
   fs::create_directories(dir.path("site"));
   for (std::size_t t = 0; t < tiles.size(); ++t) writeMesh(dir.path("site/tile" + std::to_string(t) + ".ply"), tiles[t]);
   writeFile(dir.path("jobs.txt"), "tiles site site/tile*.ply : --solver hat --cells 30\n");
@@ -321,11 +326,14 @@ TEST(JobsCommand, TilesAreParameterizedAsOneSeamlessSurface) {
   // Reassemble the three Draco outputs: the map must be seamless across the tile borders too.
   ReadOptions options;
   options.readUV = true;
+  options.origin = offset;
   TriangleMesh whole;
   std::vector<Vec2d> wholeUV;
   for (std::size_t t = 0; t < tiles.size(); ++t) {
     const TriangleMesh part = readMesh(dir.path("out/site/tile" + std::to_string(t) + ".drc"), options);
     EXPECT_EQ(part.numFaces(), tiles[t].numFaces());
+    // Far from zero, the output keeps the tiles' coordinates (its own origin is its first vertex's).
+    EXPECT_EQ(readMesh(dir.path("out/site/tile" + std::to_string(t) + ".drc")).origin.isZero(0.0), !GetParam());
     const VertexId offset = whole.numVertices();
     whole.positions.insert(whole.positions.end(), part.positions.begin(), part.positions.end());
     for (Triangle tri : part.triangles) {
@@ -346,6 +354,8 @@ TEST(JobsCommand, TilesAreParameterizedAsOneSeamlessSurface) {
   EXPECT_LE(seams.maxIntegerDistance, 1e-4);
   EXPECT_THAT(readFile(dir.path("out/site.json")), HasSubstr("\"kind\": \"tiles\""));
 }
+
+INSTANTIATE_TEST_SUITE_P(NearAndFar, TiledJobs, ::testing::Bool());
 
 TEST(JobsCommand, MpiRanksShareTheJobs) {
   Batch batch;

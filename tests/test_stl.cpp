@@ -187,7 +187,7 @@ TEST(StlRead, MalformedFilesNameTheFileAndTheProblem) {
       {"long.stl", good + "xx", false, {"not an STL file"}},
       {"header.stl", "solid", false, {"not an STL file"}},
       {"binsolid.stl", binaryStl(tri, "solid x").substr(0, 150), false, {"not an STL file"}},
-      {"nan.stl", binaryStl(tri, "b", [](std::string& b, std::size_t f) {
+      {"nanbinary.stl", binaryStl(tri, "b", [](std::string& b, std::size_t f) {
          if (f == 1) {
            const float nan = std::nanf("");
            std::memcpy(&b[b.size() - 2 - 4], &nan, 4);
@@ -199,7 +199,9 @@ TEST(StlRead, MalformedFilesNameTheFileAndTheProblem) {
       {"noend.stl", "solid a\n" + facet, true, {"ends early", "no 'endsolid' after 1 facets"}},
       {"cut.stl", "solid a\n" + facet + "facet normal 0 0 1\nouter loop\nvertex 0 0 0\n", true, {"ends early", "facet 1"}},
       {"badnumber.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 x 0\n", false, {"line 4", "bad vertex coordinate 'x'"}},
-      {"inf.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 1e99 0\n", false, {"line 4", "NaN or infinite"}},
+      {"nan.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 nan 0\n", false, {"line 4", "NaN or infinite"}},
+      {"huge.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1e99 0\nendloop\nendfacet\n",
+       false, {"line 8", "beyond float range"}},
       {"two.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid\n", false,
        {"line 7", "2 vertices (at least 3"}},
       {"keyword.stl", "solid a\nfacet normal 0 0 1\nouterloop\n", false, {"line 3", "expected 'outer loop'"}},

@@ -100,7 +100,8 @@ void printDracoFigures(const TriangleMesh& mesh, const WriteOptions& options) {
                   options.dracoUVBits > 0 ? ": their range is too large for an exact lattice" : "");
     }
   }
-  std::printf("positions %s\n", options.dracoPositionBits > 0
+  std::printf("positions %s\n", !mesh.origin.isZero(0.0) ? "lossless (float64: the mesh lies far from zero)"
+                                : options.dracoPositionBits > 0
                                     ? (std::to_string(options.dracoPositionBits) + "-bit quantized").c_str()
                                     : "lossless (float32)");
 }

@@ -24,9 +24,12 @@ void writeConesObj(AtomicFile& file, const TriangleMesh& mesh, const FieldSingul
                      " vertices with nonzero index (in quarter turns)\n";
   char buf[200];
   for (VertexId v : sing.cones) {
-    const Vec3d p = mesh.position(v);
+    const Vec3d p = mesh.origin + mesh.position(v);  // in the file's coordinates
     const int k = sing.index4[v];
-    std::snprintf(buf, sizeof buf, "# cone vertex %u index4 %+d (index %+g)\nv %.9g %.9g %.9g %s\n", v, k,
+    std::snprintf(buf, sizeof buf,
+                  mesh.origin.isZero(0.0) ? "# cone vertex %u index4 %+d (index %+g)\nv %.9g %.9g %.9g %s\n"
+                                          : "# cone vertex %u index4 %+d (index %+g)\nv %.17g %.17g %.17g %s\n",
+                  v, k,
                   k / 4.0, p.x(), p.y(), p.z(), k > 0 ? "1 0 0" : "0 0 1");
     text += buf;
   }
@@ -43,8 +46,9 @@ void writeSeamsObj(AtomicFile& file, const TriangleMesh& mesh, const Topology& t
   auto index = [&](VertexId v) {
     auto [it, added] = objIndex.emplace(v, objIndex.size() + 1);
     if (added) {
-      const Vec3d p = mesh.position(v);
-      std::snprintf(buf, sizeof buf, "v %.9g %.9g %.9g\n", p.x(), p.y(), p.z());
+      const Vec3d p = mesh.origin + mesh.position(v);
+      std::snprintf(buf, sizeof buf, mesh.origin.isZero(0.0) ? "v %.9g %.9g %.9g\n" : "v %.17g %.17g %.17g\n", p.x(),
+                    p.y(), p.z());
       vertices += buf;
     }
     return it->second;

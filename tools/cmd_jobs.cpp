@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -52,9 +53,16 @@ void createFolder(const std::string& folder, const char* what) {
   if (error) throw IoError(folder + ": cannot create the " + what + ": " + error.message());
 }
 
-std::vector<TriangleMesh> readTiles(const std::vector<std::string>& paths) {
+/// The tiles with their positions about one origin (given, or the first tile's): positions equal
+/// in the files stay equal.
+std::vector<TriangleMesh> readTiles(const std::vector<std::string>& paths, std::optional<Vec3d> origin = {}) {
   std::vector<TriangleMesh> tiles;
-  for (const std::string& path : paths) tiles.push_back(readMesh(path));
+  ReadOptions options;
+  options.origin = origin;
+  for (const std::string& path : paths) {
+    tiles.push_back(readMesh(path, options));
+    options.origin = tiles.front().origin;
+  }
   return tiles;
 }
 
@@ -75,7 +83,7 @@ int splitTileFiles(const std::string& mapped, const std::string& folder, const s
   readOptions.readUV = true;
   const TriangleMesh mesh = readMesh(mapped, readOptions);
   if (!mesh.hasUV()) throw InputError(mapped + ": the parameterized mesh has no texture coordinates");
-  SplitTiles split = splitTiles(mesh, readTiles(paths));
+  SplitTiles split = splitTiles(mesh, readTiles(paths, mesh.origin));
   createFolder(folder, "tiles output folder");
   OutputSet outputs;  // every tile or none
   for (std::size_t t = 0; t < paths.size(); ++t) {

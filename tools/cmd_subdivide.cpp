@@ -35,6 +35,7 @@ std::uint64_t writeStreamed(const CleanResult& cleaned, std::uint32_t levels, At
   layout.vertices = stream.numVertices();
   layout.faces = stream.numFaces();
   layout.attributes = cleaned.mesh.attributes.emptyCopy();
+  layout.origin = cleaned.mesh.origin;
   ChunkedMeshWriter writer(meshFile, layout, options, nullptr);
   MeshChunk chunk;
   while (stream.nextVertices(kChunk, chunk)) writer.write(chunk);

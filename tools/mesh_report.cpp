@@ -63,6 +63,7 @@ MeshSummary summarizeMeshStream(const std::string& path, MeshStream& stream, con
   summary.components = std::move(components.components);
   summary.boundaryLoops = components.boundaryLoops;
   summary.box = computeBoundingBox(cleaned.mesh.positions);
+  if (!summary.box.isEmpty()) summary.box.min += cleaned.mesh.origin, summary.box.max += cleaned.mesh.origin;
   summary.peakResidentBytes = peakResidentBytes();
   return summary;
 }
@@ -79,6 +80,7 @@ MeshSummary summarizeCensus(const std::string& path, const WeldCensus& census, c
   s.components = std::move(components.components);
   s.boundaryLoops = components.boundaryLoops;
   s.box = census.box;
+  if (!s.box.isEmpty()) s.box.min += census.origin, s.box.max += census.origin;
   s.readSeconds = seconds;
   s.edges = census.edges;
   s.boundaryEdges = census.boundaryEdges;
@@ -129,7 +131,7 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
                 ull(c.unweldedBoundaryVertices), c.unweldedBoundaryVertices ? "; --weld joins it" : "",
                 c.reordered ? ";\n                vertices and faces put in spatial order (the input's was scattered)" : "");
   if (!s.box.isEmpty()) {
-    out += format("bounding box    (%g, %g, %g) - (%g, %g, %g), diagonal %g\n", s.box.min.x(),
+    out += format("bounding box    (%.10g, %.10g, %.10g) - (%.10g, %.10g, %.10g), diagonal %g\n", s.box.min.x(),
                   s.box.min.y(), s.box.min.z(), s.box.max.x(), s.box.max.y(), s.box.max.z(),
                   s.box.diagonal());
   }

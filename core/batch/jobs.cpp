@@ -269,8 +269,13 @@ WeldedTiles weldTiles(const std::vector<TriangleMesh>& tiles) {
   result.mesh.triangles.reserve(faces);
   result.faceTile.reserve(faces);
   if (!tiles.empty()) result.mesh.attributes = tiles[0].attributes.emptyCopy();
+  if (!tiles.empty()) result.mesh.origin = tiles[0].origin;
   for (std::uint32_t t = 0; t < tiles.size(); ++t) {
     const TriangleMesh& tile = tiles[t];
+    if (tile.origin != result.mesh.origin) {
+      throw InputError("tile " + std::to_string(t) + ": its positions are kept about another origin than the first "
+                       "tile's (read the tiles with ReadOptions::origin)");
+    }
     std::vector<VertexId> merged(tile.numVertices()), fresh;
     for (VertexId v = 0; v < tile.numVertices(); ++v) {
       const auto found = earlier.find(keyOf(tile.positions[v]));
@@ -330,6 +335,7 @@ SplitTiles splitTiles(const TriangleMesh& mesh, const std::vector<TriangleMesh>&
   std::vector<VertexId> source;                                 // of each tile vertex
   for (std::size_t t = 0; t < tiles.size(); ++t) {
     TriangleMesh& out = result.tiles[t];
+    out.origin = mesh.origin;
     source.clear();
     out.triangles.reserve(first[t + 1] - first[t]);
     WedgeMapBuilder uv;

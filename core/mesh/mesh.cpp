@@ -5,6 +5,11 @@
 
 namespace seamvox {
 
+Vec3d originFor(const Vec3d& p) {
+  if (!p.allFinite() || !(p.cwiseAbs().maxCoeff() > kOriginBeyond)) return Vec3d::Zero();
+  return p.array().round().matrix();
+}
+
 BoundingBox computeBoundingBox(const std::vector<Vec3f>& positions) {
   BoundingBox box;
   for (const Vec3f& p : positions) {

@@ -27,12 +27,24 @@ struct TriangleMesh {
   /// Vertices of the file joined while it was read (STL's per-facet corners at equal positions):
   /// cleanMesh counts them as input vertices welded, as the out-of-core weld pass does.
   std::uint64_t weldedAtRead = 0;
+  /// Where position zero lies in the file's coordinates: a vertex is at origin + positions[v].
+  /// Zero unless the file's coordinates lie far from zero (a georeferenced scan at 5e5, 4e6),
+  /// where floats would lose the mesh's detail: the readers then keep positions relative to the
+  /// first vertex rounded to whole units, every stage works on those (the map does not depend on a
+  /// translation), and the writers add it back in double precision.
+  Vec3d origin = Vec3d::Zero();
 
   std::uint32_t numVertices() const { return static_cast<std::uint32_t>(positions.size()); }
   std::uint32_t numFaces() const { return static_cast<std::uint32_t>(triangles.size()); }
   bool hasUV() const { return !cornerUV.empty(); }
   Vec3d position(VertexId v) const { return positions[v].cast<double>(); }
 };
+
+/// TriangleMesh::origin for a mesh whose first vertex lies at p (in the file's coordinates): zero
+/// unless a coordinate lies beyond kOriginBeyond (float spacing 0.002 there), then p rounded to
+/// whole units.
+constexpr double kOriginBeyond = 16384.0;
+Vec3d originFor(const Vec3d& p);
 
 /// Axis-aligned bounding box of the positions (empty mesh: min > max).
 struct BoundingBox {

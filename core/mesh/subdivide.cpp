@@ -83,12 +83,14 @@ SubdivideResult subdivideMesh(const TriangleMesh& mesh, const Topology& topology
   SubdivideResult result;
   result.mesh.positions = mesh.positions;
   result.mesh.triangles = mesh.triangles;
+  result.mesh.origin = mesh.origin;
   result.mesh.attributes = mesh.attributes;
   Topology next;
   const Topology* current = &topology;
   for (std::uint32_t level = 0; level < options.levels; ++level) {
     reportProgress(options.progress, "subdivide", static_cast<double>(level) / options.levels);
     TriangleMesh finer;
+    finer.origin = result.mesh.origin;
     const std::uint64_t edges = subdivideOnce(result.mesh, *current, finer);
     if (level == 0) result.edges = edges;
     result.mesh = std::move(finer);

@@ -155,6 +155,7 @@ TriangleMesh removeFaces(const TriangleMesh& mesh, const std::vector<FaceId>& fa
                          std::vector<VertexId>* vertexMap) {
   const std::vector<std::uint8_t> removed = faceMask(mesh.numFaces(), faces);
   TriangleMesh out;
+  out.origin = mesh.origin;
   std::vector<VertexId> newVertex(mesh.numVertices(), kInvalidId);
   for (FaceId f = 0; f < mesh.numFaces(); ++f) {
     if (!removed[f]) for (VertexId v : mesh.triangles[f]) newVertex[v] = 0;

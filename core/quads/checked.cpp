@@ -233,6 +233,7 @@ std::uint64_t fillSmallHoles(const TriangleMesh& mesh, const Topology& topology,
   // own edges to the centre become seams where the loop crosses one).
   out.positions = mesh.positions;
   out.triangles = mesh.triangles;
+  out.origin = mesh.origin;
   std::vector<std::uint32_t> wedge(uv.size());
   for (CornerId k = 0; k < wedge.size(); ++k) wedge[k] = uv.wedge(k);
   std::vector<Vec2d> value(uv.numWedges());
@@ -316,6 +317,10 @@ QuadRun extractCheckedQuads(const std::string& name, const TriangleMesh& mesh, c
                      " times larger (--edge-length, --cells) and extract without --scale");
   }
   run.check = validateQuads(run.quads, computeComponents(mapTopology));
+  // The quad mesh in the file's coordinates (TriangleMesh::origin), in double precision.
+  if (!mesh.origin.isZero(0.0)) {
+    for (Vec3d& p : run.quads.mesh.positions) p += mesh.origin;
+  }
   return run;
 }
 

@@ -51,6 +51,26 @@ def test_round_trip_from_arrays_is_seamless(name):
     assert r.report["input"] == "<arrays>"
 
 
+def test_a_mesh_far_from_zero_is_mapped_as_near_it(tmp_path):
+    # A georeferenced scan (UTM metres): float32 positions there would be 0.25-0.5 apart. The same
+    # torus on a 2^-10 lattice near zero and moved by whole units maps the same, and the result and
+    # the written file keep the far positions exactly.
+    V, F = torus()
+    V = np.round(V * 1024) / 1024
+    V -= np.round(V[0])
+    offset = np.array([512000.0, 4123000.0, 100.0])
+    near = seamvox.parameterize(V, F)
+    far = seamvox.parameterize(V + offset, F)
+    np.testing.assert_array_equal(far.V, near.V + offset)
+    np.testing.assert_array_equal(far.uv, near.uv)
+    assert far.quality["seamless"] and far.report["cones"] == near.report["cones"]
+    path = str(tmp_path / "far.ply")
+    seamvox.write_mesh(path, far.V, far.F, far.uv)
+    V2, F2, uv2 = seamvox.read_mesh(path, uv=True)
+    np.testing.assert_array_equal(V2, far.V)
+    np.testing.assert_array_equal(uv2, far.uv)
+
+
 def test_a_moved_map_is_not_seamless():
     V, F = torus()
     r = seamvox.parameterize(V, F)

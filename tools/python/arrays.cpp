@@ -143,8 +143,10 @@ TriangleMesh meshFromArrays(const py::handle& V, const py::handle& F, const py::
   TriangleMesh mesh;
   const std::vector<double> xyz = finiteValues(positions, "V", true);
   mesh.positions.resize(static_cast<std::size_t>(positions.shape(0)));
+  // Far from zero, kept relative to an origin as the file readers keep them (TriangleMesh::origin).
+  if (!mesh.positions.empty()) mesh.origin = originFor(Vec3d(xyz[0], xyz[1], xyz[2]));
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    mesh.positions[v] = Vec3d(xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]).cast<float>();
+    mesh.positions[v] = (Vec3d(xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]) - mesh.origin).cast<float>();
   }
   mesh.triangles = checkedFaces(F, mesh.positions.size());
   if (!uv.is_none()) {
@@ -171,7 +173,7 @@ py::array_t<double> positionsArray(const TriangleMesh& mesh) {
   py::array_t<double> out({static_cast<py::ssize_t>(mesh.numVertices()), py::ssize_t{3}});
   auto o = out.mutable_unchecked<2>();
   for (VertexId v = 0; v < mesh.numVertices(); ++v) {
-    for (int k = 0; k < 3; ++k) o(v, k) = mesh.positions[v][k];
+    for (int k = 0; k < 3; ++k) o(v, k) = mesh.origin[k] + mesh.positions[v][k];
   }
   return out;
 }
