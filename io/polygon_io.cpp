@@ -16,6 +16,14 @@ namespace seamvox {
 
 namespace {
 
+/// Positions far from zero (a georeferenced map's quads) are written in double precision.
+bool farFromZero(const PolygonMesh& mesh) {
+  for (const Vec3d& p : mesh.positions) {
+    if (p.cwiseAbs().maxCoeff() > kOriginBeyond) return true;
+  }
+  return false;
+}
+
 void writeObj(AtomicFile& file, const PolygonMesh& mesh) {
   std::string text;
   char buffer[96];
@@ -25,8 +33,9 @@ void writeObj(AtomicFile& file, const PolygonMesh& mesh) {
   };
   text += "# seamvox quads: " + std::to_string(mesh.numVertices()) + " vertices, " +
           std::to_string(mesh.numFaces()) + " faces\n";
+  const char* format = farFromZero(mesh) ? "v %.17g %.17g %.17g\n" : "v %.9g %.9g %.9g\n";
   for (const Vec3d& p : mesh.positions) {
-    const int n = std::snprintf(buffer, sizeof buffer, "v %.9g %.9g %.9g\n", p.x(), p.y(), p.z());
+    const int n = std::snprintf(buffer, sizeof buffer, format, p.x(), p.y(), p.z());
     text.append(buffer, n);
     if (text.size() > (1u << 20)) flush();
   }
@@ -49,9 +58,11 @@ void writePly(AtomicFile& file, const PolygonMesh& mesh) {
                        " vertices, more than a PLY face list of uchar count holds");
     }
   }
+  const bool far = farFromZero(mesh);
   file.write("ply\nformat binary_little_endian 1.0\ncomment seamvox quads\nelement vertex " +
              std::to_string(mesh.numVertices()) +
-             "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+             (far ? "\nproperty double x\nproperty double y\nproperty double z\nelement face "
+                  : "\nproperty float x\nproperty float y\nproperty float z\nelement face ") +
              std::to_string(mesh.numFaces()) + "\nproperty list uchar int vertex_indices\nend_header\n");
   std::string bytes;
   auto put = [&](const void* data, std::size_t n) {
@@ -64,6 +75,10 @@ void writePly(AtomicFile& file, const PolygonMesh& mesh) {
     throw IoError(file.path() + ": PLY output needs a little-endian machine");
   }
   for (const Vec3d& p : mesh.positions) {
+    if (far) {
+      put(p.data(), 3 * sizeof(double));
+      continue;
+    }
     const float xyz[3] = {float(p.x()), float(p.y()), float(p.z())};
     put(xyz, sizeof xyz);
   }

@@ -115,6 +115,29 @@ TEST(Origin, ParamMapsAFarMeshAsTheSameMeshNearZero) {
     ASSERT_EQ(a.cornerUV.size(), b.cornerUV.size());
     for (std::size_t c = 0; c < a.cornerUV.size(); ++c) ASSERT_EQ(a.cornerUV[c], b.cornerUV[c]) << "corner " << c;
   }
+  // The quad meshes: the near one's moved by the offset (double interpolation: to 1e-6).
+  for (const char* quads : {"q.obj", "q.ply"}) {
+    SCOPED_TRACE(quads);
+    std::vector<TriangleMesh> meshes;
+    for (const char* name : {"far", "near"}) {
+      const std::string out = dir.path(std::string(name) + "." + quads);
+      ASSERT_EQ(testing::runSeamvox("param " + dir.path(std::string(name) + ".ply") + " -o " + dir.path("q.map.ply") +
+                                        " --quads " + out + options,
+                                    nullptr),
+                0);
+      meshes.push_back(readMesh(out));
+    }
+    ASSERT_EQ(meshes[0].numVertices(), meshes[1].numVertices());
+    ASSERT_GT(meshes[0].numVertices(), 0u);
+    EXPECT_FALSE(meshes[0].origin.isZero(0.0));
+    double worst = 0.0;
+    for (VertexId v = 0; v < meshes[0].numVertices(); ++v) {
+      const Vec3d a = meshes[0].origin + meshes[0].positions[v].cast<double>();
+      const Vec3d b = kOffset + meshes[1].positions[v].cast<double>();
+      worst = std::max(worst, (a - b).cwiseAbs().maxCoeff());
+    }
+    EXPECT_LT(worst, 1e-6);
+  }
   // convert chunk by chunk (above its budget) writes what it writes in memory.
   std::string output;
   ASSERT_EQ(testing::runSeamvox("convert " + dir.path("far.ply") + " " + dir.path("in.obj"), &output), 0) << output;
