@@ -94,41 +94,47 @@ void registerChunk(const ClippedChunk& chunk, Grid& grid, Sink&& sink) {
   }
 }
 
-/// Clips faces [0, numFaces) chunk by chunk through a TBB pipeline: clip(chunk) in parallel
-/// (clipChunk with the caller's corners), then in face order the chunk's fragments registered in
-/// grid and passed to sink, and done(chunk) (progress).
-template <class Clip, class Grid, class Sink, class Done>
-void clipFacesInOrder(std::uint64_t numFaces, std::uint32_t chunkFaces, Clip&& clip, Grid& grid, Sink&& sink,
-                      Done&& done) {
+/// Faces [0, numFaces) chunk by chunk (Chunk: begin, end) through a TBB pipeline: work(chunk) in
+/// parallel, then finish(chunk) in face order, at most two chunks per thread alive.
+template <class Chunk, class Work, class Finish>
+void facesInOrder(std::uint64_t numFaces, std::uint32_t chunkFaces, Work&& work, Finish&& finish) {
   const std::uint64_t step = std::max<std::uint32_t>(chunkFaces, 1);
   std::uint64_t nextFace = 0;
   const std::size_t tokens = 2 * std::size_t(tbb::this_task_arena::max_concurrency());
   tbb::parallel_pipeline(
       tokens,
-      tbb::make_filter<void, std::shared_ptr<ClippedChunk>>(
+      tbb::make_filter<void, std::shared_ptr<Chunk>>(
           tbb::filter_mode::serial_in_order,
-          [&](tbb::flow_control& control) -> std::shared_ptr<ClippedChunk> {
+          [&](tbb::flow_control& control) -> std::shared_ptr<Chunk> {
             if (nextFace >= numFaces) {
               control.stop();
               return nullptr;
             }
-            auto chunk = std::make_shared<ClippedChunk>();
+            auto chunk = std::make_shared<Chunk>();
             chunk->begin = static_cast<FaceId>(nextFace);
             nextFace = std::min(numFaces, nextFace + step);
             chunk->end = static_cast<FaceId>(nextFace);
             return chunk;
           }) &
-          tbb::make_filter<std::shared_ptr<ClippedChunk>, std::shared_ptr<ClippedChunk>>(
-              tbb::filter_mode::parallel,
-              [&](std::shared_ptr<ClippedChunk> chunk) {
-                clip(*chunk);
-                return chunk;
-              }) &
-          tbb::make_filter<std::shared_ptr<ClippedChunk>, void>(
-              tbb::filter_mode::serial_in_order, [&](std::shared_ptr<ClippedChunk> chunk) {
-                registerChunk(*chunk, grid, sink);
-                done(*chunk);
-              }));
+          tbb::make_filter<std::shared_ptr<Chunk>, std::shared_ptr<Chunk>>(tbb::filter_mode::parallel,
+                                                                         [&](std::shared_ptr<Chunk> chunk) {
+                                                                           work(*chunk);
+                                                                           return chunk;
+                                                                         }) &
+          tbb::make_filter<std::shared_ptr<Chunk>, void>(tbb::filter_mode::serial_in_order,
+                                                         [&](std::shared_ptr<Chunk> chunk) { finish(*chunk); }));
+}
+
+/// Clips faces [0, numFaces) chunk by chunk (facesInOrder): clip(chunk) in parallel (clipChunk
+/// with the caller's corners), then in face order the chunk's fragments registered in grid and
+/// passed to sink, and done(chunk) (progress).
+template <class Clip, class Grid, class Sink, class Done>
+void clipFacesInOrder(std::uint64_t numFaces, std::uint32_t chunkFaces, Clip&& clip, Grid& grid, Sink&& sink,
+                      Done&& done) {
+  facesInOrder<ClippedChunk>(numFaces, chunkFaces, clip, [&](ClippedChunk& chunk) {
+    registerChunk(chunk, grid, sink);
+    done(chunk);
+  });
 }
 
 /// Dense labels 0.. of the union-find classes, in order of first appearance.
@@ -253,8 +259,9 @@ void forSharedCorners(const VoxelCoord& d, F&& f) {
 
 /// (a) One triangle meets a support (a convex box) in a convex, connected piece: its fragments in
 /// any two voxels of the support belong to the same domain. `sorted` is scratch space.
-inline void joinFacePieces(const std::vector<FaceFragment>& pieces, std::vector<std::pair<VoxelCoord, std::uint32_t>>& sorted,
-                           UnionFind& functions) {
+template <class Functions>
+void joinFacePieces(const std::vector<FaceFragment>& pieces, std::vector<std::pair<VoxelCoord, std::uint32_t>>& sorted,
+                    Functions& functions) {
   sorted.clear();
   for (const FaceFragment& piece : pieces) sorted.emplace_back(piece.voxel, piece.element);
   std::sort(sorted.begin(), sorted.end());
@@ -276,12 +283,13 @@ inline void joinFacePieces(const std::vector<FaceFragment>& pieces, std::vector<
 /// (a) its pieces joined (joinFacePieces); (b) two triangles across an edge meet in the support
 /// along the edge's piece: non-cut edges join their domains, seam edges make a seam link.
 /// g: f's corners in grid coordinates; opposite(c), isCut(c), seamSide(c) (SeamIndex::Side);
-/// neighbour(h, out) fills the fragments of face h.
-template <class Opposite, class IsCut, class SeamSide, class Neighbour>
+/// neighbour(h, out) fills the fragments of face h. Links: DomainLinks, or any type with
+/// functions.unite(a, b) and seamLinks.push_back(link) (a record of them, applied in face order).
+template <class Opposite, class IsCut, class SeamSide, class Neighbour, class Links>
 void linkFaceFragments(FaceId f, const std::vector<FaceFragment>& mine, const std::array<Vec3d, 3>& g,
                        Opposite&& opposite, IsCut&& isCut, SeamSide&& seamSide, Neighbour&& neighbour,
                        std::vector<FaceFragment>& theirs, std::vector<std::pair<VoxelCoord, std::uint32_t>>& sorted,
-                       DomainLinks& links) {
+                       Links& links) {
   if (mine.size() >= 2) joinFacePieces(mine, sorted, links.functions);
   for (const FaceFragment& fr : mine) {
     const VoxelCoord& a = fr.voxel;

@@ -221,17 +221,37 @@ DomainLinks linkElementFunctions(const BasisInput& in, const std::vector<std::ui
       out.push_back({in.voxelCoords[fr.voxel], fragmentElement[i], static_cast<std::uint8_t>(fr.edgeMask)});
     }
   };
-  std::vector<FaceFragment> mine, theirs;
-  std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, element) of one face
-  const std::uint32_t nf = in.topology.numFaces();
-  for (FaceId f = 0; f < nf; ++f) {
-    fragmentsOf(f, mine);
-    if (mine.empty()) continue;
-    detail::linkFaceFragments(
-        f, mine, faceGridCoords(in.mesh, in.grid, f), [&](CornerId c) { return in.topology.opposite(c); },
-        [&](CornerId c) { return in.cut.corners.isCut(c); }, [&](CornerId c) { return seamIndex.find(c); },
-        fragmentsOf, theirs, sorted, links);
-  }
+  // The links of a chunk of faces are found in parallel and applied in face order: the seam links
+  // keep their order, and the union-find's sets (each rooted at its smallest node) do not
+  // depend on the order of the unions.
+  struct Recorded {
+    struct Functions {
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+      void unite(std::uint32_t a, std::uint32_t b) { pairs.emplace_back(a, b); }
+    } functions;
+    std::vector<SeamLink> seamLinks;
+  };
+  struct Chunk {
+    FaceId begin = 0, end = 0;
+    Recorded links;
+  };
+  const auto work = [&](Chunk& chunk) {
+    std::vector<FaceFragment> mine, theirs;
+    std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, element) of one face
+    for (FaceId f = chunk.begin; f < chunk.end; ++f) {
+      fragmentsOf(f, mine);
+      if (mine.empty()) continue;
+      detail::linkFaceFragments(
+          f, mine, faceGridCoords(in.mesh, in.grid, f), [&](CornerId c) { return in.topology.opposite(c); },
+          [&](CornerId c) { return in.cut.corners.isCut(c); }, [&](CornerId c) { return seamIndex.find(c); },
+          fragmentsOf, theirs, sorted, chunk.links);
+    }
+  };
+  const auto finish = [&](Chunk& chunk) {
+    for (const auto& [a, b] : chunk.links.functions.pairs) links.functions.unite(a, b);
+    links.seamLinks.insert(links.seamLinks.end(), chunk.links.seamLinks.begin(), chunk.links.seamLinks.end());
+  };
+  detail::facesInOrder<Chunk>(in.topology.numFaces(), 1u << 14, work, finish);
   return links;
 }
 
