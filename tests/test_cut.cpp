@@ -9,6 +9,7 @@
 
 #include "core/mesh/clean.h"
 #include "core/cut/cut.h"
+#include "core/cut/detail_cut.h"
 #include "core/system/errors.h"
 #include "core/field/field.h"
 #include "core/synth/generate.h"
@@ -192,6 +193,43 @@ TEST(Cut, SeveralComponents) {
                                                        testing::icosphereMesh(1)}));
   checkAll(s, computeSmoothestField(s.mesh, s.topology), "components smoothest");
   checkAll(s, randomField(s.mesh, 9), "components random");
+}
+
+// cutToDisk peels the dangling cut edges on every core: the cut is the serial peel's, on a mesh
+// large enough for many blocks, with a random field's many cones.
+TEST(Cut, TheParallelPruneIsTheSerialOne) {
+  const Surface s = makeSurface(cleanMesh(testing::generatedMesh(MeshKind::Scan, 200000), CleanOptions{}).mesh);
+  ASSERT_GT(s.topology.numVertices(), 20u * 4096u);
+  const CrossField field = randomField(s.mesh, 3);
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  ASSERT_GT(sing.cones.size(), 100u);
+  const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);
+
+  // The serial steps of cutToDisk up to the prune.
+  const std::uint32_t nf = s.topology.numFaces(), nv = s.topology.numVertices();
+  CutCorners serial(s.topology.numCorners(), true);
+  std::vector<std::uint8_t> rotationValues(nf, 0xff);
+  struct Rotation {
+    std::vector<std::uint8_t>& values;
+    bool visited(FaceId f) const { return values[f] != 0xff; }
+    std::uint8_t operator[](FaceId f) const { return values[f]; }
+    void set(FaceId f, std::uint8_t r) { values[f] = r; }
+  } rotation{rotationValues};
+  std::vector<std::uint32_t> componentValues(nf), degreeValues(nv, 0);
+  detail::VectorArray<std::uint32_t> component{componentValues}, degree{degreeValues};
+  const std::uint32_t components = detail::buildDualTree(
+      s.topology, nf, [&](CornerId c) { return sing.matching[c]; }, rotation, component, serial);
+  std::vector<std::uint64_t> remaining =
+      detail::countCutDegrees(s.topology, s.topology.numCorners(), serial, component, components, degree);
+  std::vector<std::uint8_t> isCone(nv, 0);
+  for (VertexId v : sing.cones) isCone[v] = 1;
+  detail::pruneCut(s.topology, nv, [&](VertexId v) { return isCone[v] != 0; }, component, remaining, serial, degree);
+  std::uint64_t cutEdges = 0;
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    ASSERT_EQ(cut.corners.isCut(c), serial.isCut(c)) << "corner " << c;
+    cutEdges += serial.isCut(c);
+  }
+  EXPECT_GT(cutEdges, 2 * sing.cones.size());
 }
 
 TEST(Cut, ClosedSphereWithAtMostOneConeKeepsOneEdge) {

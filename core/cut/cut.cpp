@@ -6,6 +6,7 @@
 
 #include "core/cut/detail_cut.h"
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -26,6 +27,72 @@ struct TracedCorners {
   bool operator[](CornerId c) const { return values[c]; }
   void set(CornerId c, bool traced) { values[c] = traced; }
 };
+
+/// detail::pruneCut with both cores: every vertex's dangling chains peeled in parallel, each edge
+/// claimed once by an atomic flag on its smaller corner. What stays is the cut's 2-core with the
+/// cones kept, the same whatever the order, so the same cut as the serial peel; except a component
+/// whose cut would vanish (a closed genus-0 surface with at most one cone), where the serial peel
+/// keeps the edge its order reaches last: such components get their edges back and the serial
+/// peel. degree: the cut degrees (countCutDegrees), remaining: cut edges per component.
+void pruneCutInParallel(const Topology& topology, const std::vector<std::uint8_t>& isCone,
+                        const std::vector<std::uint32_t>& component, std::vector<std::uint64_t>& remaining,
+                        CutCorners& cut, std::vector<std::uint32_t>& degree) {
+  const std::uint64_t numCorners = topology.numCorners();
+  const auto canonical = [&](CornerId c) {
+    const CornerId o = topology.opposite(c);
+    return o != kInvalidId && o < c ? o : c;
+  };
+  std::vector<std::uint8_t> flag(numCorners);  // per edge, at its smaller corner
+  parallelForEach(numCorners, 1u << 16, [&](std::uint64_t c) { flag[c] = cut.isCut(static_cast<CornerId>(c)); });
+  struct Flags {
+    std::vector<std::uint8_t>& flag;
+    const decltype(canonical)& canonicalOf;
+    bool isCut(CornerId c) const { return __atomic_load_n(&flag[canonicalOf(c)], __ATOMIC_RELAXED) != 0; }
+  } flags{flag, canonical};
+  const auto load = [](const std::uint32_t& x) { return __atomic_load_n(&x, __ATOMIC_RELAXED); };
+  parallelFor(topology.numVertices(), 1u << 12, [&](const IndexRange& range) {
+    for (VertexId v = range.begin(); v != range.end(); ++v) {
+      VertexId u = v;
+      while (!isCone[u] && load(degree[u]) == 1) {
+        const CornerId e = detail::findCutEdgeAt(topology, flags, u);
+        if (e == kInvalidId) break;
+        const CornerId o = topology.opposite(e);
+        if (o == kInvalidId) break;  // boundary edges are never pruned
+        std::uint8_t expected = 1;
+        if (!__atomic_compare_exchange_n(&flag[std::min(e, o)], &expected, std::uint8_t(0), false, __ATOMIC_ACQ_REL,
+                                         __ATOMIC_RELAXED)) {
+          continue;  // another thread took it: look again
+        }
+        const VertexId a = topology.vertex(nextCorner(e)), b = topology.vertex(prevCorner(e));
+        const VertexId w = a == u ? b : a;
+        __atomic_fetch_sub(&degree[u], 1u, __ATOMIC_RELAXED);
+        __atomic_fetch_sub(&degree[w], 1u, __ATOMIC_RELAXED);
+        __atomic_fetch_sub(&remaining[component[cornerFace(e)]], std::uint64_t(1), __ATOMIC_RELAXED);
+        u = w;
+      }
+    }
+  });
+  std::vector<std::uint8_t> vanished(remaining.size(), 0);
+  bool anyVanished = false;
+  for (std::size_t k = 0; k < remaining.size(); ++k) anyVanished |= (vanished[k] = remaining[k] == 0) != 0;
+  parallelForEach(numCorners, 1u << 16, [&](std::uint64_t c) {
+    if (!vanished[component[cornerFace(static_cast<CornerId>(c))]]) cut.setCut(static_cast<CornerId>(c), flag[canonical(static_cast<CornerId>(c))]);
+  });
+  if (!anyVanished) return;
+  // The vanished components have their whole cut back: degrees and counts again, then the serial
+  // peel (which finds nothing to do elsewhere).
+  std::fill(degree.begin(), degree.end(), 0u);
+  detail::VectorArray<std::uint32_t> degreeArray{degree};
+  const std::vector<std::uint32_t>& componentOf = component;
+  struct ComponentArray {
+    const std::vector<std::uint32_t>& values;
+    std::uint32_t operator[](std::size_t i) const { return values[i]; }
+  } components{componentOf};
+  remaining = detail::countCutDegrees(topology, numCorners, cut, components, static_cast<std::uint32_t>(remaining.size()),
+                                      degreeArray);
+  const auto coneAt = [&](VertexId v) { return isCone[v] != 0; };
+  detail::pruneCut(topology, topology.numVertices(), coneAt, components, remaining, cut, degreeArray);
+}
 
 }  // namespace
 
@@ -61,8 +128,7 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
   detail::VectorArray<std::uint32_t> degree{degreeValues};
   std::vector<std::uint64_t> remaining =
       detail::countCutDegrees(topology, topology.numCorners(), cut.corners, component, numComponents, degree);
-  const auto coneAt = [&](VertexId v) { return isCone[v] != 0; };
-  detail::pruneCut(topology, numVertices, coneAt, component, remaining, cut.corners, degree);
+  pruneCutInParallel(topology, isCone, faceComponent, remaining, cut.corners, degreeValues);
 
   reportProgress(options.progress, "cut: comb", 0.6);
   detail::combCorners(topology, topology.numCorners(), matching, rotation, cut.corners,
