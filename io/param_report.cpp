@@ -71,6 +71,8 @@ void writeRefineRounds(JsonWriter& j, const RefineStats& refine) {
 void writeRefine(JsonWriter& j, const RefineStats& refine, const ParamReportContext& c) {
   j.key("refine").beginObject();
   j.key("refinedVertexFraction").value(refine.refinedVertexFraction);
+  j.key("refinedFractionOffIslands").value(refine.refinedFractionOffIslands);
+  j.key("islandVertices").value(U64{refine.islandVertices});
   j.key("freeVertices").value(U64{refine.freeVertices});
   j.key("lockedVertices").value(U64{refine.lockedVertices});
   j.key("regionFaces").value(refine.regionFaces);

@@ -191,6 +191,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     RefineOptions refine = options.refine;
     refine.edgeLength = h;
     refine.markedFaces = std::move(seeds);
+    refine.islandFaces = basisOptions.leftOut;
     refine.seedFromMap = options.voxLoc;
     if (!options.voxLoc) refine.maxRounds = 1;
     if (!refine.progress) refine.progress = options.progress;

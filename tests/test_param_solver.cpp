@@ -198,6 +198,15 @@ TEST(ParamSolver, IslandsAreLeftOutOfTheVoxelBasisAndMappedByTheLocalHatSolve) {
     EXPECT_EQ(result.islandFaces, islands.size());
     EXPECT_TRUE(result.refined);
     EXPECT_GE(result.markedFaces, islands.size());
+    // The refinement counts the islands' vertices apart: all of them, and all of them free.
+    std::vector<VertexId> islandVertices;
+    for (FaceId f : islands) islandVertices.insert(islandVertices.end(), t.s.mesh.triangles[f].begin(), t.s.mesh.triangles[f].end());
+    std::sort(islandVertices.begin(), islandVertices.end());
+    islandVertices.erase(std::unique(islandVertices.begin(), islandVertices.end()), islandVertices.end());
+    EXPECT_EQ(result.refine.islandVertices, islandVertices.size());
+    EXPECT_GE(result.refine.freeVertices, islandVertices.size());
+    EXPECT_NEAR(result.refine.refinedFractionOffIslands,
+                double(result.refine.freeVertices - islandVertices.size()) / t.s.mesh.numVertices(), 1e-12);
     const WedgeMap& uv = result.param.cornerUV;
     EXPECT_TRUE(measureSeams(t.s.mesh, t.s.topology, t.cut, uv).isSeamless(1e-8));
     // The islands are mapped whole by the local hat solve: none of their triangles collapsed or

@@ -116,9 +116,14 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
               r.isSeamless() ? "seamless" : "NOT seamless");
   const RefineStats& refine = r.solved.refine;
   if (r.solved.refined) {
-    std::printf("refined %u vertices (%.3f%%) in %llu faces: %llu local unknowns in %u solves "
+    char islands[96] = "";
+    if (refine.islandVertices > 0) {
+      std::snprintf(islands, sizeof islands, "; %u of them on islands mapped whole, %.3f%% off them",
+                    refine.islandVertices, 100.0 * refine.refinedFractionOffIslands);
+    }
+    std::printf("refined %u vertices (%.3f%%%s) in %llu faces: %llu local unknowns in %u solves "
                 "(largest %u unknowns, %u translations, factor %.1f MB), %.2f s\n",
-                refine.freeVertices, 100.0 * refine.refinedVertexFraction,
+                refine.freeVertices, 100.0 * refine.refinedVertexFraction, islands,
                 static_cast<unsigned long long>(refine.regionFaces),
                 static_cast<unsigned long long>(refine.totalUnknowns), refine.solves, refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);

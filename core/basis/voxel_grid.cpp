@@ -185,6 +185,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   out.islandFaces = basisOptions.leftOut.size();
   out.markedFaces = withFaces(basis.markedFaces(reduction), basisOptions.leftOut);
   out.inconsistentFaces = withFaces(basis.supportFaces(reduction.inconsistentBasis), basisOptions.leftOut);
+  out.islands = basisOptions.leftOut;
   out.invisibleTranslations = reduction.invisibleTranslations;
 
   RoundOptions roundOptions;

@@ -70,6 +70,7 @@ struct VoxelParamResult {
   std::vector<FaceId> inconsistentFaces;
   /// Faces of the islands (islands.h), left out of the basis; in both lists above.
   std::uint64_t islandFaces = 0;
+  std::vector<FaceId> islands;  ///< those faces (increasing): marked, and counted apart by the refinement
   VoxelBasisStats basisStats;
   std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
   /// Normal-derivative regularization the solve succeeded with (VoxelBasisOptions), and how many

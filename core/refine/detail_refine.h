@@ -445,6 +445,22 @@ void collectRefinement(Table& topology, std::uint32_t numVertices, std::vector<S
   stats.refinedVertexFraction = numVertices ? double(freed.size()) / numVertices : 0.0;
 }
 
+/// The distinct vertices of the islands' faces, and the free vertices off them as a fraction.
+/// (After the free vertices and their fraction are counted.)
+template <class Table>
+void countIslandVertices(Table& table, const std::vector<FaceId>& islandFaces, RefineStats& stats) {
+  std::vector<VertexId> vertices;
+  vertices.reserve(3 * islandFaces.size());
+  for (FaceId f : islandFaces) {
+    for (int k = 0; k < 3; ++k) vertices.push_back(table.vertex(3 * f + k));
+  }
+  std::sort(vertices.begin(), vertices.end());
+  stats.islandVertices = static_cast<std::uint32_t>(std::unique(vertices.begin(), vertices.end()) - vertices.begin());
+  const std::uint32_t off = stats.freeVertices > stats.islandVertices ? stats.freeVertices - stats.islandVertices : 0;
+  stats.refinedFractionOffIslands =
+      stats.freeVertices ? stats.refinedVertexFraction * double(off) / double(stats.freeVertices) : 0.0;
+}
+
 /// refineNearCones after the first region is selected (`faces`, with its counts in out.stats):
 /// the rounds, the measures and the result. cones: the cut's, increasing.
 template <class Source>
@@ -492,6 +508,7 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
   if (largest.unknowns > 0) keepLargestSolve(largest, stats);
   measureRefinedMap(source, touched, cones, options, stats);
   source.collect(touched, out);
+  countIslandVertices(source.table(), options.islandFaces, out.stats);
   collectChangedSeams(currentT, seamT, out);
 }
 

@@ -39,6 +39,9 @@ struct RefineOptions {
   double edgeLength = 1.0;  ///< h, as in the map being refined (> 0)
   /// Faces to refine whatever the map looks like there (e.g. VoxelParamResult::markedFaces).
   std::vector<FaceId> markedFaces;
+  /// Those of them that are islands mapped whole (islands.h; increasing): their vertices are
+  /// counted apart (RefineStats::islandVertices), not as refinement near cones.
+  std::vector<FaceId> islandFaces;
   /// A face whose signed parameter-space area is below this fraction of its expected area
   /// A_T / h^2 is added to the region (collapsed; negative area = flipped is always added).
   double collapseThreshold = 0.1;
@@ -83,6 +86,10 @@ struct RefineStats {
   std::uint32_t freeVertices = 0;  ///< vertices re-solved in some round (all their faces in it)
   std::uint32_t lockedVertices = 0;  ///< other vertices of those faces, kept at the input values
   double refinedVertexFraction = 0.0;  ///< freeVertices / #V
+  /// Vertices of RefineOptions::islandFaces (all of them free: an island is solved whole), and
+  /// the free vertices off the islands / #V: the refinement near cones and folds.
+  std::uint32_t islandVertices = 0;
+  double refinedFractionOffIslands = 0.0;
   /// Each round solves its region in groups of whole components (splitRegion), each on its own.
   std::uint32_t solves = 0;          ///< group solves over all rounds
   /// Batches of groups solved and recorded at once, over all rounds (one per round in memory;

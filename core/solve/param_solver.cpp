@@ -146,6 +146,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     RefineOptions refineOptions = solverOptions.refine;
     refineOptions.edgeLength = options.edgeLength;
     refineOptions.markedFaces = std::move(voxLoc ? vox.markedFaces : vox.inconsistentFaces);
+    refineOptions.islandFaces = std::move(vox.islands);
     refineOptions.seedFromMap = voxLoc;
     if (!voxLoc) refineOptions.maxRounds = 1;
     if (!refineOptions.progress) refineOptions.progress = options.progress;
