@@ -35,7 +35,7 @@ struct TracedCorners {
 /// keeps the edge its order reaches last: such components get their edges back and the serial
 /// peel. degree: the cut degrees (countCutDegrees), remaining: cut edges per component.
 void pruneCutInParallel(const Topology& topology, const std::vector<std::uint8_t>& isCone,
-                        const std::vector<std::uint32_t>& component, std::vector<std::uint64_t>& remaining,
+                        detail::VectorArray<std::uint32_t>& component, std::vector<std::uint64_t>& remaining,
                         CutCorners& cut, std::vector<std::uint32_t>& degree) {
   const std::uint64_t numCorners = topology.numCorners();
   const auto canonical = [&](CornerId c) {
@@ -83,15 +83,10 @@ void pruneCutInParallel(const Topology& topology, const std::vector<std::uint8_t
   // peel (which finds nothing to do elsewhere).
   std::fill(degree.begin(), degree.end(), 0u);
   detail::VectorArray<std::uint32_t> degreeArray{degree};
-  const std::vector<std::uint32_t>& componentOf = component;
-  struct ComponentArray {
-    const std::vector<std::uint32_t>& values;
-    std::uint32_t operator[](std::size_t i) const { return values[i]; }
-  } components{componentOf};
-  remaining = detail::countCutDegrees(topology, numCorners, cut, components, static_cast<std::uint32_t>(remaining.size()),
+  remaining = detail::countCutDegrees(topology, numCorners, cut, component, static_cast<std::uint32_t>(remaining.size()),
                                       degreeArray);
   const auto coneAt = [&](VertexId v) { return isCone[v] != 0; };
-  detail::pruneCut(topology, topology.numVertices(), coneAt, components, remaining, cut, degreeArray);
+  detail::pruneCut(topology, topology.numVertices(), coneAt, component, remaining, cut, degreeArray);
 }
 
 }  // namespace
@@ -128,7 +123,7 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
   detail::VectorArray<std::uint32_t> degree{degreeValues};
   std::vector<std::uint64_t> remaining =
       detail::countCutDegrees(topology, topology.numCorners(), cut.corners, component, numComponents, degree);
-  pruneCutInParallel(topology, isCone, faceComponent, remaining, cut.corners, degreeValues);
+  pruneCutInParallel(topology, isCone, component, remaining, cut.corners, degreeValues);
 
   reportProgress(options.progress, "cut: comb", 0.6);
   detail::combCorners(topology, topology.numCorners(), matching, rotation, cut.corners,
