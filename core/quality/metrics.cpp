@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 #include "core/basis/gaussian_int.h"
 
 namespace seamvox {
@@ -265,17 +266,27 @@ void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, doubl
   std::vector<std::uint8_t> isCone;
   if (cones) isCone = markCones(mesh, *cones);
   const FaceId nf = mesh.numFaces();
+  // Per face in parallel (a byte each), counted in face order after.
+  enum : std::uint8_t { kFine, kFlippedFace, kCollapsed, kCollapsedAtCones };
+  std::vector<std::uint8_t> kind(nf);
+  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
+      if (std::abs(ratio) < kCollapsedAreaFraction) {
+        kind[f] = cones && collapsesBetweenCones(mesh, cornerUV, f, isCone) ? kCollapsedAtCones : kCollapsed;
+      } else {
+        kind[f] = ratio < 0.0 ? kFlippedFace : kFine;
+      }
+    }
+  });
   std::uint64_t flipped = 0, collapsed = 0, collapsedAtCones = 0;
   for (FaceId f = 0; f < nf; ++f) {
-    const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
-    if (std::abs(ratio) < kCollapsedAreaFraction) {
-      ++collapsed;
-      collapsedAtCones += cones && collapsesBetweenCones(mesh, cornerUV, f, isCone);
-    } else if (ratio < 0.0) {
-      ++flipped;
-      flippedFaces.push_back(f);
-    }
+    if (kind[f] == kFine) continue;
+    collapsed += kind[f] >= kCollapsed;
+    collapsedAtCones += kind[f] == kCollapsedAtCones;
+    if (kind[f] == kFlippedFace) ++flipped, flippedFaces.push_back(f);
   }
+  std::vector<std::uint8_t>().swap(kind);
   for (std::uint8_t folded : facesFoldedIn3D(mesh, topology, field, flippedFaces)) out.flippedFolded += folded;
   out.flipped = flipped;
   out.collapsed = collapsed;

@@ -361,7 +361,8 @@ bool becameWorse(int before, int now) {
 // before (they would only cost gradient error).
 std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                       WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
-                                      std::uint32_t passes, const std::vector<std::uint8_t>* pinned) {
+                                      std::uint32_t passes, const std::vector<std::uint8_t>* pinned,
+                                      std::vector<FaceId>& touched) {
   std::vector<std::uint8_t> fixed = pinned ? *pinned : std::vector<std::uint8_t>(topology.numVertices(), 0);
   for (VertexId c : cut.cones) fixed[c] = 1;
   // Only faces flipped at the start change state here (folded ones stay kFolded): no copies of
@@ -386,7 +387,10 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
       const int now = badness(c / 3), before = was[i++];
       worse = worse || becameWorse(before, now);
     });
-    if (!worse) return true;
+    if (!worse) {
+      topology.forEachCornerAround(v, [&](CornerId c) { touched.push_back(c / 3); });
+      return true;
+    }
     while (log.size() > mark) cornerUV.setWedgeValue(log.back().first, log.back().second), log.pop_back();
     return false;
   };
@@ -437,6 +441,7 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
   if (moves > 0 && flips() >= flipsBefore) {  // no gain: the moves would only cost gradient error
     for (auto it = log.rbegin(); it != log.rend(); ++it) cornerUV.setWedgeValue(it->first, it->second);
     for (FaceId f : flippedFaces) state[f] = kFlipped;
+    touched.clear();
     return 0;
   }
   return moves;
@@ -724,7 +729,8 @@ constexpr std::uint64_t kJointEvaluations = 100'000'000;
 // patches.
 std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                               WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
-                              std::uint32_t maxRings, const std::vector<std::uint8_t>* pinned) {
+                              std::uint32_t maxRings, const std::vector<std::uint8_t>* pinned,
+                              std::vector<FaceId>& touched) {
   std::vector<std::uint8_t> fixed = pinned ? *pinned : std::vector<std::uint8_t>(topology.numVertices(), 0);
   for (VertexId c : cut.cones) fixed[c] = 1;
   const auto badness = [&](FaceId f) { return faceBadness(mesh, cornerUV, f, h); };
@@ -770,6 +776,7 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
         const std::uint8_t now = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
         state[f] = now == kFlipped && state[f] == kFolded ? std::uint8_t(kFolded) : now;
       }
+      touched.insert(touched.end(), faces.begin(), faces.end());
       movedVertices += static_cast<std::uint32_t>(patch.size());
     }
   }
@@ -977,16 +984,24 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     classifyPatch(patch);
     reportProgress(options.progress, "untangle", double(round + 1) / options.maxRounds);
   }
+  // The faces whose map the last steps changed: the fans of relocated vertices, the joint
+  // patches kept.
+  std::vector<FaceId> touched;
   if (options.relocationPasses > 0) {
-    stats.relocatedVertices =
-        relocateFlippedVertices(mesh, topology, cut, cornerUV, state, h, options.relocationPasses, options.pinnedVertices);
+    stats.relocatedVertices = relocateFlippedVertices(mesh, topology, cut, cornerUV, state, h,
+                                                      options.relocationPasses, options.pinnedVertices, touched);
   }
   if (options.jointRings >= 2) {
-    stats.jointVertices = untangleJointly(mesh, topology, cut, cornerUV, state, h, options.jointRings, options.pinnedVertices);
+    stats.jointVertices =
+        untangleJointly(mesh, topology, cut, cornerUV, state, h, options.jointRings, options.pinnedVertices, touched);
   }
-  // The last steps re-measure only the faces they watch: the figures come from the whole map, as
-  // the quality measure's do.
-  if (stats.relocatedVertices > 0 || stats.jointVertices > 0) classifyAll();
+  // The last steps re-measure only the faces they watch: every face they changed is measured
+  // again, so the figures are the whole map's, as the quality measure's are.
+  if (!touched.empty()) {
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    classifyPatch(touched);
+  }
   if (std::any_of(state.begin(), state.end(), [](std::uint8_t s) { return s != kFine; })) {
     for (std::uint32_t faces : collapseSpecks(mesh, topology, cut, cornerUV, seamT, h)) {
       stats.specks += faces > 0;
