@@ -97,10 +97,19 @@ std::vector<std::uint8_t> facesNearCones(const TriangleMesh& mesh,
   std::vector<Vec3d> cones;
   for (const auto& [a, b] : pairs) cones.push_back(mesh.position(a)), cones.push_back(mesh.position(b));
   std::vector<std::uint8_t> near(mesh.numFaces(), 0);
+  if (cones.empty()) return near;
+  // A centroid that near a cone lies in the cones' box grown by the distance (a little more, for
+  // rounding): most faces are decided by the box alone.
+  Vec3d low = cones.front(), high = cones.front();
+  for (const Vec3d& p : cones) low = low.cwiseMin(p), high = high.cwiseMax(p);
+  const double grow = maxDistance * (1.0 + 1e-6);
+  low.array() -= grow;
+  high.array() += grow;
   parallelFor(mesh.numFaces(), 1u << 14, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const Triangle& t = mesh.triangles[f];
       const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
+      if ((c.array() < low.array()).any() || (c.array() > high.array()).any()) continue;
       near[f] = std::any_of(cones.begin(), cones.end(), [&](const Vec3d& p) { return (c - p).norm() <= maxDistance; });
     }
   });
