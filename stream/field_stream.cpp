@@ -106,6 +106,38 @@ class CellGroups {
   bool more_ = false;
 };
 
+/// Consecutive cells of a (cell, face) file sorted by cell, read a batch at a time: whole cells,
+/// about `batchFaces` faces (more when one cell has more).
+class CellBatches {
+ public:
+  CellBatches(ScratchFolder& folder, const ScratchFile& file, const char* stage, std::uint64_t batchFaces)
+      : groups_(folder, file, stage), batchFaces_(std::max<std::uint64_t>(1, batchFaces)) {
+    more_ = groups_.next(cell_, pending_);
+  }
+  bool next() {
+    faces.clear();
+    start_.assign(1, 0);
+    while (more_ && (faces.empty() || faces.size() + pending_.size() <= batchFaces_)) {
+      faces.insert(faces.end(), pending_.begin(), pending_.end());
+      start_.push_back(faces.size());
+      more_ = groups_.next(cell_, pending_);
+    }
+    return !faces.empty();
+  }
+  std::uint64_t cells() const { return start_.size() - 1; }
+  std::vector<FaceId>::const_iterator begin(std::uint64_t k) const { return faces.begin() + start_[k]; }
+  std::vector<FaceId>::const_iterator end(std::uint64_t k) const { return faces.begin() + start_[k + 1]; }
+  std::vector<FaceId> faces;  ///< the batch's faces, cell after cell
+
+ private:
+  CellGroups groups_;
+  std::uint64_t batchFaces_;
+  std::uint32_t cell_ = 0;
+  std::vector<FaceId> pending_;
+  std::vector<std::size_t> start_;
+  bool more_ = false;
+};
+
 /// The pieces of one cell's faces (sorted) joined through their shared edges: per face, the
 /// smallest face of its piece.
 std::vector<FaceId> piecesOfCell(const std::vector<FaceId>& faces, PagedReader<CornerId>& opposite) {
@@ -163,12 +195,21 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   ScratchFile cellFaces;
   {
     ExternalSorter<CellFace, CellFaceLess> sorter(folder, sort.named("field: cells"));
-    PagedFacePoints points(scratch, surface, cacheBytes);
-    for (FaceId f = 0; f < nf; ++f) {
-      const std::array<Vec3d, 3> p = points.points(f);
-      sorter.add({cellOrder(cells.cellOf((p[0] + p[1] + p[2]) / 3.0), cells.resolution), f});
+    ReaderPool<PagedFacePoints> pool([&] { return std::make_unique<PagedFacePoints>(scratch, surface, cacheBytes); });
+    std::vector<std::uint32_t> block;
+    for (std::uint64_t first = 0; first < nf; first += blockFaces) {
+      const std::uint64_t count = std::min(blockFaces, nf - first);
+      block.resize(count);
+      parallelFor(count, 4096, [&](const IndexRange& range) {
+        auto points = pool.take();
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+          const std::array<Vec3d, 3> p = points->points(static_cast<FaceId>(first + i));
+          block[i] = cellOrder(cells.cellOf((p[0] + p[1] + p[2]) / 3.0), cells.resolution);
+        }
+      });
+      for (std::uint64_t i = 0; i < count; ++i) sorter.add({block[i], static_cast<FaceId>(first + i)});
     }
-    folder.countRead("field: cells", points.bytesRead());
+    pool.forEach([&](PagedFacePoints& points) { folder.countRead("field: cells", points.bytesRead()); });
     sorter.finish();
     ScratchWriter writer(folder, "field: cells");
     CellFace record;
@@ -177,24 +218,33 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   }
   clock.finish("cells");
 
-  // Elements: the pieces of each cell, numbered by their smallest faces; face -> element.
+  // Elements: the pieces of each cell, numbered by their smallest faces; face -> element. The
+  // cells of a batch are joined in parallel, their records added in cell order.
   ScratchFile faceElement;
   std::uint32_t numElements = 0;
   {
     std::vector<FaceId> smallestFaces;
     ExternalSorter<FaceKey, FaceKeyLess> byFace(folder, sort.named("field: elements"));
-    PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
-    CellGroups groups(folder, cellFaces, "field: elements");
-    std::uint32_t cell = 0;
-    std::vector<FaceId> faces;
-    while (groups.next(cell, faces)) {
-      const std::vector<FaceId> smallest = piecesOfCell(faces, opposite);
-      for (std::size_t i = 0; i < faces.size(); ++i) {
-        if (smallest[i] == faces[i]) smallestFaces.push_back(faces[i]);
-        byFace.add({faces[i], smallest[i]});
+    ReaderPool<PagedReader<CornerId>> pool(
+        [&] { return std::make_unique<PagedReader<CornerId>>(scratch.opposite, cacheBytes); });
+    CellBatches batches(folder, cellFaces, "field: elements", blockFaces);
+    std::vector<FaceId> smallest;
+    while (batches.next()) {
+      smallest.resize(batches.faces.size());
+      parallelFor(batches.cells(), 1, [&](const IndexRange& range) {
+        auto opposite = pool.take();
+        for (std::uint64_t k = range.begin(); k != range.end(); ++k) {
+          const std::vector<FaceId> faces(batches.begin(k), batches.end(k));
+          const std::vector<FaceId> pieces = piecesOfCell(faces, *opposite);
+          std::copy(pieces.begin(), pieces.end(), smallest.begin() + (batches.begin(k) - batches.faces.begin()));
+        }
+      });
+      for (std::size_t i = 0; i < batches.faces.size(); ++i) {
+        if (smallest[i] == batches.faces[i]) smallestFaces.push_back(batches.faces[i]);
+        byFace.add({batches.faces[i], smallest[i]});
       }
     }
-    folder.countRead("field: elements", opposite.bytesRead());
+    pool.forEach([&](PagedReader<CornerId>& r) { folder.countRead("field: elements", r.bytesRead()); });
     std::sort(smallestFaces.begin(), smallestFaces.end());
     numElements = static_cast<std::uint32_t>(smallestFaces.size());
     byFace.finish();
@@ -215,31 +265,45 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   elements.area.resize(numElements);
   {
     std::vector<std::vector<std::pair<std::uint32_t, double>>> lists(numElements);
-    PagedFacePoints points(scratch, surface, cacheBytes);
-    PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
-    PagedReader<std::uint32_t> elementOf(faceElement, cacheBytes);
-    CellGroups groups(folder, cellFaces, "field: elements");
-    std::uint32_t cell = 0;
-    std::vector<FaceId> faces;
-    std::vector<std::pair<std::uint32_t, detail::ElementSums>> sums;
-    while (groups.next(cell, faces)) {
-      sums.clear();
-      for (const FaceId f : faces) {
-        const std::uint32_t e = elementOf[f];
-        auto it = std::find_if(sums.begin(), sums.end(), [&](const auto& s) { return s.first == e; });
-        if (it == sums.end()) it = sums.emplace(sums.end(), e, detail::ElementSums());
-        const std::array<Vec3d, 3> p = points.points(f);
-        it->second.addFace(detail::faceGeometry(p));
-        for (int k = 0; k < 3; ++k) {
-          const CornerId o = opposite[3 * f + k];
-          if (o == kInvalidId) continue;
-          const std::uint32_t other = elementOf[cornerFace(o)];
-          if (other != e) it->second.addNeighbour(other, (p[(k + 1) % 3] - p[(k + 2) % 3]).norm());
+    struct Readers {
+      PagedFacePoints points;
+      PagedReader<CornerId> opposite;
+      PagedReader<std::uint32_t> elementOf;
+    };
+    ReaderPool<Readers> pool([&] {
+      return std::unique_ptr<Readers>(new Readers{PagedFacePoints(scratch, surface, cacheBytes),
+                                                  PagedReader<CornerId>(scratch.opposite, cacheBytes),
+                                                  PagedReader<std::uint32_t>(faceElement, cacheBytes)});
+    });
+    CellBatches batches(folder, cellFaces, "field: elements", blockFaces);
+    // A cell's elements are its own: the cells of a batch finish theirs in parallel.
+    while (batches.next()) {
+      parallelFor(batches.cells(), 1, [&](const IndexRange& range) {
+        auto r = pool.take();
+        std::vector<std::pair<std::uint32_t, detail::ElementSums>> sums;
+        for (std::uint64_t k = range.begin(); k != range.end(); ++k) {
+          sums.clear();
+          for (auto face = batches.begin(k); face != batches.end(k); ++face) {
+            const FaceId f = *face;
+            const std::uint32_t e = r->elementOf[f];
+            auto it = std::find_if(sums.begin(), sums.end(), [&](const auto& s) { return s.first == e; });
+            if (it == sums.end()) it = sums.emplace(sums.end(), e, detail::ElementSums());
+            const std::array<Vec3d, 3> p = r->points.points(f);
+            it->second.addFace(detail::faceGeometry(p));
+            for (int c = 0; c < 3; ++c) {
+              const CornerId o = r->opposite[3 * f + c];
+              if (o == kInvalidId) continue;
+              const std::uint32_t other = r->elementOf[cornerFace(o)];
+              if (other != e) it->second.addNeighbour(other, (p[(c + 1) % 3] - p[(c + 2) % 3]).norm());
+            }
+          }
+          for (auto& [e, sum] : sums) lists[e] = sum.finish(elements, e);
         }
-      }
-      for (auto& [e, s] : sums) lists[e] = s.finish(elements, e);
+      });
     }
-    folder.countRead("field: elements", points.bytesRead() + opposite.bytesRead() + elementOf.bytesRead());
+    pool.forEach([&](Readers& r) {
+      folder.countRead("field: elements", r.points.bytesRead() + r.opposite.bytesRead() + r.elementOf.bytesRead());
+    });
     detail::storeNeighbours(lists, elements);
   }
   folder.remove(cellFaces);
