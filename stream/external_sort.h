@@ -61,6 +61,7 @@ class ExternalMerge {
   std::size_t written_ = 0;
   std::vector<std::unique_ptr<Source>> sources_;
   std::vector<std::size_t> heap_;  // indices into sources_, smallest record first
+  std::vector<const char*> records_;  // per source, its current record
 };
 
 }  // namespace detail
