@@ -1,6 +1,25 @@
 #include "stream/external_sort.h"
 
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <thread>
+
 namespace seamvox::detail {
+
+/// The final merge run ahead by a thread of its own, a block of records at a time, at most
+/// kBlocks blocks ahead: the pass reading the sorted records works meanwhile on its core.
+struct ExternalMerge::Prefetch {
+  static constexpr std::size_t kBlocks = 3;
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::deque<std::vector<char>> full;  // merged blocks, in order
+  std::vector<std::vector<char>> empty;  // blocks served, for the thread to fill again
+  bool done = false, stop = false;
+  std::exception_ptr error;
+  std::thread thread;
+};
 
 /// One run being merged: its reader and its current record.
 struct ExternalMerge::Source {
@@ -20,6 +39,7 @@ ExternalMerge::ExternalMerge(ScratchFolder& scratch, std::size_t recordBytes, Le
 }
 
 ExternalMerge::~ExternalMerge() {
+  stopPrefetch();
   removeSources();
   for (const ScratchFile& run : runs_) scratch_.remove(run);
 }
@@ -75,6 +95,45 @@ void ExternalMerge::startMerge() {
   }
   mergeRuns(0, runs_.size());
   runs_.clear();  // now owned by sources_
+  if (heap_.empty()) return;
+  prefetch_ = std::make_unique<Prefetch>();
+  Prefetch& p = *prefetch_;
+  const std::size_t blockBytes = std::max<std::size_t>(1, readBuffer_ / recordBytes_) * recordBytes_;
+  for (std::size_t k = 0; k < Prefetch::kBlocks; ++k) p.empty.emplace_back(blockBytes);
+  try {
+    p.thread = std::thread([this, &p, blockBytes] {
+      try {
+        for (;;) {
+          std::vector<char> block;
+          {
+            std::unique_lock<std::mutex> lock(p.mutex);
+            p.changed.wait(lock, [&] { return !p.empty.empty() || p.stop; });
+            if (p.stop) break;
+            block = std::move(p.empty.back());
+            p.empty.pop_back();
+          }
+          block.resize(blockBytes);
+          std::size_t bytes = 0;
+          while (bytes < blockBytes && pop(block.data() + bytes)) bytes += recordBytes_;
+          block.resize(bytes);
+          std::lock_guard<std::mutex> lock(p.mutex);
+          if (bytes > 0) p.full.push_back(std::move(block));
+          if (bytes < blockBytes) break;
+          p.changed.notify_all();
+        }
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(p.mutex);
+        p.error = std::current_exception();
+      }
+      {
+        std::lock_guard<std::mutex> lock(p.mutex);
+        p.done = true;
+      }
+      p.changed.notify_all();
+    });
+  } catch (const std::system_error&) {
+    prefetch_.reset();  // no thread: next() merges here
+  }
 }
 
 bool ExternalMerge::pop(void* out) {
@@ -101,6 +160,43 @@ bool ExternalMerge::pop(void* out) {
   return true;
 }
 
-bool ExternalMerge::next(void* out) { return pop(out); }
+void ExternalMerge::stopPrefetch() noexcept {
+  if (!prefetch_) return;
+  {
+    std::lock_guard<std::mutex> lock(prefetch_->mutex);
+    prefetch_->stop = true;
+  }
+  prefetch_->changed.notify_all();
+  prefetch_->thread.join();
+  prefetch_.reset();
+}
+
+bool ExternalMerge::nextBlock() {
+  if (!prefetch_) {
+    // Merged here: the final pass of few records, or one whose thread could not start.
+    block_.resize(std::max<std::size_t>(1, readBuffer_ / recordBytes_) * recordBytes_);
+    std::size_t bytes = 0;
+    while (bytes < block_.size() && pop(block_.data() + bytes)) bytes += recordBytes_;
+    at_ = block_.data();
+    end_ = at_ + bytes;
+    return bytes > 0;
+  }
+  Prefetch& p = *prefetch_;
+  std::unique_lock<std::mutex> lock(p.mutex);
+  if (!block_.empty()) p.empty.push_back(std::move(block_));
+  p.changed.notify_all();
+  p.changed.wait(lock, [&] { return !p.full.empty() || p.done; });
+  if (p.full.empty()) {
+    if (p.error) std::rethrow_exception(p.error);
+    block_.clear();
+    at_ = end_ = nullptr;
+    return false;
+  }
+  block_ = std::move(p.full.front());
+  p.full.pop_front();
+  at_ = block_.data();
+  end_ = at_ + block_.size();
+  return true;
+}
 
 }  // namespace seamvox::detail

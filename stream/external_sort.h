@@ -43,10 +43,19 @@ class ExternalMerge {
   /// Merges rounds of runs until one pass can merge the rest, then opens that pass.
   void startMerge();
   /// The next record of the final merge into out; false at the end.
-  bool next(void* out);
+  bool next(void* out) {
+    if (at_ == end_ && !nextBlock()) return false;
+    std::memcpy(out, at_, recordBytes_);
+    at_ += recordBytes_;
+    return true;
+  }
 
  private:
   struct Source;
+  struct Prefetch;
+  /// The next block of the final merge (merged ahead by another thread); false at the end.
+  bool nextBlock();
+  void stopPrefetch() noexcept;
   ScratchFile mergeRuns(std::size_t first, std::size_t count);
   /// Closes the merged runs' readers, then removes their files.
   void removeSources();
@@ -62,6 +71,10 @@ class ExternalMerge {
   std::vector<std::unique_ptr<Source>> sources_;
   std::vector<std::size_t> heap_;  // indices into sources_, smallest record first
   std::vector<const char*> records_;  // per source, its current record
+  std::unique_ptr<Prefetch> prefetch_;
+  std::vector<char> block_;  // the block next() serves from
+  const char* at_ = nullptr;
+  const char* end_ = nullptr;
 };
 
 }  // namespace detail

@@ -127,12 +127,18 @@ ScratchTraffic& ScratchFolder::stage(const std::string& name) {
   return traffic_.back();
 }
 
-void ScratchFolder::countRead(const std::string& name, std::uint64_t bytes) { stage(name).bytesRead += bytes; }
+void ScratchFolder::countRead(const std::string& name, std::uint64_t bytes) {
+  std::lock_guard<std::mutex> lock(trafficMutex_);  // a sort's merge reads on a thread of its own
+  stage(name).bytesRead += bytes;
+}
 
 void ScratchFolder::countWrite(const std::string& name, std::uint64_t bytes, std::uint64_t growth) {
-  if (written_ + bytes > writeLimit_) throwDiskFull(path_, bytes, "write limit of the test hook");
-  stage(name).bytesWritten += bytes;
-  written_ += bytes;
+  {
+    std::lock_guard<std::mutex> lock(trafficMutex_);
+    if (written_ + bytes > writeLimit_) throwDiskFull(path_, bytes, "write limit of the test hook");
+    stage(name).bytesWritten += bytes;
+    written_ += bytes;
+  }
   std::lock_guard<std::mutex> lock(freeMutex_);
   onDisk_ += growth;
   peakOnDisk_ = std::max(peakOnDisk_, onDisk_);

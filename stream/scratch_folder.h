@@ -84,6 +84,7 @@ class ScratchFolder {
   std::vector<ScratchTraffic> traffic_;
   std::uint64_t onDisk_ = 0, peakOnDisk_ = 0, written_ = 0;
   std::uint64_t writeLimit_ = ~std::uint64_t(0);
+  std::mutex trafficMutex_;  ///< traffic_ and written_
   std::mutex freeMutex_;
   std::vector<ScratchFile> free_;  ///< removed files kept for reuse
   std::uint64_t freeBytes_ = 0;

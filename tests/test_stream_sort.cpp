@@ -103,6 +103,44 @@ TEST(ExternalSort, EmptyAndSingleRecordInputs) {
   expectSameRecords(externalSort(scratch, one, 16), one);
 }
 
+// The final merge runs ahead on a thread of its own: a reader that stops early ends it, and a
+// run cut short while it is merged is the reader's error, not the thread's.
+TEST(ExternalSort, TheMergeAheadStopsWithItsReaderAndHandsOverErrors) {
+  testing::TempDir dir;
+  {
+    ScratchFolder scratch(dir.dir());
+    {
+      ExternalSorter<Record, ByKeyThenId> sorter(scratch, {4096, "test"});
+      for (const Record& r : randomRecords(60000, 1000, 9)) sorter.add(r);
+      sorter.finish();
+      Record r;
+      for (int i = 0; i < 10; ++i) ASSERT_TRUE(sorter.next(r));
+    }
+    EXPECT_EQ(scratch.bytesOnDisk(), scratch.bytesKeptForReuse()) << "the runs are removed";
+  }
+  ScratchFolder scratch(dir.dir());
+  ExternalSorter<Record, ByKeyThenId> sorter(scratch, {1 << 16, "test"});
+  for (const Record& r : randomRecords(60000, 1000, 11)) sorter.add(r);
+  sorter.finish();
+  ASSERT_GT(sorter.runs(), 1u);
+  // Every run (2048 records) cut inside its 1000th record: far beyond what the merge has read
+  // ahead (blocks of 32 records).
+  for (const auto& entry : fs::directory_iterator(scratch.path())) {
+    if (entry.is_regular_file() && entry.file_size() > 1000 * sizeof(Record)) {
+      fs::resize_file(entry.path(), 999 * sizeof(Record) + 5);
+    }
+  }
+  Record r;
+  std::size_t served = 0;
+  try {
+    while (sorter.next(r)) ++served;
+    FAIL() << "the cut runs were merged to the end (" << served << " records)";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("ends inside a record"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(served, 60000u);
+}
+
 TEST(ExternalSort, DiskFullNamesTheFolderAndTheBytesNeededAndLeavesNothing) {
   testing::TempDir dir;
   std::string folder;
