@@ -494,17 +494,22 @@ class CleanPass {
     std::vector<CornerId> copyStarts;
     std::vector<VertexId> copyOf;
     std::vector<CornerAround> group;
+    std::vector<std::uint32_t> root, fanOf;  // fansOf's, reused from vertex to vertex
     CornerAround next{};
     bool more = around.next(next);
     VertexId copy = static_cast<VertexId>(out_.numVertices);
     while (more) {
       group.assign(1, next);
       while ((more = around.next(next)) && next.vertex == group[0].vertex) group.push_back(next);
-      const std::vector<std::vector<CornerId>> fans = fansOf(group);
-      for (std::size_t i = 0; i < fans.size(); ++i) {
+      const std::uint32_t fans = fansOf(group, root, fanOf);
+      for (std::uint32_t i = 0; i < fans; ++i) {
         // The start: the most clockwise corner (an open fan), else the largest corner of a
         // vertex's only fan or the smallest of one of several (findFans).
-        const CornerId start = mostClockwise(group, fans.size() == 1 ? fans[i].back() : fans[i].front());
+        CornerId first = kInvalidId;
+        for (std::size_t j = 0; j < group.size() && first == kInvalidId; ++j) {
+          if (fanOf[j] == i) first = group[j].corner;
+        }
+        const CornerId start = mostClockwise(group, fans == 1 ? group.back().corner : first);
         const bool open = clockwiseOf(group, start) == kInvalidId;
         if (i == 0) {
           if (open) boundary_.push_back(group[0].vertex);
@@ -514,10 +519,12 @@ class CleanPass {
         if (open) copyBoundary.push_back(copy);
         copyStarts.push_back(start);
         copyOf.push_back(group[0].vertex);
-        for (const CornerId c : fans[i]) moved.add({c, copy});
+        for (std::size_t j = 0; j < group.size(); ++j) {
+          if (fanOf[j] == i) moved.add({group[j].corner, copy});
+        }
         ++copy;
       }
-      out_.report.nonManifoldVertices += fans.size() > 1;
+      out_.report.nonManifoldVertices += fans > 1;
     }
     for (const CornerId c : copyStarts) starts.write(&c, sizeof c);
     boundary_.insert(boundary_.end(), copyBoundary.begin(), copyBoundary.end());
@@ -555,10 +562,12 @@ class CleanPass {
     return t;
   }
 
-  /// The fans of one vertex's corners (group, sorted by corner): each sorted, ordered by their
-  /// smallest corner.
-  static std::vector<std::vector<CornerId>> fansOf(const std::vector<CornerAround>& group) {
-    std::vector<std::uint32_t> root(group.size());
+  /// The fans of one vertex's corners (group, sorted by corner): fanOf[i] is group[i]'s fan, the
+  /// fans numbered in the order of their smallest corners. Returns their number. root is room for
+  /// the union-find.
+  static std::uint32_t fansOf(const std::vector<CornerAround>& group, std::vector<std::uint32_t>& root,
+                              std::vector<std::uint32_t>& fanOf) {
+    root.resize(group.size());
     for (std::uint32_t i = 0; i < root.size(); ++i) root[i] = i;
     const auto find = [&](std::uint32_t i) {
       while (root[i] != i) i = root[i] = root[root[i]];
@@ -576,12 +585,14 @@ class CleanPass {
       const std::uint32_t a = find(i), b = find(j);
       if (a != b) root[std::max(a, b)] = std::min(a, b);
     }
-    std::vector<std::vector<CornerId>> fans;
-    std::vector<std::uint32_t> fanOf(group.size(), kInvalidId);
+    // Roots are the smallest indices of their sets, so a fan's root comes before its other
+    // corners: numbered when met, in the order of the fans' smallest corners.
+    fanOf.assign(group.size(), kInvalidId);
+    std::uint32_t fans = 0;
     for (std::uint32_t i = 0; i < group.size(); ++i) {
       const std::uint32_t r = find(i);
-      if (fanOf[r] == kInvalidId) fanOf[r] = static_cast<std::uint32_t>(fans.size()), fans.emplace_back();
-      fans[fanOf[r]].push_back(group[i].corner);
+      if (fanOf[r] == kInvalidId) fanOf[r] = fans++;
+      fanOf[i] = fanOf[r];
     }
     return fans;
   }
