@@ -391,7 +391,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
       PagedReader<Vec3f> normal;
       std::unique_ptr<PagedReader<Vec3f>> direction;
     };
-    std::vector<Vec3f> block, normals;
+    std::vector<Vec3f> block;
     std::vector<std::uint8_t> colours;
     for (std::int32_t sweep = 0; sweep < proxy.smoothingSweeps; ++sweep) {
       for (std::uint32_t k = 0; k < out.colours; ++k) {
@@ -403,14 +403,13 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
         });
         std::unique_ptr<ScratchUpdater> directions;
         if (!held) directions = std::make_unique<ScratchUpdater>(folder, direction, "field: sweeps");
-        ScratchReader colourReader(folder, colour, "field: sweeps"), normalReader(folder, sweepNormal, "field: sweeps");
+        // A face's own normal comes through the page cache its neighbours' come through: the
+        // pages of one colour's faces are every page, read once either way.
+        ScratchReader colourReader(folder, colour, "field: sweeps");
         for (std::uint64_t first = 0; first < nf; first += blockFaces) {
           const std::uint64_t count = std::min(blockFaces, nf - first);
-          normals.resize(count);
           colours.resize(count);
-          if (!colourReader.read(colours.data(), count) || !normalReader.read(normals.data(), count * sizeof(Vec3f))) {
-            throw IoError(colour.path + ": scratch colours or normals end early");
-          }
+          if (!colourReader.read(colours.data(), count)) throw IoError(colour.path + ": scratch colours end early");
           Vec3f* own = all.data() + first;
           if (!held) {
             block.resize(count);
@@ -420,8 +419,10 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
           parallelFor(count, 4096, [&](const IndexRange& range) {
             auto r = pool.take();
             for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-              if (colours[i] != k || detail::isZero(normals[i])) continue;
+              if (colours[i] != k) continue;
               const FaceId f = static_cast<FaceId>(first + i);
+              const Vec3f faceNormal = r->normal[f];
+              if (detail::isZero(faceNormal)) continue;
               Vec3f neighbourNormal[3];
               Vec3d neighbourDirection[3];
               int n = 0;
@@ -434,7 +435,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
                 neighbourDirection[n++] = (held ? all[cornerFace(o)] : (*r->direction)[cornerFace(o)]).cast<double>();
               }
               Vec3d swept;
-              if (detail::sweptDirection(normals[i], own[i].cast<double>(), neighbourNormal, neighbourDirection, n, swept)) {
+              if (detail::sweptDirection(faceNormal, own[i].cast<double>(), neighbourNormal, neighbourDirection, n, swept)) {
                 own[i] = swept.cast<float>();
               }
             }
