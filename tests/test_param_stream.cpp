@@ -53,7 +53,8 @@ TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
       SCOPED_TRACE(repair);
       const std::string settings = " --grid 32 --cells 20 --quiet" + repair;
       const std::string inMemory = run("param " + dir.path("clean.ply") + " -o " + dir.path("mem.ply") +
-                                           " --solver voxloc --field proxy" + settings,
+                                           " --solver voxloc --field proxy" + settings + " --report " +
+                                           dir.path("m.json"),
                                        0);
       const std::string outOfCore =
           run("param " + dir.path("in.ply") + " -o " + dir.path("ooc.ply") + " --out-of-core --memory-budget 150M" +
@@ -75,6 +76,14 @@ TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
       for (const char* pass : {"passSeconds.weld: read", "passSeconds.clean: faces", "passSeconds.field: sweeps"}) {
         EXPECT_GE(report.numberAt(pass), 0.0) << pass;
       }
+      // The map's figures as measured in memory (the sums in another order: the error to rounding).
+      const JsonValue memoryReport = parseJson(testing::readFile(dir.path("m.json")));
+      for (const char* count : {"quality.flipped", "quality.collapsed", "quality.flippedFolded"}) {
+        EXPECT_EQ(report.numberAt(count), memoryReport.numberAt(count)) << count;
+      }
+      EXPECT_NEAR(report.numberAt("quality.relativeGradientError"),
+                  memoryReport.numberAt("quality.relativeGradientError"),
+                  1e-12 * memoryReport.numberAt("quality.relativeGradientError"));
       repairs += report.numberAt("untangle.flippedBefore") > 0.0;
     }
     EXPECT_TRUE(std::filesystem::is_empty(dir.path("scratch"))) << "scratch left behind";

@@ -377,6 +377,17 @@ MapQualitySums::Kind MapQualitySums::add(const std::array<Vec3d, 3>& p, const st
   return Kind::Fine;
 }
 
+void MapQualitySums::merge(const MapQualitySums& other) {
+  error_ += other.error_;
+  target_ += other.target_;
+  hasField_ = hasField_ || other.hasField_;
+  out_.faces += other.out_.faces;
+  out_.collapsed += other.out_.collapsed;
+  out_.collapsedAtCones += other.out_.collapsedAtCones;
+  out_.flipped += other.out_.flipped;
+  out_.flippedFolded += other.out_.flippedFolded;
+}
+
 MapQuality MapQualitySums::finish() const {
   MapQuality out = out_;
   out.edgeLength = h_;

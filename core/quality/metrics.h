@@ -134,6 +134,8 @@ class MapQualitySums {
   Kind add(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q, const Vec3d* direction);
   void countCollapsedAtCones() { ++out_.collapsedAtCones; }
   void countFolded() { ++out_.flippedFolded; }
+  /// Adds the sums of other faces (of the same h).
+  void merge(const MapQualitySums& other);
   MapQuality finish() const;
 
  private:
