@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/system/errors.h"
+#include "io/atomic_file.h"
 #include "io/output_set.h"
 #include "testing.h"
 
@@ -142,6 +143,53 @@ TEST(OutputSet, AFailedWriteLeavesEveryTargetAsItWas) {
   EXPECT_EQ(readFile(small), "old small");
   EXPECT_FALSE(fs::exists(large));
   EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
+}
+
+TEST(AtomicFile, AWriteFailingOnItsWriterThreadIsAnErrorNamingTheOutput) {
+  // Output of many buffers (the writer thread writes them) into a file that may not grow beyond
+  // 1 MiB: the failure reaches the caller as IoError, and neither the target nor the temporary
+  // is left.
+  TempDir dir;
+  const std::string large = dir.path("large.bin");
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{1 << 20, 1 << 20};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    try {
+      AtomicFile file(large);
+      const std::string piece(64 << 10, 'x');
+      for (int i = 0; i < 512; ++i) file.write(piece);  // 32 MiB
+      file.commit();
+    } catch (const IoError& e) {
+      const std::string message = e.what();
+      _exit(message.find(large) != std::string::npos && message.find("write failed") != std::string::npos ? 0 : 2);
+    }
+    _exit(1);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "the failed write must throw IoError naming the output (2: another message)";
+  EXPECT_FALSE(fs::exists(large));
+  EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
+}
+
+TEST(AtomicFile, ManyBuffersArriveInOrder) {
+  TempDir dir;
+  std::string expected;
+  {
+    AtomicFile file(dir.path("out.bin"));
+    for (int i = 0; i < 3000; ++i) {
+      const std::string piece(1 + (i * 7919) % 20000, static_cast<char>('a' + i % 26));
+      file.write(piece);
+      expected += piece;
+    }
+    file.commit();
+  }
+  EXPECT_GT(expected.size(), std::size_t(16) << 20) << "several 4 MiB buffers";
+  EXPECT_TRUE(readFile(dir.path("out.bin")) == expected);
 }
 
 TEST(OutputSet, FoldersAndTargetsStagedTwiceAreRefused) {
