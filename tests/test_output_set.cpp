@@ -114,32 +114,40 @@ TEST(OutputSet, AFailedMovePutsTheOthersBack) {
   EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
 }
 
+// The exit code of body run in a child process whose files may not grow beyond `bytes` (SIGXFSZ
+// ignored, so writes fail with EFBIG as on a full disk); -1 when the child did not exit.
+template <class Body>
+int exitCodeWithFileSizeLimit(rlim_t bytes, Body&& body) {
+  const pid_t pid = fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{bytes, bytes};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    _exit(body());
+  }
+  int status = 0;
+  if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status)) return -1;
+  return WEXITSTATUS(status);
+}
+
 TEST(OutputSet, AFailedWriteLeavesEveryTargetAsItWas) {
-  // A child process whose files may not grow beyond 64 KiB (SIGXFSZ ignored, so writes fail
-  // with EFBIG as on a full disk): the small output is written, the large one fails.
+  // Files limited to 64 KiB: the small output is written, the large one fails.
   TempDir dir;
   const std::string small = dir.path("small.txt"), large = dir.path("large.bin");
   writeFile(small, "old small");
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    signal(SIGXFSZ, SIG_IGN);
-    const rlimit limit{64 << 10, 64 << 10};
-    setrlimit(RLIMIT_FSIZE, &limit);
+  const int code = exitCodeWithFileSizeLimit(64 << 10, [&] {
     try {
       OutputSet outputs;
       outputs.add(small).write("new small");
       outputs.add(large).write(std::string(1 << 20, 'x'));
       outputs.commit();
     } catch (const IoError&) {
-      _exit(0);
+      return 0;
     }
-    _exit(1);
-  }
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0) << "the failed write must throw IoError";
+    return 1;
+  });
+  EXPECT_EQ(code, 0) << "the failed write must throw IoError";
   EXPECT_EQ(readFile(small), "old small");
   EXPECT_FALSE(fs::exists(large));
   EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
@@ -151,12 +159,7 @@ TEST(AtomicFile, AWriteFailingOnItsWriterThreadIsAnErrorNamingTheOutput) {
   // is left.
   TempDir dir;
   const std::string large = dir.path("large.bin");
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    signal(SIGXFSZ, SIG_IGN);
-    const rlimit limit{1 << 20, 1 << 20};
-    setrlimit(RLIMIT_FSIZE, &limit);
+  const int code = exitCodeWithFileSizeLimit(1 << 20, [&] {
     try {
       AtomicFile file(large);
       const std::string piece(64 << 10, 'x');
@@ -164,14 +167,11 @@ TEST(AtomicFile, AWriteFailingOnItsWriterThreadIsAnErrorNamingTheOutput) {
       file.commit();
     } catch (const IoError& e) {
       const std::string message = e.what();
-      _exit(message.find(large) != std::string::npos && message.find("write failed") != std::string::npos ? 0 : 2);
+      return message.find(large) != std::string::npos && message.find("write failed") != std::string::npos ? 0 : 2;
     }
-    _exit(1);
-  }
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0) << "the failed write must throw IoError naming the output (2: another message)";
+    return 1;
+  });
+  EXPECT_EQ(code, 0) << "the failed write must throw IoError naming the output (2: another message)";
   EXPECT_FALSE(fs::exists(large));
   EXPECT_THAT(testing::temporaryFilesIn(dir.dir()), ::testing::IsEmpty());
 }
