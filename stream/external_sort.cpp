@@ -113,8 +113,7 @@ void ExternalMerge::startMerge() {
             p.empty.pop_back();
           }
           block.resize(blockBytes);
-          std::size_t bytes = 0;
-          while (bytes < blockBytes && pop(block.data() + bytes)) bytes += recordBytes_;
+          const std::size_t bytes = fill(block.data(), blockBytes);
           block.resize(bytes);
           std::lock_guard<std::mutex> lock(p.mutex);
           if (bytes > 0) p.full.push_back(std::move(block));
@@ -160,6 +159,12 @@ bool ExternalMerge::pop(void* out) {
   return true;
 }
 
+std::size_t ExternalMerge::fill(char* out, std::size_t bytes) {
+  std::size_t done = 0;
+  while (done < bytes && pop(out + done)) done += recordBytes_;
+  return done;
+}
+
 void ExternalMerge::stopPrefetch() noexcept {
   if (!prefetch_) return;
   {
@@ -175,8 +180,7 @@ bool ExternalMerge::nextBlock() {
   if (!prefetch_) {
     // Merged here: the final pass of few records, or one whose thread could not start.
     block_.resize(std::max<std::size_t>(1, readBuffer_ / recordBytes_) * recordBytes_);
-    std::size_t bytes = 0;
-    while (bytes < block_.size() && pop(block_.data() + bytes)) bytes += recordBytes_;
+    const std::size_t bytes = fill(block_.data(), block_.size());
     at_ = block_.data();
     end_ = at_ + bytes;
     return bytes > 0;

@@ -60,6 +60,9 @@ class ExternalMerge {
   /// Closes the merged runs' readers, then removes their files.
   void removeSources();
   bool pop(void* out);
+  /// Pops records into out until `bytes` (whole records) are filled or the merge ends; the bytes
+  /// filled.
+  std::size_t fill(char* out, std::size_t bytes);
 
   ScratchFolder& scratch_;
   std::size_t recordBytes_;

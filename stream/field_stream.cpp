@@ -138,21 +138,21 @@ class CellBatches {
   bool more_ = false;
 };
 
-/// The pieces of one cell's faces (sorted) joined through their shared edges: per face, the
-/// smallest face of its piece.
-std::vector<FaceId> piecesOfCell(const std::vector<FaceId>& faces, PagedReader<CornerId>& opposite) {
-  detail::UnionFind sets(faces.size());  // roots are the smallest indices, so the smallest faces
-  for (std::uint32_t i = 0; i < faces.size(); ++i) {
-    for (CornerId c = 3 * faces[i]; c < 3 * faces[i] + 3; ++c) {
+/// The pieces of one cell's faces [begin, end) (sorted) joined through their shared edges:
+/// smallest[i] gets the smallest face of the piece of begin[i].
+template <class Faces>
+void piecesOfCell(Faces begin, Faces end, PagedReader<CornerId>& opposite, FaceId* smallest) {
+  const auto n = static_cast<std::uint32_t>(end - begin);
+  detail::UnionFind sets(n);  // roots are the smallest indices, so the smallest faces
+  for (std::uint32_t i = 0; i < n; ++i) {
+    for (CornerId c = 3 * begin[i]; c < 3 * begin[i] + 3; ++c) {
       const CornerId o = opposite[c];
       if (o == kInvalidId) continue;
-      const auto it = std::lower_bound(faces.begin(), faces.end(), cornerFace(o));
-      if (it != faces.end() && *it == cornerFace(o)) sets.unite(i, static_cast<std::uint32_t>(it - faces.begin()));
+      const auto it = std::lower_bound(begin, end, cornerFace(o));
+      if (it != end && *it == cornerFace(o)) sets.unite(i, static_cast<std::uint32_t>(it - begin));
     }
   }
-  std::vector<FaceId> smallest(faces.size());
-  for (std::uint32_t i = 0; i < faces.size(); ++i) smallest[i] = faces[sets.find(i)];
-  return smallest;
+  for (std::uint32_t i = 0; i < n; ++i) smallest[i] = begin[sets.find(i)];
 }
 
 /// Calls fill(block, first, count) for blocks of faces in order, each filling `count` records of
@@ -234,9 +234,8 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
       parallelFor(batches.cells(), 1, [&](const IndexRange& range) {
         auto opposite = pool.take();
         for (std::uint64_t k = range.begin(); k != range.end(); ++k) {
-          const std::vector<FaceId> faces(batches.begin(k), batches.end(k));
-          const std::vector<FaceId> pieces = piecesOfCell(faces, *opposite);
-          std::copy(pieces.begin(), pieces.end(), smallest.begin() + (batches.begin(k) - batches.faces.begin()));
+          piecesOfCell(batches.begin(k), batches.end(k), *opposite,
+                       smallest.data() + (batches.begin(k) - batches.faces.begin()));
         }
       });
       for (std::size_t i = 0; i < batches.faces.size(); ++i) {
