@@ -57,6 +57,7 @@ void writeRefineRounds(JsonWriter& j, const RefineStats& refine) {
   j.key("rounds").beginArray();
   for (const RefineRound& round : refine.rounds) {
     j.beginObject();
+    j.key("spline").value(round.spline);
     j.key("seedFaces").value(round.seedFaces).key("regionFaces").value(round.regionFaces);
     j.key("freeVertices").value(U64{round.freeVertices});
     j.key("unknowns").value(U64{round.unknowns});
@@ -74,6 +75,8 @@ void writeRefine(JsonWriter& j, const RefineStats& refine, const ParamReportCont
   j.key("refinedFractionOffIslands").value(refine.refinedFractionOffIslands);
   j.key("islandVertices").value(U64{refine.islandVertices});
   j.key("freeVertices").value(U64{refine.freeVertices});
+  j.key("splineVertices").value(U64{refine.splineVertices});
+  j.key("splineVertexFraction").value(refine.splineVertexFraction);
   j.key("lockedVertices").value(U64{refine.lockedVertices});
   j.key("regionFaces").value(refine.regionFaces);
   j.key("markedFaces").value(refine.markedFaces);

@@ -217,6 +217,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   std::vector<FaceId> seeds = withFaces(
       scratchSupportFaces(folder, vox.basis, options.voxLoc ? solved.markedBasis : solved.inconsistentBasisFunctions),
       basisOptions.leftOut);
+  const double voxelSize = vox.basis.basis->grid().voxelSize;
   vox.basis = ScratchVoxelBasis();  // the grid-sized basis, before the local solves
   r.markedFaces = seeds.size();
   if (options.voxLoc || !seeds.empty()) {
@@ -226,6 +227,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     refine.islandFaces = basisOptions.leftOut;
     refine.seedFromMap = options.voxLoc;
     if (!options.voxLoc) refine.maxRounds = 1;
+    if (options.voxLoc && refine.splineCells > 0) refine.splineSpacing = voxelSize / refine.splineCells;
     if (!refine.progress) refine.progress = options.progress;
     const RefineResult refinement =
         refineScratchNearCones(folder, scratch, field, cut, solved.map, solved.translations, refine, pass);

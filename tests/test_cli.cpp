@@ -143,6 +143,27 @@ TEST(Cli, ParamClosesSmallHolesForQuads) {
   run("param " + input + " -o " + dir.path("o.ply") + " --close-holes -1", 2);
 }
 
+// --spline-cells reaches the voxloc refinement: its first round is the spline round, the report
+// says so and counts the vertices only it moved; the written map is seamless for check too.
+TEST(Cli, ParamSplineCellsRunsTheSplineRound) {
+  TempDir dir;
+  const std::string input = dir.path("sphere.ply");
+  writeMesh(input, testing::generatedMesh(MeshKind::Sphere, 6000));
+  for (const std::string cells : {"0", "4"}) {
+    SCOPED_TRACE(cells);
+    const std::string report = dir.path("r.json"), output = dir.path("o.ply");
+    const std::string out = run("param " + input + " -o " + output + " --cells 25 --solver voxloc --grid 16 --quiet" +
+                                    " --spline-cells " + cells + " --report " + report, 0);
+    EXPECT_TRUE(contains(out, ": seamless")) << out;
+    const std::string check = run("check " + output, 0);
+    EXPECT_TRUE(contains(check, "\nseamless\n") && !contains(check, "NOT seamless")) << check;
+    const Json r = parseJson(testing::readFile(report));
+    EXPECT_EQ(r.numberAt("refine.rounds.0.spline"), cells == "4" ? 1.0 : 0.0);
+    EXPECT_GE(r.numberAt("refine.splineVertices"), 0.0);
+  }
+  run("param " + input + " -o " + dir.path("o.ply") + " --spline-cells -1", 2);
+}
+
 // param --quads extracts from the map as solved, its small holes still capped: also the pinched
 // ones (two missing faces touching at one vertex, split apart by cleaning), which no fill of the
 // written map closes, so a sphere with such holes gives a closed quad mesh.

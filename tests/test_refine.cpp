@@ -8,6 +8,7 @@
 #include <complex>
 #include <deque>
 #include <memory>
+#include <numeric>
 #include <set>
 
 #include "core/basis/basis.h"
@@ -21,6 +22,7 @@
 #include "core/solve/hat_solver.h"
 #include "core/basis/reduce.h"
 #include "core/refine/refine.h"
+#include "core/refine/spline_space.h"
 #include "core/mesh/subdivide.h"
 #include "core/mesh/topology.h"
 #include "io/mesh_io.h"
@@ -114,13 +116,18 @@ double maxCornerDistance(const WedgeMap& a, const WedgeMap& b) {
   return out;
 }
 
+// A generated sphere of about `faces` faces, 40 cells on its diagonal.
+std::unique_ptr<Scene> sphereScene(std::uint64_t faces) {
+  GenerateOptions options;
+  options.kind = MeshKind::Sphere;
+  options.faces = faces;
+  return makeScene(generateMesh(options).mesh, 40.0);
+}
+
 class RefineSphere : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    GenerateOptions options;
-    options.kind = MeshKind::Sphere;
-    options.faces = 6000;
-    scene_ = makeScene(generateMesh(options).mesh, 40.0).release();
+    scene_ = sphereScene(6000).release();
   }
   static void TearDownTestSuite() {
     delete scene_;
@@ -757,6 +764,261 @@ TEST(RefineCommand, ParamVoxLocReportsTheRefinement) {
   EXPECT_NE(testing::runSeamvox("param " + dir.path("s.obj") + " -o " + dir.path("o.obj") +
                                     " --solver nope --quiet"),
             0);
+}
+
+// The refinement's spline round (core/refine/spline_space.h): trilinear B-splines sampled at the
+// region's vertices, with an unknown per vertex next to cones. The hat map is a fixed point of
+// its solve; damage inside the per-vertex zone around cones is repaired exactly; the columns
+// follow the charts of the faces (seams); the whole refinement with a spline round stays
+// seamless and refines fewer vertices in the hat basis.
+class SplineRound : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    scene_ = sphereScene(50000).release();
+    double sum = 0.0;
+    for (const Triangle& t : scene_->mesh().triangles) {
+      sum += (scene_->mesh().position(t[0]) - scene_->mesh().position(t[1])).norm();
+    }
+    meanEdge_ = sum / scene_->mesh().numFaces();
+  }
+  static void TearDownTestSuite() {
+    delete scene_;
+    scene_ = nullptr;
+  }
+  static Scene* scene_;
+  static double meanEdge_;
+
+  static std::vector<FaceId> allFaces() {
+    std::vector<FaceId> faces(scene_->mesh().numFaces());
+    std::iota(faces.begin(), faces.end(), 0u);
+    return faces;
+  }
+  // The region's input: the whole-mesh map on its corners (sub corner 3 i + k is whole corner
+  // 3 faceOrigin[i] + k).
+  static WedgeMap regionMap(const RegionMesh& region, const WedgeMap& whole) {
+    std::vector<Vec2d> values(3 * region.faceOrigin.size());
+    for (std::size_t i = 0; i < region.faceOrigin.size(); ++i) {
+      for (int k = 0; k < 3; ++k) values[3 * i + k] = whole[3 * region.faceOrigin[i] + k];
+    }
+    return WedgeMap::fromCorners(region.mesh.triangles, values);
+  }
+  static std::vector<Complex> regionTranslations(const RegionMesh& region) {
+    std::vector<Complex> t(region.seamOrigin.size());
+    for (std::size_t j = 0; j < t.size(); ++j) t[j] = scene_->hat.translations[region.seamOrigin[j]];
+    return t;
+  }
+};
+Scene* SplineRound::scene_ = nullptr;
+double SplineRound::meanEdge_ = 0.0;
+
+TEST_F(SplineRound, TheHatMapIsItsFixedPointWithFewUnknowns) {
+  const Scene& s = *scene_;
+  ASSERT_GE(s.cut.cones.size(), 4u);
+  const RegionMesh region = extractRegion(s.mesh(), s.topology(), s.field, s.cut, allFaces());
+  const WedgeMap input = regionMap(region, s.hat.cornerUV);
+  std::vector<std::uint8_t> own;
+  RefineStats stats;
+  const RegionSolution solved = solveRegionInSplines(region, input, regionTranslations(region), s.options.edgeLength,
+                                                     4.0 * meanEdge_, kConeWeightRadius, own, &stats);
+  ASSERT_TRUE(solved.inSplines);
+  EXPECT_LT(maxCornerDistance(solved.cornerUV, input), 1e-7) << "the hat optimum is the spline round's optimum too";
+  EXPECT_LT(4ull * stats.unknowns, region.mesh.numVertices());
+  // Every cone's free neighbours keep their own unknown; far from cones, none does.
+  const std::uint64_t owned = std::count(own.begin(), own.end(), std::uint8_t(1));
+  EXPECT_GT(owned, 0u);
+  EXPECT_LT(owned, region.mesh.numVertices() / 2);
+  std::set<VertexId> cones(region.cut.cones.begin(), region.cut.cones.end());
+  for (const Triangle& t : region.mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      if (!cones.count(t[k])) continue;
+      for (int l = 1; l < 3; ++l) EXPECT_TRUE(cones.count(t[(k + l) % 3]) || own[t[(k + l) % 3]]);
+    }
+  }
+}
+
+TEST_F(SplineRound, DamageNextToConesIsRepairedExactly) {
+  const Scene& s = *scene_;
+  const RegionMesh region = extractRegion(s.mesh(), s.topology(), s.field, s.cut, allFaces());
+  const WedgeMap hat = regionMap(region, s.hat.cornerUV);
+  // Every corner of a cone's neighbours moved onto the cone: their faces collapse.
+  std::set<VertexId> cones(region.cut.cones.begin(), region.cut.cones.end());
+  std::vector<VertexId> target(region.mesh.numVertices(), kInvalidId);
+  for (const Triangle& t : region.mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      for (int l = 1; l < 3; ++l) {
+        const VertexId w = t[(k + l) % 3];
+        if (cones.count(t[k]) && !cones.count(w)) target[w] = t[k];
+      }
+    }
+  }
+  std::vector<CornerId> corners;
+  std::vector<Vec2d> values;
+  for (CornerId c = 0; c < hat.size(); ++c) {
+    const VertexId v = region.mesh.triangles[c / 3][c % 3];
+    if (target[v] == kInvalidId) continue;
+    // The cone's value in the chart of this corner's face.
+    for (int k = 0; k < 3; ++k) {
+      if (region.mesh.triangles[c / 3][k] == target[v]) values.push_back(hat[3 * (c / 3) + k]);
+    }
+    if (values.size() == corners.size()) values.push_back(hat[c]);  // the cone is not in this face
+    corners.push_back(c);
+  }
+  WedgeMap damaged = hat;
+  damaged.assign(corners, values);
+  ASSERT_GT(maxCornerDistance(damaged, hat), 0.1);
+  std::vector<std::uint8_t> own;
+  const RegionSolution solved = solveRegionInSplines(region, damaged, regionTranslations(region),
+                                                     s.options.edgeLength, 4.0 * meanEdge_, kConeWeightRadius, own);
+  ASSERT_TRUE(solved.inSplines);
+  for (VertexId v = 0; v < target.size(); ++v) {
+    if (target[v] != kInvalidId) ASSERT_TRUE(own[v]) << "damaged vertex " << v << " has its own unknown";
+  }
+  // The hat map differs from the input only on own unknowns: it is in the space, and optimal.
+  EXPECT_LT(maxCornerDistance(solved.cornerUV, hat), 1e-6);
+}
+
+TEST_F(SplineRound, ColumnsFollowTheChartsOfTheFaces) {
+  const Scene& s = *scene_;
+  // A region with a locked border: the faces within 10 edges of the first cone.
+  const Vec3d centre = s.mesh().position(s.cut.cones.front());
+  std::vector<FaceId> faces;
+  for (FaceId f = 0; f < s.mesh().numFaces(); ++f) {
+    if ((s.mesh().position(s.mesh().triangles[f][0]) - centre).norm() < 10.0 * meanEdge_) faces.push_back(f);
+  }
+  const RegionMesh region = extractRegion(s.mesh(), s.topology(), s.field, s.cut, faces);
+  HatBasisOptions basisOptions;
+  basisOptions.edgeLength = s.options.edgeLength;
+  const HatBasis basis(region.mesh, region.topology, region.field, region.cut, basisOptions);
+  const std::vector<GaussVector> none;
+  ReduceOptions reduceOptions;
+  reduceOptions.translationConstraints = &none;
+  const Reduction reduction = reduceBasis(basis, reduceOptions);
+  std::vector<std::uint8_t> locked(region.mesh.numVertices());
+  std::uint32_t numLocked = 0;
+  for (VertexId v = 0; v < locked.size(); ++v) numLocked += locked[v] = !region.vertexFree[v];
+  ASSERT_GT(numLocked, 0u);
+  const detail::SplineSpace space =
+      detail::buildSplineSpace(region.mesh, basis.cornerDomain(), reduction, locked, 2.0 * meanEdge_);
+  ASSERT_GT(space.numSplines, 0u);
+  EXPECT_GT(space.droppedAtCones, 0u);
+  EXPECT_GT(space.truncatedAtBorder, 0u);
+  // Per corner: its vertex's positional unknown and its domain's unit (row: value x_j + ...).
+  const ReducedMap& P = reduction.map;
+  const auto positional = [&](CornerId c, Complex& unit) {
+    const std::uint32_t d = basis.cornerDomain()[c];
+    for (std::uint64_t k = P.rowStart[d]; k < P.rowStart[d + 1]; ++k) {
+      if (P.column[k] < reduction.numPositional) {
+        unit = P.value[k];
+        return P.column[k];
+      }
+    }
+    return kInvalidId;
+  };
+  const auto entry = [&](std::uint32_t j, std::uint32_t column, Complex& value) {
+    for (std::uint64_t k = space.rowStart[j]; k < space.rowStart[j + 1]; ++k) {
+      if (space.column[k] == column) {
+        value = space.value[k];
+        return true;
+      }
+    }
+    return false;
+  };
+  std::uint64_t checked = 0;
+  for (FaceId f = 0; f < region.mesh.numFaces(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const CornerId a = 3 * f + k, b = 3 * f + (k + 1) % 3;
+      Complex ua, ub;
+      const std::uint32_t ja = positional(a, ua), jb = positional(b, ub);
+      if (ja == kInvalidId || jb == kInvalidId) continue;
+      for (std::uint64_t e = space.rowStart[ja]; e < space.rowStart[ja + 1]; ++e) {
+        Complex vb;
+        if (!entry(jb, space.column[e], vb)) continue;
+        // In the face's chart the column moves both corners by the same rotation.
+        const Complex ra = ua * space.value[e] / std::abs(space.value[e]);
+        const Complex rb = ub * vb / std::abs(vb);
+        EXPECT_LT(std::abs(ra - rb), 1e-12);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100u);
+  // No column moves a locked vertex.
+  std::uint64_t lockedChecked = 0;
+  for (CornerId c = 0; c < 3u * region.mesh.numFaces(); ++c) {
+    Complex u;
+    const std::uint32_t j = positional(c, u);
+    if (!locked[region.mesh.triangles[c / 3][c % 3]] || j == kInvalidId) continue;
+    EXPECT_EQ(space.rowStart[j + 1], space.rowStart[j]);
+    ++lockedChecked;
+  }
+  EXPECT_GT(lockedChecked, 0u);
+  // Cells finer than the mesh: the B-splines are not fewer, the solve is the hat basis'.
+  std::vector<std::uint8_t> own;
+  const RegionSolution fine = solveRegionInSplines(region, regionMap(region, s.hat.cornerUV),
+                                                   regionTranslations(region), s.options.edgeLength,
+                                                   0.1 * meanEdge_, kConeWeightRadius, own);
+  EXPECT_FALSE(fine.inSplines);
+}
+
+TEST_F(SplineRound, RefinementWithASplineRoundStaysSeamlessAndRefinesFewerVertices) {
+  const Scene& s = *scene_;
+  // The hat map smeared around every cone: each of the cones' two-ring neighbours moved halfway
+  // to the cone's value; marked: the faces within 20 edges of a cone.
+  std::vector<FaceId> marked;
+  for (FaceId f = 0; f < s.mesh().numFaces(); ++f) {
+    for (VertexId c : s.cut.cones) {
+      if ((s.mesh().position(s.mesh().triangles[f][0]) - s.mesh().position(c)).norm() < 20.0 * meanEdge_) {
+        marked.push_back(f);
+        break;
+      }
+    }
+  }
+  WedgeMap damaged = s.hat.cornerUV;
+  std::vector<CornerId> corners;
+  std::vector<Vec2d> values;
+  for (VertexId c : s.cut.cones) {
+    s.topology().forEachCornerAround(c, [&](CornerId k) {
+      const FaceId f = cornerFace(k);
+      for (int i = 0; i < 3; ++i) {
+        if (3 * f + i == k) continue;
+        corners.push_back(3 * f + i);
+        values.push_back(0.5 * (s.hat.cornerUV[3 * f + i] + s.hat.cornerUV[k]));
+      }
+    });
+  }
+  damaged.assign(corners, values);
+  RefineOptions options;
+  options.edgeLength = s.options.edgeLength;
+  options.markedFaces = marked;
+  const RefineResult hatOnly = refineNearCones(s.mesh(), s.topology(), s.field, s.cut, damaged, s.hat.translations, options);
+  options.splineSpacing = 4.0 * meanEdge_;
+  options.splineMaxFraction = 0.5;  // 8 cones on 25K vertices: their per-vertex zones weigh more than on a scan
+  const RefineResult spline = refineNearCones(s.mesh(), s.topology(), s.field, s.cut, damaged, s.hat.translations, options);
+  ASSERT_FALSE(spline.stats.rounds.empty());
+  EXPECT_TRUE(spline.stats.rounds.front().spline);
+  EXPECT_GT(spline.stats.splineVertices, 0u);
+  EXPECT_LT(spline.stats.freeVertices, hatOnly.stats.freeVertices);
+  EXPECT_NEAR(spline.stats.splineVertexFraction, double(spline.stats.splineVertices) / s.mesh().numVertices(), 1e-12);
+  for (const RefineResult* r : {&hatOnly, &spline}) {
+    WedgeMap refined = damaged;
+    applyRefinement(*r, refined);
+    EXPECT_TRUE(measureSeams(s.mesh(), s.topology(), s.cut, refined).isSeamless());
+    EXPECT_LT(measureSeamsFromUV(s.mesh(), s.topology(), refined).maxResidual, 1e-6);
+    const MapQuality map = measureMap(s.mesh(), refined, &s.field, s.options.edgeLength);
+    const MapQuality hat = measureMap(s.mesh(), s.hat.cornerUV, &s.field, s.options.edgeLength);
+    EXPECT_LE(map.flipped, hat.flipped);
+    EXPECT_LE(map.collapsed, hat.collapsed);
+    EXPECT_LE(map.relativeGradientError, 1.02 * hat.relativeGradientError);
+  }
+  // The in-place refinement counts the same vertices.
+  WedgeMap inPlace = damaged;
+  std::vector<Complex> t = s.hat.translations;
+  const RefineResult placed = refineNearConesInPlace(s.mesh(), s.topology(), s.field, s.cut, inPlace, t, options);
+  EXPECT_EQ(placed.stats.freeVertices, spline.stats.freeVertices);
+  EXPECT_EQ(placed.stats.splineVertices, spline.stats.splineVertices);
+  WedgeMap whole = damaged;
+  applyRefinement(spline, whole);
+  EXPECT_LT(maxCornerDistance(inPlace, whole), 1e-12);
 }
 
 }  // namespace

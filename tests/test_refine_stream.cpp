@@ -38,9 +38,12 @@ void expectSameStats(const RefineStats& got, const RefineStats& want) {
             std::make_tuple(want.collapsedAfter, want.collapsedAtConesAfter, want.flippedAfter, want.unresolvedFaces));
   EXPECT_EQ(std::make_tuple(got.failedSolves, got.failedSolveReason), std::make_tuple(want.failedSolves, want.failedSolveReason));
   EXPECT_EQ(got.refinedVertexFraction, want.refinedVertexFraction);
+  EXPECT_EQ(std::make_tuple(got.splineVertices, got.splineVertexFraction),
+            std::make_tuple(want.splineVertices, want.splineVertexFraction));
   ASSERT_EQ(got.rounds.size(), want.rounds.size());
   for (std::size_t k = 0; k < want.rounds.size(); ++k) {
     const RefineRound &a = got.rounds[k], &b = want.rounds[k];
+    EXPECT_EQ(a.spline, b.spline) << "round " << k;
     EXPECT_EQ(std::make_tuple(a.seedFaces, a.regionFaces, a.freeVertices, a.unknowns, a.collapsed, a.flipped, a.borderFaces),
               std::make_tuple(b.seedFaces, b.regionFaces, b.freeVertices, b.unknowns, b.collapsed, b.flipped, b.borderFaces))
         << "round " << k;
@@ -76,6 +79,7 @@ struct Case {
   std::uint32_t rings;
   bool damaged = false;
   bool failSome = false;  // every third group's solve fails: it keeps its input map
+  bool spline = false;    // the first round in B-splines, half a voxel apart
 };
 
 // Moves the values of every corner of some vertices far off in both maps (as the refinement's
@@ -104,7 +108,7 @@ void damageMaps(ScratchFolder& folder, const Topology& topology, WedgeMap& map, 
 // faces stay at the region's border and later rounds grow patches around them.
 TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
   const NamedMeshes meshes = testing::stageTestMeshes(31);
-  std::uint64_t solves = 0, laterRounds = 0, outsideCounted = 0, batched = 0, failedSolves = 0;
+  std::uint64_t solves = 0, laterRounds = 0, outsideCounted = 0, batched = 0, failedSolves = 0, splineMoved = 0;
   forEachCleaned(meshes, [&](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
     const testing::StageInputs in = testing::prepareStageInputs(folder, scratch, cleaned, 32, kTinyPass);
     ParamOptions param;
@@ -114,7 +118,8 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
     ScratchVoxelBasis basis = buildScratchVoxelBasis(folder, scratch, in.field, in.cut, in.options, kTinyPass);
     for (const Case& c : {Case{"voxloc", true, 0.1, 1}, Case{"vox", false, 0.1, 1}, Case{"voxloc, no collapses", true, 0.0, 1},
                          Case{"voxloc, no rings", true, 0.1, 0}, Case{"voxloc, damaged map", true, 0.1, 0, true},
-                         Case{"voxloc, failed solves", true, 0.1, 1, false, true}}) {
+                         Case{"voxloc, failed solves", true, 0.1, 1, false, true},
+                         Case{"voxloc, spline round", true, 0.1, 1, false, false, true}}) {
       SCOPED_TRACE(c.name);
       // A fresh Vox map each time: applying changes it.
       ScratchVoxelSolution solved = solveScratchVoxelMap(folder, scratch, in.cut, basis, RoundOptions{}, kTinyPass);
@@ -131,12 +136,17 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
       options.rings = c.rings;
       options.groupFaces = 200;  // several groups solved in parallel, each with its own page caches
       if (c.failSome) options.groupFails = [](FaceId first) { return first % 3 == 0; };
+      if (c.spline) {
+        options.splineSpacing = basis.basis->grid().voxelSize / 2;
+        options.splineMaxFraction = 1.0;  // B-splines wherever they are fewer than the vertices
+      }
       const RefineResult want = refineNearCones(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut,
                                                 inMemoryMap, expected.param.translations, options);
       const RefineResult got = refineScratchNearCones(folder, scratch, in.field, in.cut, solved.map,
                                                       solved.translations, options, kTinyPass);
       expectSameResult(got, want);
       failedSolves += want.stats.failedSolves;
+      splineMoved += want.stats.splineVertices;
       if (c.failSome) EXPECT_NE(want.stats.failedSolveReason.find("test hook"), std::string::npos);
       EXPECT_EQ(want.stats.batches, want.stats.rounds.size());
       batched += got.stats.batches > want.stats.batches;  // several batches a round, each applied at once
@@ -158,6 +168,7 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
   EXPECT_GT(batched, 0u);
   EXPECT_GT(failedSolves, 0u);
   EXPECT_GT(outsideCounted, 0u);
+  EXPECT_GT(splineMoved, 0u);
 }
 
 // Corners given values that split their wedges (part of a wedge, or two values in one wedge):

@@ -54,6 +54,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.solver.gridResolution = parseGridResolution(args);
   const std::int64_t rings = args.integer("rings", o.solver.refine.rings, 0, 64);
   o.solver.refine.rings = static_cast<std::uint32_t>(rings);
+  o.solver.refine.splineCells = static_cast<std::uint32_t>(args.integer("spline-cells", 0, 0, 64));
   c.fieldSource = args.value("field", "auto");
   o.mergeCones = parseMergeCones(args);
   o.spacing = parseGridSpacing(args);
@@ -127,6 +128,11 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(refine.regionFaces),
                 static_cast<unsigned long long>(refine.totalUnknowns), refine.solves, refine.unknowns,
                 refine.freeTranslations, refine.factorBytes / 1048576.0, refine.secondsTotal);
+    if (refine.splineVertices > 0) {
+      std::printf("refined: %u more vertices (%.3f%%) moved only by the first round's B-splines (%llu unknowns)\n",
+                  refine.splineVertices, 100.0 * refine.splineVertexFraction,
+                  static_cast<unsigned long long>(refine.rounds.empty() ? 0 : refine.rounds.front().unknowns));
+    }
     if (refine.failedSolves > 0) {
       std::printf("refined: %u local solves could not be factored and kept the voxel map there (first: %s)\n",
                   refine.failedSolves, refine.failedSolveReason.c_str());
@@ -441,7 +447,7 @@ int runParam(Args& args) {
 
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
-                 "                     [--rings K] [--field auto|smooth|proxy|FILE]\n"
+                 "                     [--rings K] [--spline-cells N] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
                  "                     [--greedy] [--no-untangle] [--weld] [--keep-order] [--report R.json]\n"
                  "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
@@ -462,6 +468,10 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --solver hat        the per-vertex hat basis (exact reference, one global solve)\n"
                  "  --grid N            voxels per axis for vox and voxloc: 64, 128 (default), 256, 512\n"
                  "  --rings K           rings of neighbours added around the voxloc region (default 1)\n"
+                 "  --spline-cells N    voxloc: solve the region first in trilinear B-splines N per\n"
+                 "                      voxel edge (one unknown per vertex only next to cones), then\n"
+                 "                      per vertex only where that leaves faces collapsed or flipped;\n"
+                 "                      fewer refined vertices, slower so far; 0: off (default)\n"
                  "  --field auto        the smoothest cross field: smooth up to 400K faces, proxy above\n"
                  "                      (default)\n"
                  "  --field smooth      the smoothest cross field by one solve over all faces (exact)\n"

@@ -168,6 +168,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   param.seamAdjacencies = static_cast<std::uint32_t>(basis.adjacencies().size());
   param.secondsBasis = secondsSince(start);
   out.basisStats = basis.stats();
+  out.voxelSize = basis.grid().voxelSize;
   if (options.basisBuilt) options.basisBuilt();
 
   start = std::chrono::steady_clock::now();

@@ -72,6 +72,7 @@ struct VoxelParamResult {
   std::uint64_t islandFaces = 0;
   std::vector<FaceId> islands;  ///< those faces (increasing): marked, and counted apart by the refinement
   VoxelBasisStats basisStats;
+  double voxelSize = 0.0;  ///< edge of a voxel in mesh units
   std::uint32_t determinedBasis = 0, inconsistentBasis = 0;
   /// Normal-derivative regularization the solve succeeded with (VoxelBasisOptions), and how many
   /// factorizations failed before (nearly dependent B-splines on coarse or thin regions).

@@ -174,15 +174,19 @@ inline std::vector<std::size_t> groupBatches(const std::vector<std::vector<FaceI
 }
 
 /// A region's solved corners under whole-mesh ids, in increasing corner order, from `out` on.
-void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, SolvedCorner* out);
+/// ownUnknown (solved in B-splines; per region vertex): a free vertex without its own unknown is
+/// marked spline.
+void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, SolvedCorner* out,
+                        const std::vector<std::uint8_t>* ownUnknown);
 /// Records solved corners (sorted by corner) in `current` (sorted; these values replace older
 /// ones, a corner stays free once freed), merging within its spare capacity where it suffices.
 void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& current);
 /// Measures a solved region into figures; returns its bad faces touching a locked vertex (whole-
 /// mesh ids: they seed the next round). collapsedAtBorder: one of them is below the threshold
-/// but not flipped.
+/// but not flipped. everyBadFace (solved in B-splines): every bad face seeds, locked vertex or not.
 std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSolution& solved, double h,
-                                        double collapseThreshold, RefineRound& figures, bool& collapsedAtBorder);
+                                        double collapseThreshold, RefineRound& figures, bool& collapsedAtBorder,
+                                        bool everyBadFace = false);
 /// stats takes the system figures of the largest solve.
 void keepLargestSolve(const RefineStats& largest, RefineStats& stats);
 /// The seams whose translation changed (currentT against seamT) into out.
@@ -196,10 +200,14 @@ void collectChangedSeams(const std::vector<std::complex<double>>& currentT,
 /// corners: batch by batch gives the map that one batch of all the groups gives. Returns the bad faces touching a
 /// locked vertex (the next round's seeds), sorted. `largest` keeps the system figures of the
 /// largest group solved so far; figures sums the groups.
+/// figures.spline: the round solves in the B-splines of options.splineSpacing (with own unknowns
+/// near cones), and returns every bad face (measureSolvedRegion); a group whose solve failed
+/// returns all its faces.
 template <class Source>
 std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces, const RefineOptions& options,
                                std::vector<std::complex<double>>& currentT, RefineRound& figures,
                                bool& collapsedAtBorder, RefineStats& largest, RefineStats& stats) {
+  const bool spline = figures.spline;
   using Complex = std::complex<double>;
   struct GroupResult {
     std::vector<std::pair<std::uint32_t, Complex>> seams;
@@ -232,12 +240,16 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     r.secondsExtract = secondsSince(lap);
     lap = std::chrono::steady_clock::now();
     RegionSolution solved;
+    std::vector<std::uint8_t> ownUnknown;
     if (numFree > 0) {
       try {
         if (options.groupFails && options.groupFails(groupFaces.front())) {
           throw SolverError("refine: group of face " + std::to_string(groupFaces.front()) + " failed (test hook)");
         }
-        solved = solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
+        solved = spline ? solveRegionInSplines(region, regionUV, regionT, h, options.splineSpacing,
+                                               options.coneWeightRadius, ownUnknown, &r.system,
+                                               options.splineMaxFraction)
+                        : solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
       } catch (const SolverError& e) {
         r.failure = e.what();
         r.system = RefineStats();
@@ -250,13 +262,16 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     r.secondsSolve = secondsSince(lap);
     r.unknowns = r.system.unknowns;
     r.solves = r.system.unknowns > 0;
-    writeSolvedCorners(region, solved, out);
+    const bool inSplines = spline && solved.inSplines;
+    writeSolvedCorners(region, solved, out, inSplines ? &ownUnknown : nullptr);
     if (!r.failure.empty()) {
       for (std::size_t k = 0; k < 3 * groupFaces.size(); ++k) out[k].free = false;
       r.figures.freeVertices = 0;
     }
     for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
-    r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder);
+    r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder,
+                                   inSplines);
+    if (spline && !r.failure.empty()) r.border = groupFaces;  // the hat rounds take the group whole
   };
   const std::vector<std::size_t> batches = groupBatches(groups, std::max<std::size_t>(1, source.batchCorners()));
   for (std::size_t b = 0; b + 1 < batches.size(); ++b) {
@@ -393,29 +408,35 @@ class VertexTally {
       if (!s.free) continue;
       const VertexId v = table.vertex(s.corner);
       const std::uint8_t flag = flags_.get(v);
-      if (!(flag & kFreed)) flags_.set(v, flag | kFreed), ++freed_;
+      const std::uint8_t bit = s.spline ? kSpline : kFreed;
+      if (!(flag & bit)) flags_.set(v, flag | bit), ++(s.spline ? spline_ : freed_);
     }
   }
   /// The freed and locked counts (locked: the other vertices of the solved faces) into out.stats.
   template <class Table>
   void collect(Table& table, const std::vector<FaceId>& touched, std::uint64_t numVertices, RefineResult& out) {
     std::uint64_t around = 0;
+    spline_ = 0;
     for (FaceId f : touched) {
       for (int k = 0; k < 3; ++k) {
         const VertexId v = table.vertex(3 * f + k);
         const std::uint8_t flag = flags_.get(v);
-        if (!(flag & kSeen)) flags_.set(v, flag | kSeen), ++around;
+        if (flag & kSeen) continue;
+        flags_.set(v, flag | kSeen), ++around;
+        spline_ += (flag & kSpline) && !(flag & kFreed);
       }
     }
     out.stats.freeVertices = static_cast<std::uint32_t>(freed_);
-    out.stats.lockedVertices = static_cast<std::uint32_t>(around - freed_);
+    out.stats.lockedVertices = static_cast<std::uint32_t>(around - freed_ - spline_);
     out.stats.refinedVertexFraction = numVertices ? double(freed_) / double(numVertices) : 0.0;
+    out.stats.splineVertices = static_cast<std::uint32_t>(spline_);
+    out.stats.splineVertexFraction = numVertices ? double(spline_) / double(numVertices) : 0.0;
   }
 
  private:
-  static constexpr std::uint8_t kFreed = 1, kSeen = 2;
+  static constexpr std::uint8_t kFreed = 1, kSeen = 2, kSpline = 4;
   Flags& flags_;
-  std::uint64_t freed_ = 0;
+  std::uint64_t freed_ = 0, spline_ = 0;
 };
 
 /// The result: the corners of every vertex freed in some solve with their latest values, and the
@@ -428,12 +449,16 @@ void collectRefinement(Table& topology, std::uint32_t numVertices, std::vector<S
   current.erase(std::remove_if(current.begin(), current.end(), [](const SolvedCorner& s) { return !s.free; }),
                 current.end());
   out.corners = std::move(current);
-  std::vector<VertexId> freed;
+  std::vector<VertexId> freed, spline;
   freed.reserve(out.corners.size());
-  for (const SolvedCorner& s : out.corners) freed.push_back(topology.vertex(s.corner));
-  std::sort(freed.begin(), freed.end());
-  freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
+  for (const SolvedCorner& s : out.corners) (s.spline ? spline : freed).push_back(topology.vertex(s.corner));
+  for (std::vector<VertexId>* list : {&freed, &spline}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
   stats.freeVertices = static_cast<std::uint32_t>(freed.size());
+  stats.splineVertices = static_cast<std::uint32_t>(spline.size());
+  stats.splineVertexFraction = numVertices ? double(spline.size()) / numVertices : 0.0;
   std::vector<VertexId> around;  // vertices of every refined face
   around.reserve(3 * touched.size());
   for (FaceId f : touched) {
@@ -441,7 +466,7 @@ void collectRefinement(Table& topology, std::uint32_t numVertices, std::vector<S
   }
   std::sort(around.begin(), around.end());
   around.erase(std::unique(around.begin(), around.end()), around.end());
-  stats.lockedVertices = static_cast<std::uint32_t>(around.size() - freed.size());
+  stats.lockedVertices = static_cast<std::uint32_t>(around.size() - freed.size() - spline.size());
   stats.refinedVertexFraction = numVertices ? double(freed.size()) / numVertices : 0.0;
 }
 
@@ -472,6 +497,7 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
   // every corner solved so far (the latest solve wins), currentT the seams, `touched` every face
   // solved so far (sorted).
   const std::uint32_t maxRounds = std::max(1u, options.maxRounds);
+  const bool splineFirst = options.splineSpacing > 0.0 && maxRounds >= 2 && options.seedFromMap;
   std::uint64_t seeds = stats.markedFaces + stats.collapsedFaces + stats.flippedFaces;
   std::vector<std::complex<double>> currentT = seamT;
   std::vector<FaceId> touched = faces;
@@ -479,6 +505,7 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
   for (std::uint32_t round = 0; !faces.empty(); ++round) {
     const auto roundStart = std::chrono::steady_clock::now();
     RefineRound figures;
+    figures.spline = splineFirst && round == 0;
     figures.seedFaces = seeds;
     figures.regionFaces = faces.size();
     bool collapsedAtBorder = false;  // a border face below the threshold but not flipped
@@ -488,12 +515,19 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
     stats.totalUnknowns = std::max<std::uint64_t>(stats.totalUnknowns, figures.unknowns);
     stats.rounds.push_back(figures);
     reportProgress(options.progress, "refine", double(round + 1) / maxRounds);
+    if (figures.spline) {
+      // The islands are mapped whole in the hat basis (the voxel map left them at 0).
+      std::vector<FaceId> withIslands;
+      std::set_union(border.begin(), border.end(), options.islandFaces.begin(), options.islandFaces.end(),
+                     std::back_inserter(withIslands));
+      border = std::move(withIslands);
+    }
     if (border.empty() || round + 1 >= maxRounds) break;
     // Another solve pays while it removes collapses, or while the border shrinks fast. Flipped
     // faces that stay at the border round after round are the map's own flips near cones (hat has
     // them too); chasing them cost 3 extra solves and 27% of the time of a 22M-face run for 32 of
-    // 8174 flips.
-    if (!collapsedAtBorder && 2 * border.size() > seeds) break;
+    // 8174 flips. After the spline round, the hat round always runs on what it left.
+    if (!figures.spline && !collapsedAtBorder && 2 * border.size() > seeds) break;
     seeds = border.size();
     // Rings double each round: damage that outlasts a round usually spreads further out. The
     // patch is solved on its own, the rest of the map (refined or not) locked around it.

@@ -2,6 +2,7 @@
 
 #include "core/refine/detail_refine.h"
 #include "core/refine/detail_region.h"
+#include "core/refine/spline_space.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -24,6 +25,7 @@
 #include "core/quality/metrics.h"
 #include "core/basis/reduce.h"
 #include "core/solve/assemble.h"
+#include "core/solve/cholmod_solver.h"
 #include "core/solve/seamless_solve.h"
 #include "core/system/memory.h"
 #include "core/system/parallel.h"
@@ -456,6 +458,9 @@ Reduction buildRegionSystem(const RegionProblem& p, const std::vector<std::uint8
   return system;
 }
 
+void evaluateRegion(const RegionProblem& p, const Reduction& system, const std::vector<Complex>& x,
+                    RegionSolution& out);
+
 /// Solves the local system (when it has unknowns), evaluates the map on the region's wedges and
 /// puts the locked corners back exactly as in the input.
 RegionSolution solveRegionSystem(const RegionProblem& p, const Reduction& system, const std::vector<Complex>& seamT,
@@ -478,6 +483,14 @@ RegionSolution solveRegionSystem(const RegionProblem& p, const Reduction& system
     const std::vector<Complex> t = seamTranslations(system, s);
     for (std::uint32_t j = 0; j < p.ns; ++j) out.seamT[j] += t[j];
   }
+  evaluateRegion(p, system, x, out);
+  return out;
+}
+
+/// The map of unknowns x on the region's wedges, with the locked corners put back exactly as in
+/// the input.
+void evaluateRegion(const RegionProblem& p, const Reduction& system, const std::vector<Complex>& x,
+                    RegionSolution& out) {
   out.cornerUV = buildCutWedges(p.region.topology, p.region.cut);
   evaluateMap(p.basis, system, x, out.cornerUV);
   const auto& cornerDomain = p.basis.cornerDomain();
@@ -489,15 +502,79 @@ RegionSolution solveRegionSystem(const RegionProblem& p, const Reduction& system
     lockedUV.push_back(p.cornerUV[c]);  // exactly the input
   }
   out.cornerUV.assign(locked, lockedUV);
+}
+
+/// The positional unknowns of the map as it is: x0_j from the input at a free domain of unknown j
+/// (row: value x_j + offset; the free translations at s = 0).
+std::vector<Complex> inputUnknowns(const RegionProblem& p, const Reduction& system) {
+  const ReducedMap& Q = system.map;
+  std::vector<Complex> x(system.numUnknowns(), 0.0);
+  std::vector<std::uint8_t> seen(system.numPositional, 0);
+  for (std::uint32_t d = 0; d < p.nd; ++d) {
+    if (p.isLocked(d)) continue;
+    for (std::uint64_t k = Q.rowStart[d]; k < Q.rowStart[d + 1]; ++k) {
+      const std::uint32_t j = Q.column[k];
+      if (j >= system.numPositional || seen[j]) continue;
+      seen[j] = 1;
+      x[j] = (p.input(d) - Q.offset[d]) / Q.value[k];
+    }
+  }
+  return x;
+}
+
+/// The spline round's solve (spline_space.h): x = x0 + P c with c minimising the region's hat
+/// energy, P^H K P c = P^H (rhs - K x0). Restricted B-splines can be linearly dependent (a flat
+/// patch inside a cell), so the diagonal gets a relative 1e-9: it picks one of equal-energy
+/// combinations and changes nothing else measurable.
+RegionSolution solveInSplines(const RegionProblem& p, const Reduction& system, const detail::SplineSpace& space,
+                              const std::vector<Complex>& seamT, RefineStats& local) {
+  std::vector<Complex> x = inputUnknowns(p, system);
+  const std::uint32_t np = system.numPositional, m = space.numColumns;
+  if (m > 0) {
+    const LinearSystem ls = assembleSystem(p.basis, system);
+    const ComplexSparse K = ls.lower.selfadjointView<Eigen::Lower>();
+    std::vector<ComplexTriplet> triplets;
+    triplets.reserve(space.column.size());
+    for (std::uint32_t j = 0; j < np; ++j) {
+      for (std::uint64_t k = space.rowStart[j]; k < space.rowStart[j + 1]; ++k) {
+        triplets.emplace_back(static_cast<int>(j), static_cast<int>(space.column[k]), space.value[k]);
+      }
+    }
+    ComplexSparse P(static_cast<int>(np), static_cast<int>(m));
+    P.setFromTriplets(triplets.begin(), triplets.end());
+    ComplexVector x0(np);
+    for (std::uint32_t j = 0; j < np; ++j) x0[j] = x[j];
+    const ComplexSparse PH = P.adjoint();
+    const ComplexSparse A = PH * K * P;
+    const ComplexVector b = PH * (ls.rhs - K * x0);
+    ComplexSparse lower = A.triangularView<Eigen::Lower>();
+    for (int i = 0; i < static_cast<int>(m); ++i) {
+      Complex& diagonal = lower.coeffRef(i, i);
+      diagonal = diagonal.real() > 0.0 ? Complex(diagonal.real() * (1.0 + 1e-9), 0.0) : Complex(1.0, 0.0);
+    }
+    lower.makeCompressed();
+    CholmodFactor factor;
+    factor.factor(lower);
+    const ComplexVector c = factor.solve(b);
+    const ComplexVector dx = P * c;
+    for (std::uint32_t j = 0; j < np; ++j) x[j] += dx[j];
+    local.unknowns = m;
+    local.systemNonzeros = static_cast<std::uint64_t>(lower.nonZeros());
+    local.factorNonzeros = factor.factorNonzeros();
+    local.factorBytes = factor.factorBytes();
+    local.factorPeakBytes = factor.peakBytes();
+  }
+  RegionSolution out;
+  out.seamT = seamT;
+  evaluateRegion(p, system, x, out);
   return out;
 }
 
-}  // namespace
-
-RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
-                           const std::vector<Complex>& seamT, double edgeLength,
-                           RefineStats* stats, const std::vector<double>& faceWeight,
-                           double coneWeightRadius, bool keepTranslations) {
+/// solveRegion, and with spacing > 0 the spline round's solve (solveRegionInSplines).
+RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
+                               double edgeLength, RefineStats* stats, const std::vector<double>& faceWeight,
+                               double coneWeightRadius, bool keepTranslations, double spacing,
+                               std::vector<std::uint8_t>* ownUnknown, double maxColumnFraction) {
   const std::uint32_t rf = region.topology.numFaces();
   const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
   if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
@@ -518,7 +595,7 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
   const RegionProblem problem(region, cornerUV, basis, reduction);
 
   const std::vector<std::uint8_t> freeSeam =
-      keepTranslations ? std::vector<std::uint8_t>(ns, 0) : findFreeSeams(problem);
+      keepTranslations || spacing > 0.0 ? std::vector<std::uint8_t>(ns, 0) : findFreeSeams(problem);
   RegionComponents components = findRegionComponents(problem, freeSeam);
   const FreeTranslations translations = findFreeTranslations(problem, freeSeam, edgeLength);
   const std::vector<Complex> fixedPart = fixedTranslationPart(problem, seamT);
@@ -531,7 +608,22 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
   local.unknowns = system.numUnknowns();
   local.freeTranslations = translations.numS;
 
-  RegionSolution out = solveRegionSystem(problem, system, seamT, local);
+  RegionSolution out;
+  if (spacing > 0.0) {
+    std::vector<std::uint8_t> locked(region.mesh.numVertices());
+    for (VertexId v = 0; v < locked.size(); ++v) locked[v] = !region.vertexFree[v];
+    detail::SplineSpace space = detail::buildSplineSpace(region.mesh, basis.cornerDomain(), system, locked, spacing);
+    if (double(space.numColumns) >= maxColumnFraction * system.numPositional) {
+      // Cells finer than the mesh: the hat solve, as the round would be without B-splines.
+      return solveRegionWith(region, cornerUV, seamT, edgeLength, stats, faceWeight, coneWeightRadius,
+                             keepTranslations, 0.0, nullptr, 0.0);
+    }
+    out = solveInSplines(problem, system, space, seamT, local);
+    out.inSplines = true;
+    if (ownUnknown) *ownUnknown = std::move(space.ownUnknown);
+  } else {
+    out = solveRegionSystem(problem, system, seamT, local);
+  }
   if (stats) {
     stats->unknowns = local.unknowns;
     stats->freeTranslations = local.freeTranslations;
@@ -544,19 +636,41 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
   return out;
 }
 
+}  // namespace
+
+RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
+                           const std::vector<Complex>& seamT, double edgeLength,
+                           RefineStats* stats, const std::vector<double>& faceWeight,
+                           double coneWeightRadius, bool keepTranslations) {
+  return solveRegionWith(region, cornerUV, seamT, edgeLength, stats, faceWeight, coneWeightRadius, keepTranslations,
+                         0.0, nullptr, 0.0);
+}
+
+RegionSolution solveRegionInSplines(const RegionMesh& region, const WedgeMap& cornerUV,
+                                    const std::vector<Complex>& seamT, double edgeLength, double spacing,
+                                    double coneWeightRadius, std::vector<std::uint8_t>& ownUnknown,
+                                    RefineStats* stats, double maxColumnFraction) {
+  if (!(spacing > 0.0)) throw InputError("refine: spline spacing must be positive");
+  return solveRegionWith(region, cornerUV, seamT, edgeLength, stats, {}, coneWeightRadius, false, spacing,
+                         &ownUnknown, maxColumnFraction);
+}
+
 namespace detail {
 
 /// A region's solved corners under whole-mesh ids, in increasing corner order (sub faces follow
 /// the whole mesh's order), written from `out` on.
-void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, SolvedCorner* out) {
+void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, SolvedCorner* out,
+                        const std::vector<std::uint8_t>* ownUnknown) {
   for (CornerId c = 0; c < solved.cornerUV.size(); ++c) {
-    out[c] = {solved.cornerUV[c], 3 * region.faceOrigin[c / 3] + c % 3,
-              region.vertexFree[region.mesh.triangles[c / 3][c % 3]] != 0};
+    const VertexId v = region.mesh.triangles[c / 3][c % 3];
+    const bool free = region.vertexFree[v] != 0;
+    out[c] = {solved.cornerUV[c], 3 * region.faceOrigin[c / 3] + c % 3, free,
+              free && ownUnknown && !(*ownUnknown)[v]};
   }
 }
 
 /// Records solved corners (sorted by corner) in `current` (sorted by corner; these values replace
-/// older ones, a corner stays free once freed). Corners seen before are updated in place and new
+/// older ones, a corner stays free once freed, and hat-freed once a hat round freed it). Corners seen before are updated in place and new
 /// ones merged in within the spare capacity where it suffices: no second copy of `current`,
 /// which holds every corner of a region of millions of faces.
 void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& current) {
@@ -569,7 +683,8 @@ void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& cur
   for (const SolvedCorner& s : fresh) {
     const auto it = std::lower_bound(current.begin(), current.end(), s, byCorner);
     if (it != current.end() && it->corner == s.corner) {
-      *it = {s.uv, s.corner, s.free || it->free};
+      const bool hatFreed = (s.free && !s.spline) || (it->free && !it->spline);
+      *it = {s.uv, s.corner, s.free || it->free, (s.free || it->free) && !hatFreed};
     } else {
       added.push_back(s);
     }
@@ -583,7 +698,8 @@ void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& cur
 /// mesh ids: they seed the next round). collapsedAtBorder: one of them is below the threshold
 /// but not flipped.
 std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSolution& solved, double h,
-                                        double collapseThreshold, RefineRound& figures, bool& collapsedAtBorder) {
+                                        double collapseThreshold, RefineRound& figures, bool& collapsedAtBorder,
+                                        bool everyBadFace) {
   std::vector<std::uint8_t> subCone(region.mesh.numVertices(), 0);
   for (VertexId v : region.cut.cones) subCone[v] = 1;
   FaceCounts inRegion;
@@ -593,8 +709,12 @@ std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSo
   for (std::uint32_t i = 0; i < rf; ++i) {
     const double ratio = parameterAreaRatio(region.mesh, solved.cornerUV, i, h);
     inRegion.add(ratio, [&] { return collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone); });
-    if (std::isnan(ratio) || ratio >= collapseThreshold) continue;
     const Triangle& t = region.mesh.triangles[i];
+    if (std::isnan(ratio) || ratio >= collapseThreshold) continue;
+    if (everyBadFace) {
+      if (!collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone)) border.push_back(region.faceOrigin[i]);
+      continue;
+    }
     const bool locked = !region.vertexFree[t[0]] || !region.vertexFree[t[1]] || !region.vertexFree[t[2]];
     if (locked && !collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone)) {
       border.push_back(region.faceOrigin[i]);

@@ -54,6 +54,19 @@ struct RefineOptions {
   /// Solves at most (>= 1; 1: no re-detection).
   std::uint32_t maxRounds = 6;
   double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
+  /// > 0 (mesh units): the first round solves its region in trilinear B-splines of this spacing
+  /// (spline_space.h), with an unknown per vertex only next to cones, instead of one unknown per
+  /// vertex; the next rounds re-solve in the hat basis the faces it leaves collapsed or flipped,
+  /// with rings around them. 0: every round in the hat basis. Needs maxRounds >= 2 and
+  /// seedFromMap.
+  double splineSpacing = 0.0;
+  /// B-splines per voxel edge for the voxloc solvers, which set splineSpacing to the voxel size
+  /// divided by it; 0: off (the default; bench/RESULTS.md, session 28, has what it costs and
+  /// saves).
+  std::uint32_t splineCells = 0;
+  /// A group of the spline round is solved in the hat basis instead when the B-splines and own
+  /// unknowns are not fewer than this fraction of its free vertices (solveRegionInSplines).
+  double splineMaxFraction = 0.25;
   /// A round's region is solved in groups of whole components of at least this many faces
   /// (splitRegion), in parallel: a group's factor stays near 40 MB at the default.
   std::size_t groupFaces = std::size_t(1) << 15;
@@ -65,6 +78,8 @@ struct RefineOptions {
 
 /// One solve of the (grown) region.
 struct RefineRound {
+  /// Solved in the B-splines of RefineOptions::splineSpacing (unknowns: their coefficients).
+  bool spline = false;
   /// Faces the region grew around: round 0 the input's marked, collapsed and flipped faces; later
   /// rounds the previous round's borderFaces.
   std::uint64_t seedFaces = 0;
@@ -90,6 +105,10 @@ struct RefineStats {
   /// the free vertices off the islands / #V: the refinement near cones and folds.
   std::uint32_t islandVertices = 0;
   double refinedFractionOffIslands = 0.0;
+  /// Vertices only the spline round moved (free there, in no hat round: not in freeVertices),
+  /// and their fraction of #V.
+  std::uint32_t splineVertices = 0;
+  double splineVertexFraction = 0.0;
   /// Each round solves its region in groups of whole components (splitRegion), each on its own.
   std::uint32_t solves = 0;          ///< group solves over all rounds
   /// Batches of groups solved and recorded at once, over all rounds (one per round in memory;
@@ -130,6 +149,7 @@ struct RefinedCorner {
   Vec2d uv = Vec2d::Zero();
   CornerId corner = 0;
   bool free = false;  // 24 bytes with the value first
+  bool spline = false;  ///< free only in the spline round (not a hat-refined vertex)
 };
 
 /// New (u, v) of the corners of the free vertices, sorted by corner. Every other corner keeps the
@@ -187,6 +207,9 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
 struct RegionSolution {
   WedgeMap cornerUV;  ///< on the region's cut wedges
   std::vector<std::complex<double>> seamT;
+  /// solveRegionInSplines solved in the B-splines (false: they were too many, and it solved in
+  /// the hat basis instead).
+  bool inSplines = false;
 };
 
 /// Re-solves the free vertices of a region in the hat basis (DESIGN section 10): locked wedges
@@ -202,6 +225,18 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            RefineStats* stats = nullptr,
                            const std::vector<double>& faceWeight = {}, double coneWeightRadius = 0.0,
                            bool keepTranslations = false);
+
+/// solveRegion with its translations kept, in the trilinear B-splines of the given spacing (mesh
+/// units) sampled at the region's vertices (core/refine/spline_space.h) instead of one unknown per
+/// free vertex: a few coefficients per cell, and near cones, where the B-splines would not keep
+/// the seams, an unknown per vertex (ownUnknown gets those vertices, per region vertex). When its
+/// unknowns are not fewer than maxColumnFraction of the free vertices (cells too fine for the
+/// mesh, or cones too close together), solves as solveRegion does (inSplines false). Throws
+/// SolverError when the factorization fails.
+RegionSolution solveRegionInSplines(const RegionMesh& region, const WedgeMap& cornerUV,
+                                    const std::vector<std::complex<double>>& seamT, double edgeLength,
+                                    double spacing, double coneWeightRadius, std::vector<std::uint8_t>& ownUnknown,
+                                    RefineStats* stats = nullptr, double maxColumnFraction = 0.25);
 
 /// The cut's cones as an increasing list (duplicates dropped). InputError for a cone at or above
 /// numVertices.

@@ -149,6 +149,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     refineOptions.islandFaces = std::move(vox.islands);
     refineOptions.seedFromMap = voxLoc;
     if (!voxLoc) refineOptions.maxRounds = 1;
+    if (voxLoc && refineOptions.splineCells > 0) refineOptions.splineSpacing = vox.voxelSize / refineOptions.splineCells;
     if (!refineOptions.progress) refineOptions.progress = options.progress;
     // The solved corners go into the map a batch at a time (at most 96 MB of them held).
     const RefineResult refinement = refineNearConesInPlace(mesh, topology, field, cut, out.param.cornerUV,
