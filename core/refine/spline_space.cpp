@@ -62,11 +62,6 @@ struct Entry {
   double w;
 };
 
-struct Link {
-  Cell g;
-  VertexId a, b;
-  std::int8_t rel;  // power(rho_b) = power(rho_a) + rel (mod 4)
-};
 
 /// Union-find whose links carry a rotation (power of i, mod 4) from a node to its parent.
 struct RotationSets {
@@ -156,31 +151,36 @@ SplineSpace buildSplineSpace(const TriangleMesh& mesh, const std::vector<std::ui
       if (stencil[v].weight[k] > 0.0) entries.push_back({stencil[v].corner[k], v, stencil[v].weight[k]});
     }
   }
-  std::vector<Link> links;
-  links.reserve(12u * static_cast<std::size_t>(nf));
-  for (FaceId f = 0; f < nf; ++f) {
-    const Triangle& t = mesh.triangles[f];
-    for (int k = 0; k < 3; ++k) {
-      const int l = (k + 1) % 3;
-      const VertexId a = t[k], b = t[l];
-      if (a == b || kind[a] != kFree || kind[b] != kFree) continue;
-      const int rel = ((cornerUnit[3 * f + k] - cornerUnit[3 * f + l]) % 4 + 4) % 4;
-      for (int i = 0; i < 8; ++i) {
-        if (!(stencil[a].weight[i] > 0.0)) continue;
-        for (int j = 0; j < 8; ++j) {
-          if (stencil[b].weight[j] > 0.0 && stencil[a].corner[i] == stencil[b].corner[j]) {
-            links.push_back({stencil[a].corner[i], a, b, static_cast<std::int8_t>(rel)});
-          }
-        }
+  std::vector<Stencil>().swap(stencil);
+  // The chart links along the edges between free vertices, per vertex (both directions; an edge
+  // of two faces twice): power(rho_w) = power(rho_v) + rel.
+  struct Link {
+    VertexId w;
+    std::int8_t rel;
+  };
+  std::vector<std::uint32_t> linkStart(nv + 1, 0);
+  const auto forEachEdge = [&](auto&& visit) {
+    for (FaceId f = 0; f < nf; ++f) {
+      const Triangle& t = mesh.triangles[f];
+      for (int k = 0; k < 3; ++k) {
+        const int l = (k + 1) % 3;
+        if (t[k] == t[l] || kind[t[k]] != kFree || kind[t[l]] != kFree) continue;
+        visit(t[k], t[l], ((cornerUnit[3 * f + k] - cornerUnit[3 * f + l]) % 4 + 4) % 4);
       }
     }
+  };
+  forEachEdge([&](VertexId a, VertexId b, int) { ++linkStart[a + 1], ++linkStart[b + 1]; });
+  for (VertexId v = 0; v < nv; ++v) linkStart[v + 1] += linkStart[v];
+  std::vector<Link> links(linkStart[nv]);
+  {
+    std::vector<std::uint32_t> fill(linkStart.begin(), linkStart.end() - 1);
+    forEachEdge([&](VertexId a, VertexId b, int rel) {
+      links[fill[a]++] = {b, static_cast<std::int8_t>(rel)};
+      links[fill[b]++] = {a, static_cast<std::int8_t>((4 - rel) % 4)};
+    });
   }
-  std::vector<Stencil>().swap(stencil);
   const auto entryLess = [](const Entry& x, const Entry& y) { return x.g != y.g ? x.g < y.g : x.v < y.v; };
   std::sort(entries.begin(), entries.end(), entryLess);
-  std::sort(links.begin(), links.end(), [](const Link& x, const Link& y) {
-    return x.g != y.g ? x.g < y.g : (x.a != y.a ? x.a < y.a : x.b < y.b);
-  });
 
   // Pass 1: per B-spline, dropped (at a cone, at the border) or split into pieces with the
   // unit rho of each entry's vertex relative to its piece.
@@ -191,30 +191,32 @@ SplineSpace buildSplineSpace(const TriangleMesh& mesh, const std::vector<std::ui
   std::uint32_t numPieces = 0;
   RotationSets sets;
   std::vector<std::uint32_t> rootPiece;
-  std::size_t li = 0;
-  for (std::size_t first = 0; first < entries.size();) {
+  // Per vertex, the B-spline (run of entries) it was last seen in and its place there.
+  std::vector<std::uint32_t> seenIn(nv, kInvalidId), seenAt(nv, 0);
+  std::uint32_t run = 0;
+  for (std::size_t first = 0; first < entries.size(); ++run) {
     std::size_t last = first;
     while (last < entries.size() && entries[last].g == entries[first].g) ++last;
-    const Cell g = entries[first].g;
-    while (li < links.size() && links[li].g < g) ++li;
-    std::size_t lastLink = li;
-    while (lastLink < links.size() && links[lastLink].g == g) ++lastLink;
     bool atCone = false, atBorder = false;
     for (std::size_t e = first; e < last; ++e) {
-      atCone = atCone || kind[entries[e].v] == kAtCone;
-      atBorder = atBorder || kind[entries[e].v] == kLocked;
+      const VertexId v = entries[e].v;
+      atCone = atCone || kind[v] == kAtCone;
+      atBorder = atBorder || kind[v] == kLocked;
+      seenIn[v] = run, seenAt[v] = static_cast<std::uint32_t>(e - first);
     }
     space.truncatedAtBorder += atBorder;
     const std::size_t n = last - first;
-    const auto local = [&](VertexId v) {
-      return static_cast<std::uint32_t>(
-          std::lower_bound(entries.begin() + first, entries.begin() + last, Entry{g, v, 0.0}, entryLess) -
-          (entries.begin() + first));
-    };
     if (!atCone) {
       sets.reset(n);
-      for (std::size_t k = li; k < lastLink && !atCone; ++k) {
-        atCone = !sets.unite(local(links[k].a), local(links[k].b), links[k].rel);
+      for (std::size_t e = first; e < last && !atCone; ++e) {
+        const VertexId v = entries[e].v;
+        if (kind[v] != kFree) continue;
+        for (std::uint32_t k = linkStart[v]; k < linkStart[v + 1] && !atCone; ++k) {
+          const VertexId w = links[k].w;
+          if (seenIn[w] == run && w > v) {
+            atCone = !sets.unite(static_cast<std::uint32_t>(e - first), seenAt[w], links[k].rel);
+          }
+        }
       }
     }
     if (atCone) {
@@ -229,7 +231,6 @@ SplineSpace buildSplineSpace(const TriangleMesh& mesh, const std::vector<std::ui
         entryPower[e] = static_cast<std::uint8_t>(power);
       }
     }
-    li = lastLink;
     first = last;
   }
   std::vector<Link>().swap(links);

@@ -44,7 +44,8 @@ struct SplineSpace {
 /// The space over a region's system (`system.map` rows per hat domain, positional unknowns
 /// 0 .. numPositional-1 with at most one entry per row; cornerDomain per corner of `mesh`).
 /// vertexLocked[v]: the region keeps vertex v at its input values. Grid planes at integer
-/// multiples of spacing. Deterministic; cost about 8 entries per vertex and 24 per face.
+/// multiples of spacing. Deterministic; cost: a sort of 8 entries per vertex, and per B-spline the
+/// edges of its vertices (6 chart links per face in all).
 SplineSpace buildSplineSpace(const TriangleMesh& mesh, const std::vector<std::uint32_t>& cornerDomain,
                              const Reduction& system, const std::vector<std::uint8_t>& vertexLocked, double spacing);
 
