@@ -116,7 +116,8 @@ SplineSpace buildSplineSpace(const TriangleMesh& mesh, const std::vector<std::ui
     throw InputError("refine: bad spline space input (spacing " + std::to_string(spacing) + ", " +
                      std::to_string(cornerDomain.size()) + " corner domains for " + std::to_string(nf) + " faces)");
   }
-  // Per corner the power of its domain's unit on the vertex's positional unknown (-1: none).
+  // Per vertex its positional unknown and kind; per corner the power of its domain's unit on that
+  // unknown (-1: none).
   std::vector<std::uint32_t> vertexColumn(nv, kInvalidId);
   std::vector<std::uint8_t> kind(nv, kFree);
   std::vector<std::int8_t> cornerUnit(3u * static_cast<std::size_t>(nf), -1);
@@ -141,17 +142,15 @@ SplineSpace buildSplineSpace(const TriangleMesh& mesh, const std::vector<std::ui
     if (kind[v] == kAtCone) vertexColumn[v] = kInvalidId;
   }
 
-  // Every vertex's B-splines with a positive value there, and the chart links along face edges.
+  // Every vertex's B-splines with a positive value there.
   std::vector<Entry> entries;
   entries.reserve(8u * static_cast<std::size_t>(nv));
-  std::vector<Stencil> stencil(nv);
   for (VertexId v = 0; v < nv; ++v) {
-    stencil[v] = stencilOf(mesh.position(v), spacing);
+    const Stencil stencil = stencilOf(mesh.position(v), spacing);
     for (int k = 0; k < 8; ++k) {
-      if (stencil[v].weight[k] > 0.0) entries.push_back({stencil[v].corner[k], v, stencil[v].weight[k]});
+      if (stencil.weight[k] > 0.0) entries.push_back({stencil.corner[k], v, stencil.weight[k]});
     }
   }
-  std::vector<Stencil>().swap(stencil);
   // The chart links along the edges between free vertices, per vertex (both directions; an edge
   // of two faces twice): power(rho_w) = power(rho_v) + rel.
   struct Link {
