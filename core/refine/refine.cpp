@@ -594,35 +594,38 @@ RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerU
   const Reduction reduction = reduceBasis(basis, reduceOptions);
   const RegionProblem problem(region, cornerUV, basis, reduction);
 
-  const std::vector<std::uint8_t> freeSeam =
-      keepTranslations || spacing > 0.0 ? std::vector<std::uint8_t>(ns, 0) : findFreeSeams(problem);
-  RegionComponents components = findRegionComponents(problem, freeSeam);
-  const FreeTranslations translations = findFreeTranslations(problem, freeSeam, edgeLength);
   const std::vector<Complex> fixedPart = fixedTranslationPart(problem, seamT);
   RefineStats local;
-  std::vector<std::uint8_t> pinned;
-  std::vector<Complex> pinValue;
-  local.pinned = pinFreeComponents(problem, freeSeam, fixedPart, components, pinned, pinValue);
-  const Reduction system =
-      buildRegionSystem(problem, freeSeam, translations, fixedPart, pinned, pinValue, components);
-  local.unknowns = system.numUnknowns();
-  local.freeTranslations = translations.numS;
+  // The local system with the given seams' translations free (the rest fixed to seamT).
+  const auto buildSystem = [&](const std::vector<std::uint8_t>& freeSeam) {
+    RegionComponents components = findRegionComponents(problem, freeSeam);
+    const FreeTranslations translations = findFreeTranslations(problem, freeSeam, edgeLength);
+    std::vector<std::uint8_t> pinned;
+    std::vector<Complex> pinValue;
+    local.pinned = pinFreeComponents(problem, freeSeam, fixedPart, components, pinned, pinValue);
+    Reduction system = buildRegionSystem(problem, freeSeam, translations, fixedPart, pinned, pinValue, components);
+    local.unknowns = system.numUnknowns();
+    local.freeTranslations = translations.numS;
+    return system;
+  };
+  const auto freeSeams = [&] { return keepTranslations ? std::vector<std::uint8_t>(ns, 0) : findFreeSeams(problem); };
 
   RegionSolution out;
   if (spacing > 0.0) {
+    const Reduction system = buildSystem(std::vector<std::uint8_t>(ns, 0));
     std::vector<std::uint8_t> locked(region.mesh.numVertices());
     for (VertexId v = 0; v < locked.size(); ++v) locked[v] = !region.vertexFree[v];
     detail::SplineSpace space = detail::buildSplineSpace(region.mesh, basis.cornerDomain(), system, locked, spacing);
     if (double(space.numColumns) >= maxColumnFraction * system.numPositional) {
       // Cells finer than the mesh: the hat solve, as the round would be without B-splines.
-      return solveRegionWith(region, cornerUV, seamT, edgeLength, stats, faceWeight, coneWeightRadius,
-                             keepTranslations, 0.0, nullptr, 0.0);
+      out = solveRegionSystem(problem, buildSystem(freeSeams()), seamT, local);
+    } else {
+      out = solveInSplines(problem, system, space, seamT, local);
+      out.inSplines = true;
+      if (ownUnknown) *ownUnknown = std::move(space.ownUnknown);
     }
-    out = solveInSplines(problem, system, space, seamT, local);
-    out.inSplines = true;
-    if (ownUnknown) *ownUnknown = std::move(space.ownUnknown);
   } else {
-    out = solveRegionSystem(problem, system, seamT, local);
+    out = solveRegionSystem(problem, buildSystem(freeSeams()), seamT, local);
   }
   if (stats) {
     stats->unknowns = local.unknowns;
