@@ -644,16 +644,20 @@ class ScratchSingularityEdits {
 
 }  // namespace
 
-ConeMergeResult mergeScratchCones(ScratchFolder& folder, const CleanScratch& scratch, ScratchSingularities& singularities,
-                                  const ConeMergeOptions& options, const StreamPassOptions& pass) {
+namespace {
+
+/// A merge on the out-of-core singularities: merge(positionOf, table, edits) changes them through
+/// edits; the changed matchings are written back in place, index4 follows the cones.
+template <class Merge>
+ConeMergeResult editScratchSingularities(ScratchFolder& folder, const CleanScratch& scratch,
+                                         ScratchSingularities& singularities, const StreamPassOptions& pass,
+                                         Merge&& merge) {
   const char* stage = "singularities: merge";
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   PagedCornerTable table(scratch, cacheBytes);
   PagedReader<Vec3f> positions(scratch.positions, cacheBytes);
   ScratchSingularityEdits edits(singularities, cacheBytes);
-  const ConeMergeResult out = detail::mergeCloseConesWith(
-      [&](VertexId v) -> Vec3d { return positions[v].cast<double>(); }, table, edits, singularities.cones,
-      options.maxDistance);
+  const ConeMergeResult out = merge([&](VertexId v) -> Vec3d { return positions[v].cast<double>(); }, table, edits);
   folder.countRead(stage, table.bytesRead() + positions.bytesRead() + edits.bytesRead());
   std::vector<std::pair<CornerId, std::uint8_t>> changed(edits.changed().begin(), edits.changed().end());
   std::sort(changed.begin(), changed.end());
@@ -662,6 +666,27 @@ ConeMergeResult mergeScratchCones(ScratchFolder& folder, const CleanScratch& scr
   singularities.index4.clear();
   for (VertexId v : singularities.cones) singularities.index4.emplace_back(v, edits.index(v));
   return out;
+}
+
+}  // namespace
+
+ConeMergeResult mergeScratchCones(ScratchFolder& folder, const CleanScratch& scratch, ScratchSingularities& singularities,
+                                  const ConeMergeOptions& options, const StreamPassOptions& pass) {
+  return editScratchSingularities(folder, scratch, singularities, pass, [&](auto&& positionOf, auto& table, auto& edits) {
+    return detail::mergeCloseConesWith(positionOf, table, edits, singularities.cones, options.maxDistance);
+  });
+}
+
+ConeMergeResult mergeScratchCoincidentCones(ScratchFolder& folder, const CleanScratch& scratch,
+                                            ScratchSingularities& singularities,
+                                            const std::vector<std::pair<VertexId, VertexId>>& pairs, double maxDistance,
+                                            const StreamPassOptions& pass) {
+  for (const auto& [a, b] : pairs) {
+    if (a >= scratch.numVertices || b >= scratch.numVertices) throw InputError("mergeCoincidentCones: vertex out of range");
+  }
+  return editScratchSingularities(folder, scratch, singularities, pass, [&](auto&& positionOf, auto& table, auto& edits) {
+    return detail::mergeCoincidentConesWith(positionOf, table, edits, singularities.cones, pairs, maxDistance);
+  });
 }
 
 }  // namespace seamvox

@@ -67,4 +67,11 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
 ConeMergeResult mergeScratchCones(ScratchFolder& folder, const CleanScratch& scratch, ScratchSingularities& singularities,
                                   const ConeMergeOptions& options, const StreamPassOptions& pass);
 
+/// mergeCoincidentCones on the out-of-core singularities, as mergeScratchCones: the pairs a
+/// solve put on one point (a later cone pass). InputError for a vertex out of range.
+ConeMergeResult mergeScratchCoincidentCones(ScratchFolder& folder, const CleanScratch& scratch,
+                                            ScratchSingularities& singularities,
+                                            const std::vector<std::pair<VertexId, VertexId>>& pairs, double maxDistance,
+                                            const StreamPassOptions& pass);
+
 }  // namespace seamvox

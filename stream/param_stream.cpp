@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <complex>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"
+#include "stream/cone_pass_stream.h"
 #include "stream/cut_stream.h"
 #include "stream/field_stream.h"
 #include "stream/paged_corner_table.h"
@@ -130,6 +132,66 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
   folder.countRead("metrics", faces.cacheBytesRead() + (smooth ? smooth->bytesRead() : 0));
 }
 
+/// One cone pass's solve through the cut: voxel basis and Vox solve, then the local refinement;
+/// the map and the seams' translations out.
+void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
+                      const StreamParamOptions& options, const StreamPassOptions& pass, StageMeter& meter,
+                      StreamParamResult& r, ScratchMap& map, std::vector<std::complex<double>>& translations) {
+  const double h = r.edgeLength;
+  VoxelBasisOptions basisOptions;
+  basisOptions.gridResolution = options.gridResolution;
+  basisOptions.edgeLength = h;
+  basisOptions.progress = options.progress;
+  const auto islandsStart = std::chrono::steady_clock::now();
+  basisOptions.leftOut = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes);
+  r.islandFaces = basisOptions.leftOut.size();
+  r.passSeconds.emplace_back("basis: islands", secondsSince(islandsStart));
+  RoundOptions round;
+  round.progress = options.progress;
+  VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason);
+  ScratchVoxelSolution& solved = vox.solved;
+  r.solve = solved.stats;
+  r.translationConstraints = solved.translationConstraints;
+  r.determinedBasis = solved.determinedBasis;
+  r.inconsistentBasis = solved.inconsistentBasis;
+  r.failedAttempts = solved.failedAttempts;
+  r.domains = vox.basis.basis->numDomains();
+  r.basisFunctions = vox.basis.basis->numBasisFunctions();
+  r.elements = vox.basis.basis->numElements();
+  r.fragments = vox.basis.numFragments;
+
+  // voxloc refines near cones and wherever the map collapses or flips; vox only where its
+  // reduction left basis functions inconsistent (as parameterizeMeshWithSolver).
+  // The islands are mapped by the local hat solve: every face of theirs seeds it.
+  std::vector<FaceId> seeds = withFaces(
+      scratchSupportFaces(folder, vox.basis, options.voxLoc ? solved.markedBasis : solved.inconsistentBasisFunctions),
+      basisOptions.leftOut);
+  const double voxelSize = vox.basis.basis->grid().voxelSize;
+  for (const ScratchFile* file : {&vox.basis.fragments, &vox.basis.fragmentElement, &vox.basis.faceFragmentStart}) {
+    if (!file->path.empty()) folder.remove(*file);
+  }
+  vox.basis = ScratchVoxelBasis();  // the grid-sized basis, before the local solves
+  r.markedFaces = seeds.size();
+  if (options.voxLoc || !seeds.empty()) {
+    RefineOptions refine = options.refine;
+    refine.edgeLength = h;
+    refine.markedFaces = std::move(seeds);
+    refine.islandFaces = basisOptions.leftOut;
+    refine.seedFromMap = options.voxLoc;
+    if (!options.voxLoc) refine.maxRounds = 1;
+    if (options.voxLoc && refine.splineCells > 0) refine.splineSpacing = voxelSize / refine.splineCells;
+    if (!refine.progress) refine.progress = options.progress;
+    const RefineResult refinement =
+        refineScratchNearCones(folder, scratch, field, cut, solved.map, solved.translations, refine, pass);
+    applyScratchRefinement(folder, refinement, solved.map, &solved.translations, pass);
+    r.refined = true;
+    r.refine = refinement.stats;
+    meter.finish("refine");
+  }
+  map = solved.map;
+  translations = std::move(solved.translations);
+}
+
 }  // namespace
 
 StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folder, const StreamParamOptions& options) {
@@ -176,82 +238,93 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   ConeMergeOptions merge;
   merge.maxDistance = options.mergeCones * h;
   r.merged = mergeScratchCones(folder, scratch, singularities, merge, early);
-  const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, early);
+  const double coincidentDistance = kCoincidentSearchFraction * h;
+  // The cone passes (parameterize's solveConePasses): cut, solve, refine and repair; again with
+  // the cone pairs the map put on one point merged, while there are such pairs. Each pass's
+  // merges go onto the singularities the last pass cut through.
+  ScratchCut cut;
+  ScratchMap map;
+  std::vector<std::complex<double>> translations;
+  for (;;) {
+    ++r.conePasses;
+    cut = cutScratchToDisk(folder, scratch, singularities, early);
+    r.cones = cut.cones;
+    std::sort(r.cones.begin(), r.cones.end());
+    r.coneIndex4.clear();
+    for (VertexId v : r.cones) {
+      const auto it =
+          std::lower_bound(singularities.index4.begin(), singularities.index4.end(), std::make_pair(v, INT32_MIN));
+      r.coneIndex4.push_back(it != singularities.index4.end() && it->first == v ? it->second : 0);
+    }
+    r.seams = static_cast<std::uint32_t>(cut.seams.size());
+    r.components = cut.components;
+    meter.finish("cut");
+    reportProgress(options.progress, "cut", 1.0);
+    solveScratchPass(folder, scratch, field, cut, options, pass, meter, r, map, translations);
+
+    const bool passesLeft = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
+    // Another pass with these pairs merged: this pass's cut and map go.
+    const auto nextPass = [&](const std::vector<std::pair<VertexId, VertexId>>& pairs) {
+      if (pairs.empty()) return false;
+      const ConeMergeResult more =
+          mergeScratchCoincidentCones(folder, scratch, singularities, pairs, coincidentDistance, early);
+      r.merged.cancelledPairs += more.cancelledPairs;
+      r.merged.mergedPairs += more.mergedPairs;
+      r.merged.changedEdges += more.changedEdges;
+      r.merged.longestPath = std::max(r.merged.longestPath, more.longestPath);
+      for (const ScratchFile* file : {&cut.corners, &cut.faceRotation, &map.vertexWedgeStart, &map.cornerWedge, &map.wedgeValues}) {
+        if (!file->path.empty()) folder.remove(*file);
+      }
+      r.refined = false;
+      r.refine = RefineStats();
+      r.untangled = false;
+      r.untangle = UntangleStats();
+      r.untangleWindowFaces = 0;
+      return true;
+    };
+    // Adjacent cones on one point: another pass before any repair (the faces between them collapse).
+    if (passesLeft && nextPass(scratchMergeableCoincidentCones(folder, scratch, singularities, map, 0.0, pass))) continue;
+    if (options.untangle) {
+      UntangleOptions untangle = options.untangleOptions;
+      untangle.edgeLength = h;
+      if (!untangle.progress) untangle.progress = options.progress;
+      // Close cones on one point with flips next to them: repaired first alone; when flips stay
+      // next to them another pass starts before the whole map is repaired.
+      std::uint64_t repairedNearCones = 0;
+      if (passesLeft) {
+        const auto suspects = scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, coincidentDistance, pass);
+        if (!suspects.empty()) {
+          const FacesNearPoints near = facesNearConePairs(scratch, suspects, coincidentDistance, pass);
+          const ScratchUntangleStats local =
+              untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass, &near);
+          repairedNearCones = local.untangle.flippedBefore - local.untangle.flippedAfter;
+          if (nextPass(scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, coincidentDistance, pass))) {
+            continue;
+          }
+        }
+      }
+      const ScratchUntangleStats repaired =
+          untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass);
+      r.untangled = true;
+      r.untangle = repaired.untangle;
+      r.untangle.flippedBefore += repairedNearCones;
+      r.untangleWindowFaces = repaired.windowFaces;
+      meter.finish("untangle");
+      // Close cones on one point with flips left next to them: merging them can move the flips
+      // away, the repair with the cones fixed cannot.
+      if (passesLeft && r.untangle.flippedAfter > 0 &&
+          nextPass(scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, coincidentDistance, pass))) {
+        continue;
+      }
+    }
+    break;
+  }
   folder.remove(singularities.matching);
-  r.cones = cut.cones;
-  std::sort(r.cones.begin(), r.cones.end());
-  for (VertexId v : r.cones) {
-    const auto it = std::lower_bound(singularities.index4.begin(), singularities.index4.end(), std::make_pair(v, INT32_MIN));
-    r.coneIndex4.push_back(it != singularities.index4.end() && it->first == v ? it->second : 0);
-  }
-  r.seams = static_cast<std::uint32_t>(cut.seams.size());
-  r.components = cut.components;
-  meter.finish("cut");
-  reportProgress(options.progress, "cut", 1.0);
+  r.wedges = map.numWedges;
 
-  VoxelBasisOptions basisOptions;
-  basisOptions.gridResolution = options.gridResolution;
-  basisOptions.edgeLength = h;
-  basisOptions.progress = options.progress;
-  const auto islandsStart = std::chrono::steady_clock::now();
-  basisOptions.leftOut = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes);
-  r.islandFaces = basisOptions.leftOut.size();
-  r.passSeconds.emplace_back("basis: islands", secondsSince(islandsStart));
-  RoundOptions round;
-  round.progress = options.progress;
-  VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason);
-  ScratchVoxelSolution& solved = vox.solved;
-  r.solve = solved.stats;
-  r.translationConstraints = solved.translationConstraints;
-  r.determinedBasis = solved.determinedBasis;
-  r.inconsistentBasis = solved.inconsistentBasis;
-  r.failedAttempts = solved.failedAttempts;
-  r.domains = vox.basis.basis->numDomains();
-  r.basisFunctions = vox.basis.basis->numBasisFunctions();
-  r.elements = vox.basis.basis->numElements();
-  r.fragments = vox.basis.numFragments;
-
-  // voxloc refines near cones and wherever the map collapses or flips; vox only where its
-  // reduction left basis functions inconsistent (as parameterizeMeshWithSolver).
-  // The islands are mapped by the local hat solve: every face of theirs seeds it.
-  std::vector<FaceId> seeds = withFaces(
-      scratchSupportFaces(folder, vox.basis, options.voxLoc ? solved.markedBasis : solved.inconsistentBasisFunctions),
-      basisOptions.leftOut);
-  const double voxelSize = vox.basis.basis->grid().voxelSize;
-  vox.basis = ScratchVoxelBasis();  // the grid-sized basis, before the local solves
-  r.markedFaces = seeds.size();
-  if (options.voxLoc || !seeds.empty()) {
-    RefineOptions refine = options.refine;
-    refine.edgeLength = h;
-    refine.markedFaces = std::move(seeds);
-    refine.islandFaces = basisOptions.leftOut;
-    refine.seedFromMap = options.voxLoc;
-    if (!options.voxLoc) refine.maxRounds = 1;
-    if (options.voxLoc && refine.splineCells > 0) refine.splineSpacing = voxelSize / refine.splineCells;
-    if (!refine.progress) refine.progress = options.progress;
-    const RefineResult refinement =
-        refineScratchNearCones(folder, scratch, field, cut, solved.map, solved.translations, refine, pass);
-    applyScratchRefinement(folder, refinement, solved.map, &solved.translations, pass);
-    r.refined = true;
-    r.refine = refinement.stats;
-    meter.finish("refine");
-  }
-  if (options.untangle) {
-    UntangleOptions untangle = options.untangleOptions;
-    untangle.edgeLength = h;
-    if (!untangle.progress) untangle.progress = options.progress;
-    const ScratchUntangleStats repaired =
-        untangleScratchFlips(folder, scratch, field, cut, solved.map, solved.translations, untangle, pass);
-    r.untangled = true;
-    r.untangle = repaired.untangle;
-    r.untangleWindowFaces = repaired.windowFaces;
-    meter.finish("untangle");
-  }
-  r.wedges = solved.map.numWedges;
-
-  options.writeMap(scratch, solved.map);
+  options.writeMap(scratch, map);
   meter.finish("write");
-  measureScratchMap(folder, scratch, field, cut, solved.map, h, pass, r);
+  measureScratchMap(folder, scratch, field, cut, map, h, pass, r);
   meter.finish("metrics");
   return r;
 }

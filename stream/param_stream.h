@@ -3,8 +3,8 @@
 /// scratch files within a memory budget (weld and clean, proxy field, cones, cut, voxel basis, Vox
 /// solve, local refinement, foldover repair in a window around the flips, measures), the map
 /// written chunk by chunk. Each stage equals its in-memory counterpart (the stream_* tests), so the
-/// map is the in-memory pipeline's on the cleaned mesh with the proxy field and one cone pass
-/// (further passes are not built out of core).
+/// map is the in-memory pipeline's on the cleaned mesh with the proxy field, its cone passes
+/// included.
 #include <complex>
 #include <cstdint>
 #include <functional>
@@ -37,6 +37,9 @@ struct StreamParamOptions {
   bool weld = false;  ///< join vertices at exactly equal positions (CleanOptions::weldVertices)
   GridSpacing spacing;
   double mergeCones = kConeMergeFraction;  ///< in grid spacings (PipelineOptions::mergeCones)
+  /// Cone passes at most (PipelineOptions::maxConePasses): a later pass merges the cone pairs the
+  /// map put on one point; none without merging.
+  std::uint32_t maxConePasses = 3;
   std::int32_t gridResolution = 128;
   /// voxloc: refine near cones and wherever the map collapses or flips; vox: only the faces of
   /// basis functions the reduction left inconsistent (one round).
@@ -60,7 +63,8 @@ struct StreamParamResult {
   double diagonal = 0.0, edgeLength = 0.0;
   std::uint32_t fieldElements = 0;
   std::uint32_t conesBeforeMerge = 0;
-  ConeMergeResult merged;
+  std::uint32_t conePasses = 0;
+  ConeMergeResult merged;  ///< summed over the passes
   std::vector<VertexId> cones;        ///< of the cleaned mesh, increasing
   std::vector<std::int32_t> coneIndex4;  ///< per cone
   std::uint32_t seams = 0, components = 0;

@@ -20,7 +20,7 @@ namespace {
 /// The faces the map flips (collapsed ones apart, as untangleFlips counts them) and the mean
 /// length of their edges, by one pass over the faces and their corners' wedges.
 std::vector<FaceId> flippedFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map, double h,
-                                 std::size_t cacheBytes, double& meanEdge) {
+                                 std::size_t cacheBytes, const FacesNearPoints* only, double& meanEdge) {
   ScratchMapFaces faces(folder, scratch, map, "untangle", cacheBytes);
   std::vector<FaceId> flipped;
   double edges = 0.0;
@@ -29,7 +29,7 @@ std::vector<FaceId> flippedFaces(ScratchFolder& folder, const CleanScratch& scra
   std::array<Vec3d, 3> p;
   std::array<Vec2d, 3> q;
   while (faces.next(f, t, p, q)) {
-    if (!isFlippedRatio(parameterAreaRatio(p, q, h))) continue;
+    if (!isFlippedRatio(parameterAreaRatio(p, q, h)) || (only && !only->holds(p))) continue;
     flipped.push_back(f);
     for (int k = 0; k < 3; ++k) edges += (p[(k + 1) % 3] - p[k]).norm();
   }
@@ -86,7 +86,7 @@ void alignWindowWithMesh(RegionMesh& w, PagedCornerTable& table) {
 ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                           const ScratchCut& cut, ScratchMap& map,
                                           std::vector<std::complex<double>>& seamT, const UntangleOptions& options,
-                                          const StreamPassOptions& pass) {
+                                          const StreamPassOptions& pass, const FacesNearPoints* only) {
   const double h = options.edgeLength;
   if (!(h > 0.0) || !std::isfinite(h) || options.onlyFaces || options.pinnedVertices) {
     throw InputError("untangle: the out-of-core repair needs a positive edge length and no face or vertex flags");
@@ -98,7 +98,7 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   ScratchUntangleStats out;
   double meanEdge = 0.0;
-  const std::vector<FaceId> flipped = flippedFaces(folder, scratch, map, h, cacheBytes, meanEdge);
+  const std::vector<FaceId> flipped = flippedFaces(folder, scratch, map, h, cacheBytes, only, meanEdge);
   if (flipped.empty()) return out;
 
   // The window: the rings of every patch round (as untangleFlips sizes them: a round's seeds lie
@@ -147,6 +147,15 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
   for (std::size_t v = 0; v < pinned.size(); ++v) pinned[v] = !w.vertexFree[v];
   UntangleOptions local = options;
   local.pinnedVertices = &pinned;
+  std::vector<std::uint8_t> onlyFaces;
+  if (only) {
+    onlyFaces.resize(w.mesh.numFaces());
+    for (FaceId f = 0; f < w.mesh.numFaces(); ++f) {
+      const Triangle& t = w.mesh.triangles[f];
+      onlyFaces[f] = only->holds({w.mesh.position(t[0]), w.mesh.position(t[1]), w.mesh.position(t[2])});
+    }
+    local.onlyFaces = &onlyFaces;
+  }
   local.maxPatchFraction = options.maxPatchFraction * double(scratch.numFaces) / double(window.size());
   out.untangle = untangleFlips(w.mesh, w.topology, w.field, w.cut, uv, windowT, local);
 

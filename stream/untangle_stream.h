@@ -3,6 +3,8 @@
 /// one pass, a window of rings around them paged in (stream/refine_stream's readers) as a mesh of
 /// its own, untangleFlips run there with the window's border pinned (its faces outside keep
 /// their values, so the map stays seamless), and the moved corners written back in place.
+#include <algorithm>
+#include <array>
 #include <complex>
 #include <cstdint>
 #include <vector>
@@ -23,13 +25,25 @@ struct ScratchUntangleStats {
   std::uint32_t windowRings = 0;
 };
 
+/// Faces whose centroid lies within `distance` of one of `points`: the repair near a few cones
+/// before deciding on another cone pass (UntangleOptions::onlyFaces in memory).
+struct FacesNearPoints {
+  std::vector<Vec3d> points;
+  double distance = 0.0;
+  bool holds(const std::array<Vec3d, 3>& p) const {
+    const Vec3d c = (p[0] + p[1] + p[2]) / 3.0;
+    return std::any_of(points.begin(), points.end(), [&](const Vec3d& q) { return (c - q).norm() <= distance; });
+  }
+};
+
 /// Repairs the flips of map (seamT per seam of cut, updated where a seam inside a patch
-/// re-rounded). options.edgeLength is h; options.onlyFaces and pinnedVertices must be unset. The
+/// re-rounded). options.edgeLength is h; options.onlyFaces and pinnedVertices must be unset: with
+/// `only`, only the flipped faces it holds are repaired and counted. The
 /// window holds rings enough for every patch round and the joint step, fewer (halved) when it
 /// would exceed max(8 minPatchFaces, pass.memoryBytes / 1 KiB) faces. Memory: the window.
 ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                           const ScratchCut& cut, ScratchMap& map,
                                           std::vector<std::complex<double>>& seamT, const UntangleOptions& options,
-                                          const StreamPassOptions& pass);
+                                          const StreamPassOptions& pass, const FacesNearPoints* only = nullptr);
 
 }  // namespace seamvox

@@ -228,7 +228,7 @@ PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver sol
   r.seams = s.seams;
   r.conesBeforeMerge = s.conesBeforeMerge;
   r.merged = s.merged;
-  r.conePasses = 1;
+  r.conePasses = s.conePasses;
   SolverResult& solved = r.solved;
   solved.solver = solver;
   solved.solverReason = "out of core, the voxel basis (the hat basis needs the whole mesh in memory)";
@@ -294,6 +294,7 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
   options.weld = c.options.clean.weldVertices;
   options.spacing = c.options.spacing;
   options.mergeCones = c.options.mergeCones;
+  options.maxConePasses = c.options.maxConePasses;
   options.gridResolution = grid;
   const ParamSolver solver = c.options.solver.solver == ParamSolver::Vox ? ParamSolver::Vox : ParamSolver::VoxLoc;
   options.voxLoc = solver == ParamSolver::VoxLoc;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/field/cone_merge.h"
+#include "core/quality/metrics.h"
 
 namespace seamvox::detail {
 
@@ -109,6 +110,94 @@ ConeMergeResult mergeCloseConesWith(PositionOf&& positionOf, Table& table, Singu
     for (VertexId y = gone; y != keep; y = table.vertex(nextCorner(path.back()))) path.push_back(ball.pred.at(y));
     moveIndex(table, s, keep, gone, path, out);
     out.longestPath = std::max(out.longestPath, pair.distance);
+  }
+  cones.erase(std::remove_if(cones.begin(), cones.end(), [&](VertexId v) { return s.index(v) == 0; }), cones.end());
+  return out;
+}
+
+/// coincidentCones on these interfaces; uvOf(c): Vec2d, the map at corner c; cones increasing.
+template <class PositionOf, class Table, class UvOf>
+std::vector<std::pair<VertexId, VertexId>> coincidentConesWith(PositionOf&& positionOf, Table& table, UvOf&& uvOf,
+                                                               const std::vector<VertexId>& cones, double maxDistance) {
+  std::vector<std::pair<VertexId, VertexId>> out;
+  const auto isCone = [&](VertexId v) { return std::binary_search(cones.begin(), cones.end(), v); };
+  // Adjacent pairs: the edge v -> w of face(c), named by prev(c); each undirected edge once (from
+  // its smaller vertex, or from v when the other side is the boundary).
+  for (VertexId v : cones) {
+    table.forEachCornerAround(v, [&](CornerId c) {
+      const CornerId edge = prevCorner(c);
+      const CornerId n = nextCorner(c);
+      const VertexId w = table.vertex(n);
+      if (!isCone(w) || (w < v && table.opposite(edge) != kInvalidId)) return;
+      if ((uvOf(c) - uvOf(n)).norm() <= kCoincidentConeDistance) out.push_back({v, w});
+    });
+  }
+  if (maxDistance > 0.0) {
+    // Cones grouped by the points their wedges map to (the map puts cones on lattice points, far
+    // from the 1e-6 keys' borders), then one bounded search per cone that shares a point: the
+    // work is the cones' wedges plus a ball per such cone, even when a whole unsolved component's
+    // cones sit at (0, 0).
+    struct Image {
+      std::int64_t u, v;
+      VertexId cone;
+      Vec2d q;
+    };
+    std::vector<Image> images;
+    constexpr double kKeyCell = 1e-6;
+    for (VertexId v : cones) {
+      table.forEachCornerAround(v, [&](CornerId c) {
+        const Vec2d q = uvOf(c);
+        images.push_back({std::llround(q.x() / kKeyCell), std::llround(q.y() / kKeyCell), v, q});
+      });
+    }
+    std::sort(images.begin(), images.end(), [](const Image& x, const Image& y) {
+      return x.u != y.u ? x.u < y.u : (x.v != y.v ? x.v < y.v : x.cone < y.cone);
+    });
+    for (std::size_t begin = 0, end = 0; begin < images.size(); begin = end) {
+      while (end < images.size() && images[end].u == images[begin].u && images[end].v == images[begin].v) ++end;
+      if (images[begin].cone == images[end - 1].cone) continue;  // one cone's wedges only
+      for (std::size_t i = begin; i < end; ++i) {
+        if (i > begin && images[i].cone == images[i - 1].cone) continue;
+        const Ball ball = searchBall(positionOf, table, images[i].cone, maxDistance);
+        for (std::size_t j = begin; j < end; ++j) {
+          if (images[j].cone > images[i].cone && ball.distance.count(images[j].cone) &&
+              (images[j].q - images[i].q).norm() <= kCoincidentConeDistance) {
+            out.push_back({images[i].cone, images[j].cone});
+          }
+        }
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+/// mergeCoincidentCones on these interfaces; cones: the cones, increasing, updated. Vertex ids
+/// are checked by the caller.
+template <class PositionOf, class Table, class Singularities>
+ConeMergeResult mergeCoincidentConesWith(PositionOf&& positionOf, Table& table, Singularities& s,
+                                         std::vector<VertexId>& cones,
+                                         const std::vector<std::pair<VertexId, VertexId>>& pairs, double maxDistance) {
+  ConeMergeResult out;
+  for (const auto& [a, b] : pairs) {
+    if (!canMergeCoincident(s.index(a), s.index(b))) continue;
+    const bool keepA = std::abs(s.index(a)) >= std::abs(s.index(b));
+    const VertexId keep = keepA ? a : b, gone = keepA ? b : a;
+    // An adjacent pair is reached whatever maxDistance: through its own edge at worst.
+    double reach = maxDistance;
+    table.forEachCornerAround(keep, [&](CornerId c) {
+      if (table.vertex(nextCorner(c)) == gone && table.opposite(prevCorner(c)) != kInvalidId) {
+        reach = std::max(reach, (positionOf(gone) - positionOf(keep)).norm());
+      }
+    });
+    if (!(reach > 0.0)) continue;
+    const Ball ball = searchBall(positionOf, table, keep, reach, gone);
+    if (!ball.pred.count(gone)) continue;  // farther than reach along interior edges
+    std::vector<CornerId> path;
+    for (VertexId y = gone; y != keep; y = table.vertex(nextCorner(path.back()))) path.push_back(ball.pred.at(y));
+    moveIndex(table, s, keep, gone, path, out);
+    out.longestPath = std::max(out.longestPath, ball.distance.at(gone));
   }
   cones.erase(std::remove_if(cones.begin(), cones.end(), [&](VertexId v) { return s.index(v) == 0; }), cones.end());
   return out;
