@@ -10,6 +10,16 @@
 
 namespace seamvox {
 
+namespace {
+
+/// index4 of a vertex of the out-of-core singularities (0: not a cone).
+std::int32_t indexOf(const ScratchSingularities& singularities, VertexId v) {
+  const auto it = std::lower_bound(singularities.index4.begin(), singularities.index4.end(), std::make_pair(v, INT32_MIN));
+  return it != singularities.index4.end() && it->first == v ? it->second : 0;
+}
+
+}  // namespace
+
 std::vector<std::pair<VertexId, VertexId>> scratchMergeableCoincidentCones(ScratchFolder& folder,
                                                                            const CleanScratch& scratch,
                                                                            const ScratchSingularities& singularities,
@@ -24,13 +34,9 @@ std::vector<std::pair<VertexId, VertexId>> scratchMergeableCoincidentCones(Scrat
                                                  table, [&](CornerId c) { return values[cornerWedge[c]]; },
                                                  singularities.cones, maxDistance);
   folder.countRead("cone passes", table.bytesRead() + positions.bytesRead() + cornerWedge.bytesRead() + values.bytesRead());
-  const auto indexOf = [&](VertexId v) {
-    const auto it = std::lower_bound(singularities.index4.begin(), singularities.index4.end(), std::make_pair(v, INT32_MIN));
-    return it != singularities.index4.end() && it->first == v ? it->second : 0;
-  };
   std::vector<std::pair<VertexId, VertexId>> out;
   for (const auto& [a, b] : pairs) {
-    if (canMergeCoincident(indexOf(a), indexOf(b))) out.push_back({a, b});
+    if (canMergeCoincident(indexOf(singularities, a), indexOf(singularities, b))) out.push_back({a, b});
   }
   return out;
 }
@@ -47,14 +53,17 @@ FacesNearPoints facesNearConePairs(const CleanScratch& scratch, const std::vecto
   return near;
 }
 
-std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchFolder& folder, const CleanScratch& scratch,
-                                                                        const ScratchSingularities& singularities,
-                                                                        const ScratchMap& map, double h,
-                                                                        double maxDistance, const StreamPassOptions& pass) {
-  const auto candidates = scratchMergeableCoincidentCones(folder, scratch, singularities, map, maxDistance, pass);
+namespace {
+
+/// Of candidates, those with a face the map flips whose centroid lies within maxDistance of one
+/// of their cones (withBoth: of each), by one pass over the faces (none without candidates).
+std::vector<std::pair<VertexId, VertexId>> withFlipsNear(ScratchFolder& folder, const CleanScratch& scratch,
+                                                         const ScratchMap& map,
+                                                         const std::vector<std::pair<VertexId, VertexId>>& candidates,
+                                                         double h, double maxDistance, bool withBoth,
+                                                         const StreamPassOptions& pass) {
   if (candidates.empty()) return {};
   const FacesNearPoints near = facesNearConePairs(scratch, candidates, maxDistance, pass);
-  // The flipped faces' centroids among the faces near the candidates, by one pass over the faces.
   std::vector<Vec3d> centroids;
   {
     ScratchMapFaces faces(folder, scratch, map, "cone passes", pageCacheBytes(pass.memoryBytes));
@@ -72,8 +81,45 @@ std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchF
   };
   std::vector<std::pair<VertexId, VertexId>> pairs;
   for (std::size_t k = 0; k < candidates.size(); ++k) {
-    if (nearFlip(near.points[2 * k]) || nearFlip(near.points[2 * k + 1])) pairs.push_back(candidates[k]);
+    const bool a = nearFlip(near.points[2 * k]), b = nearFlip(near.points[2 * k + 1]);
+    if (withBoth ? a && b : a || b) pairs.push_back(candidates[k]);
   }
+  return pairs;
+}
+
+}  // namespace
+
+std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchFolder& folder, const CleanScratch& scratch,
+                                                                        const ScratchSingularities& singularities,
+                                                                        const ScratchMap& map, double h,
+                                                                        double maxDistance, const StreamPassOptions& pass) {
+  return withFlipsNear(folder, scratch, map,
+                       scratchMergeableCoincidentCones(folder, scratch, singularities, map, maxDistance, pass), h,
+                       maxDistance, false, pass);
+}
+
+std::vector<std::pair<VertexId, VertexId>> scratchFoldedConesAfterRepair(ScratchFolder& folder,
+                                                                         const CleanScratch& scratch,
+                                                                         const ScratchSingularities& singularities,
+                                                                         const ScratchMap& map, double h,
+                                                                         double maxDistance,
+                                                                         const StreamPassOptions& pass) {
+  std::vector<std::pair<VertexId, VertexId>> pairs =
+      scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, maxDistance, pass);
+  std::vector<std::pair<VertexId, VertexId>> close;
+  {
+    const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+    PagedCornerTable table(scratch, cacheBytes);
+    PagedReader<Vec3f> positions(scratch.positions, cacheBytes);
+    for (const auto& [a, b] : detail::closeConesWith([&](VertexId v) -> Vec3d { return positions[v].cast<double>(); },
+                                                     table, singularities.cones, maxDistance)) {
+      if (canMergeCoincident(indexOf(singularities, a), indexOf(singularities, b))) close.push_back({a, b});
+    }
+    folder.countRead("cone passes", table.bytesRead() + positions.bytesRead());
+  }
+  for (const auto& pair : withFlipsNear(folder, scratch, map, close, h, maxDistance, true, pass)) pairs.push_back(pair);
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   return pairs;
 }
 

@@ -33,4 +33,14 @@ std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchF
                                                                         const ScratchMap& map, double h,
                                                                         double maxDistance, const StreamPassOptions& pass);
 
+/// After the repair (parameterize's foldedConesAfterRepair): the pairs of
+/// scratchFoldedCoincidentCones, and close cones (within maxDistance along interior edges, on two
+/// points) whose indices may merge with a face still flipped near each of them.
+std::vector<std::pair<VertexId, VertexId>> scratchFoldedConesAfterRepair(ScratchFolder& folder,
+                                                                         const CleanScratch& scratch,
+                                                                         const ScratchSingularities& singularities,
+                                                                         const ScratchMap& map, double h,
+                                                                         double maxDistance,
+                                                                         const StreamPassOptions& pass);
+
 }  // namespace seamvox

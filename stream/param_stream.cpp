@@ -310,10 +310,10 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
       r.untangle.flippedBefore += repairedNearCones;
       r.untangleWindowFaces = repaired.windowFaces;
       meter.finish("untangle");
-      // Close cones on one point with flips left next to them: merging them can move the flips
-      // away, the repair with the cones fixed cannot.
+      // Close cones with flips left next to them: merging them can move the flips away, the
+      // repair with the cones fixed cannot.
       if (passesLeft && r.untangle.flippedAfter > 0 &&
-          nextPass(scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, coincidentDistance, pass))) {
+          nextPass(scratchFoldedConesAfterRepair(folder, scratch, singularities, map, h, coincidentDistance, pass))) {
         continue;
       }
     }

@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <string>
@@ -261,6 +262,55 @@ TEST(ConeMerge, CloseConesOnOnePointAreFoundAndMergedAlongAPath) {
   const ConeMergeResult far = mergeCoincidentCones(s.mesh, s.topology, untouched, {apart}, 0.0);
   EXPECT_EQ(far.mergedPairs + far.cancelledPairs, 0u);
   EXPECT_EQ(untouched.index4, sing.index4);
+}
+
+TEST(ConeMerge, CloseConesAreThePairsWithinReachAlongEdges) {
+  // Close cones whatever the map (the repair's check for cones on two points with flips left
+  // between them): every pair whose shortest path of edges is within reach, found by a search
+  // written here, and on a map that puts everything on one point the same pairs as coincidentCones.
+  const Surface s = testing::makeSurface(testing::torusMesh(30, 12));
+  const CrossField field = testing::randomField(s.mesh, 7);
+  const FieldSingularities sing = computeSingularities(s.mesh, s.topology, field);
+  ASSERT_GT(sing.cones.size(), 4u);
+  double longest = 0.0;
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+    const VertexId x = s.topology.vertex(nextCorner(c)), y = s.topology.vertex(prevCorner(c));
+    longest = std::max(longest, (s.mesh.position(x) - s.mesh.position(y)).norm());
+  }
+  for (const double reach : {0.0, 1.5 * longest, 4.0 * longest}) {
+    SCOPED_TRACE(reach);
+    std::vector<std::pair<VertexId, VertexId>> expected;
+    for (VertexId a : sing.cones) {
+      // Plain Dijkstra over every vertex (the torus is closed: every edge is interior).
+      std::vector<double> d(s.topology.numVertices(), 1e300);
+      std::vector<std::uint8_t> done(s.topology.numVertices(), 0);
+      d[a] = 0.0;
+      for (;;) {
+        VertexId x = kInvalidId;
+        for (VertexId v = 0; v < d.size(); ++v) {
+          if (!done[v] && d[v] <= reach && (x == kInvalidId || d[v] < d[x])) x = v;
+        }
+        if (x == kInvalidId) break;
+        done[x] = 1;
+        s.topology.forEachCornerAround(x, [&](CornerId c) {
+          const VertexId y = s.topology.vertex(nextCorner(c));
+          d[y] = std::min(d[y], d[x] + (s.mesh.position(y) - s.mesh.position(x)).norm());
+        });
+      }
+      for (VertexId b : sing.cones) {
+        if (b > a && done[b]) expected.push_back({a, b});
+      }
+    }
+    std::sort(expected.begin(), expected.end());
+    const auto close = closeCones(s.mesh, s.topology, sing.cones, reach);
+    EXPECT_EQ(close, expected);
+    if (reach > longest) {
+      EXPECT_FALSE(close.empty());
+      const WedgeMap flat =
+          WedgeMap::fromCorners(s.mesh.triangles, std::vector<Vec2d>(s.topology.numCorners(), Vec2d::Zero()));
+      EXPECT_EQ(close, coincidentCones(s.mesh, s.topology, sing.cones, flat, reach));
+    }
+  }
 }
 
 TEST(ConeMerge, ParamLeavesNoCollapsedFacesOnSharedMeshes) {

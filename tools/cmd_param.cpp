@@ -331,7 +331,6 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
       j.key("passSeconds").beginObject();
       for (const auto& [name, seconds] : streamed.passSeconds) j.key(name).value(seconds);
       j.endObject();
-      j.key("notRunOutOfCore").beginArray().value(std::string("further cone passes")).endArray();
     };
     const std::string json = paramReportJson(r, context);
     if (reportFile) {

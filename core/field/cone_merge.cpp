@@ -75,6 +75,13 @@ std::vector<std::pair<VertexId, VertexId>> coincidentCones(const TriangleMesh& m
                                      [&](CornerId c) { return cornerUV[c]; }, sorted, maxDistance);
 }
 
+std::vector<std::pair<VertexId, VertexId>> closeCones(const TriangleMesh& mesh, const Topology& topology,
+                                                      const std::vector<VertexId>& cones, double maxDistance) {
+  std::vector<VertexId> sorted = cones;
+  std::sort(sorted.begin(), sorted.end());
+  return detail::closeConesWith([&](VertexId v) { return mesh.position(v); }, topology, sorted, maxDistance);
+}
+
 ConeMergeResult mergeCoincidentCones(const TriangleMesh& mesh, const Topology& topology,
                                      FieldSingularities& singularities,
                                      const std::vector<std::pair<VertexId, VertexId>>& pairs,

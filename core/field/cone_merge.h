@@ -87,6 +87,11 @@ std::vector<std::pair<VertexId, VertexId>> coincidentCones(const TriangleMesh& m
                                                            const std::vector<VertexId>& cones,
                                                            const WedgeMap& cornerUV, double maxDistance);
 
+/// Cone pairs no farther apart than maxDistance along interior edges, whatever the map. Sorted,
+/// each pair once with a < b.
+std::vector<std::pair<VertexId, VertexId>> closeCones(const TriangleMesh& mesh, const Topology& topology,
+                                                      const std::vector<VertexId>& cones, double maxDistance);
+
 /// Merges the given pairs like mergeCloseCones, along a shortest path of interior edges no longer
 /// than maxDistance (an adjacent pair at least along its edge); skips pairs that are no longer
 /// both cones, are farther apart, or whose sum would exceed kMaxCoincidentIndex4.

@@ -203,4 +203,21 @@ ConeMergeResult mergeCoincidentConesWith(PositionOf&& positionOf, Table& table, 
   return out;
 }
 
+/// Cone pairs (a < b) no farther apart than maxDistance along interior edges, sorted; cones
+/// increasing. One bounded search per cone.
+template <class PositionOf, class Table>
+std::vector<std::pair<VertexId, VertexId>> closeConesWith(PositionOf&& positionOf, Table& table,
+                                                          const std::vector<VertexId>& cones, double maxDistance) {
+  std::vector<std::pair<VertexId, VertexId>> out;
+  if (!(maxDistance > 0.0)) return out;
+  for (VertexId a : cones) {
+    const Ball ball = searchBall(positionOf, table, a, maxDistance);
+    for (const auto& [b, distance] : ball.distance) {
+      if (b > a && std::binary_search(cones.begin(), cones.end(), b)) out.push_back({a, b});
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 }  // namespace seamvox::detail

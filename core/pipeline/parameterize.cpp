@@ -116,15 +116,12 @@ std::vector<std::uint8_t> facesNearCones(const TriangleMesh& mesh,
   return near;
 }
 
-/// Cone pairs the map put on one point within maxDistance of each other along edges
-/// (coincidentCones), mergeable, with a face still flipped within maxDistance of one of them. The
-/// pairs come first (a few cones' wedges): only faces whose centroid lies that close to one of
-/// their cones are measured, and none when there is no pair.
-std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
-    const PipelineResult& r, const std::vector<VertexId>& cones,
-    const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
-  const auto candidates = mergeableCoincidentCones(r.mesh, r.topology, cones, coneIndex,
-                                                   r.solved.param.cornerUV, maxDistance);
+/// Of `candidates`, the pairs with a face the map flips whose centroid lies within maxDistance of
+/// one of their cones (withBoth: of each of them). Only faces whose centroid lies that close to a
+/// candidate's cone are measured, and none when there is no candidate.
+std::vector<std::pair<VertexId, VertexId>> withFlipsNear(const PipelineResult& r,
+                                                         const std::vector<std::pair<VertexId, VertexId>>& candidates,
+                                                         double maxDistance, bool withBoth) {
   if (candidates.empty()) return {};
   const std::vector<std::uint8_t> near = facesNearCones(r.mesh, candidates, maxDistance);
   const WedgeMap& map = r.solved.param.cornerUV;
@@ -146,8 +143,37 @@ std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
   };
   std::vector<std::pair<VertexId, VertexId>> pairs;
   for (const auto& [a, b] : candidates) {
-    if (nearFlip(a) || nearFlip(b)) pairs.push_back({a, b});
+    if (withBoth ? nearFlip(a) && nearFlip(b) : nearFlip(a) || nearFlip(b)) pairs.push_back({a, b});
   }
+  return pairs;
+}
+
+/// Cone pairs the map put on one point within maxDistance of each other along edges
+/// (coincidentCones), mergeable, with a face still flipped within maxDistance of one of them.
+std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
+    const PipelineResult& r, const std::vector<VertexId>& cones,
+    const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
+  return withFlipsNear(
+      r, mergeableCoincidentCones(r.mesh, r.topology, cones, coneIndex, r.solved.param.cornerUV, maxDistance),
+      maxDistance, false);
+}
+
+/// After the repair: the pairs of foldedCoincidentCones, and close cones on two points with faces
+/// still flipped near each of them, whose indices may merge. Rounding puts close cones on lattice
+/// points that may lie the wrong way round (a +1 and a +2 cone, which merging by distance keeps
+/// apart, half a unit apart across the fold), and the repair, which holds cones, cannot unfold
+/// the faces between them; merged, they are one cone.
+std::vector<std::pair<VertexId, VertexId>> foldedConesAfterRepair(
+    const PipelineResult& r, const std::vector<VertexId>& cones,
+    const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
+  std::vector<std::pair<VertexId, VertexId>> pairs = foldedCoincidentCones(r, cones, coneIndex, maxDistance);
+  std::vector<std::pair<VertexId, VertexId>> close;
+  for (const auto& [a, b] : closeCones(r.mesh, r.topology, cones, maxDistance)) {
+    if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b))) close.push_back({a, b});
+  }
+  for (const auto& pair : withFlipsNear(r, close, maxDistance, true)) pairs.push_back(pair);
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   return pairs;
 }
 
@@ -360,11 +386,11 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       r.untangle.flippedBefore += repairedNearCones;
       r.untangled = true;
       meter.finish("untangle");
-      // Close cones on one point with flips left next to them: the repair cannot move them apart
-      // (their seams' translations fix them), merging them can; on a noisy scan most such pairs
-      // are harmless and merging them all costs flips elsewhere, so only these.
+      // Close cones with flips left next to them: the repair cannot move them (their seams'
+      // translations fix them), merging them can; on a noisy scan most such pairs are harmless
+      // and merging them all costs flips elsewhere, so only these.
       if (passesLeft && r.untangle.flippedAfter > 0) {
-        const auto pairs = foldedCoincidentCones(r, coneCut.cut.cones, coneIndex, coincidentDistance);
+        const auto pairs = foldedConesAfterRepair(r, coneCut.cut.cones, coneIndex, coincidentDistance);
         if (!pairs.empty()) {
           coincident.insert(coincident.end(), pairs.begin(), pairs.end());
           r.solved = SolverResult{};

@@ -109,7 +109,8 @@ struct PipelineOptions {
   /// still capped) before the caps are taken off: `param --quads` extracts there, where the
   /// caps close the holes a quad mesh cannot keep open, with no copy of the map to fill them.
   std::function<void(const TriangleMesh& map, const Topology& topology)> withSolvedMap;
-  /// Cut-and-solve passes at most while a solve puts mergeable adjacent cones on one point.
+  /// Cut-and-solve passes at most: another pass while a solve puts mergeable adjacent cones on
+  /// one point, or leaves flips next to close cones after the repair.
   std::uint32_t maxConePasses = 3;
   /// Feature curves at faces the map collapses are released and the map solved again: the
   /// shortest curve per cluster of collapsed faces, at most this many times, then every curve at
