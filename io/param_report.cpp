@@ -201,6 +201,10 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("conesCancelled").value(U64{2 * r.merged.cancelledPairs});
   j.key("conesMerged").value(U64{r.merged.mergedPairs});
   j.key("conePasses").value(U64{r.conePasses});
+  j.key("conePassKept").value(U64{r.conePassKept});
+  j.key("conePassFlips").beginArray();
+  for (const std::uint64_t flips : r.conePassFlips) j.value(U64{flips});
+  j.endArray();
   j.key("seams").value(U64{r.seams});
   j.key("seamEdges").value(r.seamQuality.seamEdges).key("seamLength").value(r.seamQuality.seamLength);
   j.key("wedges").value(U64{r.size.wedges}).key("mapBytes").value(r.size.mapBytes);

@@ -245,6 +245,19 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   ScratchCut cut;
   ScratchMap map;
   std::vector<std::complex<double>> translations;
+  const auto removePass = [&](const ScratchCut& c, const ScratchMap& m) {
+    for (const ScratchFile* file : {&c.corners, &c.faceRotation, &m.vertexWedgeStart, &m.cornerWedge, &m.wedgeValues}) {
+      if (!file->path.empty()) folder.remove(*file);
+    }
+  };
+  // The best pass that started another after its repair (parameterize's KeptPass).
+  struct KeptPass {
+    StreamParamResult r;
+    ScratchCut cut;
+    ScratchMap map;
+    std::vector<std::complex<double>> translations;
+  };
+  std::optional<KeptPass> kept;
   for (;;) {
     ++r.conePasses;
     cut = cutScratchToDisk(folder, scratch, singularities, early);
@@ -263,18 +276,24 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     solveScratchPass(folder, scratch, field, cut, options, pass, meter, r, map, translations);
 
     const bool passesLeft = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
-    // Another pass with these pairs merged: this pass's cut and map go.
-    const auto nextPass = [&](const std::vector<std::pair<VertexId, VertexId>>& pairs) {
+    // Another pass with these pairs merged: this pass's cut and map go, or are kept (afterRepair:
+    // the best such pass so far, in case the next ends with more flips).
+    const auto nextPass = [&](const std::vector<std::pair<VertexId, VertexId>>& pairs, bool afterRepair = false) {
       if (pairs.empty()) return false;
+      if (afterRepair) {
+        if (kept) removePass(kept->cut, kept->map);
+        kept = KeptPass{r, std::move(cut), map, std::move(translations)};
+        cut = ScratchCut();
+      } else {
+        removePass(cut, map);
+      }
+      map = ScratchMap();
       const ConeMergeResult more =
           mergeScratchCoincidentCones(folder, scratch, singularities, pairs, coincidentDistance, early);
       r.merged.cancelledPairs += more.cancelledPairs;
       r.merged.mergedPairs += more.mergedPairs;
       r.merged.changedEdges += more.changedEdges;
       r.merged.longestPath = std::max(r.merged.longestPath, more.longestPath);
-      for (const ScratchFile* file : {&cut.corners, &cut.faceRotation, &map.vertexWedgeStart, &map.cornerWedge, &map.wedgeValues}) {
-        if (!file->path.empty()) folder.remove(*file);
-      }
       r.refined = false;
       r.refine = RefineStats();
       r.untangled = false;
@@ -310,15 +329,35 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
       r.untangle.flippedBefore += repairedNearCones;
       r.untangleWindowFaces = repaired.windowFaces;
       meter.finish("untangle");
+      r.conePassFlips.push_back(r.untangle.flippedAfter);
       // Close cones with flips left next to them: merging them can move the flips away, the
-      // repair with the cones fixed cannot.
-      if (passesLeft && r.untangle.flippedAfter > 0 &&
-          nextPass(scratchFoldedConesAfterRepair(folder, scratch, singularities, map, h, coincidentDistance, pass))) {
+      // repair with the cones fixed cannot; not again after a pass that did not leave fewer.
+      if (passesLeft && r.untangle.flippedAfter > 0 && (!kept || r.untangle.flippedAfter < kept->r.untangle.flippedAfter) &&
+          nextPass(scratchFoldedConesAfterRepair(folder, scratch, singularities, map, h, coincidentDistance, pass),
+                   true)) {
         continue;
       }
     }
     break;
   }
+  r.conePassKept = r.conePasses;
+  if (kept && kept->r.untangle.flippedAfter <= r.untangle.flippedAfter) {
+    removePass(cut, map);
+    const std::uint32_t passes = r.conePasses;
+    std::vector<std::pair<std::string, double>> passSeconds = std::move(r.passSeconds);
+    std::vector<std::uint64_t> passFlips = std::move(r.conePassFlips);
+    r = std::move(kept->r);
+    r.conePassKept = r.conePasses;
+    r.conePasses = passes;
+    r.passSeconds = std::move(passSeconds);
+    r.conePassFlips = std::move(passFlips);
+    cut = std::move(kept->cut);
+    map = kept->map;
+    translations = std::move(kept->translations);
+  } else if (kept) {
+    removePass(kept->cut, kept->map);
+  }
+  kept.reset();
   folder.remove(singularities.matching);
   r.wedges = map.numWedges;
 

@@ -64,7 +64,9 @@ struct StreamParamResult {
   std::uint32_t fieldElements = 0;
   std::uint32_t conesBeforeMerge = 0;
   std::uint32_t conePasses = 0;
-  ConeMergeResult merged;  ///< summed over the passes
+  std::uint32_t conePassKept = 0;  ///< the pass whose map is written (PipelineResult::conePassKept)
+  std::vector<std::uint64_t> conePassFlips;  ///< PipelineResult::conePassFlips
+  ConeMergeResult merged;  ///< of the kept pass
   std::vector<VertexId> cones;        ///< of the cleaned mesh, increasing
   std::vector<std::int32_t> coneIndex4;  ///< per cone
   std::uint32_t seams = 0, components = 0;

@@ -229,6 +229,8 @@ PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver sol
   r.conesBeforeMerge = s.conesBeforeMerge;
   r.merged = s.merged;
   r.conePasses = s.conePasses;
+  r.conePassKept = s.conePassKept;
+  r.conePassFlips = s.conePassFlips;
   SolverResult& solved = r.solved;
   solved.solver = solver;
   solved.solverReason = "out of core, the voxel basis (the hat basis needs the whole mesh in memory)";

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
@@ -314,6 +315,17 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   // memory budget (the field's directions on disk).
   const bool keepSingularities = !options.directionStore && options.mergeCones > 0.0 && options.maxConePasses > 1;
   PackedSingularities fieldSingularities;
+  // The best pass that started another after its repair (flips left next to close cones): a
+  // later pass replaces it only with fewer flips, since the new cut changes seams everywhere.
+  struct KeptPass {
+    SolverResult solved;
+    CutResult cut;
+    std::unordered_map<VertexId, std::int32_t> coneIndex;
+    UntangleStats untangle;
+    ConeMergeResult merged;
+    std::uint32_t pass = 0;
+  };
+  std::optional<KeptPass> kept;
   for (;;) {
     ++r.conePasses;
     if (fieldSingularities.empty()) restoreFramePositions(r.mesh, r.topology, field);
@@ -386,19 +398,32 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       r.untangle.flippedBefore += repairedNearCones;
       r.untangled = true;
       meter.finish("untangle");
+      r.conePassFlips.push_back(r.untangle.flippedAfter);
       // Close cones with flips left next to them: the repair cannot move them (their seams'
       // translations fix them), merging them can; on a noisy scan most such pairs are harmless
-      // and merging them all costs flips elsewhere, so only these.
-      if (passesLeft && r.untangle.flippedAfter > 0) {
+      // and merging them all costs flips elsewhere, so only these. Not again after a pass that
+      // did not leave fewer flips than the best such pass.
+      if (passesLeft && r.untangle.flippedAfter > 0 && (!kept || r.untangle.flippedAfter < kept->untangle.flippedAfter)) {
         const auto pairs = foldedConesAfterRepair(r, coneCut.cut.cones, coneIndex, coincidentDistance);
         if (!pairs.empty()) {
           coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+          kept = KeptPass{std::move(r.solved), std::move(coneCut.cut), std::move(coneIndex), r.untangle, r.merged,
+                          r.conePasses};
           r.solved = SolverResult{};
           r.untangle = UntangleStats{};
           r.untangled = false;
           continue;
         }
       }
+    }
+    r.conePassKept = r.conePasses;
+    if (kept && kept->untangle.flippedAfter <= r.untangle.flippedAfter) {
+      r.solved = std::move(kept->solved);
+      coneCut.cut = std::move(kept->cut);
+      coneIndex = std::move(kept->coneIndex);
+      r.untangle = kept->untangle;
+      r.merged = kept->merged;
+      r.conePassKept = kept->pass;
     }
     r.cones = coneCut.cut.cones;
     std::sort(r.cones.begin(), r.cones.end());

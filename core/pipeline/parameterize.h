@@ -164,12 +164,17 @@ struct PipelineResult {
   std::string fieldMethod;  ///< "direct", "proxy" or "file"
   FieldSolveStats fieldSolve;  ///< the field's factorization (zero for an imported field)
   double edgeLength = 0.0, diagonal = 0.0;
-  std::vector<VertexId> cones;   ///< of the last cut, sorted
+  std::vector<VertexId> cones;   ///< of the kept pass's cut, sorted
   std::vector<std::int32_t> coneIndex4;  ///< index of each cone, quarter turns
-  std::uint32_t seams = 0;       ///< seam curves of the last cut
+  std::uint32_t seams = 0;       ///< seam curves of the kept pass's cut
   std::uint32_t conesBeforeMerge = 0;  ///< of the first pass
-  ConeMergeResult merged;        ///< of the last pass (each merges the field's cones afresh)
+  ConeMergeResult merged;        ///< of the kept pass (each merges the field's cones afresh)
   std::uint32_t conePasses = 0;
+  /// The pass whose map is the result (1-based): a pass started after the repair because flips
+  /// stayed next to close cones is kept only when it ends with fewer flips; else the earlier one.
+  std::uint32_t conePassKept = 0;
+  /// Per pass that ran the whole repair, the faces it left flipped (UntangleStats::flippedAfter).
+  std::vector<std::uint64_t> conePassFlips;
   /// Small holes capped for the field and the solve (PipelineOptions::closeHoles), not in the
   /// output.
   std::uint32_t fieldCappedHoles = 0;
