@@ -56,11 +56,11 @@ FacesNearPoints facesNearConePairs(const CleanScratch& scratch, const std::vecto
 namespace {
 
 /// Of candidates, those with a face the map flips whose centroid lies within maxDistance of one
-/// of their cones (withBoth: of each), by one pass over the faces (none without candidates).
+/// of their cones, by one pass over the faces (none without candidates).
 std::vector<std::pair<VertexId, VertexId>> withFlipsNear(ScratchFolder& folder, const CleanScratch& scratch,
                                                          const ScratchMap& map,
                                                          const std::vector<std::pair<VertexId, VertexId>>& candidates,
-                                                         double h, double maxDistance, bool withBoth,
+                                                         double h, double maxDistance,
                                                          const StreamPassOptions& pass) {
   if (candidates.empty()) return {};
   const FacesNearPoints near = facesNearConePairs(scratch, candidates, maxDistance, pass);
@@ -81,8 +81,7 @@ std::vector<std::pair<VertexId, VertexId>> withFlipsNear(ScratchFolder& folder, 
   };
   std::vector<std::pair<VertexId, VertexId>> pairs;
   for (std::size_t k = 0; k < candidates.size(); ++k) {
-    const bool a = nearFlip(near.points[2 * k]), b = nearFlip(near.points[2 * k + 1]);
-    if (withBoth ? a && b : a || b) pairs.push_back(candidates[k]);
+    if (nearFlip(near.points[2 * k]) || nearFlip(near.points[2 * k + 1])) pairs.push_back(candidates[k]);
   }
   return pairs;
 }
@@ -95,7 +94,7 @@ std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchF
                                                                         double maxDistance, const StreamPassOptions& pass) {
   return withFlipsNear(folder, scratch, map,
                        scratchMergeableCoincidentCones(folder, scratch, singularities, map, maxDistance, pass), h,
-                       maxDistance, false, pass);
+                       maxDistance, pass);
 }
 
 std::vector<std::pair<VertexId, VertexId>> scratchFoldedConesAfterRepair(ScratchFolder& folder,
@@ -106,18 +105,30 @@ std::vector<std::pair<VertexId, VertexId>> scratchFoldedConesAfterRepair(Scratch
                                                                          const StreamPassOptions& pass) {
   std::vector<std::pair<VertexId, VertexId>> pairs =
       scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, maxDistance, pass);
-  std::vector<std::pair<VertexId, VertexId>> close;
   {
     const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
     PagedCornerTable table(scratch, cacheBytes);
+    PagedFacePoints points(scratch, scratch.positions, cacheBytes);
     PagedReader<Vec3f> positions(scratch.positions, cacheBytes);
-    for (const auto& [a, b] : detail::closeConesWith([&](VertexId v) -> Vec3d { return positions[v].cast<double>(); },
-                                                     table, singularities.cones, maxDistance)) {
-      if (canMergeCoincident(indexOf(singularities, a), indexOf(singularities, b))) close.push_back({a, b});
+    PagedReader<std::uint32_t> cornerWedge(map.cornerWedge, cacheBytes);
+    PagedReader<Vec2d> values(map.wedgeValues, cacheBytes);
+    const auto fanFlipped = [&](VertexId v) {
+      bool flipped = false;
+      table.forEachCornerAround(v, [&](CornerId c) {
+        const FaceId f = cornerFace(c);
+        const std::array<Vec2d, 3> q{values[cornerWedge[3 * f]], values[cornerWedge[3 * f + 1]], values[cornerWedge[3 * f + 2]]};
+        flipped |= isFlippedRatio(parameterAreaRatio(points.points(f), q, h));
+      });
+      return flipped;
+    };
+    for (const auto& pair : detail::foldedCloseConesWith(
+             [&](VertexId v) -> Vec3d { return positions[v].cast<double>(); }, table, singularities.cones,
+             [&](VertexId v) { return indexOf(singularities, v); }, fanFlipped, maxDistance)) {
+      pairs.push_back(pair);
     }
-    folder.countRead("cone passes", table.bytesRead() + positions.bytesRead());
+    folder.countRead("cone passes", table.bytesRead() + points.bytesRead() + positions.bytesRead() +
+                                        cornerWedge.bytesRead() + values.bytesRead());
   }
-  for (const auto& pair : withFlipsNear(folder, scratch, map, close, h, maxDistance, true, pass)) pairs.push_back(pair);
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   return pairs;

@@ -35,7 +35,7 @@ std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchF
 
 /// After the repair (parameterize's foldedConesAfterRepair): the pairs of
 /// scratchFoldedCoincidentCones, and close cones (within maxDistance along interior edges, on two
-/// points) whose indices may merge with a face still flipped near each of them.
+/// points) whose indices may merge and whose own fans both hold a flipped face.
 std::vector<std::pair<VertexId, VertexId>> scratchFoldedConesAfterRepair(ScratchFolder& folder,
                                                                          const CleanScratch& scratch,
                                                                          const ScratchSingularities& singularities,

@@ -330,8 +330,8 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
       r.untangleWindowFaces = repaired.windowFaces;
       meter.finish("untangle");
       r.conePassFlips.push_back(r.untangle.flippedAfter);
-      // Close cones with flips left next to them: merging them can move the flips away, the
-      // repair with the cones fixed cannot; not again after a pass that did not leave fewer.
+      // Close cones with flips left at them: merging them can move the flips away, the repair
+      // with the cones fixed cannot; not again after a pass that did not leave fewer.
       if (passesLeft && r.untangle.flippedAfter > 0 && (!kept || r.untangle.flippedAfter < kept->r.untangle.flippedAfter) &&
           nextPass(scratchFoldedConesAfterRepair(folder, scratch, singularities, map, h, coincidentDistance, pass),
                    true)) {

@@ -164,6 +164,33 @@ TEST(Cli, ParamSplineCellsRunsTheSplineRound) {
   run("param " + input + " -o " + dir.path("o.ply") + " --spline-cells -1", 2);
 }
 
+// A noisy scan whose first repair leaves a flipped face at two close cones on two points: the
+// next pass merges them; a pass started so is kept only with fewer flips, and the written map is
+// the pass with the fewest (the report lists each pass's flips after its repair).
+TEST(Cli, ParamRetriesAPassWhoseRepairLeavesFlipsAtCloseCones) {
+  const std::string scan = testing::sharedMesh("cheburashka.off");
+  if (scan.empty()) GTEST_SKIP() << testing::missingSharedMessage("cheburashka.off");
+  TempDir dir;
+  const std::string noisy = dir.path("noisy.ply"), output = dir.path("o.ply"), report = dir.path("r.json");
+  run("subdivide " + scan + " --levels 1 --noise 0.3 -o " + noisy + " --quiet", 0);
+  const std::string out = run("param " + noisy + " -o " + output + " --solver voxloc --merge-cones 0.25 --cells 150" +
+                                  " --quiet --report " + report, 0);
+  EXPECT_TRUE(contains(out, ": seamless")) << out;
+  const std::string check = run("check " + output, 0);
+  EXPECT_TRUE(contains(check, "\nseamless\n") && !contains(check, "NOT seamless")) << check;
+  const Json r = parseJson(testing::readFile(report));
+  const Json* flips = r.find("conePassFlips");
+  ASSERT_TRUE(flips);
+  ASSERT_GE(flips->items.size(), 2u) << "a pass after a repair that left flips";
+  EXPECT_GT(flips->items.front().number, 0.0);
+  double fewest = flips->items.front().number;
+  for (const Json& f : flips->items) fewest = std::min(fewest, f.number);
+  EXPECT_EQ(r.numberAt("untangle.flippedAfter"), fewest);
+  const double kept = r.numberAt("conePassKept");
+  ASSERT_GE(kept, 1.0);
+  ASSERT_LE(kept, r.numberAt("conePasses"));
+}
+
 // param --quads extracts from the map as solved, its small holes still capped: also the pinched
 // ones (two missing faces touching at one vertex, split apart by cleaning), which no fill of the
 // written map closes, so a sphere with such holes gives a closed quad mesh.

@@ -313,6 +313,49 @@ TEST(ConeMerge, CloseConesAreThePairsWithinReachAlongEdges) {
   }
 }
 
+TEST(ConeMerge, FoldedCloseConesAreClosePairsWithFlipsAtBothCones) {
+  // Two cones two edges apart on a flat grid, the map the grid itself (unit cells): the pair is
+  // reported only when a face at each cone is flipped, they are within reach and their indices
+  // may merge.
+  // A +1 and a +2 cone may merge (a +3 cone); two +2 cones may not.
+  for (const double first : {1.0, 2.0}) {
+    SCOPED_TRACE(first);
+    const PairCase c = pairCase(12, 5, 6, 7, 6, first, 2.0);
+    const FieldSingularities sing = computeSingularities(c.s.mesh, c.s.topology, c.field);
+    ASSERT_EQ(sing.index4[c.a], std::int32_t(first));
+    ASSERT_EQ(sing.index4[c.b], 2);
+    const std::vector<VertexId> cones{std::min(c.a, c.b), std::max(c.a, c.b)};
+    const std::vector<std::int32_t> index4{sing.index4[cones[0]], sing.index4[cones[1]]};
+    const bool mergeable = canMergeCoincident(index4[0], index4[1]);
+    EXPECT_EQ(mergeable, first == 1.0);
+    std::vector<Vec2d> values(c.s.topology.numCorners());
+    for (CornerId k = 0; k < values.size(); ++k) {
+      const Vec3d p = c.s.mesh.position(c.s.topology.vertex(k));
+      values[k] = Vec2d(p.x(), p.y());
+    }
+    // Flips one face at v: two of its corners' values swapped.
+    const auto flipAt = [&](std::vector<Vec2d>& q, VertexId v) {
+      const FaceId f = cornerFace(c.s.topology.vertexCorner(v));
+      std::swap(q[3 * f + 1], q[3 * f + 2]);
+    };
+    const auto folded = [&](const std::vector<Vec2d>& q, double reach) {
+      return foldedCloseCones(c.s.mesh, c.s.topology, cones, index4, WedgeMap::fromCorners(c.s.mesh.triangles, q),
+                              1.0, reach);
+    };
+    EXPECT_TRUE(folded(values, 3.0).empty()) << "no flips";
+    std::vector<Vec2d> one = values;
+    flipAt(one, c.a);
+    EXPECT_TRUE(folded(one, 3.0).empty()) << "flips at one cone only";
+    std::vector<Vec2d> both = one;
+    flipAt(both, c.b);
+    const std::pair<VertexId, VertexId> pair{cones[0], cones[1]};
+    using Pairs = std::vector<std::pair<VertexId, VertexId>>;
+    const Pairs expected = mergeable ? Pairs{pair} : Pairs{};
+    EXPECT_EQ(folded(both, 3.0), expected);
+    EXPECT_TRUE(folded(both, 1.5).empty()) << "farther apart than the reach";
+  }
+}
+
 TEST(ConeMerge, ParamLeavesNoCollapsedFacesOnSharedMeshes) {
   // #6: without merging, the hat map of cheburashka collapses faces between coincident cones;
   // with it, neither hat nor voxloc (after refinement) leaves a collapsed face.

@@ -139,9 +139,9 @@ TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
 }
 
 // A real scan whose solve puts two close cones on one point: the second cone pass merges them,
-// out of core as in memory (two scans, at the spacings where it happens). And a noisy scan whose
-// repair leaves flips next to close cones on two points: the next pass merges them and is kept
-// only with fewer flips (the written map's are the fewest of all passes).
+// out of core as in memory (two scans, at the spacings where it happens); and a noisy scan at the
+// default grid, with the repair and the checks after it (the retry of a pass whose repair leaves
+// flips at close cones: test_cli, in memory, where a small scan needs it).
 TEST(ParamStream, LaterConePassesAsInMemory) {
   const std::string scan = testing::sharedMesh("cheburashka.off");
   if (scan.empty()) GTEST_SKIP() << testing::missingSharedMessage("cheburashka.off");
@@ -151,10 +151,9 @@ TEST(ParamStream, LaterConePassesAsInMemory) {
     ASSERT_EQ(testing::runSeamvox("subdivide " + scan + " --levels 2 --noise 0.25 -o " + dir.path("noisy.ply") +
                                       " --quiet", &out), 0) << out;
     const PathRun r = expectPathsAgree(readMesh(dir.path("noisy.ply")), {" --quiet"}, "700M").at(0);
-    ASSERT_GE(r.conePassFlips.size(), 2u);
-    EXPECT_GT(r.conePassFlips.front(), 0.0) << "the first pass leaves flips";
+    EXPECT_TRUE(r.repaired);
+    ASSERT_FALSE(r.conePassFlips.empty());
     EXPECT_EQ(r.flipped, *std::min_element(r.conePassFlips.begin(), r.conePassFlips.end()));
-    EXPECT_EQ(r.flipped, r.conePassFlips.at(std::size_t(r.conePassKept) - 1));
   }
   const std::string path = testing::sharedMesh("fertility.off");
   if (path.empty()) return;

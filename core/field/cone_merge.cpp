@@ -3,6 +3,7 @@
 #include "core/field/detail_cone_merge.h"
 
 #include <algorithm>
+#include <climits>
 #include <cstdlib>
 #include <queue>
 #include <string>
@@ -80,6 +81,33 @@ std::vector<std::pair<VertexId, VertexId>> closeCones(const TriangleMesh& mesh, 
   std::vector<VertexId> sorted = cones;
   std::sort(sorted.begin(), sorted.end());
   return detail::closeConesWith([&](VertexId v) { return mesh.position(v); }, topology, sorted, maxDistance);
+}
+
+std::vector<std::pair<VertexId, VertexId>> foldedCloseCones(const TriangleMesh& mesh, const Topology& topology,
+                                                            const std::vector<VertexId>& cones,
+                                                            const std::vector<std::int32_t>& index4,
+                                                            const WedgeMap& cornerUV, double h, double maxDistance) {
+  if (index4.size() != cones.size() || cornerUV.size() != std::size_t(topology.numCorners())) {
+    throw InputError("foldedCloseCones: " + std::to_string(index4.size()) + " indices for " +
+                     std::to_string(cones.size()) + " cones, a map of " + std::to_string(cornerUV.size()) +
+                     " corners for " + std::to_string(topology.numCorners()));
+  }
+  std::vector<std::pair<VertexId, std::int32_t>> byVertex;
+  for (std::size_t k = 0; k < cones.size(); ++k) byVertex.push_back({cones[k], index4[k]});
+  std::sort(byVertex.begin(), byVertex.end());
+  std::vector<VertexId> sorted;
+  for (const auto& [v, k] : byVertex) sorted.push_back(v);
+  const auto indexOf = [&](VertexId v) {
+    return std::lower_bound(byVertex.begin(), byVertex.end(), std::make_pair(v, INT32_MIN))->second;
+  };
+  const auto fanFlipped = [&](VertexId v) {
+    bool flipped = false;
+    topology.forEachCornerAround(
+        v, [&](CornerId c) { flipped |= isFlippedRatio(parameterAreaRatio(mesh, cornerUV, cornerFace(c), h)); });
+    return flipped;
+  };
+  return detail::foldedCloseConesWith([&](VertexId v) { return mesh.position(v); }, topology, sorted, indexOf,
+                                      fanFlipped, maxDistance);
 }
 
 ConeMergeResult mergeCoincidentCones(const TriangleMesh& mesh, const Topology& topology,

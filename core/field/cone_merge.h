@@ -92,6 +92,17 @@ std::vector<std::pair<VertexId, VertexId>> coincidentCones(const TriangleMesh& m
 std::vector<std::pair<VertexId, VertexId>> closeCones(const TriangleMesh& mesh, const Topology& topology,
                                                       const std::vector<VertexId>& cones, double maxDistance);
 
+/// Close cones on two points that a repair holding the cones cannot unfold: pairs no farther
+/// apart than maxDistance along interior edges whose indices may merge (canMergeCoincident) and
+/// whose fans both hold a face the map flips (isFlippedRatio, h the grid spacing). Rounding puts
+/// close cones on lattice points that may lie the wrong way round (a +1 and a +2 cone, which
+/// merging by distance keeps apart, half a unit apart with the faces between them folded);
+/// merged, they are one cone. index4: per cone, in the order of `cones`. Sorted, a < b.
+std::vector<std::pair<VertexId, VertexId>> foldedCloseCones(const TriangleMesh& mesh, const Topology& topology,
+                                                            const std::vector<VertexId>& cones,
+                                                            const std::vector<std::int32_t>& index4,
+                                                            const WedgeMap& cornerUV, double h, double maxDistance);
+
 /// Merges the given pairs like mergeCloseCones, along a shortest path of interior edges no longer
 /// than maxDistance (an adjacent pair at least along its edge); skips pairs that are no longer
 /// both cones, are farther apart, or whose sum would exceed kMaxCoincidentIndex4.

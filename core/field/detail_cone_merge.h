@@ -220,4 +220,17 @@ std::vector<std::pair<VertexId, VertexId>> closeConesWith(PositionOf&& positionO
   return out;
 }
 
+/// foldedCloseCones on these interfaces: indexOf(v) the cone's index4, fanFlipped(v) whether a
+/// face around v is flipped; cones increasing.
+template <class PositionOf, class Table, class IndexOf, class FanFlipped>
+std::vector<std::pair<VertexId, VertexId>> foldedCloseConesWith(PositionOf&& positionOf, Table& table,
+                                                                const std::vector<VertexId>& cones, IndexOf&& indexOf,
+                                                                FanFlipped&& fanFlipped, double maxDistance) {
+  std::vector<std::pair<VertexId, VertexId>> out;
+  for (const auto& [a, b] : closeConesWith(positionOf, table, cones, maxDistance)) {
+    if (canMergeCoincident(indexOf(a), indexOf(b)) && fanFlipped(a) && fanFlipped(b)) out.push_back({a, b});
+  }
+  return out;
+}
+
 }  // namespace seamvox::detail

@@ -118,11 +118,11 @@ std::vector<std::uint8_t> facesNearCones(const TriangleMesh& mesh,
 }
 
 /// Of `candidates`, the pairs with a face the map flips whose centroid lies within maxDistance of
-/// one of their cones (withBoth: of each of them). Only faces whose centroid lies that close to a
-/// candidate's cone are measured, and none when there is no candidate.
+/// one of their cones. Only faces whose centroid lies that close to a candidate's cone are
+/// measured, and none when there is no candidate.
 std::vector<std::pair<VertexId, VertexId>> withFlipsNear(const PipelineResult& r,
                                                          const std::vector<std::pair<VertexId, VertexId>>& candidates,
-                                                         double maxDistance, bool withBoth) {
+                                                         double maxDistance) {
   if (candidates.empty()) return {};
   const std::vector<std::uint8_t> near = facesNearCones(r.mesh, candidates, maxDistance);
   const WedgeMap& map = r.solved.param.cornerUV;
@@ -144,7 +144,7 @@ std::vector<std::pair<VertexId, VertexId>> withFlipsNear(const PipelineResult& r
   };
   std::vector<std::pair<VertexId, VertexId>> pairs;
   for (const auto& [a, b] : candidates) {
-    if (withBoth ? nearFlip(a) && nearFlip(b) : nearFlip(a) || nearFlip(b)) pairs.push_back({a, b});
+    if (nearFlip(a) || nearFlip(b)) pairs.push_back({a, b});
   }
   return pairs;
 }
@@ -156,23 +156,21 @@ std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
     const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
   return withFlipsNear(
       r, mergeableCoincidentCones(r.mesh, r.topology, cones, coneIndex, r.solved.param.cornerUV, maxDistance),
-      maxDistance, false);
+      maxDistance);
 }
 
-/// After the repair: the pairs of foldedCoincidentCones, and close cones on two points with faces
-/// still flipped near each of them, whose indices may merge. Rounding puts close cones on lattice
-/// points that may lie the wrong way round (a +1 and a +2 cone, which merging by distance keeps
-/// apart, half a unit apart across the fold), and the repair, which holds cones, cannot unfold
-/// the faces between them; merged, they are one cone.
+/// After the repair: the pairs of foldedCoincidentCones and of foldedCloseCones (flipped faces at
+/// both cones, which the repair holds).
 std::vector<std::pair<VertexId, VertexId>> foldedConesAfterRepair(
     const PipelineResult& r, const std::vector<VertexId>& cones,
     const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
   std::vector<std::pair<VertexId, VertexId>> pairs = foldedCoincidentCones(r, cones, coneIndex, maxDistance);
-  std::vector<std::pair<VertexId, VertexId>> close;
-  for (const auto& [a, b] : closeCones(r.mesh, r.topology, cones, maxDistance)) {
-    if (canMergeCoincident(coneIndex.at(a), coneIndex.at(b))) close.push_back({a, b});
+  std::vector<std::int32_t> index4;
+  for (VertexId v : cones) index4.push_back(coneIndex.at(v));
+  for (const auto& pair : foldedCloseCones(r.mesh, r.topology, cones, index4, r.solved.param.cornerUV, r.edgeLength,
+                                           maxDistance)) {
+    pairs.push_back(pair);
   }
-  for (const auto& pair : withFlipsNear(r, close, maxDistance, true)) pairs.push_back(pair);
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   return pairs;
@@ -399,7 +397,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       r.untangled = true;
       meter.finish("untangle");
       r.conePassFlips.push_back(r.untangle.flippedAfter);
-      // Close cones with flips left next to them: the repair cannot move them (their seams'
+      // Close cones with flips left at them: the repair cannot move them (their seams'
       // translations fix them), merging them can; on a noisy scan most such pairs are harmless
       // and merging them all costs flips elsewhere, so only these. Not again after a pass that
       // did not leave fewer flips than the best such pass.

@@ -110,7 +110,7 @@ struct PipelineOptions {
   /// caps close the holes a quad mesh cannot keep open, with no copy of the map to fill them.
   std::function<void(const TriangleMesh& map, const Topology& topology)> withSolvedMap;
   /// Cut-and-solve passes at most: another pass while a solve puts mergeable adjacent cones on
-  /// one point, or leaves flips next to close cones after the repair.
+  /// one point, or leaves flipped faces at both of two close cones after the repair.
   std::uint32_t maxConePasses = 3;
   /// Feature curves at faces the map collapses are released and the map solved again: the
   /// shortest curve per cluster of collapsed faces, at most this many times, then every curve at
@@ -171,7 +171,7 @@ struct PipelineResult {
   ConeMergeResult merged;        ///< of the kept pass (each merges the field's cones afresh)
   std::uint32_t conePasses = 0;
   /// The pass whose map is the result (1-based): a pass started after the repair because flips
-  /// stayed next to close cones is kept only when it ends with fewer flips; else the earlier one.
+  /// stayed at close cones is kept only when it ends with fewer flips; else the earlier one.
   std::uint32_t conePassKept = 0;
   /// Per pass that ran the whole repair, the faces it left flipped (UntangleStats::flippedAfter).
   std::vector<std::uint64_t> conePassFlips;
