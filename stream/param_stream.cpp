@@ -240,8 +240,8 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   r.merged = mergeScratchCones(folder, scratch, singularities, merge, early);
   const double coincidentDistance = kCoincidentSearchFraction * h;
   // The cone passes (parameterize's solveConePasses): cut, solve, refine and repair; again with
-  // the cone pairs the map put on one point merged, while there are such pairs. Each pass's
-  // merges go onto the singularities the last pass cut through.
+  // the cone pairs the map put on one point, or close cones with flips left at them after the
+  // repair, merged. Each pass's merges go onto the singularities the last pass cut through.
   ScratchCut cut;
   ScratchMap map;
   std::vector<std::complex<double>> translations;

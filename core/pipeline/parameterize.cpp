@@ -277,7 +277,8 @@ void uncapForOutput(PipelineResult& r, CrossField& field, CappedHoles& caps) {
 }
 
 /// The cone passes: merge and cut, solve; again with the pairs a solve put on one point merged,
-/// while there are such pairs (at most options.maxConePasses passes).
+/// or close cones with flips left at them after the repair, while there are such pairs (at most
+/// options.maxConePasses passes).
 void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions& options,
                      StageMeter& meter) {
   ParamOptions param;
