@@ -10,16 +10,6 @@
 
 namespace seamvox {
 
-namespace {
-
-/// index4 of a vertex of the out-of-core singularities (0: not a cone).
-std::int32_t indexOf(const ScratchSingularities& singularities, VertexId v) {
-  const auto it = std::lower_bound(singularities.index4.begin(), singularities.index4.end(), std::make_pair(v, INT32_MIN));
-  return it != singularities.index4.end() && it->first == v ? it->second : 0;
-}
-
-}  // namespace
-
 std::vector<std::pair<VertexId, VertexId>> scratchMergeableCoincidentCones(ScratchFolder& folder,
                                                                            const CleanScratch& scratch,
                                                                            const ScratchSingularities& singularities,
@@ -36,7 +26,7 @@ std::vector<std::pair<VertexId, VertexId>> scratchMergeableCoincidentCones(Scrat
   folder.countRead("cone passes", table.bytesRead() + positions.bytesRead() + cornerWedge.bytesRead() + values.bytesRead());
   std::vector<std::pair<VertexId, VertexId>> out;
   for (const auto& [a, b] : pairs) {
-    if (canMergeCoincident(indexOf(singularities, a), indexOf(singularities, b))) out.push_back({a, b});
+    if (canMergeCoincident(coneIndexOf(singularities, a), coneIndexOf(singularities, b))) out.push_back({a, b});
   }
   return out;
 }
@@ -53,17 +43,14 @@ FacesNearPoints facesNearConePairs(const CleanScratch& scratch, const std::vecto
   return near;
 }
 
-namespace {
-
-/// Of candidates, those with a face the map flips whose centroid lies within maxDistance of one
-/// of their cones, by one pass over the faces (none without candidates).
-std::vector<std::pair<VertexId, VertexId>> withFlipsNear(ScratchFolder& folder, const CleanScratch& scratch,
-                                                         const ScratchMap& map,
-                                                         const std::vector<std::pair<VertexId, VertexId>>& candidates,
-                                                         double h, double maxDistance,
-                                                         const StreamPassOptions& pass) {
+std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchFolder& folder, const CleanScratch& scratch,
+                                                                        const ScratchSingularities& singularities,
+                                                                        const ScratchMap& map, double h,
+                                                                        double maxDistance, const StreamPassOptions& pass) {
+  const auto candidates = scratchMergeableCoincidentCones(folder, scratch, singularities, map, maxDistance, pass);
   if (candidates.empty()) return {};
   const FacesNearPoints near = facesNearConePairs(scratch, candidates, maxDistance, pass);
+  // The flipped faces' centroids among the faces near the candidates, by one pass over the faces.
   std::vector<Vec3d> centroids;
   {
     ScratchMapFaces faces(folder, scratch, map, "cone passes", pageCacheBytes(pass.memoryBytes));
@@ -84,17 +71,6 @@ std::vector<std::pair<VertexId, VertexId>> withFlipsNear(ScratchFolder& folder, 
     if (nearFlip(near.points[2 * k]) || nearFlip(near.points[2 * k + 1])) pairs.push_back(candidates[k]);
   }
   return pairs;
-}
-
-}  // namespace
-
-std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchFolder& folder, const CleanScratch& scratch,
-                                                                        const ScratchSingularities& singularities,
-                                                                        const ScratchMap& map, double h,
-                                                                        double maxDistance, const StreamPassOptions& pass) {
-  return withFlipsNear(folder, scratch, map,
-                       scratchMergeableCoincidentCones(folder, scratch, singularities, map, maxDistance, pass), h,
-                       maxDistance, pass);
 }
 
 std::vector<std::pair<VertexId, VertexId>> scratchFoldedConesAfterRepair(ScratchFolder& folder,
@@ -123,7 +99,7 @@ std::vector<std::pair<VertexId, VertexId>> scratchFoldedConesAfterRepair(Scratch
     };
     for (const auto& pair : detail::foldedCloseConesWith(
              [&](VertexId v) -> Vec3d { return positions[v].cast<double>(); }, table, singularities.cones,
-             [&](VertexId v) { return indexOf(singularities, v); }, fanFlipped, maxDistance)) {
+             [&](VertexId v) { return coneIndexOf(singularities, v); }, fanFlipped, maxDistance)) {
       pairs.push_back(pair);
     }
     folder.countRead("cone passes", table.bytesRead() + points.bytesRead() + positions.bytesRead() +

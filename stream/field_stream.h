@@ -2,6 +2,8 @@
 /// The field stage of the out-of-core param, on the cleaned mesh in the scratch folder
 /// (clean_stream): each step equals its in-memory counterpart on readCleanScratch's mesh, and
 /// reads the scratch through page caches (paged_reader) in the faces' Morton order.
+#include <algorithm>
+#include <climits>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -54,6 +56,12 @@ struct ScratchSingularities {
   std::vector<std::pair<VertexId, std::int32_t>> index4, boundaryIndex4;
   std::vector<VertexId> cones;  ///< vertices with index4 != 0, increasing
 };
+
+/// index4 of vertex v in the out-of-core singularities (0: not a cone).
+inline std::int32_t coneIndexOf(const ScratchSingularities& singularities, VertexId v) {
+  const auto it = std::lower_bound(singularities.index4.begin(), singularities.index4.end(), std::make_pair(v, INT32_MIN));
+  return it != singularities.index4.end() && it->first == v ? it->second : 0;
+}
 
 /// Per face its angles (a file of 16 bytes per face, removed at the end), per corner the matching
 /// across its edge, per vertex the index by a walk around its fan: equal to computeSingularities

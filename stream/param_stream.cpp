@@ -264,11 +264,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     r.cones = cut.cones;
     std::sort(r.cones.begin(), r.cones.end());
     r.coneIndex4.clear();
-    for (VertexId v : r.cones) {
-      const auto it =
-          std::lower_bound(singularities.index4.begin(), singularities.index4.end(), std::make_pair(v, INT32_MIN));
-      r.coneIndex4.push_back(it != singularities.index4.end() && it->first == v ? it->second : 0);
-    }
+    for (VertexId v : r.cones) r.coneIndex4.push_back(coneIndexOf(singularities, v));
     r.seams = static_cast<std::uint32_t>(cut.seams.size());
     r.components = cut.components;
     meter.finish("cut");
@@ -288,12 +284,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
         removePass(cut, map);
       }
       map = ScratchMap();
-      const ConeMergeResult more =
-          mergeScratchCoincidentCones(folder, scratch, singularities, pairs, coincidentDistance, early);
-      r.merged.cancelledPairs += more.cancelledPairs;
-      r.merged.mergedPairs += more.mergedPairs;
-      r.merged.changedEdges += more.changedEdges;
-      r.merged.longestPath = std::max(r.merged.longestPath, more.longestPath);
+      r.merged.add(mergeScratchCoincidentCones(folder, scratch, singularities, pairs, coincidentDistance, early));
       r.refined = false;
       r.refine = RefineStats();
       r.untangled = false;

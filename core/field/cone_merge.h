@@ -59,6 +59,14 @@ struct ConeMergeResult {
   /// Vertices reached by the bounded searches (mergeCloseCones): the work done, about the
   /// number of cones times the vertices within maxDistance of one.
   std::uint64_t searchedVertices = 0;
+  /// Adds another merge's figures (the longest path the longer of the two).
+  void add(const ConeMergeResult& other) {
+    cancelledPairs += other.cancelledPairs;
+    mergedPairs += other.mergedPairs;
+    longestPath = longestPath > other.longestPath ? longestPath : other.longestPath;
+    changedEdges += other.changedEdges;
+    searchedVertices += other.searchedVertices;
+  }
 };
 
 /// Greedily, closest pair first, moves the whole index of one cone onto another no farther than

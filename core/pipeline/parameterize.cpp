@@ -66,12 +66,7 @@ ConeCut cutThroughCones(const TriangleMesh& mesh, const Topology& topology, Cros
   ConeMergeOptions mergeOptions;
   mergeOptions.maxDistance = mergeDistance;
   result.merged = mergeCloseCones(mesh, topology, result.singularities, mergeOptions);
-  const ConeMergeResult onePoint =
-      mergeCoincidentCones(mesh, topology, result.singularities, coincident, coincidentDistance);
-  result.merged.cancelledPairs += onePoint.cancelledPairs;
-  result.merged.mergedPairs += onePoint.mergedPairs;
-  result.merged.changedEdges += onePoint.changedEdges;
-  result.merged.longestPath = std::max(result.merged.longestPath, onePoint.longestPath);
+  result.merged.add(mergeCoincidentCones(mesh, topology, result.singularities, coincident, coincidentDistance));
   CutOptions cutOptions;
   cutOptions.progress = progress;
   result.cut = cutToDisk(mesh, topology, field, result.singularities, cutOptions);
@@ -117,12 +112,15 @@ std::vector<std::uint8_t> facesNearCones(const TriangleMesh& mesh,
   return near;
 }
 
-/// Of `candidates`, the pairs with a face the map flips whose centroid lies within maxDistance of
-/// one of their cones. Only faces whose centroid lies that close to a candidate's cone are
-/// measured, and none when there is no candidate.
-std::vector<std::pair<VertexId, VertexId>> withFlipsNear(const PipelineResult& r,
-                                                         const std::vector<std::pair<VertexId, VertexId>>& candidates,
-                                                         double maxDistance) {
+/// Cone pairs the map put on one point within maxDistance of each other along edges
+/// (coincidentCones), mergeable, with a face still flipped within maxDistance of one of them. The
+/// pairs come first (a few cones' wedges): only faces whose centroid lies that close to one of
+/// their cones are measured, and none when there is no pair.
+std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
+    const PipelineResult& r, const std::vector<VertexId>& cones,
+    const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
+  const auto candidates = mergeableCoincidentCones(r.mesh, r.topology, cones, coneIndex,
+                                                   r.solved.param.cornerUV, maxDistance);
   if (candidates.empty()) return {};
   const std::vector<std::uint8_t> near = facesNearCones(r.mesh, candidates, maxDistance);
   const WedgeMap& map = r.solved.param.cornerUV;
@@ -147,16 +145,6 @@ std::vector<std::pair<VertexId, VertexId>> withFlipsNear(const PipelineResult& r
     if (nearFlip(a) || nearFlip(b)) pairs.push_back({a, b});
   }
   return pairs;
-}
-
-/// Cone pairs the map put on one point within maxDistance of each other along edges
-/// (coincidentCones), mergeable, with a face still flipped within maxDistance of one of them.
-std::vector<std::pair<VertexId, VertexId>> foldedCoincidentCones(
-    const PipelineResult& r, const std::vector<VertexId>& cones,
-    const std::unordered_map<VertexId, std::int32_t>& coneIndex, double maxDistance) {
-  return withFlipsNear(
-      r, mergeableCoincidentCones(r.mesh, r.topology, cones, coneIndex, r.solved.param.cornerUV, maxDistance),
-      maxDistance);
 }
 
 /// After the repair: the pairs of foldedCoincidentCones and of foldedCloseCones (flipped faces at
