@@ -2,15 +2,11 @@
 /// External sort of fixed-size records: records are buffered up to a memory limit, each full
 /// buffer is sorted and written to the scratch folder as a run, and the runs are merged k ways
 /// (in several rounds when there are more runs than the limit holds read buffers) into a stream
-/// read with next(). Input that fits the limit never touches the disk. After the first run the
-/// buffer is two halves: one is sorted and written on a thread of its own while the caller fills
-/// the other. Memory: about the limit.
+/// read with next(). Input that fits the limit never touches the disk. Memory: about the limit.
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
-#include <future>
 #include <memory>
-#include <system_error>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -105,13 +101,11 @@ class ExternalSorter {
   }
   /// Ends the input; next() then returns the records in order.
   void finish() {
-    settleSpill();
     tbb::parallel_sort(buffer_.begin(), buffer_.end(), Less{});
     onDisk_ = merge_.runs() > 0;
     if (onDisk_) {
       if (!buffer_.empty()) merge_.writeRun(buffer_.data(), buffer_.size());
       std::vector<Record>().swap(buffer_);
-      std::vector<Record>().swap(spilling_);
       merge_.startMerge();
     }
   }
@@ -132,43 +126,18 @@ class ExternalSorter {
     std::memcpy(&y, b, sizeof(Record));
     return Less{}(x, y);
   }
-  void sortAndWrite(std::vector<Record>& records) {
-    tbb::parallel_sort(records.begin(), records.end(), Less{});
-    merge_.writeRun(records.data(), records.size());
-    records.clear();
-  }
-  /// The first full buffer is written here (the input did not fit); then the buffer is halves,
-  /// each full one written on a thread while the other fills.
   void spill() {
-    if (!halves_) {
-      sortAndWrite(buffer_);
-      std::vector<Record>().swap(buffer_);
-      capacity_ = std::max<std::size_t>(1, capacity_ / 2);
-      halves_ = true;
-      return;
-    }
-    settleSpill();
-    std::swap(buffer_, spilling_);  // buffer_: the half written last, empty
-    try {
-      spill_ = std::async(std::launch::async, [this] { sortAndWrite(spilling_); });
-    } catch (const std::system_error&) {
-      sortAndWrite(spilling_);  // no thread: written here
-    }
-  }
-  /// Waits for the half being written; its error thrown here.
-  void settleSpill() {
-    if (spill_.valid()) spill_.get();
+    tbb::parallel_sort(buffer_.begin(), buffer_.end(), Less{});
+    merge_.writeRun(buffer_.data(), buffer_.size());
+    buffer_.clear();
   }
 
   detail::ExternalMerge merge_;
   std::size_t capacity_;
   std::vector<Record> buffer_;
-  std::vector<Record> spilling_;  ///< the half being written on spill_'s thread
-  bool halves_ = false;
   std::uint64_t count_ = 0;
   std::size_t served_ = 0;
   bool onDisk_ = false;
-  std::future<void> spill_;  ///< last: waited for before the buffers and the runs go
 };
 
 }  // namespace seamvox

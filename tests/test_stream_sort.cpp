@@ -141,25 +141,6 @@ TEST(ExternalSort, TheMergeAheadStopsWithItsReaderAndHandsOverErrors) {
   EXPECT_LT(served, 60000u);
 }
 
-// After the first run, each full half of the buffer is written on a thread of its own: a sorter
-// given up before finish() waits for it and leaves no run behind; one finished sorts as before.
-TEST(ExternalSort, HalvesWrittenOnTheirThreadAreWaitedForAndMerged) {
-  testing::TempDir dir;
-  ScratchFolder scratch(dir.dir());
-  const std::vector<Record> records = randomRecords(30000, 1u << 20, 23);
-  for (const std::size_t given : {std::size_t(5000), std::size_t(20001)}) {
-    ExternalSorter<Record, ByKeyThenId> sorter(scratch, {4096, "test"});
-    for (std::size_t i = 0; i < given; ++i) sorter.add(records[i]);
-  }
-  EXPECT_EQ(scratch.bytesOnDisk(), scratch.bytesKeptForReuse()) << "the runs are removed";
-  std::vector<Record> expected = records;
-  std::sort(expected.begin(), expected.end(), ByKeyThenId{});
-  std::size_t runs = 0;
-  expectSameRecords(externalSort(scratch, records, 4096, &runs), expected);
-  // 128 records per buffer (2 KiB): 235 whole runs; halves after the first make about 470.
-  EXPECT_GT(runs, 3 * records.size() / 128 / 2) << "runs of half the buffer after the first";
-}
-
 TEST(ExternalSort, DiskFullNamesTheFolderAndTheBytesNeededAndLeavesNothing) {
   testing::TempDir dir;
   std::string folder;
