@@ -39,12 +39,20 @@ struct VertexPair {
 struct FaceRecord {
   std::array<VertexId, 3> vertices;  ///< sorted
   std::uint32_t face;
-  Triangle triangle;
+  std::uint32_t order;  ///< the input's corner k is vertices[(order >> 2k) & 3] (20 bytes, not 28)
+  Triangle triangle() const {
+    return {vertices[order & 3], vertices[(order >> 2) & 3], vertices[(order >> 4) & 3]};
+  }
 };
-std::array<VertexId, 3> sortedVertices(const Triangle& t) {
-  std::array<VertexId, 3> s{t[0], t[1], t[2]};
-  std::sort(s.begin(), s.end());
-  return s;
+static_assert(sizeof(FaceRecord) == 20, "the duplicate sort's records");
+FaceRecord faceRecord(const Triangle& t, std::uint32_t face) {
+  FaceRecord r{{t[0], t[1], t[2]}, face, 0};
+  std::sort(r.vertices.begin(), r.vertices.end());
+  for (std::uint32_t k = 0; k < 3; ++k) {
+    const std::uint32_t at = static_cast<std::uint32_t>(std::find(r.vertices.begin(), r.vertices.end(), t[k]) - r.vertices.begin());
+    r.order |= at << (2 * k);
+  }
+  return r;
 }
 struct SameVerticesLess {
   bool operator()(const FaceRecord& a, const FaceRecord& b) const {
@@ -277,7 +285,7 @@ class WeldPass {
         ++result_.census.degenerateFaces;
         continue;
       }
-      faceSort_->add({sortedVertices(t), f, t});
+      faceSort_->add(faceRecord(t, f));
     }
     weldId_.reset();
     folder_.remove(inputTriangles_);
@@ -309,7 +317,7 @@ class WeldPass {
         continue;
       }
       last = key;
-      const Triangle& t = r.triangle;
+      const Triangle t = r.triangle();
       components_->unite(t[0], t[1]);
       components_->unite(t[1], t[2]);
       for (std::uint32_t k = 0; k < 3; ++k) {
