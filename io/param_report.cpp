@@ -202,6 +202,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("conesMerged").value(U64{r.merged.mergedPairs});
   j.key("conePasses").value(U64{r.conePasses});
   j.key("conePassKept").value(U64{r.conePassKept});
+  j.key("conePassSkippedForMemory").value(r.conePassSkippedForMemory);
   j.key("conePassFlips").beginArray();
   for (const std::uint64_t flips : r.conePassFlips) j.value(U64{flips});
   j.endArray();

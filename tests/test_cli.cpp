@@ -189,6 +189,20 @@ TEST(Cli, ParamRetriesAPassWhoseRepairLeavesFlipsAtCloseCones) {
   const double kept = r.numberAt("conePassKept");
   ASSERT_GE(kept, 1.0);
   ASSERT_LE(kept, r.numberAt("conePasses"));
+  EXPECT_EQ(r.numberAt("conePassSkippedForMemory"), 0.0);
+
+  // A budget that holds the run's estimate but not the first map besides: no such pass, and the
+  // report says why.
+  const std::uint64_t estimate = static_cast<std::uint64_t>(r.numberAt("estimatedBytes"));
+  run("param " + noisy + " -o " + output + " --solver voxloc --merge-cones 0.25 --cells 150 --memory-budget " +
+          std::to_string(estimate + 1024) + " --quiet --report " + report, 0);
+  const Json tight = parseJson(testing::readFile(report));
+  EXPECT_EQ(tight["path"].text, "in-memory");
+  EXPECT_EQ(tight.numberAt("conePassSkippedForMemory"), 1.0);
+  ASSERT_EQ(tight.find("conePassFlips")->items.size(), 1u);
+  EXPECT_EQ(tight.numberAt("untangle.flippedAfter"), flips->items.front().number);
+  const std::string tightCheck = run("check " + output, 0);
+  EXPECT_TRUE(contains(tightCheck, "\nseamless\n") && !contains(tightCheck, "NOT seamless")) << tightCheck;
 }
 
 // param --quads extracts from the map as solved, its small holes still capped: also the pinched

@@ -383,6 +383,7 @@ int runParam(Args& args) {
       c.options.directionStore = directionStore.get();
     }
   }
+  c.options.passHeadroomBytes = memoryPath.budget - std::min(memoryPath.budget, memoryPath.estimate);
   StageMeter meter;
   c.options.meter = &meter;
   TriangleMesh raw = readMesh(*stream);
@@ -489,7 +490,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      merging on, close cones a solve puts on one point, or whose\n"
                  "                      faces stay flipped after the repair, are merged and the map\n"
                  "                      solved again (up to 3 passes; a pass retried for flips is kept\n"
-                 "                      only when it leaves fewer)\n"
+                 "                      only when it leaves fewer, and in memory it starts only when\n"
+                 "                      the earlier map fits the budget beside the estimate)\n"
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
                  "                      re-solved with stiffening; seams and translations kept)\n"

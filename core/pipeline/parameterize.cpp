@@ -392,7 +392,10 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       // did not leave fewer flips than the best such pass.
       if (passesLeft && r.untangle.flippedAfter > 0 && (!kept || r.untangle.flippedAfter < kept->untangle.flippedAfter)) {
         const auto pairs = foldedConesAfterRepair(r, coneCut.cut.cones, coneIndex, coincidentDistance);
-        if (!pairs.empty()) {
+        const std::uint64_t keptBytes = r.solved.param.cornerUV.memoryBytes() + coneCut.cut.corners.memoryBytes() +
+                                        coneCut.cut.faceRotation.capacity();
+        if (!pairs.empty() && keptBytes > options.passHeadroomBytes) r.conePassSkippedForMemory = true;
+        if (!pairs.empty() && keptBytes <= options.passHeadroomBytes) {
           coincident.insert(coincident.end(), pairs.begin(), pairs.end());
           kept = KeptPass{std::move(r.solved), std::move(coneCut.cut), std::move(coneIndex), r.untangle, r.merged,
                           r.conePasses};

@@ -112,6 +112,10 @@ struct PipelineOptions {
   /// Cut-and-solve passes at most: another pass while a solve puts mergeable adjacent cones on
   /// one point, or leaves flipped faces at both of two close cones after the repair.
   std::uint32_t maxConePasses = 3;
+  /// Memory a pass started after the repair may hold beyond the run's estimate: the earlier
+  /// pass's map and cut wait meanwhile (about 24 bytes per face). Such a pass is not started when
+  /// they would not fit (`param`: the budget less the estimate); unlimited by default.
+  std::uint64_t passHeadroomBytes = ~std::uint64_t(0);
   /// Feature curves at faces the map collapses are released and the map solved again: the
   /// shortest curve per cluster of collapsed faces, at most this many times, then every curve at
   /// one once more (0: the constraints are kept whatever they collapse).
@@ -175,6 +179,9 @@ struct PipelineResult {
   std::uint32_t conePassKept = 0;
   /// Per pass that ran the whole repair, the faces it left flipped (UntangleStats::flippedAfter).
   std::vector<std::uint64_t> conePassFlips;
+  /// A pass after the repair was due but not started: the earlier pass's map and cut would not
+  /// fit PipelineOptions::passHeadroomBytes.
+  bool conePassSkippedForMemory = false;
   /// Small holes capped for the field and the solve (PipelineOptions::closeHoles), not in the
   /// output.
   std::uint32_t fieldCappedHoles = 0;
