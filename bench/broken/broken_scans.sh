@@ -2,6 +2,8 @@
 # Damaged variants of the shared meshes (damage_mesh.py) through param with quads, check and
 # render: one line per variant with the exit codes, both verdicts, flips before/after the repair
 # and the quad mesh's validation. Usage: bash bench/broken/broken_scans.sh [OUTDIR]
+# OOC_BUDGET=700M: param out of core within that budget (no quads: not out of core) and check
+# within it.
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 S=${SEAMVOX:-$here/../../build/seamvox}
@@ -16,8 +18,15 @@ for m in bunny.off camelhead.off fertility.off spot.obj rocker-arm.obj cheburash
     x=$b-$k
     python3 "$here/damage_mesh.py" $b.obj $x.obj $k 7
     rm -f $x-o.ply $x-q.obj $x.json
-    "$S" param $x.obj -o $x-o.ply --quads $x-q.obj --report $x.json --quiet > $x.log 2>&1; rc=$?
-    "$S" check $x-o.ply > $x.check 2>&1; rc2=$?
+    if [ -n "${OOC_BUDGET:-}" ]; then
+      rm -rf scratch && mkdir scratch
+      "$S" param $x.obj -o $x-o.ply --report $x.json --out-of-core --memory-budget $OOC_BUDGET --scratch scratch \
+        --quiet > $x.log 2>&1; rc=$?
+      "$S" check $x-o.ply --memory-budget $OOC_BUDGET --scratch scratch > $x.check 2>&1; rc2=$?
+    else
+      "$S" param $x.obj -o $x-o.ply --quads $x-q.obj --report $x.json --quiet > $x.log 2>&1; rc=$?
+      "$S" check $x-o.ply > $x.check 2>&1; rc2=$?
+    fi
     "$S" render $x-o.ply -o $x.png --seams --cones --quiet > $x.render 2>&1; rc3=$?
     seam=$(grep -oE "(NOT )?seamless" $x.log | tail -1)
     flips=$(grep -oE "flipped [0-9]+ -> [0-9]+" $x.log | tail -1)
