@@ -18,6 +18,7 @@ std::string checkReportJson(const std::string& mesh, const CheckResult& r,
   j.key("maxIntegerDistance").value(r.seams.maxIntegerDistance);
   j.key("flipped").value(r.map.flipped).key("flippedFraction").value(r.map.flippedFraction);
   j.key("collapsed").value(r.map.collapsed);
+  j.key("stretched").value(r.map.stretched);
   j.key("edgeLength").value(r.map.edgeLength);
   j.key("relativeGradientError");
   if (r.hasField) {

@@ -146,6 +146,7 @@ void writeQuality(JsonWriter& j, const PipelineResult& r) {
   j.key("flipped").value(r.mapQuality.flipped).key("flippedFraction").value(r.mapQuality.flippedFraction);
   j.key("flippedFolded").value(r.mapQuality.flippedFolded);
   j.key("collapsed").value(r.mapQuality.collapsed);
+  j.key("stretched").value(r.mapQuality.stretched);
   j.endObject();
 }
 

@@ -23,8 +23,8 @@ struct SeamLength {
   double length;
   bool operator<(const SeamLength& o) const { return corner < o.corner; }
 };
-struct FaceArea {  // signed parameter area and 3D area of a cleaned face
-  double uv, area;
+struct FaceArea {  // signed parameter area, 3D area and gradientNormSquared of a cleaned face
+  double uv, area, gradient;
 };
 struct FaceGeometry {  // a cleaned face's gluingNormal and edge lengths (of corner j's edge)
   double normal[3], length[3];
@@ -106,7 +106,8 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
       const double length = (p[1] - p[0]).cross(p[2] - p[0]).norm();
       const Vec3d normal = gluingNormal(p[0], p[1], p[2]);
       const Vec2d a = vec2(face.uv[1]) - vec2(face.uv[0]), b = vec2(face.uv[2]) - vec2(face.uv[0]);
-      const FaceArea area{0.5 * (a.x() * b.y() - a.y() * b.x()), 0.5 * length};
+      const FaceArea area{0.5 * (a.x() * b.y() - a.y() * b.x()), 0.5 * length,
+                          gradientNormSquared({p[0], p[1], p[2]}, {vec2(face.uv[0]), vec2(face.uv[1]), vec2(face.uv[2])})};
       areas.write(&area, sizeof area);
       areaSum += area.area;
       uvAreaSum += std::abs(area.uv);
@@ -155,7 +156,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   scratch.remove(geometryFile);
 
   finishStage("edges");
-  // Flips and collapses for the spacing h, given or fitted (measureMap without a field).
+  // Flips, collapses and stretches for the spacing h, given or fitted (measureMap without a field).
   MapQuality& map = result.map;
   map.faces = result.faces;
   map.edgeLength = options.edgeLength > 0.0 ? options.edgeLength
@@ -171,6 +172,8 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
         ++map.collapsed;
       } else if (ratio < 0.0) {
         ++map.flipped;
+      } else {
+        map.stretched += isStretched(area.gradient, map.edgeLength);
       }
     }
     map.flippedFraction = map.faces ? static_cast<double>(map.flipped) / map.faces : 0.0;

@@ -152,6 +152,39 @@ TEST(MapMetrics, GradientErrorFlipsAndCollapses) {
   EXPECT_EQ(measureMap(mesh, wedges(mesh, squashed), &field, h).collapsed, 1u);
 }
 
+// A face the map stretches over ten times (root mean square of its gradient against 1/h) is
+// counted as stretched, in memory and face by face alike; five times is not; a flipped or
+// collapsed face counts as that only.
+TEST(MapMetrics, FacesStretchedTenfoldAreCounted) {
+  const TriangleMesh mesh = testing::gridMesh(5, 5, 0.5);
+  const double h = 0.25;
+  std::vector<Vec2d> uv = linearUV(mesh, 1.0 / h);
+  auto scaleFace = [&](FaceId f, double s) {
+    for (int k = 1; k < 3; ++k) uv[3 * f + k] = uv[3 * f] + s * (uv[3 * f + k] - uv[3 * f]);
+  };
+  scaleFace(1, 12.0);   // stretch 144
+  scaleFace(2, 5.0);    // 25
+  for (int k = 1; k < 3; ++k) uv[9 + k].y() = 2.0 * uv[9].y() - uv[9 + k].y();  // face 3 mirrored: flipped
+  scaleFace(4, 1e-4);   // collapsed
+  const MapQuality inMemory = measureMap(mesh, wedges(mesh, uv), nullptr, h);
+  EXPECT_EQ(inMemory.stretched, 1u);
+  EXPECT_EQ(inMemory.flipped, 1u);
+  EXPECT_EQ(inMemory.collapsed, 1u);
+  MapQualitySums sums(h);
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    sums.add({mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])}, {uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]},
+             nullptr);
+  }
+  EXPECT_EQ(sums.finish().stretched, 1u);
+  // The threshold itself: 10 times along both directions is 100, not above it.
+  const std::array<Vec3d, 3> p = {Vec3d(0, 0, 0), Vec3d(1, 0, 0), Vec3d(0, 1, 0)};
+  EXPECT_NEAR(gradientNormSquared(p, {Vec2d(0, 0), Vec2d(10, 0), Vec2d(0, 10)}), 200.0, 1e-9);
+  EXPECT_FALSE(isStretched(200.0, 1.0));
+  EXPECT_TRUE(isStretched(200.5, 1.0));
+  EXPECT_TRUE(std::isnan(gradientNormSquared({p[0], p[1], p[1]}, {Vec2d(0, 0), Vec2d(1, 0), Vec2d(0, 1)})));
+}
+
 // Two unit right triangles sharing the edge 1-2: (0, 1, 2) and (2, 1, 3).
 TEST(MapMetrics, CollapsesBetweenCoincidentConesAreCountedApart) {
   TriangleMesh mesh;

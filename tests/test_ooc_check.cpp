@@ -69,7 +69,7 @@ class OocCheck : public ::testing::Test {
     EXPECT_EQ(y.textAt("path"), "out-of-core");
     EXPECT_GT(y.numberAt("scratch.peakBytes"), 0.0);
     for (const char* key : {"faces", "seamless", "seamEdges", "seamLength", "maxSeamResidual", "maxIntegerDistance",
-                            "flipped", "flippedFraction", "collapsed"}) {
+                            "flipped", "flippedFraction", "collapsed", "stretched"}) {
       EXPECT_EQ(x.numberAt(key), y.numberAt(key)) << key << " of " << file;
     }
     // h is a least-squares fit summed in parallel in memory: equal up to rounding.
@@ -148,6 +148,21 @@ TEST_F(OocCheck, NotSeamlessSamePaths) {
   mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
   writeMesh(path("broken-map.ply"), mesh);
   expectSamePaths(path("broken-map.ply"), false);
+}
+
+// Faces the map stretches twentyfold: the same count on both paths.
+TEST_F(OocCheck, StretchedFacesSamePaths) {
+  TriangleMesh mesh = readMap("scan-map.ply");
+  std::vector<Vec2d> uv = testing::cornerValues(mesh.cornerUV);
+  for (std::size_t f = 200; f < 210; ++f) {
+    for (int k = 1; k < 3; ++k) uv[3 * f + k] = uv[3 * f] + 20.0 * (uv[3 * f + k] - uv[3 * f]);
+  }
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  writeMesh(path("stretched-map.ply"), mesh);
+  expectSamePaths(path("stretched-map.ply"), false);
+  std::string text;
+  check(path("stretched-map.ply"), "1K", "--json", &text);
+  EXPECT_EQ(parseJson(text, "out of core").numberAt("stretched"), 10.0) << text;
 }
 
 TEST_F(OocCheck, SizesThatAreNotSizesAreUsageErrors) {

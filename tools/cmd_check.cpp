@@ -101,8 +101,10 @@ void printText(const std::string& path, const CheckFigures& c) {
               seams.seamLength);
   std::printf("seam residual %.3g, integer distance %.3g (tolerance %.3g)\n", seams.maxResidual,
               seams.maxIntegerDistance, tolerance);
-  std::printf("flipped %llu (%.4f%%), collapsed %llu, h %.6g\n", static_cast<unsigned long long>(map.flipped),
-              100.0 * map.flippedFraction, static_cast<unsigned long long>(map.collapsed), map.edgeLength);
+  std::printf("flipped %llu (%.4f%%), collapsed %llu, stretched %llu, h %.6g\n",
+              static_cast<unsigned long long>(map.flipped), 100.0 * map.flippedFraction,
+              static_cast<unsigned long long>(map.collapsed), static_cast<unsigned long long>(map.stretched),
+              map.edgeLength);
   if (c.result.hasField) std::printf("relative gradient error %.6f\n", map.relativeGradientError);
   if (c.outOfCore) {
     std::printf("path out of core: estimate %s above the budget %s; positions %s; scratch peak %s; %s; peak memory %s\n",

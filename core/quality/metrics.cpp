@@ -267,21 +267,27 @@ void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, doubl
   if (cones) isCone = markCones(mesh, *cones);
   const FaceId nf = mesh.numFaces();
   // Per face in parallel (a byte each), counted in face order after.
-  enum : std::uint8_t { kFine, kFlippedFace, kCollapsed, kCollapsedAtCones };
+  enum : std::uint8_t { kFine, kStretched, kFlippedFace, kCollapsed, kCollapsedAtCones };
   std::vector<std::uint8_t> kind(nf);
   parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
       if (std::abs(ratio) < kCollapsedAreaFraction) {
         kind[f] = cones && collapsesBetweenCones(mesh, cornerUV, f, isCone) ? kCollapsedAtCones : kCollapsed;
+      } else if (ratio < 0.0) {
+        kind[f] = kFlippedFace;
       } else {
-        kind[f] = ratio < 0.0 ? kFlippedFace : kFine;
+        const Triangle& t = mesh.triangles[f];
+        const std::array<Vec3d, 3> p = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+        const std::array<Vec2d, 3> q = {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]};
+        kind[f] = isStretched(gradientNormSquared(p, q), h) ? kStretched : kFine;
       }
     }
   });
   std::uint64_t flipped = 0, collapsed = 0, collapsedAtCones = 0;
   for (FaceId f = 0; f < nf; ++f) {
     if (kind[f] == kFine) continue;
+    out.stretched += kind[f] == kStretched;
     collapsed += kind[f] >= kCollapsed;
     collapsedAtCones += kind[f] == kCollapsedAtCones;
     if (kind[f] == kFlippedFace) ++flipped, flippedFaces.push_back(f);
@@ -337,6 +343,15 @@ std::vector<std::uint8_t> facesFoldedIn3D(const TriangleMesh& mesh, const Topolo
   return folded;
 }
 
+double gradientNormSquared(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q) {
+  const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0], n = e1.cross(e2);
+  const double a2 = n.squaredNorm();
+  if (!(a2 > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  const Vec2d d1 = q[1] - q[0], d2 = q[2] - q[0];
+  const Vec3d s = n.cross(e2) / a2, t = e1.cross(n) / a2;  // grad f = (f1 - f0) s + (f2 - f0) t
+  return (d1.x() * s + d2.x() * t).squaredNorm() + (d1.y() * s + d2.y() * t).squaredNorm();
+}
+
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
                       const std::vector<VertexId>* cones, const Topology* topology) {
@@ -374,6 +389,7 @@ MapQualitySums::Kind MapQualitySums::add(const std::array<Vec3d, 3>& p, const st
     ++out_.flipped;
     return Kind::Flipped;
   }
+  out_.stretched += isStretched(gradientNormSquared(p, q), h_);
   return Kind::Fine;
 }
 
@@ -386,6 +402,7 @@ void MapQualitySums::merge(const MapQualitySums& other) {
   out_.collapsedAtCones += other.out_.collapsedAtCones;
   out_.flipped += other.out_.flipped;
   out_.flippedFolded += other.out_.flippedFolded;
+  out_.stretched += other.out_.stretched;
 }
 
 MapQuality MapQualitySums::finish() const {

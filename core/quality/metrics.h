@@ -56,6 +56,16 @@ constexpr double kCollapsedAreaFraction = 1e-6;
 /// A flipped face by its parameterAreaRatio: negative, and not collapsed.
 inline bool isFlippedRatio(double ratio) { return ratio < 0.0 && std::abs(ratio) >= kCollapsedAreaFraction; }
 
+/// |grad u|^2 + |grad v|^2 of the linear map of a triangle with corners p and values q (NaN for a
+/// zero-area triangle).
+double gradientNormSquared(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q);
+/// A face is stretched when h^2 (|grad u|^2 + |grad v|^2) / 2 (1 for |grad q| = 1/h) is above
+/// this: the map stretches it over ten times on average, a smear no flip or collapse count sees.
+constexpr double kStretchedFaceStretch = 100.0;
+inline bool isStretched(double gradientNormSquared, double h) {
+  return std::isfinite(gradientNormSquared) && 0.5 * h * h * gradientNormSquared > kStretchedFaceStretch;
+}
+
 /// Signed parameter-space area of face f (corners 3 f .. 3 f + 2 of cornerUV) over its expected
 /// area A_T / h^2: 1 for a map with |grad q| = 1/h and no shear, negative when flipped, +-inf or
 /// NaN for a face of zero 3D area.
@@ -108,6 +118,8 @@ struct MapQuality {
   /// Of the collapsed faces, those between two coincident cones (collapsesBetweenCones); 0 when
   /// measureMap was given no cones.
   std::uint64_t collapsedAtCones = 0;
+  /// Neither flipped nor collapsed, stretched (isStretched) by the map.
+  std::uint64_t stretched = 0;
   double flippedFraction = 0.0;
   /// sqrt(sum A |grad q - w/h|^2 / sum A |w/h|^2), w the nearest of the 4 cross directions;
   /// NaN without a field.
