@@ -271,15 +271,15 @@ void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, doubl
   std::vector<std::uint8_t> kind(nf);
   parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
-      const double ratio = parameterAreaRatio(mesh, cornerUV, f, h);
+      const Triangle& t = mesh.triangles[f];
+      const std::array<Vec3d, 3> p = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+      const std::array<Vec2d, 3> q = {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]};
+      const double ratio = parameterAreaRatio(p, q, h);
       if (std::abs(ratio) < kCollapsedAreaFraction) {
         kind[f] = cones && collapsesBetweenCones(mesh, cornerUV, f, isCone) ? kCollapsedAtCones : kCollapsed;
       } else if (ratio < 0.0) {
         kind[f] = kFlippedFace;
       } else {
-        const Triangle& t = mesh.triangles[f];
-        const std::array<Vec3d, 3> p = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
-        const std::array<Vec2d, 3> q = {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]};
         kind[f] = isStretched(gradientNormSquared(p, q), h) ? kStretched : kFine;
       }
     }
@@ -343,13 +343,15 @@ std::vector<std::uint8_t> facesFoldedIn3D(const TriangleMesh& mesh, const Topolo
   return folded;
 }
 
+// The squared gradient of measureFace's figures (NaN for a zero-area face): one formula for
+// every path that counts stretched faces.
+double gradientNormSquared(const FaceFigures& x) {
+  return x.area > 0.0 ? x.gu.squaredNorm() + x.gv.squaredNorm() : std::numeric_limits<double>::quiet_NaN();
+}
+
 double gradientNormSquared(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q) {
-  const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0], n = e1.cross(e2);
-  const double a2 = n.squaredNorm();
-  if (!(a2 > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  const Vec2d d1 = q[1] - q[0], d2 = q[2] - q[0];
-  const Vec3d s = n.cross(e2) / a2, t = e1.cross(n) / a2;  // grad f = (f1 - f0) s + (f2 - f0) t
-  return (d1.x() * s + d2.x() * t).squaredNorm() + (d1.y() * s + d2.y() * t).squaredNorm();
+  const Complex c[3] = {toComplex(q[0]), toComplex(q[1]), toComplex(q[2])};
+  return gradientNormSquared(measureFace(p.data(), c, nullptr));
 }
 
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
@@ -389,7 +391,7 @@ MapQualitySums::Kind MapQualitySums::add(const std::array<Vec3d, 3>& p, const st
     ++out_.flipped;
     return Kind::Flipped;
   }
-  out_.stretched += isStretched(gradientNormSquared(p, q), h_);
+  out_.stretched += isStretched(gradientNormSquared(x), h_);
   return Kind::Fine;
 }
 
