@@ -294,6 +294,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
     };
   }
   solverOptions.refine.coneWeightRadius = options.coneWeightRadius;
+  solverOptions.refine.closeHolesWithin = param.closeHolesWithin;
   const double mergeDistance = options.mergeCones * r.edgeLength;
   const double coincidentDistance = kCoincidentSearchFraction * r.edgeLength;
   std::vector<std::pair<VertexId, VertexId>> coincident;
@@ -358,6 +359,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       UntangleOptions untangle = options.untangleOptions;
       untangle.edgeLength = r.edgeLength;
       untangle.coneWeightRadius = options.coneWeightRadius;
+      untangle.closeHolesWithin = param.closeHolesWithin;
       untangle.progress = options.progress;
       // Close cones on one point with flips next to them (below) start another pass, which
       // repairs its own map: they are repaired first alone, and when flips stay next to them the

@@ -248,8 +248,9 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
         }
         solved = spline ? solveRegionInSplines(region, regionUV, regionT, h, options.splineSpacing,
                                                options.coneWeightRadius, ownUnknown, &r.system,
-                                               options.splineMaxFraction)
-                        : solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius);
+                                               options.splineMaxFraction, options.closeHolesWithin)
+                        : solveRegion(region, regionUV, regionT, h, &r.system, {}, options.coneWeightRadius, false,
+                                      options.closeHolesWithin);
       } catch (const SolverError& e) {
         r.failure = e.what();
         r.system = RefineStats();

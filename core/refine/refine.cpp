@@ -302,12 +302,17 @@ struct FreeTranslations {
 };
 
 FreeTranslations findFreeTranslations(const RegionProblem& p, const std::vector<std::uint8_t>& freeSeam,
-                                      double edgeLength) {
+                                      double closeHolesWithin) {
   FreeTranslations ft(p.ns);
-  // The holes the region holds whole stay closed as the global solve left them
-  // (ParamOptions::closeHolesWithin).
-  std::vector<GaussVector> rows =
-      smallHoleConstraints(p.region.mesh, p.region.topology, p.region.cut, edgeLength, &p.region.vertexFree).rows;
+  // The holes the region holds whole stay closed when the global solve closed them
+  // (ParamOptions::closeHolesWithin, the same extent). Held regardless, they froze the loop
+  // translations the voxel map gave one-triangle cracks: on a scan with thousands of them the
+  // re-solve flipped 110 faces and stretched 23 up to 170-fold.
+  std::vector<GaussVector> rows;
+  if (closeHolesWithin > 0.0) {
+    rows = smallHoleConstraints(p.region.mesh, p.region.topology, p.region.cut, closeHolesWithin, &p.region.vertexFree)
+               .rows;
+  }
   rows.insert(rows.begin(), p.reduction.cycleConstraints.begin(), p.reduction.cycleConstraints.end());
   for (const GaussVector& row : rows) {
     GaussVector restricted;
@@ -574,7 +579,8 @@ RegionSolution solveInSplines(const RegionProblem& p, const Reduction& system, c
 RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
                                double edgeLength, RefineStats* stats, const std::vector<double>& faceWeight,
                                double coneWeightRadius, bool keepTranslations, double spacing,
-                               std::vector<std::uint8_t>* ownUnknown, double maxColumnFraction) {
+                               std::vector<std::uint8_t>* ownUnknown, double maxColumnFraction,
+                               double closeHolesWithin) {
   const std::uint32_t rf = region.topology.numFaces();
   const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
   if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
@@ -599,7 +605,7 @@ RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerU
   // The local system with the given seams' translations free (the rest fixed to seamT).
   const auto buildSystem = [&](const std::vector<std::uint8_t>& freeSeam) {
     RegionComponents components = findRegionComponents(problem, freeSeam);
-    const FreeTranslations translations = findFreeTranslations(problem, freeSeam, edgeLength);
+    const FreeTranslations translations = findFreeTranslations(problem, freeSeam, closeHolesWithin);
     std::vector<std::uint8_t> pinned;
     std::vector<Complex> pinValue;
     local.pinned = pinFreeComponents(problem, freeSeam, fixedPart, components, pinned, pinValue);
@@ -644,18 +650,18 @@ RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerU
 RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<Complex>& seamT, double edgeLength,
                            RefineStats* stats, const std::vector<double>& faceWeight,
-                           double coneWeightRadius, bool keepTranslations) {
+                           double coneWeightRadius, bool keepTranslations, double closeHolesWithin) {
   return solveRegionWith(region, cornerUV, seamT, edgeLength, stats, faceWeight, coneWeightRadius, keepTranslations,
-                         0.0, nullptr, 0.0);
+                         0.0, nullptr, 0.0, closeHolesWithin);
 }
 
 RegionSolution solveRegionInSplines(const RegionMesh& region, const WedgeMap& cornerUV,
                                     const std::vector<Complex>& seamT, double edgeLength, double spacing,
                                     double coneWeightRadius, std::vector<std::uint8_t>& ownUnknown,
-                                    RefineStats* stats, double maxColumnFraction) {
+                                    RefineStats* stats, double maxColumnFraction, double closeHolesWithin) {
   if (!(spacing > 0.0)) throw InputError("refine: spline spacing must be positive");
   return solveRegionWith(region, cornerUV, seamT, edgeLength, stats, {}, coneWeightRadius, false, spacing,
-                         &ownUnknown, maxColumnFraction);
+                         &ownUnknown, maxColumnFraction, closeHolesWithin);
 }
 
 namespace detail {

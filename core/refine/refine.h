@@ -54,6 +54,8 @@ struct RefineOptions {
   /// Solves at most (>= 1; 1: no re-detection).
   std::uint32_t maxRounds = 6;
   double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
+  /// The global solve's ParamOptions::closeHolesWithin (mesh units; 0: no hole held, solveRegion).
+  double closeHolesWithin = 0.0;
   /// > 0 (mesh units): the first round solves its region in trilinear B-splines of this spacing
   /// (spline_space.h), with an unknown per vertex only next to cones, instead of one unknown per
   /// vertex; the next rounds re-solve in the hat basis the faces it leaves collapsed or flipped,
@@ -219,12 +221,15 @@ struct RegionSolution {
 /// Locked corners keep their input values exactly. faceWeight (#sub faces or empty) scales each
 /// face's energy, and so does HatBasisOptions::coneWeightRadius around the region's cones.
 /// keepTranslations fixes every seam's translation (the foldover repair: re-rounding a seam between
-/// two cones in the region can put them on one point). Throws SolverError when a factorization fails.
+/// two cones in the region can put them on one point). closeHolesWithin > 0: the loop translations
+/// of the holes within it that the region holds whole stay as the input has them, as
+/// ParamOptions::closeHolesWithin holds them closed in the global solve (pass the global solve's
+/// value; 0: solved with the seams). Throws SolverError when a factorization fails.
 RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<std::complex<double>>& seamT, double edgeLength,
                            RefineStats* stats = nullptr,
                            const std::vector<double>& faceWeight = {}, double coneWeightRadius = 0.0,
-                           bool keepTranslations = false);
+                           bool keepTranslations = false, double closeHolesWithin = 0.0);
 
 /// solveRegion with its translations kept, in the trilinear B-splines of the given spacing (mesh
 /// units) sampled at the region's vertices (core/refine/spline_space.h) instead of one unknown per
@@ -236,7 +241,8 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
 RegionSolution solveRegionInSplines(const RegionMesh& region, const WedgeMap& cornerUV,
                                     const std::vector<std::complex<double>>& seamT, double edgeLength,
                                     double spacing, double coneWeightRadius, std::vector<std::uint8_t>& ownUnknown,
-                                    RefineStats* stats = nullptr, double maxColumnFraction = 0.25);
+                                    RefineStats* stats = nullptr, double maxColumnFraction = 0.25,
+                                    double closeHolesWithin = 0.0);
 
 /// The cut's cones as an increasing list (duplicates dropped). InputError for a cone at or above
 /// numVertices.

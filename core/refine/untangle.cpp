@@ -102,14 +102,16 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
   const std::vector<std::uint8_t> collapsedBefore = collapsedFaces(region, regionUV, h);
   for (std::uint32_t solve = 0; solve < std::max(1u, options.maxSolves); ++solve) {
     RefineStats stats;
-    RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius);
+    RegionSolution solved =
+        solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, false, options.closeHolesWithin);
     // Seams whose edges all lie in the patch are re-rounded, which can move two cones onto one
     // point (their faces collapse): then solved again with every translation kept.
     const std::vector<std::uint8_t> collapsed = collapsedFaces(region, solved.cornerUV, h);
     bool collapsesMore = false;
     for (std::size_t i = 0; i < collapsed.size() && !collapsesMore; ++i) collapsesMore = collapsed[i] > collapsedBefore[i];
     if (collapsesMore) {
-      solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, true);
+      solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, true,
+                           options.closeHolesWithin);
       ++out.solves;
     }
     ++out.solves;

@@ -37,6 +37,8 @@ struct UntangleOptions {
   std::uint64_t minPatchFaces = 20000;
   double stiffening = 2.0;        ///< energy factor per re-solve of a face still flipped (> 1)
   double coneWeightRadius = kConeWeightRadius;  ///< of the local hat solves (HatBasisOptions)
+  /// The global solve's ParamOptions::closeHolesWithin (mesh units; 0: no hole held, solveRegion).
+  double closeHolesWithin = 0.0;
   /// Gauss-Seidel passes of the last step: an interior vertex of a face still flipped, not a cone
   /// and next to no face folded in 3D, moves into the kernel of its fan (every fan triangle
   /// positive) when it has one, else a step toward a larger worst margin; neighbours make room
