@@ -50,6 +50,12 @@ void writeVoxel(JsonWriter& j, const SolverResult& s, std::int32_t grid) {
   j.key("inconsistentBasis").value(U64{s.inconsistentBasis});
   j.key("markedFaces").value(s.markedFaces);
   j.key("islandFaces").value(s.islandFaces);
+  j.key("smoothedEvaluation").beginObject();
+  j.key("foldedBefore").value(s.smoothedEvaluation.foldedBefore);
+  j.key("vertices").value(s.smoothedEvaluation.vertices);
+  j.key("keptForStretch").value(s.smoothedEvaluation.keptForStretch);
+  j.key("rounds").value(U64{s.smoothedEvaluation.rounds});
+  j.endObject();
   j.endObject();
 }
 

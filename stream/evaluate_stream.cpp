@@ -162,4 +162,82 @@ bool ScratchMapFaces::next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std:
   return true;
 }
 
+SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& folder, const CleanScratch& scratch,
+                                                              const ScratchField& field,
+                                                              const ScratchVoxelBasis& basis,
+                                                              const std::vector<std::complex<double>>& coefficients,
+                                                              double h, ScratchMap& map,
+                                                              const StreamPassOptions& pass) {
+  const char* const stage = "smoothed evaluation";
+  SmoothedEvaluationStats stats;
+  if (field.framePositions.bytes == 0) return stats;
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  std::vector<FaceId> faces;
+  {
+    ScratchMapFaces all(folder, scratch, map, stage, cacheBytes);
+    FaceId f = 0;
+    Triangle t;
+    std::array<Vec3d, 3> p;
+    std::array<Vec2d, 3> q;
+    while (all.next(f, t, p, q)) {
+      if (foldedForSmoothedEvaluation(p, q, h)) faces.push_back(f);
+    }
+    folder.countRead(stage, all.cacheBytesRead());
+  }
+  stats.foldedBefore = faces.size();
+  if (faces.empty()) return stats;
+  const VoxelBasis& voxels = *basis.basis;
+  const VoxelGridGeometry& grid = voxels.grid();
+  PagedCornerTable table(scratch, cacheBytes);
+  PagedFacePoints points(scratch, scratch.positions, cacheBytes);
+  PagedReader<Vec3f> smooth(field.framePositions, cacheBytes);
+  PagedReader<std::uint32_t> wedgeStart(map.vertexWedgeStart, cacheBytes), cornerWedge(map.cornerWedge, cacheBytes);
+  PagedReader<std::uint32_t> faceStart(basis.faceFragmentStart, cacheBytes), element(basis.fragmentElement, cacheBytes);
+  PagedArray<Vec2d> values(folder, map.wedgeValues, stage, cacheBytes);
+  const auto faceValues = [&](FaceId f) {
+    return std::array<Vec2d, 3>{values[cornerWedge[3 * f]], values[cornerWedge[3 * f + 1]],
+                                values[cornerWedge[3 * f + 2]]};
+  };
+  const auto folded = [&](FaceId f) { return foldedForSmoothedEvaluation(points.points(f), faceValues(f), h); };
+  std::vector<VertexId> tried;  // sorted
+  for (std::uint32_t round = 0; round < kSmoothedEvaluationRounds && !faces.empty(); ++round) {
+    std::vector<VertexId> vertices =
+        detail::smoothedCandidates(faces, tried, folded, [&](FaceId f) { return points.triangle(f); });
+    // One wedge (none: an isolated vertex; more: a seam through it).
+    vertices.erase(std::remove_if(vertices.begin(), vertices.end(),
+                                  [&](VertexId v) { return wedgeStart[std::uint64_t(v) + 1] - wedgeStart[v] != 1; }),
+                   vertices.end());
+    if (vertices.empty()) break;
+    // Vertex by vertex in increasing order, each value set unless it stretches a face of its fan
+    // at the values so far (as the in-memory pass goes).
+    for (VertexId v : vertices) {
+      // The element of the wedge's smallest corner, found from the vertex's own position as
+      // evaluateScratchVoxelMap found it.
+      CornerId smallest = kInvalidId;
+      table.forEachCornerAround(v, [&](CornerId c) { smallest = std::min(smallest, c); });
+      const FaceId f = cornerFace(smallest);
+      const Vec3d x = grid.toGrid(points.points(points.triangle(f))[smallest % 3]);
+      const std::uint32_t begin = faceStart[f], end = faceStart[std::uint64_t(f) + 1];
+      const std::uint32_t e = voxels.nearestElement(x, end - begin, [&](std::uint32_t i) { return element[begin + i]; });
+      bool keep = e == kInvalidId;
+      if (!keep) {
+        const std::complex<double> q = voxels.evaluateAt(e, grid.toGrid(smooth[v].cast<double>()), coefficients);
+        const Vec2d value(q.real(), q.imag());
+        table.forEachCornerAround(v, [&](CornerId c) {
+          const FaceId g = cornerFace(c);
+          keep = keep || movingStretches(points.points(points.triangle(g)), faceValues(g), c % 3, value, h);
+        });
+        if (!keep) values.set(wedgeStart[v], value);
+      }
+      stats.keptForStretch += keep;
+    }
+    detail::finishSmoothedRound(table, vertices, tried, faces, stats);
+  }
+  values.flush();
+  folder.countRead(stage, table.bytesRead() + points.bytesRead() + smooth.bytesRead() + wedgeStart.bytesRead() +
+                              cornerWedge.bytesRead() + faceStart.bytesRead() + element.bytesRead() +
+                              values.bytesRead());
+  return stats;
+}
+
 }  // namespace seamvox

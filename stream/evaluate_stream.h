@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/basis/smoothed_evaluation.h"
 #include "stream/clean_stream.h"
 #include "stream/cut_stream.h"
 #include "stream/field_stream.h"
@@ -53,5 +54,17 @@ class ScratchMapFaces {
 ScratchMap evaluateScratchVoxelMap(ScratchFolder& folder, const CleanScratch& scratch, const ScratchCut& cut,
                                    const ScratchVoxelBasis& basis, const std::vector<std::complex<double>>& coefficients,
                                    const StreamPassOptions& pass);
+
+/// evaluateFoldsAtSmoothedSurface out of core on the map evaluateScratchVoxelMap wrote (its
+/// wedge values changed in place): the faces measured in order, then around the vertices moved
+/// through page caches; the smoothed surface is field.framePositions (nothing moves without it).
+/// Equal, bit for bit, to the in-memory pass with the same field. Memory: the folded faces'
+/// vertices and the caches.
+SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& folder, const CleanScratch& scratch,
+                                                              const ScratchField& field,
+                                                              const ScratchVoxelBasis& basis,
+                                                              const std::vector<std::complex<double>>& coefficients,
+                                                              double h, ScratchMap& map,
+                                                              const StreamPassOptions& pass);
 
 }  // namespace seamvox

@@ -159,6 +159,11 @@ void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const 
   r.basisFunctions = vox.basis.basis->numBasisFunctions();
   r.elements = vox.basis.basis->numElements();
   r.fragments = vox.basis.numFragments;
+  if (options.smoothedEvaluation) {
+    r.smoothedEvaluation = evaluateScratchFoldsAtSmoothedSurface(folder, scratch, field, vox.basis, solved.coefficients,
+                                                                 h, solved.map, pass);
+  }
+  std::vector<std::complex<double>>().swap(solved.coefficients);
 
   // voxloc refines near cones and wherever the map collapses or flips; vox only where its
   // reduction left basis functions inconsistent (as parameterizeMeshWithSolver).

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/basis/smoothed_evaluation.h"
 #include "core/field/cone_merge.h"
 #include "core/mesh/clean.h"
 #include "core/pipeline/grid_spacing.h"
@@ -45,6 +46,8 @@ struct StreamParamOptions {
   /// basis functions the reduction left inconsistent (one round).
   bool voxLoc = true;
   RefineOptions refine;  ///< rings, rounds, cone weight (edgeLength and the seeds are set here)
+  /// The Vox map re-evaluated at the smoothed surface where it folds (evaluateScratchFoldsAtSmoothedSurface).
+  bool smoothedEvaluation = true;
   /// Foldover repair after the refinement (untangleScratchFlips; edgeLength set here).
   bool untangle = true;
   UntangleOptions untangleOptions;
@@ -77,6 +80,7 @@ struct StreamParamResult {
   std::uint64_t islandFaces = 0;  ///< faces of the islands, left out of the voxel basis
   std::string voxelRetryReason;  ///< why the basis was built a second time (empty: once)
   std::uint64_t markedFaces = 0;
+  SmoothedEvaluationStats smoothedEvaluation;
   bool refined = false;
   RefineStats refine;
   bool untangled = false;

@@ -37,7 +37,8 @@ ScratchVoxelSolution solveScratchVoxelMap(ScratchFolder& folder, const CleanScra
   out.regularization = basis.basis->regularization();
   out.stats = solution.stats;
   out.translations = std::move(solution.translations);
-  out.map = evaluateScratchVoxelMap(folder, scratch, cut, basis, expandCoefficients(reduction, solution.unknowns), pass);
+  out.coefficients = expandCoefficients(reduction, solution.unknowns);
+  out.map = evaluateScratchVoxelMap(folder, scratch, cut, basis, out.coefficients, pass);
   return out;
 }
 

@@ -30,6 +30,7 @@ struct ScratchVoxelSolution {
   /// markedBasisFunctions of the reduction: whose support the local refinement re-solves.
   std::vector<std::uint32_t> markedBasis;
   std::vector<std::uint32_t> inconsistentBasisFunctions;
+  std::vector<std::complex<double>> coefficients;  ///< per domain of the basis: what the map evaluates
 };
 
 /// VoxelBasis::supportFaces out of core: the faces holding a fragment of an element one of whose

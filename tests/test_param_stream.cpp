@@ -56,6 +56,7 @@ struct PathRun {
   std::vector<double> conePassFlips;  ///< flips left by each pass's repair
   double flipped = 0.0;               ///< left by the repair in the written map
   bool repaired = false;              ///< the repair had flips to repair
+  double smoothedVertices = 0.0;      ///< the voxel map re-evaluated at the smoothed surface there
 };
 
 // param on `mesh` out of core and in memory (on the mesh as the out-of-core path cleans it, in its
@@ -100,14 +101,16 @@ std::vector<PathRun> expectPathsAgree(const TriangleMesh& mesh, const std::vecto
     }
     // The map's figures as measured in memory (the sums in another order: the error to rounding).
     const JsonValue memoryReport = parseJson(testing::readFile(dir.path("m.json")));
-    for (const char* count : {"quality.flipped", "quality.collapsed", "quality.flippedFolded", "conePasses", "conePassKept", "cones",
-                              "conesCancelled", "conesMerged", "seams"}) {
+    for (const char* count : {"quality.flipped", "quality.collapsed", "quality.flippedFolded", "quality.stretched",
+                              "conePasses", "conePassKept", "cones", "conesCancelled", "conesMerged", "seams",
+                              "voxel.smoothedEvaluation.foldedBefore", "voxel.smoothedEvaluation.vertices"}) {
       EXPECT_EQ(report.numberAt(count), memoryReport.numberAt(count)) << count;
     }
     EXPECT_NEAR(report.numberAt("quality.relativeGradientError"), memoryReport.numberAt("quality.relativeGradientError"),
                 (laterPasses ? 1e-9 : 1e-12) * memoryReport.numberAt("quality.relativeGradientError"));
     PathRun r{memoryReport.numberAt("conePasses"), memoryReport.numberAt("conePassKept"), {},
-              report.numberAt("untangle.flippedAfter"), report.numberAt("untangle.flippedBefore") > 0.0};
+              report.numberAt("untangle.flippedAfter"), report.numberAt("untangle.flippedBefore") > 0.0,
+              report.numberAt("voxel.smoothedEvaluation.vertices")};
     const JsonValue& flips = report["conePassFlips"];
     const JsonValue& memoryFlips = memoryReport["conePassFlips"];
     EXPECT_EQ(flips.items.size(), memoryFlips.items.size());
@@ -127,15 +130,18 @@ std::vector<PathRun> expectPathsAgree(const TriangleMesh& mesh, const std::vecto
 // repair without later cone passes (no merging).
 TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
   std::size_t repairs = 0;
+  double smoothed = 0.0;
   for (const auto& [name, mesh] : testing::stageTestMeshes(43)) {
     SCOPED_TRACE(name);
     for (const PathRun& r : expectPathsAgree(mesh, {" --grid 32 --cells 20 --quiet --no-untangle",
                                                     " --grid 32 --cells 20 --quiet",
                                                     " --grid 32 --cells 20 --quiet --merge-cones 0"})) {
       repairs += r.repaired;
+      smoothed += r.smoothedVertices;
     }
   }
   EXPECT_GT(repairs, 0u);  // some map had flips to repair
+  EXPECT_GT(smoothed, 0.0);  // and some voxel map folds that the smoothed surface re-evaluated
 }
 
 // A real scan whose solve puts two close cones on one point: the second cone pass merges them,
@@ -152,6 +158,7 @@ TEST(ParamStream, LaterConePassesAsInMemory) {
                                       " --quiet", &out), 0) << out;
     const PathRun r = expectPathsAgree(readMesh(dir.path("noisy.ply")), {" --quiet"}, "700M").at(0);
     EXPECT_TRUE(r.repaired);
+    EXPECT_GT(r.smoothedVertices, 0.0);
     ASSERT_FALSE(r.conePassFlips.empty());
     EXPECT_EQ(r.flipped, *std::min_element(r.conePassFlips.begin(), r.conePassFlips.end()));
   }

@@ -113,6 +113,7 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
     const testing::StageInputs in = testing::prepareStageInputs(folder, scratch, cleaned, 32, kTinyPass);
     ParamOptions param;
     param.edgeLength = in.options.edgeLength;
+    param.smoothedEvaluation = false;  // the Vox map as solveScratchVoxelMap gives it
     const VoxelParamResult expected =
         parameterizeMeshVoxel(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, param, 32);
     ScratchVoxelBasis basis = buildScratchVoxelBasis(folder, scratch, in.field, in.cut, in.options, kTinyPass);

@@ -24,6 +24,9 @@
 #include "core/basis/voxel_basis.h"
 #include "core/basis/voxel_clip.h"
 #include "core/basis/voxel_grid.h"
+#include "core/field/field_proxy.h"
+#include "core/mesh/clean.h"
+#include "core/synth/generate.h"
 #include "tests/test_meshes.h"
 #include "tests/testing.h"
 
@@ -864,6 +867,79 @@ TEST(VoxelSolver, OneEvaluationPerWedgeEqualsOnePerCorner) {
   }
   EXPECT_GT(largest, 1.0);
   EXPECT_LT(difference, 1e-9 * largest);
+}
+
+// The voxel map of a noisy scan (scanner noise of half an edge) re-evaluated at the
+// field's smoothed surface where it folds: fewer folded faces, still seamless, and only vertices
+// without a seam through them, near the faces first folded, move (smoothed_evaluation.h).
+TEST(SmoothedEvaluation, NoiseFoldsFewerFacesAndOnlyOneWedgeVerticesMove) {
+  TriangleMesh noisy = testing::generatedMesh(MeshKind::Scan, 30000);
+  ScanNoiseOptions noise;
+  noise.amplitude = 0.5;  // a quarter of an edge folds only the generated scan's cone and border faces
+  addScanNoise(noisy, noise);
+  CleanResult clean = cleanMesh(std::move(noisy));
+  const TriangleMesh& mesh = clean.mesh;
+  const Topology& topology = clean.topology;
+  const CrossField field = computeCrossField(mesh, topology, FieldMethod::Proxy);
+  ASSERT_GT(field.frameSmoothing, 0u);
+  const CutResult cut = cutToDisk(mesh, topology, field, computeSingularities(mesh, topology, field));
+  ParamOptions options;
+  options.edgeLength = computeBoundingBox(mesh.positions).diagonal() / 25.0;
+  const double h = options.edgeLength;
+  options.smoothedEvaluation = false;
+  const VoxelParamResult raw = parameterizeMeshVoxel(mesh, topology, field, cut, options, 32);
+  options.smoothedEvaluation = true;
+  const VoxelParamResult smoothed = parameterizeMeshVoxel(mesh, topology, field, cut, options, 32);
+  const auto foldedFaces = [&](const WedgeMap& uv) {
+    std::vector<FaceId> out;
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      if (foldedForSmoothedEvaluation({mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])},
+                                      {uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]}, h)) {
+        out.push_back(f);
+      }
+    }
+    return out;
+  };
+  const std::vector<FaceId> before = foldedFaces(raw.param.cornerUV), after = foldedFaces(smoothed.param.cornerUV);
+  EXPECT_EQ(raw.smoothedEvaluation.vertices, 0u);
+  EXPECT_EQ(smoothed.smoothedEvaluation.foldedBefore, before.size());
+  ASSERT_GT(before.size(), 100u) << "the noise folds too few faces: the test proves nothing";
+  EXPECT_LT(2 * after.size(), before.size());  // measured 1,150 -> 305
+  EXPECT_TRUE(measureSeams(mesh, topology, cut, raw.param.cornerUV).isSeamless());
+  EXPECT_TRUE(measureSeams(mesh, topology, cut, smoothed.param.cornerUV).isSeamless());
+  // The vertices within kSmoothedEvaluationRounds - 1 rings of the faces first folded.
+  std::vector<std::uint8_t> near(topology.numVertices(), 0);
+  std::vector<VertexId> frontier;
+  for (FaceId f : before) {
+    for (VertexId v : mesh.triangles[f]) near[v] = 1, frontier.push_back(v);
+  }
+  for (std::uint32_t ring = 1; ring < kSmoothedEvaluationRounds; ++ring) {
+    std::vector<VertexId> next;
+    for (VertexId v : frontier) {
+      topology.forEachCornerAround(v, [&](CornerId c) {
+        for (VertexId w : mesh.triangles[cornerFace(c)]) {
+          if (!near[w]) near[w] = 1, next.push_back(w);
+        }
+      });
+    }
+    frontier = std::move(next);
+  }
+  std::vector<std::uint8_t> changed(topology.numVertices(), 0);
+  for (CornerId c = 0; c < topology.numCorners(); ++c) {
+    if (raw.param.cornerUV[c] != smoothed.param.cornerUV[c]) changed[topology.vertex(c)] = 1;
+  }
+  std::uint64_t moved = 0;
+  for (VertexId v = 0; v < topology.numVertices(); ++v) {
+    if (!changed[v]) continue;
+    ++moved;
+    EXPECT_TRUE(near[v]) << "vertex " << v;
+    std::set<std::uint32_t> wedges;
+    topology.forEachCornerAround(v, [&](CornerId c) { wedges.insert(smoothed.param.cornerUV.wedge(c)); });
+    EXPECT_EQ(wedges.size(), 1u) << "vertex " << v;
+  }
+  EXPECT_GT(moved, 0u);
+  EXPECT_LE(moved, smoothed.smoothedEvaluation.vertices);
 }
 
 }  // namespace

@@ -243,6 +243,7 @@ TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
     const Inputs in = prepareInputs(folder, scratch, cleaned, 32);
     ParamOptions param;
     param.edgeLength = in.options.edgeLength;
+    param.smoothedEvaluation = false;  // the Vox map as solved (its re-evaluation: test_param_stream)
     const VoxelParamResult expected =
         parameterizeMeshVoxel(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, param, 32);
     EXPECT_EQ(scratchSeamCycleConstraints(scratch, in.cut, kTinyPass),

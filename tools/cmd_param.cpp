@@ -60,6 +60,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
   o.untangle = !args.flag("no-untangle");
+  o.solver.smoothedEvaluation = !args.flag("no-smoothed-evaluation");
   o.features.alignBoundary = args.flag("align-boundary");
   o.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
   o.features.autoFeatureAngle = !args.value("feature-angle");  // given, even as 0: exactly that
@@ -246,6 +247,7 @@ PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver sol
   solved.failedAttempts = s.failedAttempts;
   solved.voxelRetryReason = s.voxelRetryReason;
   solved.markedFaces = s.markedFaces;
+  solved.smoothedEvaluation = s.smoothedEvaluation;
   solved.islandFaces = s.islandFaces;
   solved.refined = s.refined;
   solved.refine = s.refine;
@@ -302,6 +304,7 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
   const ParamSolver solver = c.options.solver.solver == ParamSolver::Vox ? ParamSolver::Vox : ParamSolver::VoxLoc;
   options.voxLoc = solver == ParamSolver::VoxLoc;
   options.refine = c.options.solver.refine;
+  options.smoothedEvaluation = c.options.solver.smoothedEvaluation;
   options.refine.coneWeightRadius = c.options.coneWeightRadius;
   options.untangle = c.options.untangle;
   options.untangleOptions = c.options.untangleOptions;
@@ -453,7 +456,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--spline-cells N] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
-                 "                     [--greedy] [--no-untangle] [--weld] [--keep-order] [--report R.json]\n"
+                 "                     [--greedy] [--no-untangle] [--no-smoothed-evaluation] [--weld]\n"
+                 "                     [--keep-order] [--report R.json]\n"
                  "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
                  "                     [--quads Q.obj|.ply] [--close-holes C] [--align-boundary]\n"
                  "                     [--feature-angle DEG]\n"
@@ -496,6 +500,10 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
                  "                      re-solved with stiffening; seams and translations kept)\n"
+                 "  --no-smoothed-evaluation\n"
+                 "                      vox, voxloc: keep the voxel map at the vertices of the faces\n"
+                 "                      it folds (by default re-evaluated at the field's smoothed\n"
+                 "                      surface, where scan noise does not fold it)\n"
                  "  --align-boundary    the field follows boundary curves and the map puts them on\n"
                  "                      integer iso-lines, so quads end cleanly there (direct field\n"
                  "                      and hat solver only; the report counts curves aligned and\n"
@@ -535,7 +543,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                        passes, --quads, --render, --close-holes, features or hat\n"
                  "                        solver yet\n"
                  "  --out-of-core         take the out-of-core path whatever the estimate\n",
-                 {"greedy", "no-untangle", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
+                 {"greedy", "no-untangle", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
                  &runParam});
 
 }  // namespace seamvox::cli

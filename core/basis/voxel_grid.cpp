@@ -198,7 +198,13 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   // The factorizations leave many freed blocks in the heap (150 MB at grid 128): back to the
   // system before the map (20 bytes per face) is built next to the basis.
   releaseFreedMemory();
+  std::vector<std::complex<double>> coefficients;
+  if (options.smoothedEvaluation) coefficients = expandCoefficients(reduction, solution.unknowns);
   storeSeamlessSolution(basis, reduction, std::move(solution), topology, cut, param);
+  if (options.smoothedEvaluation) {
+    out.smoothedEvaluation = evaluateFoldsAtSmoothedSurface(mesh, topology, field, basis, coefficients,
+                                                            options.edgeLength, param.cornerUV);
+  }
   return out;
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/solve/hat_solver.h"
+#include "core/basis/smoothed_evaluation.h"
 #include "core/basis/voxel_basis.h"
 
 namespace seamvox {
@@ -79,6 +80,7 @@ struct VoxelParamResult {
   double regularization = 0.0;
   std::uint32_t failedAttempts = 0;
   std::uint32_t invisibleTranslations = 0;  ///< Reduction::invisibleTranslations
+  SmoothedEvaluationStats smoothedEvaluation;  ///< ParamOptions::smoothedEvaluation
 };
 /// Strongest normal-derivative regularization the Vox solver retries with.
 constexpr double kMaxVoxelRegularization = 1e-3;

@@ -31,6 +31,9 @@ struct ParamOptions {
   /// Boundary loops within this extent (mesh units; 0: none) carry no seam translation, so the
   /// map extends over the hole (smallHoleConstraints, hole_loops.h). The pipeline passes h.
   double closeHolesWithin = 0.0;
+  /// Voxel solvers: the map re-evaluated at the smoothed surface at the vertices of the faces it
+  /// folds (smoothed_evaluation.h).
+  bool smoothedEvaluation = true;
 };
 
 struct ParamResult {

@@ -98,6 +98,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   VoxelParamResult vox;
   try {
     ParamOptions voxOptions = options;
+    voxOptions.smoothedEvaluation = solverOptions.smoothedEvaluation;
     voxOptions.basisBuilt = [&] {
       if (options.basisBuilt) options.basisBuilt();
       if (solverOptions.meter) solverOptions.meter->finish("basis");
@@ -133,6 +134,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
   out.regularization = vox.regularization;
   out.failedAttempts = vox.failedAttempts;
   out.invisibleTranslations = vox.invisibleTranslations;
+  out.smoothedEvaluation = vox.smoothedEvaluation;
   out.param = std::move(vox.param);
   out.basisStats = vox.basisStats;
   out.determinedBasis = vox.determinedBasis;

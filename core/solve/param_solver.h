@@ -8,6 +8,7 @@
 
 #include "core/solve/hat_solver.h"
 #include "core/refine/refine.h"
+#include "core/basis/smoothed_evaluation.h"
 #include "core/basis/voxel_basis.h"
 #include "core/system/memory.h"
 
@@ -95,6 +96,8 @@ struct SolverOptions {
   /// field's directions until fieldNeeded runs (before the refinement, or the hat fallback): a
   /// caller may keep them elsewhere meanwhile, while the map is built next to the basis.
   std::function<void()> fieldIdle, fieldNeeded;
+  /// vox, voxloc: ParamOptions::smoothedEvaluation (out of core: StreamParamOptions's).
+  bool smoothedEvaluation = true;
 };
 
 struct SolverResult {
@@ -111,6 +114,7 @@ struct SolverResult {
   double regularization = 0.0;
   std::uint32_t failedAttempts = 0;
   std::uint32_t invisibleTranslations = 0;  ///< Reduction::invisibleTranslations (vox, voxloc)
+  SmoothedEvaluationStats smoothedEvaluation;  ///< vox, voxloc (SolverOptions::smoothedEvaluation)
   /// Set when the voxel system could not be factored and the hat solver ran instead (solver is
   /// then Hat): CHOLMOD's message. Reported, never silent.
   std::string fallbackReason;

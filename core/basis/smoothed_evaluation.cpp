@@ -1,0 +1,90 @@
+// The voxel map re-evaluated at the smoothed surface at the vertices of the faces it folds.
+#include "core/basis/smoothed_evaluation.h"
+
+#include <algorithm>
+
+#include "core/field/field_proxy.h"
+#include "core/system/parallel.h"
+
+namespace seamvox {
+
+namespace {
+
+std::array<Vec2d, 3> faceValues(const WedgeMap& uv, FaceId f) { return {uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]}; }
+
+std::array<Vec3d, 3> facePoints(const TriangleMesh& mesh, FaceId f) {
+  const Triangle& t = mesh.triangles[f];
+  return {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
+}
+
+}  // namespace
+
+SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh, const Topology& topology,
+                                                        const CrossField& field, const VoxelBasis& basis,
+                                                        const std::vector<std::complex<double>>& coefficients,
+                                                        double h, WedgeMap& cornerUV) {
+  SmoothedEvaluationStats stats;
+  const FaceId nf = topology.numFaces();
+  const std::uint32_t steps = field.frameSmoothing > 0 ? field.frameSmoothing : kFieldSmoothingIterations;
+  // Round one measures every face (in parallel, flags per face), the next ones the fans moved.
+  std::vector<std::uint8_t> folded(nf, 0);
+  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      folded[f] = foldedForSmoothedEvaluation(facePoints(mesh, f), faceValues(cornerUV, f), h);
+    }
+  });
+  std::vector<FaceId> faces;
+  for (FaceId f = 0; f < nf; ++f) {
+    if (folded[f]) faces.push_back(f);
+  }
+  std::vector<std::uint8_t>().swap(folded);
+  stats.foldedBefore = faces.size();
+  std::vector<VertexId> tried;  // every vertex a round tried, sorted
+  for (std::uint32_t round = 0; round < kSmoothedEvaluationRounds && !faces.empty(); ++round) {
+    std::vector<VertexId> vertices = detail::smoothedCandidates(
+        faces, tried,
+        [&](FaceId f) { return foldedForSmoothedEvaluation(facePoints(mesh, f), faceValues(cornerUV, f), h); },
+        [&](FaceId f) { return mesh.triangles[f]; });
+    // One wedge: every corner around the vertex in it (no seam through it).
+    const auto seamOrIsolated = [&](VertexId v) {
+      if (topology.isIsolatedVertex(v)) return true;
+      const std::uint32_t w = cornerUV.wedge(topology.vertexCorner(v));
+      bool several = false;
+      topology.forEachCornerAround(v, [&](CornerId c) { several = several || cornerUV.wedge(c) != w; });
+      return several;
+    };
+    vertices.erase(std::remove_if(vertices.begin(), vertices.end(), seamOrIsolated), vertices.end());
+    if (vertices.empty()) break;
+    const std::vector<Vec3f> smoothed = smoothPositionsAt(mesh, topology, steps, vertices);
+    const VoxelGridGeometry& grid = basis.grid();
+    // New values in parallel; then, vertex by vertex in increasing order, each set unless it
+    // stretches a face of its fan at the values so far (as the out-of-core pass goes).
+    std::vector<std::uint8_t> keep(vertices.size(), 0);
+    std::vector<Vec2d> value(vertices.size());
+    parallelFor(vertices.size(), 1024, [&](const IndexRange& range) {
+      for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+        const VertexId v = vertices[i];
+        // The wedge's value comes from its smallest corner's element (VoxelBasis::evaluateCorners).
+        CornerId smallest = kInvalidId;
+        topology.forEachCornerAround(v, [&](CornerId c) { smallest = std::min(smallest, c); });
+        const std::uint32_t e = basis.cornerElement(smallest);
+        keep[i] = e == kInvalidId;
+        if (keep[i]) continue;
+        const std::complex<double> q = basis.evaluateAt(e, grid.toGrid(smoothed[i].cast<double>()), coefficients);
+        value[i] = Vec2d(q.real(), q.imag());
+      }
+    });
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      topology.forEachCornerAround(vertices[i], [&](CornerId c) {
+        const FaceId f = cornerFace(c);
+        keep[i] = keep[i] || movingStretches(facePoints(mesh, f), faceValues(cornerUV, f), c % 3, value[i], h);
+      });
+      if (!keep[i]) cornerUV.setWedgeValue(cornerUV.wedge(topology.vertexCorner(vertices[i])), value[i]);
+      stats.keptForStretch += keep[i];
+    }
+    detail::finishSmoothedRound(topology, vertices, tried, faces, stats);
+  }
+  return stats;
+}
+
+}  // namespace seamvox
