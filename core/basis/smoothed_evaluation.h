@@ -9,9 +9,9 @@
 /// (the one holding its own position: evaluateAt clamps the point into that voxel).
 /// A vertex keeps its value when the new one would stretch a face of its fan (isStretched) that
 /// the old one did not, the rest of the fan as set so far (vertices in increasing order): a noise
-/// needle (a face far thinner in 3D than its neighbours) given an image of its neighbours' size. Rounds:
-/// first every face is measured, then only the faces around the vertices just moved; a vertex
-/// is tried once.
+/// needle (a face far thinner in 3D than its neighbours) given an image of its neighbours' size.
+/// Rounds: first every face is measured, then only the faces around the vertices just moved; a
+/// vertex is tried once.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -27,11 +27,11 @@
 
 namespace seamvox {
 
-/// Rounds of smoothedEvaluation (each after the faces it measured).
+/// Rounds of evaluateFoldsAtSmoothedSurface (each after the faces it measured).
 constexpr std::uint32_t kSmoothedEvaluationRounds = 3;
-/// A face is folded here when its parameterAreaRatio is below this (negative or NaN-free and
-/// collapsed to under a tenth of its area): the refinement's default collapse threshold, so what
-/// this leaves folded is what seeds it.
+/// A face is folded here when its parameterAreaRatio is below this (flipped, or collapsed to
+/// under a tenth of its area; a zero-area face, NaN, is not): the refinement's default collapse
+/// threshold, so what this leaves folded is what seeds it.
 constexpr double kSmoothedEvaluationRatio = 0.1;
 
 inline bool foldedForSmoothedEvaluation(const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q, double h) {
