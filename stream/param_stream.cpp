@@ -305,14 +305,12 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
       if (!untangle.progress) untangle.progress = options.progress;
       // Close cones on one point with flips next to them: repaired first alone; when flips stay
       // next to them another pass starts before the whole map is repaired.
-      std::uint64_t repairedNearCones = 0;
+      UntangleStats nearCones;
       if (passesLeft) {
         const auto suspects = scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, coincidentDistance, pass);
         if (!suspects.empty()) {
           const FacesNearPoints near = facesNearConePairs(scratch, suspects, coincidentDistance, pass);
-          const ScratchUntangleStats local =
-              untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass, &near);
-          repairedNearCones = local.untangle.flippedBefore - local.untangle.flippedAfter;
+          nearCones = untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass, &near).untangle;
           if (nextPass(scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, coincidentDistance, pass))) {
             continue;
           }
@@ -322,7 +320,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
           untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass);
       r.untangled = true;
       r.untangle = repaired.untangle;
-      r.untangle.flippedBefore += repairedNearCones;
+      addEarlierRepair(r.untangle, nearCones);
       r.untangleWindowFaces = repaired.windowFaces;
       meter.finish("untangle");
       r.conePassFlips.push_back(r.untangle.flippedAfter);

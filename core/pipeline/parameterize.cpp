@@ -364,16 +364,15 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       // Close cones on one point with flips next to them (below) start another pass, which
       // repairs its own map: they are repaired first alone, and when flips stay next to them the
       // pass starts before the whole map is repaired.
-      std::uint64_t repairedNearCones = 0;
+      UntangleStats nearCones;
       if (passesLeft) {
         const auto suspects = foldedCoincidentCones(r, coneCut.cut.cones, coneIndex, coincidentDistance);
         if (!suspects.empty()) {
           const std::vector<std::uint8_t> near = facesNearCones(r.mesh, suspects, coincidentDistance);
           UntangleOptions local = untangle;
           local.onlyFaces = &near;
-          const UntangleStats stats = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
-                                                    r.solved.param.translations, local);
-          repairedNearCones = stats.flippedBefore - stats.flippedAfter;
+          nearCones = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
+                                    r.solved.param.translations, local);
           const auto pairs = foldedCoincidentCones(r, coneCut.cut.cones, coneIndex, coincidentDistance);
           if (!pairs.empty()) {
             coincident.insert(coincident.end(), pairs.begin(), pairs.end());
@@ -384,7 +383,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       }
       r.untangle = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
                                  r.solved.param.translations, untangle);
-      r.untangle.flippedBefore += repairedNearCones;
+      addEarlierRepair(r.untangle, nearCones);
       r.untangled = true;
       meter.finish("untangle");
       r.conePassFlips.push_back(r.untangle.flippedAfter);

@@ -841,6 +841,17 @@ GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, cons
 
 }  // namespace
 
+void addEarlierRepair(UntangleStats& stats, const UntangleStats& earlier) {
+  stats.flippedBefore += earlier.flippedBefore - earlier.flippedAfter;
+  stats.solves += earlier.solves;
+  stats.patchFaces += earlier.patchFaces;
+  stats.freeVertices += earlier.freeVertices;
+  stats.largestUnknowns = std::max(stats.largestUnknowns, earlier.largestUnknowns);
+  stats.relocatedVertices += earlier.relocatedVertices;
+  stats.jointVertices += earlier.jointVertices;
+  stats.seconds += earlier.seconds;
+}
+
 std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                           WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h) {
   // Only the components of flipped faces are walked, each walk given up once its box reaches h:

@@ -80,6 +80,11 @@ struct UntangleStats {
   double seconds = 0.0;
 };
 
+/// stats of a repair that followed an earlier one restricted to some faces (onlyFaces: the faces
+/// near close cones, repaired first when a pass may follow): the flips the earlier one repaired
+/// count as found before, its work and seconds are added.
+void addEarlierRepair(UntangleStats& stats, const UntangleStats& earlier);
+
 /// Closed components whose bounding box diagonal is below h and whose map still has flipped
 /// faces are mapped to the point (0, 0), every corner and the translations of their seams: a
 /// closed surface other than a torus needs cones, which a seamless map puts on lattice points at
