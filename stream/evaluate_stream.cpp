@@ -216,7 +216,7 @@ SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& fol
       CornerId smallest = kInvalidId;
       table.forEachCornerAround(v, [&](CornerId c) { smallest = std::min(smallest, c); });
       const FaceId f = cornerFace(smallest);
-      const Vec3d x = grid.toGrid(points.points(points.triangle(f))[smallest % 3]);
+      const Vec3d x = grid.toGrid(points.points(f)[smallest % 3]);
       const std::uint32_t begin = faceStart[f], end = faceStart[std::uint64_t(f) + 1];
       const std::uint32_t e = voxels.nearestElement(x, end - begin, [&](std::uint32_t i) { return element[begin + i]; });
       bool keep = e == kInvalidId;
@@ -225,7 +225,7 @@ SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& fol
         const Vec2d value(q.real(), q.imag());
         table.forEachCornerAround(v, [&](CornerId c) {
           const FaceId g = cornerFace(c);
-          keep = keep || movingStretches(points.points(points.triangle(g)), faceValues(g), c % 3, value, h);
+          keep = keep || movingStretches(points.points(g), faceValues(g), c % 3, value, h);
         });
         if (!keep) values.set(wedgeStart[v], value);
       }
