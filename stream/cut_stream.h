@@ -28,7 +28,8 @@ struct ScratchCut {
 /// The cut file (ScratchCut::corners) read through a page cache as CutCorners is read.
 class PagedCutCorners {
  public:
-  PagedCutCorners(const ScratchFile& corners, std::size_t cacheBytes) : bytes_(corners, cacheBytes) {}
+  PagedCutCorners(const ScratchFile& corners, std::size_t cacheBytes, std::size_t pageBytes = kScratchPageBytes)
+      : bytes_(corners, cacheBytes, pageBytes) {}
   bool isCut(CornerId c) { return CutCorners::isCutByte(bytes_[c]); }
   std::uint8_t matching(CornerId c) { return CutCorners::matchingOfByte(bytes_[c]); }
   std::uint64_t bytesRead() const { return bytes_.bytesRead(); }

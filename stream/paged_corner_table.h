@@ -14,9 +14,9 @@ namespace seamvox {
 /// The cleaned mesh's corner table through page caches: the same fan walk as Topology's.
 class PagedCornerTable {
  public:
-  PagedCornerTable(const CleanScratch& scratch, std::size_t cacheBytes)
-      : faces_(scratch.faces, cacheBytes), opposite_(scratch.opposite, cacheBytes),
-        vertexCorner_(scratch.vertexCorner, cacheBytes) {}
+  PagedCornerTable(const CleanScratch& scratch, std::size_t cacheBytes, std::size_t pageBytes = kScratchPageBytes)
+      : faces_(scratch.faces, cacheBytes, pageBytes), opposite_(scratch.opposite, cacheBytes, pageBytes),
+        vertexCorner_(scratch.vertexCorner, cacheBytes, pageBytes) {}
   VertexId vertex(CornerId c) { return faces_[c / 3].triangle[c % 3]; }
   CornerId opposite(CornerId c) { return opposite_[c]; }
   CornerId vertexCorner(VertexId v) { return vertexCorner_[v]; }
@@ -49,6 +49,12 @@ class PagedCornerTable {
 /// thread holds a handful of caches; a larger cache hardly saves reads.
 inline std::size_t pageCacheBytes(std::uint64_t memoryBytes) {
   return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 32, std::uint64_t(1) << 17, std::uint64_t(1) << 23));
+}
+
+/// Per page cache of a window scattered over the mesh (small pages): what a window of about
+/// memoryBytes / 1 KiB faces reads of one file, in clusters around far-apart seeds.
+inline std::size_t windowCacheBytes(std::uint64_t memoryBytes) {
+  return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 64, std::uint64_t(1) << 20, std::uint64_t(1) << 25));
 }
 
 /// A face's corner positions (in double, as TriangleMesh::position gives them) through caches.

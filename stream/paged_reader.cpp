@@ -13,7 +13,6 @@
 namespace seamvox {
 
 namespace {
-constexpr std::size_t kPageBytes = std::size_t(1) << 14;
 constexpr std::uint64_t kNoPage = ~std::uint64_t(0);
 }  // namespace
 
@@ -23,7 +22,7 @@ PageCache::PageCache(ScratchUpdater& updater, const ScratchFile& file, std::size
   dirty_.assign(tags_.size(), 0);
 }
 
-PageCache::PageCache(const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes)
+PageCache::PageCache(const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes, std::size_t pageBytes)
     : path_(file.path), recordBytes_(recordBytes) {
   if (recordBytes == 0 || file.bytes % recordBytes != 0) {
     throw IoError(path_ + ": scratch file of " + std::to_string(file.bytes) + " bytes is not a whole number of " +
@@ -33,7 +32,7 @@ PageCache::PageCache(const ScratchFile& file, std::size_t recordBytes, std::size
   // Powers of two (records per page, pages in the cache): a lookup is a shift, a mask and two
   // compares. Two ways per set, the older one replaced: pages of a moving front (a breadth-first
   // walk over the surface) that fall on one set no longer evict each other at once.
-  while ((std::size_t(2) << pageShift_) * recordBytes <= kPageBytes) ++pageShift_;
+  while ((std::size_t(2) << pageShift_) * recordBytes <= pageBytes) ++pageShift_;
   pageRecords_ = std::size_t(1) << pageShift_;
   pageBytes_ = pageRecords_ * recordBytes;
   const std::uint64_t pagesInFile = (numRecords_ + pageRecords_ - 1) / pageRecords_;

@@ -16,11 +16,19 @@
 
 namespace seamvox {
 
+/// Page sizes: passes that walk files in a coherent order read large pages; lookups scattered over
+/// the mesh (the repair's window around flips far apart) small ones, so that the cache holds the
+/// records they need rather than their neighbours.
+constexpr std::size_t kScratchPageBytes = std::size_t(1) << 14;
+constexpr std::size_t kWindowPageBytes = std::size_t(1) << 10;
+
 /// Two-way set-associative cache of fixed-size records of one file.
 class PageCache {
  public:
-  /// cacheBytes: what the pages may hold (rounded up to a power of two of pages, at least two).
-  PageCache(const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes);
+  /// cacheBytes: what the pages may hold (rounded up to a power of two of pages, at least two);
+  /// a page holds as many records as fit pageBytes, a power of two (one at least).
+  PageCache(const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes,
+            std::size_t pageBytes = kScratchPageBytes);
   /// Writable: a changed page is written back in place when it leaves the cache and on flush(),
   /// through `updater` (its writes counted in its folder; a full disk is the folder's IoError).
   PageCache(ScratchUpdater& updater, const ScratchFile& file, std::size_t recordBytes, std::size_t cacheBytes);
@@ -76,7 +84,8 @@ class PageCache {
 template <class T>
 class PagedReader {
  public:
-  PagedReader(const ScratchFile& file, std::size_t cacheBytes) : cache_(file, sizeof(T), cacheBytes) {}
+  PagedReader(const ScratchFile& file, std::size_t cacheBytes, std::size_t pageBytes = kScratchPageBytes)
+      : cache_(file, sizeof(T), cacheBytes, pageBytes) {}
   T operator[](std::uint64_t i) {
     T value;
     std::memcpy(static_cast<void*>(&value), cache_.record(i), sizeof(T));  // T is a plain record

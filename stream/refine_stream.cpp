@@ -28,9 +28,11 @@ struct RegionReaders {
   PagedReader<std::uint8_t> rotations;
   PagedCutCorners corners;
   const ScratchCut& cut;
-  RegionReaders(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& c, std::size_t cacheBytes)
-      : table(scratch, cacheBytes), positions(scratch.positions, cacheBytes), directions(field.directions, cacheBytes),
-        rotations(c.faceRotation, cacheBytes), corners(c.corners, cacheBytes), cut(c) {}
+  RegionReaders(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& c, std::size_t cacheBytes,
+                std::size_t pageBytes = kScratchPageBytes)
+      : table(scratch, cacheBytes, pageBytes), positions(scratch.positions, cacheBytes, pageBytes),
+        directions(field.directions, cacheBytes, pageBytes), rotations(c.faceRotation, cacheBytes, pageBytes),
+        corners(c.corners, cacheBytes, pageBytes), cut(c) {}
   RegionMesh extract(const std::vector<FaceId>& regionFaces) {
     return detail::extractRegionFrom(
         table, [&](VertexId v) { return positions[v]; }, [&](FaceId f) { return directions[f]; },
@@ -61,10 +63,14 @@ void checkRegionFaces(const std::vector<FaceId>& regionFaces, std::uint64_t numF
 }  // namespace
 
 RegionMesh extractScratchRegion(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
-                                const std::vector<FaceId>& regionFaces, const StreamPassOptions& pass) {
+                                const std::vector<FaceId>& regionFaces, const StreamPassOptions& pass,
+                                std::uint64_t* bytesRead) {
   checkRegionFaces(regionFaces, scratch.numFaces);
-  RegionReaders readers(scratch, field, cut, pageCacheBytes(pass.memoryBytes));
-  return readers.extract(regionFaces);
+  // A region is faces scattered over the mesh: small pages, and room for what it reads.
+  RegionReaders readers(scratch, field, cut, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
+  RegionMesh out = readers.extract(regionFaces);
+  if (bytesRead) *bytesRead += readers.bytesRead();
+  return out;
 }
 
 std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "core/quality/metrics.h"
@@ -108,32 +109,37 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
     const double radius = options.patchRadius * double(1u << round);
     rings += static_cast<std::uint32_t>(std::clamp(meanEdge > 0.0 ? std::ceil(radius * h / meanEdge) : 2.0, 2.0, 64.0));
   }
+  // The flips lie far apart over the mesh: the window's walks read small pages, and a growth
+  // stops as soon as it passes the cap (that many rings would be halved anyway).
   const std::uint64_t cap = std::max<std::uint64_t>(8 * options.minPatchFaces, pass.memoryBytes >> 10);
+  const std::size_t windowBytes = windowCacheBytes(pass.memoryBytes);
   std::vector<FaceId> window;
+  RegionMesh w;
+  std::uint64_t bytesRead = 0;
   {
-    PagedCornerTable table(scratch, cacheBytes);
-    window = detail::growFacesIn(table, flipped, rings);
+    PagedCornerTable table(scratch, windowBytes, kWindowPageBytes);
+    const auto grow = [&] {
+      return detail::growFacesIn(table, flipped, rings, rings > 2 ? cap : std::numeric_limits<std::size_t>::max());
+    };
+    window = grow();
     while (window.size() > cap && rings > 2) {
       rings = std::max(2u, rings / 2);
-      window = detail::growFacesIn(table, flipped, rings);
+      window = grow();
     }
-    folder.countRead("untangle", table.bytesRead());
-  }
-  out.windowFaces = window.size();
-  out.windowRings = rings;
-  RegionMesh w = extractScratchRegion(scratch, field, cut, window, pass);
-  {
-    PagedCornerTable table(scratch, cacheBytes);
+    out.windowFaces = window.size();
+    out.windowRings = rings;
+    w = extractScratchRegion(scratch, field, cut, window, pass, &bytesRead);
     alignWindowWithMesh(w, table);
-    folder.countRead("untangle", table.bytesRead());
+    bytesRead += table.bytesRead();
   }
+  folder.countRead("untangle", bytesRead);
   std::vector<Vec2d> values(3 * window.size());
   {
-    PagedReader<std::uint32_t> cornerWedge(map.cornerWedge, cacheBytes);
-    PagedReader<Vec2d> wedgeValues(map.wedgeValues, cacheBytes);
+    PagedReader<std::uint32_t> cornerWedge(map.cornerWedge, windowBytes, kWindowPageBytes);
+    PagedReader<Vec2d> wedgeValues(map.wedgeValues, windowBytes, kWindowPageBytes);
     for (std::size_t c = 0; c < values.size(); ++c) values[c] = wedgeValues[cornerWedge[3 * window[c / 3] + c % 3]];
     if (field.framePositions.bytes > 0) {  // the smoothed surface tells faces folded in 3D
-      PagedReader<Vec3f> smooth(field.framePositions, cacheBytes);
+      PagedReader<Vec3f> smooth(field.framePositions, windowBytes, kWindowPageBytes);
       for (VertexId v : w.vertexOrigin) w.field.framePositions.push_back(smooth[v]);
       folder.countRead("untangle", smooth.bytesRead());
     }

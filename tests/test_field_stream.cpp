@@ -57,6 +57,31 @@ TEST(PagedReader, ReadsEveryRecordInAnyOrderThroughTwoPages) {
   EXPECT_THROW(reader[values.size()], IoError);
 }
 
+// Clusters of records far apart, read again and again (a window's rings around scattered flips):
+// small pages read the same values and a small fraction of the bytes large pages read, since the
+// cache then holds the clusters rather than their neighbours.
+TEST(PagedReader, SmallPagesHoldScatteredClusters) {
+  testing::TempDir dir;
+  ScratchFolder folder(dir.dir());
+  std::vector<Vec3f> values(1 << 20);
+  for (std::size_t i = 0; i < values.size(); ++i) values[i] = Vec3f(float(i), float(i % 7), float(i % 11));
+  ScratchWriter writer(folder, "test");
+  writer.write(values.data(), values.size() * sizeof(Vec3f));
+  const ScratchFile file = writer.finish();
+  const std::size_t cacheBytes = std::size_t(1) << 19;
+  PagedReader<Vec3f> large(file, cacheBytes), small(file, cacheBytes, kWindowPageBytes);
+  std::size_t wrong = 0;
+  for (int pass = 0; pass < 10; ++pass) {
+    for (std::size_t cluster = 0; cluster < 200; ++cluster) {
+      const std::size_t start = cluster * 5209;  // 61 KiB apart: a large page each
+      for (std::size_t i = start; i < start + 40; ++i) wrong += large[i] != values[i] || small[i] != values[i];
+    }
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_LT(small.bytesRead(), 400u * kWindowPageBytes);  // each cluster's one or two pages, once
+  EXPECT_GT(large.bytesRead(), 10 * small.bytesRead());
+}
+
 // Random reads and writes through a two-page writable cache agree with a vector; after flush()
 // the file holds the vector, the rest of a zero file still zero.
 TEST(PagedArray, ChangesThroughTwoPagesReachTheFile) {

@@ -23,6 +23,7 @@
 #include "core/solve/hat_solver.h"
 #include "core/basis/reduce.h"
 #include "core/refine/refine.h"
+#include "core/refine/detail_refine.h"
 #include "core/refine/spline_space.h"
 #include "core/mesh/subdivide.h"
 #include "core/mesh/topology.h"
@@ -190,6 +191,23 @@ TEST_F(RefineSphere, MarkedDamageAroundConesIsRepairedToTheHatMap) {
   EXPECT_GT(stats.factorBytes, 0u);
   EXPECT_NEAR(stats.refinedVertexFraction, double(stats.freeVertices) / s.mesh().numVertices(),
               1e-12);
+}
+
+// A growth capped at maxFaces stops at the first ring that passes the cap: the rings grown
+// until then, exactly; a cap it never passes changes nothing.
+TEST_F(RefineSphere, GrowthStopsAtTheRingThatPassesTheCap) {
+  const Scene& s = *scene_;
+  WedgeMap damaged;
+  const std::vector<FaceId> seeds = damageAroundCones(s, 1, damaged);
+  const Topology& topology = s.topology();
+  const std::vector<FaceId> whole = detail::growFacesIn(topology, seeds, 6);
+  EXPECT_EQ(detail::growFacesIn(topology, seeds, 6, whole.size()), whole);
+  std::vector<std::size_t> sizes;
+  for (std::uint32_t r = 0; r <= 6; ++r) sizes.push_back(detail::growFacesIn(topology, seeds, r).size());
+  ASSERT_LT(sizes[2], sizes[3]) << "the rings grow the patch";
+  const std::vector<FaceId> capped = detail::growFacesIn(topology, seeds, 6, sizes[2]);
+  EXPECT_EQ(capped, detail::growFacesIn(topology, seeds, 3));
+  EXPECT_GT(capped.size(), sizes[2]);
 }
 
 TEST_F(RefineSphere, RegionGroupsAreWholeComponentsAndTheMapDoesNotDependOnThem) {

@@ -14,6 +14,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -68,14 +69,16 @@ inline bool isSortedUnique(const std::vector<FaceId>& faces) {
   return std::adjacent_find(faces.begin(), faces.end(), [](FaceId a, FaceId b) { return a >= b; }) == faces.end();
 }
 
-/// growFaces over any corner table.
+/// growFaces over any corner table. It stops early, with more than maxFaces faces, once a ring
+/// takes it past maxFaces (a caller that would refuse so large a patch need not grow it whole).
 template <class Table>
-std::vector<FaceId> growFacesIn(Table& topology, std::vector<FaceId> frontier, std::uint32_t rings) {
+std::vector<FaceId> growFacesIn(Table& topology, std::vector<FaceId> frontier, std::uint32_t rings,
+                                std::size_t maxFaces = std::numeric_limits<std::size_t>::max()) {
   std::vector<FaceId> patch = frontier;
   std::sort(patch.begin(), patch.end());
   patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
   std::vector<VertexId> seen;  // vertices expanded, sorted
-  for (std::uint32_t ring = 0; ring < rings && !frontier.empty(); ++ring) {
+  for (std::uint32_t ring = 0; ring < rings && !frontier.empty() && patch.size() <= maxFaces; ++ring) {
     // The frontier's vertices not expanded yet, each once (a vertex has about six frontier faces).
     std::vector<VertexId> fresh;
     fresh.reserve(3 * frontier.size());
