@@ -855,14 +855,17 @@ void addEarlierRepair(UntangleStats& stats, const UntangleStats& earlier) {
 std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                                           WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h) {
   // Only the components of flipped faces are walked, each walk given up once its box reaches h:
-  // the cost follows the flips, and nothing is kept per face of the mesh.
+  // the cost follows the flips, and nothing is kept per face of the mesh. A walk that meets a face
+  // of an earlier walk is in that walk's component, which was given up (a speck is walked whole):
+  // it is not a speck either, though the faces left to it may look closed and small.
   std::vector<std::uint32_t> collapsed;
-  std::unordered_set<FaceId> walked, speckFaces;
+  std::unordered_set<FaceId> walked, speckFaces, current;
   std::vector<CornerId> corners;
   for (FaceId seed = 0; seed < topology.numFaces(); ++seed) {
     if (walked.count(seed) || !isFlippedRatio(parameterAreaRatio(mesh, cornerUV, seed, h))) continue;
     std::vector<FaceId> faces{seed};
     walked.insert(seed);
+    current = {seed};
     BoundingBox box;
     bool closed = true, small = true;
     for (std::size_t i = 0; i < faces.size() && small; ++i) {
@@ -875,9 +878,12 @@ std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topolo
           closed = false;
         } else if (walked.insert(cornerFace(o)).second) {
           faces.push_back(cornerFace(o));
+          current.insert(cornerFace(o));
+        } else if (!current.count(cornerFace(o))) {
+          small = false;  // an earlier walk's component
         }
       }
-      small = box.diagonal() < h;
+      small = small && box.diagonal() < h;
     }
     if (!small || !closed) continue;
     // Closed: E = 3F / 2; a torus (chi 0) needs no cone and is left to the repair.
