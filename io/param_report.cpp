@@ -120,6 +120,10 @@ void writeUntangle(JsonWriter& j, const UntangleStats& u) {
   j.key("largestUnknowns").value(U64{u.largestUnknowns});
   j.key("relocatedVertices").value(U64{u.relocatedVertices}).key("jointVertices").value(U64{u.jointVertices});
   j.key("specks").value(U64{u.specks}).key("speckFaces").value(u.speckFaces);
+  j.key("leftover").beginObject();
+  j.key("flips").value(u.leftoverFlips).key("regionFaces").value(u.leftoverRegionFaces);
+  j.key("freeVertices").value(U64{u.leftoverFreeVertices}).key("flipsAfterResolve").value(u.leftoverAfterResolve);
+  j.endObject();
   j.key("seconds").value(u.seconds);
   j.endObject();
 }

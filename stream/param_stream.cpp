@@ -316,11 +316,11 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
           }
         }
       }
-      const ScratchUntangleStats repaired =
-          untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass);
+      ScratchUntangleStats repaired = untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass);
+      addEarlierRepair(repaired.untangle, nearCones);
+      resolveScratchLeftoverFlips(folder, scratch, field, cut, map, translations, options.refine, untangle, pass, repaired);
       r.untangled = true;
       r.untangle = repaired.untangle;
-      addEarlierRepair(r.untangle, nearCones);
       r.untangleWindowFaces = repaired.windowFaces;
       meter.finish("untangle");
       r.conePassFlips.push_back(r.untangle.flippedAfter);

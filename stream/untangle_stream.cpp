@@ -10,6 +10,7 @@
 #include "core/refine/detail_refine.h"
 #include "core/refine/detail_region.h"
 #include "core/system/errors.h"
+#include "core/system/stopwatch.h"
 #include "stream/paged_corner_table.h"
 #include "stream/paged_reader.h"
 #include "stream/refine_stream.h"
@@ -177,6 +178,27 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
   }
   applyScratchRefinement(folder, moved, map, &seamT, pass);
   return out;
+}
+
+void resolveScratchLeftoverFlips(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                                 const ScratchCut& cut, ScratchMap& map, std::vector<std::complex<double>>& seamT,
+                                 RefineOptions refine, const UntangleOptions& options, const StreamPassOptions& pass,
+                                 ScratchUntangleStats& repaired) {
+  if (repaired.untangle.flippedAfter == 0 || !(options.leftoverRadius > 0.0)) return;
+  const auto start = SteadyClock::now();
+  double meanEdge = 0.0;
+  std::vector<FaceId> flipped =
+      flippedFaces(folder, scratch, map, options.edgeLength, pageCacheBytes(pass.memoryBytes), nullptr, meanEdge);
+  if (flipped.empty()) return;
+  refine.edgeLength = options.edgeLength;
+  const RefineOptions local = leftoverRefineOptions(refine, std::move(flipped), meanEdge, options.leftoverRadius);
+  const RefineResult resolved = refineScratchNearCones(folder, scratch, field, cut, map, seamT, local, pass);
+  applyScratchRefinement(folder, resolved, map, &seamT, pass);
+  const double seconds = secondsSince(start);
+  ScratchUntangleStats again = untangleScratchFlips(folder, scratch, field, cut, map, seamT, options, pass);
+  addLeftoverRepair(again.untangle, repaired.untangle, resolved.stats.regionFaces, resolved.stats.freeVertices, seconds);
+  again.windowFaces = std::max(again.windowFaces, repaired.windowFaces);
+  repaired = again;
 }
 
 }  // namespace seamvox

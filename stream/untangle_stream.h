@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/refine/refine.h"
 #include "core/refine/untangle.h"
 #include "stream/clean_stream.h"
 #include "stream/cut_stream.h"
@@ -45,5 +46,14 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
                                           const ScratchCut& cut, ScratchMap& map,
                                           std::vector<std::complex<double>>& seamT, const UntangleOptions& options,
                                           const StreamPassOptions& pass, const FacesNearPoints* only = nullptr);
+
+/// The hat re-solve of the flips an out-of-core repair left (UntangleOptions::leftoverRadius;
+/// refineScratchNearCones with leftoverRefineOptions) and the repair again, as the in-memory
+/// pipeline does: `repaired` (the earlier repair's figures) becomes both repairs'. refine: the
+/// pipeline's refine options (edgeLength set here from options). Nothing without flips left.
+void resolveScratchLeftoverFlips(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
+                                 const ScratchCut& cut, ScratchMap& map, std::vector<std::complex<double>>& seamT,
+                                 RefineOptions refine, const UntangleOptions& options, const StreamPassOptions& pass,
+                                 ScratchUntangleStats& repaired);
 
 }  // namespace seamvox

@@ -60,6 +60,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
   o.untangle = !args.flag("no-untangle");
+  if (args.flag("no-leftover-resolve")) o.untangleOptions.leftoverRadius = 0.0;
   o.solver.smoothedEvaluation = !args.flag("no-smoothed-evaluation");
   o.features.alignBoundary = args.flag("align-boundary");
   o.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
@@ -148,6 +149,13 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(r.untangle.foldedIn3D),
                 static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves,
                 r.untangle.relocatedVertices, r.untangle.jointVertices, r.untangle.seconds);
+    if (r.untangle.leftoverFlips > 0) {
+      std::printf("foldover repair: %llu flips left re-solved in the hat basis (%llu faces, %u vertices), "
+                  "%llu flipped after that, then repaired again\n",
+                  static_cast<unsigned long long>(r.untangle.leftoverFlips),
+                  static_cast<unsigned long long>(r.untangle.leftoverRegionFaces), r.untangle.leftoverFreeVertices,
+                  static_cast<unsigned long long>(r.untangle.leftoverAfterResolve));
+    }
     if (r.untangle.specks > 0) {
       std::printf("foldover repair: %u closed components smaller than a cell (%llu faces) were still folded: "
                   "mapped to one point, their faces collapsed\n",
@@ -456,7 +464,8 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--spline-cells N] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
-                 "                     [--greedy] [--no-untangle] [--no-smoothed-evaluation] [--weld]\n"
+                 "                     [--greedy] [--no-untangle] [--no-leftover-resolve]\n"
+                 "                     [--no-smoothed-evaluation] [--weld]\n"
                  "                     [--keep-order] [--report R.json]\n"
                  "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
                  "                     [--quads Q.obj|.ply] [--close-holes C] [--align-boundary]\n"
@@ -500,6 +509,11 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
                  "                      re-solved with stiffening; seams and translations kept)\n"
+                 "  --no-leftover-resolve\n"
+                 "                      vox, voxloc: no hat re-solve within 1 H of the flips the\n"
+                 "                      repair leaves, and no second repair after it (by default\n"
+                 "                      both run, before any further cone pass; report\n"
+                 "                      untangle.leftover)\n"
                  "  --no-smoothed-evaluation\n"
                  "                      vox, voxloc: keep the voxel map at the vertices of the faces\n"
                  "                      it folds (by default re-evaluated at the field's smoothed\n"
@@ -543,7 +557,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                        passes, --quads, --render, --close-holes, features or hat\n"
                  "                        solver yet\n"
                  "  --out-of-core         take the out-of-core path whatever the estimate\n",
-                 {"greedy", "no-untangle", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
+                 {"greedy", "no-untangle", "no-leftover-resolve", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
                  &runParam});
 
 }  // namespace seamvox::cli

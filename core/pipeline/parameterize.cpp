@@ -9,8 +9,10 @@
 #include <unordered_map>
 
 #include "core/mesh/hole_caps.h"
+#include "core/refine/refine.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
+#include "core/system/stopwatch.h"
 
 namespace seamvox {
 
@@ -264,6 +266,33 @@ void uncapForOutput(PipelineResult& r, CrossField& field, CappedHoles& caps) {
   caps = CappedHoles();
 }
 
+/// The hat re-solve of the flips the repair left on a voxel map (UntangleOptions::leftoverRadius),
+/// then the repair again from there; r.untangle becomes the figures of both repairs.
+void resolveLeftoverFlips(PipelineResult& r, const CrossField& field, const CutResult& cut, RefineOptions refine,
+                          const UntangleOptions& untangle) {
+  if (r.untangle.flippedAfter == 0 || !(untangle.leftoverRadius > 0.0) || r.solved.solver == ParamSolver::Hat) return;
+  const auto start = SteadyClock::now();
+  std::vector<FaceId> flipped;
+  double edges = 0.0;
+  for (FaceId f = 0; f < r.mesh.numFaces(); ++f) {
+    if (!isFlippedRatio(parameterAreaRatio(r.mesh, r.solved.param.cornerUV, f, r.edgeLength))) continue;
+    flipped.push_back(f);
+    const Triangle& t = r.mesh.triangles[f];
+    for (int k = 0; k < 3; ++k) edges += (r.mesh.position(t[(k + 1) % 3]) - r.mesh.position(t[k])).norm();
+  }
+  if (flipped.empty()) return;
+  refine.edgeLength = r.edgeLength;
+  const double meanEdge = edges / (3.0 * double(flipped.size()));
+  const RefineOptions local = leftoverRefineOptions(refine, std::move(flipped), meanEdge, untangle.leftoverRadius);
+  const RefineResult resolved = refineNearConesInPlace(r.mesh, r.topology, field, cut, r.solved.param.cornerUV,
+                                                       r.solved.param.translations, local);
+  const double seconds = secondsSince(start);
+  UntangleStats again =
+      untangleFlips(r.mesh, r.topology, field, cut, r.solved.param.cornerUV, r.solved.param.translations, untangle);
+  addLeftoverRepair(again, r.untangle, resolved.stats.regionFaces, resolved.stats.freeVertices, seconds);
+  r.untangle = again;
+}
+
 /// The cone passes: merge and cut, solve; again with the pairs a solve put on one point merged,
 /// or close cones with flips left at them after the repair, while there are such pairs (at most
 /// options.maxConePasses passes).
@@ -384,6 +413,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       r.untangle = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
                                  r.solved.param.translations, untangle);
       addEarlierRepair(r.untangle, nearCones);
+      resolveLeftoverFlips(r, field, coneCut.cut, solverOptions.refine, untangle);
       r.untangled = true;
       meter.finish("untangle");
       r.conePassFlips.push_back(r.untangle.flippedAfter);

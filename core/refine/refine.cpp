@@ -126,6 +126,20 @@ std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topo
 
 }  // namespace
 
+RefineOptions leftoverRefineOptions(const RefineOptions& base, std::vector<FaceId> flipped, double meanEdge,
+                                    double radius) {
+  RefineOptions out = base;
+  out.markedFaces = std::move(flipped);
+  out.islandFaces.clear();
+  out.seedFromMap = false;
+  out.maxRounds = 1;
+  out.splineSpacing = 0.0;
+  out.splineCells = 0;
+  const double rings = meanEdge > 0.0 ? std::ceil(radius * base.edgeLength / meanEdge) : 1.0;
+  out.rings = static_cast<std::uint32_t>(std::clamp(rings, 1.0, 256.0));
+  return out;
+}
+
 std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> frontier,
                               std::uint32_t rings) {
   return detail::growFacesIn(topology, std::move(frontier), rings);

@@ -267,6 +267,13 @@ RefineResult refineNearConesInPlace(const TriangleMesh& mesh, const Topology& to
                                     std::vector<std::complex<double>>& seamT, const RefineOptions& options = {},
                                     std::size_t batchCorners = std::size_t(1) << 22);
 
+/// The hat re-solve of flips a foldover repair left (UntangleOptions::leftoverRadius): `flipped`
+/// as the marked faces with the rings that reach radius h at their mean edge length meanEdge (1 to
+/// 256 rings), one round in the hat basis, not seeded from the map. base: the pipeline's refine
+/// options (edge length, cone weights, holes held).
+RefineOptions leftoverRefineOptions(const RefineOptions& base, std::vector<FaceId> flipped, double meanEdge,
+                                    double radius);
+
 /// Writes a refinement's corner values into a whole-mesh map (3 #F; a free vertex's wedges
 /// change whole and keep their ids) and, when given, its re-solved translations into the per-seam
 /// translations.

@@ -841,8 +841,10 @@ GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, cons
 
 }  // namespace
 
-void addEarlierRepair(UntangleStats& stats, const UntangleStats& earlier) {
-  stats.flippedBefore += earlier.flippedBefore - earlier.flippedAfter;
+namespace {
+
+/// The work of an earlier repair added to a later one's figures.
+void addRepairWork(UntangleStats& stats, const UntangleStats& earlier) {
   stats.solves += earlier.solves;
   stats.patchFaces += earlier.patchFaces;
   stats.freeVertices += earlier.freeVertices;
@@ -850,6 +852,27 @@ void addEarlierRepair(UntangleStats& stats, const UntangleStats& earlier) {
   stats.relocatedVertices += earlier.relocatedVertices;
   stats.jointVertices += earlier.jointVertices;
   stats.seconds += earlier.seconds;
+}
+
+}  // namespace
+
+void addEarlierRepair(UntangleStats& stats, const UntangleStats& earlier) {
+  stats.flippedBefore += earlier.flippedBefore - earlier.flippedAfter;
+  addRepairWork(stats, earlier);
+}
+
+void addLeftoverRepair(UntangleStats& stats, const UntangleStats& earlier, std::uint64_t regionFaces,
+                       std::uint32_t freeVertices, double seconds) {
+  stats.leftoverFlips = earlier.flippedAfter;
+  stats.leftoverAfterResolve = stats.flippedBefore;
+  stats.leftoverRegionFaces = regionFaces;
+  stats.leftoverFreeVertices = freeVertices;
+  stats.flippedBefore = earlier.flippedBefore;
+  stats.rounds = std::max(stats.rounds, earlier.rounds);
+  addRepairWork(stats, earlier);
+  stats.specks += earlier.specks;
+  stats.speckFaces += earlier.speckFaces;
+  stats.seconds += seconds;
 }
 
 std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,

@@ -53,6 +53,11 @@ struct UntangleOptions {
   /// did not before. The wide patches matter on fine meshes: at 36 edges per h, a cone's
   /// distorted neighbourhood spans more than 12 rings.
   std::uint32_t jointRings = 36;
+  /// After the repair, the pipelines re-solve the flips it left in the hat basis within this many
+  /// h of them (one round from the repaired map, leftoverRefineOptions) and repair again: a fold
+  /// next to a cone that the voxel or spline map put there and no patch opens with the cone fixed.
+  /// Voxel maps only (a hat map re-solved locally is itself again); 0: off.
+  double leftoverRadius = 1.0;
   /// When given (one flag per face): only the flipped faces marked here are repaired and counted,
   /// the others are taken as fine (a repair near a few cones, before deciding on another pass).
   const std::vector<std::uint8_t>* onlyFaces = nullptr;
@@ -77,6 +82,11 @@ struct UntangleStats {
   /// their faces are collapsed, not counted in flippedAfter.
   std::uint32_t specks = 0;
   std::uint64_t speckFaces = 0;
+  /// The hat re-solve of the flips the repair left (UntangleOptions::leftoverRadius): the flips it
+  /// started from, its region's faces and free vertices, and the flips right after it (before the
+  /// repair that follows; flippedAfter is that repair's).
+  std::uint64_t leftoverFlips = 0, leftoverRegionFaces = 0, leftoverAfterResolve = 0;
+  std::uint32_t leftoverFreeVertices = 0;
   double seconds = 0.0;
 };
 
@@ -84,6 +94,12 @@ struct UntangleStats {
 /// near close cones, repaired first when a pass may follow): the flips the earlier one repaired
 /// count as found before, its work and seconds are added.
 void addEarlierRepair(UntangleStats& stats, const UntangleStats& earlier);
+
+/// stats of the repair after the hat re-solve of what an earlier repair left (`earlier`, whose
+/// flippedAfter the re-solve started from): the leftover figures set from the re-solve's refine
+/// stats, the work and seconds of both repairs added, flippedBefore the earlier one's.
+void addLeftoverRepair(UntangleStats& stats, const UntangleStats& earlier, std::uint64_t regionFaces,
+                       std::uint32_t freeVertices, double seconds);
 
 /// Closed components whose bounding box diagonal is below h and whose map still has flipped
 /// faces are mapped to the point (0, 0), every corner and the translations of their seams: a
