@@ -724,8 +724,8 @@ std::uint32_t coneEdges(const Topology& topology, const std::vector<VertexId>& c
 
 // The collapse bound of the issue: voxloc collapses no triangle except between two coincident
 // cones (metrics.h collapsesBetweenCones), the hat solver neither; each edge between two cones
-// collapses at most its two triangles; the stage's whole-map counts are the metric's; no bad face
-// is left at the region's border.
+// collapses at most its two triangles; the stage's whole-map counts are the metric's; bad faces
+// left at the region's border: none, or with the spline round few, for the repair.
 void expectNoCollapseBeyondCones(const Scene& s, const MapQuality& hat, const SolverFigures& voxloc) {
   EXPECT_EQ(hat.collapsed, hat.collapsedAtCones);
   EXPECT_EQ(voxloc.map.collapsed, voxloc.map.collapsedAtCones);
@@ -734,8 +734,15 @@ void expectNoCollapseBeyondCones(const Scene& s, const MapQuality& hat, const So
   EXPECT_EQ(refine.collapsedAfter, voxloc.map.collapsed);
   EXPECT_EQ(refine.collapsedAtConesAfter, voxloc.map.collapsedAtCones);
   EXPECT_EQ(refine.flippedAfter, voxloc.map.flipped);
-  EXPECT_EQ(refine.unresolvedFaces, 0u);
-  EXPECT_FALSE(refine.rounds.empty());
+  ASSERT_FALSE(refine.rounds.empty());
+  // In the hat basis alone the rounds go on while a face is left bad at the region's border; after
+  // the spline round they stop once none is collapsed, and the faces left poor or flipped at the
+  // border are the foldover repair's: at most 0.1% of the faces.
+  if (refine.rounds.front().spline) {
+    EXPECT_LE(double(refine.unresolvedFaces), 0.001 * s.mesh().numFaces());
+  } else {
+    EXPECT_EQ(refine.unresolvedFaces, 0u);
+  }
 }
 
 TEST_F(RefineSphere, VoxLocIsSeamlessAndCloseToHat) {

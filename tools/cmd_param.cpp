@@ -54,7 +54,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.solver.gridResolution = parseGridResolution(args);
   const std::int64_t rings = args.integer("rings", o.solver.refine.rings, 0, 64);
   o.solver.refine.rings = static_cast<std::uint32_t>(rings);
-  o.solver.refine.splineCells = static_cast<std::uint32_t>(args.integer("spline-cells", 0, 0, 64));
+  o.solver.refine.splineCells = static_cast<std::uint32_t>(args.integer("spline-cells", 4, 0, 64));
   c.fieldSource = args.value("field", "auto");
   o.mergeCones = parseMergeCones(args);
   o.spacing = parseGridSpacing(args);
@@ -487,9 +487,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --rings K           rings of neighbours added around the voxloc region (default 1)\n"
                  "  --spline-cells N    voxloc: solve the region first in trilinear B-splines N per\n"
                  "                      voxel edge (one unknown per vertex only next to cones), then\n"
-                 "                      per vertex only where that leaves faces collapsed or flipped;\n"
-                 "                      fewer refined vertices, more flips left on noisy scans;\n"
-                 "                      0: off (default)\n"
+                 "                      per vertex only where that leaves faces collapsed or flipped\n"
+                 "                      (default 4: about a seventh of the vertices solved per vertex\n"
+                 "                      without it; 0: off, every round per vertex)\n"
                  "  --field auto        the smoothest cross field: smooth up to 400K faces, proxy above\n"
                  "                      (default)\n"
                  "  --field smooth      the smoothest cross field by one solve over all faces (exact)\n"

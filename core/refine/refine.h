@@ -63,9 +63,9 @@ struct RefineOptions {
   /// seedFromMap.
   double splineSpacing = 0.0;
   /// B-splines per voxel edge for the voxloc solvers, which set splineSpacing to the voxel size
-  /// divided by it; 0: off (the default; bench/RESULTS.md, session 28, has what it costs and
-  /// saves).
-  std::uint32_t splineCells = 0;
+  /// divided by it; 0: off. The default 4 refines 0.8% of armadillo x4's vertices in the hat
+  /// basis against 6.2% without it (bench/RESULTS.md, sessions 28 and 32).
+  std::uint32_t splineCells = 4;
   /// A group of the spline round is solved in the hat basis instead when the B-splines and own
   /// unknowns are not fewer than this fraction of its free vertices (solveRegionInSplines).
   double splineMaxFraction = 0.25;
