@@ -272,15 +272,23 @@ void resolveLeftoverFlips(PipelineResult& r, const CrossField& field, const CutR
                           const UntangleOptions& untangle) {
   if (r.untangle.flippedAfter == 0 || !(untangle.leftoverRadius > 0.0) || r.solved.solver == ParamSolver::Hat) return;
   const auto start = SteadyClock::now();
+  const FaceId nf = r.mesh.numFaces();
+  std::vector<std::uint8_t> isFlipped(nf);
+  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      isFlipped[f] = isFlippedRatio(parameterAreaRatio(r.mesh, r.solved.param.cornerUV, f, r.edgeLength));
+    }
+  });
   std::vector<FaceId> flipped;
   double edges = 0.0;
-  for (FaceId f = 0; f < r.mesh.numFaces(); ++f) {
-    if (!isFlippedRatio(parameterAreaRatio(r.mesh, r.solved.param.cornerUV, f, r.edgeLength))) continue;
+  for (FaceId f = 0; f < nf; ++f) {
+    if (!isFlipped[f]) continue;
     flipped.push_back(f);
     const Triangle& t = r.mesh.triangles[f];
     for (int k = 0; k < 3; ++k) edges += (r.mesh.position(t[(k + 1) % 3]) - r.mesh.position(t[k])).norm();
   }
   if (flipped.empty()) return;
+  std::vector<std::uint8_t>().swap(isFlipped);
   refine.edgeLength = r.edgeLength;
   const double meanEdge = edges / (3.0 * double(flipped.size()));
   const RefineOptions local = leftoverRefineOptions(refine, std::move(flipped), meanEdge, untangle.leftoverRadius);

@@ -876,7 +876,8 @@ void addLeftoverRepair(UntangleStats& stats, const UntangleStats& earlier, std::
 }
 
 std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
-                                          WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h) {
+                                          WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h,
+                                          const std::vector<FaceId>* flipped) {
   // Only the components of flipped faces are walked, each walk given up once its box reaches h:
   // the cost follows the flips, and nothing is kept per face of the mesh. A walk that meets a face
   // of an earlier walk is in that walk's component, which was given up (a speck is walked whole):
@@ -884,8 +885,7 @@ std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topolo
   std::vector<std::uint32_t> collapsed;
   std::unordered_set<FaceId> walked, speckFaces, current;
   std::vector<CornerId> corners;
-  for (FaceId seed = 0; seed < topology.numFaces(); ++seed) {
-    if (walked.count(seed) || !isFlippedRatio(parameterAreaRatio(mesh, cornerUV, seed, h))) continue;
+  const auto walk = [&](FaceId seed) {
     std::vector<FaceId> faces{seed};
     walked.insert(seed);
     current = {seed};
@@ -908,18 +908,27 @@ std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topolo
       }
       small = small && box.diagonal() < h;
     }
-    if (!small || !closed) continue;
+    if (!small || !closed) return;
     // Closed: E = 3F / 2; a torus (chi 0) needs no cone and is left to the repair.
     std::vector<VertexId> vertices;
     for (FaceId f : faces) vertices.insert(vertices.end(), mesh.triangles[f].begin(), mesh.triangles[f].end());
     std::sort(vertices.begin(), vertices.end());
     const std::int64_t v = std::unique(vertices.begin(), vertices.end()) - vertices.begin();
     const std::int64_t chi = v - 3 * std::int64_t(faces.size()) / 2 + std::int64_t(faces.size());
-    if (chi == 0) continue;
+    if (chi == 0) return;
     collapsed.push_back(static_cast<std::uint32_t>(faces.size()));
     for (FaceId f : faces) {
       speckFaces.insert(f);
       for (CornerId c = 3 * f; c < 3 * f + 3; ++c) corners.push_back(c);
+    }
+  };
+  if (flipped) {
+    for (FaceId seed : *flipped) {
+      if (!walked.count(seed)) walk(seed);
+    }
+  } else {
+    for (FaceId seed = 0; seed < topology.numFaces(); ++seed) {
+      if (!walked.count(seed) && isFlippedRatio(parameterAreaRatio(mesh, cornerUV, seed, h))) walk(seed);
     }
   }
   if (corners.empty()) return collapsed;
@@ -1045,7 +1054,14 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     classifyPatch(touched);
   }
   if (std::any_of(state.begin(), state.end(), [](std::uint8_t s) { return s != kFine; })) {
-    for (std::uint32_t faces : collapseSpecks(mesh, topology, cut, cornerUV, seamT, h)) {
+    // The states are the map's (every change re-measured), except outside onlyFaces.
+    std::vector<FaceId> flipped;
+    if (!only) {
+      for (FaceId f = 0; f < nf; ++f) {
+        if (state[f] != kFine) flipped.push_back(f);
+      }
+    }
+    for (std::uint32_t faces : collapseSpecks(mesh, topology, cut, cornerUV, seamT, h, only ? nullptr : &flipped)) {
       stats.specks += faces > 0;
       stats.speckFaces += faces;
     }

@@ -109,8 +109,11 @@ void addLeftoverRepair(UntangleStats& stats, const UntangleStats& earlier, std::
 /// seamless (its seams' translations 0), its faces are collapsed (`check` counts them so, the
 /// component report says "point") and the quad mesh reports it as an island smaller than a cell.
 /// Returns the faces of each component mapped so (in the order of their first flipped face).
+/// flipped: the map's flipped faces, increasing, when the caller has them (else one pass finds
+/// them).
 std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
-                                          WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h);
+                                          WedgeMap& cornerUV, std::vector<std::complex<double>>& seamT, double h,
+                                          const std::vector<FaceId>* flipped = nullptr);
 
 /// Repairs flips of cornerUV (3 #F, on the wedges of cut) in place; seamT (per seam of cut,
 /// Gaussian integers) is updated where a seam inside a patch re-rounded its translation. A round
