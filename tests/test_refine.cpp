@@ -580,6 +580,58 @@ TEST_F(RefineSphere, InPlaceBatchesGiveTheWholeRefinementsMapAndFigures) {
   }
 }
 
+// regionOnly: the same map, the faces solved listed (sorted, holding the marked ones, every face
+// whose corners changed among them), and the after-figures counted over them alone.
+TEST_F(RefineSphere, RegionOnlyListsTheSolvedFacesAndCountsThemAlone) {
+  const Scene& s = *scene_;
+  WedgeMap damaged;
+  RefineOptions options;
+  options.edgeLength = s.options.edgeLength;
+  options.markedFaces = damageAroundCones(s, 2, damaged);
+  std::sort(options.markedFaces.begin(), options.markedFaces.end());
+  options.rings = 1;
+  options.maxRounds = 1;
+  options.seedFromMap = false;
+  // A fold far from the marked faces, outside the region: counted only by the whole-map figures.
+  VertexId far = 0;
+  double farthest = 0.0;
+  for (VertexId v = 0; v < s.mesh().numVertices(); ++v) {
+    double nearest = 1e300;
+    for (FaceId f : options.markedFaces) nearest = std::min(nearest, (s.mesh().position(v) - s.mesh().position(s.mesh().triangles[f][0])).norm());
+    if (nearest > farthest) far = v, farthest = nearest;
+  }
+  const CornerId farCorner = s.topology().vertexCorner(far);
+  damaged.setWedgeValue(damaged.wedge(farCorner), damaged[farCorner] + Vec2d(2.5, -1.5));
+  ASSERT_GT(measureMap(s.mesh(), damaged, &s.field, s.options.edgeLength).flipped, 0u);
+  WedgeMap plain = damaged, listed = damaged;
+  std::vector<Complex> plainT = s.hat.translations, listedT = s.hat.translations;
+  const RefineResult a = refineNearConesInPlace(s.mesh(), s.topology(), s.field, s.cut, plain, plainT, options);
+  options.regionOnly = true;
+  const RefineResult b = refineNearConesInPlace(s.mesh(), s.topology(), s.field, s.cut, listed, listedT, options);
+  EXPECT_TRUE(a.regionFaces.empty());
+  ASSERT_EQ(b.regionFaces.size(), b.stats.regionFaces);
+  EXPECT_TRUE(std::is_sorted(b.regionFaces.begin(), b.regionFaces.end()));
+  EXPECT_TRUE(std::includes(b.regionFaces.begin(), b.regionFaces.end(), options.markedFaces.begin(),
+                            options.markedFaces.end()));
+  std::size_t differ = 0;
+  for (CornerId c = 0; c < plain.size(); ++c) {
+    differ += plain[c] != listed[c];
+    if (listed[c] != damaged[c]) {
+      EXPECT_TRUE(std::binary_search(b.regionFaces.begin(), b.regionFaces.end(), cornerFace(c))) << "corner " << c;
+    }
+  }
+  EXPECT_EQ(differ, 0u);
+  std::uint64_t collapsed = 0, flipped = 0;
+  for (FaceId f : b.regionFaces) {
+    const double ratio = parameterAreaRatio(s.mesh(), listed, f, s.options.edgeLength);
+    collapsed += std::abs(ratio) < kCollapsedAreaFraction;
+    flipped += isFlippedRatio(ratio);
+  }
+  EXPECT_EQ(b.stats.flippedAfter, flipped);
+  EXPECT_EQ(b.stats.collapsedAfter, collapsed);
+  EXPECT_GT(a.stats.flippedAfter, b.stats.flippedAfter) << "the fold outside the region is not counted";
+}
+
 TEST_F(RefineSphere, ExtractedRegionIsAManifoldSubMeshWithIndexMaps) {
   const Scene& s = *scene_;
   const Topology& topology = s.topology();

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <random>
 
+#include <tbb/global_control.h>
+
 #include "core/basis/basis.h"
 #include "core/mesh/clean.h"
 #include "core/pipeline/parameterize.h"
@@ -655,6 +657,118 @@ TEST(Untangle, JointPatchesUnfoldAMirroredDiskThatRelocationCannot) {
       topology.forEachCornerAround(cone, [&](CornerId c) { EXPECT_EQ(map.cornerUV[c], before[c]); });
     }
   }
+}
+
+// Several mirrored disks far apart, each with many flipped faces: the joint patches of one wave
+// (disjoint reaches) run in parallel and a disk's other seeds wait for the next wave. The map is
+// the same with one thread or two, every disk unfolds, seams and translations exact.
+TEST(Untangle, JointPatchesOfSeveralFoldsGiveTheSameMapAtAnyThreadCount) {
+  testing::CutSurface cs = testing::makeCutSurface(sphere(24000));
+  const TriangleMesh& mesh = cs.s.mesh;
+  const Topology& topology = cs.s.topology;
+  const double h = 0.1;
+  ParamOptions param;
+  param.edgeLength = h;
+  const ParamResult clean = parameterizeMesh(mesh, topology, cs.field, cs.cut, param);
+  ASSERT_EQ(measureMap(mesh, clean.cornerUV, &cs.field, h).flipped, 0u);
+  std::vector<std::uint8_t> blocked(mesh.numVertices(), 0);  // the cut, and near a disk already
+  for (VertexId c : cs.cut.cones) blocked[c] = 1;
+  for (const SeamCurve& seam : cs.cut.seams) {
+    for (CornerId c : seam.corners) blocked[topology.vertex(c)] = blocked[topology.vertex(nextCorner(c))] = 1;
+  }
+  ParamResult broken = clean;
+  std::size_t disks = 0;
+  for (VertexId v = 0; v < mesh.numVertices() && disks < 4; v += 13) {
+    bool clear = true;
+    for (const auto& [w, r] : ringsAround(mesh, topology, v, 8)) clear = clear && !blocked[w] && !topology.isBoundaryVertex(w);
+    if (!clear) continue;
+    for (const auto& [w, r] : ringsAround(mesh, topology, v, 12)) blocked[w] = 1;
+    const Vec2d centre = broken.cornerUV[topology.vertexCorner(v)];
+    for (const auto& [w, r] : ringsAround(mesh, topology, v, 2)) {  // one wedge each: off the cut
+      const std::uint32_t wedge = broken.cornerUV.wedge(topology.vertexCorner(w));
+      const Vec2d q = broken.cornerUV.wedgeValue(wedge);
+      broken.cornerUV.setWedgeValue(wedge, Vec2d(q.x(), 2.0 * centre.y() - q.y()));
+    }
+    ++disks;
+  }
+  ASSERT_GE(disks, 3u) << "too few places far from the cut";
+  const std::uint64_t flips = measureMap(mesh, broken.cornerUV, &cs.field, h).flipped;
+  ASSERT_GT(flips, 10 * disks);
+  std::vector<WedgeMap> maps;
+  for (std::size_t threads : {1u, 2u}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    ParamResult map = broken;
+    UntangleOptions options;
+    options.edgeLength = h;
+    options.maxRounds = 0;
+    options.relocationPasses = 0;
+    options.jointRings = 6;
+    std::vector<std::complex<double>> t = map.translations;
+    const UntangleStats stats = untangleFlips(mesh, topology, cs.field, cs.cut, map.cornerUV, t, options);
+    EXPECT_EQ(stats.flippedBefore, flips);
+    EXPECT_EQ(stats.flippedAfter, 0u);
+    EXPECT_GT(stats.jointVertices, 0u);
+    EXPECT_TRUE(stats.leftFaces.empty());
+    EXPECT_EQ(measureMap(mesh, map.cornerUV, &cs.field, h).flipped, 0u);
+    const SeamQuality seams = measureSeams(mesh, topology, cs.cut, map.cornerUV);
+    EXPECT_LT(seams.maxResidual, 1e-10);
+    EXPECT_EQ(t, map.translations);
+    maps.push_back(map.cornerUV);
+  }
+  std::size_t differ = 0;
+  for (CornerId c = 0; c < maps[0].size(); ++c) differ += maps[0][c] != maps[1][c];
+  EXPECT_EQ(differ, 0u) << "corners whose (u, v) differ between one and two threads";
+}
+
+// With the faces that may be flipped given (a caller that knows the rest of the map is fine), the
+// repair measures only those and gives the same map as one that measures every face; the faces
+// it leaves flipped are listed. Faces left out are taken as fine and never touched.
+TEST(Untangle, CandidateFacesGiveTheSameRepairAsTheWholeMap) {
+  DamagedMap d = damagedSphereMap();
+  const TriangleMesh& mesh = d.cs.s.mesh;
+  const double h = 0.15;
+  std::vector<FaceId> flipped;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    if (isFlippedRatio(parameterAreaRatio(mesh, d.map.cornerUV, f, h))) flipped.push_back(f);
+  }
+  ASSERT_GT(flipped.size(), 0u);
+  UntangleOptions options;
+  options.edgeLength = h;
+  options.maxRounds = 1;
+  options.maxSolves = 1;  // leaves flips, so that the list of faces left is tested too
+  options.relocationPasses = 0;
+  options.jointRings = 0;
+  ParamResult whole = d.map, listed = d.map;
+  const UntangleStats a = untangleFlips(mesh, d.cs.s.topology, d.cs.field, d.cs.cut, whole.cornerUV,
+                                        whole.translations, options);
+  options.candidateFaces = &flipped;
+  const UntangleStats b = untangleFlips(mesh, d.cs.s.topology, d.cs.field, d.cs.cut, listed.cornerUV,
+                                        listed.translations, options);
+  EXPECT_EQ(a.flippedBefore, flipped.size());
+  EXPECT_EQ(b.flippedBefore, a.flippedBefore);
+  EXPECT_EQ(b.flippedAfter, a.flippedAfter);
+  EXPECT_EQ(b.leftFaces, a.leftFaces);
+  std::size_t differ = 0;
+  for (CornerId c = 0; c < whole.cornerUV.size(); ++c) differ += whole.cornerUV[c] != listed.cornerUV[c];
+  EXPECT_EQ(differ, 0u);
+  std::vector<FaceId> left;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    if (isFlippedRatio(parameterAreaRatio(mesh, whole.cornerUV, f, h))) left.push_back(f);
+  }
+  EXPECT_EQ(a.leftFaces, left);
+  EXPECT_EQ(a.flippedAfter, left.size());
+
+  // Half the flips left out: they are not counted and their faces keep their values.
+  const std::vector<FaceId> half(flipped.begin(), flipped.begin() + flipped.size() / 2);
+  ParamResult some = d.map;
+  options.candidateFaces = &half;
+  const UntangleStats c = untangleFlips(mesh, d.cs.s.topology, d.cs.field, d.cs.cut, some.cornerUV,
+                                        some.translations, options);
+  EXPECT_EQ(c.flippedBefore, half.size());
+  const std::vector<FaceId> unsorted = {flipped.back(), flipped.front()};
+  options.candidateFaces = &unsorted;
+  EXPECT_THROW(untangleFlips(mesh, d.cs.s.topology, d.cs.field, d.cs.cut, some.cornerUV, some.translations, options),
+               InputError);
 }
 
 TEST(Untangle, NothingToDoLeavesTheMapAsItIs) {

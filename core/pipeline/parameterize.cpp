@@ -272,33 +272,44 @@ void resolveLeftoverFlips(PipelineResult& r, const CrossField& field, const CutR
                           const UntangleOptions& untangle) {
   if (r.untangle.flippedAfter == 0 || !(untangle.leftoverRadius > 0.0) || r.solved.solver == ParamSolver::Hat) return;
   const auto start = SteadyClock::now();
-  const FaceId nf = r.mesh.numFaces();
-  std::vector<std::uint8_t> isFlipped(nf);
-  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-    for (FaceId f = range.begin(); f != range.end(); ++f) {
-      isFlipped[f] = isFlippedRatio(parameterAreaRatio(r.mesh, r.solved.param.cornerUV, f, r.edgeLength));
+  // The repair's states are the whole map's: its leftover faces are every flip, and after the
+  // re-solve only those and the re-solved faces are measured again.
+  std::vector<FaceId> left = r.untangle.leftFaces;
+  if (left.size() != r.untangle.flippedAfter) {  // not listed (a repair of some faces only): one pass
+    const FaceId nf = r.mesh.numFaces();
+    std::vector<std::uint8_t> isFlipped(nf);
+    parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+      for (FaceId f = range.begin(); f != range.end(); ++f) {
+        isFlipped[f] = isFlippedRatio(parameterAreaRatio(r.mesh, r.solved.param.cornerUV, f, r.edgeLength));
+      }
+    });
+    left.clear();
+    for (FaceId f = 0; f < nf; ++f) {
+      if (isFlipped[f]) left.push_back(f);
     }
-  });
-  std::vector<FaceId> flipped;
+    if (left.empty()) return;
+  }
   double edges = 0.0;
-  for (FaceId f = 0; f < nf; ++f) {
-    if (!isFlipped[f]) continue;
-    flipped.push_back(f);
+  for (FaceId f : left) {
     const Triangle& t = r.mesh.triangles[f];
     for (int k = 0; k < 3; ++k) edges += (r.mesh.position(t[(k + 1) % 3]) - r.mesh.position(t[k])).norm();
   }
-  if (flipped.empty()) return;
-  std::vector<std::uint8_t>().swap(isFlipped);
   refine.edgeLength = r.edgeLength;
-  const double meanEdge = edges / (3.0 * double(flipped.size()));
-  const RefineOptions local = leftoverRefineOptions(refine, std::move(flipped), meanEdge, untangle.leftoverRadius);
+  const double meanEdge = edges / (3.0 * double(left.size()));
+  RefineOptions local = leftoverRefineOptions(refine, left, meanEdge, untangle.leftoverRadius);
+  local.regionOnly = true;
   const RefineResult resolved = refineNearConesInPlace(r.mesh, r.topology, field, cut, r.solved.param.cornerUV,
                                                        r.solved.param.translations, local);
   const double seconds = secondsSince(start);
-  UntangleStats again =
-      untangleFlips(r.mesh, r.topology, field, cut, r.solved.param.cornerUV, r.solved.param.translations, untangle);
-  addLeftoverRepair(again, r.untangle, resolved.stats.regionFaces, resolved.stats.freeVertices, seconds);
-  r.untangle = again;
+  std::vector<FaceId> candidates;
+  std::set_union(left.begin(), left.end(), resolved.regionFaces.begin(), resolved.regionFaces.end(),
+                 std::back_inserter(candidates));
+  UntangleOptions again = untangle;
+  again.candidateFaces = &candidates;
+  UntangleStats repaired =
+      untangleFlips(r.mesh, r.topology, field, cut, r.solved.param.cornerUV, r.solved.param.translations, again);
+  addLeftoverRepair(repaired, r.untangle, resolved.stats.regionFaces, resolved.stats.freeVertices, seconds);
+  r.untangle = std::move(repaired);
 }
 
 /// The cone passes: merge and cut, solve; again with the pairs a solve put on one point merged,

@@ -365,7 +365,7 @@ void measureRefinedMap(Source& source, const std::vector<FaceId>& touched, const
   // Faces never solved keep the input map. With the map's own faces seeded (voxloc), the first
   // region held every face below the collapse threshold: none outside is collapsed or flipped.
   FaceCounts outside;
-  if (!options.seedFromMap || options.collapseThreshold < kCollapsedAreaFraction) {
+  if (!options.regionOnly && (!options.seedFromMap || options.collapseThreshold < kCollapsedAreaFraction)) {
     outside = source.countOutside(touched, cones, h);
   }
   stats.collapsedAfter = outside.collapsed + inside.collapsed;
@@ -551,6 +551,7 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
   if (largest.unknowns > 0) keepLargestSolve(largest, stats);
   measureRefinedMap(source, touched, cones, options, stats);
   source.collect(touched, out);
+  if (options.regionOnly) out.regionFaces = touched;
   countIslandVertices(source.table(), options.islandFaces, out.stats);
   collectChangedSeams(currentT, seamT, out);
 }

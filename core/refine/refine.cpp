@@ -140,9 +140,9 @@ RefineOptions leftoverRefineOptions(const RefineOptions& base, std::vector<FaceI
   return out;
 }
 
-std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> frontier,
-                              std::uint32_t rings) {
-  return detail::growFacesIn(topology, std::move(frontier), rings);
+std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> frontier, std::uint32_t rings,
+                              std::size_t maxFaces) {
+  return detail::growFacesIn(topology, std::move(frontier), rings, maxFaces);
 }
 
 std::vector<std::vector<FaceId>> splitRegion(const Topology& topology, const std::vector<FaceId>& faces,

@@ -23,6 +23,7 @@
 #include <complex>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -75,6 +76,9 @@ struct RefineOptions {
   /// Test hook: a group whose first face it returns true for fails its solve as an indefinite
   /// system would (RefineStats::failedSolves).
   std::function<bool(FaceId firstFace)> groupFails;
+  /// RefineResult::regionFaces lists the faces solved, and the after-figures (collapsedAfter,
+  /// flippedAfter) count only them: for a caller that knows the rest of the map's faces.
+  bool regionOnly = false;
   ProgressFn progress;
 };
 
@@ -162,6 +166,7 @@ struct RefineResult {
   std::vector<std::uint32_t> seams;
   std::vector<std::complex<double>> seamT;
   RefineStats stats;
+  std::vector<FaceId> regionFaces;  ///< faces solved in some round, increasing (RefineOptions::regionOnly)
 };
 
 /// The region's triangles as a mesh of their own, with index maps back to the whole mesh. Sub
@@ -182,8 +187,10 @@ struct RegionMesh {
 };
 
 /// Faces within `rings` vertex rings of the seeds (the seeds included). Sorted, unique. Cost: the
-/// patch's size times the valence.
-std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> seeds, std::uint32_t rings);
+/// patch's size times the valence. It stops early, with more than maxFaces faces, at the first
+/// ring that takes it past maxFaces (for a caller that refuses so large a patch).
+std::vector<FaceId> growFaces(const Topology& topology, std::vector<FaceId> seeds, std::uint32_t rings,
+                              std::size_t maxFaces = std::numeric_limits<std::size_t>::max());
 
 /// The faces (sorted, unique) as groups of whole components (faces sharing a vertex belong to one
 /// component): a group closes once it holds groupFaces faces, so each is solved on its own with

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 #include <tuple>
 #include <unordered_map>
@@ -729,6 +730,12 @@ constexpr std::uint64_t kJointEvaluations = 100'000'000;
 // patch's border fixed. A patch is kept only when it has fewer flipped faces, no face that was
 // fine flips and none collapses; else its wedges are restored. Returns the vertices of kept
 // patches.
+//
+// The seeds are taken in face order, in waves: a seed joins a wave when the faces its rings can
+// reach meet none that an earlier seed of the wave, or a deferred one, may reach; so the patches
+// of a wave share no face and run in parallel. A seed inside such faces waits for the next wave
+// (often its face is then in a tried patch). The same map at any thread count; the work budget
+// is checked between waves.
 std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
                               WedgeMap& cornerUV, std::vector<std::uint8_t>& state, double h,
                               std::uint32_t maxRings, const std::vector<std::uint8_t>* pinned,
@@ -736,50 +743,103 @@ std::uint32_t untangleJointly(const TriangleMesh& mesh, const Topology& topology
   std::vector<std::uint8_t> fixed = pinned ? *pinned : std::vector<std::uint8_t>(topology.numVertices(), 0);
   for (VertexId c : cut.cones) fixed[c] = 1;
   const auto badness = [&](FaceId f) { return faceBadness(mesh, cornerUV, f, h); };
+  // One seed's patch: built (serially, from the map between waves), then minimised on its own.
+  struct Candidate {
+    std::unique_ptr<JointPatch> patch;
+    std::vector<FaceId> faces;
+    std::uint64_t work = 0;
+    bool kept = false;
+  };
   std::uint32_t movedVertices = 0;
   std::uint64_t work = 0;
+  std::vector<std::uint8_t> claimed(state.size(), 0);  // faces a seed of the wave (or deferred) may reach
   for (const std::uint32_t rings : {2u, 3u, 4u, 6u, 9u, 12u, 18u, 27u, 36u}) {
     if (rings > maxRings) break;
-    std::vector<FaceId> seeds;
+    std::vector<FaceId> pending;
     for (FaceId f = 0; f < state.size(); ++f) {
-      if (state[f] != kFine) seeds.push_back(f);
+      if (state[f] != kFine) pending.push_back(f);
     }
     std::vector<std::uint8_t> tried(state.size(), 0);  // in a patch of this many rings already
-    for (FaceId seed : seeds) {
-      if (state[seed] == kFine || tried[seed]) continue;
+    // A deferred seed's rings and reach (topology only), kept for its next wave.
+    std::unordered_map<FaceId, std::pair<std::vector<VertexId>, std::vector<FaceId>>> known;
+    while (!pending.empty()) {
       if (work > kJointEvaluations) return movedVertices;
-      const Triangle& t = mesh.triangles[seed];
-      JointPatch patch(mesh, topology, cornerUV, h);
-      for (VertexId v : vertexRings(mesh, topology, {t[0], t[1], t[2]}, rings - 1)) patch.add(v, fixed);
-      if (patch.size() == 0) continue;
-      const std::vector<FaceId> faces = patch.faces();
-      std::vector<std::pair<CornerId, Vec2d>> saved;
-      std::vector<int> before;
-      std::uint32_t flipsBefore = 0;
-      for (FaceId f : faces) {
-        before.push_back(badness(f));
-        flipsBefore += before.back() == 1;
-        for (int k = 0; k < 3; ++k) saved.emplace_back(3 * f + k, cornerUV[3 * f + k]);
+      std::vector<Candidate> wave;
+      std::vector<FaceId> deferred, claims;
+      for (FaceId seed : pending) {
+        if (state[seed] == kFine || tried[seed]) {
+          known.erase(seed);
+          continue;
+        }
+        if (claimed[seed]) {
+          deferred.push_back(seed);
+          continue;
+        }
+        auto it = known.find(seed);
+        if (it == known.end()) {
+          const Triangle& t = mesh.triangles[seed];
+          std::vector<VertexId> ring = vertexRings(mesh, topology, {t[0], t[1], t[2]}, rings - 1);
+          std::vector<FaceId> reach;
+          for (VertexId v : ring) topology.forEachCornerAround(v, [&](CornerId c) { reach.push_back(cornerFace(c)); });
+          std::sort(reach.begin(), reach.end());
+          reach.erase(std::unique(reach.begin(), reach.end()), reach.end());
+          it = known.emplace(seed, std::make_pair(std::move(ring), std::move(reach))).first;
+        }
+        const std::vector<FaceId>& reach = it->second.second;
+        const bool free = std::none_of(reach.begin(), reach.end(), [&](FaceId f) { return claimed[f] != 0; });
+        for (FaceId f : reach) {
+          if (!claimed[f]) claimed[f] = 1, claims.push_back(f);
+        }
+        if (!free) {
+          deferred.push_back(seed);
+          continue;
+        }
+        Candidate cand;
+        cand.patch = std::make_unique<JointPatch>(mesh, topology, cornerUV, h);
+        for (VertexId v : it->second.first) cand.patch->add(v, fixed);
+        known.erase(it);
+        if (cand.patch->size() == 0) continue;
+        cand.faces = cand.patch->faces();
+        wave.push_back(std::move(cand));
       }
-      for (FaceId f : faces) tried[f] = 1;
-      work += patch.minimise(faces);
-      std::uint32_t flipsAfter = 0;
-      bool worse = false;
-      for (std::size_t i = 0; i < faces.size(); ++i) {
-        const int now = badness(faces[i]);
-        flipsAfter += now == 1;
-        worse = worse || becameWorse(before[i], now);
+      for (FaceId f : claims) claimed[f] = 0;
+      parallelForEach(wave.size(), 1, [&](std::uint64_t i) {
+        Candidate& cand = wave[i];
+        const std::vector<FaceId>& faces = cand.faces;
+        std::vector<std::pair<CornerId, Vec2d>> saved;
+        std::vector<int> before;
+        std::uint32_t flipsBefore = 0;
+        for (FaceId f : faces) {
+          before.push_back(badness(f));
+          flipsBefore += before.back() == 1;
+          for (int k = 0; k < 3; ++k) saved.emplace_back(3 * f + k, cornerUV[3 * f + k]);
+        }
+        cand.work = cand.patch->minimise(faces);
+        std::uint32_t flipsAfter = 0;
+        bool worse = false;
+        for (std::size_t j = 0; j < faces.size(); ++j) {
+          const int now = badness(faces[j]);
+          flipsAfter += now == 1;
+          worse = worse || becameWorse(before[j], now);
+        }
+        if (worse || flipsAfter >= flipsBefore) {
+          for (const auto& [c, q] : saved) cornerUV.setWedgeValue(cornerUV.wedge(c), q);
+          return;
+        }
+        cand.kept = true;
+        for (FaceId f : faces) {
+          const std::uint8_t now = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
+          state[f] = now == kFlipped && state[f] == kFolded ? std::uint8_t(kFolded) : now;
+        }
+      });
+      for (Candidate& cand : wave) {
+        work += cand.work;
+        for (FaceId f : cand.faces) tried[f] = 1;
+        if (!cand.kept) continue;
+        touched.insert(touched.end(), cand.faces.begin(), cand.faces.end());
+        movedVertices += static_cast<std::uint32_t>(cand.patch->size());
       }
-      if (worse || flipsAfter >= flipsBefore) {
-        for (const auto& [c, q] : saved) cornerUV.setWedgeValue(cornerUV.wedge(c), q);
-        continue;
-      }
-      for (FaceId f : faces) {
-        const std::uint8_t now = stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
-        state[f] = now == kFlipped && state[f] == kFolded ? std::uint8_t(kFolded) : now;
-      }
-      touched.insert(touched.end(), faces.begin(), faces.end());
-      movedVertices += static_cast<std::uint32_t>(patch.size());
+      pending.swap(deferred);
     }
   }
   return movedVertices;
@@ -960,10 +1020,17 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   auto classify = [&](FaceId f) {
     return only && !(*only)[f] ? kFine : stateOf(parameterAreaRatio(mesh, cornerUV, f, h));
   };
+  const std::vector<FaceId>* candidates = options.candidateFaces;
   auto classifyAll = [&] {
-    parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-      for (FaceId f = range.begin(); f != range.end(); ++f) state[f] = classify(f);
-    });
+    if (candidates) {
+      parallelFor(candidates->size(), 1u << 12, [&](const IndexRange& range) {
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) state[(*candidates)[i]] = classify((*candidates)[i]);
+      });
+    } else {
+      parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+        for (FaceId f = range.begin(); f != range.end(); ++f) state[f] = classify(f);
+      });
+    }
     markFolded(mesh, topology, field, state, [](FaceId f) { return f; });
   };
   // After a round only the patch's faces can change: every corner it assigns belongs to a free
@@ -985,6 +1052,11 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     throw InputError("untangle: " + std::to_string(only->size()) + " face flags for " +
                      std::to_string(nf) + " faces");
   }
+  if (candidates && (only || !std::is_sorted(candidates->begin(), candidates->end()) ||
+                     (!candidates->empty() && candidates->back() >= nf))) {
+    throw InputError("untangle: candidate faces must be increasing ids below " + std::to_string(nf) +
+                     ", without face flags");
+  }
   if (options.pinnedVertices && options.pinnedVertices->size() != mesh.numVertices()) {
     throw InputError("untangle: " + std::to_string(options.pinnedVertices->size()) + " vertex flags for " +
                      std::to_string(mesh.numVertices()) + " vertices");
@@ -1003,11 +1075,15 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     // The patch radius halves until the round's faces fit the budget (at least 2 rings).
     const std::uint64_t budget = std::max<std::uint64_t>(
         options.minPatchFaces, static_cast<std::uint64_t>(options.maxPatchFraction * nf));
+    // A growth stops at the first ring past the budget: that patch would be refused anyway.
     std::uint32_t rings = patchRings(mesh, seeds, h, options.patchRadius * double(1u << round));
-    std::vector<FaceId> patch = growFaces(topology, seeds, rings);
+    const auto grow = [&] {
+      return growFaces(topology, seeds, rings, rings > 2 ? budget : std::numeric_limits<std::size_t>::max());
+    };
+    std::vector<FaceId> patch = grow();
     while (patch.size() > budget && rings > 2) {
       rings = std::max(2u, rings / 2);
-      patch = growFaces(topology, seeds, rings);
+      patch = grow();
     }
     ++stats.rounds;
     stats.patchFaces += patch.size();
@@ -1070,8 +1146,10 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   std::sort(moved.begin(), moved.end());
   stats.freeVertices = static_cast<std::uint32_t>(std::unique(moved.begin(), moved.end()) - moved.begin());
   for (FaceId f = 0; f < nf; ++f) {
-    stats.flippedAfter += state[f] != kFine;
+    if (state[f] == kFine) continue;
+    ++stats.flippedAfter;
     stats.foldedIn3D += state[f] == kFolded;
+    if (!only) stats.leftFaces.push_back(f);
   }
   stats.seconds = secondsSince(start);
   return stats;

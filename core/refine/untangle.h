@@ -64,6 +64,10 @@ struct UntangleOptions {
   /// When given (one flag per vertex): vertices never moved, by any step (the border of a window
   /// cut out of a larger mesh, whose faces outside keep their values).
   const std::vector<std::uint8_t>* pinnedVertices = nullptr;
+  /// When given (increasing face ids): the only faces that may be flipped; every other face is
+  /// known fine and not measured (a caller that re-solved a few regions of a map whose flips it
+  /// knows). Not with onlyFaces.
+  const std::vector<FaceId>* candidateFaces = nullptr;
   ProgressFn progress;
 };
 
@@ -88,6 +92,9 @@ struct UntangleStats {
   std::uint64_t leftoverFlips = 0, leftoverRegionFaces = 0, leftoverAfterResolve = 0;
   std::uint32_t leftoverFreeVertices = 0;
   double seconds = 0.0;
+  /// The faces still flipped (folded in 3D or not) at the end, increasing: the whole map's, or
+  /// empty with UntangleOptions::onlyFaces.
+  std::vector<FaceId> leftFaces;
 };
 
 /// stats of a repair that followed an earlier one restricted to some faces (onlyFaces: the faces
