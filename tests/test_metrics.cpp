@@ -166,10 +166,12 @@ TEST(MapMetrics, FacesStretchedTenfoldAreCounted) {
   scaleFace(2, 5.0);    // 25
   for (int k = 1; k < 3; ++k) uv[9 + k].y() = 2.0 * uv[9].y() - uv[9 + k].y();  // face 3 mirrored: flipped
   scaleFace(4, 1e-4);   // collapsed
-  const MapQuality inMemory = measureMap(mesh, wedges(mesh, uv), nullptr, h);
+  std::vector<FaceId> flippedFaces = {7, 8};  // replaced
+  const MapQuality inMemory = measureMap(mesh, wedges(mesh, uv), nullptr, h, nullptr, nullptr, &flippedFaces);
   EXPECT_EQ(inMemory.stretched, 1u);
   EXPECT_EQ(inMemory.flipped, 1u);
   EXPECT_EQ(inMemory.collapsed, 1u);
+  EXPECT_EQ(flippedFaces, std::vector<FaceId>{3});
   MapQualitySums sums(h);
   for (FaceId f = 0; f < mesh.numFaces(); ++f) {
     const Triangle& t = mesh.triangles[f];

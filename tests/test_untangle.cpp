@@ -11,6 +11,7 @@
 
 #include "core/basis/basis.h"
 #include "core/mesh/clean.h"
+#include "core/pipeline/components.h"
 #include "core/pipeline/parameterize.h"
 #include "core/quality/metrics.h"
 #include "core/refine/untangle.h"
@@ -822,6 +823,33 @@ TEST(Untangle, PipelineStageLowersFlips) {
   bool stage = false;
   for (const StageFigures& s : meter.stages()) stage = stage || s.name == "untangle";
   EXPECT_TRUE(stage);
+}
+
+// The per-component figures count the flips measureMap listed: the same as measuring every face
+// again, with the pipeline's flips left unrepaired on two components.
+TEST(Untangle, ComponentFlipsFromTheListedFacesEqualThoseMeasuredAgain) {
+  PipelineOptions options;
+  options.solver.solver = ParamSolver::Hat;
+  options.spacing.cells = 30;
+  options.coneWeightRadius = 0.0;
+  options.untangle = false;
+  TriangleMesh mesh = generatedMesh(MeshKind::Genus2, 30000);
+  const TriangleMesh second = sphere(2000);
+  const VertexId offset = mesh.numVertices();
+  for (const Vec3f& p : second.positions) mesh.positions.push_back(p + Vec3f(5.0f, 0.0f, 0.0f));
+  for (Triangle t : second.triangles) mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const PipelineResult r = parameterize(std::move(mesh), options);
+  ASSERT_GT(r.mapQuality.flipped, 0u) << "the test needs a map with flips";
+  ASSERT_GE(r.components.count, 2u);
+  const ComponentSummary again = summarizeComponents(r.mesh, r.topology, r.cones, r.solved.param.unsolvedFaces,
+                                                     r.solved.param.anchoredFaces, r.edgeLength, 100);
+  ASSERT_EQ(again.listed.size(), r.components.listed.size());
+  std::uint64_t sum = 0;
+  for (std::size_t k = 0; k < again.listed.size(); ++k) {
+    EXPECT_EQ(r.components.listed[k].flippedFaces, again.listed[k].flippedFaces) << "component " << k;
+    sum += r.components.listed[k].flippedFaces;
+  }
+  EXPECT_EQ(sum, r.mapQuality.flipped);
 }
 
 // Scan noise folds faces in 3D, which flip under the least-squares map; the repair unfolds them

@@ -39,7 +39,8 @@ struct ComponentMapFacts {
 
 ComponentMapFacts gatherMapFacts(const TriangleMesh& mesh, const ComponentsResult& components,
                                  const std::vector<FaceId>& unsolvedFaces,
-                                 const std::vector<FaceId>& anchoredFaces, double edgeLength) {
+                                 const std::vector<FaceId>& anchoredFaces, double edgeLength,
+                                 const std::vector<FaceId>* flippedFaces) {
   const std::size_t n = components.components.size();
   const std::vector<std::uint32_t>& faceComponent = components.faceComponent;
   ComponentMapFacts facts;
@@ -65,8 +66,7 @@ ComponentMapFacts gatherMapFacts(const TriangleMesh& mesh, const ComponentsResul
     const auto f = static_cast<FaceId>(i);
     area[f] = static_cast<float>(faceArea(mesh, f));
     if (!mesh.hasUV()) return;
-    const double ratio = parameterAreaRatio(mesh, mesh.cornerUV, f, edgeLength);
-    std::uint8_t b = isFlippedRatio(ratio);
+    std::uint8_t b = !flippedFaces && isFlippedRatio(parameterAreaRatio(mesh, mesh.cornerUV, f, edgeLength));
     for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
       if ((mesh.cornerUV[c] - first[faceComponent[f]]).cwiseAbs().maxCoeff() > kCoincidentConeDistance) b |= 2;
     }
@@ -77,6 +77,9 @@ ComponentMapFacts gatherMapFacts(const TriangleMesh& mesh, const ComponentsResul
     facts.area[k] += area[f];
     facts.flipped[k] += bits[f] & 1;
     facts.moved[k] |= bits[f] >> 1;
+  }
+  if (flippedFaces && mesh.hasUV()) {
+    for (FaceId f : *flippedFaces) ++facts.flipped[faceComponent[f]];
   }
   return facts;
 }
@@ -96,10 +99,12 @@ ComponentSummary summarizeComponents(const TriangleMesh& mesh, const Topology& t
                                      const std::vector<FaceId>& unsolvedFaces,
                                      const std::vector<FaceId>& anchoredFaces, double edgeLength,
                                      std::uint32_t limit,
-                                     std::vector<FaceId>* unsolvedComponentFaces) {
+                                     std::vector<FaceId>* unsolvedComponentFaces,
+                                     const std::vector<FaceId>* flippedFaces) {
   const ComponentsResult components = computeComponents(topology);
   const auto n = static_cast<std::uint32_t>(components.components.size());
-  const ComponentMapFacts facts = gatherMapFacts(mesh, components, unsolvedFaces, anchoredFaces, edgeLength);
+  const ComponentMapFacts facts =
+      gatherMapFacts(mesh, components, unsolvedFaces, anchoredFaces, edgeLength, flippedFaces);
   // Ids in the order of each component's lowest face.
   std::vector<std::uint32_t> idOf(n, kInvalidId);
   std::uint32_t next = 0;

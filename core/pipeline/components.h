@@ -48,13 +48,15 @@ struct ComponentSummary {
 /// Figures of every component of mesh (its cornerUV holds the map, spacing edgeLength) with the
 /// solver's facts: cones (vertex ids), the faces of unsolved and of anchored components (sorted,
 /// ParamResult). When unsolvedComponentFaces is given it receives the faces of the components
-/// reported unsolved. Linear, parallel; 10 bytes per face while it runs.
+/// reported unsolved. flippedFaces (when given: the map's flipped faces, as measureMap lists them)
+/// spares measuring every face's flip again. Linear, parallel; 10 bytes per face while it runs.
 ComponentSummary summarizeComponents(const TriangleMesh& mesh, const Topology& topology,
                                      const std::vector<VertexId>& cones,
                                      const std::vector<FaceId>& unsolvedFaces,
                                      const std::vector<FaceId>& anchoredFaces, double edgeLength,
                                      std::uint32_t limit,
-                                     std::vector<FaceId>* unsolvedComponentFaces = nullptr);
+                                     std::vector<FaceId>* unsolvedComponentFaces = nullptr,
+                                     const std::vector<FaceId>* flippedFaces = nullptr);
 
 /// The mesh without the given faces (sorted) and without the vertices only they used; the map
 /// (cornerUV) follows. Order of the kept faces and vertices is kept; vertexMap (when given)

@@ -479,11 +479,12 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
 
 /// Per-component figures, and with options.dropUnsolved the unsolved components removed (the
 /// corner table rebuilt for the smaller mesh).
-void summarizeMappedComponents(PipelineResult& r, const PipelineOptions& options) {
+void summarizeMappedComponents(PipelineResult& r, const PipelineOptions& options,
+                               const std::vector<FaceId>& flippedFaces) {
   std::vector<FaceId> unsolvedFaces;
   r.components = summarizeComponents(r.mesh, r.topology, r.cones, r.solved.param.unsolvedFaces,
                                      r.solved.param.anchoredFaces, r.edgeLength,
-                                     options.listComponents, &unsolvedFaces);
+                                     options.listComponents, &unsolvedFaces, &flippedFaces);
   if (!options.dropUnsolved || unsolvedFaces.empty()) return;
   r.components.droppedIds = r.components.unsolvedIds;
   r.components.droppedFaces = unsolvedFaces.size();
@@ -558,10 +559,11 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
     std::swap(r.mesh.cornerUV, r.solved.param.cornerUV);
   }
   uncapForOutput(r, field, caps);
-  r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength, nullptr, &r.topology);
+  std::vector<FaceId> flippedFaces;
+  r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength, nullptr, &r.topology, &flippedFaces);
   r.mesh.cornerUV = std::move(r.solved.param.cornerUV);
   field = CrossField();  // before the per-component figures (10 bytes per face)
-  summarizeMappedComponents(r, options);
+  summarizeMappedComponents(r, options, flippedFaces);
   r.size = {r.mesh.numFaces(), r.mesh.numVertices(), r.mesh.cornerUV.numWedges(), r.mesh.cornerUV.memoryBytes(),
             r.mesh.attributes.describe(), r.mesh.attributes.memoryBytes()};
   meter.finish("metrics");

@@ -209,14 +209,56 @@ struct MapSums {
   double area = 0.0, uvArea = 0.0, gw = 0.0, error = 0.0, target = 0.0;
 };
 
+}  // namespace
+
+double gradientNormSquared(const FaceFigures& x);  // below: one formula for every stretched count
+
+namespace {
+
+// Per vertex: is it one of the cones (InputError naming an out-of-range one)?
+std::vector<std::uint8_t> markCones(const TriangleMesh& mesh, const std::vector<VertexId>& cones) {
+  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
+  for (VertexId v : cones) {
+    if (v >= mesh.numVertices()) {
+      throw InputError("metrics: cone " + std::to_string(v) + " out of range (" +
+                       std::to_string(mesh.numVertices()) + " vertices)");
+    }
+    isCone[v] = 1;
+  }
+  return isCone;
+}
+
+// What a face is under the map at spacing h.
+enum FaceKind : std::uint8_t { kFine, kStretched, kFlippedFace, kCollapsed, kCollapsedAtCones };
+
+// The kind of face f with corners p, values q and measureFace's figures x (isCone: per vertex,
+// empty without cones).
+std::uint8_t faceKind(const TriangleMesh& mesh, const WedgeMap& cornerUV, FaceId f, const std::array<Vec3d, 3>& p,
+                      const std::array<Vec2d, 3>& q, const FaceFigures& x, double h,
+                      const std::vector<std::uint8_t>& isCone) {
+  const double ratio = parameterAreaRatio(p, q, h);
+  if (std::abs(ratio) < kCollapsedAreaFraction) {
+    return !isCone.empty() && collapsesBetweenCones(mesh, cornerUV, f, isCone) ? kCollapsedAtCones : kCollapsed;
+  }
+  if (ratio < 0.0) return kFlippedFace;
+  return isStretched(gradientNormSquared(x), h) ? kStretched : kFine;
+}
+
 // Area-weighted sums over all faces (in parallel); the error terms only for a spacing h > 0.
+// With kind (h > 0), each face's kind too, in the same pass.
 MapSums sumFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, const CrossField* field,
-                 double h) {
+                 double h, std::vector<std::uint8_t>* kind = nullptr,
+                 const std::vector<std::uint8_t>& isCone = {}) {
   return tbb::parallel_reduce(
       tbb::blocked_range<FaceId>(0, mesh.numFaces(), 8192), MapSums{},
       [&](const tbb::blocked_range<FaceId>& range, MapSums s) {
         for (FaceId f = range.begin(); f != range.end(); ++f) {
           const FaceFigures x = measureFace(mesh, cornerUV, field, f);
+          if (kind) {
+            const Triangle& t = mesh.triangles[f];
+            (*kind)[f] = faceKind(mesh, cornerUV, f, {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])},
+                                  {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]}, x, h, isCone);
+          }
           const Complex q0 = toComplex(cornerUV[3 * f]);
           s.area += x.area;
           s.uvArea += 0.5 * std::abs(std::imag(std::conj(toComplex(cornerUV[3 * f + 1]) - q0) *
@@ -243,61 +285,30 @@ double fitEdgeLength(const TriangleMesh& mesh, const WedgeMap& cornerUV, const C
                                : (fit.uvArea > 0.0 ? std::sqrt(fit.area / fit.uvArea) : 1.0);
 }
 
-// Per vertex: is it one of the cones (InputError naming an out-of-range one)?
-std::vector<std::uint8_t> markCones(const TriangleMesh& mesh, const std::vector<VertexId>& cones) {
-  std::vector<std::uint8_t> isCone(mesh.numVertices(), 0);
-  for (VertexId v : cones) {
-    if (v >= mesh.numVertices()) {
-      throw InputError("metrics: cone " + std::to_string(v) + " out of range (" +
-                       std::to_string(mesh.numVertices()) + " vertices)");
-    }
-    isCone[v] = 1;
-  }
-  return isCone;
-}
 
 
-// Counts collapsed faces (those between coincident cones apart when cones are given) and flipped
-// ones into out, for spacing h.
-void countFlippedFaces(const TriangleMesh& mesh, const WedgeMap& cornerUV, double h,
-                       const std::vector<VertexId>* cones, const CrossField* field,
-                       const Topology* topology, MapQuality& out) {
-  std::vector<FaceId> flippedFaces;
-  std::vector<std::uint8_t> isCone;
-  if (cones) isCone = markCones(mesh, *cones);
-  const FaceId nf = mesh.numFaces();
-  // Per face in parallel (a byte each), counted in face order after.
-  enum : std::uint8_t { kFine, kStretched, kFlippedFace, kCollapsed, kCollapsedAtCones };
-  std::vector<std::uint8_t> kind(nf);
-  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-    for (FaceId f = range.begin(); f != range.end(); ++f) {
-      const Triangle& t = mesh.triangles[f];
-      const std::array<Vec3d, 3> p = {mesh.position(t[0]), mesh.position(t[1]), mesh.position(t[2])};
-      const std::array<Vec2d, 3> q = {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]};
-      const double ratio = parameterAreaRatio(p, q, h);
-      if (std::abs(ratio) < kCollapsedAreaFraction) {
-        kind[f] = cones && collapsesBetweenCones(mesh, cornerUV, f, isCone) ? kCollapsedAtCones : kCollapsed;
-      } else if (ratio < 0.0) {
-        kind[f] = kFlippedFace;
-      } else {
-        kind[f] = isStretched(gradientNormSquared(p, q), h) ? kStretched : kFine;
-      }
-    }
-  });
-  std::uint64_t flipped = 0, collapsed = 0, collapsedAtCones = 0;
-  for (FaceId f = 0; f < nf; ++f) {
+// Counts the faces by kind (faceKind) into out; the flipped ones folded in 3D against the field's
+// smoothed surface; flippedFaces (when given) receives the flipped faces.
+void countFaceKinds(const TriangleMesh& mesh, std::vector<std::uint8_t>& kind, const CrossField* field,
+                    const Topology* topology, MapQuality& out, std::vector<FaceId>* flippedFaces) {
+  std::vector<FaceId> flippedList;
+  std::vector<FaceId>& flipped = flippedFaces ? *flippedFaces : flippedList;
+  flipped.clear();
+  std::uint64_t collapsed = 0, collapsedAtCones = 0;
+  for (FaceId f = 0; f < kind.size(); ++f) {
     if (kind[f] == kFine) continue;
     out.stretched += kind[f] == kStretched;
     collapsed += kind[f] >= kCollapsed;
     collapsedAtCones += kind[f] == kCollapsedAtCones;
-    if (kind[f] == kFlippedFace) ++flipped, flippedFaces.push_back(f);
+    if (kind[f] == kFlippedFace) flipped.push_back(f);
   }
   std::vector<std::uint8_t>().swap(kind);
-  for (std::uint8_t folded : facesFoldedIn3D(mesh, topology, field, flippedFaces)) out.flippedFolded += folded;
-  out.flipped = flipped;
+  for (std::uint8_t folded : facesFoldedIn3D(mesh, topology, field, flipped)) out.flippedFolded += folded;
+  const FaceId nf = mesh.numFaces();
+  out.flipped = flipped.size();
   out.collapsed = collapsed;
   out.collapsedAtCones = collapsedAtCones;
-  out.flippedFraction = nf ? static_cast<double>(flipped) / nf : 0.0;
+  out.flippedFraction = nf ? static_cast<double>(flipped.size()) / nf : 0.0;
 }
 
 }  // namespace
@@ -356,7 +367,8 @@ double gradientNormSquared(const std::array<Vec3d, 3>& p, const std::array<Vec2d
 
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
-                      const std::vector<VertexId>* cones, const Topology* topology) {
+                      const std::vector<VertexId>* cones, const Topology* topology,
+                      std::vector<FaceId>* flippedFaces) {
   checkSizes(mesh, cornerUV);
   if (field && field->direction.size() != mesh.numFaces()) {
     throw InputError("metrics: field has " + std::to_string(field->direction.size()) +
@@ -366,11 +378,13 @@ MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
   out.faces = mesh.numFaces();
   const double h = edgeLength > 0.0 ? edgeLength : fitEdgeLength(mesh, cornerUV, field);
   out.edgeLength = h;
-  const MapSums sums = sumFaces(mesh, cornerUV, field, h);
+  // One pass: the sums and each face's kind (a byte per face), counted in face order after.
+  std::vector<std::uint8_t> kind(mesh.numFaces());
+  const MapSums sums = sumFaces(mesh, cornerUV, field, h, &kind, cones ? markCones(mesh, *cones) : std::vector<std::uint8_t>());
   out.relativeGradientError = field && sums.target > 0.0
                                   ? std::sqrt(sums.error / sums.target)
                                   : std::numeric_limits<double>::quiet_NaN();
-  countFlippedFaces(mesh, cornerUV, h, cones, field, topology, out);
+  countFaceKinds(mesh, kind, field, topology, out, flippedFaces);
   return out;
 }
 

@@ -131,9 +131,11 @@ struct MapQuality {
 /// (<= 0: fitted); with the cones (vertex ids, e.g. CutResult::cones) also collapsedAtCones.
 /// Linear, parallel.
 /// The topology is needed only for a field whose framePositions were released (facesFoldedIn3D).
+/// flippedFaces (when given) receives the flipped faces, increasing.
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
-                      const std::vector<VertexId>* cones = nullptr, const Topology* topology = nullptr);
+                      const std::vector<VertexId>* cones = nullptr, const Topology* topology = nullptr,
+                      std::vector<FaceId>* flippedFaces = nullptr);
 
 /// measureMap with a given h for a mesh read face by face (out of core): the same per-face terms,
 /// summed in the order given. The caller counts collapsedAtCones and flippedFolded by the kind
