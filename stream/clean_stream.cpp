@@ -696,10 +696,12 @@ class CleanPass {
         [&](VertexReaders& r, VertexId v, std::size_t i, std::vector<double>& values) {
           values.clear();
           const Vec3d p = r.positions[v].cast<double>();
-          // Squared lengths, two roots per vertex: the same values (see findSpikeVertices).
+          // Squared lengths, two roots per vertex: the same values (see findSpikeVertices); each
+          // edge once around an interior vertex, which keeps the least and the median.
+          const bool interior = !r.table.isBoundaryVertex(v);
           r.table.forEachCornerAround(v, [&](CornerId c) {
             values.push_back((r.positions[r.table.vertex(nextCorner(c))].cast<double>() - p).squaredNorm());
-            values.push_back((r.positions[r.table.vertex(prevCorner(c))].cast<double>() - p).squaredNorm());
+            if (!interior) values.push_back((r.positions[r.table.vertex(prevCorner(c))].cast<double>() - p).squaredNorm());
           });
           if (values.empty()) return;
           std::sort(values.begin(), values.end());
@@ -725,9 +727,10 @@ class CleanPass {
           },
           [&](VertexReaders& r, VertexId v, std::size_t i, std::vector<double>& around) {
             around.clear();
+            const bool interior = !r.table.isBoundaryVertex(v);
             r.table.forEachCornerAround(v, [&](CornerId c) {
               around.push_back((*r.perVertex)[r.table.vertex(nextCorner(c))]);
-              around.push_back((*r.perVertex)[r.table.vertex(prevCorner(c))]);
+              if (!interior) around.push_back((*r.perVertex)[r.table.vertex(prevCorner(c))]);
             });
             if (around.empty()) return;
             std::sort(around.begin(), around.end());

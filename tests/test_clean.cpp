@@ -449,5 +449,57 @@ TEST(Clean, CoherentOrSmallMeshesKeepTheirOrder) {
   EXPECT_FALSE(b.report.reordered);
 }
 
+// The spike test by its definition: per vertex the two edges of every corner around it (an
+// interior edge twice), their least and median length, then the median of the neighbours' medians
+// over the same corners. findSpikeVertices lists each interior edge once; on a scan with holes,
+// islands and vertices pulled far out, its spikes must be these.
+TEST(CleanSpikes, SameAsTheDefinitionWithEveryCornersTwoEdges) {
+  TriangleMesh mesh = testing::generatedMesh(MeshKind::Scan, 20000);
+  std::mt19937 random(5);
+  for (int k = 0; k < 40; ++k) {
+    const VertexId v = random() % mesh.numVertices();
+    mesh.positions[v] += Vec3f(0.0f, 0.0f, 0.5f * float(1 + k % 3));
+  }
+  const CleanResult cleaned = cleanMesh(std::move(mesh));
+  TriangleMesh m = cleaned.mesh;
+  const Topology& topology = cleaned.topology;
+  const std::uint32_t nv = m.numVertices();
+  // Boundary vertices pulled out by varying amounts too: there the two edges of every corner are
+  // not every edge twice.
+  for (VertexId v = 0, pulled = 0; v < nv && pulled < 60; v += 7) {
+    if (topology.isIsolatedVertex(v) || !topology.isBoundaryVertex(v)) continue;
+    m.positions[v] += Vec3f(0.0f, 0.0f, 0.02f * float(1 + pulled++));
+  }
+  const auto medianOf = [](std::vector<double> values) {
+    std::sort(values.begin(), values.end());
+    return values[values.size() / 2];
+  };
+  std::vector<double> typical(nv, 0.0), shortest(nv, 0.0);
+  std::size_t boundary = 0;
+  for (VertexId v = 0; v < nv; ++v) {
+    if (topology.isIsolatedVertex(v)) continue;
+    boundary += topology.isBoundaryVertex(v);
+    std::vector<double> lengths;
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      for (CornerId o : {nextCorner(c), prevCorner(c)}) lengths.push_back((m.position(topology.vertex(o)) - m.position(v)).norm());
+    });
+    shortest[v] = *std::min_element(lengths.begin(), lengths.end());
+    typical[v] = medianOf(lengths);
+  }
+  std::vector<VertexId> expected;
+  for (VertexId v = 0; v < nv; ++v) {
+    if (topology.isIsolatedVertex(v)) continue;
+    std::vector<double> around;
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      for (CornerId o : {nextCorner(c), prevCorner(c)}) around.push_back(typical[topology.vertex(o)]);
+    });
+    const double scale = medianOf(around);
+    if (scale > 0.0 && shortest[v] > kSpikeRatio * scale) expected.push_back(v);
+  }
+  ASSERT_GT(boundary, 0u) << "no boundary: the test needs holes";
+  ASSERT_GE(expected.size(), 10u) << "too few spikes to compare";
+  EXPECT_EQ(findSpikeVertices(m, topology), expected);
+}
+
 }  // namespace
 }  // namespace seamvox

@@ -313,9 +313,15 @@ double median(std::vector<double>& values) {
 }
 
 /// Calls f(squared length) for every edge at v (the two edges of each corner around it).
+/// Around an interior vertex every edge is two corners' edge: each is given once, which leaves
+/// the least value and the median (the element at size / 2, sorted) as they were.
 template <class F>
 void forEachSquaredEdgeLength(const TriangleMesh& mesh, const Topology& topology, VertexId v, F&& f) {
   const Vec3d p = mesh.position(v);
+  if (!topology.isBoundaryVertex(v)) {
+    topology.forEachCornerAround(v, [&](CornerId c) { f((mesh.position(topology.vertex(nextCorner(c))) - p).squaredNorm()); });
+    return;
+  }
   topology.forEachCornerAround(v, [&](CornerId c) {
     for (CornerId other : {nextCorner(c), prevCorner(c)}) f((mesh.position(topology.vertex(other)) - p).squaredNorm());
   });
@@ -346,8 +352,11 @@ std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology
       if (topology.isIsolatedVertex(v)) continue;
       around.clear();
       double least = std::numeric_limits<double>::infinity();
+      // Each neighbour once around an interior vertex (as forEachSquaredEdgeLength's edges).
+      const bool interior = !topology.isBoundaryVertex(v);
       topology.forEachCornerAround(v, [&](CornerId c) {
         for (CornerId other : {nextCorner(c), prevCorner(c)}) {
+          if (interior && other == prevCorner(c)) continue;
           around.push_back(typical[topology.vertex(other)]);
           least = std::min(least, around.back());
         }
