@@ -60,8 +60,9 @@ inline std::size_t windowCacheBytes(std::uint64_t memoryBytes) {
 /// A face's corner positions (in double, as TriangleMesh::position gives them) through caches.
 class PagedFacePoints {
  public:
-  PagedFacePoints(const CleanScratch& scratch, const ScratchFile& positions, std::size_t cacheBytes)
-      : faces_(scratch.faces, cacheBytes), positions_(positions, cacheBytes) {}
+  PagedFacePoints(const CleanScratch& scratch, const ScratchFile& positions, std::size_t cacheBytes,
+                  std::size_t pageBytes = kScratchPageBytes)
+      : faces_(scratch.faces, cacheBytes, pageBytes), positions_(positions, cacheBytes, pageBytes) {}
   Triangle triangle(FaceId f) { return faces_[f].triangle; }
   std::array<Vec3d, 3> points(const Triangle& t) {
     return {positions_[t[0]].cast<double>(), positions_[t[1]].cast<double>(), positions_[t[2]].cast<double>()};

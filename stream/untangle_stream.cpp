@@ -40,6 +40,27 @@ std::vector<FaceId> flippedFaces(ScratchFolder& folder, const CleanScratch& scra
   return flipped;
 }
 
+/// The same of the candidate faces only (increasing), read through small pages.
+std::vector<FaceId> flippedAmong(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map, double h,
+                                 std::size_t cacheBytes, const std::vector<FaceId>& candidates, double& meanEdge) {
+  PagedFacePoints points(scratch, scratch.positions, cacheBytes, kWindowPageBytes);
+  PagedReader<std::uint32_t> cornerWedge(map.cornerWedge, cacheBytes, kWindowPageBytes);
+  PagedReader<Vec2d> wedgeValues(map.wedgeValues, cacheBytes, kWindowPageBytes);
+  std::vector<FaceId> flipped;
+  double edges = 0.0;
+  for (FaceId f : candidates) {
+    const std::array<Vec3d, 3> p = points.points(f);
+    const std::array<Vec2d, 3> q = {wedgeValues[cornerWedge[3 * f]], wedgeValues[cornerWedge[3 * f + 1]],
+                                    wedgeValues[cornerWedge[3 * f + 2]]};
+    if (!isFlippedRatio(parameterAreaRatio(p, q, h))) continue;
+    flipped.push_back(f);
+    for (int k = 0; k < 3; ++k) edges += (p[(k + 1) % 3] - p[k]).norm();
+  }
+  meanEdge = flipped.empty() ? 0.0 : edges / (3.0 * flipped.size());
+  folder.countRead("untangle", points.bytesRead() + cornerWedge.bytesRead() + wedgeValues.bytesRead());
+  return flipped;
+}
+
 /// The window as untangleFlips sees the whole mesh: sub vertices in the order of their mesh ids
 /// (the repair's Gauss-Seidel passes and joint patches go in vertex order) and every free
 /// vertex's fan starting at the mesh's own start corner (the order its fan is summed in).
@@ -88,9 +109,11 @@ void alignWindowWithMesh(RegionMesh& w, PagedCornerTable& table) {
 ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                           const ScratchCut& cut, ScratchMap& map,
                                           std::vector<std::complex<double>>& seamT, const UntangleOptions& options,
-                                          const StreamPassOptions& pass, const FacesNearPoints* only) {
+                                          const StreamPassOptions& pass, const FacesNearPoints* only,
+                                          const std::vector<FaceId>* candidates) {
   const double h = options.edgeLength;
-  if (!(h > 0.0) || !std::isfinite(h) || options.onlyFaces || options.pinnedVertices) {
+  if (!(h > 0.0) || !std::isfinite(h) || options.onlyFaces || options.pinnedVertices || options.candidateFaces ||
+      (only && candidates)) {
     throw InputError("untangle: the out-of-core repair needs a positive edge length and no face or vertex flags");
   }
   if (seamT.size() != cut.seams.size()) {
@@ -100,7 +123,9 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   ScratchUntangleStats out;
   double meanEdge = 0.0;
-  const std::vector<FaceId> flipped = flippedFaces(folder, scratch, map, h, cacheBytes, only, meanEdge);
+  const std::vector<FaceId> flipped =
+      candidates ? flippedAmong(folder, scratch, map, h, windowCacheBytes(pass.memoryBytes), *candidates, meanEdge)
+                 : flippedFaces(folder, scratch, map, h, cacheBytes, only, meanEdge);
   if (flipped.empty()) return out;
 
   // The window: the rings of every patch round (as untangleFlips sizes them: a round's seeds lie
@@ -165,6 +190,14 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
   }
   local.maxPatchFraction = options.maxPatchFraction * double(scratch.numFaces) / double(window.size());
   out.untangle = untangleFlips(w.mesh, w.topology, w.field, w.cut, uv, windowT, local);
+  // The window holds every flipped face: the faces it leaves are the map's, by mesh id.
+  double leftEdges = 0.0;
+  for (FaceId& f : out.untangle.leftFaces) {
+    const Triangle& t = w.mesh.triangles[f];
+    for (int k = 0; k < 3; ++k) leftEdges += (w.mesh.position(t[(k + 1) % 3]) - w.mesh.position(t[k])).norm();
+    f = window[f];
+  }
+  if (!out.untangle.leftFaces.empty()) out.leftMeanEdge = leftEdges / (3.0 * out.untangle.leftFaces.size());
 
   // The moved corners (free vertices only) and re-rounded translations back into the map.
   RefineResult moved;
@@ -186,16 +219,25 @@ void resolveScratchLeftoverFlips(ScratchFolder& folder, const CleanScratch& scra
                                  ScratchUntangleStats& repaired) {
   if (repaired.untangle.flippedAfter == 0 || !(options.leftoverRadius > 0.0)) return;
   const auto start = SteadyClock::now();
-  double meanEdge = 0.0;
-  std::vector<FaceId> flipped =
-      flippedFaces(folder, scratch, map, options.edgeLength, pageCacheBytes(pass.memoryBytes), nullptr, meanEdge);
+  // The repair's leftover faces are every flip of the map (its window held them all); after the
+  // re-solve only those and the re-solved faces are read again.
+  double meanEdge = repaired.leftMeanEdge;
+  std::vector<FaceId> flipped = repaired.untangle.leftFaces;
+  if (flipped.size() != repaired.untangle.flippedAfter) {
+    flipped = flippedFaces(folder, scratch, map, options.edgeLength, pageCacheBytes(pass.memoryBytes), nullptr, meanEdge);
+  }
   if (flipped.empty()) return;
   refine.edgeLength = options.edgeLength;
-  const RefineOptions local = leftoverRefineOptions(refine, std::move(flipped), meanEdge, options.leftoverRadius);
+  RefineOptions local = leftoverRefineOptions(refine, flipped, meanEdge, options.leftoverRadius);
+  local.regionOnly = true;
   const RefineResult resolved = refineScratchNearCones(folder, scratch, field, cut, map, seamT, local, pass);
   applyScratchRefinement(folder, resolved, map, &seamT, pass);
   const double seconds = secondsSince(start);
-  ScratchUntangleStats again = untangleScratchFlips(folder, scratch, field, cut, map, seamT, options, pass);
+  std::vector<FaceId> candidates;
+  std::set_union(flipped.begin(), flipped.end(), resolved.regionFaces.begin(), resolved.regionFaces.end(),
+                 std::back_inserter(candidates));
+  ScratchUntangleStats again =
+      untangleScratchFlips(folder, scratch, field, cut, map, seamT, options, pass, nullptr, &candidates);
   addLeftoverRepair(again.untangle, repaired.untangle, resolved.stats.regionFaces, resolved.stats.freeVertices, seconds);
   again.windowFaces = std::max(again.windowFaces, repaired.windowFaces);
   repaired = again;

@@ -21,9 +21,10 @@ namespace seamvox {
 /// Window figures besides untangleFlips' own (flips before and after are the whole map's: the
 /// window holds every flipped face).
 struct ScratchUntangleStats {
-  UntangleStats untangle;
+  UntangleStats untangle;  ///< leftFaces: mesh face ids (without `only`)
   std::uint64_t windowFaces = 0;
   std::uint32_t windowRings = 0;
+  double leftMeanEdge = 0.0;  ///< mean edge length of untangle.leftFaces
 };
 
 /// Faces whose centroid lies within `distance` of one of `points`: the repair near a few cones
@@ -42,10 +43,13 @@ struct FacesNearPoints {
 /// `only`, only the flipped faces it holds are repaired and counted. The
 /// window holds rings enough for every patch round and the joint step, fewer (halved) when it
 /// would exceed max(8 minPatchFaces, pass.memoryBytes / 1 KiB) faces. Memory: the window.
+/// candidates (increasing, not with `only`): the only faces that may be flipped, read through
+/// small pages instead of a pass over every face (a caller that knows the rest of the map).
 ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                           const ScratchCut& cut, ScratchMap& map,
                                           std::vector<std::complex<double>>& seamT, const UntangleOptions& options,
-                                          const StreamPassOptions& pass, const FacesNearPoints* only = nullptr);
+                                          const StreamPassOptions& pass, const FacesNearPoints* only = nullptr,
+                                          const std::vector<FaceId>* candidates = nullptr);
 
 /// The hat re-solve of the flips an out-of-core repair left (UntangleOptions::leftoverRadius;
 /// refineScratchNearCones with leftoverRefineOptions) and the repair again, as the in-memory

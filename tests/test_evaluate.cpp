@@ -12,7 +12,9 @@
 #include "core/basis/reduce.h"
 #include "core/basis/voxel_grid.h"
 #include "core/cut/cut.h"
+#include "core/mesh/clean.h"
 #include "core/field/field.h"
+#include "core/solve/detail_wedges.h"
 #include "core/solve/evaluate.h"
 #include "tests/test_meshes.h"
 
@@ -58,6 +60,34 @@ TEST(Evaluate, WedgesChangeExactlyAcrossCutEdges) {
   for (VertexId v = 0; v < t.s.topology.numVertices(); ++v) {
     EXPECT_EQ(wedgeCount[v], std::max(1u, cutEdges[v])) << "vertex " << v;
   }
+}
+
+// Over many blocks of vertices (holes, islands, a cut): wedges numbered in vertex order, each
+// vertex's in the order its fan is walked, as one serial walk over every vertex numbers them.
+TEST(Evaluate, WedgesAreNumberedInVertexOrderOverManyBlocks) {
+  const testing::CutSurface t = testing::makeCutSurface(cleanMesh(testing::generatedMesh(MeshKind::Scan, 120000)).mesh, 3);
+  const Topology& topology = t.s.topology;
+  ASSERT_GT(topology.numVertices(), 3u << 14) << "the test needs several blocks of vertices";
+  std::vector<std::uint32_t> expected(topology.numCorners(), 0);
+  std::uint32_t w = 0;
+  for (VertexId v = 0; v < topology.numVertices(); ++v) {
+    bool open = false;
+    detail::walkWedges(topology, t.cut.corners, v, [&](CornerId c) {
+      if (c == kInvalidId) {
+        if (open) ++w;
+        open = false;
+      } else {
+        open = true;
+        expected[c] = w;
+      }
+    });
+    if (open) ++w;
+  }
+  const WedgeMap wedges = buildCutWedges(topology, t.cut);
+  ASSERT_EQ(wedges.numWedges(), w);
+  std::size_t differ = 0;
+  for (CornerId c = 0; c < topology.numCorners(); ++c) differ += wedges.wedge(c) != expected[c];
+  EXPECT_EQ(differ, 0u);
 }
 
 TEST(Evaluate, PerWedgeEqualsPerCorner) {

@@ -1,4 +1,7 @@
 #include "core/solve/evaluate.h"
+
+#include <algorithm>
+
 #include "core/solve/detail_wedges.h"
 #include "core/system/parallel.h"
 
@@ -10,29 +13,17 @@ using detail::walkWedges;
 WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
   const std::uint32_t nv = topology.numVertices();
   const CutCorners& corners = cut.corners;
-  // Wedges per vertex (a fan with k > 0 cut edges has k wedges, unless it is a boundary fan,
-  // whose last edge is a boundary edge), then one prefix sum, then the numbering.
-  std::vector<std::uint32_t> first(nv + std::size_t(1), 0);
-  parallelFor(nv, 1u << 14, [&](const IndexRange& range) {
-    for (VertexId v = range.begin(); v != range.end(); ++v) {
-      std::uint32_t wedges = 0;
-      bool open = false;
-      walkWedges(topology, corners, v, [&](CornerId c) {
-        if (c == kInvalidId) {
-          open = false;
-        } else if (!open) {
-          open = true;
-          ++wedges;
-        }
-      });
-      first[v + 1] = wedges;
-    }
-  });
-  for (VertexId v = 0; v < nv; ++v) first[v + 1] += first[v];
-  std::vector<std::uint32_t> cornerWedge(topology.numCorners(), 0);
-  parallelFor(nv, 1u << 14, [&](const IndexRange& range) {
-    for (VertexId v = range.begin(); v != range.end(); ++v) {
-      std::uint32_t w = first[v];
+  // Wedges are numbered in vertex order, a fan's in walk order (a fan with k > 0 cut edges has k
+  // wedges, unless it is a boundary fan, whose last edge is a boundary edge). One walk per vertex
+  // numbers them within its block of vertices; then every corner adds its block's offset.
+  constexpr std::uint32_t kBlock = 1u << 14;
+  const std::uint32_t blocks = (nv + kBlock - 1) / kBlock;
+  std::vector<std::uint32_t> first(blocks + std::size_t(1), 0);
+  std::vector<std::uint32_t> cornerWedge(topology.numCorners(), kInvalidId);
+  parallelForEach(blocks, 1, [&](std::uint64_t b) {
+    std::uint32_t w = 0;
+    const VertexId end = static_cast<VertexId>(std::min<std::uint64_t>(nv, (b + 1) * std::uint64_t(kBlock)));
+    for (VertexId v = static_cast<VertexId>(b * kBlock); v < end; ++v) {
       bool open = false;
       walkWedges(topology, corners, v, [&](CornerId c) {
         if (c == kInvalidId) {
@@ -43,9 +34,18 @@ WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut) {
           cornerWedge[c] = w;
         }
       });
+      if (open) ++w;
+    }
+    first[b + 1] = w;
+  });
+  for (std::uint32_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
+  parallelFor(cornerWedge.size(), 1u << 16, [&](const IndexRange& range) {
+    for (CornerId c = range.begin(); c != range.end(); ++c) {
+      std::uint32_t& w = cornerWedge[c];
+      w = w == kInvalidId ? 0 : w + first[topology.vertex(c) / kBlock];
     }
   });
-  const std::uint32_t numWedges = first[nv];
+  const std::uint32_t numWedges = first[blocks];
   std::vector<std::uint32_t>().swap(first);
   // Room for the wedges the refinement and the repair add (WedgeMap::assign): an untouched
   // reserve is not resident, a reallocation would hold the values twice.
