@@ -597,17 +597,20 @@ std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& t
     if (v >= topology.numVertices()) throw InputError("smoothPositionsAt: vertex " + std::to_string(v) + " out of range");
     enter(v);
   }
+  // ringEnd[r]: the ball's vertices within r rings come first, ball[0, ringEnd[r]).
+  std::vector<std::size_t> ringEnd = {ball.size()};
   std::size_t ringStart = 0;
   for (std::uint32_t ring = 0; ring < iterations; ++ring) {
-    const std::size_t ringEnd = ball.size();
-    for (std::size_t i = ringStart; i < ringEnd; ++i) {
+    const std::size_t end = ball.size();
+    for (std::size_t i = ringStart; i < end; ++i) {
       if (topology.isIsolatedVertex(ball[i])) continue;
       topology.forEachCornerAround(ball[i], [&](CornerId c) {
         enter(topology.vertex(nextCorner(c)));
         enter(topology.vertex(prevCorner(c)));
       });
     }
-    ringStart = ringEnd;
+    ringStart = end;
+    ringEnd.push_back(ball.size());
   }
   std::vector<Vec3f> current(ball.size()), next(ball.size());
   for (std::size_t i = 0; i < ball.size(); ++i) current[i] = mesh.positions[ball[i]];
@@ -615,8 +618,10 @@ std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& t
     const std::uint32_t i = localOf(w);
     return i == kInvalidId ? pointOf(mesh.positions, w) : pointOf(current, i);
   };
+  // Step it needs exact values only within iterations - it rings: the vertices it computes read
+  // neighbours one ring further, all computed by the step before (or input positions at step 0).
   for (std::uint32_t it = 0; it < iterations; ++it) {
-    parallelFor(ball.size(), 4096, [&](const IndexRange& range) {
+    parallelFor(ringEnd[iterations - 1 - it], 4096, [&](const IndexRange& range) {
       for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
         next[i] = detail::smoothingStep(topology, ball[i], valueOf);
       }
