@@ -221,14 +221,9 @@ void resolveScratchLeftoverFlips(ScratchFolder& folder, const CleanScratch& scra
   const auto start = SteadyClock::now();
   // The repair's leftover faces are every flip of the map (its window held them all); after the
   // re-solve only those and the re-solved faces are read again.
-  double meanEdge = repaired.leftMeanEdge;
-  std::vector<FaceId> flipped = repaired.untangle.leftFaces;
-  if (flipped.size() != repaired.untangle.flippedAfter) {
-    flipped = flippedFaces(folder, scratch, map, options.edgeLength, pageCacheBytes(pass.memoryBytes), nullptr, meanEdge);
-  }
-  if (flipped.empty()) return;
+  const std::vector<FaceId>& flipped = repaired.untangle.leftFaces;
   refine.edgeLength = options.edgeLength;
-  RefineOptions local = leftoverRefineOptions(refine, flipped, meanEdge, options.leftoverRadius);
+  RefineOptions local = leftoverRefineOptions(refine, flipped, repaired.leftMeanEdge, options.leftoverRadius);
   local.regionOnly = true;
   const RefineResult resolved = refineScratchNearCones(folder, scratch, field, cut, map, seamT, local, pass);
   applyScratchRefinement(folder, resolved, map, &seamT, pass);

@@ -272,23 +272,9 @@ void resolveLeftoverFlips(PipelineResult& r, const CrossField& field, const CutR
                           const UntangleOptions& untangle) {
   if (r.untangle.flippedAfter == 0 || !(untangle.leftoverRadius > 0.0) || r.solved.solver == ParamSolver::Hat) return;
   const auto start = SteadyClock::now();
-  // The repair's states are the whole map's: its leftover faces are every flip, and after the
+  // The whole map's repair lists every flip it leaves (UntangleStats::leftFaces); after the
   // re-solve only those and the re-solved faces are measured again.
-  std::vector<FaceId> left = r.untangle.leftFaces;
-  if (left.size() != r.untangle.flippedAfter) {  // not listed (a repair of some faces only): one pass
-    const FaceId nf = r.mesh.numFaces();
-    std::vector<std::uint8_t> isFlipped(nf);
-    parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-      for (FaceId f = range.begin(); f != range.end(); ++f) {
-        isFlipped[f] = isFlippedRatio(parameterAreaRatio(r.mesh, r.solved.param.cornerUV, f, r.edgeLength));
-      }
-    });
-    left.clear();
-    for (FaceId f = 0; f < nf; ++f) {
-      if (isFlipped[f]) left.push_back(f);
-    }
-    if (left.empty()) return;
-  }
+  const std::vector<FaceId>& left = r.untangle.leftFaces;
   double edges = 0.0;
   for (FaceId f : left) {
     const Triangle& t = r.mesh.triangles[f];

@@ -285,8 +285,6 @@ double fitEdgeLength(const TriangleMesh& mesh, const WedgeMap& cornerUV, const C
                                : (fit.uvArea > 0.0 ? std::sqrt(fit.area / fit.uvArea) : 1.0);
 }
 
-
-
 // Counts the faces by kind (faceKind) into out; the flipped ones folded in 3D against the field's
 // smoothed surface; flippedFaces (when given) receives the flipped faces.
 void countFaceKinds(const TriangleMesh& mesh, std::vector<std::uint8_t>& kind, const CrossField* field,
