@@ -33,7 +33,8 @@ Complex fourthPower(const Vec3d& v, const Vec3d& e1, const Vec3d& e2) {
   const double x = v.dot(e1), y = v.dot(e2);
   const double r2 = x * x + y * y;
   if (!(r2 > 0.0) || !std::isfinite(r2)) return 0.0;
-  const double a = (x * x - y * y) / r2, b = 2.0 * x * y / r2;  // unit square
+  const double inverse = 1.0 / r2;
+  const double a = (x * x - y * y) * inverse, b = 2.0 * x * y * inverse;  // unit square
   return {a * a - b * b, 2.0 * a * b};
 }
 
@@ -49,7 +50,8 @@ Complex unitSqrt(Complex w) {
 Vec3d directionOf(Complex z, const Vec3d& e1, const Vec3d& e2) {
   const double len = std::sqrt(std::norm(z));
   if (!(len > 0.0) || !std::isfinite(len)) return e1;
-  const Complex r = unitSqrt(unitSqrt(z / len));
+  const double inverse = 1.0 / len;
+  const Complex r = unitSqrt(unitSqrt(Complex(z.real() * inverse, z.imag() * inverse)));
   return r.real() * e1 + r.imag() * e2;
 }
 
@@ -234,14 +236,38 @@ Vec3d transferredDirection(const ProxyElements& proxy, const ElementDirections& 
 
 bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal, const Vec3d* neighbourDirection,
                     int count, Vec3d& out) {
+  // The sweeps' inner step, written out: rotateBetween inline, one reciprocal where a pair or a
+  // vector is divided by the same number.
   const Vec3d n = normal.cast<double>();
   // Frame with e1 = the current direction: the new one is the representative nearest it.
   const Vec3d v = n.cross(u);
-  Complex sum = 0.0;
+  double sumRe = 0.0, sumIm = 0.0;
   for (int i = 0; i < count; ++i) {
-    sum += fourthPower(rotateBetween(neighbourNormal[i].cast<double>(), n, neighbourDirection[i]), u, v);
+    const Vec3d m = neighbourNormal[i].cast<double>();
+    const Vec3d& d = neighbourDirection[i];
+    const double c = m.dot(n);
+    Vec3d w;
+    if (c > -1.0 + 1e-9) {
+      const Vec3d k = m.cross(n);
+      w = c * d + k.cross(d) + (k.dot(d) / (1.0 + c)) * k;
+    } else {
+      w = rotateBetween(m, n, d);
+    }
+    const double x = w.dot(u), y = w.dot(v);
+    const double r2 = x * x + y * y;
+    if (!(r2 > 0.0) || !std::isfinite(r2)) continue;
+    const double inverse = 1.0 / r2;
+    const double a = (x * x - y * y) * inverse, b = 2.0 * x * y * inverse;  // unit square
+    sumRe += a * a - b * b;
+    sumIm += 2.0 * a * b;
   }
-  const Vec3d next = directionOf(sum, u, v);
+  Vec3d next = u;
+  const double len = std::sqrt(sumRe * sumRe + sumIm * sumIm);
+  if (len > 0.0 && std::isfinite(len)) {
+    const double inverse = 1.0 / len;
+    const Complex r = unitSqrt(unitSqrt(Complex(sumRe * inverse, sumIm * inverse)));
+    next = r.real() * u + r.imag() * v;
+  }
   return tangentOf(n, next, out);
 }
 
@@ -249,7 +275,7 @@ bool tangentOf(const Vec3d& n, const Vec3d& u, Vec3d& out) {
   const Vec3d tangent = u - u.dot(n) * n;
   const double len = tangent.norm();
   if (!(len > 0.0 && std::isfinite(len))) return false;
-  out = tangent / len;
+  out = tangent * (1.0 / len);
   return true;
 }
 
