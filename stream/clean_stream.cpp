@@ -196,6 +196,8 @@ class CleanPass {
     positions_ = positions.finish();
     out_.vertexOrigin = origin.finish();
     out_.numVertices = n;
+    // The welded vertices no kept face uses (the weld's census counts them too, when it runs).
+    out_.report.unreferencedVertices = out_.report.inputVertices - out_.report.weldedVertices - n;
   }
 
   /// renumberVertices without 4 B per welded vertex in memory (a mesh whose ids do not fit): the

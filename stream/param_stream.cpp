@@ -211,6 +211,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   WeldStreamOptions weld;
   weld.weld = options.weld;
   weld.memoryBytes = early.memoryBytes;
+  weld.census = false;  // what `info` prints; param uses none of it
   const CleanScratch scratch = [&] {
     const WeldStreamResult welded = weldMeshStream(stream, folder, weld);
     r.inputFaces = welded.census.inputFaces;
@@ -238,11 +239,16 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   meter.finish("field");
   reportProgress(options.progress, "field", 1.0);
 
+  std::vector<std::pair<std::string, double>> cutSeconds;
+  StageClock cutClock(cutSeconds);
   ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, early);
   r.conesBeforeMerge = static_cast<std::uint32_t>(singularities.cones.size());
+  cutClock.finish("cut: singularities");
   ConeMergeOptions merge;
   merge.maxDistance = options.mergeCones * h;
   r.merged = mergeScratchCones(folder, scratch, singularities, merge, early);
+  cutClock.finish("cut: merge");
+  for (auto& entry : cutSeconds) r.passSeconds.push_back(std::move(entry));
   const double coincidentDistance = kCoincidentSearchFraction * h;
   // The cone passes (parameterize's solveConePasses): cut, solve, refine and repair; again with
   // the cone pairs the map put on one point, or close cones with flips left at them after the
@@ -266,6 +272,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   for (;;) {
     ++r.conePasses;
     cut = cutScratchToDisk(folder, scratch, singularities, early);
+    for (const auto& [name, seconds] : cut.stageSeconds) r.passSeconds.emplace_back("cut: " + name, seconds);
     r.cones = cut.cones;
     std::sort(r.cones.begin(), r.cones.end());
     r.coneIndex4.clear();

@@ -295,12 +295,15 @@ class WeldPass {
   /// to their sorts.
   void dropDuplicateFaces() {
     faceSort_->finish();
-    components_ = std::make_unique<ScratchUnionFind>(folder_, welded_, setsBytes_, "weld: components");
-    edgeSort_ = std::make_unique<ExternalSorter<EdgeRecord, EdgeLess>>(folder_, sortOptions("edges"));
+    if (options_.census) {
+      components_ = std::make_unique<ScratchUnionFind>(folder_, welded_, setsBytes_, "weld: components");
+      edgeSort_ = std::make_unique<ExternalSorter<EdgeRecord, EdgeLess>>(folder_, sortOptions("edges"));
+    }
     // Positions that fit three quarters of the memory with the union-find are read whole later
     // (the sorts before have ended; the Morton sort, fed from them, gets the rest of the memory)
     // and the kept faces wait in a file; otherwise the corners are joined with them by two sorts.
-    const std::uint64_t unionFind = std::min<std::uint64_t>(welded_ * sizeof(std::uint32_t), setsBytes_);
+    const std::uint64_t unionFind =
+        components_ ? std::min<std::uint64_t>(welded_ * sizeof(std::uint32_t), setsBytes_) : 0;
     positionsInMemory_ =
         !options_.joinPositions && unionFind + welded_ * sizeof(Vec3f) <= options_.memoryBytes / 4 * 3;
     if (positionsInMemory_) {
@@ -318,11 +321,13 @@ class WeldPass {
       }
       last = key;
       const Triangle t = r.triangle();
-      components_->unite(t[0], t[1]);
-      components_->unite(t[1], t[2]);
+      if (components_) {
+        components_->unite(t[0], t[1]);
+        components_->unite(t[1], t[2]);
+      }
       for (std::uint32_t k = 0; k < 3; ++k) {
         const VertexId a = t[k], b = t[(k + 1) % 3];
-        edgeSort_->add({std::min(a, b), std::max(a, b), a < b ? 1u : 0u});
+        if (edgeSort_) edgeSort_->add({std::min(a, b), std::max(a, b), a < b ? 1u : 0u});
         if (cornerSort_) cornerSort_->add({t[k], r.face, k});
       }
       if (keptFaces_) {
@@ -340,6 +345,7 @@ class WeldPass {
 
   /// Pass 5: edges grouped by their two vertices; boundary edges join their vertices' loops.
   void countEdges() {
+    if (!edgeSort_) return;
     edgeSort_->finish();
     WeldCensus& c = result_.census;
     LoopSets loops(folder_, welded_, setsBytes_);
@@ -464,7 +470,7 @@ class WeldPass {
     ExternalSortOptions options = sortOptions("morton");
     if (positionsInMemory_) {
       const std::uint64_t held = positions_.size() * sizeof(Vec3f) +
-                                 std::min<std::uint64_t>(welded_ * sizeof(std::uint32_t), setsBytes_);
+                                 (components_ ? std::min<std::uint64_t>(welded_ * sizeof(std::uint32_t), setsBytes_) : 0);
       options.memoryBytes = std::max(kMinimumSortBytes, std::min(options.memoryBytes,
                                                                  options_.memoryBytes - std::min(options_.memoryBytes, held)));
     }
@@ -474,7 +480,7 @@ class WeldPass {
                   d = face.corner(2).cast<double>();
       c.zeroAreaFaces += 0.5 * (b - a).cross(d - a).norm() <= tiny;
       face.morton = mortonCode((a + b + d) / 3.0, c.box);
-      ++counts_[components_->find(face.triangle[0])].faces;
+      if (components_) ++counts_[components_->find(face.triangle[0])].faces;
       sorter.add(face);
     };
     if (positionsInMemory_) {
@@ -497,6 +503,7 @@ class WeldPass {
 
   /// Vertices per component (the union-find's last use), then the components' figures.
   void countComponents() {
+    if (!components_) return;
     WeldCensus& c = result_.census;
     for (std::uint32_t v = 0; v < welded_; ++v) {
       const auto it = counts_.find(components_->find(v));

@@ -45,6 +45,10 @@ struct WeldStreamOptions {
   /// Tests: the weld map and the union-finds of the components and boundary loops on disk even
   /// when they fit.
   bool setsOnDisk = false;
+  /// The census of edges, components and boundary loops (WeldCensus: edges to components,
+  /// setsOnDisk), which `info` prints. Without it (param) the weld skips their edge sort, union-
+  /// find and per-component counts; those fields stay 0 and empty.
+  bool census = true;
 };
 
 /// What the weld pass found: the figures `seamvox info` prints, out of core.

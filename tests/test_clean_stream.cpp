@@ -150,6 +150,57 @@ TEST(CleanStream, EqualsCleanMeshOnNonManifoldAndNonOrientableMeshes) {
   }
 }
 
+// param welds without the census `info` prints (edges, components, loops): the same cleaned mesh
+// and repair counts, with the unreferenced vertices counted by the cleaning.
+TEST(CleanStream, WithoutTheWeldCensusTheCleaningIsTheSame) {
+  TriangleMesh mesh = testing::damagedMesh(5);
+  for (int k = 0; k < 7; ++k) mesh.positions.push_back(Vec3f(float(k), 9.0f, 9.0f));  // no face uses them
+  mesh.positions.push_back(mesh.positions[mesh.triangles[10][0]]);  // welded with the vertex it copies
+  mesh.triangles[20][0] = VertexId(mesh.positions.size() - 1);
+  const auto shared = std::make_shared<const TriangleMesh>(mesh);
+  for (const std::uint64_t memory : {std::uint64_t(1), std::uint64_t(64) << 20}) {
+    SCOPED_TRACE(memory);
+    CleanResult cleaned[2];
+    WeldCensus census[2];
+    for (const bool withCensus : {true, false}) {
+      testing::TempDir dir;
+      ScratchFolder folder(dir.dir());
+      const std::unique_ptr<MeshStream> stream = makeMemoryStream("mesh", shared, 997);
+      WeldStreamOptions weld;
+      weld.weld = true;
+      weld.memoryBytes = memory;
+      weld.census = withCensus;
+      const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
+      const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, memory);
+      cleaned[withCensus] = readCleanScratch(folder, scratch);
+      census[withCensus] = welded.census;
+    }
+    const CleanResult &a = cleaned[0], &b = cleaned[1];
+    EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+    EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+    EXPECT_EQ(a.faceOrigin, b.faceOrigin);
+    EXPECT_EQ(a.vertexOrigin, b.vertexOrigin);
+    std::size_t wrong = 0;
+    for (CornerId k = 0; k < a.topology.numCorners(); ++k) wrong += a.topology.opposite(k) != b.topology.opposite(k);
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_EQ(std::make_tuple(a.report.inputVertices, a.report.weldedVertices, a.report.degenerateFaces,
+                              a.report.duplicateFaces, a.report.unreferencedVertices, a.report.nonManifoldEdges,
+                              a.report.nonManifoldVertices, a.report.flippedFaces, a.report.outputVertices),
+              std::make_tuple(b.report.inputVertices, b.report.weldedVertices, b.report.degenerateFaces,
+                              b.report.duplicateFaces, b.report.unreferencedVertices, b.report.nonManifoldEdges,
+                              b.report.nonManifoldVertices, b.report.flippedFaces, b.report.outputVertices));
+    // The cleaning's count of unreferenced vertices is the census's.
+    EXPECT_EQ(b.report.unreferencedVertices, census[1].unreferencedVertices);
+    EXPECT_GE(b.report.unreferencedVertices, 7u);
+    EXPECT_GE(b.report.weldedVertices, 1u);
+    EXPECT_GT(b.report.duplicateFaces, 0u);
+    EXPECT_GT(census[1].edges, 0u);
+    EXPECT_FALSE(census[1].components.empty());
+    EXPECT_EQ(census[0].edges, 0u);
+    EXPECT_TRUE(census[0].components.empty());
+  }
+}
+
 // A scratch disk that fills up during the cleaning (after the weld pass) is an error naming the
 // folder, and the folder is removed with everything in it.
 TEST(CleanStream, AFullScratchDiskIsAnErrorNamingTheFolder) {
