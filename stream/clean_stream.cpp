@@ -301,10 +301,27 @@ class CleanPass {
     }
     faces_ = out.finish();
     edges_->finish();
-    // The sorted sides are read twice more: kept in a file.
+    // The sorted sides are read again: kept in a file. On the way, the edges orient() and glue()
+    // look for: two sides in one direction (a clash), more than two sides.
     ScratchWriter sorted(folder_, "clean: edges", std::size_t(1) << 20, edges_->size() * sizeof(EdgeSide));
-    EdgeSide side{};
-    while (edges_->next(side)) sorted.write(&side, sizeof side);
+    EdgeSide side{}, first{};
+    std::uint32_t sides = 0;
+    bool sameDirection = false;
+    auto close = [&] {
+      clashes_ += sides == 2 && sameDirection;
+      multiEdges_ += sides > 2;
+    };
+    while (edges_->next(side)) {
+      if (sides > 0 && (side.lo != first.lo || side.hi != first.hi)) {
+        close();
+        sides = 0;
+      }
+      if (sides == 0) first = side;
+      if (sides == 1) sameDirection = side.forward == first.forward;
+      ++sides;
+      sorted.write(&side, sizeof side);
+    }
+    close();
     edges_.reset();
     sortedEdges_ = sorted.finish();
   }
@@ -329,12 +346,7 @@ class CleanPass {
   /// component (through edges of exactly two faces) is oriented like most of its faces, the
   /// edges united in order (a non-orientable loop keeps the edge closing it as a clash).
   void orient() {
-    std::uint64_t clashes = 0;
-    forEachEdge("clean: orient", [&](const std::vector<EdgeSide>& sides) {
-      if (sides.size() == 2 && sides[0].forward == sides[1].forward) ++clashes;
-      if (sides.size() > 2) ++multiEdges_;
-    });
-    if (clashes == 0) return;
+    if (clashes_ == 0) return;
     ScratchParityUnionFind faces(folder_, out_.numFaces, orientBytes_, "clean: orient");
     forEachEdge("clean: orient", [&](const std::vector<EdgeSide>& sides) {
       if (sides.size() != 2) return;
@@ -812,7 +824,7 @@ class CleanPass {
   std::unique_ptr<ScratchArray<std::uint8_t>> flip_;  // per face, when the orientation changed any
   std::uint64_t orientBytes_ = 0, flipBytes_ = 0, piecesBytes_ = 0;
   bool setsOnDisk_ = false;
-  std::uint64_t multiEdges_ = 0;
+  std::uint64_t multiEdges_ = 0, clashes_ = 0;  ///< edges of more than two sides; of two in one direction
   std::vector<VertexId> boundary_;  // the vertices whose fan is open, increasing
 };
 
