@@ -124,6 +124,9 @@ class CleanPass {
     out_.numFaces = welded.numFaces;
     out_.origin = census.origin;
     out_.report = weldCleanReport(census);
+    // The weld counted them on the kept faces with the same box (of the same referenced
+    // positions) and threshold as cleanMesh; flips and splits do not change an area.
+    out_.report.zeroAreaFaces = census.zeroAreaFaces;
   }
 
   CleanScratch run() {
@@ -410,8 +413,8 @@ class CleanPass {
     out_.opposite = out.finish();
   }
 
-  /// The faces' gluing normals (cleanMesh's gluingNormal of the oriented face), read from the
-  /// weld pass's records for the few faces on edges of more than two faces.
+  /// The faces' gluing normals (cleanMesh's gluingNormal of the oriented face) for the few faces
+  /// on edges of more than two faces: their triangles and positions read where they lie.
   std::unordered_map<FaceId, Vec3d> gluingNormals(const std::vector<std::vector<EdgeSide>>& multi) {
     std::vector<FaceId> faces;
     for (const auto& sides : multi) {
@@ -420,11 +423,16 @@ class CleanPass {
     std::sort(faces.begin(), faces.end());
     faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
     std::unordered_map<FaceId, Vec3d> normal;
-    ScratchRandomReader in(folder_, welded_.faces, "clean: glue");
+    ScratchRandomReader triangles(folder_, faces_, "clean: glue"), positions(folder_, positions_, "clean: glue");
     for (const FaceId f : faces) {
-      WeldedFace w;
-      in.readAt(std::uint64_t(f) * sizeof(WeldedFace), &w, sizeof w);
-      Vec3d p[3] = {w.corner(0).cast<double>(), w.corner(1).cast<double>(), w.corner(2).cast<double>()};
+      CleanFace face;
+      triangles.readAt(std::uint64_t(f) * sizeof(CleanFace), &face, sizeof face);
+      Vec3d p[3];
+      for (int k = 0; k < 3; ++k) {
+        Vec3f q;
+        positions.readAt(std::uint64_t(face.triangle[k]) * sizeof(Vec3f), &q, sizeof q);
+        p[k] = q.cast<double>();
+      }
       if (flip_ && flip_->get(f)) std::swap(p[1], p[2]);
       normal[f] = gluingNormal(p[0], p[1], p[2]);
     }
@@ -650,25 +658,6 @@ class CleanPass {
     out_.faces = out.finish();
   }
 
-  /// Calls visit(face, triangle, p) for each final face with its corner positions (from the
-  /// weld pass's records, in the final corner order).
-  template <class Visit>
-  void forEachPlacedFace(const char* stage, Visit&& visit) {
-    ScratchReader faces(folder_, out_.faces, stage);
-    WeldedFaceReader welded(folder_, welded_, stage);
-    std::vector<WeldedFace> chunk;
-    CleanFace face;
-    FaceId f = 0;
-    while (welded.next(chunk, kChunkFaces)) {
-      for (const WeldedFace& w : chunk) {
-        if (!faces.read(&face, sizeof face)) throw IoError(out_.faces.path + ": scratch faces end early");
-        Vec3d p[3] = {w.corner(0).cast<double>(), w.corner(1).cast<double>(), w.corner(2).cast<double>()};
-        if (flip_ && flip_->get(f)) std::swap(p[1], p[2]);
-        visit(f++, face.triangle, p);
-      }
-    }
-  }
-
   /// For blocks of 64K vertices: start(first, count), then visit(readers, first + i, i) for each
   /// of its vertices in parallel (a per-thread set of readers: the final corner table, the
   /// positions and, when given, a file of one double per vertex), then finish(count).
@@ -762,15 +751,11 @@ class CleanPass {
     return spikes;
   }
 
-  /// cleanMesh's last counts: zero-area faces, boundary vertices at the position of another of
-  /// another origin (cracks), spikes and the bounding box diagonal without them.
+  /// cleanMesh's last counts (the zero-area faces come from the weld): boundary vertices at the
+  /// position of another of another origin (cracks), spikes and the bounding box diagonal without
+  /// them.
   void measure() {
     CleanReport& r = out_.report;
-    const BoundingBox box = scratchBoundingBox(folder_, out_.positions, "clean: measure");
-    const double tiny = 1e-14 * box.diagonal() * box.diagonal();
-    forEachPlacedFace("clean: measure", [&](FaceId, const Triangle&, const Vec3d (&p)[3]) {
-      r.zeroAreaFaces += 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm() <= tiny;
-    });
     const std::vector<VertexId> spikes = findSpikes();
     r.spikeVertices = spikes.size();
     // Boundary points at one position with two origins, and the box without the spikes.

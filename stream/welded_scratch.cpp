@@ -87,6 +87,13 @@ struct ByCornerLess {
   }
 };
 
+/// A kept face with its corners' positions, between the weld's positions and Morton passes.
+struct PlacedFace {
+  WeldedFace face;
+  std::array<float, 3> corners[3]{};  ///< plain floats: written as bytes
+  Vec3f corner(int k) const { return Vec3f(corners[k][0], corners[k][1], corners[k][2]); }
+};
+
 struct MortonLess {
   bool operator()(const WeldedFace& a, const WeldedFace& b) const {
     return a.morton != b.morton ? a.morton < b.morton : a.face < b.face;
@@ -387,7 +394,7 @@ class WeldPass {
   /// corner positions go to a file.
   void placeCorners() {
     BoundingBox& box = result_.census.box;
-    auto include = [&](const WeldedFace& face) {
+    auto include = [&](const PlacedFace& face) {
       for (int k = 0; k < 3; ++k) {
         const Vec3d p = face.corner(k).cast<double>();
         box.min = box.min.cwiseMin(p);
@@ -406,7 +413,7 @@ class WeldPass {
       return;
     }
     ScratchWriter out(folder_, "positions");
-    joinCornersWithPositions([&](WeldedFace& face) {
+    joinCornersWithPositions([&](PlacedFace& face) {
       include(face);
       out.write(&face, sizeof face);
     });
@@ -417,10 +424,10 @@ class WeldPass {
   template <class Visit>
   void forEachKeptFace(const char* stage, Visit&& visit) {
     ScratchReader in(folder_, keptFile_, stage);
-    WeldedFace face;
-    while (in.read(&face.face, sizeof face.face) && in.read(&face.triangle, sizeof face.triangle)) {
+    PlacedFace face;
+    while (in.read(&face.face.face, sizeof face.face.face) && in.read(&face.face.triangle, sizeof face.face.triangle)) {
       for (int k = 0; k < 3; ++k) {
-        const Vec3f& p = positions_[face.triangle[k]];
+        const Vec3f& p = positions_[face.face.triangle[k]];
         face.corners[k] = {p.x(), p.y(), p.z()};
       }
       visit(face);
@@ -450,10 +457,10 @@ class WeldPass {
     placed->finish();
     PlacedCorner c[3];
     while (placed->next(c[0]) && placed->next(c[1]) && placed->next(c[2])) {
-      WeldedFace face;
-      face.face = c[0].face;
+      PlacedFace face;
+      face.face.face = c[0].face;
       for (int k = 0; k < 3; ++k) {
-        face.triangle[k] = c[k].vertex;
+        face.face.triangle[k] = c[k].vertex;
         face.corners[k] = c[k].position;
       }
       add(face);
@@ -475,13 +482,13 @@ class WeldPass {
                                                                  options_.memoryBytes - std::min(options_.memoryBytes, held)));
     }
     ExternalSorter<WeldedFace, MortonLess> sorter(folder_, options);
-    auto take = [&](WeldedFace& face) {
-      const Vec3d a = face.corner(0).cast<double>(), b = face.corner(1).cast<double>(),
-                  d = face.corner(2).cast<double>();
+    auto take = [&](PlacedFace& placed) {
+      const Vec3d a = placed.corner(0).cast<double>(), b = placed.corner(1).cast<double>(),
+                  d = placed.corner(2).cast<double>();
       c.zeroAreaFaces += 0.5 * (b - a).cross(d - a).norm() <= tiny;
-      face.morton = mortonCode((a + b + d) / 3.0, c.box);
-      if (components_) ++counts_[components_->find(face.triangle[0])].faces;
-      sorter.add(face);
+      placed.face.morton = mortonCode((a + b + d) / 3.0, c.box);
+      if (components_) ++counts_[components_->find(placed.face.triangle[0])].faces;
+      sorter.add(placed.face);  // the corners stay behind: the cleaning reads positions by vertex
     };
     if (positionsInMemory_) {
       forEachKeptFace("morton", take);
@@ -489,7 +496,7 @@ class WeldPass {
       folder_.remove(keptFile_);
     } else {
       ScratchReader in(folder_, placedFaces_, "morton");
-      WeldedFace face;
+      PlacedFace face;
       while (in.read(&face, sizeof face)) take(face);
       folder_.remove(placedFaces_);
     }

@@ -3,8 +3,8 @@
 /// scratch folder, welded (optional: exactly equal positions, as cleanMesh welds with tolerance 0),
 /// cleaned of degenerate and duplicate faces as cleanMesh cleans them, and measured (edges by
 /// their two vertices, components by union-find, boundary loops, bounding box). Its output, the
-/// welded triangles with their corner positions sorted by the Morton code of their centroid (a
-/// spatially coherent order) and the welded positions, stays in the scratch folder for the next
+/// welded triangles sorted by the Morton code of their centroid (a spatially coherent order; 24
+/// bytes each, the positions apart) and the welded positions, stays in the scratch folder for the next
 /// streamed stage (WeldedFaceReader). Memory: the sorts' limit, plus the weld map (4 bytes per
 /// input vertex while faces are renumbered) and the union-finds of the components and boundary loops
 /// (4 bytes per vertex, the loops' a map of the boundary vertices while it is small), each
@@ -32,9 +32,8 @@ struct WeldedFace {
   std::uint64_t morton = 0;  ///< of the centroid on a 2^21 grid over the bounding box
   std::uint32_t face = 0;    ///< index in the input stream
   Triangle triangle{};       ///< welded vertex ids, the input's corner order
-  std::array<float, 3> corners[3]{};  ///< positions of the three vertices (plain floats: written as bytes)
-  Vec3f corner(int k) const { return Vec3f(corners[k][0], corners[k][1], corners[k][2]); }
 };
+static_assert(sizeof(WeldedFace) == 24, "the Morton sort's records");
 
 struct WeldStreamOptions {
   bool weld = false;  ///< join vertices at exactly equal positions (the lowest input id keeps its place first); always for a stream of corner vertices (STL)
