@@ -152,7 +152,7 @@ class CleanPass {
   /// Welded vertices that some face references, numbered in the order the (Morton-ordered) faces
   /// first name them, so that a vertex's id is near its faces' ids (cleanMesh's
   /// dropUnreferencedVertices on vertices so numbered); their positions and input ids, put in
-  /// that order by a sort.
+  /// that order in memory when they fit beside the new ids (half the sorts' share), else by a sort.
   void renumberVertices() {
     if (renumberBySorts_) return renumberVerticesBySorts();
     newId_.assign(welded_.numVertices, kInvalidId);
@@ -165,6 +165,23 @@ class CleanPass {
           if (newId_[v] == kInvalidId) newId_[v] = n++;
         }
       }
+    }
+    if (std::uint64_t(n) * (sizeof(Vec3f) + sizeof(VertexId)) <= sort_.memoryBytes / 2) {
+      std::vector<Vec3f> positions(n);
+      std::vector<VertexId> origin(n);
+      ScratchReader in(folder_, welded_.positions, "clean: vertices");
+      Vec3f p;
+      for (VertexId v = 0; v < newId_.size(); ++v) {
+        if (!in.read(&p, sizeof p)) throw IoError(welded_.positions.path + ": scratch positions end early");
+        if (newId_[v] == kInvalidId) continue;
+        positions[newId_[v]] = p;
+        origin[newId_[v]] = v;
+      }
+      ScratchWriter positionsOut(folder_, "clean: vertices"), originOut(folder_, "clean: vertices");
+      positionsOut.write(positions.data(), positions.size() * sizeof(Vec3f));
+      originOut.write(origin.data(), origin.size() * sizeof(VertexId));
+      setNumberedVertices(positionsOut.finish(), originOut.finish(), n);
+      return;
     }
     ExternalSorter<NumberedVertex, NumberedVertexLess> sorter(folder_, sortOptions("clean: vertices"));
     {
@@ -196,8 +213,12 @@ class CleanPass {
       origin.write(&record.origin, sizeof record.origin);
       numbered(record.origin, n++);
     }
-    positions_ = positions.finish();
-    out_.vertexOrigin = origin.finish();
+    setNumberedVertices(positions.finish(), origin.finish(), n);
+  }
+
+  void setNumberedVertices(const ScratchFile& positions, const ScratchFile& origin, std::uint32_t n) {
+    positions_ = positions;
+    out_.vertexOrigin = origin;
     out_.numVertices = n;
     // The welded vertices no kept face uses (the weld's census counts them too, when it runs).
     out_.report.unreferencedVertices = out_.report.inputVertices - out_.report.weldedVertices - n;
