@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <tuple>
 #include <unordered_map>
 
 #include "core/system/errors.h"
@@ -94,11 +95,46 @@ struct PlacedFace {
   Vec3f corner(int k) const { return Vec3f(corners[k][0], corners[k][1], corners[k][2]); }
 };
 
+/// The triangle's vertex ids in increasing order.
+std::array<VertexId, 3> sortedVertices(const Triangle& t) {
+  std::array<VertexId, 3> v{t[0], t[1], t[2]};
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+/// Morton order, then the vertex set, then the input index: faces on one vertex set (duplicates)
+/// stay together, the one cleanMesh keeps first.
 struct MortonLess {
   bool operator()(const WeldedFace& a, const WeldedFace& b) const {
-    return a.morton != b.morton ? a.morton < b.morton : a.face < b.face;
+    if (a.morton != b.morton) return a.morton < b.morton;
+    const auto x = sortedVertices(a.triangle), y = sortedVertices(b.triangle);
+    return x != y ? x < y : a.face < b.face;
   }
 };
+
+/// A face for the Morton sort that also finds duplicates (the weld without its census): its
+/// code and its duplicate-sort record, in MortonLess's order.
+struct MortonFace {
+  std::uint32_t high, low;  ///< the Morton code's halves (28 bytes, not 32)
+  FaceRecord record;
+  std::uint64_t morton() const { return std::uint64_t(high) << 32 | low; }
+};
+static_assert(sizeof(MortonFace) == 28, "the fused Morton sort's records");
+struct MortonFaceLess {
+  bool operator()(const MortonFace& a, const MortonFace& b) const {
+    if (a.high != b.high || a.low != b.low) return std::tie(a.high, a.low) < std::tie(b.high, b.low);
+    return SameVerticesLess{}(a.record, b.record);
+  }
+};
+
+/// The centroid summed in the order of the vertex ids: the same for every face on the vertex set.
+template <class CornerOf>
+Vec3d sortedCentroid(const Triangle& t, CornerOf&& corner) {
+  int k[3] = {0, 1, 2};
+  std::sort(k, k + 3, [&](int a, int b) { return t[a] < t[b]; });
+  const Vec3d a = corner(k[0]), b = corner(k[1]), c = corner(k[2]);
+  return (a + b + c) / 3.0;
+}
 
 /// Per component (by union-find root) what the passes count.
 struct ComponentCount {
@@ -280,8 +316,17 @@ class WeldPass {
   }
 
   /// Pass 3: triangles on welded ids; degenerate ones dropped, the others to the duplicate sort.
+  /// Without the census, with the positions in three quarters of the memory, the Morton sort
+  /// finds the duplicates instead (fused_): the faces wait in a file, the positions in memory.
   void renumberFaces() {
-    faceSort_ = std::make_unique<ExternalSorter<FaceRecord, SameVerticesLess>>(folder_, sortOptions("duplicates"));
+    fused_ = !options_.census && !options_.joinPositions && welded_ * sizeof(Vec3f) <= options_.memoryBytes / 4 * 3;
+    if (fused_) {
+      positionsInMemory_ = true;
+      readPositions();
+      keptFaces_ = std::make_unique<ScratchWriter>(folder_, "faces");
+    } else {
+      faceSort_ = std::make_unique<ExternalSorter<FaceRecord, SameVerticesLess>>(folder_, sortOptions("duplicates"));
+    }
     ScratchReader in(folder_, inputTriangles_, "faces");
     Triangle t;
     for (std::uint32_t f = 0; in.read(&t, sizeof t); ++f) {
@@ -292,15 +337,39 @@ class WeldPass {
         ++result_.census.degenerateFaces;
         continue;
       }
-      faceSort_->add(faceRecord(t, f));
+      ++validFaces_;
+      if (faceSort_) {
+        faceSort_->add(faceRecord(t, f));
+      } else {
+        keptFaces_->write(&f, sizeof f);
+        keptFaces_->write(&t, sizeof t);
+      }
     }
     weldId_.reset();
     folder_.remove(inputTriangles_);
   }
 
+  /// The welded positions whole into memory.
+  void readPositions() {
+    positions_.resize(welded_);
+    ScratchReader in(folder_, result_.scratch.positions, "positions");
+    if (welded_ > 0 && !in.read(positions_.data(), positions_.size() * sizeof(Vec3f))) {
+      throw IoError(result_.scratch.positions.path + ": welded positions end early");
+    }
+  }
+
+  void throwWithoutValidFaces() const {
+    throw InputError(name_ + ": the mesh has no valid faces (" + std::to_string(result_.census.inputFaces) +
+                     " faces in the input, all degenerate or duplicates)");
+  }
+
   /// Pass 4: the first face of each vertex set kept; its vertices united, its edges and corners
   /// to their sorts.
   void dropDuplicateFaces() {
+    if (fused_) {
+      if (validFaces_ == 0) throwWithoutValidFaces();
+      return;
+    }
     faceSort_->finish();
     if (options_.census) {
       components_ = std::make_unique<ScratchUnionFind>(folder_, welded_, setsBytes_, "weld: components");
@@ -344,10 +413,7 @@ class WeldPass {
       ++result_.census.faces;
     }
     faceSort_.reset();
-    if (result_.census.faces == 0) {
-      throw InputError(name_ + ": the mesh has no valid faces (" + std::to_string(result_.census.inputFaces) +
-                       " faces in the input, all degenerate or duplicates)");
-    }
+    if (result_.census.faces == 0) throwWithoutValidFaces();
   }
 
   /// Pass 5: edges grouped by their two vertices; boundary edges join their vertices' loops.
@@ -402,11 +468,7 @@ class WeldPass {
       }
     };
     if (positionsInMemory_) {
-      positions_.resize(welded_);
-      ScratchReader in(folder_, result_.scratch.positions, "positions");
-      if (welded_ > 0 && !in.read(positions_.data(), positions_.size() * sizeof(Vec3f))) {
-        throw IoError(result_.scratch.positions.path + ": welded positions end early");
-      }
+      if (!fused_) readPositions();
       keptFile_ = keptFaces_->finish();
       keptFaces_.reset();
       forEachKeptFace("positions", include);
@@ -481,12 +543,19 @@ class WeldPass {
       options.memoryBytes = std::max(kMinimumSortBytes, std::min(options.memoryBytes,
                                                                  options_.memoryBytes - std::min(options_.memoryBytes, held)));
     }
-    ExternalSorter<WeldedFace, MortonLess> sorter(folder_, options);
-    auto take = [&](PlacedFace& placed) {
+    const auto isZeroArea = [&](const PlacedFace& placed) {
       const Vec3d a = placed.corner(0).cast<double>(), b = placed.corner(1).cast<double>(),
                   d = placed.corner(2).cast<double>();
-      c.zeroAreaFaces += 0.5 * (b - a).cross(d - a).norm() <= tiny;
-      placed.face.morton = mortonCode((a + b + d) / 3.0, c.box);
+      return 0.5 * (b - a).cross(d - a).norm() <= tiny;
+    };
+    const auto mortonOf = [&](const PlacedFace& placed) {
+      return mortonCode(sortedCentroid(placed.face.triangle, [&](int k) -> Vec3d { return placed.corner(k).cast<double>(); }), c.box);
+    };
+    if (fused_) return sortByMortonWithDuplicates(options, isZeroArea, mortonOf);
+    ExternalSorter<WeldedFace, MortonLess> sorter(folder_, options);
+    auto take = [&](PlacedFace& placed) {
+      c.zeroAreaFaces += isZeroArea(placed);
+      placed.face.morton = mortonOf(placed);
       if (components_) ++counts_[components_->find(placed.face.triangle[0])].faces;
       sorter.add(placed.face);  // the corners stay behind: the cleaning reads positions by vertex
     };
@@ -505,6 +574,45 @@ class WeldPass {
     WeldedFace face;
     while (sorter.next(face)) out.write(&face, sizeof face);
     result_.scratch.faces = out.finish();
+    result_.scratch.numFaces = c.faces;
+  }
+
+  /// sortByMorton when the duplicate sort did not run: all valid faces sorted, a face on the
+  /// vertex set of the face before it dropped as a duplicate (the first, cleanMesh's, kept).
+  template <class IsZeroArea, class MortonOf>
+  void sortByMortonWithDuplicates(const ExternalSortOptions& options, IsZeroArea&& isZeroArea, MortonOf&& mortonOf) {
+    WeldCensus& c = result_.census;
+    {
+      ExternalSorter<MortonFace, MortonFaceLess> sorter(folder_, options);
+      forEachKeptFace("morton", [&](const PlacedFace& placed) {
+        const std::uint64_t code = mortonOf(placed);
+        sorter.add({static_cast<std::uint32_t>(code >> 32), static_cast<std::uint32_t>(code),
+                    faceRecord(placed.face.triangle, placed.face.face)});
+      });
+      folder_.remove(keptFile_);
+      sorter.finish();
+      ScratchWriter out(folder_, "morton", std::size_t(1) << 20, sorter.size() * sizeof(WeldedFace));
+      MortonFace record{};
+      std::array<VertexId, 3> last{kInvalidId, kInvalidId, kInvalidId};
+      while (sorter.next(record)) {
+        if (record.record.vertices == last) {
+          ++c.duplicateFaces;
+          continue;
+        }
+        last = record.record.vertices;
+        PlacedFace placed;
+        placed.face = {record.morton(), record.record.face, record.record.triangle()};
+        for (int k = 0; k < 3; ++k) {
+          const Vec3f& p = positions_[placed.face.triangle[k]];
+          placed.corners[k] = {p.x(), p.y(), p.z()};
+        }
+        c.zeroAreaFaces += isZeroArea(placed);
+        ++c.faces;
+        out.write(&placed.face, sizeof placed.face);
+      }
+      result_.scratch.faces = out.finish();
+    }
+    std::vector<Vec3f>().swap(positions_);
     result_.scratch.numFaces = c.faces;
   }
 
@@ -553,6 +661,8 @@ class WeldPass {
   ScratchFile keptFile_;                      ///< what keptFaces_ wrote
   std::vector<Vec3f> positions_;              ///< welded positions, from pass 6 to 7 when in memory
   bool positionsInMemory_ = false;
+  bool fused_ = false;            ///< the Morton sort finds the duplicates (renumberFaces)
+  std::uint64_t validFaces_ = 0;  ///< not degenerate
   std::uint64_t setsBytes_ = 0;
   std::unique_ptr<ScratchUnionFind> components_;
   std::unordered_map<std::uint32_t, ComponentCount> counts_;  ///< by union-find root

@@ -14,6 +14,7 @@
 
 #include "core/mesh/clean.h"
 #include "core/mesh/detail_union_find.h"
+#include "core/mesh/morton.h"
 #include "io/json_reader.h"
 #include "stream/welded_scratch.h"
 
@@ -275,9 +276,11 @@ TEST(WeldedScratch, FacesInMortonOrderAreTheFacesCleanMeshKeepsOnWeldedVertices)
   cleanOptions.weldVertices = true;
   const CleanResult cleaned = cleanMesh(*mesh, cleanOptions);
 
-  // Positions joined with the corners by sorts (the smallest sorts), and read whole (8 MiB).
-  for (const bool join : {true, false}) {
-  SCOPED_TRACE(join ? "positions joined" : "positions in memory");
+  // Positions joined with the corners by sorts (the smallest sorts), and read whole (8 MiB); the
+  // latter without the census too, when the Morton sort finds the duplicates.
+  for (const int mode : {0, 1, 2}) {
+  const bool join = mode == 0;
+  SCOPED_TRACE(join ? "positions joined" : mode == 1 ? "positions in memory" : "duplicates in the Morton sort");
   testing::TempDir dir;
   ScratchFolder folder(dir.dir());
   const std::unique_ptr<MeshStream> stream = makeMemoryStream("scan", mesh, 5000);
@@ -285,6 +288,7 @@ TEST(WeldedScratch, FacesInMortonOrderAreTheFacesCleanMeshKeepsOnWeldedVertices)
   weld.weld = true;
   weld.memoryBytes = join ? 1 : std::uint64_t(8) << 20;
   weld.joinPositions = join;
+  weld.census = mode != 2;
   const WeldStreamResult result = weldMeshStream(*stream, folder, weld);
   EXPECT_EQ(result.census.weldedVertices, cleaned.report.weldedVertices);
   EXPECT_EQ(result.census.faces, cleaned.mesh.numFaces());
@@ -315,6 +319,13 @@ TEST(WeldedScratch, FacesInMortonOrderAreTheFacesCleanMeshKeepsOnWeldedVertices)
         ASSERT_LT(f.triangle[k], positions.size());
         EXPECT_EQ(positions[f.triangle[k]], mesh->positions[mesh->triangles[f.face][k]]);
       }
+      // The code is the centroid's (summed in vertex id order: the same for every face on a
+      // vertex set) on the box of the positions.
+      std::array<VertexId, 3> ids = f.triangle;
+      std::sort(ids.begin(), ids.end());
+      const Vec3d a = positions[ids[0]].cast<double>(), b = positions[ids[1]].cast<double>(),
+                  d = positions[ids[2]].cast<double>();
+      EXPECT_EQ(f.morton, mortonCode((a + b + d) / 3.0, result.census.box));
     }
   }
   EXPECT_EQ(count, cleaned.mesh.numFaces());
