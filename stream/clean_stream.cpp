@@ -34,10 +34,13 @@ constexpr std::uint32_t kLargePieceFaces = 1024;
 
 /// A side of an edge: corner c's edge runs vertex(next c) -> vertex(prev c).
 struct EdgeSide {
-  std::uint32_t lo, hi;  ///< its vertices, smaller first
+  VertexId from, to;  ///< in the face's direction (12 bytes: the direction is their order)
   CornerId corner;
-  std::uint32_t forward;  ///< runs lo -> hi
+  VertexId lo() const { return std::min(from, to); }
+  VertexId hi() const { return std::max(from, to); }
+  bool forward() const { return from < to; }  ///< runs lo -> hi
 };
+static_assert(sizeof(EdgeSide) == 12, "the edge sort's records");
 /// A kept vertex: its new id, welded id and position (20 bytes).
 /// A corner (its index in the Morton order of the faces) at its welded vertex; and a vertex's
 /// first corner or new id, for the renumbering by sorts.
@@ -60,7 +63,8 @@ struct NumberedVertexLess {
 
 struct EdgeSideLess {
   bool operator()(const EdgeSide& a, const EdgeSide& b) const {
-    return std::tie(a.lo, a.hi, a.corner) < std::tie(b.lo, b.hi, b.corner);
+    const VertexId alo = a.lo(), ahi = a.hi(), blo = b.lo(), bhi = b.hi();
+    return std::tie(alo, ahi, a.corner) < std::tie(blo, bhi, b.corner);
   }
 };
 
@@ -314,7 +318,7 @@ class CleanPass {
         out.write(&face, sizeof face);
         for (int k = 0; k < 3; ++k, ++corner) {
           const VertexId a = face.triangle[(k + 1) % 3], b = face.triangle[(k + 2) % 3];
-          edges_->add({std::min(a, b), std::max(a, b), corner, a < b ? 1u : 0u});
+          edges_->add({a, b, corner});
         }
       }
     }
@@ -336,12 +340,12 @@ class CleanPass {
       multiEdges_ += sides > 2;
     };
     while (edges_->next(side)) {
-      if (sides > 0 && (side.lo != first.lo || side.hi != first.hi)) {
+      if (sides > 0 && (side.lo() != first.lo() || side.hi() != first.hi())) {
         close();
         sides = 0;
       }
       if (sides == 0) first = side;
-      if (sides == 1) sameDirection = side.forward == first.forward;
+      if (sides == 1) sameDirection = side.forward() == first.forward();
       ++sides;
       sorted.write(&side, sizeof side);
     }
@@ -357,7 +361,7 @@ class CleanPass {
     std::vector<EdgeSide> sides;
     EdgeSide side{};
     while (in.read(&side, sizeof side)) {
-      if (!sides.empty() && (side.lo != sides[0].lo || side.hi != sides[0].hi)) {
+      if (!sides.empty() && (side.lo() != sides[0].lo() || side.hi() != sides[0].hi())) {
         visit(sides);
         sides.clear();
       }
@@ -374,7 +378,7 @@ class CleanPass {
     ScratchParityUnionFind faces(folder_, out_.numFaces, orientBytes_, "clean: orient");
     forEachEdge("clean: orient", [&](const std::vector<EdgeSide>& sides) {
       if (sides.size() != 2) return;
-      faces.unite(sides[0].corner / 3, sides[1].corner / 3, sides[0].forward == sides[1].forward);
+      faces.unite(sides[0].corner / 3, sides[1].corner / 3, sides[0].forward() == sides[1].forward());
     });
     flip_ = std::make_unique<ScratchArray<std::uint8_t>>(folder_, out_.numFaces, flipBytes_, "clean: orient");
     faces.majorityFlips(*flip_);
@@ -389,7 +393,7 @@ class CleanPass {
     for (EdgeSide& s : sides) {
       if (!flip_->get(s.corner / 3)) continue;
       s.corner = flippedCorner(s.corner);
-      s.forward ^= 1;
+      std::swap(s.from, s.to);
       changed = true;
     }
     if (changed) std::sort(sides.begin(), sides.end(), EdgeSideLess{});
@@ -408,7 +412,7 @@ class CleanPass {
       if (sides.size() > 2) {
         ++out_.report.nonManifoldEdges;
         multi.push_back(sides);
-      } else if (sides.size() == 2 && sides[0].forward == sides[1].forward) {
+      } else if (sides.size() == 2 && sides[0].forward() == sides[1].forward()) {
         ++out_.report.nonManifoldEdges;
       } else if (sides.size() == 2) {
         pairs.add({sides[0].corner, sides[1].corner});
@@ -480,12 +484,12 @@ class CleanPass {
     std::vector<Pair> candidates;
     for (const auto& sides : multi) {
       // `same`: the sides running like the edge's smallest corner; `reverse`: the others.
-      const std::uint32_t direction = sides[0].forward;
+      const bool direction = sides[0].forward();
       candidates.clear();
       for (const EdgeSide& x : sides) {
-        if (x.forward != direction) continue;
+        if (x.forward() != direction) continue;
         for (const EdgeSide& y : sides) {
-          if (y.forward == direction) continue;
+          if (y.forward() == direction) continue;
           const FaceId fx = x.corner / 3, fy = y.corner / 3;
           candidates.push_back({std::min(wanted.at(pieces.find(fx)), wanted.at(pieces.find(fy))),
                                 gluingAlignment(normal.at(fx), normal.at(fy)), x.corner, y.corner});

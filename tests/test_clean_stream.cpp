@@ -46,7 +46,7 @@ Cleaned cleanBothWays(const TriangleMesh& mesh, std::uint64_t memoryBytes, bool 
   for (const ScratchTraffic& t : folder.traffic()) {
     if (t.stage == "clean: edges") out.edgeSortWritten = t.bytesWritten;
   }
-  out.sortedEdgeBytes = 3 * sizeof(std::uint32_t[4]) * scratch.numFaces;
+  out.sortedEdgeBytes = 3 * sizeof(std::uint32_t[3]) * scratch.numFaces;  // 12-byte edge sides
   // In memory: the weld pass's faces in its order (input vertex ids: nothing welded).
   TriangleMesh ordered;
   ordered.positions = mesh.positions;
