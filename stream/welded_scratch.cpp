@@ -343,10 +343,32 @@ class WeldPass {
       } else {
         keptFaces_->write(&f, sizeof f);
         keptFaces_->write(&t, sizeof t);
+        PlacedFace placed;
+        placed.face.triangle = t;
+        fillCorners(placed);
+        includeInBox(placed);  // a duplicate's vertices are its kept face's: the same box
       }
     }
     weldId_.reset();
     folder_.remove(inputTriangles_);
+  }
+
+  /// The face's corner positions from the positions in memory.
+  void fillCorners(PlacedFace& face) const {
+    for (int k = 0; k < 3; ++k) {
+      const Vec3f& p = positions_[face.face.triangle[k]];
+      face.corners[k] = {p.x(), p.y(), p.z()};
+    }
+  }
+
+  /// The census's bounding box grown by the face's corners.
+  void includeInBox(const PlacedFace& face) {
+    BoundingBox& box = result_.census.box;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d p = face.corner(k).cast<double>();
+      box.min = box.min.cwiseMin(p);
+      box.max = box.max.cwiseMax(p);
+    }
   }
 
   /// The welded positions whole into memory.
@@ -455,28 +477,21 @@ class WeldPass {
     result_.census.setsOnDisk = components_->onDisk() || loops.onDisk();
   }
 
-  /// Pass 6: the bounding box of the referenced vertices. Positions held in memory stay for the
-  /// Morton pass, which places the kept faces' corners itself; otherwise the kept faces with their
-  /// corner positions go to a file.
+  /// Pass 6: the bounding box of the referenced vertices (already grown when fused_). Positions
+  /// held in memory stay for the Morton pass, which places the kept faces' corners itself;
+  /// otherwise the kept faces with their corner positions go to a file.
   void placeCorners() {
-    BoundingBox& box = result_.census.box;
-    auto include = [&](const PlacedFace& face) {
-      for (int k = 0; k < 3; ++k) {
-        const Vec3d p = face.corner(k).cast<double>();
-        box.min = box.min.cwiseMin(p);
-        box.max = box.max.cwiseMax(p);
-      }
-    };
     if (positionsInMemory_) {
-      if (!fused_) readPositions();
       keptFile_ = keptFaces_->finish();
       keptFaces_.reset();
-      forEachKeptFace("positions", include);
+      if (fused_) return;  // the box grew as the faces were read
+      readPositions();
+      forEachKeptFace("positions", [&](const PlacedFace& face) { includeInBox(face); });
       return;
     }
     ScratchWriter out(folder_, "positions");
     joinCornersWithPositions([&](PlacedFace& face) {
-      include(face);
+      includeInBox(face);
       out.write(&face, sizeof face);
     });
     placedFaces_ = out.finish();
@@ -488,10 +503,7 @@ class WeldPass {
     ScratchReader in(folder_, keptFile_, stage);
     PlacedFace face;
     while (in.read(&face.face.face, sizeof face.face.face) && in.read(&face.face.triangle, sizeof face.face.triangle)) {
-      for (int k = 0; k < 3; ++k) {
-        const Vec3f& p = positions_[face.face.triangle[k]];
-        face.corners[k] = {p.x(), p.y(), p.z()};
-      }
+      fillCorners(face);
       visit(face);
     }
   }
@@ -602,10 +614,7 @@ class WeldPass {
         last = record.record.vertices;
         PlacedFace placed;
         placed.face = {record.morton(), record.record.face, record.record.triangle()};
-        for (int k = 0; k < 3; ++k) {
-          const Vec3f& p = positions_[placed.face.triangle[k]];
-          placed.corners[k] = {p.x(), p.y(), p.z()};
-        }
+        fillCorners(placed);
         c.zeroAreaFaces += isZeroArea(placed);
         ++c.faces;
         out.write(&placed.face, sizeof placed.face);
