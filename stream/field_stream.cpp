@@ -378,10 +378,11 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
     const ScratchFile colour = colourWriter.finish();
     clock.finish("colour");
 
-    // One pass per sweep and colour, in place: a colour's faces read only faces of other colours
-    // (as the in-memory sweep's parallel loop over that colour does), so the directions they read
-    // stay right while that colour's are rewritten. The directions are held in memory when they
-    // fit three quarters of the pass's memory, else read and written back through the file.
+    // One pass per sweep, in place, in the in-memory sweep's order: blocks of faces, one colour
+    // after another within a block (proxy.sweepBlockFaces). A colour's faces read only faces of
+    // other colours, so they update in parallel. The directions are held in memory when they fit
+    // three quarters of the pass's memory; else a block's are read, changed and written back, its
+    // neighbours' read through page caches that forget a block once it is written back.
     const bool held = nf * sizeof(Vec3f) <= pass.memoryBytes / 4 * 3;
     std::vector<Vec3f> all;
     if (held) all = readWholeScratch<Vec3f>(folder, direction, nf, "field: sweeps");
@@ -390,62 +391,75 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
       PagedReader<Vec3f> normal;
       std::unique_ptr<PagedReader<Vec3f>> direction;
     };
+    // I/O blocks of whole sweep blocks: the order does not depend on the pass's block size.
+    const std::uint64_t sweepBlock = std::max<std::uint64_t>(1, proxy.sweepBlockFaces);
+    const std::uint64_t ioFaces = (blockFaces + sweepBlock - 1) / sweepBlock * sweepBlock;
     std::vector<Vec3f> block;
     std::vector<std::uint8_t> colours;
     for (std::int32_t sweep = 0; sweep < proxy.smoothingSweeps; ++sweep) {
-      for (std::uint32_t k = 0; k < out.colours; ++k) {
-        ReaderPool<SweepReaders> pool([&] {
-          auto r = std::unique_ptr<SweepReaders>(new SweepReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes),
-                                                                  PagedReader<Vec3f>(sweepNormal, cacheBytes), nullptr});
-          if (!held) r->direction = std::make_unique<PagedReader<Vec3f>>(direction, cacheBytes);
-          return r;
-        });
-        std::unique_ptr<ScratchUpdater> directions;
-        if (!held) directions = std::make_unique<ScratchUpdater>(folder, direction, "field: sweeps");
-        // A face's own normal comes through the page cache its neighbours' come through: the
-        // pages of one colour's faces are every page, read once either way.
-        ScratchReader colourReader(folder, colour, "field: sweeps");
-        for (std::uint64_t first = 0; first < nf; first += blockFaces) {
-          const std::uint64_t count = std::min(blockFaces, nf - first);
-          colours.resize(count);
-          if (!colourReader.read(colours.data(), count)) throw IoError(colour.path + ": scratch colours end early");
-          Vec3f* own = all.data() + first;
-          if (!held) {
-            block.resize(count);
-            directions->readAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
-            own = block.data();
-          }
-          parallelFor(count, 4096, [&](const IndexRange& range) {
-            auto r = pool.take();
-            for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-              if (colours[i] != k) continue;
-              const FaceId f = static_cast<FaceId>(first + i);
-              const Vec3f faceNormal = r->normal[f];
-              if (detail::isZero(faceNormal)) continue;
-              Vec3f neighbourNormal[3];
-              Vec3d neighbourDirection[3];
-              int n = 0;
-              for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-                const CornerId o = r->opposite[c];
-                if (o == kInvalidId) continue;
-                const Vec3f normal = r->normal[cornerFace(o)];
-                if (detail::isZero(normal)) continue;
-                neighbourNormal[n] = normal;
-                neighbourDirection[n++] = (held ? all[cornerFace(o)] : (*r->direction)[cornerFace(o)]).cast<double>();
-              }
-              Vec3d swept;
-              if (detail::sweptDirection(faceNormal, own[i].cast<double>(), neighbourNormal, neighbourDirection, n, swept)) {
-                own[i] = swept.cast<float>();
-              }
-            }
-          });
-          if (!held) directions->writeAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+      ReaderPool<SweepReaders> pool([&] {
+        auto r = std::unique_ptr<SweepReaders>(new SweepReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes),
+                                                                PagedReader<Vec3f>(sweepNormal, cacheBytes), nullptr});
+        if (!held) r->direction = std::make_unique<PagedReader<Vec3f>>(direction, cacheBytes);
+        return r;
+      });
+      std::unique_ptr<ScratchUpdater> directions;
+      if (!held) directions = std::make_unique<ScratchUpdater>(folder, direction, "field: sweeps");
+      ScratchReader colourReader(folder, colour, "field: sweeps");
+      for (std::uint64_t first = 0; first < nf; first += ioFaces) {
+        const std::uint64_t count = std::min(ioFaces, nf - first);
+        colours.resize(count);
+        if (!colourReader.read(colours.data(), count)) throw IoError(colour.path + ": scratch colours end early");
+        Vec3f* own = all.data() + first;
+        if (!held) {
+          block.resize(count);
+          directions->readAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+          own = block.data();
         }
-        pool.forEach([&](SweepReaders& r) {
-          folder.countRead("field: sweeps", r.opposite.bytesRead() + r.normal.bytesRead() +
-                                                (r.direction ? r.direction->bytesRead() : 0));
-        });
+        // A neighbour's direction: this I/O block's from `own`, the others' from memory or the file.
+        const auto neighbourDirection = [&](SweepReaders& r, FaceId g) -> Vec3f {
+          if (held) return all[g];
+          return g >= first && g < first + count ? own[g - first] : (*r.direction)[g];
+        };
+        for (std::uint64_t sub = 0; sub < count; sub += sweepBlock) {
+          const std::uint64_t subCount = std::min(sweepBlock, count - sub);
+          for (std::uint32_t k = 0; k < out.colours; ++k) {
+            parallelFor(subCount, 4096, [&](const IndexRange& range) {
+              auto r = pool.take();
+              for (std::uint64_t i = sub + range.begin(); i != sub + range.end(); ++i) {
+                if (colours[i] != k) continue;
+                const FaceId f = static_cast<FaceId>(first + i);
+                const Vec3f faceNormal = r->normal[f];
+                if (detail::isZero(faceNormal)) continue;
+                Vec3f neighbourNormal[3];
+                Vec3d neighbourDirections[3];
+                int n = 0;
+                for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+                  const CornerId o = r->opposite[c];
+                  if (o == kInvalidId) continue;
+                  const Vec3f normal = r->normal[cornerFace(o)];
+                  if (detail::isZero(normal)) continue;
+                  neighbourNormal[n] = normal;
+                  neighbourDirections[n++] = neighbourDirection(*r, cornerFace(o)).cast<double>();
+                }
+                Vec3d swept;
+                if (detail::sweptDirection(faceNormal, own[i].cast<double>(), neighbourNormal, neighbourDirections, n,
+                                           swept)) {
+                  own[i] = swept.cast<float>();
+                }
+              }
+            });
+          }
+        }
+        if (!held) {
+          directions->writeAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+          pool.forEach([&](SweepReaders& r) { r.direction->forget(first, count); });
+        }
       }
+      pool.forEach([&](SweepReaders& r) {
+        folder.countRead("field: sweeps", r.opposite.bytesRead() + r.normal.bytesRead() +
+                                              (r.direction ? r.direction->bytesRead() : 0));
+      });
     }
     if (held) {
       ScratchUpdater(folder, direction, "field: sweeps").writeAt(0, all.data(), all.size() * sizeof(Vec3f));

@@ -62,6 +62,17 @@ void PageCache::flush() {
   for (std::size_t slot = 0; slot < dirty_.size(); ++slot) writeBack(slot);
 }
 
+void PageCache::forget(std::uint64_t first, std::uint64_t count) {
+  if (updater_) throw IoError(path_ + ": forget() on a writable page cache would lose its changes");
+  if (count == 0 || first >= numRecords_) return;
+  const std::uint64_t last = (std::min(first + count, numRecords_) - 1) >> pageShift_;
+  for (std::uint64_t page = first >> pageShift_; page <= last; ++page) {
+    const std::size_t slot = 2 * (static_cast<std::size_t>(page) & setMask_);
+    if (tags_[slot] == page) tags_[slot] = kNoPage;
+    if (tags_[slot + 1] == page) tags_[slot + 1] = kNoPage;
+  }
+}
+
 void PageCache::writeBack(std::size_t slot) {
   if (!dirty_[slot]) return;
   const std::uint64_t offset = tags_[slot] * pageBytes_;

@@ -60,6 +60,9 @@ class PageCache {
   char* recordForWrite(std::uint64_t i);
   /// Writes the changed pages back (a writable cache's changes are lost without it).
   void flush();
+  /// Drops the cached pages holding records [first, first + count) of a read-only cache: the file
+  /// changed there, and the next lookups read it again.
+  void forget(std::uint64_t first, std::uint64_t count);
   std::uint64_t numRecords() const { return numRecords_; }
   std::uint64_t bytesRead() const { return bytesRead_; }
   std::size_t memoryBytes() const { return data_.size() + tags_.size() * sizeof(tags_[0]); }
@@ -94,6 +97,8 @@ class PagedReader {
   std::uint64_t size() const { return cache_.numRecords(); }
   std::uint64_t bytesRead() const { return cache_.bytesRead(); }
   std::size_t memoryBytes() const { return cache_.memoryBytes(); }
+  /// See PageCache::forget.
+  void forget(std::uint64_t first, std::uint64_t count) { cache_.forget(first, count); }
 
  private:
   PageCache cache_;

@@ -82,6 +82,39 @@ TEST(PagedReader, SmallPagesHoldScatteredClusters) {
   EXPECT_GT(large.bytesRead(), 10 * small.bytesRead());
 }
 
+// A file changed behind a reader's back: its cached pages keep the old records until forget()
+// drops the pages of the changed range; records outside it come from the cache as before.
+TEST(PagedReader, ForgetReadsAChangedRangeAgain) {
+  testing::TempDir dir;
+  ScratchFolder folder(dir.dir());
+  const std::uint32_t n = 100000, first = 30001, count = 9000;
+  std::vector<std::uint32_t> values(n);
+  for (std::uint32_t i = 0; i < n; ++i) values[i] = i;
+  ScratchWriter writer(folder, "test");
+  writer.write(values.data(), n * sizeof(std::uint32_t));
+  const ScratchFile file = writer.finish();
+  PagedReader<std::uint32_t> reader(file, std::size_t(1) << 20);  // holds every page
+  for (std::uint32_t i = 0; i < n; ++i) ASSERT_EQ(reader[i], i);
+  std::vector<std::uint32_t> changed(count);
+  for (std::uint32_t i = 0; i < count; ++i) changed[i] = 7 * (first + i) + 1;
+  ScratchUpdater(folder, file, "test").writeAt(std::uint64_t(first) * sizeof(std::uint32_t), changed.data(),
+                                               count * sizeof(std::uint32_t));
+  EXPECT_EQ(reader[first + 10], first + 10);  // still the cached page
+  const std::uint64_t before = reader.bytesRead();
+  reader.forget(first, count);
+  std::size_t wrong = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    wrong += reader[i] != (i >= first && i < first + count ? 7 * i + 1 : i);
+  }
+  EXPECT_EQ(wrong, 0u);
+  // Read again: the changed range's pages (and at most one page more at each end), not the file.
+  EXPECT_GE(reader.bytesRead() - before, count * sizeof(std::uint32_t));
+  EXPECT_LE(reader.bytesRead() - before, count * sizeof(std::uint32_t) + 2 * kScratchPageBytes);
+  reader.forget(n - 5, 100);  // past the end: nothing to drop
+  reader.forget(2 * n, 10);
+  EXPECT_EQ(reader[n - 1], n - 1);
+}
+
 // Random reads and writes through a two-page writable cache agree with a vector; after flush()
 // the file holds the vector, the rest of a zero file still zero.
 TEST(PagedArray, ChangesThroughTwoPagesReachTheFile) {
@@ -136,17 +169,22 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
                                                    testing::moebiusStrip(16, Vec3f(4.0f, 0.0f, 0.0f))})}};
   struct Variant {
     std::int32_t grid, sweeps;
-    std::uint32_t smoothing;
+    std::uint32_t smoothing, sweepBlock;
   };
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
-    // Grid 4: cells of more faces than a block (a batch of cells then holds one).
-    for (const Variant v : {Variant{128, 4, 3}, Variant{16, 4, 3}, Variant{32, 0, 3}, Variant{64, 2, 0}, Variant{4, 1, 0}})
+    // Grid 4: cells of more faces than a block (a batch of cells then holds one). Sweep blocks:
+    // the whole mesh in one; 1024 faces, each I/O block of 1000 faces rounded up to one; 300
+    // faces, four to an I/O block (neighbours in the block, before it and after it).
+    for (const Variant v : {Variant{128, 4, 3, 1u << 16}, Variant{16, 4, 3, 1024}, Variant{32, 0, 3, 1u << 16},
+                            Variant{64, 2, 0, 300}, Variant{4, 1, 0, 1u << 16}})
     for (const std::uint64_t memory : {std::uint64_t(1), std::uint64_t(1) << 30}) {
       SCOPED_TRACE("grid " + std::to_string(v.grid) + ", sweeps " + std::to_string(v.sweeps) + ", smoothing " +
-                   std::to_string(v.smoothing) + ", memory " + std::to_string(memory));
+                   std::to_string(v.smoothing) + ", sweep blocks " + std::to_string(v.sweepBlock) + ", memory " +
+                   std::to_string(memory));
       ProxyFieldOptions proxy;
       proxy.gridResolution = v.grid;
       proxy.smoothingSweeps = v.sweeps;
+      proxy.sweepBlockFaces = v.sweepBlock;
       FieldGeometryOptions geometry;
       geometry.smoothingIterations = v.smoothing;
       const CrossField expected = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, proxy, geometry);

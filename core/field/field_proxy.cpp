@@ -399,6 +399,7 @@ void checkProxyFieldInput(const TriangleMesh& mesh, const Topology& topology, co
   if (options.smoothingSweeps < 0) {
     throw InputError("computeProxyField: negative number of smoothing sweeps");
   }
+  if (options.sweepBlockFaces == 0) throw InputError("computeProxyField: sweep blocks of 0 faces");
 }
 
 /// Transfer: each face averages the 4th powers of its element and the element's neighbours,
@@ -419,30 +420,33 @@ void transferToFaces(const TriangleMesh& mesh, const Proxy& proxy, const VectorC
   });
 }
 
-/// One Gauss-Seidel sweep by colour; faces of one colour share no edge, so each colour is a
-/// race-free parallel loop and the result does not depend on the thread count. A sweep reads
-/// only the corner table, the float normals and the directions (unit weights): memory traffic,
-/// not geometry.
+/// One Gauss-Seidel sweep, by blocks of blockFaces faces and by colour within a block; faces of one colour share no edge, so each colour of a block is a
+/// race-free parallel loop and the result does not depend on the thread count. A sweep reads only
+/// the corner table, the float normals and the directions (unit weights): memory traffic, not
+/// geometry.
 void smoothSweep(const Topology& topology, const std::vector<std::uint8_t>& colour, std::uint32_t colours,
-                 const std::vector<Vec3f>& sweepNormal, CrossField& field) {
+                 std::uint32_t blockFaces, const std::vector<Vec3f>& sweepNormal, CrossField& field) {
   const std::uint32_t numFaces = topology.numFaces();
-  for (std::uint32_t k = 0; k < colours; ++k) {
-    parallelFor(numFaces, 4096, [&](const IndexRange& range) {
-      for (FaceId f = range.begin(); f != range.end(); ++f) {
-        if (colour[f] != k || isZero(sweepNormal[f])) continue;
-        Vec3f normals[3];
-        Vec3d directions[3];
-        int count = 0;
-        for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-          const CornerId o = topology.opposite(c);
-          if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
-          normals[count] = sweepNormal[cornerFace(o)];
-          directions[count++] = field.at(cornerFace(o));
+  for (std::uint64_t first = 0; first < numFaces; first += blockFaces) {
+    const std::uint64_t count = std::min<std::uint64_t>(blockFaces, numFaces - first);
+    for (std::uint32_t k = 0; k < colours; ++k) {
+      parallelFor(count, 4096, [&](const IndexRange& range) {
+        for (FaceId f = static_cast<FaceId>(first + range.begin()); f != first + range.end(); ++f) {
+          if (colour[f] != k || isZero(sweepNormal[f])) continue;
+          Vec3f normals[3];
+          Vec3d directions[3];
+          int n = 0;
+          for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+            const CornerId o = topology.opposite(c);
+            if (o == kInvalidId || isZero(sweepNormal[cornerFace(o)])) continue;
+            normals[n] = sweepNormal[cornerFace(o)];
+            directions[n++] = field.at(cornerFace(o));
+          }
+          Vec3d next;
+          if (detail::sweptDirection(sweepNormal[f], field.at(f), normals, directions, n, next)) field.set(f, next);
         }
-        Vec3d next;
-        if (detail::sweptDirection(sweepNormal[f], field.at(f), normals, directions, count, next)) field.set(f, next);
-      }
-    });
+      });
+    }
   }
 }
 
@@ -487,7 +491,7 @@ ProxyFieldResult computeProxyField(const TriangleMesh& mesh, const Topology& top
   result.colours = options.smoothingSweeps > 0 ? colourFaces(topology, colour) : 0;
   for (std::int32_t sweep = 0; sweep < options.smoothingSweeps; ++sweep) {
     reportProgress(options.progress, "proxy field: smooth", 0.6 + 0.4 * sweep / options.smoothingSweeps);
-    smoothSweep(topology, colour, result.colours, sweepNormal, result.field);
+    smoothSweep(topology, colour, result.colours, options.sweepBlockFaces, sweepNormal, result.field);
   }
   // The exact tangent planes are restored once at the end.
   if (options.smoothingSweeps > 0) restoreTangentPlanes(mesh, sweepNormal, result.field);

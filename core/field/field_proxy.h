@@ -20,6 +20,11 @@ struct ProxyFieldOptions {
   /// Gauss-Seidel sweeps on the faces after the transfer (each face := normalized transported
   /// average of its neighbours' 4th powers), one colour of the face graph at a time.
   std::int32_t smoothingSweeps = 4;
+  /// The sweeps' order: blocks of this many faces in face order, and within a block one colour
+  /// after another (a colour's faces in parallel). Later blocks see the earlier blocks' new
+  /// directions, and a pass out of core reads each block and its neighbours once per sweep. Every
+  /// path (in memory, out of core at any budget) updates the faces in this order.
+  std::uint32_t sweepBlockFaces = std::uint32_t(1) << 16;
   ProgressFn progress;
   FieldSolveStats* stats = nullptr;  ///< the element solve's figures, filled when set
 };
