@@ -18,6 +18,7 @@
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 #include "stream/external_sort.h"
+#include "stream/keyed_sort.h"
 #include "stream/paged_corner_table.h"
 #include "stream/paged_reader.h"
 #include "stream/scratch_union_find.h"
@@ -73,6 +74,16 @@ struct CornerPair {
   bool operator<(const CornerPair& o) const { return corner < o.corner; }
 };
 
+/// The keys of the keyed sorts: an edge's smaller vertex, a pair's corner, a corner's vertex.
+struct EdgeSideKey {
+  std::uint64_t operator()(const EdgeSide& s) const { return s.lo(); }
+};
+struct CornerPairKey {
+  std::uint64_t operator()(const CornerPair& p) const { return p.corner; }
+};
+using EdgeSorter = KeyedSorter<EdgeSide, EdgeSideLess, EdgeSideKey>;
+using PairSorter = KeyedSorter<CornerPair, std::less<CornerPair>, CornerPairKey>;
+
 /// A thread's readers of the cleaned mesh's vertex passes.
 struct VertexReaders {
   PagedCornerTable table;
@@ -102,6 +113,9 @@ struct CornerAroundLess {
   bool operator()(const CornerAround& a, const CornerAround& b) const {
     return a.vertex != b.vertex ? a.vertex < b.vertex : a.corner < b.corner;
   }
+};
+struct CornerAroundKey {
+  std::uint64_t operator()(const CornerAround& a) const { return a.vertex; }
 };
 
 /// The corner of a face after the face was flipped (its corners 1 and 2 swapped).
@@ -136,7 +150,7 @@ class CleanPass {
   CleanScratch run() {
     const std::pair<const char*, void (CleanPass::*)()> passes[] = {
         {"vertices", &CleanPass::renumberVertices}, {"faces", &CleanPass::readFaces},
-        {"orient", &CleanPass::orient},             {"glue", &CleanPass::glue},
+        {"glue", &CleanPass::orientAndGlue},
         {"fans", &CleanPass::splitVertices},        {"write", &CleanPass::writeFaces},
         {"measure", &CleanPass::measure}};
     for (const auto& [name, pass] : passes) {
@@ -296,9 +310,9 @@ class CleanPass {
     cornerNewId_ = cornerIds.finish();
   }
 
-  /// The faces on the new ids (a scratch file) and their edges' sides into a sort.
+  /// The faces on the new ids (a scratch file) and their edges' sides into a sort by edge.
   void readFaces() {
-    edges_ = std::make_unique<ExternalSorter<EdgeSide, EdgeSideLess>>(folder_, sortOptions("clean: edges"));
+    edges_ = std::make_unique<EdgeSorter>(folder_, out_.numVertices, 3 * out_.numFaces, sortOptions("clean: edges"));
     WeldedFaceReader faces(folder_, welded_, "clean: faces");
     ScratchWriter out(folder_, "clean: faces");
     std::unique_ptr<ScratchReader> cornerIds;
@@ -329,45 +343,38 @@ class CleanPass {
     }
     faces_ = out.finish();
     edges_->finish();
-    // The sorted sides are read again: kept in a file. On the way, the edges orient() and glue()
-    // look for: two sides in one direction (a clash), more than two sides.
-    ScratchWriter sorted(folder_, "clean: edges", std::size_t(1) << 20, edges_->size() * sizeof(EdgeSide));
-    EdgeSide side{}, first{};
-    std::uint32_t sides = 0;
-    bool sameDirection = false;
-    auto close = [&] {
-      clashes_ += sides == 2 && sameDirection;
-      multiEdges_ += sides > 2;
-    };
-    while (edges_->next(side)) {
-      if (sides > 0 && (side.lo() != first.lo() || side.hi() != first.hi())) {
-        close();
-        sides = 0;
-      }
-      if (sides == 0) first = side;
-      if (sides == 1) sameDirection = side.forward() == first.forward();
-      ++sides;
-      sorted.write(&side, sizeof side);
-    }
-    close();
-    edges_.reset();
-    sortedEdges_ = sorted.finish();
   }
 
-  /// Calls visit(sides) for the sides of each edge in turn (sorted by corner).
+  /// Calls visit(sides) for the sides of each edge in turn (sorted by corner) until it returns
+  /// false; false then.
   template <class Visit>
-  void forEachEdge(const char* stage, Visit&& visit) {
-    ScratchReader in(folder_, sortedEdges_, stage);
+  bool forEachEdge(Visit&& visit) {
+    edges_->rewind();
     std::vector<EdgeSide> sides;
     EdgeSide side{};
-    while (in.read(&side, sizeof side)) {
+    while (edges_->next(side)) {
       if (!sides.empty() && (side.lo() != sides[0].lo() || side.hi() != sides[0].hi())) {
-        visit(sides);
+        if (!visit(sides)) return false;
         sides.clear();
       }
       sides.push_back(side);
     }
-    if (!sides.empty()) visit(sides);
+    return sides.empty() || visit(sides);
+  }
+
+  /// Gluing and orientation. Most meshes have only edges of two sides in opposite directions (or
+  /// one side): the gluing assumes so and stops at the first edge that is not, which is then
+  /// counted, oriented and glued in full.
+  void orientAndGlue() {
+    if (glue(true)) return edges_.reset();
+    forEachEdge([&](const std::vector<EdgeSide>& sides) {
+      clashes_ += sides.size() == 2 && sides[0].forward() == sides[1].forward();
+      multiEdges_ += sides.size() > 2;
+      return true;
+    });
+    orient();
+    glue(false);
+    edges_.reset();
   }
 
   /// cleanMesh's orientation: when two faces meet along an edge in the same direction, each
@@ -376,9 +383,9 @@ class CleanPass {
   void orient() {
     if (clashes_ == 0) return;
     ScratchParityUnionFind faces(folder_, out_.numFaces, orientBytes_, "clean: orient");
-    forEachEdge("clean: orient", [&](const std::vector<EdgeSide>& sides) {
-      if (sides.size() != 2) return;
-      faces.unite(sides[0].corner / 3, sides[1].corner / 3, sides[0].forward() == sides[1].forward());
+    forEachEdge([&](const std::vector<EdgeSide>& sides) {
+      if (sides.size() == 2) faces.unite(sides[0].corner / 3, sides[1].corner / 3, sides[0].forward() == sides[1].forward());
+      return true;
     });
     flip_ = std::make_unique<ScratchArray<std::uint8_t>>(folder_, out_.numFaces, flipBytes_, "clean: orient");
     faces.majorityFlips(*flip_);
@@ -402,13 +409,15 @@ class CleanPass {
   /// cleanMesh's gluing: an edge of two faces in opposite directions is glued, two in the same
   /// direction stay open (a clash); on an edge of more than two faces, pairs of opposite
   /// directions are glued, pairs between large pieces first, then the most aligned normals.
-  void glue() {
-    ExternalSorter<CornerPair> pairs(folder_, sortOptions("clean: glue"));
+  /// `simple`: stops (false) at the first edge of two sides in one direction or of more than two.
+  bool glue(bool simple) {
+    PairSorter pairs(folder_, 3 * out_.numFaces, 3 * out_.numFaces, sortOptions("clean: glue"));
     std::unique_ptr<ScratchUnionFind> pieces;
     if (multiEdges_ > 0) pieces = std::make_unique<ScratchUnionFind>(folder_, out_.numFaces, piecesBytes_, "clean: glue");
     std::vector<std::vector<EdgeSide>> multi;
-    forEachEdge("clean: glue", [&](std::vector<EdgeSide>& sides) {
+    const bool whole = forEachEdge([&](std::vector<EdgeSide>& sides) {
       applyFlips(sides);
+      if (simple && (sides.size() > 2 || (sides.size() == 2 && sides[0].forward() == sides[1].forward()))) return false;
       if (sides.size() > 2) {
         ++out_.report.nonManifoldEdges;
         multi.push_back(sides);
@@ -419,7 +428,9 @@ class CleanPass {
         pairs.add({sides[1].corner, sides[0].corner});
         if (pieces) pieces->unite(sides[0].corner / 3, sides[1].corner / 3);
       }
+      return true;
     });
+    if (!whole) return false;
     if (!multi.empty()) pairMultiEdges(multi, *pieces, pairs);
     if (pieces) setsOnDisk_ |= pieces->onDisk();
     pieces.reset();
@@ -436,6 +447,7 @@ class CleanPass {
       out.write(&o, sizeof o);
     }
     out_.opposite = out.finish();
+    return true;
   }
 
   /// The faces' gluing normals (cleanMesh's gluingNormal of the oriented face) for the few faces
@@ -464,8 +476,7 @@ class CleanPass {
     return normal;
   }
 
-  void pairMultiEdges(const std::vector<std::vector<EdgeSide>>& multi, ScratchUnionFind& pieces,
-                      ExternalSorter<CornerPair>& pairs) {
+  void pairMultiEdges(const std::vector<std::vector<EdgeSide>>& multi, ScratchUnionFind& pieces, PairSorter& pairs) {
     // Per face, its piece's size (capped): counted per root.
     std::unordered_map<std::uint32_t, std::uint32_t> wanted;
     for (const auto& sides : multi) {
@@ -518,7 +529,8 @@ class CleanPass {
   /// vertex, numbered after all others in the order of their vertices (cleanMesh's
   /// splitNonManifoldVertices). Fan starts as Topology::build picks them.
   void splitVertices() {
-    ExternalSorter<CornerAround, CornerAroundLess> around(folder_, sortOptions("clean: fans"));
+    KeyedSorter<CornerAround, CornerAroundLess, CornerAroundKey> around(folder_, out_.numVertices, 3 * out_.numFaces,
+                                                                         sortOptions("clean: fans"));
     {
       ScratchReader faces(folder_, faces_, "clean: fans"), opposite(folder_, out_.opposite, "clean: fans");
       CleanFace face;
@@ -679,7 +691,6 @@ class CleanPass {
       out.write(&face, sizeof face);
     }
     folder_.remove(faces_);
-    folder_.remove(sortedEdges_);
     out_.faces = out.finish();
   }
 
@@ -828,8 +839,8 @@ class CleanPass {
   std::vector<VertexId> newId_;
   bool renumberBySorts_ = false;
   ScratchFile cornerNewId_;  // with renumberBySorts_: each corner's new vertex id, in face order
-  ScratchFile positions_, faces_, sortedEdges_;
-  std::unique_ptr<ExternalSorter<EdgeSide, EdgeSideLess>> edges_;
+  ScratchFile positions_, faces_;
+  std::unique_ptr<EdgeSorter> edges_;  // kept until the gluing is done
   std::unique_ptr<ExternalSorter<CornerPair>> moved_;  // corners moved to a copy of their vertex
   std::unique_ptr<ScratchArray<std::uint8_t>> flip_;  // per face, when the orientation changed any
   std::uint64_t orientBytes_ = 0, flipBytes_ = 0, piecesBytes_ = 0;

@@ -15,6 +15,7 @@
 #include "core/system/errors.h"
 #include "io/interrupt_cleanup.h"
 #include "stream/external_sort.h"
+#include "stream/keyed_sort.h"
 #include "stream/scratch_folder.h"
 #include "testing.h"
 
@@ -160,6 +161,77 @@ TEST(ExternalSort, DiskFullNamesTheFolderAndTheBytesNeededAndLeavesNothing) {
   EXPECT_FALSE(folder.empty());
   EXPECT_FALSE(fs::exists(folder)) << "the scratch folder is removed when the error unwinds";
   EXPECT_EQ(filesIn(dir.dir()), 0u);
+}
+
+struct KeyOf {
+  std::uint64_t operator()(const Record& r) const { return r.key; }
+};
+
+// Sorts records with a keyed sorter (keys below keyCount), twice through rewind(); both passes
+// must give the same records.
+std::vector<Record> keyedSort(ScratchFolder& scratch, const std::vector<Record>& records, std::uint64_t keyCount,
+                              std::uint64_t expected, std::uint64_t memoryBytes, std::size_t* files = nullptr) {
+  KeyedSorter<Record, ByKeyThenId, KeyOf> sorter(scratch, keyCount, expected, {memoryBytes, "test"});
+  for (const Record& r : records) sorter.add(r);
+  sorter.finish();
+  EXPECT_EQ(sorter.size(), records.size());
+  std::vector<Record> out, again;
+  Record r;
+  while (sorter.next(r)) out.push_back(r);
+  sorter.rewind();
+  while (sorter.next(r)) again.push_back(r);
+  expectSameRecords(again, out);
+  if (files) *files = sorter.filesWritten();
+  return out;
+}
+
+// In memory, in partitions of key ranges, with a key holding half the records (its partition over
+// the limit: the external sort), and with far more records than announced: std::sort's order.
+// The input runs from the largest id down, so each key's records need their own sort.
+TEST(KeyedSort, EqualsStdSortInMemoryInPartitionsAndPastTheLimit) {
+  testing::TempDir dir;
+  const std::uint64_t keys = 5000;
+  std::vector<Record> spread = randomRecords(60000, keys, 29), skewed = spread;
+  for (std::size_t i = 0; i < skewed.size(); i += 2) skewed[i].key = 17;
+  for (std::vector<Record>* records : {&spread, &skewed}) std::reverse(records->begin(), records->end());
+  struct Case {
+    const char* name;
+    const std::vector<Record>& records;
+    std::uint64_t expected, memory;
+    bool inMemory;
+  };
+  const std::uint64_t bytes = spread.size() * sizeof(Record);
+  for (const Case& c : {Case{"in memory", spread, spread.size(), 64u << 20, true},
+                        Case{"partitions", spread, spread.size(), 64u << 10, false},
+                        Case{"one large key", skewed, skewed.size(), 256u << 10, false},
+                        Case{"more than announced", spread, 100, 64u << 10, false}}) {
+    SCOPED_TRACE(c.name);
+    ScratchFolder scratch(dir.dir());
+    std::vector<Record> expected = c.records;
+    std::sort(expected.begin(), expected.end(), ByKeyThenId{});
+    std::size_t files = 0;
+    expectSameRecords(keyedSort(scratch, c.records, keys, c.expected, c.memory, &files), expected);
+    if (c.inMemory) {
+      EXPECT_EQ(files, 0u);
+      EXPECT_EQ(scratch.bytesWritten(), 0u);
+      continue;
+    }
+    EXPECT_GE(files, 1u);
+    if (std::string(c.name) == "partitions") {
+      EXPECT_GT(files, 20u);  // 64 KiB for 1.9 MB of records
+      // Written once, read once per pass (two passes): no runs, no merge rounds.
+      EXPECT_EQ(scratch.traffic().at(0).bytesWritten, bytes);
+      EXPECT_EQ(scratch.traffic().at(0).bytesRead, 2 * bytes);
+    } else {
+      EXPECT_GT(scratch.traffic().at(0).bytesWritten, bytes) << "the partition over the limit is sorted in runs";
+    }
+  }
+  ScratchFolder scratch(dir.dir());
+  KeyedSorter<Record, ByKeyThenId, KeyOf> sorter(scratch, keys, 10, {1u << 20, "test"});
+  EXPECT_THROW(sorter.add(Record{keys, 0, 0}), std::out_of_range);
+  sorter.finish();
+  Record r;
+  EXPECT_FALSE(sorter.next(r));
 }
 
 TEST(ScratchFolder, FilesRoundTripAndTrafficIsCountedPerStage) {
