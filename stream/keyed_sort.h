@@ -4,10 +4,12 @@
 /// they all fit, else one scratch file each), and each partition is counting-sorted by key, then
 /// each key's few records by Less. No comparison sort of the whole input and no merge: every
 /// record is written and read once. A partition over the memory limit (a key holding a large
-/// share of the records) is sorted by an ExternalSorter instead. The records can be served in
-/// order more than once (rewind()). Memory: about options.memoryBytes.
+/// share of the records) is sorted by an ExternalSorter instead. While a partition is served, the
+/// next is read and sorted on a thread of its own. The records can be served in order more than
+/// once (rewind()). Memory: about options.memoryBytes.
 #include <algorithm>
 #include <cstdint>
+#include <future>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -32,13 +34,13 @@ class KeyedSorter {
               const ExternalSortOptions& options)
       : scratch_(scratch), options_(options), keyCount_(std::max<std::uint64_t>(1, keyCount)) {
     // A partition's sort holds its records twice and a 4-byte count per key: three quarters of
-    // the limit, the rest for the partitions' write buffers.
+    // the limit, the rest for the partitions' write buffers. Beyond one partition, two are held
+    // at once (the one served and the next, sorted ahead on a thread of its own).
     work_ = std::max<std::uint64_t>(1, options.memoryBytes / 4 * 3);
     const std::uint64_t need = 2 * expectedRecords * sizeof(Record) + 4 * keyCount_;
-    const std::uint64_t partitions = std::max<std::uint64_t>(1, (need + work_ - 1) / work_);
+    const std::uint64_t partitions = need <= work_ ? 1 : (2 * need + work_ - 1) / work_;
     keysPerPartition_ = (keyCount_ + partitions - 1) / partitions;
     partitions_ = static_cast<std::size_t>((keyCount_ + keysPerPartition_ - 1) / keysPerPartition_);
-    counts_.assign(partitions_, 0);
     if (partitions_ > 1) {
       files_.resize(partitions_);
       writers_.resize(partitions_);
@@ -46,6 +48,7 @@ class KeyedSorter {
     }
   }
   ~KeyedSorter() {
+    if (ahead_.valid()) ahead_.wait();  // its error, if any, no longer matters
     writers_.clear();
     fallback_.reset();
     for (const ScratchFile& file : files_) scratch_.remove(file);
@@ -60,19 +63,19 @@ class KeyedSorter {
                               std::to_string(keyCount_));
     }
     const std::size_t p = static_cast<std::size_t>(key / keysPerPartition_);
-    ++counts_[p];
     ++size_;
+    std::vector<Record>& memory = slots_[0].input;
     if (partitions_ == 1 && !spilled_) {
-      if (2 * (memory_.size() + 1) * sizeof(Record) + 4 * keyCount_ <= work_) {
-        memory_.push_back(record);
+      if (2 * (memory.size() + 1) * sizeof(Record) + 4 * keyCount_ <= work_) {
+        memory.push_back(record);
         return;
       }
       // More than expected: partition 0 goes to a file after all.
       files_.resize(1);
       writers_.resize(1);
       writers_[0] = std::make_unique<ScratchWriter>(scratch_, options_.stage);
-      writers_[0]->write(memory_.data(), memory_.size() * sizeof(Record));
-      std::vector<Record>().swap(memory_);
+      writers_[0]->write(memory.data(), memory.size() * sizeof(Record));
+      std::vector<Record>().swap(memory);
       spilled_ = true;
     }
     if (!writers_[p]) writers_[p] = std::make_unique<ScratchWriter>(scratch_, options_.stage, bufferBytes_);
@@ -86,8 +89,8 @@ class KeyedSorter {
     }
     writers_.clear();
     if (partitions_ == 1 && !spilled_) {
-      sorted_ = countingSort(memory_, 0);
-      std::vector<Record>().swap(memory_);
+      countingSort(slots_[0], 0);
+      std::vector<Record>().swap(slots_[0].input);
       inMemory_ = true;
       return;
     }
@@ -97,8 +100,9 @@ class KeyedSorter {
   bool next(Record& out) {
     served_ = true;
     for (;;) {
-      if (at_ < sorted_.size()) {
-        out = sorted_[at_++];
+      const std::vector<Record>& sorted = slots_[current_].sorted;
+      if (at_ < sorted.size()) {
+        out = sorted[at_++];
         return true;
       }
       if (fallback_ && fallback_->next(out)) return true;
@@ -125,40 +129,77 @@ class KeyedSorter {
   }
 
  private:
-  /// Reads partition p and sorts it (counting sort, or the ExternalSorter when it does not fit).
+  /// A partition's records as read, sorted, and the counting sort's per-key ends. Their room
+  /// serves partition after partition (no fresh pages for the kernel to clear each time).
+  struct Slot {
+    std::vector<Record> input, sorted;
+    std::vector<std::uint32_t> end;
+  };
+
+  /// Whether partition p's counting sort fits a slot (half the limit: two slots at once).
+  bool fits(std::size_t p) const {
+    const std::uint64_t n = files_[p].bytes / sizeof(Record);
+    const std::uint64_t keys = std::min(keyCount_ - p * keysPerPartition_, keysPerPartition_);
+    return 2 * n * sizeof(Record) + 4 * keys <= options_.memoryBytes / 2 && n < (std::uint64_t(1) << 32);
+  }
+
+  /// Reads partition p (one that fits) into slot and sorts it; on any thread.
+  void prepare(std::size_t p, Slot& slot) {
+    slot.sorted.clear();
+    const ScratchFile& file = files_[p];
+    if (file.path.empty()) return;
+    slot.input.resize(static_cast<std::size_t>(file.bytes / sizeof(Record)));
+    ScratchReader in(scratch_, file, options_.stage);
+    if (!slot.input.empty() && !in.read(slot.input.data(), slot.input.size() * sizeof(Record))) {
+      throw IoError(file.path + ": scratch partition ends early");
+    }
+    countingSort(slot, p * keysPerPartition_);
+  }
+
+  /// Serves partition p: sorted ahead, else sorted now (counting sort, or the ExternalSorter when
+  /// it does not fit); then the next one is sorted ahead when it fits.
   void open(std::size_t p) {
     partition_ = p;
     at_ = 0;
-    std::vector<Record>().swap(sorted_);
     fallback_.reset();
-    const ScratchFile& file = files_[p];
-    if (file.path.empty()) return;
-    const std::uint64_t n = file.bytes / sizeof(Record);
-    const std::uint64_t keys = std::min(keyCount_ - p * keysPerPartition_, keysPerPartition_);
-    ScratchReader in(scratch_, file, options_.stage);
-    if (2 * n * sizeof(Record) + 4 * keys <= options_.memoryBytes && n < (std::uint64_t(1) << 32)) {
-      std::vector<Record> records(static_cast<std::size_t>(n));
-      if (n > 0 && !in.read(records.data(), records.size() * sizeof(Record))) {
-        throw IoError(file.path + ": scratch partition ends early");
+    bool ready = false;
+    if (ahead_.valid()) {
+      const std::size_t aheadOf = aheadOf_;
+      ahead_.get();  // the thread's error, if any, is the caller's
+      if (aheadOf == p) {
+        current_ ^= 1;
+        ready = true;
       }
-      sorted_ = countingSort(records, p * keysPerPartition_);
+    }
+    if (!ready && (files_[p].path.empty() || fits(p))) {
+      prepare(p, slots_[current_]);
+    } else if (!ready) {
+      for (Slot& slot : slots_) slot = Slot{};  // the limit is the external sort's
+      fallback_ = std::make_unique<ExternalSorter<Record, Less>>(scratch_, options_);
+      ScratchReader in(scratch_, files_[p], options_.stage);
+      Record record;
+      while (in.read(&record, sizeof record)) fallback_->add(record);
+      fallback_->finish();
       return;
     }
-    fallback_ = std::make_unique<ExternalSorter<Record, Less>>(scratch_, options_);
-    Record record;
-    while (in.read(&record, sizeof record)) fallback_->add(record);
-    fallback_->finish();
+    if (p + 1 < partitions_ && !files_[p + 1].path.empty() && fits(p + 1)) {
+      Slot& other = slots_[current_ ^ 1];
+      aheadOf_ = p + 1;
+      ahead_ = std::async(std::launch::async, [this, &other, q = p + 1] { prepare(q, other); });
+    }
   }
 
-  /// records (keys from first on, in this partition's range) in Less order: stable by key,
-  /// then each key's records sorted (they usually come in order already).
-  std::vector<Record> countingSort(const std::vector<Record>& records, std::uint64_t first) const {
+  /// slot.sorted := slot.input (keys from first on, in one partition's range) in Less order:
+  /// stable by key, then each key's records sorted (they usually come in order already).
+  void countingSort(Slot& slot, std::uint64_t first) const {
     const std::uint64_t keys = std::min(keyCount_ - first, keysPerPartition_);
-    std::vector<std::uint32_t> end(static_cast<std::size_t>(keys) + 1, 0);
-    for (const Record& r : records) ++end[static_cast<std::size_t>(Key{}(r) - first) + 1];
+    std::vector<std::uint32_t>& end = slot.end;
+    end.assign(static_cast<std::size_t>(keys) + 1, 0);
+    for (const Record& r : slot.input) ++end[static_cast<std::size_t>(Key{}(r) - first) + 1];
     for (std::size_t k = 1; k < end.size(); ++k) end[k] += end[k - 1];
-    std::vector<Record> out(records.size());
-    for (const Record& r : records) out[end[static_cast<std::size_t>(Key{}(r) - first)]++] = r;
+    std::vector<Record>& out = slot.sorted;
+    out.resize(slot.input.size());
+    for (const Record& r : slot.input) out[end[static_cast<std::size_t>(Key{}(r) - first)]++] = r;
     // end[k] is now where key k's records end.
     std::size_t begin = 0;
     for (std::size_t k = 0; k < keys; ++k) {
@@ -168,17 +209,18 @@ class KeyedSorter {
       }
       begin = stop;
     }
-    return out;
   }
 
   ScratchFolder& scratch_;
   ExternalSortOptions options_;
   std::uint64_t keyCount_, keysPerPartition_ = 1, size_ = 0, work_ = 1;
   std::size_t partitions_ = 1, bufferBytes_ = 4096, partition_ = 0, at_ = 0;
-  std::vector<std::uint64_t> counts_;
   std::vector<ScratchFile> files_;
   std::vector<std::unique_ptr<ScratchWriter>> writers_;
-  std::vector<Record> memory_, sorted_;
+  Slot slots_[2];  // slots_[0].input: the records while they fit in memory
+  int current_ = 0;  // the slot served
+  std::future<void> ahead_;  // sorts partition aheadOf_ into the other slot
+  std::size_t aheadOf_ = 0;
   std::unique_ptr<ExternalSorter<Record, Less>> fallback_;
   bool spilled_ = false, inMemory_ = false, served_ = false;
 };
