@@ -14,6 +14,7 @@
 #include "core/mesh/detail_union_find.h"
 #include "core/mesh/morton.h"
 #include "stream/external_sort.h"
+#include "stream/keyed_sort.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"
@@ -81,6 +82,13 @@ struct FaceKey {
 };
 struct FaceKeyLess {
   bool operator()(const FaceKey& a, const FaceKey& b) const { return a.face < b.face; }
+};
+/// The keyed sorts' keys: a record's cell (in cellOrder), a record's face.
+struct CellOfRecord {
+  std::uint64_t operator()(const CellFace& r) const { return r.cell; }
+};
+struct FaceOfRecord {
+  std::uint64_t operator()(const FaceKey& r) const { return r.face; }
 };
 
 /// Reads a file of (cell, face) records sorted by cell one cell at a time.
@@ -194,7 +202,10 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   const detail::ProxyCells cells = detail::proxyCells(box, proxy.gridResolution);
   ScratchFile cellFaces;
   {
-    ExternalSorter<CellFace, CellFaceLess> sorter(folder, sort.named("field: cells"));
+    const std::uint32_t last = cells.resolution - 1;  // cellOrder grows with each coordinate
+    const std::uint64_t cellKeys = std::uint64_t(cellOrder(last + cells.resolution * (last + cells.resolution * last),
+                                                           cells.resolution)) + 1;
+    KeyedSorter<CellFace, CellFaceLess, CellOfRecord> sorter(folder, cellKeys, nf, sort.named("field: cells"));
     ReaderPool<PagedFacePoints> pool([&] { return std::make_unique<PagedFacePoints>(scratch, surface, cacheBytes); });
     std::vector<std::uint32_t> block;
     for (std::uint64_t first = 0; first < nf; first += blockFaces) {
@@ -224,7 +235,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   std::uint32_t numElements = 0;
   {
     std::vector<FaceId> smallestFaces;
-    ExternalSorter<FaceKey, FaceKeyLess> byFace(folder, sort.named("field: elements"));
+    KeyedSorter<FaceKey, FaceKeyLess, FaceOfRecord> byFace(folder, nf, nf, sort.named("field: elements"));
     ReaderPool<PagedReader<CornerId>> pool(
         [&] { return std::make_unique<PagedReader<CornerId>>(scratch.opposite, cacheBytes); });
     CellBatches batches(folder, cellFaces, "field: elements", blockFaces);

@@ -8,6 +8,7 @@
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"
 #include "stream/external_sort.h"
+#include "stream/keyed_sort.h"
 #include "stream/paged_corner_table.h"
 #include "stream/paged_reader.h"
 
@@ -30,6 +31,14 @@ struct VoxelOrderRecord {
 struct FragmentElementRecord {
   std::uint32_t fragment = 0, element = 0;
   bool operator<(const FragmentElementRecord& o) const { return fragment < o.fragment; }
+};
+
+/// The keyed sorts' keys: a record's voxel, a record's fragment.
+struct VoxelOfRecord {
+  std::uint64_t operator()(const VoxelOrderRecord& r) const { return r.key >> 32; }
+};
+struct FragmentOfRecord {
+  std::uint64_t operator()(const FragmentElementRecord& r) const { return r.fragment; }
 };
 
 /// The readers a block of voxels takes: the cut surface's neighbours and the faces' integrands.
@@ -171,7 +180,8 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
   // Ids in the tree's block order, as buildVoxelBasis numbers them; the fragments in face order
   // with those ids, and by voxel for the elements.
   const std::vector<std::uint32_t> remap = out.grid.orderByBlocks();
-  ExternalSorter<VoxelOrderRecord> byVoxel(folder, sort);
+  KeyedSorter<VoxelOrderRecord, std::less<VoxelOrderRecord>, VoxelOfRecord> byVoxel(
+      folder, out.grid.size(), raw.bytes / sizeof(VoxelFragment), sort);
   {
     ScratchReader reader(folder, raw, kStage);
     ScratchWriter writer(folder, kStage), starts(folder, kStage);
@@ -206,7 +216,8 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
         PagedFacePoints(scratch, scratch.positions, cacheBytes), PagedReader<Vec3f>(field.directions, cacheBytes),
         PagedReader<std::uint8_t>(cut.faceRotation, cacheBytes)});
   });
-  ExternalSorter<FragmentElementRecord> byFragment(folder, sort);
+  KeyedSorter<FragmentElementRecord, std::less<FragmentElementRecord>, FragmentOfRecord> byFragment(
+      folder, out.numFragments, out.numFragments, sort);
   const std::uint64_t blockRecords = std::max<std::uint64_t>(1, pass.blockRecords);
   FragmentBlock block;
   const auto flush = [&] {
