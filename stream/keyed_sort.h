@@ -1,8 +1,8 @@
 #pragma once
 /// Sort of fixed-size records whose order starts with a dense integer key below keyCount (a
 /// vertex or corner id): the records go to partitions of equal key ranges (kept in memory when
-/// they all fit, else one scratch file each), and each partition is counting-sorted by key, then
-/// each key's few records by Less. No comparison sort of the whole input and no merge: every
+/// they all fit, else one scratch file each), and each partition (or run of consecutive ones that
+/// fit together) is counting-sorted by key, then each key's few records by Less. No comparison sort of the whole input and no merge: every
 /// record is written and read once. A partition over the memory limit (a key holding a large
 /// share of the records) is sorted by an ExternalSorter instead. While a partition is served, the
 /// next is read and sorted on a thread of its own. The records can be served in order more than
@@ -38,7 +38,11 @@ class KeyedSorter {
     // at once (the one served and the next, sorted ahead on a thread of its own).
     work_ = std::max<std::uint64_t>(1, options.memoryBytes / 4 * 3);
     const std::uint64_t need = 2 * expectedRecords * sizeof(Record) + 4 * keyCount_;
-    const std::uint64_t partitions = need <= work_ ? 1 : (2 * need + work_ - 1) / work_;
+    const std::uint64_t needed = need <= work_ ? 1 : (2 * need + work_ - 1) / work_;
+    // Beyond one, finer partitions than needed (8 to each, up to 512): keys bunched in part of
+    // their range still fill the slots, consecutive partitions being sorted together while they
+    // fit one.
+    const std::uint64_t partitions = needed == 1 ? 1 : std::max(needed, std::min<std::uint64_t>(8 * needed, 512));
     keysPerPartition_ = (keyCount_ + partitions - 1) / partitions;
     partitions_ = static_cast<std::size_t>((keyCount_ + keysPerPartition_ - 1) / keysPerPartition_);
     if (partitions_ > 1) {
@@ -89,7 +93,7 @@ class KeyedSorter {
     }
     writers_.clear();
     if (partitions_ == 1 && !spilled_) {
-      countingSort(slots_[0], 0);
+      countingSort(slots_[0], 0, keyCount_);
       std::vector<Record>().swap(slots_[0].input);
       inMemory_ = true;
       return;
@@ -106,8 +110,8 @@ class KeyedSorter {
         return true;
       }
       if (fallback_ && fallback_->next(out)) return true;
-      if (inMemory_ || partition_ + 1 >= partitions_) return false;
-      open(partition_ + 1);
+      if (inMemory_ || end_ >= partitions_) return false;
+      open(end_);
     }
   }
 
@@ -136,28 +140,41 @@ class KeyedSorter {
     std::vector<std::uint32_t> end;
   };
 
-  /// Whether partition p's counting sort fits a slot (half the limit: two slots at once).
-  bool fits(std::size_t p) const {
-    const std::uint64_t n = files_[p].bytes / sizeof(Record);
-    const std::uint64_t keys = std::min(keyCount_ - p * keysPerPartition_, keysPerPartition_);
-    return 2 * n * sizeof(Record) + 4 * keys <= options_.memoryBytes / 2 && n < (std::uint64_t(1) << 32);
+  /// The keys of partitions [p, q).
+  std::uint64_t keysOf(std::size_t p, std::size_t q) const {
+    return std::min(keyCount_, q * keysPerPartition_) - p * keysPerPartition_;
+  }
+  /// Whether partitions [p, q) sort together in a slot (half the sorts' share: two slots at once).
+  bool fits(std::size_t p, std::size_t q) const {
+    std::uint64_t n = 0;
+    for (std::size_t k = p; k < q; ++k) n += files_[k].bytes / sizeof(Record);
+    return 2 * n * sizeof(Record) + 4 * keysOf(p, q) <= work_ / 2 && n < (std::uint64_t(1) << 32);
+  }
+  /// The end of the partitions sorted together from p on: as many as fit a slot, one at least.
+  std::size_t rangeEnd(std::size_t p) const {
+    std::size_t q = p + 1;
+    while (q < partitions_ && fits(p, q + 1)) ++q;
+    return q;
   }
 
-  /// Reads partition p (one that fits) into slot and sorts it; on any thread.
-  void prepare(std::size_t p, Slot& slot) {
-    slot.sorted.clear();
-    const ScratchFile& file = files_[p];
-    if (file.path.empty()) return;
-    slot.input.resize(static_cast<std::size_t>(file.bytes / sizeof(Record)));
-    ScratchReader in(scratch_, file, options_.stage);
-    if (!slot.input.empty() && !in.read(slot.input.data(), slot.input.size() * sizeof(Record))) {
-      throw IoError(file.path + ": scratch partition ends early");
+  /// Reads partitions [p, q) (that fit) into slot and sorts them; on any thread.
+  void prepare(std::size_t p, std::size_t q, Slot& slot) {
+    std::uint64_t n = 0;
+    for (std::size_t k = p; k < q; ++k) n += files_[k].bytes / sizeof(Record);
+    slot.input.resize(static_cast<std::size_t>(n));
+    Record* to = slot.input.data();
+    for (std::size_t k = p; k < q; ++k) {
+      const ScratchFile& file = files_[k];
+      if (file.path.empty()) continue;
+      ScratchReader in(scratch_, file, options_.stage);
+      if (!in.read(to, file.bytes)) throw IoError(file.path + ": scratch partition ends early");
+      to += file.bytes / sizeof(Record);
     }
-    countingSort(slot, p * keysPerPartition_);
+    countingSort(slot, p * keysPerPartition_, keysOf(p, q));
   }
 
-  /// Serves partition p: sorted ahead, else sorted now (counting sort, or the ExternalSorter when
-  /// it does not fit); then the next one is sorted ahead when it fits.
+  /// Serves partitions from p on: sorted ahead, else sorted now (by counting, or partition p alone
+  /// by the ExternalSorter when it does not fit); then the next ones are sorted ahead.
   void open(std::size_t p) {
     partition_ = p;
     at_ = 0;
@@ -168,12 +185,15 @@ class KeyedSorter {
       ahead_.get();  // the thread's error, if any, is the caller's
       if (aheadOf == p) {
         current_ ^= 1;
+        end_ = aheadEnd_;
         ready = true;
       }
     }
-    if (!ready && (files_[p].path.empty() || fits(p))) {
-      prepare(p, slots_[current_]);
+    if (!ready && fits(p, p + 1)) {
+      end_ = rangeEnd(p);
+      prepare(p, end_, slots_[current_]);
     } else if (!ready) {
+      end_ = p + 1;
       for (Slot& slot : slots_) slot = Slot{};  // the limit is the external sort's
       fallback_ = std::make_unique<ExternalSorter<Record, Less>>(scratch_, options_);
       ScratchReader in(scratch_, files_[p], options_.stage);
@@ -182,17 +202,17 @@ class KeyedSorter {
       fallback_->finish();
       return;
     }
-    if (p + 1 < partitions_ && !files_[p + 1].path.empty() && fits(p + 1)) {
+    if (end_ < partitions_ && fits(end_, end_ + 1)) {
       Slot& other = slots_[current_ ^ 1];
-      aheadOf_ = p + 1;
-      ahead_ = std::async(std::launch::async, [this, &other, q = p + 1] { prepare(q, other); });
+      aheadOf_ = end_;
+      aheadEnd_ = rangeEnd(end_);
+      ahead_ = std::async(std::launch::async, [this, &other, p = aheadOf_, q = aheadEnd_] { prepare(p, q, other); });
     }
   }
 
-  /// slot.sorted := slot.input (keys from first on, in one partition's range) in Less order:
+  /// slot.sorted := slot.input (keys [first, first + keys)) in Less order:
   /// stable by key, then each key's records sorted (they usually come in order already).
-  void countingSort(Slot& slot, std::uint64_t first) const {
-    const std::uint64_t keys = std::min(keyCount_ - first, keysPerPartition_);
+  void countingSort(Slot& slot, std::uint64_t first, std::uint64_t keys) const {
     std::vector<std::uint32_t>& end = slot.end;
     end.assign(static_cast<std::size_t>(keys) + 1, 0);
     for (const Record& r : slot.input) ++end[static_cast<std::size_t>(Key{}(r) - first) + 1];
@@ -214,13 +234,13 @@ class KeyedSorter {
   ScratchFolder& scratch_;
   ExternalSortOptions options_;
   std::uint64_t keyCount_, keysPerPartition_ = 1, size_ = 0, work_ = 1;
-  std::size_t partitions_ = 1, bufferBytes_ = 4096, partition_ = 0, at_ = 0;
+  std::size_t partitions_ = 1, bufferBytes_ = 4096, partition_ = 0, end_ = 1, at_ = 0;  // served: [partition_, end_)
   std::vector<ScratchFile> files_;
   std::vector<std::unique_ptr<ScratchWriter>> writers_;
   Slot slots_[2];  // slots_[0].input: the records while they fit in memory
   int current_ = 0;  // the slot served
-  std::future<void> ahead_;  // sorts partition aheadOf_ into the other slot
-  std::size_t aheadOf_ = 0;
+  std::future<void> ahead_;  // sorts partitions [aheadOf_, aheadEnd_) into the other slot
+  std::size_t aheadOf_ = 0, aheadEnd_ = 0;
   std::unique_ptr<ExternalSorter<Record, Less>> fallback_;
   bool spilled_ = false, inMemory_ = false, served_ = false;
 };
