@@ -8,6 +8,7 @@
 
 #include "core/system/errors.h"
 #include "stream/external_sort.h"
+#include "stream/keyed_sort.h"
 #include "stream/scratch_union_find.h"
 
 namespace seamvox {
@@ -125,6 +126,15 @@ struct MortonFaceLess {
     if (a.high != b.high || a.low != b.low) return std::tie(a.high, a.low) < std::tie(b.high, b.low);
     return SameVerticesLess{}(a.record, b.record);
   }
+};
+
+/// The Morton sorts' keys: a code's leading 24 bits (256 cells along each axis of the box), so
+/// the keyed sort's counts take 64 MB; the faces of one such cell are sorted by the whole order.
+constexpr int kMortonKeyBits = 24;
+constexpr std::uint64_t kMortonKeys = std::uint64_t(1) << kMortonKeyBits;
+struct MortonKey {
+  std::uint64_t operator()(const WeldedFace& f) const { return f.morton >> (3 * kMortonBits - kMortonKeyBits); }
+  std::uint64_t operator()(const MortonFace& f) const { return f.morton() >> (3 * kMortonBits - kMortonKeyBits); }
 };
 
 /// The centroid summed in the order of the vertex ids: the same for every face on the vertex set.
@@ -564,7 +574,7 @@ class WeldPass {
       return mortonCode(sortedCentroid(placed.face.triangle, [&](int k) -> Vec3d { return placed.corner(k).cast<double>(); }), c.box);
     };
     if (fused_) return sortByMortonWithDuplicates(options, isZeroArea, mortonOf);
-    ExternalSorter<WeldedFace, MortonLess> sorter(folder_, options);
+    KeyedSorter<WeldedFace, MortonLess, MortonKey> sorter(folder_, kMortonKeys, validFaces_, options);
     auto take = [&](PlacedFace& placed) {
       c.zeroAreaFaces += isZeroArea(placed);
       placed.face.morton = mortonOf(placed);
@@ -595,7 +605,7 @@ class WeldPass {
   void sortByMortonWithDuplicates(const ExternalSortOptions& options, IsZeroArea&& isZeroArea, MortonOf&& mortonOf) {
     WeldCensus& c = result_.census;
     {
-      ExternalSorter<MortonFace, MortonFaceLess> sorter(folder_, options);
+      KeyedSorter<MortonFace, MortonFaceLess, MortonKey> sorter(folder_, kMortonKeys, validFaces_, options);
       forEachKeptFace("morton", [&](const PlacedFace& placed) {
         const std::uint64_t code = mortonOf(placed);
         sorter.add({static_cast<std::uint32_t>(code >> 32), static_cast<std::uint32_t>(code),
