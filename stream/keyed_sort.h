@@ -49,6 +49,9 @@ class KeyedSorter {
       files_.resize(partitions_);
       writers_.resize(partitions_);
       bufferBytes_ = std::clamp<std::size_t>(options.memoryBytes / 8 / partitions_, 4096, std::size_t(1) << 20);
+    } else {
+      // Room for the expected records at once: no doubling (three times the records for a moment).
+      slots_[0].input.reserve(static_cast<std::size_t>(expectedRecords));
     }
   }
   ~KeyedSorter() {
