@@ -183,6 +183,7 @@ void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const 
     refine.markedFaces = std::move(seeds);
     refine.islandFaces = basisOptions.leftOut;
     refine.seedFromMap = options.voxLoc;
+    refine.flipsToRepair = options.untangle;
     if (!options.voxLoc) refine.maxRounds = 1;
     if (options.voxLoc && refine.splineCells > 0) refine.splineSpacing = voxelSize / refine.splineCells;
     if (!refine.progress) refine.progress = options.progress;

@@ -1186,5 +1186,51 @@ TEST_F(SplineRound, RefinementWithASplineRoundStaysSeamlessAndRefinesFewerVertic
   EXPECT_LT(maxCornerDistance(inPlace, whole), 1e-12);
 }
 
+// Folds in 3D flip under any smooth map, so the spline round leaves them flipped. With the
+// foldover repair to follow (flipsToRepair) they do not seed hat rounds: only collapsed faces
+// do, and fewer vertices are freed in the hat basis; without it the hat rounds take them.
+TEST(SplineRoundFlips, FlipsLeftByTheSplineRoundGoToTheRepairWhenOneFollows) {
+  GenerateOptions generate;
+  generate.kind = MeshKind::Sphere;
+  generate.faces = 40000;
+  TriangleMesh mesh = generateMesh(generate).mesh;
+  ScanNoiseOptions noise;
+  noise.amplitude = 0.0;
+  noise.folds = 12;
+  noise.seed = 5;
+  const double meanEdge = addScanNoise(mesh, noise).meanEdgeLength;
+  const auto s = makeScene(std::move(mesh), 40.0);
+  std::vector<FaceId> all(s->mesh().numFaces());
+  std::iota(all.begin(), all.end(), 0u);
+  RefineOptions options;
+  options.edgeLength = s->options.edgeLength;
+  options.markedFaces = all;
+  options.splineSpacing = 8.0 * meanEdge;
+  options.splineMaxFraction = 0.9;
+  const RefineResult chased = refineNearCones(s->mesh(), s->topology(), s->field, s->cut, s->hat.cornerUV,
+                                              s->hat.translations, options);
+  options.flipsToRepair = true;
+  const RefineResult left = refineNearCones(s->mesh(), s->topology(), s->field, s->cut, s->hat.cornerUV,
+                                            s->hat.translations, options);
+  for (const RefineResult* r : {&chased, &left}) {
+    ASSERT_FALSE(r->stats.rounds.empty());
+    ASSERT_TRUE(r->stats.rounds[0].spline);
+    EXPECT_GT(r->stats.splineVertices, s->mesh().numVertices() / 2) << "the spline round solved in B-splines";
+    WedgeMap refined = s->hat.cornerUV;
+    applyRefinement(*r, refined);
+    EXPECT_TRUE(measureSeams(s->mesh(), s->topology(), s->cut, refined).isSeamless());
+  }
+  const RefineRound& first = chased.stats.rounds[0];
+  ASSERT_GT(first.flipped, 0u) << "the spline round leaves no flip: the test tests nothing";
+  EXPECT_EQ(left.stats.rounds[0].flipped, first.flipped) << "the same spline round";
+  ASSERT_GE(chased.stats.rounds.size(), 2u);
+  EXPECT_GE(chased.stats.rounds[1].seedFaces, first.flipped);
+  // Faces collapsed between coincident cones seed nothing (no free vertex moves them).
+  if (left.stats.rounds.size() > 1) EXPECT_LE(left.stats.rounds[1].seedFaces, first.collapsed - first.collapsedAtCones);
+  EXPECT_LT(left.stats.freeVertices, chased.stats.freeVertices);
+  // What the spline round left flipped is left to the repair (here the hat round made it worse).
+  if (left.stats.rounds.size() == 1) EXPECT_EQ(left.stats.flippedAfter, first.flipped);
+}
+
 }  // namespace
 }  // namespace seamvox

@@ -329,6 +329,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   }
   solverOptions.refine.coneWeightRadius = options.coneWeightRadius;
   solverOptions.refine.closeHolesWithin = param.closeHolesWithin;
+  solverOptions.refine.flipsToRepair = options.untangle;
   const double mergeDistance = options.mergeCones * r.edgeLength;
   const double coincidentDistance = kCoincidentSearchFraction * r.edgeLength;
   std::vector<std::pair<VertexId, VertexId>> coincident;

@@ -186,10 +186,11 @@ void writeSolvedCorners(const RegionMesh& region, const RegionSolution& solved, 
 void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& current);
 /// Measures a solved region into figures; returns its bad faces touching a locked vertex (whole-
 /// mesh ids: they seed the next round). collapsedAtBorder: one of them is below the threshold
-/// but not flipped. everyBadFace (solved in B-splines): every bad face seeds, locked vertex or not.
+/// but not flipped. everyBadFace (solved in B-splines): every bad face seeds, locked vertex or not;
+/// with collapsedOnly, only those collapsed by MapQuality's measure (flips are left to the repair).
 std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSolution& solved, double h,
                                         double collapseThreshold, RefineRound& figures, bool& collapsedAtBorder,
-                                        bool everyBadFace = false);
+                                        bool everyBadFace = false, bool collapsedOnly = false);
 /// stats takes the system figures of the largest solve.
 void keepLargestSolve(const RefineStats& largest, RefineStats& stats);
 /// The seams whose translation changed (currentT against seamT) into out.
@@ -274,7 +275,7 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
     }
     for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
     r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder,
-                                   inSplines);
+                                   inSplines, inSplines && options.flipsToRepair);
     if (spline && !r.failure.empty()) r.border = groupFaces;  // the hat rounds take the group whole
   };
   const std::vector<std::size_t> batches = groupBatches(groups, std::max<std::size_t>(1, source.batchCorners()));

@@ -722,7 +722,7 @@ void mergeSolved(std::vector<SolvedCorner> fresh, std::vector<SolvedCorner>& cur
 /// but not flipped.
 std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSolution& solved, double h,
                                         double collapseThreshold, RefineRound& figures, bool& collapsedAtBorder,
-                                        bool everyBadFace) {
+                                        bool everyBadFace, bool collapsedOnly) {
   std::vector<std::uint8_t> subCone(region.mesh.numVertices(), 0);
   for (VertexId v : region.cut.cones) subCone[v] = 1;
   FaceCounts inRegion;
@@ -735,6 +735,7 @@ std::vector<FaceId> measureSolvedRegion(const RegionMesh& region, const RegionSo
     const Triangle& t = region.mesh.triangles[i];
     if (std::isnan(ratio) || ratio >= collapseThreshold) continue;
     if (everyBadFace) {
+      if (collapsedOnly && !(std::abs(ratio) < kCollapsedAreaFraction)) continue;
       if (!collapsesBetweenCones(region.mesh, solved.cornerUV, i, subCone)) border.push_back(region.faceOrigin[i]);
       continue;
     }
