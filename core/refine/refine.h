@@ -68,8 +68,10 @@ struct RefineOptions {
   /// basis against 6.2% without it (bench/RESULTS.md, sessions 28 and 32).
   std::uint32_t splineCells = 4;
   /// A group of the spline round is solved in the hat basis instead when the B-splines and own
-  /// unknowns are not fewer than this fraction of its free vertices (solveRegionInSplines).
-  double splineMaxFraction = 0.25;
+  /// unknowns are not fewer than this fraction of its free vertices (solveRegionInSplines). At a
+  /// quarter, most groups of noisy fertility x5 (9.2M faces) went to the hat basis: 2.85% of the
+  /// vertices refined there against 0.25% at a half, in the same time (bench/RESULTS.md, session 36).
+  double splineMaxFraction = 0.5;
   /// The foldover repair runs after the refinement (ParamOptions::untangle): the faces the spline
   /// round leaves flipped go to it, and only collapsed ones (and islands) seed the hat rounds. A
   /// local hat solve turns a collapse near a cone into a proper map; a flip of a triangle that
