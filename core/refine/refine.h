@@ -73,7 +73,8 @@ struct RefineOptions {
   /// vertices refined there against 0.25% at a half, in the same time (bench/RESULTS.md, session 36).
   double splineMaxFraction = 0.5;
   /// The foldover repair runs after the refinement (ParamOptions::untangle): the faces the spline
-  /// round leaves flipped go to it, and only collapsed ones (and islands) seed the hat rounds. A
+  /// round leaves flipped in its groups solved in B-splines go to it, and only collapsed ones (and
+  /// islands) seed the hat rounds there; a group solved per vertex seeds as before. A
   /// local hat solve turns a collapse near a cone into a proper map; a flip of a triangle that
   /// noise folded stays flipped under any smooth map, and the repair unfolds it with fewer free
   /// vertices (noisy armadillo x4: 1.24% -> 0.68% of the vertices in hat rounds, same repair time).
