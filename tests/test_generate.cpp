@@ -185,6 +185,54 @@ TEST(ScanNoise, MovesStayWithinTheAmplitudeAlongTheNormalAndAcross) {
   EXPECT_THROW(noisy(generate(MeshKind::Sphere, 12), 0.1, 1, 5, 5), InputError);
 }
 
+// The tangential share scales the move across the normal only: 0 moves along the normals alone
+// (a range scanner's depth noise), 0.5 at most half the amplitude across; the normal part is the
+// same draw either way.
+TEST(ScanNoise, TheTangentialShareScalesOnlyTheMoveAcrossTheNormal) {
+  const TriangleMesh sphere = generate(MeshKind::Sphere, 8000);
+  std::vector<Vec3d> normal(sphere.numVertices(), Vec3d::Zero());
+  for (const Triangle& t : sphere.triangles) {
+    const Vec3d n = (sphere.position(t[1]) - sphere.position(t[0])).cross(sphere.position(t[2]) - sphere.position(t[0]));
+    for (VertexId v : t) normal[v] += n;
+  }
+  const auto moved = [&](double tangential, ScanNoiseResult& result) {
+    TriangleMesh mesh = sphere;
+    ScanNoiseOptions options;
+    options.amplitude = 0.4;
+    options.seed = 3;
+    options.tangential = tangential;
+    result = addScanNoise(mesh, options);
+    return mesh;
+  };
+  ScanNoiseResult full, half, none;
+  const TriangleMesh a = moved(1.0, full), b = moved(0.5, half), c = moved(0.0, none);
+  const double bound = 0.4 * full.meanEdgeLength;
+  double acrossHalf = 0.0, acrossNone = 0.0, alongNone = 0.0;
+  for (VertexId v = 0; v < sphere.numVertices(); ++v) {
+    const Vec3d n = normal[v].normalized();
+    const Vec3d da = a.position(v) - sphere.position(v), db = b.position(v) - sphere.position(v),
+                dc = c.position(v) - sphere.position(v);
+    const auto across = [&](const Vec3d& d) { return (d - d.dot(n) * n).norm(); };
+    // Float positions: the same normal part within their rounding.
+    EXPECT_NEAR(dc.dot(n), da.dot(n), 1e-6 * (1.0 + sphere.position(v).norm())) << "vertex " << v;
+    EXPECT_NEAR(across(db), 0.5 * across(da), 1e-6 * (1.0 + sphere.position(v).norm())) << "vertex " << v;
+    acrossHalf = std::max(acrossHalf, across(db));
+    acrossNone = std::max(acrossNone, across(dc));
+    alongNone = std::max(alongNone, std::abs(dc.dot(n)));
+  }
+  EXPECT_LT(acrossNone, 1e-5 * bound + 1e-6);
+  EXPECT_GT(alongNone, 0.9 * bound);
+  EXPECT_LE(acrossHalf, 0.5 * bound * (1.0 + 1e-4) + 1e-6);
+  EXPECT_GT(acrossHalf, 0.45 * bound);
+  TriangleMesh mesh = sphere;
+  ScanNoiseOptions bad;
+  bad.amplitude = 0.1;
+  for (const double share : {-0.1, 1.5, std::nan("")}) {
+    bad.tangential = share;
+    EXPECT_THROW(addScanNoise(mesh, bad), InputError) << share;
+  }
+}
+
 TEST(ScanNoise, KeepsTheTopologyAndTheUnweldedSeam) {
   GenerateOptions options;
   options.kind = MeshKind::Scan;

@@ -215,12 +215,17 @@ bool parseScanNoise(Args& args, ScanNoiseOptions& options) {
   }
   options.spikes = static_cast<std::uint32_t>(spikes);
   options.folds = static_cast<std::uint32_t>(folds);
+  options.tangential = args.number("noise-tangential", 1.0);
+  if (!(options.tangential >= 0.0 && options.tangential <= 1.0)) {
+    throw UsageError("--noise-tangential must be between 0 and 1 (the tangential share of --noise)");
+  }
   return options.amplitude > 0.0 || spikes > 0 || folds > 0;
 }
 
 void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& result) {
-  std::printf("scan noise %.3g mean edge lengths (edge %.4g, largest move %.4g), %u spikes, %u folds\n",
-              options.amplitude, result.meanEdgeLength, result.maxDisplacement, result.spikes,
+  std::printf("scan noise %.3g mean edge lengths (tangential share %.3g; edge %.4g, largest move %.4g), %u spikes, "
+              "%u folds\n",
+              options.amplitude, options.tangential, result.meanEdgeLength, result.maxDisplacement, result.spikes,
               result.folds);
 }
 

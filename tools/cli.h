@@ -86,6 +86,8 @@ void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& resu
 #define SEAMVOX_SCAN_NOISE_HELP                                                              \
   "  --noise A   scan noise: every vertex moves up to A mean edge lengths along its normal\n" \
   "              and up to A tangentially (deterministic for a seed)\n"                       \
+  "  --noise-tangential F  the tangential part up to F A instead (0 to 1, default 1; 0: along\n" \
+  "              the normal only, as a range scanner's depth noise)\n"                        \
   "  --spikes N  N outlier vertices pushed 2-6 edge lengths along their normal\n"            \
   "  --folds N   N small fold-overs (a vertex and its ring slid over their neighbours)\n"
 

@@ -119,7 +119,7 @@ int runGen(Args& args) {
 
 SEAMVOX_COMMAND({"gen", "generate a synthetic scan-like mesh (sphere, torus, genus2, scan)",
                  "usage: seamvox gen KIND --faces N -o OUT [--seed S] [--ascii]\n"
-                 "                      [--noise A] [--spikes N] [--folds N]\n"
+                 "                      [--noise A [--noise-tangential F]] [--spikes N] [--folds N]\n"
                  "\n"
                  "Writes a deterministic synthetic mesh with about N faces (within a few percent):\n"
                  "the same KIND, N and seed give a byte-identical file on every machine.\n"

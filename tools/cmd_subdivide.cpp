@@ -166,7 +166,8 @@ int runSubdivide(Args& args) {
 
 SEAMVOX_COMMAND({"subdivide", "1-to-4 midpoint subdivision (the scaling series), carrying a field",
                  "usage: seamvox subdivide MESH --levels K -o OUT [--field IN --field-out OUT]\n"
-                 "                        [--noise A [--seed S]] [--spikes N] [--folds N]\n"
+                 "                        [--noise A [--seed S] [--noise-tangential F]] [--spikes N]\n"
+                 "                        [--folds N]\n"
                  "\n"
                  "Cleans MESH, then splits every triangle into four at its edge midpoints, K times\n"
                  "(faces x 4^K; old vertices keep their positions). Vertex properties (colors,\n"

@@ -908,6 +908,10 @@ void checkScanNoiseInput(const TriangleMesh& mesh, const ScanNoiseOptions& optio
     throw InputError("scan noise: the amplitude must be a finite number >= 0, not " +
                      std::to_string(options.amplitude));
   }
+  if (!(options.tangential >= 0.0 && options.tangential <= 1.0)) {
+    throw InputError("scan noise: the tangential share must be between 0 and 1, not " +
+                     std::to_string(options.tangential));
+  }
   const std::uint64_t numVertices = mesh.positions.size();
   if (std::uint64_t(options.spikes) + options.folds > numVertices) {
     throw InputError("scan noise: " + std::to_string(options.spikes) + " spikes and " +
@@ -1017,7 +1021,7 @@ ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options
                                          mix64(std::uint64_t(bits[2]) + 0x7a11ull));
           const std::uint64_t h1 = mix64(h0), h2 = mix64(h1);
           const double along = amplitude * (2.0 * unitFromBits(h0) - 1.0);
-          const double across = amplitude * std::sqrt(unitFromBits(h1));
+          const double across = options.tangential * amplitude * std::sqrt(unitFromBits(h1));
           move = along * normal[r] + across * tangentAt(normal[r], unitFromBits(h2));
           local = std::max(local, move.norm());
         }

@@ -81,9 +81,13 @@ class MeshGenerator {
 /// Scanner defects added to an existing mesh: per-vertex noise, outlier spikes and small folds.
 /// Lengths are in units of the mean edge length L (over the triangles' edges).
 struct ScanNoiseOptions {
-  /// Every vertex moves by at most amplitude * L along its normal and at most amplitude * L
-  /// tangentially (uniform in [-A L, A L] along the normal, uniform in the disc of radius A L).
+  /// Every vertex moves by at most amplitude * L along its normal and at most tangential *
+  /// amplitude * L tangentially (uniform in [-A L, A L] along the normal, uniform in the disc of
+  /// radius t A L).
   double amplitude = 0.0;
+  /// The tangential part's share of the amplitude, 0 to 1 (0: along the normal only, as a range
+  /// scanner's depth noise; on uneven triangles the tangential part folds the thin ones in 3D).
+  double tangential = 1.0;
   /// Vertices pushed along their normal by 2..6 L (outliers), one sign at random each.
   std::uint32_t spikes = 0;
   /// Small fold-overs: a vertex moved 2 L along a tangent, its ring 1 L, so the faces around it
