@@ -2,8 +2,8 @@
 /// Sort of fixed-size records whose order starts with a dense integer key below keyCount (a
 /// vertex or corner id): the records go to partitions of equal key ranges (kept in memory when
 /// they all fit, else one scratch file each), and each partition (or run of consecutive ones that
-/// fit together) is counting-sorted by key, then each key's few records by Less. No comparison sort of the whole input and no merge: every
-/// record is written and read once. A partition over the memory limit (a key holding a large
+/// fit together) is counting-sorted by key, then each key's few records by Less. No comparison
+/// sort of the whole input and no merge: every record is written and read once. A partition over the memory limit (a key holding a large
 /// share of the records) is sorted by an ExternalSorter instead. While a partition is served, the
 /// next is read and sorted on a thread of its own. The records can be served in order more than
 /// once (rewind()). Memory: about options.memoryBytes.
@@ -132,7 +132,8 @@ class KeyedSorter {
   std::uint64_t size() const { return size_; }
   /// Partitions written to scratch files (0 when the records stayed in memory).
   std::size_t filesWritten() const {
-    return static_cast<std::size_t>(std::count_if(files_.begin(), files_.end(), [](const ScratchFile& f) { return !f.path.empty(); }));
+    return static_cast<std::size_t>(
+        std::count_if(files_.begin(), files_.end(), [](const ScratchFile& f) { return !f.path.empty(); }));
   }
 
  private:
@@ -179,7 +180,6 @@ class KeyedSorter {
   /// Serves partitions from p on: sorted ahead, else sorted now (by counting, or partition p alone
   /// by the ExternalSorter when it does not fit); then the next ones are sorted ahead.
   void open(std::size_t p) {
-    partition_ = p;
     at_ = 0;
     fallback_.reset();
     bool ready = false;
@@ -237,7 +237,7 @@ class KeyedSorter {
   ScratchFolder& scratch_;
   ExternalSortOptions options_;
   std::uint64_t keyCount_, keysPerPartition_ = 1, size_ = 0, work_ = 1;
-  std::size_t partitions_ = 1, bufferBytes_ = 4096, partition_ = 0, end_ = 1, at_ = 0;  // served: [partition_, end_)
+  std::size_t partitions_ = 1, bufferBytes_ = 4096, end_ = 1, at_ = 0;  // end_: past the partitions served
   std::vector<ScratchFile> files_;
   std::vector<std::unique_ptr<ScratchWriter>> writers_;
   Slot slots_[2];  // slots_[0].input: the records while they fit in memory

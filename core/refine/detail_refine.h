@@ -274,8 +274,9 @@ std::vector<FaceId> solveRound(Source& source, const std::vector<FaceId>& faces,
       r.figures.freeVertices = 0;
     }
     for (std::size_t j = 0; j < region.seamOrigin.size(); ++j) r.seams.push_back({region.seamOrigin[j], solved.seamT[j]});
+    const bool collapsedOnly = inSplines && options.flipsToRepair;  // the flips are the repair's
     r.border = measureSolvedRegion(region, solved, h, options.collapseThreshold, r.figures, r.collapsedAtBorder,
-                                   inSplines, inSplines && options.flipsToRepair);
+                                   inSplines, collapsedOnly);
     if (spline && !r.failure.empty()) r.border = groupFaces;  // the hat rounds take the group whole
   };
   const std::vector<std::size_t> batches = groupBatches(groups, std::max<std::size_t>(1, source.batchCorners()));

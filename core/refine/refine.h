@@ -60,8 +60,8 @@ struct RefineOptions {
   /// > 0 (mesh units): the first round solves its region in trilinear B-splines of this spacing
   /// (spline_space.h), with an unknown per vertex only next to cones, instead of one unknown per
   /// vertex; the next rounds re-solve in the hat basis the faces it leaves collapsed or flipped
-  /// (collapsed only with flipsToRepair), with rings around them. 0: every round in the hat basis. Needs maxRounds >= 2 and
-  /// seedFromMap.
+  /// (collapsed only with flipsToRepair), with rings around them. 0: every round in the hat
+  /// basis. Needs maxRounds >= 2 and seedFromMap.
   double splineSpacing = 0.0;
   /// B-splines per voxel edge for the voxloc solvers, which set splineSpacing to the voxel size
   /// divided by it; 0: off. The default 4 refines 0.5% of armadillo x4's vertices in the hat
