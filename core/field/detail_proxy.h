@@ -84,6 +84,10 @@ inline std::uint8_t firstFreeColour(unsigned taken) {
   return k;
 }
 
+/// sweptDirection takes a neighbour's direction by projection where the two normals' cosine is at
+/// least this (a tilt of 18 degrees at most), by rotation about the shared edge where it is less.
+constexpr double kProjectCosine = 0.95;
+
 /// One Gauss-Seidel step at a face of unit float normal `normal` (not zero) and direction u:
 /// the normalized transported average of its `count` neighbours' 4th powers (their float normals,
 /// not zero, and directions). False when the face keeps u.

@@ -236,24 +236,33 @@ Vec3d transferredDirection(const ProxyElements& proxy, const ElementDirections& 
 
 bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal, const Vec3d* neighbourDirection,
                     int count, Vec3d& out) {
-  // The sweeps' inner step, written out: rotateBetween inline, one reciprocal where a pair or a
-  // vector is divided by the same number.
+  // Frame (u, v = n x u): the new direction is the representative nearest the current one.
   const Vec3d n = normal.cast<double>();
-  // Frame with e1 = the current direction: the new one is the representative nearest it.
   const Vec3d v = n.cross(u);
   double sumRe = 0.0, sumIm = 0.0;
   for (int i = 0; i < count; ++i) {
     const Vec3d m = neighbourNormal[i].cast<double>();
     const Vec3d& d = neighbourDirection[i];
     const double c = m.dot(n);
-    Vec3d w;
-    if (c > -1.0 + 1e-9) {
-      const Vec3d k = m.cross(n);
-      w = c * d + k.cross(d) + (k.dot(d) / (1.0 + c)) * k;
+    // A neighbour's direction in this face's plane. Nearly coplanar (c >= kProjectCosine): its
+    // projection, (x, y) = (d.u, d.v), whose angle differs from the rotated direction's by at
+    // most 1.5 degrees there. Tilted further (a fold of the surface): the rotation about the
+    // shared edge, inline (rotateBetween).
+    double x, y;
+    if (c >= kProjectCosine) {
+      x = d.dot(u);
+      y = d.dot(v);
     } else {
-      w = rotateBetween(m, n, d);
+      Vec3d w;
+      if (c > -1.0 + 1e-9) {
+        const Vec3d k = m.cross(n);
+        w = c * d + k.cross(d) + (k.dot(d) / (1.0 + c)) * k;
+      } else {
+        w = rotateBetween(m, n, d);
+      }
+      x = w.dot(u);
+      y = w.dot(v);
     }
-    const double x = w.dot(u), y = w.dot(v);
     const double r2 = x * x + y * y;
     if (!(r2 > 0.0) || !std::isfinite(r2)) continue;
     const double inverse = 1.0 / r2;
