@@ -89,8 +89,9 @@ inline std::uint8_t firstFreeColour(unsigned taken) {
 constexpr double kProjectCosine = 0.95;
 
 /// One Gauss-Seidel step at a face of unit float normal `normal` (not zero) and direction u:
-/// the normalized transported average of its `count` neighbours' 4th powers (their float normals,
-/// not zero, and directions). False when the face keeps u.
+/// the direction in the face's plane whose 4th power has the argument of the sum of its `count`
+/// neighbours' unit 4th powers (their float normals, not zero, and directions) carried into the
+/// plane; not renormalized (the caller projects after the last sweep). False when the face keeps u.
 bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal, const Vec3d* neighbourDirection,
                     int count, Vec3d& out);
 

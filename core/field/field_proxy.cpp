@@ -270,14 +270,14 @@ bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourN
     sumRe += a * a - b * b;
     sumIm += 2.0 * a * b;
   }
-  Vec3d next = u;
   const double len = std::sqrt(sumRe * sumRe + sumIm * sumIm);
-  if (len > 0.0 && std::isfinite(len)) {
-    const double inverse = 1.0 / len;
-    const Complex r = unitSqrt(unitSqrt(Complex(sumRe * inverse, sumIm * inverse)));
-    next = r.real() * u + r.imag() * v;
-  }
-  return tangentOf(n, next, out);
+  if (!(len > 0.0 && std::isfinite(len))) return false;
+  const double inverse = 1.0 / len;
+  const Complex r = unitSqrt(unitSqrt(Complex(sumRe * inverse, sumIm * inverse)));
+  // Unit and tangent up to float rounding (u's, and |n| in v): a few 1e-7 after the sweeps, whose
+  // last step projects onto the exact planes and normalizes.
+  out = r.real() * u + r.imag() * v;
+  return std::isfinite(out[0]) && std::isfinite(out[1]) && std::isfinite(out[2]);
 }
 
 bool tangentOf(const Vec3d& n, const Vec3d& u, Vec3d& out) {
