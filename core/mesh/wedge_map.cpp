@@ -31,9 +31,14 @@ WedgeMap WedgeMap::fromCorners(const std::vector<Triangle>& triangles, const std
   return builder.finish();
 }
 
-std::vector<CornerId> WedgeMap::wedgeCorners() const {
-  std::vector<CornerId> first(value_.size(), kInvalidId);
-  for (std::size_t c = wedge_.size(); c-- > 0;) first[wedge_[c]] = static_cast<CornerId>(c);
+std::vector<CornerId> WedgeMap::wedgeCorners(std::uint32_t begin, std::uint32_t end) const {
+  end = std::min(end, numWedges());
+  begin = std::min(begin, end);
+  std::vector<CornerId> first(end - begin, kInvalidId);
+  for (std::size_t c = wedge_.size(); c-- > 0;) {
+    const std::uint32_t w = wedge_[c];
+    if (w >= begin && w < end) first[w - begin] = static_cast<CornerId>(c);
+  }
   return first;
 }
 

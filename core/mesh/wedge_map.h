@@ -29,8 +29,9 @@ class WedgeMap {
   const Vec2d& wedgeValue(std::uint32_t w) const { return value_[w]; }
   /// Sets the value of every corner of wedge w.
   void setWedgeValue(std::uint32_t w, const Vec2d& q) { value_[w] = q; }
-  /// The smallest corner of each wedge (#wedges; kInvalidId for a wedge without corners). O(#corners).
-  std::vector<CornerId> wedgeCorners() const;
+  /// The smallest corner of each wedge in [begin, end) (kInvalidId for a wedge without corners),
+  /// indexed from begin. One pass over the corners: a caller short of memory takes a range at a time.
+  std::vector<CornerId> wedgeCorners(std::uint32_t begin = 0, std::uint32_t end = UINT32_MAX) const;
 
   /// Sets one corner: a no-op when the value is unchanged, else c moves to a new wedge of its own
   /// (its old wedge may be left without corners). For many corners use assign().

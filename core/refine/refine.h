@@ -275,13 +275,14 @@ RefineResult refineNearCones(const TriangleMesh& mesh, const Topology& topology,
                              const RefineOptions& options = {});
 
 /// refineNearCones then applyRefinement, with the solved corners written into cornerUV a batch
-/// at a time (at most batchCorners, 24 bytes each, held at once) instead of held until the end:
+/// at a time (at most batchCorners, 24 bytes each, held at once with a quarter more reserved; 30 MB
+/// by default: this runs at the pipeline's peak) instead of held until the end:
 /// later batches and rounds read the map itself, as the out-of-core refinement does. The same
 /// map and translations; the result's corners are left empty.
 RefineResult refineNearConesInPlace(const TriangleMesh& mesh, const Topology& topology,
                                     const CrossField& field, const CutResult& cut, WedgeMap& cornerUV,
                                     std::vector<std::complex<double>>& seamT, const RefineOptions& options = {},
-                                    std::size_t batchCorners = std::size_t(1) << 22);
+                                    std::size_t batchCorners = std::size_t(1) << 20);
 
 /// The hat re-solve of flips a foldover repair left (UntangleOptions::leftoverRadius): `flipped`
 /// as the marked faces with the rings that reach radius h at their mean edge length meanEdge (1 to
