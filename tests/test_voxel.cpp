@@ -229,6 +229,29 @@ TEST(VoxelClip, FragmentIntegralsMatchTheTangentialGradientsPairByPair) {
   }
 }
 
+// The compact per-face fragment ranges give back every face's offsets: counts of 0, 1, just below,
+// at and far above the one-byte limit, across the 16-face blocks.
+TEST(VoxelBasis, FragmentRangesGiveBackTheOffsets) {
+  std::mt19937 rng(3);
+  const std::uint32_t special[] = {0, 1, 254, 255, 256, 300, 70000};
+  std::vector<std::uint32_t> start{0};
+  for (int f = 0; f < 1000; ++f) {
+    const std::uint32_t n = f % 37 == 5 ? special[(f / 37) % 7] : std::uniform_int_distribution<std::uint32_t>(0, 4)(rng);
+    start.push_back(start.back() + n);
+  }
+  const FragmentRanges ranges(start);
+  ASSERT_EQ(ranges.numFaces(), 1000u);
+  std::set<std::uint32_t> counts;
+  for (FaceId f = 0; f < 1000; ++f) {
+    ASSERT_EQ(ranges.begin(f), start[f]) << "face " << f;
+    ASSERT_EQ(ranges.count(f), start[f + 1] - start[f]) << "face " << f;
+    counts.insert(ranges.count(f));
+  }
+  for (std::uint32_t n : special) EXPECT_TRUE(counts.count(n)) << n;  // every special count was used
+  EXPECT_LT(ranges.bytes(), 1000u * 2);
+  EXPECT_EQ(FragmentRanges(std::vector<std::uint32_t>{}).numFaces(), 0u);
+}
+
 TEST(VoxelClip, SmallPiecesAreIntegratedWithinATenThousandth) {
   // Triangles under a quarter of a voxel across take the degree-2 rule: every integral within 1e-4
   // of the exact one (relative to the largest entry), anywhere in the voxel, and no longer exact

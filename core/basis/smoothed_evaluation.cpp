@@ -26,18 +26,21 @@ SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh,
   SmoothedEvaluationStats stats;
   const FaceId nf = topology.numFaces();
   const std::uint32_t steps = field.frameSmoothing > 0 ? field.frameSmoothing : kFieldSmoothingIterations;
-  // Round one measures every face (in parallel, flags per face), the next ones the fans moved.
-  std::vector<std::uint8_t> folded(nf, 0);
-  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-    for (FaceId f = range.begin(); f != range.end(); ++f) {
-      folded[f] = foldedForSmoothedEvaluation(facePoints(mesh, f), faceValues(cornerUV, f), h);
+  // Round one measures every face (in parallel, listed by blocks of faces rather than flagged per
+  // face: this runs at the pipeline's peak), the next ones the fans moved.
+  constexpr std::uint64_t kBlock = 1u << 16;
+  std::vector<std::vector<FaceId>> foundIn((nf + kBlock - 1) / kBlock);
+  parallelForEach(foundIn.size(), 1, [&](std::uint64_t b) {
+    const FaceId end = static_cast<FaceId>(std::min<std::uint64_t>(nf, (b + 1) * kBlock));
+    for (FaceId f = static_cast<FaceId>(b * kBlock); f < end; ++f) {
+      if (foldedForSmoothedEvaluation(facePoints(mesh, f), faceValues(cornerUV, f), h)) foundIn[b].push_back(f);
     }
   });
   std::vector<FaceId> faces;
-  for (FaceId f = 0; f < nf; ++f) {
-    if (folded[f]) faces.push_back(f);
+  for (std::vector<FaceId>& found : foundIn) {
+    faces.insert(faces.end(), found.begin(), found.end());
+    std::vector<FaceId>().swap(found);
   }
-  std::vector<std::uint8_t>().swap(folded);
   stats.foldedBefore = faces.size();
   std::vector<VertexId> tried;  // every vertex a round tried, sorted
   for (std::uint32_t round = 0; round < kSmoothedEvaluationRounds && !faces.empty(); ++round) {

@@ -359,7 +359,8 @@ VoxelBasis::VoxelBasis(const TriangleMesh* mesh, detail::VoxelBasisParts parts, 
     : mesh_(mesh), grid_(parts.grid), voxelCoords_(std::move(parts.voxelCoords)),
       voxelElementStart_(std::move(parts.voxelElementStart)), elementVoxel_(std::move(parts.elementVoxel)),
       records_(std::move(parts.records)), normalStiffness_(std::move(parts.normalStiffness)),
-      faceFragmentStart_(std::move(parts.faceFragmentStart)), fragmentElement_(std::move(parts.fragmentElement)) {
+      faceFragments_(parts.faceFragmentStart), fragmentElement_(std::move(parts.fragmentElement)) {
+  std::vector<std::uint32_t>().swap(parts.faceFragmentStart);
   if (voxelElementStart_.size() != voxelCoords_.size() + 1 || voxelElementStart_.back() != elementVoxel_.size() ||
       records_.size() != elementVoxel_.size() || normalStiffness_.size() != elementVoxel_.size() ||
       parts.links.functions.parent.size() != 8 * elementVoxel_.size()) {
@@ -427,18 +428,39 @@ void VoxelBasis::elementIntegrals(std::uint64_t e, ElementIntegrals& out) const 
   out.area = r.area;
 }
 
+FragmentRanges::FragmentRanges(const std::vector<std::uint32_t>& start) {
+  if (start.empty()) return;
+  const std::uint32_t nf = static_cast<std::uint32_t>(start.size() - 1);
+  count_.resize(nf);
+  blockStart_.resize((std::uint64_t(nf) + kBlockMask) >> kBlockBits);
+  for (FaceId f = 0; f < nf; ++f) {
+    if ((f & kBlockMask) == 0) blockStart_[f >> kBlockBits] = start[f];
+    const std::uint32_t n = start[f + 1] - start[f];
+    count_[f] = static_cast<std::uint8_t>(std::min<std::uint32_t>(n, kLarge));
+    if (n >= kLarge) large_.push_back({f, n});
+  }
+}
+
+std::uint32_t FragmentRanges::largeCount(FaceId f) const {
+  return std::lower_bound(large_.begin(), large_.end(), std::make_pair(f, std::uint32_t(0)))->second;
+}
+
+std::size_t FragmentRanges::bytes() const {
+  return count_.capacity() + blockStart_.capacity() * sizeof(std::uint32_t) + large_.capacity() * sizeof(large_[0]);
+}
+
 std::vector<std::uint32_t> VoxelBasis::faceElements(FaceId f) const {
   (void)mesh();  // the per-face index is kept only with the mesh
-  return {fragmentElement_.begin() + faceFragmentStart_[f],
-          fragmentElement_.begin() + faceFragmentStart_[f + 1]};
+  const std::uint32_t begin = faceFragments_.begin(f);
+  return {fragmentElement_.begin() + begin, fragmentElement_.begin() + begin + faceFragments_.count(f)};
 }
 
 std::uint32_t VoxelBasis::cornerElement(CornerId c) const {
   const TriangleMesh& mesh = this->mesh();
   const FaceId f = cornerFace(c);
   const Vec3d x = grid_.toGrid(mesh.position(mesh.triangles[f][c % 3]));
-  const std::uint32_t begin = faceFragmentStart_[f];
-  return nearestElement(x, faceFragmentStart_[f + 1] - begin, [&](std::uint32_t i) { return fragmentElement_[begin + i]; });
+  const std::uint32_t begin = faceFragments_.begin(f);
+  return nearestElement(x, faceFragments_.count(f), [&](std::uint32_t i) { return fragmentElement_[begin + i]; });
 }
 
 std::complex<double> VoxelBasis::evaluateAt(std::uint32_t e, const Vec3d& x,
@@ -494,9 +516,12 @@ std::vector<FaceId> VoxelBasis::supportFaces(const std::vector<std::uint32_t>& b
   (void)mesh();  // the per-face index is kept only with the mesh
   const std::vector<std::uint8_t> elementMarked = elementsTouching(basisFunctions);
   std::vector<FaceId> faces;
-  const std::uint32_t nf = static_cast<std::uint32_t>(faceFragmentStart_.size() - 1);
+  const std::uint32_t nf = faceFragments_.numFaces();
+  std::uint32_t end = 0;
   for (FaceId f = 0; f < nf; ++f) {
-    for (std::uint32_t i = faceFragmentStart_[f]; i < faceFragmentStart_[f + 1]; ++i) {
+    const std::uint32_t begin = end;
+    end += faceFragments_.count(f);
+    for (std::uint32_t i = begin; i < end; ++i) {
       if (elementMarked[fragmentElement_[i]]) {
         faces.push_back(f);
         break;
@@ -524,7 +549,7 @@ VoxelBasisStats VoxelBasis::stats() const {
   s.joinedDomains = joinedDomains_;
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   s.bytes = bytes(voxelCoords_) + bytes(voxelElementStart_) + bytes(elementVoxel_) +
-            bytes(records_) + bytes(normalStiffness_) + bytes(elementDomain_) + bytes(faceFragmentStart_) +
+            bytes(records_) + bytes(normalStiffness_) + bytes(elementDomain_) + faceFragments_.bytes() +
             bytes(fragmentElement_) + bytes(basisCorner_) + bytes(domainBasis_) +
             bytes(adjacencies_) + bytes(seamRotation_);
   return s;

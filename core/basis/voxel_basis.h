@@ -66,6 +66,31 @@ struct VoxelBasisStats {
   std::uint64_t bytes = 0;  ///< memory held by the basis
 };
 
+/// Per face, the range of its fragments in an array ordered by face, in about 1.25 bytes per face
+/// instead of 4: a count per face (kLarge: listed apart) and the first fragment of every 16th face.
+class FragmentRanges {
+ public:
+  FragmentRanges() = default;
+  /// From #F + 1 increasing offsets (empty: no faces).
+  explicit FragmentRanges(const std::vector<std::uint32_t>& start);
+  std::uint32_t numFaces() const { return static_cast<std::uint32_t>(count_.size()); }
+  std::uint32_t begin(FaceId f) const {
+    std::uint32_t first = blockStart_[f >> kBlockBits];
+    for (FaceId g = f & ~kBlockMask; g < f; ++g) first += count(g);
+    return first;
+  }
+  std::uint32_t count(FaceId f) const { return count_[f] == kLarge ? largeCount(f) : count_[f]; }
+  std::size_t bytes() const;
+
+ private:
+  static constexpr std::uint32_t kBlockBits = 4, kBlockMask = (1u << kBlockBits) - 1;
+  static constexpr std::uint8_t kLarge = 255;
+  std::uint32_t largeCount(FaceId f) const;
+  std::vector<std::uint8_t> count_;                       // #F
+  std::vector<std::uint32_t> blockStart_;                 // #F / 16, rounded up
+  std::vector<std::pair<FaceId, std::uint32_t>> large_;  // faces of kLarge or more fragments, by face
+};
+
 /// Restricted trilinear B-splines on the cut surface. Element functions of element e are its
 /// voxel's 8 corners, numbered k = kx + 2 ky + 4 kz (voxel_clip.h). Holds a reference to the
 /// mesh (evaluation): it must outlive the basis.
@@ -164,7 +189,7 @@ class VoxelBasis final : public Basis {
   double regularization_ = 0.0;
   std::uint32_t joinedDomains_ = 0;
   std::vector<std::uint32_t> elementDomain_;      // 8 #elements
-  std::vector<std::uint32_t> faceFragmentStart_;  // #F + 1
+  FragmentRanges faceFragments_;                  // #F (empty out of core)
   std::vector<std::uint32_t> fragmentElement_;    // #fragments, ordered by face
   std::vector<VoxelCoord> basisCorner_;           // #basis functions
 };
