@@ -550,23 +550,31 @@ RegionSolution solveInSplines(const RegionProblem& p, const Reduction& system, c
   std::vector<Complex> x = inputUnknowns(p, system);
   const std::uint32_t np = system.numPositional, m = space.numColumns;
   if (m > 0) {
-    const LinearSystem ls = assembleSystem(p.basis, system);
-    const ComplexSparse K = ls.lower.selfadjointView<Eigen::Lower>();
-    std::vector<ComplexTriplet> triplets;
-    triplets.reserve(space.column.size());
-    for (std::uint32_t j = 0; j < np; ++j) {
-      for (std::uint64_t k = space.rowStart[j]; k < space.rowStart[j + 1]; ++k) {
-        triplets.emplace_back(static_cast<int>(j), static_cast<int>(space.column[k]), space.value[k]);
-      }
-    }
+    // Only P, the reduced lower triangle and b outlive their block into the factorization: the
+    // largest groups' solves run at the in-memory pipeline's peak, two at a time.
     ComplexSparse P(static_cast<int>(np), static_cast<int>(m));
-    P.setFromTriplets(triplets.begin(), triplets.end());
-    ComplexVector x0(np);
-    for (std::uint32_t j = 0; j < np; ++j) x0[j] = x[j];
-    const ComplexSparse PH = P.adjoint();
-    const ComplexSparse A = PH * K * P;
-    const ComplexVector b = PH * (ls.rhs - K * x0);
-    ComplexSparse lower = A.triangularView<Eigen::Lower>();
+    {
+      std::vector<ComplexTriplet> triplets;
+      triplets.reserve(space.column.size());
+      for (std::uint32_t j = 0; j < np; ++j) {
+        for (std::uint64_t k = space.rowStart[j]; k < space.rowStart[j + 1]; ++k) {
+          triplets.emplace_back(static_cast<int>(j), static_cast<int>(space.column[k]), space.value[k]);
+        }
+      }
+      P.setFromTriplets(triplets.begin(), triplets.end());
+    }
+    ComplexSparse lower;
+    ComplexVector b;
+    {
+      const LinearSystem ls = assembleSystem(p.basis, system);
+      const ComplexSparse K = ls.lower.selfadjointView<Eigen::Lower>();
+      ComplexVector x0(np);
+      for (std::uint32_t j = 0; j < np; ++j) x0[j] = x[j];
+      const ComplexSparse PH = P.adjoint();
+      const ComplexSparse A = PH * K * P;
+      b = PH * (ls.rhs - K * x0);
+      lower = A.triangularView<Eigen::Lower>();
+    }
     for (int i = 0; i < static_cast<int>(m); ++i) {
       Complex& diagonal = lower.coeffRef(i, i);
       diagonal = diagonal.real() > 0.0 ? Complex(diagonal.real() * (1.0 + 1e-9), 0.0) : Complex(1.0, 0.0);
