@@ -215,10 +215,7 @@ bool parseScanNoise(Args& args, ScanNoiseOptions& options) {
   }
   options.spikes = static_cast<std::uint32_t>(spikes);
   options.folds = static_cast<std::uint32_t>(folds);
-  options.tangential = args.number("noise-tangential", 1.0);
-  if (!(options.tangential >= 0.0 && options.tangential <= 1.0)) {
-    throw UsageError("--noise-tangential must be between 0 and 1 (the tangential share of --noise)");
-  }
+  options.tangential = args.number("noise-tangential", 1.0, 0.0, 1.0);
   return options.amplitude > 0.0 || spikes > 0 || folds > 0;
 }
 

@@ -246,20 +246,14 @@ bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourN
     const double c = m.dot(n);
     // A neighbour's direction in this face's plane. Nearly coplanar (c >= kProjectCosine): its
     // projection, (x, y) = (d.u, d.v), whose angle differs from the rotated direction's by at
-    // most 1.5 degrees there. Tilted further (a fold of the surface): the rotation about the
-    // shared edge, inline (rotateBetween).
+    // most 1.5 degrees there. Tilted further (a fold of the surface): the rotation between the
+    // normals.
     double x, y;
     if (c >= kProjectCosine) {
       x = d.dot(u);
       y = d.dot(v);
     } else {
-      Vec3d w;
-      if (c > -1.0 + 1e-9) {
-        const Vec3d k = m.cross(n);
-        w = c * d + k.cross(d) + (k.dot(d) / (1.0 + c)) * k;
-      } else {
-        w = rotateBetween(m, n, d);
-      }
+      const Vec3d w = rotateBetween(m, n, d);
       x = w.dot(u);
       y = w.dot(v);
     }
