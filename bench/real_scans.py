@@ -2,6 +2,8 @@
 """The default `param` on real meshes at scan size, with and without scan noise (issue #15's
 targets: noisy <= 60 s and <= 2 GB with no stage above a quarter of the total, clean <= 45 s and
 <= 1.8 GB; flipped faces <= 0.01% and at most 1% of the vertices refined in the hat basis on both).
+The wound column counts vertices the map winds around twice (a fold no flipped face shows); the
+issue sets no target for it.
 
     python3 bench/real_scans.py SEAMVOX DATA_DIR OUT_DIR [--noise A] [--noise-tangential F]
                                 [--no-check] [--only NAME,...]
@@ -94,15 +96,15 @@ def main():
     check = "--no-check" not in sys.argv
     os.makedirs(os.path.join(out, "runs"), exist_ok=True)
     print("| input | faces | time s | peak MiB | cones (before merging) | hat-refined | flips before repair "
-          "-> after | stretched | gradient error | largest stage | check | misses |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "-> after | stretched | wound | gradient error | largest stage | check | misses |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for label, path in inputs(seamvox, data, out, noise, tangential, only):
         tag = label.replace(" ", "_")
         report = os.path.join(out, "runs", f"{tag}.json")
         mapped = os.path.join(out, "map.ply")
         done = run([seamvox, "param", path, "-o", mapped, "--report", report, "--quiet"], check=False)
         if done.returncode != 0:
-            print(f"| {label} | - | failed (exit {done.returncode}) | | | | | | | | | |", flush=True)
+            print(f"| {label} | - | failed (exit {done.returncode}) | | | | | | | | | | |", flush=True)
             continue
         with open(report) as f:
             r = json.load(f)
@@ -117,6 +119,7 @@ def main():
         print(f"| {label} | {r['faces']:,} | {r['seconds']['total']:.1f} | {r['peakResidentBytes'] / 2**20:,.0f} "
               f"| {r['cones']} ({r['conesBeforeMerge']}) | {100 * rf.get('refinedFractionOffIslands', 0.0):.3f}% "
               f"| {u.get('flippedBefore', 0):,} -> {q['flipped']:,} | {q['stretched']} "
+              f"| {'-' if q.get('wound') is None else q['wound']} "
               f"| {q['relativeGradientError']:.4f} | {stage['name']} {stage['seconds']:.1f} s ({100 * share:.0f}%) "
               f"| {'-' if checked is None else ('seamless' if checked else 'NOT seamless')} "
               f"| {', '.join(misses(r, 'noise' in label, checked)) or 'none'} |", flush=True)

@@ -19,6 +19,12 @@ std::string checkReportJson(const std::string& mesh, const CheckResult& r,
   j.key("flipped").value(r.map.flipped).key("flippedFraction").value(r.map.flippedFraction);
   j.key("collapsed").value(r.map.collapsed);
   j.key("stretched").value(r.map.stretched);
+  j.key("wound");
+  if (r.map.woundCounted) {
+    j.value(r.map.wound);
+  } else {
+    j.null();  // out of core: not counted
+  }
   j.key("edgeLength").value(r.map.edgeLength);
   j.key("relativeGradientError");
   if (r.hasField) {

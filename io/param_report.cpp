@@ -157,6 +157,12 @@ void writeQuality(JsonWriter& j, const PipelineResult& r) {
   j.key("flippedFolded").value(r.mapQuality.flippedFolded);
   j.key("collapsed").value(r.mapQuality.collapsed);
   j.key("stretched").value(r.mapQuality.stretched);
+  j.key("wound");
+  if (r.mapQuality.woundCounted) {
+    j.value(r.mapQuality.wound);
+  } else {
+    j.null();  // out of core: not counted
+  }
   j.endObject();
 }
 

@@ -230,5 +230,81 @@ TEST(MapMetrics, CollapsesBetweenCoincidentConesAreCountedApart) {
   EXPECT_THROW(measureMap(mesh, wedges(mesh, uv), nullptr, h, &badCones), InputError);
 }
 
+// A planar fan of n triangles around vertex 0 mapped by z -> z^s (ring vertex j at angle
+// s 2 pi j / n): every triangle positive, the angles at the centre summing to 2 pi s. With
+// `seam`, the second half of the triangles has its values in another chart (i q + t), as across
+// a seam: the angles do not change.
+struct Fan {
+  TriangleMesh mesh;
+  Topology topology;
+  WedgeMap uv;
+};
+Fan powerFan(int n, double s, bool seam) {
+  Fan fan;
+  fan.mesh.positions.push_back(Vec3f(0, 0, 0));
+  for (int j = 0; j < n; ++j) {
+    const double a = 2.0 * M_PI * j / n;
+    fan.mesh.positions.push_back(Vec3f(float(std::cos(a)), float(std::sin(a)), 0));
+  }
+  std::vector<Vec2d> values;
+  for (int j = 0; j < n; ++j) {
+    const VertexId a = 1 + j, b = 1 + (j + 1) % n;
+    fan.mesh.triangles.push_back(Triangle{0, a, b});
+    for (VertexId v : {VertexId(0), a, b}) {
+      const double turn = v == 0 ? 0.0 : s * 2.0 * M_PI * (v == b && j + 1 == n ? n : v - 1) / n;
+      Complex q = v == 0 ? Complex(0, 0) : std::polar(1.0, turn);
+      if (seam && 2 * j >= n) q = Complex(0, 1) * q + Complex(3, 5);
+      values.emplace_back(q.real(), q.imag());
+    }
+  }
+  fan.topology = Topology::build(fan.mesh.triangles, fan.mesh.numVertices());
+  fan.uv = WedgeMap::fromCorners(fan.mesh.triangles, values);
+  return fan;
+}
+
+// The angle sum is 2 pi at a regular vertex, 2 pi - k pi / 2 at a cone and 4 pi where the map
+// winds twice with no face flipped: only that counts as wound, and only at interior vertices.
+TEST(MapMetrics, VerticesTheMapWindsAroundTwiceAreCounted) {
+  for (bool seam : {false, true}) {
+    for (const auto& [s, wound] : {std::pair{1.0, false}, {0.25, false}, {0.75, false}, {1.75, false},
+                                   {2.0, true}, {2.5, true}}) {
+      const Fan fan = powerFan(12, s, seam);
+      EXPECT_NEAR(cornerAngleSum(fan.topology, fan.uv, 0), 2.0 * M_PI * s, 1e-9) << s;
+      EXPECT_EQ(woundVertices(fan.topology, fan.uv), wound ? std::vector<VertexId>{0} : std::vector<VertexId>{})
+          << "power " << s << (seam ? " across a seam" : "");
+      const MapQuality q = measureMap(fan.mesh, fan.uv, nullptr, 1.0, nullptr, &fan.topology);
+      EXPECT_EQ(q.flipped, 0u) << s;
+      EXPECT_TRUE(q.woundCounted);
+      EXPECT_EQ(q.wound, wound ? 1u : 0u) << s;
+      EXPECT_FALSE(measureMap(fan.mesh, fan.uv, nullptr, 1.0).woundCounted);
+    }
+  }
+  // A linear map of a grid: 2 pi at every interior vertex, none wound.
+  const TriangleMesh grid = testing::gridMesh(6, 6, 1.0);
+  const Topology topology = Topology::build(grid.triangles, grid.numVertices());
+  const WedgeMap uv = wedges(grid, linearUV(grid, Complex(0.3, 2.0)));
+  std::uint32_t interior = 0;
+  for (VertexId v = 0; v < grid.numVertices(); ++v) {
+    if (topology.isBoundaryVertex(v)) continue;
+    ++interior;
+    EXPECT_NEAR(cornerAngleSum(topology, uv, v), 2.0 * M_PI, 1e-9) << v;
+  }
+  EXPECT_EQ(interior, 25u);
+  EXPECT_TRUE(woundVertices(topology, uv).empty());
+  // Every neighbour of an interior vertex on its value (collapsed faces): no angle, not wound
+  // (atan2 of the zero edges' signed zeros would add +-pi per corner).
+  std::vector<Vec2d> collapsed = linearUV(grid, Complex(1, 0));
+  const VertexId centre = 3 * 7 + 3;
+  for (CornerId c = 0; c < collapsed.size(); ++c) {
+    for (VertexId w : grid.triangles[c / 3]) {
+      if (w == centre) collapsed[c] = Vec2d(-0.0, 0.0);
+    }
+  }
+  const WedgeMap point = wedges(grid, collapsed);
+  EXPECT_EQ(cornerAngleSum(topology, point, centre), 0.0);
+  EXPECT_TRUE(woundVertices(topology, point).empty());
+  EXPECT_THROW(woundVertices(topology, WedgeMap({0, 0, 0}, {Vec2d::Zero()})), InputError);
+}
+
 }  // namespace
 }  // namespace seamvox

@@ -489,11 +489,13 @@ std::vector<std::pair<std::string, TriangleMesh>> awkwardMeshes() {
           {"unwelded", unwelded},     {"unwelded grid with fin", unweldedSeamWithFin()}};
 }
 
-/// check's verdict on a file (tools/cmd_check.cpp): read with UVs, clean, seams from the UVs.
-bool checkFindsSeamless(const std::string& path) {
+/// check's verdict on a file (tools/cmd_check.cpp): read with UVs, clean, seams from the UVs;
+/// and the vertices it finds wound.
+bool checkFindsSeamless(const std::string& path, std::size_t* wound = nullptr) {
   ReadOptions options;
   options.readUV = true;
   CleanResult clean = cleanMesh(readMesh(path, options));
+  if (wound) *wound = woundVertices(clean.topology, clean.mesh.cornerUV).size();
   return measureSeamsFromUV(clean.mesh, clean.topology, clean.mesh.cornerUV).isSeamless();
 }
 
@@ -516,7 +518,10 @@ TEST(ValidMeshes, ParamVerdictIsCheckVerdictForEverySolverAndFormat) {
         WriteOptions options;
         options.binary = format.binary;
         writeMesh(path, r.mesh, options);
-        EXPECT_EQ(checkFindsSeamless(path), r.isSeamless()) << what;
+        std::size_t wound = 0;
+        EXPECT_EQ(checkFindsSeamless(path, &wound), r.isSeamless()) << what;
+        EXPECT_TRUE(r.mapQuality.woundCounted) << what;
+        EXPECT_EQ(wound, r.mapQuality.wound) << what;
         if (format.ext != std::string(".drc")) {
           // The non-manifold splits are in the file: one vertex per written vertex.
           EXPECT_EQ(readMesh(path).numVertices(), r.mesh.numVertices()) << what;

@@ -105,6 +105,10 @@ void printText(const std::string& path, const CheckFigures& c) {
               static_cast<unsigned long long>(map.flipped), 100.0 * map.flippedFraction,
               static_cast<unsigned long long>(map.collapsed), static_cast<unsigned long long>(map.stretched),
               map.edgeLength);
+  if (map.woundCounted) {
+    std::printf("wound %llu (interior vertices the map winds around twice or more)\n",
+                static_cast<unsigned long long>(map.wound));
+  }
   if (c.result.hasField) std::printf("relative gradient error %.6f\n", map.relativeGradientError);
   if (c.outOfCore) {
     std::printf("path out of core: estimate %s above the budget %s; positions %s; scratch peak %s; %s; peak memory %s\n",

@@ -111,12 +111,16 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   if (r.size.attributeBytes > 0) {
     std::printf("vertex properties: %s, %.1f MB\n", r.size.attributes.c_str(), r.size.attributeBytes / 1048576.0);
   }
+  char wound[48] = "";
+  if (r.mapQuality.woundCounted) {
+    std::snprintf(wound, sizeof wound, ", wound %llu", static_cast<unsigned long long>(r.mapQuality.wound));
+  }
   std::printf("seam residual %.3g, integer distance %.3g, gradient error %.4f, flipped %llu, "
-              "collapsed %llu, stretched %llu: %s\n",
+              "collapsed %llu, stretched %llu%s: %s\n",
               r.seamQuality.maxResidual, r.seamQuality.maxIntegerDistance,
               r.mapQuality.relativeGradientError, static_cast<unsigned long long>(r.mapQuality.flipped),
               static_cast<unsigned long long>(r.mapQuality.collapsed),
-              static_cast<unsigned long long>(r.mapQuality.stretched),
+              static_cast<unsigned long long>(r.mapQuality.stretched), wound,
               r.isSeamless() ? "seamless" : "NOT seamless");
   const RefineStats& refine = r.solved.refine;
   if (r.solved.refined) {

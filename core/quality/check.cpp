@@ -28,7 +28,7 @@ CheckResult checkParameterization(TriangleMesh raw, const CheckOptions& options)
   CheckResult r;
   r.faces = mesh.numFaces();
   r.seams = measureSeamsFromUV(mesh, clean.topology, mesh.cornerUV);
-  r.map = measureMap(mesh, mesh.cornerUV, hasField ? &field : nullptr, options.edgeLength);
+  r.map = measureMap(mesh, mesh.cornerUV, hasField ? &field : nullptr, options.edgeLength, nullptr, &clean.topology);
   r.hasField = hasField;
   r.tolerance = options.tolerance;
   r.isSeamless = r.seams.isSeamless(options.tolerance);

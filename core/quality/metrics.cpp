@@ -363,6 +363,35 @@ double gradientNormSquared(const std::array<Vec3d, 3>& p, const std::array<Vec2d
   return gradientNormSquared(measureFace(p.data(), c, nullptr));
 }
 
+double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, VertexId v) {
+  double sum = 0.0;
+  topology.forEachCornerAround(v, [&](CornerId c) {
+    const Vec2d q = cornerUV[c];
+    const Vec2d a = cornerUV[nextCorner(c)] - q, b = cornerUV[prevCorner(c)] - q;
+    // A corner on a collapsed edge has no angle (atan2 of signed zeros would give +-pi).
+    if (a == Vec2d::Zero() || b == Vec2d::Zero()) return;
+    sum += std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+  });
+  return sum;
+}
+
+std::vector<VertexId> woundVertices(const Topology& topology, const WedgeMap& cornerUV) {
+  checkCorners(cornerUV, 3 * static_cast<std::size_t>(topology.numFaces()), "metrics");
+  const std::uint32_t nv = topology.numVertices();
+  constexpr std::uint32_t kBlock = 1u << 16;  // fixed blocks: the list comes out in vertex order
+  std::vector<std::vector<VertexId>> found((std::uint64_t(nv) + kBlock - 1) / kBlock);
+  parallelForEach(found.size(), 1, [&](std::uint64_t b) {
+    const VertexId end = static_cast<VertexId>(std::min<std::uint64_t>(nv, (b + 1) * kBlock));
+    for (VertexId v = static_cast<VertexId>(b * kBlock); v != end; ++v) {
+      if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) continue;
+      if (cornerAngleSum(topology, cornerUV, v) >= kWoundAngleSum) found[b].push_back(v);
+    }
+  });
+  std::vector<VertexId> out;
+  for (const std::vector<VertexId>& block : found) out.insert(out.end(), block.begin(), block.end());
+  return out;
+}
+
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
                       const std::vector<VertexId>* cones, const Topology* topology,
@@ -383,6 +412,10 @@ MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                                   ? std::sqrt(sums.error / sums.target)
                                   : std::numeric_limits<double>::quiet_NaN();
   countFaceKinds(mesh, kind, field, topology, out, flippedFaces);
+  if (topology) {
+    out.wound = woundVertices(*topology, cornerUV).size();
+    out.woundCounted = true;
+  }
   return out;
 }
 

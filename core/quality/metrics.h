@@ -120,6 +120,10 @@ struct MapQuality {
   std::uint64_t collapsedAtCones = 0;
   /// Neither flipped nor collapsed, stretched (isStretched) by the map.
   std::uint64_t stretched = 0;
+  /// Interior vertices the map winds around twice or more (woundVertices): a fold that no flipped
+  /// face shows. Counted when measureMap has the topology (woundCounted), else 0.
+  std::uint64_t wound = 0;
+  bool woundCounted = false;
   double flippedFraction = 0.0;
   /// sqrt(sum A |grad q - w/h|^2 / sum A |w/h|^2), w the nearest of the 4 cross directions;
   /// NaN without a field.
@@ -127,10 +131,25 @@ struct MapQuality {
   double edgeLength = 0.0;  ///< h used (given, or fitted by least squares when given <= 0)
 };
 
+/// The signed (u, v) angles of the corners at interior vertex v summed, each in its own face's
+/// chart: 2 pi w at a regular vertex the map winds around w times (the fan's triangles all
+/// positive: w >= 1), 2 pi - k pi / 2 at a cone of index k / 4 wound once. A corner with an edge
+/// of zero length in (u, v) (a collapsed face) adds nothing.
+double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, VertexId v);
+/// An interior vertex whose corner angles sum to at least this (3.75 pi) is wound: the map covers
+/// the plane around it twice or more. A foldover repair that counts only flipped faces can end
+/// there: moving a vertex into the kernel of a fan that winds twice unflips every face and
+/// leaves a branch point (next to a cone, whose own angle drops by 2 pi). A cone of index -1 or
+/// below (angle 4 pi or more) counts too: a file alone cannot tell it from a fold.
+constexpr double kWoundAngleSum = 3.75 * 3.14159265358979323846;
+/// Interior vertices wound by the map (kWoundAngleSum), increasing. Linear, parallel.
+std::vector<VertexId> woundVertices(const Topology& topology, const WedgeMap& cornerUV);
+
 /// Flips, collapses and the gradient error against a field (may be null) for target spacing h
 /// (<= 0: fitted); with the cones (vertex ids, e.g. CutResult::cones) also collapsedAtCones.
 /// Linear, parallel.
-/// The topology is needed only for a field whose framePositions were released (facesFoldedIn3D).
+/// With the topology also the wound vertices (woundVertices); the field's folds need it when its
+/// framePositions were released (facesFoldedIn3D).
 /// flippedFaces (when given) receives the flipped faces, increasing.
 MapQuality measureMap(const TriangleMesh& mesh, const WedgeMap& cornerUV,
                       const CrossField* field, double edgeLength,
