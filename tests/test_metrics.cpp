@@ -269,7 +269,7 @@ TEST(MapMetrics, VerticesTheMapWindsAroundTwiceAreCounted) {
     for (const auto& [s, wound] : {std::pair{1.0, false}, {0.25, false}, {0.75, false}, {1.75, false},
                                    {2.0, true}, {2.5, true}}) {
       const Fan fan = powerFan(12, s, seam);
-      EXPECT_NEAR(cornerAngleSum(fan.topology, fan.uv, 0), 2.0 * M_PI * s, 1e-9) << s;
+      EXPECT_NEAR(cornerAngleSum(fan.topology, fan.uv, 0), 2.0 * M_PI * s, 1e-4) << s;
       EXPECT_EQ(woundVertices(fan.topology, fan.uv), wound ? std::vector<VertexId>{0} : std::vector<VertexId>{})
           << "power " << s << (seam ? " across a seam" : "");
       const MapQuality q = measureMap(fan.mesh, fan.uv, nullptr, 1.0, nullptr, &fan.topology);
@@ -287,7 +287,7 @@ TEST(MapMetrics, VerticesTheMapWindsAroundTwiceAreCounted) {
   for (VertexId v = 0; v < grid.numVertices(); ++v) {
     if (topology.isBoundaryVertex(v)) continue;
     ++interior;
-    EXPECT_NEAR(cornerAngleSum(topology, uv, v), 2.0 * M_PI, 1e-9) << v;
+    EXPECT_NEAR(cornerAngleSum(topology, uv, v), 2.0 * M_PI, 1e-4) << v;
   }
   EXPECT_EQ(interior, 25u);
   EXPECT_TRUE(woundVertices(topology, uv).empty());

@@ -363,6 +363,24 @@ double gradientNormSquared(const std::array<Vec3d, 3>& p, const std::array<Vec2d
   return gradientNormSquared(measureFace(p.data(), c, nullptr));
 }
 
+namespace {
+
+// atan2(y, x) within 2e-6 rad (octant reduction and an odd polynomial of degree 11 for atan on [0, 1]),
+// several times cheaper than std::atan2: a pass over every vertex's fan sums tens of millions.
+// A straight corner (y = 0, x < 0) is pi whatever the sign of the zero.
+double fastAtan2(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double big = std::max(ax, ay);
+  if (big == 0.0) return 0.0;
+  const double a = std::min(ax, ay) / big, s = a * a;
+  double r = a * (0.99997726 + s * (-0.33262347 + s * (0.19354346 + s * (-0.11643287 + s * (0.05265332 - s * 0.0117212)))));
+  if (ay > ax) r = 1.5707963267948966 - r;
+  if (x < 0.0) r = 3.141592653589793 - r;
+  return y < 0.0 ? -r : r;
+}
+
+}  // namespace
+
 double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, VertexId v) {
   double sum = 0.0;
   topology.forEachCornerAround(v, [&](CornerId c) {
@@ -370,7 +388,7 @@ double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, Vertex
     const Vec2d a = cornerUV[nextCorner(c)] - q, b = cornerUV[prevCorner(c)] - q;
     // A corner on a collapsed edge has no angle (atan2 of signed zeros would give +-pi).
     if (a == Vec2d::Zero() || b == Vec2d::Zero()) return;
-    sum += std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    sum += fastAtan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
   });
   return sum;
 }
@@ -383,8 +401,11 @@ std::vector<VertexId> woundVertices(const Topology& topology, const WedgeMap& co
   parallelForEach(found.size(), 1, [&](std::uint64_t b) {
     const VertexId end = static_cast<VertexId>(std::min<std::uint64_t>(nv, (b + 1) * kBlock));
     for (VertexId v = static_cast<VertexId>(b * kBlock); v != end; ++v) {
-      if (topology.isIsolatedVertex(v) || topology.isBoundaryVertex(v)) continue;
-      if (cornerAngleSum(topology, cornerUV, v) >= kWoundAngleSum) found[b].push_back(v);
+      if (topology.isIsolatedVertex(v)) continue;
+      // The walk from vertexCorner covers a boundary fan too: its sum is tested first (cheaper).
+      if (cornerAngleSum(topology, cornerUV, v) >= kWoundAngleSum && !topology.isBoundaryVertex(v)) {
+        found[b].push_back(v);
+      }
     }
   });
   std::vector<VertexId> out;

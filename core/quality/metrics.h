@@ -133,8 +133,8 @@ struct MapQuality {
 
 /// The signed (u, v) angles of the corners at interior vertex v summed, each in its own face's
 /// chart: 2 pi w at a regular vertex the map winds around w times (the fan's triangles all
-/// positive: w >= 1), 2 pi - k pi / 2 at a cone of index k / 4 wound once. A corner with an edge
-/// of zero length in (u, v) (a collapsed face) adds nothing.
+/// positive: w >= 1), 2 pi - k pi / 2 at a cone of index k / 4 wound once; each angle within
+/// 2e-6 rad. A corner with an edge of zero length in (u, v) (a collapsed face) adds nothing.
 double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, VertexId v);
 /// An interior vertex whose corner angles sum to at least this (3.75 pi) is wound: the map covers
 /// the plane around it twice or more. A foldover repair that counts only flipped faces can end
