@@ -119,6 +119,7 @@ void writeUntangle(JsonWriter& j, const UntangleStats& u) {
   j.key("patchFaces").value(u.patchFaces).key("freeVertices").value(U64{u.freeVertices});
   j.key("largestUnknowns").value(U64{u.largestUnknowns});
   j.key("relocatedVertices").value(U64{u.relocatedVertices}).key("jointVertices").value(U64{u.jointVertices});
+  j.key("miswoundCones").value(U64{u.miswoundCones}).key("miswoundConesAfter").value(U64{u.miswoundConesAfter});
   j.key("specks").value(U64{u.specks}).key("speckFaces").value(u.speckFaces);
   j.key("leftover").beginObject();
   j.key("flips").value(u.leftoverFlips).key("regionFaces").value(u.leftoverRegionFaces);

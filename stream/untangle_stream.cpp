@@ -131,10 +131,15 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
   // The window: the rings of every patch round (as untangleFlips sizes them: a round's seeds lie
   // in the patches before it) and of the joint step, halved while the window is too large.
   std::uint32_t rings = (options.jointRings >= 2 ? options.jointRings : 0) + 1;
+  const auto ringsFor = [&](double radius) {
+    return static_cast<std::uint32_t>(std::clamp(meanEdge > 0.0 ? std::ceil(radius * h / meanEdge) : 2.0, 2.0, 64.0));
+  };
   for (std::uint32_t round = 0; round < std::min(options.maxRounds, 8u); ++round) {
-    const double radius = options.patchRadius * double(1u << round);
-    rings += static_cast<std::uint32_t>(std::clamp(meanEdge > 0.0 ? std::ceil(radius * h / meanEdge) : 2.0, 2.0, 64.0));
+    rings += ringsFor(options.patchRadius * double(1u << round));
   }
+  // The cones' own re-solves: a cone within coneRepairRadius of a flip, its patch grown twice
+  // from it (the second time from the flips the first reached).
+  if (options.coneRepairRadius > 0.0) rings += ringsFor(options.coneRepairRadius) + 2 * ringsFor(4.0 * options.coneRepairRadius);
   // The flips lie far apart over the mesh: the window's walks read small pages, and a growth
   // stops as soon as it passes the cap (that many rings would be halved anyway).
   const std::uint64_t cap = std::max<std::uint64_t>(8 * options.minPatchFaces, pass.memoryBytes >> 10);

@@ -175,10 +175,12 @@ TEST(Cli, ParamRetriesAPassWhoseRepairLeavesFlipsAtCloseCones) {
   TempDir dir;
   const std::string noisy = dir.path("noisy.ply"), output = dir.path("o.ply"), report = dir.path("r.json");
   run("subdivide " + scan + " --levels 1 --noise 0.3 -o " + noisy + " --quiet", 0);
-  // Without the smoothed evaluation and the hat re-solve of the repair's leftovers, which both
-  // remove the flips at close cones on this scan before a retry would be needed.
+  // Without the smoothed evaluation, the hat re-solve of the repair's leftovers and the cones'
+  // own re-solves, which all remove the flips at close cones on this scan before a retry would
+  // be needed.
   const std::string common =
-      " --solver voxloc --merge-cones 0.25 --cells 150 --no-smoothed-evaluation --no-leftover-resolve --quiet";
+      " --solver voxloc --merge-cones 0.25 --cells 150 --no-smoothed-evaluation --no-leftover-resolve"
+      " --no-cone-resolve --quiet";
   const std::string out = run("param " + noisy + " -o " + output + common + " --report " + report, 0);
   EXPECT_TRUE(contains(out, ": seamless")) << out;
   const std::string check = run("check " + output, 0);

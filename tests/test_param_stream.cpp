@@ -180,6 +180,7 @@ TEST(ParamStream, FlipsTheRepairLeavesAreResolvedInTheHatBasisAsInMemory) {
   still.maxRounds = 0;
   still.relocationPasses = 0;
   still.jointRings = 0;
+  still.coneRepairRadius = 0.0;
   testing::TempDir dir;
   TriangleMesh cleaned;
   {

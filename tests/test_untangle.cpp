@@ -591,6 +591,38 @@ std::vector<std::pair<VertexId, std::uint32_t>> ringsAround(const TriangleMesh& 
   return out;
 }
 
+// The hat map of the shared armadillo and rocker arm leaves valence-5 cones at 90 degrees, the
+// map folded beside them. Without the cones' own re-solves the repair unfolds that only by
+// winding a neighbour twice (no face flipped, a vertex the map covers twice); with them every
+// such cone is opened to its 450 degrees and nothing is wound.
+TEST(Untangle, ConesLeftAFullTurnShortAreReSolvedNotWound) {
+  std::size_t meshes = 0;
+  for (const char* name : {"armadillo.obj", "rocker-arm.obj"}) {
+    const std::string path = testing::sharedMesh(name);
+    if (path.empty()) {
+      std::printf("skipping %s: %s\n", name, testing::missingSharedMessage(name).c_str());
+      continue;
+    }
+    SCOPED_TRACE(name);
+    ++meshes;
+    PipelineOptions options;
+    options.solver.solver = ParamSolver::Hat;
+    const PipelineResult fixed = parameterize(readMesh(path), options);
+    EXPECT_GT(fixed.untangle.miswoundCones, 0u);
+    EXPECT_EQ(fixed.untangle.miswoundConesAfter, 0u);
+    EXPECT_EQ(fixed.mapQuality.flipped, 0u);
+    EXPECT_TRUE(fixed.mapQuality.woundCounted);
+    EXPECT_EQ(fixed.mapQuality.wound, 0u);
+    EXPECT_TRUE(fixed.isSeamless());
+    options.untangleOptions.coneRepairRadius = 0.0;
+    const PipelineResult off = parameterize(readMesh(path), options);
+    EXPECT_GT(off.untangle.miswoundConesAfter, 0u);
+    EXPECT_TRUE(off.isSeamless());
+  }
+  if (meshes == 0) GTEST_SKIP() << "no shared mesh";
+}
+
+
 TEST(Untangle, JointPatchesUnfoldAMirroredDiskThatRelocationCannot) {
   // A disk of two rings mirrored in (u, v): its inner fans are reversed, so no vertex alone has a
   // kernel to move into. Relocation alone leaves flips; the joint patches move the disk's

@@ -61,6 +61,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.greedyRounding = args.flag("greedy");
   o.untangle = !args.flag("no-untangle");
   if (args.flag("no-leftover-resolve")) o.untangleOptions.leftoverRadius = 0.0;
+  if (args.flag("no-cone-resolve")) o.untangleOptions.coneRepairRadius = 0.0;
   o.solver.smoothedEvaluation = !args.flag("no-smoothed-evaluation");
   o.features.alignBoundary = args.flag("align-boundary");
   o.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
@@ -153,6 +154,10 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
                 static_cast<unsigned long long>(r.untangle.foldedIn3D),
                 static_cast<unsigned long long>(r.untangle.patchFaces), r.untangle.solves,
                 r.untangle.relocatedVertices, r.untangle.jointVertices, r.untangle.seconds);
+    if (r.untangle.miswoundCones > 0) {
+      std::printf("foldover repair: %u cones a full turn short after its rounds, %u after their own re-solves\n",
+                  r.untangle.miswoundCones, r.untangle.miswoundConesAfter);
+    }
     if (r.untangle.leftoverFlips > 0) {
       std::printf("foldover repair: %llu flips left re-solved in the hat basis (%llu faces, %u vertices), "
                   "%llu flipped after that, then repaired again\n",
@@ -468,7 +473,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--spline-cells N] [--field auto|smooth|proxy|FILE]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F]\n"
-                 "                     [--greedy] [--no-untangle] [--no-leftover-resolve]\n"
+                 "                     [--greedy] [--no-untangle] [--no-leftover-resolve] [--no-cone-resolve]\n"
                  "                     [--no-smoothed-evaluation] [--weld]\n"
                  "                     [--keep-order] [--report R.json]\n"
                  "                     [--render OUT.png] [--report-components N] [--drop-unsolved]\n"
@@ -518,6 +523,11 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      repair leaves, and no second repair after it (by default\n"
                  "                      both run, before any further cone pass; report\n"
                  "                      untangle.leftover)\n"
+                 "  --no-cone-resolve   no re-solves of their own, within 1, 2 and 4 H, for cones the\n"
+                 "                      map leaves a full turn short next to a flip (a valence-5\n"
+                 "                      cone at 90 degrees, the map folded beside it, which the\n"
+                 "                      later steps unfold only by winding a neighbour twice;\n"
+                 "                      report untangle.miswoundCones, miswoundConesAfter)\n"
                  "  --no-smoothed-evaluation\n"
                  "                      vox, voxloc: keep the voxel map at the vertices of the faces\n"
                  "                      it folds (by default re-evaluated at the field's smoothed\n"
@@ -561,7 +571,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                        passes, --quads, --render, --close-holes, features or hat\n"
                  "                        solver yet\n"
                  "  --out-of-core         take the out-of-core path whatever the estimate\n",
-                 {"greedy", "no-untangle", "no-leftover-resolve", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
+                 {"greedy", "no-untangle", "no-leftover-resolve", "no-cone-resolve", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
                  &runParam});
 
 }  // namespace seamvox::cli

@@ -355,6 +355,27 @@ bool becameWorse(int before, int now) {
   return (now != 0 && before == 0) || (now == 2 && before != 2) || (now == 1 && before == 2);
 }
 
+// A cone the map leaves a full turn short or over: its (u, v) angle sum outside [pi, 3 pi] by
+// about a full turn (at most 0.75 pi or at least 3.25 pi; the cut's cones have indices -2..2
+// quarter turns, angles pi to 3 pi). The least-squares map, hat or voxel, leaves many valence-5
+// cones at pi / 2 instead of 5 pi / 2 with the map folded next to them (half of them on fertility
+// x3 in the hat basis, 47 of 107 on armadillo x4); the relocation and joint steps, which move
+// vertices with the cone fixed, unflip such a fold only by winding a neighbour twice
+// (metrics.h woundVertices), and the fold they leave may span a thousand faces.
+// A cone with a corner on a zero-length (u, v) edge (on one point with another cone, its faces
+// collapsed) is not judged: its angle sum misses those corners.
+bool coneMiswound(const Topology& topology, const WedgeMap& uv, VertexId cone) {
+  constexpr double kPi = 3.14159265358979323846;
+  if (topology.isIsolatedVertex(cone) || topology.isBoundaryVertex(cone)) return false;
+  bool degenerate = false;
+  topology.forEachCornerAround(cone, [&](CornerId c) {
+    degenerate = degenerate || uv[nextCorner(c)] == uv[c] || uv[prevCorner(c)] == uv[c];
+  });
+  if (degenerate) return false;
+  const double sum = cornerAngleSum(topology, uv, cone);
+  return sum <= 0.75 * kPi || sum >= 3.25 * kPi;
+}
+
 // The last step: interior vertices of faces still flipped that are not cones and touch no face
 // folded in 3D move toward their fan's kernel (seam vertices with all their wedges), pass after
 // pass; when none can, their neighbours move halfway into their own kernels to make room. A move
@@ -905,6 +926,7 @@ namespace {
 
 /// The work of an earlier repair added to a later one's figures.
 void addRepairWork(UntangleStats& stats, const UntangleStats& earlier) {
+  stats.miswoundCones = std::max(stats.miswoundCones, earlier.miswoundCones);
   stats.solves += earlier.solves;
   stats.patchFaces += earlier.patchFaces;
   stats.freeVertices += earlier.freeVertices;
@@ -1066,6 +1088,32 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   for (FaceId f = 0; f < nf; ++f) stats.flippedBefore += state[f] != kFine;
 
   std::vector<VertexId> moved;
+  // Re-solves a patch: its components are independent (everything around them is locked), so
+  // groups of them are solved in parallel, and a group's factor stays small.
+  const auto solvePatch = [&](const std::vector<FaceId>& patch) {
+    ++stats.rounds;
+    stats.patchFaces += patch.size();
+    const std::vector<std::vector<FaceId>> groups =
+        splitRegion(topology, patch, std::max<std::size_t>(kMinGroupFaces, patch.size() / 8));
+    std::vector<GroupRepair> repairs(groups.size());
+    parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
+      repairs[g] = repairGroup(mesh, topology, field, cut, cornerUV, seamT, groups[g], options);
+    });
+    // One assignment per patch: WedgeMap::assign walks every corner of the map.
+    std::vector<CornerId> corners;
+    std::vector<Vec2d> uv;
+    for (GroupRepair& repair : repairs) {
+      stats.solves += repair.solves;
+      stats.largestUnknowns = std::max(stats.largestUnknowns, repair.unknowns);
+      corners.insert(corners.end(), repair.corners.begin(), repair.corners.end());
+      uv.insert(uv.end(), repair.uv.begin(), repair.uv.end());
+      moved.insert(moved.end(), repair.moved.begin(), repair.moved.end());
+      for (const auto& [seam, t] : repair.seams) seamT[seam] = t;
+      repair = GroupRepair();
+    }
+    cornerUV.assign(corners, uv);
+    classifyPatch(patch);
+  };
   for (std::uint32_t round = 0; round < options.maxRounds; ++round) {
     std::vector<FaceId> seeds;
     for (FaceId f = 0; f < nf; ++f) {
@@ -1085,32 +1133,57 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
       rings = std::max(2u, rings / 2);
       patch = grow();
     }
-    ++stats.rounds;
-    stats.patchFaces += patch.size();
-    // The patch's components are independent (everything around them is locked): groups of them
-    // are re-solved in parallel, and a group's factor stays small.
-    const std::vector<std::vector<FaceId>> groups =
-        splitRegion(topology, patch, std::max<std::size_t>(kMinGroupFaces, patch.size() / 8));
-    std::vector<GroupRepair> repairs(groups.size());
-    parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
-      repairs[g] = repairGroup(mesh, topology, field, cut, cornerUV, seamT, groups[g], options);
-    });
-    // One assignment per round: WedgeMap::assign walks every corner of the map.
-    std::vector<CornerId> corners;
-    std::vector<Vec2d> uv;
-    for (GroupRepair& repair : repairs) {
-      stats.solves += repair.solves;
-      stats.largestUnknowns = std::max(stats.largestUnknowns, repair.unknowns);
-      corners.insert(corners.end(), repair.corners.begin(), repair.corners.end());
-      uv.insert(uv.end(), repair.uv.begin(), repair.uv.end());
-      moved.insert(moved.end(), repair.moved.begin(), repair.moved.end());
-      for (const auto& [seam, t] : repair.seams) seamT[seam] = t;
-      repair = GroupRepair();
-    }
-    cornerUV.assign(corners, uv);
-    classifyPatch(patch);
+    solvePatch(patch);
     reportProgress(options.progress, "untangle", double(round + 1) / options.maxRounds);
   }
+  // Cones the rounds leave a full turn short (coneMiswound) with a flip within coneRepairRadius h
+  // get re-solves of their own, at that radius, twice and four times it, outside the rounds'
+  // budget (a few cones): the budget shrinks a round's patches to a few rings when flips are
+  // many, and only a patch wide enough to spread the cone's rounded position opens the fold. A
+  // patch grows from the cone's fan, then again from it and the flips that growth reached (a fold
+  // may lie off to one side). Only cones near flips: the out-of-core window holds those.
+  const auto coneFan = [&](VertexId c) {
+    std::vector<FaceId> fan;
+    topology.forEachCornerAround(c, [&](CornerId k) {
+      if (!only || (*only)[cornerFace(k)]) fan.push_back(cornerFace(k));
+    });
+    return fan;
+  };
+  const auto judged = [&](VertexId c) {
+    return !(options.pinnedVertices && (*options.pinnedVertices)[c]) && coneMiswound(topology, cornerUV, c);
+  };
+  std::vector<VertexId> targets;
+  if (options.coneRepairRadius > 0.0) {
+    for (VertexId c : cut.cones) {
+      if (!judged(c)) continue;
+      ++stats.miswoundCones;
+      const std::vector<FaceId> fan = coneFan(c);
+      if (fan.empty()) continue;
+      const std::vector<FaceId> near = growFaces(topology, fan, patchRings(mesh, fan, h, options.coneRepairRadius));
+      if (std::any_of(near.begin(), near.end(), [&](FaceId f) { return state[f] == kFlipped; })) targets.push_back(c);
+    }
+  }
+  for (std::uint32_t round = 0; round < 3 && !targets.empty(); ++round) {
+    std::vector<FaceId> seeds;
+    std::vector<VertexId> still;
+    for (VertexId c : targets) {
+      if (!judged(c)) continue;
+      still.push_back(c);
+      for (FaceId f : coneFan(c)) seeds.push_back(f);
+    }
+    targets.swap(still);
+    if (seeds.empty()) break;
+    std::sort(seeds.begin(), seeds.end());
+    seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
+    const std::uint32_t rings = patchRings(mesh, seeds, h, options.coneRepairRadius * double(1u << round));
+    for (FaceId f : growFaces(topology, seeds, rings)) {
+      if (state[f] == kFlipped) seeds.push_back(f);
+    }
+    std::sort(seeds.begin(), seeds.end());
+    seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
+    solvePatch(growFaces(topology, seeds, rings));
+  }
+  for (VertexId c : cut.cones) stats.miswoundConesAfter += judged(c);
   // The faces whose map the last steps changed: the fans of relocated vertices, the joint
   // patches kept.
   std::vector<FaceId> touched;

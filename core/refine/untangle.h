@@ -29,6 +29,12 @@ struct UntangleOptions {
   /// rings at the seeds' mean edge length, at least 2); each further round doubles it.
   double patchRadius = 0.5;
   std::uint32_t maxRounds = 3;    ///< patch rounds (0: only the relocation step below)
+  /// After the rounds: cones the map leaves a full turn short (a valence-5 cone at pi / 2, the
+  /// map folded next to it) are re-solved in patches of this radius (grid spacings h), then twice
+  /// and four times it (at most 64 rings each), outside the rounds' budget; 0: off. Without
+  /// them the later steps unfold such a fold only by winding a neighbour twice (fertility x5:
+  /// 31 such cones, 15 left wound and one fold of 871 faces left flipped).
+  double coneRepairRadius = 1.0;
   std::uint32_t maxSolves = 6;    ///< stiffening re-solves per round (>= 1)
   /// A round's patches hold at most max(minPatchFaces, maxPatchFraction * #F) faces: the radius
   /// shrinks to fit. Unbounded, a 22M-face scan with 9154 flips re-solved 1.7M faces 24 times
@@ -75,7 +81,10 @@ struct UntangleStats {
   std::uint64_t flippedBefore = 0, flippedAfter = 0;  ///< whole map, collapsed faces excluded
   /// Of flippedAfter: folded in 3D against the field's smoothed surface (0 without one).
   std::uint64_t foldedIn3D = 0;
-  std::uint32_t rounds = 0;
+  std::uint32_t rounds = 0;  ///< patch re-solves, the cones' included
+  /// Cones the map left a full turn short after the rounds (the most any of the combined repairs
+  /// found), and after the cones' own re-solves (the last repair's).
+  std::uint32_t miswoundCones = 0, miswoundConesAfter = 0;
   std::uint32_t solves = 0;  ///< stiffening re-solves, summed over the groups of components of each round
   std::uint64_t patchFaces = 0;     ///< faces re-solved, summed over rounds
   std::uint32_t freeVertices = 0;   ///< vertices moved in some round (counted once per round)
