@@ -83,7 +83,8 @@ struct UntangleStats {
   std::uint64_t foldedIn3D = 0;
   std::uint32_t rounds = 0;  ///< patch re-solves, the cones' included
   /// Cones the map left a full turn short after the rounds (the most any of the combined repairs
-  /// found), and after the cones' own re-solves (the last repair's).
+  /// found), and after the cones' own re-solves (the last repair's). Out of core: those of the
+  /// repair's window (the cones near flips), not the whole map's.
   std::uint32_t miswoundCones = 0, miswoundConesAfter = 0;
   std::uint32_t solves = 0;  ///< stiffening re-solves, summed over the groups of components of each round
   std::uint64_t patchFaces = 0;     ///< faces re-solved, summed over rounds
