@@ -11,6 +11,7 @@
 #include "stream/corner_positions.h"
 #include "stream/map_passes.h"
 #include "stream/external_sort.h"
+#include "stream/wound_count.h"
 
 namespace seamvox {
 namespace {
@@ -52,11 +53,22 @@ void measureSeam(const EdgeRecord& c, const EdgeRecord& o, FaceGeometries& geome
 // opposite directions with the most aligned normals first (ties: smaller corners first). Returns
 // false for two sides in the same direction (an orientation clash: cleanMesh would reorient).
 bool measureEdge(const std::vector<EdgeRecord>& sides, FaceGeometries& geometry, SeamQuality& seams,
-                 ExternalSorter<SeamLength>& lengths) {
+                 ExternalSorter<SeamLength>& lengths, FanWoundCounter& wound) {
   bool clash = false;
   const auto glued = glueSides(
       sides, [&](std::size_t i) { return vec3(geometry.at(sides[i].corner()).normal); }, clash);
-  for (const auto& [first, second] : glued) measureSeam(sides[first], sides[second], geometry, seams, lengths);
+  const std::uint32_t low = static_cast<std::uint32_t>(sides[0].edge >> 32), high = static_cast<std::uint32_t>(sides[0].edge);
+  const auto start = [&](const EdgeRecord& side) { return side.forward() ? low : high; };
+  std::vector<std::uint8_t> isGlued(sides.size(), 0);
+  for (const auto& [first, second] : glued) {
+    const EdgeRecord &c = sides[first], &o = sides[second];
+    measureSeam(c, o, geometry, seams, lengths);
+    wound.addGluedSides(start(c), start(o), c.corner(), o.corner(), c.startAngle, o.startAngle);
+    isGlued[first] = isGlued[second] = 1;
+  }
+  for (std::size_t i = 0; i < sides.size(); ++i) {
+    if (!isGlued[i]) wound.addSide(start(sides[i]), sides[i].corner(), sides[i].startAngle);
+  }
   return !clash;
 }
 
@@ -67,7 +79,8 @@ std::uint64_t mapCheckScratchBytes(std::uint64_t vertices, std::uint64_t faces) 
   // file with the runs of the corner requests and positions: an upper bound of the peak.
   return vertices * sizeof(Vec3f) +
          faces * (sizeof(FaceRecord) + sizeof(FaceArea) + sizeof(FaceGeometry) + sizeof(DuplicateKey) + 3 * sizeof(EdgeRecord) +
-                  3 * (sizeof(corner_detail::CornerRequest) + sizeof(corner_detail::CornerPosition)));
+                  3 * (sizeof(corner_detail::CornerRequest) + sizeof(corner_detail::CornerPosition)) +
+                  kFanWoundBytesPerFace);
 }
 
 MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options) {
@@ -75,14 +88,14 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   ScratchFolder scratch(options.scratchParent,
                         mapCheckScratchBytes(stream.declaredVertices(), stream.expectedTriangles()));
   if (options.onScratch) options.onScratch(scratch);
-  std::uint64_t sortMemory = options.memoryBytes / 4;  // up to four sorts alive at a time
+  std::uint64_t sortMemory = options.memoryBytes / 5;  // up to five sorts alive at a time
   auto sortOptions = [&](const char* stage) {
     return ExternalSortOptions{std::max<std::uint64_t>(sortMemory, kMinimumSortBytes), stage};
   };
 
   // Positions in memory when they take at most half the memory; the sorts share the rest.
   CornerPositions positions(name, scratch, stream.declaredVertices(), options.memoryBytes / 2, sortOptions("corners"));
-  if (positions.inMemory()) sortMemory -= stream.declaredVertices() * sizeof(Vec3f) / 4;
+  if (positions.inMemory()) sortMemory -= stream.declaredVertices() * sizeof(Vec3f) / 5;
   auto duplicateKeys = std::make_unique<ExternalSorter<DuplicateKey>>(scratch, sortOptions("duplicates"));
   MapCheckResult result;
   SteadyClock::time_point start = SteadyClock::now();
@@ -98,6 +111,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   finishStage("duplicates");
   // Pass over the faces in order: areas, and the sides of every edge.
   ExternalSorter<EdgeRecord> edges(scratch, sortOptions("edges"));
+  FanWoundCounter wound(scratch, read.vertices, read.kept, sortOptions("wound"));
   ScratchWriter areas(scratch, "faces"), geometries(scratch, "faces");
   double areaSum = 0.0, uvAreaSum = 0.0;
   {
@@ -116,6 +130,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
         const int s = (j + 1) % 3, e = (j + 2) % 3;
         EdgeRecord edge(face.v[s], face.v[e], 3 * f + j);
         for (int k = 0; k < 2; ++k) edge.uvStart[k] = face.uv[s][k], edge.uvEnd[k] = face.uv[e][k];
+        edge.startAngle = static_cast<float>(cornerUVAngle(vec2(face.uv[s]), vec2(face.uv[e]), vec2(face.uv[j])));
         edges.add(edge);
         geometry.length[j] = (p[s] - p[e]).norm();
       }
@@ -136,7 +151,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
     EdgeRecord edge;
     std::uint64_t clashes = 0;
     auto flush = [&] {
-      clashes += !measureEdge(sides, geometry, result.seams, lengths);
+      clashes += !measureEdge(sides, geometry, result.seams, lengths, wound);
       sides.clear();
     };
     while (edges.next(edge)) {
@@ -154,8 +169,11 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
     while (lengths.next(seam)) result.seams.seamLength += seam.length;
   }
   scratch.remove(geometryFile);
-
   finishStage("edges");
+  result.map.wound = wound.count();
+  result.map.woundCounted = true;
+
+  finishStage("wound");
   // Flips, collapses and stretches for the spacing h, given or fitted (measureMap without a field).
   MapQuality& map = result.map;
   map.faces = result.faces;

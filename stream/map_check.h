@@ -3,7 +3,8 @@
 /// stream and measured by external sorts in a scratch folder (faces cleaned as cleanMesh cleans
 /// them: degenerate and duplicate faces dropped, edges of more than two faces paired flattest
 /// first), so memory stays within a limit whatever the mesh size. Same figures as
-/// measureSeamsFromUV and measureMap (no field) on the cleaned mesh in memory.
+/// measureSeamsFromUV and measureMap (no field, with the topology: wound vertices counted) on
+/// the cleaned mesh in memory.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -21,8 +22,8 @@ constexpr std::uint64_t kMinimumSortBytes = std::uint64_t(1) << 20;
 
 struct MapCheckOptions {
   double edgeLength = 0.0;  ///< grid spacing h; <= 0: fitted by least squares as measureMap fits it
-  /// Memory of the sorts (the records buffered and merged at once); each of the up to four
-  /// sorts alive at a time gets a quarter.
+  /// Memory of the sorts (the records buffered and merged at once); each of the up to five
+  /// sorts alive at a time gets a fifth.
   std::uint64_t memoryBytes = std::uint64_t(256) << 20;
   std::string scratchParent = "/tmp";  ///< the scratch folder is created in it
   /// Called with the scratch folder once created (tests set a write limit through it).

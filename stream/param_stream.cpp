@@ -26,6 +26,7 @@
 #include "stream/untangle_stream.h"
 #include "stream/voxel_solve_stream.h"
 #include "stream/voxel_stream.h"
+#include "stream/wound_count.h"
 #include "stream/welded_scratch.h"
 
 namespace seamvox {
@@ -86,6 +87,10 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
   if (field.framePositions.bytes > 0) smooth.emplace(field.framePositions, cacheBytes);
   MapQualitySums sums(h);
   ScratchMapFaces faces(folder, scratch, map, "metrics", cacheBytes);
+  // Wound vertices: the corners' angles summed per vertex, a corner on an edge without another
+  // side marking its vertex as boundary.
+  ManifoldWoundCounter wound(folder, scratch.numVertices, pass.memoryBytes / 2, "metrics: wound");
+  PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
   ScratchReader directions(folder, field.directions, "metrics");
   // Faces read a block at a time in order, measured in parallel in fixed chunks whose sums are
   // added in order (the same figures at any thread count); flipped faces tested after.
@@ -94,6 +99,8 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
     std::array<Vec3d, 3> p;
     std::array<Vec2d, 3> q;
     Vec3d u;
+    std::array<float, 3> angle;  // woundCornerAngle
+    std::uint8_t onBoundary;     // bit j: corner j's vertex is on the boundary
   };
   constexpr std::size_t kBlockFaces = std::size_t(1) << 16, kChunkFaces = 4096;
   std::vector<MeasuredFace> block;
@@ -108,6 +115,11 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
     while (block.size() < kBlockFaces && (more = faces.next(f, face.t, face.p, face.q))) {
       if (!directions.read(&direction, sizeof direction)) throw IoError(field.directions.path + ": scratch file ends early");
       face.u = direction.cast<double>();
+      face.onBoundary = 0;
+      for (std::uint32_t j = 0; j < 3; ++j) {
+        const CornerId c = 3 * f + j;
+        if (opposite[nextCorner(c)] == kInvalidId || opposite[prevCorner(c)] == kInvalidId) face.onBoundary |= 1 << j;
+      }
       block.push_back(face);
     }
     const std::size_t chunks = (block.size() + kChunkFaces - 1) / kChunkFaces;
@@ -115,11 +127,16 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
     chunkFlipped.assign(chunks, {});
     parallelForEach(chunks, 1, [&](std::uint64_t c) {
       for (std::size_t i = c * kChunkFaces; i < std::min(block.size(), (c + 1) * kChunkFaces); ++i) {
-        if (chunkSums[c].add(block[i].p, block[i].q, &block[i].u) == MapQualitySums::Kind::Flipped) {
+        MeasuredFace& x = block[i];
+        if (chunkSums[c].add(x.p, x.q, &x.u) == MapQualitySums::Kind::Flipped) {
           chunkFlipped[c].push_back(static_cast<std::uint32_t>(i));
         }
+        for (int j = 0; j < 3; ++j) x.angle[j] = woundCornerAngle(x.q[j], x.q[(j + 1) % 3], x.q[(j + 2) % 3], x.onBoundary >> j & 1);
       }
     });
+    for (const MeasuredFace& x : block) {
+      for (int j = 0; j < 3; ++j) wound.add(x.t[j], x.angle[j]);
+    }
     for (std::size_t c = 0; c < chunks; ++c) {
       sums.merge(chunkSums[c]);
       for (const std::uint32_t i : chunkFlipped[c]) {
@@ -129,7 +146,9 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
     }
   }
   r.mapQuality = sums.finish();
-  folder.countRead("metrics", faces.cacheBytesRead() + (smooth ? smooth->bytesRead() : 0));
+  r.mapQuality.wound = wound.count();
+  r.mapQuality.woundCounted = true;
+  folder.countRead("metrics", faces.cacheBytesRead() + opposite.bytesRead() + (smooth ? smooth->bytesRead() : 0));
 }
 
 /// One cone pass's solve through the cut: voxel basis and Vox solve, then the local refinement;

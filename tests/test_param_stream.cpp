@@ -59,6 +59,7 @@ struct PathRun {
   double flipped = 0.0;               ///< left by the repair in the written map
   bool repaired = false;              ///< the repair had flips to repair
   double smoothedVertices = 0.0;      ///< the voxel map re-evaluated at the smoothed surface there
+  double wound = 0.0;                 ///< wound vertices in the written map
 };
 
 // param on `mesh` out of core and in memory (on the mesh as the out-of-core path cleans it, in its
@@ -103,7 +104,7 @@ std::vector<PathRun> expectPathsAgree(const TriangleMesh& mesh, const std::vecto
     }
     // The map's figures as measured in memory (the sums in another order: the error to rounding).
     const JsonValue memoryReport = parseJson(testing::readFile(dir.path("m.json")));
-    for (const char* count : {"quality.flipped", "quality.collapsed", "quality.flippedFolded", "quality.stretched",
+    for (const char* count : {"quality.flipped", "quality.collapsed", "quality.flippedFolded", "quality.stretched", "quality.wound",
                               "conePasses", "conePassKept", "cones", "conesCancelled", "conesMerged", "seams",
                               "voxel.smoothedEvaluation.foldedBefore", "voxel.smoothedEvaluation.vertices"}) {
       EXPECT_EQ(report.numberAt(count), memoryReport.numberAt(count)) << count;
@@ -112,7 +113,7 @@ std::vector<PathRun> expectPathsAgree(const TriangleMesh& mesh, const std::vecto
                 (laterPasses ? 1e-9 : 1e-12) * memoryReport.numberAt("quality.relativeGradientError"));
     PathRun r{memoryReport.numberAt("conePasses"), memoryReport.numberAt("conePassKept"), {},
               report.numberAt("untangle.flippedAfter"), report.numberAt("untangle.flippedBefore") > 0.0,
-              report.numberAt("voxel.smoothedEvaluation.vertices")};
+              report.numberAt("voxel.smoothedEvaluation.vertices"), report.numberAt("quality.wound")};
     const JsonValue& flips = report["conePassFlips"];
     const JsonValue& memoryFlips = memoryReport["conePassFlips"];
     EXPECT_EQ(flips.items.size(), memoryFlips.items.size());
@@ -132,7 +133,7 @@ std::vector<PathRun> expectPathsAgree(const TriangleMesh& mesh, const std::vecto
 // repair without later cone passes (no merging).
 TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
   std::size_t repairs = 0;
-  double smoothed = 0.0;
+  double smoothed = 0.0, wound = 0.0;
   for (const auto& [name, mesh] : testing::stageTestMeshes(43)) {
     SCOPED_TRACE(name);
     for (const PathRun& r : expectPathsAgree(mesh, {" --grid 32 --cells 20 --quiet --no-untangle",
@@ -140,8 +141,10 @@ TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
                                                     " --grid 32 --cells 20 --quiet --merge-cones 0"})) {
       repairs += r.repaired;
       smoothed += r.smoothedVertices;
+      wound += r.wound;
     }
   }
+  EXPECT_GT(wound, 0.0);  // some map wound, counted alike on both paths
   EXPECT_GT(repairs, 0u);  // some map had flips to repair
   EXPECT_GT(smoothed, 0.0);  // and some voxel map folds that the smoothed surface re-evaluated
 }

@@ -154,8 +154,8 @@ int runCheck(Args& args) {
     options.edgeLength = edgeLength;
     const std::uint64_t program = currentResidentBytes();
     options.memoryBytes = memory.budget > program ? memory.budget - program : 0;
-    if (options.memoryBytes < 4 * kMinimumSortBytes) {
-      std::fprintf(stderr, "seamvox check: the budget %s is below what the program holds (%s) and 4 MiB for the sorts: running with that minimum\n",
+    if (options.memoryBytes < 5 * kMinimumSortBytes) {
+      std::fprintf(stderr, "seamvox check: the budget %s is below what the program holds (%s) and 5 MiB for the sorts: running with that minimum\n",
                    formatByteSize(memory.budget).c_str(), formatByteSize(program).c_str());
     }
     options.scratchParent = memory.scratch;

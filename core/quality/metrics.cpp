@@ -381,14 +381,17 @@ double fastAtan2(double y, double x) {
 
 }  // namespace
 
+double cornerUVAngle(const Vec2d& q, const Vec2d& next, const Vec2d& prev) {
+  const Vec2d a = next - q, b = prev - q;
+  // A corner on a collapsed edge has no angle (atan2 of signed zeros would give +-pi).
+  if (a == Vec2d::Zero() || b == Vec2d::Zero()) return 0.0;
+  return fastAtan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+}
+
 double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, VertexId v) {
   double sum = 0.0;
   topology.forEachCornerAround(v, [&](CornerId c) {
-    const Vec2d q = cornerUV[c];
-    const Vec2d a = cornerUV[nextCorner(c)] - q, b = cornerUV[prevCorner(c)] - q;
-    // A corner on a collapsed edge has no angle (atan2 of signed zeros would give +-pi).
-    if (a == Vec2d::Zero() || b == Vec2d::Zero()) return;
-    sum += fastAtan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    sum += cornerUVAngle(cornerUV[c], cornerUV[nextCorner(c)], cornerUV[prevCorner(c)]);
   });
   return sum;
 }

@@ -136,6 +136,9 @@ struct MapQuality {
 /// positive: w >= 1), 2 pi - k pi / 2 at a cone of index k / 4 wound once; each angle within
 /// 2e-6 rad. A corner with an edge of zero length in (u, v) (a collapsed face) adds nothing.
 double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, VertexId v);
+/// One corner's signed (u, v) angle as cornerAngleSum sums it: at q, from the edge to next to
+/// the edge to prev; 0 when either edge has zero length.
+double cornerUVAngle(const Vec2d& q, const Vec2d& next, const Vec2d& prev);
 /// An interior vertex whose corner angles sum to at least this (3.75 pi) is wound: the map covers
 /// the plane around it twice or more. A foldover repair that counts only flipped faces can end
 /// there: moving a vertex into the kernel of a fan that winds twice unflips every face and
