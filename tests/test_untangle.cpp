@@ -14,6 +14,7 @@
 #include "core/pipeline/components.h"
 #include "core/pipeline/parameterize.h"
 #include "core/quality/metrics.h"
+#include "core/refine/detail_untangle.h"
 #include "core/refine/untangle.h"
 #include "core/solve/hat_solver.h"
 #include "core/synth/generate.h"
@@ -25,6 +26,57 @@
 
 namespace seamvox {
 namespace {
+
+// The joint patches' Newton steps use the untangling energy's gradient and Hessian in one corner:
+// they match central differences of the energy and of the gradient, on folded faces too and at
+// every eps the schedule reaches.
+TEST(Untangle, EnergyGradientAndHessianMatchDifferences) {
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  TriangleMesh mesh;
+  std::size_t folded = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    mesh.positions = {Vec3f(0, 0, 0), Vec3f(1.0f + 0.3f * float(unit(random)), 0.2f * float(unit(random)), 0.1f),
+                      Vec3f(0.5f * float(unit(random)), 1.0f + 0.3f * float(unit(random)), 0.2f * float(unit(random)))};
+    mesh.triangles = {Triangle{0, 1, 2}};
+    const detail::ReferenceShape shape = detail::referenceShape(mesh, 0, 0.5);
+    ASSERT_GT(shape.area, 0.0);
+    Vec2d q[3];
+    for (Vec2d& x : q) x = Vec2d(2.0 * unit(random), 2.0 * unit(random));
+    const double eps = std::pow(10.0, -3.0 * (trial % 4) / 3.0);  // 1 down to 1e-3
+    Eigen::Matrix2d edges;
+    edges.col(0) = q[1] - q[0];
+    edges.col(1) = q[2] - q[0];
+    const double det = (edges * shape.inverse).determinant();
+    folded += det < 0.0;
+    // Steps well inside the scale on which the energy turns (near a fold, the regularised det),
+    // central differences with Richardson's extrapolation.
+    const double step = 1e-3 * std::min(1.0, std::abs(det) + eps) / (1.0 + shape.inverse.norm());
+    for (int k = 0; k < 3; ++k) {
+      const detail::UntanglingTerms t = detail::untanglingTerms(shape, q[0], q[1], q[2], k, eps);
+      EXPECT_NEAR(t.energy, detail::untanglingEnergy(shape, q[0], q[1], q[2], eps), 1e-12 * t.energy);
+      const auto moved = [&](const Vec2d& d) {
+        Vec2d m[3] = {q[0], q[1], q[2]};
+        m[k] += d;
+        return detail::untanglingTerms(shape, m[0], m[1], m[2], k, eps);
+      };
+      for (int axis = 0; axis < 2; ++axis) {
+        const auto central = [&](double s) {
+          const detail::UntanglingTerms plus = moved(s * Vec2d::Unit(axis)), minus = moved(-s * Vec2d::Unit(axis));
+          return std::make_pair((plus.energy - minus.energy) / (2.0 * s), Vec2d((plus.gradient - minus.gradient) / (2.0 * s)));
+        };
+        const auto [slopeH, columnH] = central(step);
+        const auto [slopeHalf, columnHalf] = central(0.5 * step);
+        const double slope = (4.0 * slopeHalf - slopeH) / 3.0;
+        const Vec2d column = (4.0 * columnHalf - columnH) / 3.0;
+        EXPECT_NEAR(t.gradient[axis], slope, 1e-6 * (1.0 + t.gradient.norm())) << trial << " " << k;
+        EXPECT_NEAR(t.hessian(0, axis), column[0], 1e-5 * (1.0 + t.hessian.norm())) << trial << " " << k;
+        EXPECT_NEAR(t.hessian(1, axis), column[1], 1e-5 * (1.0 + t.hessian.norm())) << trial << " " << k;
+      }
+    }
+  }
+  EXPECT_GT(folded, 50u);  // folded faces were among the trials
+}
 
 using testing::generatedMesh;
 

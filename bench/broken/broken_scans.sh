@@ -1,7 +1,7 @@
 #!/bin/bash
 # Damaged variants of the shared meshes (damage_mesh.py) through param with quads, check and
-# render: one line per variant with the exit codes, both verdicts, flips before/after the repair
-# and the quad mesh's validation. Usage: bash bench/broken/broken_scans.sh [OUTDIR]
+# render: one line per variant with the exit codes, both verdicts, flips before/after the repair,
+# the quad mesh's validation and the wound vertices param and check count. Usage: bash bench/broken/broken_scans.sh [OUTDIR]
 # OOC_BUDGET=700M: param out of core within that budget (no quads: not out of core) and check
 # within it.
 set -u
@@ -31,6 +31,8 @@ for m in bunny.off camelhead.off fertility.off spot.obj rocker-arm.obj cheburash
     seam=$(grep -oE "(NOT )?seamless" $x.log | tail -1)
     flips=$(grep -oE "flipped [0-9]+ -> [0-9]+" $x.log | tail -1)
     valid=$(grep -oE "validation: (NOT )?valid" $x.log | tail -1)
-    echo "$x param=$rc check=$rc2 render=$rc3 [$seam] [$(tail -1 $x.check)] [$flips] [$valid] output=$([ -f $x-o.ply ] && echo yes || echo no)"
+    # wound vertices as param counted them (its path) and as check counts them on the file
+    wound="$(grep -oE "wound [0-9]+" $x.log | tail -1 | cut -d' ' -f2)/$(grep -oE "^wound [0-9]+" $x.check | cut -d' ' -f2)"
+    echo "$x param=$rc check=$rc2 render=$rc3 [$seam] [$(tail -1 $x.check)] [$flips] [$valid] wound=$wound output=$([ -f $x-o.ply ] && echo yes || echo no)"
   done
 done

@@ -15,6 +15,7 @@
 #include <Eigen/LU>
 
 #include "core/quality/metrics.h"
+#include "core/refine/detail_untangle.h"
 #include "core/refine/refine.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
@@ -473,19 +474,16 @@ std::uint32_t relocateFlippedVertices(const TriangleMesh& mesh, const Topology& 
 
 // ---- Joint untangling: whole patches of vertices move together ----
 
-// The regularised denominator of the untangling energy (Garanzha et al. 2021): chi(D, eps) =
-// (D + sqrt(eps^2 + D^2)) / 2, positive for every D, written without cancellation for D < 0.
+// The regularised denominator of the untangling energy: chi(D, eps) = (D + sqrt(eps^2 + D^2)) / 2,
+// positive for every D, written without cancellation for D < 0.
 double regularisedDet(double det, double eps) {
   const double root = std::sqrt(eps * eps + det * det);
   return det >= 0.0 ? 0.5 * (det + root) : 0.5 * eps * eps / (root - det);
 }
 
-// A face's 3D shape in its own plane, in grid units (edges / h), as the inverse of its edge
-// matrix: J = (uv edges) * inverse is the map's Jacobian, a rotation for an ideal map.
-struct ReferenceShape {
-  Eigen::Matrix2d inverse;
-  double area = 0.0;
-};
+}  // namespace
+
+namespace detail {
 
 ReferenceShape referenceShape(const TriangleMesh& mesh, FaceId f, double h) {
   const Triangle& t = mesh.triangles[f];
@@ -501,9 +499,7 @@ ReferenceShape referenceShape(const TriangleMesh& mesh, FaceId f, double h) {
   return shape;
 }
 
-// Untangling energy of one face with corner values q: conformal term |J|^2 / chi plus area term
-// (det^2 + 1) / chi, times the reference area. Finite for folded faces while eps > 0; as eps
-// falls, a fold costs ever more, so minimising under a falling eps unfolds where it can.
+// As eps falls, a fold costs ever more, so minimising under a falling eps unfolds where it can.
 double untanglingEnergy(const ReferenceShape& shape, const Vec2d& q0, const Vec2d& q1, const Vec2d& q2, double eps) {
   Eigen::Matrix2d edges;
   edges.col(0) = q1 - q0;
@@ -513,24 +509,44 @@ double untanglingEnergy(const ReferenceShape& shape, const Vec2d& q0, const Vec2
   return shape.area * (j.squaredNorm() + det * det + 1.0) / chi;
 }
 
-// The gradient of untanglingEnergy with respect to corner k's value (k = 0, 1, 2). With
-// J = [q1 - q0, q2 - q0] S, moving corner k by d adds d w^T to J (w = S^T c_k, c_0 = (-1, -1),
-// c_1 = (1, 0), c_2 = (0, 1)); dE/dJ = A ((2 J + 2 det cof J) chi - f chi' cof J) / chi^2.
-Vec2d untanglingGradient(const ReferenceShape& shape, const Vec2d& q0, const Vec2d& q1, const Vec2d& q2, int k,
-                         double eps) {
+// With J = [q1 - q0, q2 - q0] S, moving corner k by d adds d w^T to J (w = S^T c_k, c_0 = (-1, -1),
+// c_1 = (1, 0), c_2 = (0, 1)): det J grows by g.d (g = cof(J) w), |J|^2 by 2 a.d + |w|^2 |d|^2
+// (a = J w). So f = |J|^2 + det^2 + 1 has gradient 2 a + 2 det g and Hessian 2 |w|^2 I + 2 g g^T,
+// chi has chi' g and chi'' g g^T, and E = A f / chi follows by the quotient rule.
+UntanglingTerms untanglingTerms(const ReferenceShape& shape, const Vec2d& q0, const Vec2d& q1, const Vec2d& q2, int k,
+                                double eps) {
   Eigen::Matrix2d edges;
   edges.col(0) = q1 - q0;
   edges.col(1) = q2 - q0;
   const Eigen::Matrix2d j = edges * shape.inverse;
   const double det = j.determinant(), root = std::sqrt(eps * eps + det * det);
   const double chi = regularisedDet(det, eps), dchi = 0.5 * (1.0 + det / root);
+  const double ddchi = 0.5 * eps * eps / (root * root * root);
   const double f = j.squaredNorm() + det * det + 1.0;
   Eigen::Matrix2d cof;
   cof << j(1, 1), -j(1, 0), -j(0, 1), j(0, 0);
-  const Eigen::Matrix2d dj = shape.area * ((2.0 * j + 2.0 * det * cof) * chi - f * dchi * cof) / (chi * chi);
   const Vec2d c = k == 0 ? Vec2d(-1.0, -1.0) : (k == 1 ? Vec2d(1.0, 0.0) : Vec2d(0.0, 1.0));
-  return dj * (shape.inverse.transpose() * c);
+  const Vec2d w = shape.inverse.transpose() * c;
+  const Vec2d g = cof * w, a = j * w;
+  const Vec2d df = 2.0 * a + 2.0 * det * g;
+  const Eigen::Matrix2d ggT = g * g.transpose();
+  const Eigen::Matrix2d ddf = 2.0 * w.squaredNorm() * Eigen::Matrix2d::Identity() + 2.0 * ggT;
+  const Eigen::Matrix2d cross = df * g.transpose() + g * df.transpose();
+  UntanglingTerms out;
+  out.energy = shape.area * f / chi;
+  out.gradient = shape.area * (df / chi - f * dchi / (chi * chi) * g);
+  out.hessian = shape.area * (ddf / chi - dchi / (chi * chi) * cross +
+                              (2.0 * f * dchi * dchi / (chi * chi * chi) - f * ddchi / (chi * chi)) * ggT);
+  return out;
 }
+
+}  // namespace detail
+
+namespace {
+
+using detail::ReferenceShape;
+using detail::referenceShape;
+using detail::untanglingEnergy;
 
 // A vertex that moves in a joint patch: its fan's corners with their quarter turns (fanTurns).
 struct JointVertex {
@@ -661,36 +677,39 @@ class JointPatch {
     return e;
   }
 
-  // Gradient of jv's fan energy with jv moved by d (in jv's first corner's chart).
-  Vec2d fanGradient(const JointVertex& jv, const Vec2d& d, double eps) {
-    ++evaluations_;
-    Vec2d g = Vec2d::Zero();
+  // Energy, gradient and Hessian of jv's fan where it is (the gradient and Hessian in jv's first
+  // corner's chart: each corner's terms turned back from its own). Counted as the energy and three
+  // gradients a step took when the Hessian was differenced, so the work budget buys as many steps.
+  detail::UntanglingTerms fanTerms(const JointVertex& jv, double eps) {
+    evaluations_ += 4;
+    detail::UntanglingTerms sum;
     for (std::size_t i = 0; i < jv.corners.size(); ++i) {
       const CornerId c = jv.corners[i];
       const FaceId f = c / 3;
-      Vec2d q[3] = {uv_[3 * f], uv_[3 * f + 1], uv_[3 * f + 2]};
-      q[c % 3] += quarterTurns(d, jv.turns[i]);
-      g += quarterTurns(untanglingGradient(*jv.shapes[i], q[0], q[1], q[2], int(c % 3), eps), -jv.turns[i]);
+      const detail::UntanglingTerms t =
+          detail::untanglingTerms(*jv.shapes[i], uv_[3 * f], uv_[3 * f + 1], uv_[3 * f + 2], int(c % 3), eps);
+      Eigen::Matrix2d turn;  // a move d in jv's chart is turn * d in the corner's
+      turn.col(0) = quarterTurns(Vec2d(1.0, 0.0), jv.turns[i]);
+      turn.col(1) = quarterTurns(Vec2d(0.0, 1.0), jv.turns[i]);
+      sum.energy += t.energy;
+      sum.gradient += turn.transpose() * t.gradient;
+      sum.hessian += turn.transpose() * t.hessian * turn;
     }
-    return g;
+    return sum;
   }
 
-  // One damped Newton step (analytic gradient, Hessian by differences of gradients: the fans
-  // are small) that lowers the fan's energy; adds the fan's energy to total and what the step
-  // gained to gained. False when the vertex did not move.
+  // One damped Newton step (analytic gradient and Hessian) that lowers the fan's energy; adds the
+  // fan's energy to total and what the step gained to gained. False when the vertex did not move.
   bool newtonStep(const JointVertex& jv, double eps, double& total, double& gained) {
     double scale = 0.0;
     for (CornerId c : jv.corners) scale += (uv_[nextCorner(c)] - uv_[c]).norm();
     scale /= jv.corners.size();
     if (!(scale > 0.0)) return false;
-    const double delta = 1e-4 * scale;
-    const double e0 = fanEnergy(jv, Vec2d::Zero(), eps);
+    const detail::UntanglingTerms terms = fanTerms(jv, eps);
+    const double e0 = terms.energy;
     total += e0;
-    const Vec2d g = fanGradient(jv, Vec2d::Zero(), eps);
-    Eigen::Matrix2d hessian;
-    hessian.col(0) = (fanGradient(jv, Vec2d(delta, 0), eps) - g) / delta;
-    hessian.col(1) = (fanGradient(jv, Vec2d(0, delta), eps) - g) / delta;
-    hessian = 0.5 * (hessian + hessian.transpose()).eval();
+    const Vec2d& g = terms.gradient;
+    const Eigen::Matrix2d& hessian = terms.hessian;
     if (!g.allFinite() || !(g.norm() > 0.0)) return false;
     Vec2d step = -g.normalized() * (0.25 * scale);
     if (hessian.allFinite() && hessian(0, 0) > 0.0 && hessian.determinant() > 0.0) {
