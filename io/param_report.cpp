@@ -126,6 +126,11 @@ void writeUntangle(JsonWriter& j, const UntangleStats& u) {
   j.key("freeVertices").value(U64{u.leftoverFreeVertices}).key("flipsAfterResolve").value(u.leftoverAfterResolve);
   j.endObject();
   j.key("seconds").value(u.seconds);
+  j.key("stepSeconds").beginObject();
+  j.key("rounds").value(u.roundSeconds).key("cones").value(u.coneSeconds);
+  j.key("relocation").value(u.relocationSeconds).key("joint").value(u.jointSeconds);
+  j.key("leftover").value(u.leftoverSeconds);
+  j.endObject();
   j.endObject();
 }
 

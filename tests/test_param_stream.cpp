@@ -111,6 +111,18 @@ std::vector<PathRun> expectPathsAgree(const TriangleMesh& mesh, const std::vecto
     }
     EXPECT_NEAR(report.numberAt("quality.relativeGradientError"), memoryReport.numberAt("quality.relativeGradientError"),
                 (laterPasses ? 1e-9 : 1e-12) * memoryReport.numberAt("quality.relativeGradientError"));
+    // The repair's steps' seconds are parts of its seconds, on both paths.
+    for (const JsonValue* x : {&report, &memoryReport}) {
+      if (!repair) continue;
+      double steps = 0.0;
+      for (const char* step : {"rounds", "cones", "relocation", "joint", "leftover"}) {
+        const double seconds = x->numberAt(std::string("untangle.stepSeconds.") + step);
+        EXPECT_GE(seconds, 0.0) << step;
+        steps += seconds;
+      }
+      EXPECT_LE(steps, x->numberAt("untangle.seconds") + 1e-9);
+      if (x->numberAt("untangle.flippedBefore") > 0.0) EXPECT_GT(steps, 0.0);
+    }
     PathRun r{memoryReport.numberAt("conePasses"), memoryReport.numberAt("conePassKept"), {},
               report.numberAt("untangle.flippedAfter"), report.numberAt("untangle.flippedBefore") > 0.0,
               report.numberAt("voxel.smoothedEvaluation.vertices"), report.numberAt("quality.wound")};

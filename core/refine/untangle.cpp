@@ -953,6 +953,11 @@ void addRepairWork(UntangleStats& stats, const UntangleStats& earlier) {
   stats.relocatedVertices += earlier.relocatedVertices;
   stats.jointVertices += earlier.jointVertices;
   stats.seconds += earlier.seconds;
+  stats.roundSeconds += earlier.roundSeconds;
+  stats.coneSeconds += earlier.coneSeconds;
+  stats.relocationSeconds += earlier.relocationSeconds;
+  stats.jointSeconds += earlier.jointSeconds;
+  stats.leftoverSeconds += earlier.leftoverSeconds;
 }
 
 }  // namespace
@@ -974,6 +979,7 @@ void addLeftoverRepair(UntangleStats& stats, const UntangleStats& earlier, std::
   stats.specks += earlier.specks;
   stats.speckFaces += earlier.speckFaces;
   stats.seconds += seconds;
+  stats.leftoverSeconds += seconds;
 }
 
 std::vector<std::uint32_t> collapseSpecks(const TriangleMesh& mesh, const Topology& topology, const CutResult& cut,
@@ -1133,6 +1139,11 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     cornerUV.assign(corners, uv);
     classifyPatch(patch);
   };
+  auto stepStart = SteadyClock::now();
+  const auto stepDone = [&](double& seconds) {
+    seconds += secondsSince(stepStart);
+    stepStart = SteadyClock::now();
+  };
   for (std::uint32_t round = 0; round < options.maxRounds; ++round) {
     std::vector<FaceId> seeds;
     for (FaceId f = 0; f < nf; ++f) {
@@ -1155,6 +1166,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     solvePatch(patch);
     reportProgress(options.progress, "untangle", double(round + 1) / options.maxRounds);
   }
+  stepDone(stats.roundSeconds);
   // Cones the rounds leave a full turn short (coneMiswound) with a flip within coneRepairRadius h
   // get re-solves of their own, at that radius, twice and four times it, outside the rounds'
   // budget (a few cones): the budget shrinks a round's patches to a few rings when flips are
@@ -1203,6 +1215,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     solvePatch(growFaces(topology, seeds, rings));
   }
   for (VertexId c : cut.cones) stats.miswoundConesAfter += judged(c);
+  stepDone(stats.coneSeconds);
   // The faces whose map the last steps changed: the fans of relocated vertices, the joint
   // patches kept.
   std::vector<FaceId> touched;
@@ -1210,10 +1223,12 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     stats.relocatedVertices = relocateFlippedVertices(mesh, topology, cut, cornerUV, state, h,
                                                       options.relocationPasses, options.pinnedVertices, touched);
   }
+  stepDone(stats.relocationSeconds);
   if (options.jointRings >= 2) {
     stats.jointVertices =
         untangleJointly(mesh, topology, cut, cornerUV, state, h, options.jointRings, options.pinnedVertices, touched);
   }
+  stepDone(stats.jointSeconds);
   // The last steps re-measure only the faces they watch: every face they changed is measured
   // again, so the figures are the whole map's, as the quality measure's are.
   if (!touched.empty()) {

@@ -102,6 +102,9 @@ struct UntangleStats {
   std::uint64_t leftoverFlips = 0, leftoverRegionFaces = 0, leftoverAfterResolve = 0;
   std::uint32_t leftoverFreeVertices = 0;
   double seconds = 0.0;
+  /// Of seconds: the patch rounds, the cones' re-solves, the relocation, the joint patches and
+  /// the leftovers' hat re-solve (summed over the combined repairs).
+  double roundSeconds = 0.0, coneSeconds = 0.0, relocationSeconds = 0.0, jointSeconds = 0.0, leftoverSeconds = 0.0;
   /// The faces still flipped (folded in 3D or not) at the end, increasing: the whole map's, or
   /// empty with UntangleOptions::onlyFaces.
   std::vector<FaceId> leftFaces;
