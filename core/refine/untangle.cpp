@@ -183,8 +183,12 @@ double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>&
           m.row(k) << normal[i].x(), normal[i].y(), -weight[i];
           r[k] = -offset[i];
         }
-        if (std::abs(m.determinant()) < 1e-300) continue;
-        const Eigen::Vector3d x = m.partialPivLu().solve(r);
+        // Cramer's rule: the columns' cross products give the determinant and the inverse's rows.
+        const Eigen::Vector3d c01 = m.col(1).cross(m.col(2)), c12 = m.col(2).cross(m.col(0)),
+                              c20 = m.col(0).cross(m.col(1));
+        const double det = m.col(0).dot(c01);
+        if (std::abs(det) < 1e-300) continue;
+        const Eigen::Vector3d x(c01.dot(r) / det, c12.dot(r) / det, c20.dot(r) / det);
         if (!x.allFinite() || x[2] <= best) continue;
         bool feasible = true;
         for (std::size_t i = 0; i < n && feasible; ++i) {
