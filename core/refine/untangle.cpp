@@ -1198,6 +1198,9 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
       if (std::any_of(near.begin(), near.end(), [&](FaceId f) { return state[f] == kFlipped; })) targets.push_back(c);
     }
   }
+  // A round whose rings the clamps of patchRings keep at the last round's would solve that patch
+  // again: skipped (noisy armadillo x4: 2h and 4h both 64 rings, the third round gained nothing).
+  std::uint32_t lastRings = 0;
   for (std::uint32_t round = 0; round < 3 && !targets.empty(); ++round) {
     std::vector<FaceId> seeds;
     std::vector<VertexId> still;
@@ -1211,6 +1214,8 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     std::sort(seeds.begin(), seeds.end());
     seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
     const std::uint32_t rings = patchRings(mesh, seeds, h, options.coneRepairRadius * double(1u << round));
+    if (rings == lastRings) continue;
+    lastRings = rings;
     for (FaceId f : growFaces(topology, seeds, rings)) {
       if (state[f] == kFlipped) seeds.push_back(f);
     }
