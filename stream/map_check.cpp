@@ -53,7 +53,7 @@ void measureSeam(const EdgeRecord& c, const EdgeRecord& o, FaceGeometries& geome
 // opposite directions with the most aligned normals first (ties: smaller corners first). Returns
 // false for two sides in the same direction (an orientation clash: cleanMesh would reorient).
 bool measureEdge(const std::vector<EdgeRecord>& sides, FaceGeometries& geometry, SeamQuality& seams,
-                 ExternalSorter<SeamLength>& lengths, FanWoundCounter& wound) {
+                 ExternalSorter<SeamLength>& lengths, FanAngleSums<float>& wound) {
   bool clash = false;
   const auto glued = glueSides(
       sides, [&](std::size_t i) { return vec3(geometry.at(sides[i].corner()).normal); }, clash);
@@ -63,11 +63,11 @@ bool measureEdge(const std::vector<EdgeRecord>& sides, FaceGeometries& geometry,
   for (const auto& [first, second] : glued) {
     const EdgeRecord &c = sides[first], &o = sides[second];
     measureSeam(c, o, geometry, seams, lengths);
-    wound.addGluedSides(start(c), start(o), c.corner(), o.corner(), c.startAngle, o.startAngle);
+    wound.addGluedSides(start(c), start(o), c.corner(), o.corner(), float(c.startAngle), float(o.startAngle));
     isGlued[first] = isGlued[second] = 1;
   }
   for (std::size_t i = 0; i < sides.size(); ++i) {
-    if (!isGlued[i]) wound.addSide(start(sides[i]), sides[i].corner(), sides[i].startAngle);
+    if (!isGlued[i]) wound.addSide(start(sides[i]), sides[i].corner(), float(sides[i].startAngle));
   }
   return !clash;
 }
@@ -80,7 +80,7 @@ std::uint64_t mapCheckScratchBytes(std::uint64_t vertices, std::uint64_t faces) 
   return vertices * sizeof(Vec3f) +
          faces * (sizeof(FaceRecord) + sizeof(FaceArea) + sizeof(FaceGeometry) + sizeof(DuplicateKey) + 3 * sizeof(EdgeRecord) +
                   3 * (sizeof(corner_detail::CornerRequest) + sizeof(corner_detail::CornerPosition)) +
-                  kFanWoundBytesPerFace);
+                  3 * FanAngleSums<float>::kBytesPerSide);
 }
 
 MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options) {
@@ -111,7 +111,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   finishStage("duplicates");
   // Pass over the faces in order: areas, and the sides of every edge.
   ExternalSorter<EdgeRecord> edges(scratch, sortOptions("edges"));
-  FanWoundCounter wound(scratch, read.vertices, read.kept, sortOptions("wound"));
+  FanAngleSums<float> wound(scratch, read.vertices, read.kept, sortOptions("wound"));
   ScratchWriter areas(scratch, "faces"), geometries(scratch, "faces");
   double areaSum = 0.0, uvAreaSum = 0.0;
   {
@@ -130,7 +130,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
         const int s = (j + 1) % 3, e = (j + 2) % 3;
         EdgeRecord edge(face.v[s], face.v[e], 3 * f + j);
         for (int k = 0; k < 2; ++k) edge.uvStart[k] = face.uv[s][k], edge.uvEnd[k] = face.uv[e][k];
-        edge.startAngle = static_cast<float>(cornerUVAngle(vec2(face.uv[s]), vec2(face.uv[e]), vec2(face.uv[j])));
+        edge.startAngle = cornerUVAngle(vec2(face.uv[s]), vec2(face.uv[e]), vec2(face.uv[j]));
         edges.add(edge);
         geometry.length[j] = (p[s] - p[e]).norm();
       }
@@ -170,7 +170,7 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
   }
   scratch.remove(geometryFile);
   finishStage("edges");
-  result.map.wound = wound.count();
+  result.map.wound = countWoundFans(wound);
   result.map.woundCounted = true;
 
   finishStage("wound");

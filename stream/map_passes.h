@@ -38,8 +38,7 @@ struct EdgeRecord {  // corner c of the cleaned mesh: its edge runs from a = ver
   std::uint64_t edge;     // min(a, b) << 32 | max(a, b): the sort key
   std::uint64_t corner2;  // 2 c + (a < b): by corner within an edge, with the direction
   double uvStart[2], uvEnd[2];  // UV at a, at b
-  float startAngle = 0.0f;      // the (u, v) angle of corner next c (at a): wound vertices
-  std::uint32_t pad = 0;
+  double startAngle = 0.0;      // the (u, v) angle of corner next c (at a), as its command sums them
   EdgeRecord() = default;
   EdgeRecord(std::uint32_t a, std::uint32_t b, std::uint64_t c)
       : edge(std::uint64_t(std::min(a, b)) << 32 | std::max(a, b)), corner2(2 * c + (a < b)) {}

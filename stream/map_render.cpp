@@ -10,6 +10,7 @@
 #include "stream/corner_positions.h"
 #include "stream/external_sort.h"
 #include "stream/map_passes.h"
+#include "stream/wound_count.h"
 
 namespace seamvox {
 namespace {
@@ -27,12 +28,6 @@ struct DrawnFace {  // a face drawn: corners, (u, v), input index
   Vec3d position(int j) const { return Vec3f(corner[j][0], corner[j][1], corner[j][2]).cast<double>(); }
   /// The normal cleanMesh glues the sides of an edge by.
   Vec3d normal() const { return gluingNormal(position(0), position(1), position(2)); }
-};
-struct CornerAngle {  // a drawn face's corner: its vertex and signed (u, v) angle
-  std::uint32_t vertex = 0, pad = 0;
-  std::uint64_t corner = 0;  // 3 face + j, drawn faces numbered in order
-  double angle = 0.0;
-  bool operator<(const CornerAngle& o) const { return std::tie(vertex, corner) < std::tie(o.vertex, o.corner); }
 };
 
 /// The drawn faces, read back for the few corners that need them (seam edges, edges of more
@@ -53,7 +48,7 @@ std::uint64_t mapRenderScratchBytes(std::uint64_t vertices, std::uint64_t faces,
   std::uint64_t perFace = sizeof(WeldKey) / 2 + sizeof(FaceRecord) + sizeof(DuplicateKey) +
                           3 * (sizeof(corner_detail::CornerRequest) + sizeof(corner_detail::CornerPosition));
   perFace += sizeof(DrawnFace);
-  if (seamsOrCones) perFace += 3 * sizeof(EdgeRecord) + 3 * sizeof(CornerAngle);
+  if (seamsOrCones) perFace += 3 * sizeof(EdgeRecord) + 3 * FanAngleSums<double>::kBytesPerSide;
   return vertices * sizeof(Vec3f) + faces * perFace;
 }
 
@@ -101,9 +96,9 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
   // and corners sorted for the seams and cones.
   FrameBuilder frame(render);
   std::unique_ptr<ExternalSorter<EdgeRecord>> edges;
-  std::unique_ptr<ExternalSorter<CornerAngle>> angles;
+  std::unique_ptr<FanAngleSums<double>> fans;  // the cones: each closed fan's angles, as cleaning splits fans
   if (seamsOrCones) edges = std::make_unique<ExternalSorter<EdgeRecord>>(scratch, sortOptions("edges"));
-  if (render.drawCones) angles = std::make_unique<ExternalSorter<CornerAngle>>(scratch, sortOptions("cones"));
+  if (render.drawCones) fans = std::make_unique<FanAngleSums<double>>(scratch, read.vertices, read.kept, sortOptions("cones"));
   ScratchFile drawnFile;
   {
     ScratchWriter drawn(scratch, "faces");
@@ -124,11 +119,8 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
         const int s = (j + 1) % 3, e = (j + 2) % 3;
         EdgeRecord edge(v[s], v[e], 3 * f + j);
         for (int k2 = 0; k2 < 2; ++k2) edge.uvStart[k2] = face.uv[s][k2], edge.uvEnd[k2] = face.uv[e][k2];
+        if (fans) edge.startAngle = cornerAngle(vec2(face.uv[s]), vec2(face.uv[e]), vec2(face.uv[j]));
         edges->add(edge);
-      }
-      for (int j = 0; angles && j < 3; ++j) {
-        const double angle = cornerAngle(vec2(face.uv[j]), vec2(face.uv[(j + 1) % 3]), vec2(face.uv[(j + 2) % 3]));
-        angles->add({v[j], 0, 3 * f + j, angle});
       }
     });
     drawnFile = drawn.finish();
@@ -168,10 +160,8 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
   finishStage("raster");
 
   // Seams: the glued sides of every edge whose (u, v) differ, drawn from the smaller corner's
-  // next vertex to its previous one (as in memory); vertices of unglued sides are boundary.
+  // next vertex to its previous one (as in memory); every side goes to the fans.
   const double tolerance = lineTolerance(camera, ss);
-  std::unique_ptr<ExternalSorter<std::uint32_t>> boundary;
-  if (render.drawCones) boundary = std::make_unique<ExternalSorter<std::uint32_t>>(scratch, sortOptions("cones"));
   if (edges) {
     DrawnFaces drawn(scratch, drawnFile, "edges");
     edges->finish();
@@ -182,10 +172,23 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
       bool clash = false;
       auto glued = glueSides(
           sides, [&](std::size_t i) { return drawn.at(sides[i].corner()).normal(); }, clash);
+      // The fans: glued sides joined across the edge; the rest (a clash's too) open their fans.
+      if (fans) {
+        const std::uint32_t low = static_cast<std::uint32_t>(sides[0].edge >> 32);
+        const std::uint32_t high = static_cast<std::uint32_t>(sides[0].edge & 0xffffffffu);
+        const auto start = [&](const EdgeRecord& side) { return side.forward() ? low : high; };
+        used.assign(sides.size(), 0);
+        for (const auto& [x, y] : glued) {
+          fans->addGluedSides(start(sides[x]), start(sides[y]), sides[x].corner(), sides[y].corner(),
+                              sides[x].startAngle, sides[y].startAngle);
+          used[x] = used[y] = 1;
+        }
+        for (std::size_t i = 0; i < sides.size(); ++i) {
+          if (!used[i]) fans->addSide(start(sides[i]), sides[i].corner(), sides[i].startAngle);
+        }
+      }
       if (clash) glued.push_back({0, 1});  // in memory the faces are reoriented, then glued
-      used.assign(sides.size(), 0);
       for (const auto& [x, y] : glued) {
-        used[x] = used[y] = 1;
         const auto [xLow, xHigh] = uvAtEnds(sides[x]);
         const auto [yLow, yHigh] = uvAtEnds(sides[y]);
         if (!render.drawSeams ||
@@ -199,11 +202,6 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
         drawSegment(toScreen(camera, ss, face.position((j + 1) % 3)), toScreen(camera, ss, face.position((j + 2) % 3)),
                     0.5 * render.seamWidth * ss, tolerance, render.seamColor, canvas);
       }
-      for (std::size_t i = 0; boundary && i < sides.size(); ++i) {
-        if (used[i]) continue;
-        boundary->add(static_cast<std::uint32_t>(sides[i].edge >> 32));
-        boundary->add(static_cast<std::uint32_t>(sides[i].edge & 0xffffffffu));
-      }
       sides.clear();
     };
     while (edges->next(edge)) {
@@ -216,36 +214,22 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
   finishStage("edges");
   drawLines(render, camera, ss, canvas);
 
-  // Cones: interior vertices whose corners' angles sum to 2 pi - k pi / 2, k != 0.
-  if (angles) {
+  // Cones: closed fans whose corners' angles sum to 2 pi - k pi / 2, k != 0 (a bowtie vertex's
+  // fans apart, as cleaning splits them).
+  if (fans) {
     DrawnFaces drawn(scratch, drawnFile, "cones");
-    angles->finish();
-    boundary->finish();
-    std::uint32_t nextBoundary = 0;
-    bool moreBoundary = boundary->next(nextBoundary);
     std::vector<Vec3d> screen;
-    CornerAngle corner;
-    bool have = angles->next(corner);
-    while (have) {
-      const CornerAngle first = corner;
-      double sum = 0.0;
-      while (have && corner.vertex == first.vertex) {
-        sum += corner.angle;
-        have = angles->next(corner);
-      }
-      while (moreBoundary && nextBoundary < first.vertex) moreBoundary = boundary->next(nextBoundary);
-      if (moreBoundary && nextBoundary == first.vertex) continue;
-      const int turns = coneTurns(sum);
+    fans->forEachClosedFan([&](const ClosedFan& fan) {
+      const int turns = coneTurns(fan.angleSum);
       if (turns == kIrregularAngleSum) {
         ++result.render.irregularVertices;
       } else if (turns != 0) {
-        result.render.cones.push_back({first.vertex, turns});
-        screen.push_back(toScreen(camera, ss, drawn.at(first.corner).position(int(first.corner % 3))));
+        result.render.cones.push_back({fan.vertex, turns});
+        screen.push_back(toScreen(camera, ss, drawn.at(fan.corner).position(int(fan.corner % 3))));
       }
-    }
+    });
     drawCones(result.render.cones, screen, render, ss, tolerance, canvas);
-    angles.reset();
-    boundary.reset();
+    fans.reset();
   }
   finishStage("cones");
   scratch.remove(drawnFile);

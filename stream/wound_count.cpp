@@ -1,6 +1,7 @@
 #include "stream/wound_count.h"
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -19,16 +20,21 @@ struct VertexAngle {  // a corner's angle at its vertex, in a range's scratch fi
   float angle;
 };
 
+template <class Angle>
 struct FanCorner {  // a corner at a vertex and the corner it is joined to there (none: kNoCorner)
   std::uint64_t corner, joined;
   std::uint32_t vertex;
-  float angle;
+  Angle angle;
 };
+template <class Angle>
 struct FanCornerLess {
-  bool operator()(const FanCorner& x, const FanCorner& y) const { return std::tie(x.vertex, x.corner) < std::tie(y.vertex, y.corner); }
+  bool operator()(const FanCorner<Angle>& x, const FanCorner<Angle>& y) const {
+    return std::tie(x.vertex, x.corner) < std::tie(y.vertex, y.corner);
+  }
 };
 struct VertexOf {
-  std::uint64_t operator()(const FanCorner& x) const { return x.vertex; }
+  template <class Record>
+  std::uint64_t operator()(const Record& x) const { return x.vertex; }
 };
 constexpr std::uint64_t kNoCorner = ~std::uint64_t(0);
 
@@ -111,33 +117,40 @@ std::uint64_t ManifoldWoundCounter::count() {
   return wound;
 }
 
-struct FanWoundCounter::Impl {
-  KeyedSorter<FanCorner, FanCornerLess, VertexOf> corners;
+template <class Angle>
+struct FanAngleSums<Angle>::Impl {
+  KeyedSorter<FanCorner<Angle>, FanCornerLess<Angle>, VertexOf> corners;
   Impl(ScratchFolder& scratch, std::uint64_t vertices, std::uint64_t faces, const ExternalSortOptions& options)
       : corners(scratch, vertices, 3 * faces, options) {}
 };
 
-FanWoundCounter::FanWoundCounter(ScratchFolder& scratch, std::uint64_t vertices, std::uint64_t faces,
-                                 const ExternalSortOptions& options)
-    : impl_(std::make_unique<Impl>(scratch, vertices, faces, options)) {}
-FanWoundCounter::~FanWoundCounter() = default;
+template <class Angle>
+FanAngleSums<Angle>::FanAngleSums(ScratchFolder& scratch, std::uint64_t vertices, std::uint64_t faces,
+                                  const ExternalSortOptions& options)
+    : impl_(std::make_unique<Impl>(scratch, vertices, faces, options)) {
+  static_assert(sizeof(FanCorner<Angle>) == kBytesPerSide, "the record's bytes");
+}
+template <class Angle>
+FanAngleSums<Angle>::~FanAngleSums() = default;
 
-void FanWoundCounter::addSide(std::uint32_t a, std::uint64_t c, float angle) {
+template <class Angle>
+void FanAngleSums<Angle>::addSide(std::uint32_t a, std::uint64_t c, Angle angle) {
   impl_->corners.add({nextOf(c), kNoCorner, a, angle});
 }
 
-void FanWoundCounter::addGluedSides(std::uint32_t a, std::uint32_t b, std::uint64_t c, std::uint64_t o, float angleC,
-                                    float angleO) {
+template <class Angle>
+void FanAngleSums<Angle>::addGluedSides(std::uint32_t a, std::uint32_t b, std::uint64_t c, std::uint64_t o,
+                                        Angle angleC, Angle angleO) {
   impl_->corners.add({nextOf(c), prevOf(o), a, angleC});
   impl_->corners.add({nextOf(o), prevOf(c), b, angleO});
 }
 
-std::uint64_t FanWoundCounter::count() {
+template <class Angle>
+void FanAngleSums<Angle>::forEachClosedFan(const std::function<void(const ClosedFan&)>& visit) {
   impl_->corners.finish();
-  std::uint64_t wound = 0;
-  FanCorner corner;
+  FanCorner<Angle> corner;
   bool have = impl_->corners.next(corner);
-  std::vector<FanCorner> around;
+  std::vector<FanCorner<Angle>> around;
   std::vector<double> sums;
   std::vector<std::uint32_t> parent, cornerCount, joinedCount;
   // A vertex at a time: its corners (by corner id) joined into fans.
@@ -151,7 +164,7 @@ std::uint64_t FanWoundCounter::count() {
     for (std::uint32_t i = 0; i < n; ++i) {
       if (around[i].joined == kNoCorner) continue;
       const auto it = std::lower_bound(around.begin(), around.end(), around[i].joined,
-                                       [](const FanCorner& x, std::uint64_t c) { return x.corner < c; });
+                                       [](const FanCorner<Angle>& x, std::uint64_t c) { return x.corner < c; });
       if (it != around.end() && it->corner == around[i].joined) {
         parent[findRoot(parent, i)] = findRoot(parent, static_cast<std::uint32_t>(it - around.begin()));
       } else {
@@ -161,16 +174,30 @@ std::uint64_t FanWoundCounter::count() {
     sums.assign(n, 0.0);
     cornerCount.assign(n, 0);
     joinedCount.assign(n, 0);
+    std::vector<std::uint32_t> firstOf(n, n);  // per root, its smallest corner's index
     for (std::uint32_t i = 0; i < n; ++i) {
       const std::uint32_t root = findRoot(parent, i);
       sums[root] += around[i].angle;
       ++cornerCount[root];
       joinedCount[root] += around[i].joined != kNoCorner;
+      firstOf[root] = std::min(firstOf[root], i);
     }
+    // Fans in the order of their smallest corners.
+    std::vector<std::uint32_t> roots;
     for (std::uint32_t i = 0; i < n; ++i) {
-      wound += parent[i] == i && joinedCount[i] == cornerCount[i] && sums[i] >= kWoundAngleSum;
+      if (parent[i] == i && joinedCount[i] == cornerCount[i]) roots.push_back(i);
     }
+    std::sort(roots.begin(), roots.end(), [&](std::uint32_t x, std::uint32_t y) { return firstOf[x] < firstOf[y]; });
+    for (const std::uint32_t root : roots) visit(ClosedFan{v, sums[root], around[firstOf[root]].corner});
   }
+}
+
+template class FanAngleSums<float>;
+template class FanAngleSums<double>;
+
+std::uint64_t countWoundFans(FanAngleSums<float>& sums) {
+  std::uint64_t wound = 0;
+  sums.forEachClosedFan([&](const ClosedFan& fan) { wound += fan.angleSum >= kWoundAngleSum; });
   return wound;
 }
 

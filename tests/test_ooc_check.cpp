@@ -175,30 +175,13 @@ TEST_F(OocCheck, StretchedFacesSamePaths) {
 TEST_F(OocCheck, WoundVerticesAtFansAndBowtiesSamePaths) {
   TriangleMesh mesh;
   std::vector<Vec2d> uv;
-  // A fan of n faces around `centre` (a new vertex unless given), rim at height z, mapped by
-  // z^power; `faces` of the n made.
   const auto addFan = [&](double power, float z, int faces, VertexId centre) {
-    constexpr int n = 10;
-    if (centre == kInvalidId) {
-      centre = mesh.numVertices();
-      mesh.positions.push_back(Vec3f(0.0f, 0.0f, z - 0.5f));
-    }
-    const VertexId rim = mesh.numVertices();
-    for (int j = 0; j < n; ++j) {
-      const double a = 2.0 * M_PI * j / n;
-      mesh.positions.push_back(Vec3f(float(std::cos(a)), float(std::sin(a)), z));
-    }
-    for (int j = 0; j < faces; ++j) {
-      mesh.triangles.push_back({centre, rim + j, rim + (j + 1) % n});
-      uv.push_back(Vec2d::Zero());
-      for (int k : {j, j + 1}) uv.push_back(Vec2d(std::cos(power * 2.0 * M_PI * k / n), std::sin(power * 2.0 * M_PI * k / n)));
-    }
-    return centre;
+    return testing::addPowerFan(mesh, uv, power, z, faces, centre);
   };
-  addFan(2.0, 0.0f, 10, kInvalidId);                      // wound
+  addFan(2.0, 0.0f, 10, kInvalidId);                         // wound
   addFan(1.0, 1.0f, 10, addFan(1.0, 2.0f, 10, kInvalidId));  // bowtie, 2 pi each: not wound
   addFan(2.0, 3.0f, 10, addFan(1.0, 4.0f, 10, kInvalidId));  // bowtie, one fan wound
-  addFan(2.4, 5.0f, 9, kInvalidId);                       // 4.3 pi on a boundary vertex: not wound
+  addFan(2.4, 5.0f, 9, kInvalidId);                          // 4.3 pi on a boundary vertex: not wound
   mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
   writeMesh(path("fans-map.ply"), mesh);
   std::string log;

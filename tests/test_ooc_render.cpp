@@ -195,6 +195,23 @@ TEST_F(OocRender, NonManifoldWithDuplicateAndDegenerateFacesSamePicture) {
   expectSamePicture(path("fin-map.ply"));
 }
 
+// Cones at bowtie vertices: two fans mapped by z^0.75 on one vertex (a cone of a quarter turn
+// each; their angles together would read as one cone of -2), one such fan with one by z^1.25
+// (+1 and -1; together a vertex wound twice), and a lone z^1.25 fan: found per fan, as cleaning
+// splits the vertex, so both paths draw the same five cones.
+TEST_F(OocRender, ConesAtBowtieVerticesSamePicture) {
+  TriangleMesh mesh;
+  std::vector<Vec2d> uv;
+  testing::addPowerFan(mesh, uv, 0.75, 1.0f, 10, testing::addPowerFan(mesh, uv, 0.75, 2.0f, 10));
+  testing::addPowerFan(mesh, uv, 1.25, 3.0f, 10, testing::addPowerFan(mesh, uv, 0.75, 4.0f, 10));
+  testing::addPowerFan(mesh, uv, 1.25, 5.0f, 10);
+  mesh.cornerUV = WedgeMap::fromCorners(mesh.triangles, uv);
+  writeMesh(path("bowtie-cones-map.ply"), mesh);
+  const RenderResult expected = inMemory(path("bowtie-cones-map.ply"), options());
+  EXPECT_EQ(expected.cones.size(), 5u);
+  expectSamePicture(path("bowtie-cones-map.ply"));
+}
+
 // Several views and sizes: the framing and the bands of rows agree at any shape of picture.
 TEST_F(OocRender, OtherViewsAndSizesSamePicture) {
   for (const auto& [w, h, az, el, up] : {std::tuple{97, 301, 0.0, 90.0, 2}, std::tuple{512, 64, -120.0, -35.0, 0}}) {

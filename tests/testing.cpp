@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -73,6 +74,25 @@ std::string readFile(const std::string& path) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+VertexId addPowerFan(TriangleMesh& mesh, std::vector<Vec2d>& uv, double power, float z, int faces, VertexId centre) {
+  constexpr int n = 10;
+  if (centre == kInvalidId) {
+    centre = mesh.numVertices();
+    mesh.positions.push_back(Vec3f(0.0f, 0.0f, z - 0.5f));
+  }
+  const VertexId rim = mesh.numVertices();
+  for (int j = 0; j < n; ++j) {
+    const double a = 2.0 * M_PI * j / n;
+    mesh.positions.push_back(Vec3f(float(std::cos(a)), float(std::sin(a)), z));
+  }
+  for (int j = 0; j < faces; ++j) {
+    mesh.triangles.push_back({centre, rim + j, rim + (j + 1) % n});
+    uv.push_back(Vec2d::Zero());
+    for (int k : {j, j + 1}) uv.push_back(Vec2d(std::cos(power * 2.0 * M_PI * k / n), std::sin(power * 2.0 * M_PI * k / n)));
+  }
+  return centre;
 }
 
 std::vector<Vec2d> cornerValues(const WedgeMap& map) {

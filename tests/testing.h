@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mesh/mesh.h"
 #include "core/mesh/wedge_map.h"
 #include "stream/mesh_stream.h"
 #include "stream/scratch_folder.h"
@@ -17,6 +18,12 @@ namespace seamvox::testing {
 /// The value of every corner of a map (tests compare and edit maps corner by corner; rebuild
 /// with WedgeMap::fromCorners).
 std::vector<Vec2d> cornerValues(const WedgeMap& map);
+
+/// Appends a fan of `faces` of 10 triangles around `centre` (a new vertex at height z - 0.5 when
+/// kInvalidId) with its rim at height z, mapped by z^power (per corner into uv: the centre at 0,
+/// rim vertex k at angle power 2 pi k / 10); returns the centre.
+VertexId addPowerFan(TriangleMesh& mesh, std::vector<Vec2d>& uv, double power, float z, int faces,
+                     VertexId centre = kInvalidId);
 
 /// Path of a file in ../shared/data (or $SEAMVOX_DATA), or "" when it is absent. Use
 ///   auto path = sharedMesh("bunny.off"); if (path.empty()) GTEST_SKIP() << ...;
