@@ -152,7 +152,7 @@ void FanAngleSums<Angle>::forEachClosedFan(const std::function<void(const Closed
   bool have = impl_->corners.next(corner);
   std::vector<FanCorner<Angle>> around;
   std::vector<double> sums;
-  std::vector<std::uint32_t> parent, cornerCount, joinedCount;
+  std::vector<std::uint32_t> parent, cornerCount, joinedCount, firstOf, roots;
   // A vertex at a time: its corners (by corner id) joined into fans.
   while (have) {
     const std::uint32_t v = corner.vertex;
@@ -174,7 +174,7 @@ void FanAngleSums<Angle>::forEachClosedFan(const std::function<void(const Closed
     sums.assign(n, 0.0);
     cornerCount.assign(n, 0);
     joinedCount.assign(n, 0);
-    std::vector<std::uint32_t> firstOf(n, n);  // per root, its smallest corner's index
+    firstOf.assign(n, n);  // per root, its smallest corner's index
     for (std::uint32_t i = 0; i < n; ++i) {
       const std::uint32_t root = findRoot(parent, i);
       sums[root] += around[i].angle;
@@ -183,7 +183,7 @@ void FanAngleSums<Angle>::forEachClosedFan(const std::function<void(const Closed
       firstOf[root] = std::min(firstOf[root], i);
     }
     // Fans in the order of their smallest corners.
-    std::vector<std::uint32_t> roots;
+    roots.clear();
     for (std::uint32_t i = 0; i < n; ++i) {
       if (parent[i] == i && joinedCount[i] == cornerCount[i]) roots.push_back(i);
     }
