@@ -53,22 +53,12 @@ void measureSeam(const EdgeRecord& c, const EdgeRecord& o, FaceGeometries& geome
 // opposite directions with the most aligned normals first (ties: smaller corners first). Returns
 // false for two sides in the same direction (an orientation clash: cleanMesh would reorient).
 bool measureEdge(const std::vector<EdgeRecord>& sides, FaceGeometries& geometry, SeamQuality& seams,
-                 ExternalSorter<SeamLength>& lengths, FanAngleSums<float>& wound) {
+                 ExternalSorter<SeamLength>& lengths, FanAngleSums<float>& wound, std::vector<std::uint8_t>& used) {
   bool clash = false;
   const auto glued = glueSides(
       sides, [&](std::size_t i) { return vec3(geometry.at(sides[i].corner()).normal); }, clash);
-  const std::uint32_t low = static_cast<std::uint32_t>(sides[0].edge >> 32), high = static_cast<std::uint32_t>(sides[0].edge);
-  const auto start = [&](const EdgeRecord& side) { return side.forward() ? low : high; };
-  std::vector<std::uint8_t> isGlued(sides.size(), 0);
-  for (const auto& [first, second] : glued) {
-    const EdgeRecord &c = sides[first], &o = sides[second];
-    measureSeam(c, o, geometry, seams, lengths);
-    wound.addGluedSides(start(c), start(o), c.corner(), o.corner(), float(c.startAngle), float(o.startAngle));
-    isGlued[first] = isGlued[second] = 1;
-  }
-  for (std::size_t i = 0; i < sides.size(); ++i) {
-    if (!isGlued[i]) wound.addSide(start(sides[i]), sides[i].corner(), float(sides[i].startAngle));
-  }
+  for (const auto& [first, second] : glued) measureSeam(sides[first], sides[second], geometry, seams, lengths);
+  addSidesToFans(wound, sides, glued, used);
   return !clash;
 }
 
@@ -148,10 +138,11 @@ MapCheckResult checkMapStream(MeshStream& stream, const MapCheckOptions& options
     FaceGeometries geometry(scratch, geometryFile, "edges");
     edges.finish();
     std::vector<EdgeRecord> sides;
+    std::vector<std::uint8_t> used;
     EdgeRecord edge;
     std::uint64_t clashes = 0;
     auto flush = [&] {
-      clashes += !measureEdge(sides, geometry, result.seams, lengths, wound);
+      clashes += !measureEdge(sides, geometry, result.seams, lengths, wound, used);
       sides.clear();
     };
     while (edges.next(edge)) {

@@ -134,4 +134,26 @@ std::vector<std::pair<std::size_t, std::size_t>> glueSides(const std::vector<Edg
   return glued;
 }
 
+template <class Angle>
+void addSidesToFans(FanAngleSums<Angle>& fans, const std::vector<EdgeRecord>& sides,
+                    const std::vector<std::pair<std::size_t, std::size_t>>& glued, std::vector<std::uint8_t>& used) {
+  const std::uint32_t low = static_cast<std::uint32_t>(sides[0].edge >> 32);
+  const std::uint32_t high = static_cast<std::uint32_t>(sides[0].edge & 0xffffffffu);
+  const auto start = [&](const EdgeRecord& side) { return side.forward() ? low : high; };
+  used.assign(sides.size(), 0);
+  for (const auto& [x, y] : glued) {
+    fans.addGluedSides(start(sides[x]), start(sides[y]), sides[x].corner(), sides[y].corner(),
+                       static_cast<Angle>(sides[x].startAngle), static_cast<Angle>(sides[y].startAngle));
+    used[x] = used[y] = 1;
+  }
+  for (std::size_t i = 0; i < sides.size(); ++i) {
+    if (!used[i]) fans.addSide(start(sides[i]), sides[i].corner(), static_cast<Angle>(sides[i].startAngle));
+  }
+}
+
+template void addSidesToFans(FanAngleSums<float>&, const std::vector<EdgeRecord>&,
+                             const std::vector<std::pair<std::size_t, std::size_t>>&, std::vector<std::uint8_t>&);
+template void addSidesToFans(FanAngleSums<double>&, const std::vector<EdgeRecord>&,
+                             const std::vector<std::pair<std::size_t, std::size_t>>&, std::vector<std::uint8_t>&);
+
 }  // namespace seamvox::map_pass

@@ -17,6 +17,7 @@
 #include "stream/external_sort.h"
 #include "stream/mesh_stream.h"
 #include "stream/scratch_folder.h"
+#include "stream/wound_count.h"
 
 namespace seamvox::map_pass {
 
@@ -126,5 +127,16 @@ class RecordsByFace {
 std::vector<std::pair<std::size_t, std::size_t>> glueSides(const std::vector<EdgeRecord>& sides,
                                                            const std::function<Vec3d(std::size_t)>& normalOf,
                                                            bool& clash);
+
+/// The sides of one edge into fan sums: the glued pairs (glueSides) joined across the edge, every
+/// other side (an unpaired one, a clash's) opening its vertex's fan; each with its startAngle.
+/// used: scratch flags, reused across edges.
+template <class Angle>
+void addSidesToFans(FanAngleSums<Angle>& fans, const std::vector<EdgeRecord>& sides,
+                    const std::vector<std::pair<std::size_t, std::size_t>>& glued, std::vector<std::uint8_t>& used);
+extern template void addSidesToFans(FanAngleSums<float>&, const std::vector<EdgeRecord>&,
+                                    const std::vector<std::pair<std::size_t, std::size_t>>&, std::vector<std::uint8_t>&);
+extern template void addSidesToFans(FanAngleSums<double>&, const std::vector<EdgeRecord>&,
+                                    const std::vector<std::pair<std::size_t, std::size_t>>&, std::vector<std::uint8_t>&);
 
 }  // namespace seamvox::map_pass

@@ -172,21 +172,7 @@ MapRenderResult renderMapStream(MeshStream& stream, const MapRenderOptions& opti
       bool clash = false;
       auto glued = glueSides(
           sides, [&](std::size_t i) { return drawn.at(sides[i].corner()).normal(); }, clash);
-      // The fans: glued sides joined across the edge; the rest (a clash's too) open their fans.
-      if (fans) {
-        const std::uint32_t low = static_cast<std::uint32_t>(sides[0].edge >> 32);
-        const std::uint32_t high = static_cast<std::uint32_t>(sides[0].edge & 0xffffffffu);
-        const auto start = [&](const EdgeRecord& side) { return side.forward() ? low : high; };
-        used.assign(sides.size(), 0);
-        for (const auto& [x, y] : glued) {
-          fans->addGluedSides(start(sides[x]), start(sides[y]), sides[x].corner(), sides[y].corner(),
-                              sides[x].startAngle, sides[y].startAngle);
-          used[x] = used[y] = 1;
-        }
-        for (std::size_t i = 0; i < sides.size(); ++i) {
-          if (!used[i]) fans->addSide(start(sides[i]), sides[i].corner(), sides[i].startAngle);
-        }
-      }
+      if (fans) addSidesToFans(*fans, sides, glued, used);  // a clash's sides open their fans
       if (clash) glued.push_back({0, 1});  // in memory the faces are reoriented, then glued
       for (const auto& [x, y] : glued) {
         const auto [xLow, xHigh] = uvAtEnds(sides[x]);

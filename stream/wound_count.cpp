@@ -9,6 +9,7 @@
 #include <tuple>
 #include <vector>
 
+#include "core/mesh/detail_union_find.h"
 #include "core/quality/metrics.h"
 #include "stream/keyed_sort.h"
 
@@ -40,11 +41,6 @@ constexpr std::uint64_t kNoCorner = ~std::uint64_t(0);
 
 std::uint64_t nextOf(std::uint64_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
 std::uint64_t prevOf(std::uint64_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
-
-std::uint32_t findRoot(std::vector<std::uint32_t>& parent, std::uint32_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
 
 }  // namespace
 
@@ -152,21 +148,23 @@ void FanAngleSums<Angle>::forEachClosedFan(const std::function<void(const Closed
   bool have = impl_->corners.next(corner);
   std::vector<FanCorner<Angle>> around;
   std::vector<double> sums;
-  std::vector<std::uint32_t> parent, cornerCount, joinedCount, firstOf, roots;
-  // A vertex at a time: its corners (by corner id) joined into fans.
+  std::vector<std::uint32_t> cornerCount, joinedCount;
+  detail::UnionFind fans(0);
+  // A vertex at a time: its corners (by corner id) joined into fans. A fan's root is its smallest
+  // index, so its smallest corner, and the roots in increasing order give the fans in that order.
   while (have) {
     const std::uint32_t v = corner.vertex;
     around.clear();
     for (; have && corner.vertex == v; have = impl_->corners.next(corner)) around.push_back(corner);
     const std::uint32_t n = static_cast<std::uint32_t>(around.size());
-    parent.resize(n);
-    std::iota(parent.begin(), parent.end(), 0u);
+    fans.parent.resize(n);
+    std::iota(fans.parent.begin(), fans.parent.end(), 0u);
     for (std::uint32_t i = 0; i < n; ++i) {
       if (around[i].joined == kNoCorner) continue;
       const auto it = std::lower_bound(around.begin(), around.end(), around[i].joined,
                                        [](const FanCorner<Angle>& x, std::uint64_t c) { return x.corner < c; });
       if (it != around.end() && it->corner == around[i].joined) {
-        parent[findRoot(parent, i)] = findRoot(parent, static_cast<std::uint32_t>(it - around.begin()));
+        fans.unite(i, static_cast<std::uint32_t>(it - around.begin()));
       } else {
         around[i].joined = kNoCorner;  // not a corner at v (cannot happen for glued sides)
       }
@@ -174,21 +172,15 @@ void FanAngleSums<Angle>::forEachClosedFan(const std::function<void(const Closed
     sums.assign(n, 0.0);
     cornerCount.assign(n, 0);
     joinedCount.assign(n, 0);
-    firstOf.assign(n, n);  // per root, its smallest corner's index
     for (std::uint32_t i = 0; i < n; ++i) {
-      const std::uint32_t root = findRoot(parent, i);
+      const std::uint32_t root = fans.find(i);
       sums[root] += around[i].angle;
       ++cornerCount[root];
       joinedCount[root] += around[i].joined != kNoCorner;
-      firstOf[root] = std::min(firstOf[root], i);
     }
-    // Fans in the order of their smallest corners.
-    roots.clear();
     for (std::uint32_t i = 0; i < n; ++i) {
-      if (parent[i] == i && joinedCount[i] == cornerCount[i]) roots.push_back(i);
+      if (fans.parent[i] == i && joinedCount[i] == cornerCount[i]) visit(ClosedFan{v, sums[i], around[i].corner});
     }
-    std::sort(roots.begin(), roots.end(), [&](std::uint32_t x, std::uint32_t y) { return firstOf[x] < firstOf[y]; });
-    for (const std::uint32_t root : roots) visit(ClosedFan{v, sums[root], around[firstOf[root]].corner});
   }
 }
 
