@@ -21,26 +21,36 @@ namespace seamvox {
 
 namespace {
 
-/// What extractScratchRegion reads, through page caches: one set per thread.
+/// What extractScratchRegion reads, through page caches: one set per thread. onFieldSurface: the
+/// regions go onto the field's smoothed surface (extractRegionOnFieldSurface) when it has one.
 struct RegionReaders {
   PagedCornerTable table;
   PagedReader<Vec3f> positions, directions;
   PagedReader<std::uint8_t> rotations;
   PagedCutCorners corners;
+  std::optional<PagedReader<Vec3f>> surface;
   const ScratchCut& cut;
   RegionReaders(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& c, std::size_t cacheBytes,
-                std::size_t pageBytes = kScratchPageBytes)
+                bool onFieldSurface, std::size_t pageBytes = kScratchPageBytes)
       : table(scratch, cacheBytes, pageBytes), positions(scratch.positions, cacheBytes, pageBytes),
         directions(field.directions, cacheBytes, pageBytes), rotations(c.faceRotation, cacheBytes, pageBytes),
-        corners(c.corners, cacheBytes, pageBytes), cut(c) {}
+        corners(c.corners, cacheBytes, pageBytes), cut(c) {
+    if (onFieldSurface && field.framePositions.bytes > 0) surface.emplace(field.framePositions, cacheBytes, pageBytes);
+  }
   RegionMesh extract(const std::vector<FaceId>& regionFaces) {
-    return detail::extractRegionFrom(
+    RegionMesh out = detail::extractRegionFrom(
         table, [&](VertexId v) { return positions[v]; }, [&](FaceId f) { return directions[f]; },
         [&](FaceId f) { return rotations[f]; }, corners, cut.seams, cut.cones, regionFaces);
+    if (surface) {
+      std::vector<Vec3f> points(out.vertexOrigin.size());
+      for (std::size_t i = 0; i < points.size(); ++i) points[i] = (*surface)[out.vertexOrigin[i]];
+      placeRegionOnSurface(out, std::move(points));
+    }
+    return out;
   }
   std::uint64_t bytesRead() const {
     return table.bytesRead() + positions.bytesRead() + directions.bytesRead() + rotations.bytesRead() +
-           corners.bytesRead();
+           corners.bytesRead() + (surface ? surface->bytesRead() : 0);
   }
 };
 
@@ -64,10 +74,10 @@ void checkRegionFaces(const std::vector<FaceId>& regionFaces, std::uint64_t numF
 
 RegionMesh extractScratchRegion(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                                 const std::vector<FaceId>& regionFaces, const StreamPassOptions& pass,
-                                std::uint64_t* bytesRead) {
+                                std::uint64_t* bytesRead, bool onFieldSurface) {
   checkRegionFaces(regionFaces, scratch.numFaces);
   // A region is faces scattered over the mesh: small pages, and room for what it reads.
-  RegionReaders readers(scratch, field, cut, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
+  RegionReaders readers(scratch, field, cut, windowCacheBytes(pass.memoryBytes), onFieldSurface, kWindowPageBytes);
   RegionMesh out = readers.extract(regionFaces);
   if (bytesRead) *bytesRead += readers.bytesRead();
   return out;
@@ -145,7 +155,7 @@ class ScratchRefineSource {
     MapValues map;
     GroupReaders(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut, const ScratchMap& m,
                  std::size_t cacheBytes)
-        : RegionReaders(scratch, field, cut, cacheBytes), map(m, cacheBytes) {}
+        : RegionReaders(scratch, field, cut, cacheBytes, true), map(m, cacheBytes) {}
   };
 
   ScratchRefineSource(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,

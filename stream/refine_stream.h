@@ -13,13 +13,14 @@
 
 namespace seamvox {
 
-/// extractRegion on readCleanScratch's mesh, the field's directions and the cut (equal to it).
+/// extractRegion on readCleanScratch's mesh, the field's directions and the cut (equal to it);
+/// onFieldSurface: extractRegionOnFieldSurface, the surface read from field.framePositions.
 /// regionFaces: increasing face ids (InputError otherwise). Cost: the region times the valence,
 /// read through small pages (windowCacheBytes of them per file); the bytes read are added to
 /// *bytesRead when given.
 RegionMesh extractScratchRegion(const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                                 const std::vector<FaceId>& regionFaces, const StreamPassOptions& pass,
-                                std::uint64_t* bytesRead = nullptr);
+                                std::uint64_t* bytesRead = nullptr, bool onFieldSurface = false);
 
 /// selectRefineRegion on the out-of-core map (evaluate_stream): options.markedFaces, the faces the
 /// map collapses or flips (with options.seedFromMap; one pass over the faces, their corners'

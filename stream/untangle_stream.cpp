@@ -164,11 +164,30 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
     bytesRead += table.bytesRead();
   }
   folder.countRead("untangle", bytesRead);
+  // The window's wedges are the map's (per sub vertex), not corners of equal values: corners of
+  // two wedges can hold one value (a seam whose transition fixes that point), and the repair
+  // moves wedges.
   std::vector<Vec2d> values(3 * window.size());
+  std::vector<std::uint32_t> localWedge(values.size());
+  std::vector<Vec2d> localValues;
   {
     PagedReader<std::uint32_t> cornerWedge(map.cornerWedge, windowBytes, kWindowPageBytes);
     PagedReader<Vec2d> wedgeValues(map.wedgeValues, windowBytes, kWindowPageBytes);
-    for (std::size_t c = 0; c < values.size(); ++c) values[c] = wedgeValues[cornerWedge[3 * window[c / 3] + c % 3]];
+    // Local ids in the order of the map's (wedge, sub vertex) keys.
+    std::vector<std::uint64_t> key(values.size());
+    for (std::size_t c = 0; c < values.size(); ++c) {
+      const std::uint32_t wedge = cornerWedge[3 * window[c / 3] + c % 3];
+      values[c] = wedgeValues[wedge];
+      key[c] = (std::uint64_t(wedge) << 32) | w.mesh.triangles[c / 3][c % 3];
+    }
+    std::vector<std::uint64_t> keys = key;
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    localValues.resize(keys.size());
+    for (std::size_t c = 0; c < values.size(); ++c) {
+      localWedge[c] = static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key[c]) - keys.begin());
+      localValues[localWedge[c]] = values[c];
+    }
     if (field.framePositions.bytes > 0) {  // the smoothed surface tells faces folded in 3D
       PagedReader<Vec3f> smooth(field.framePositions, windowBytes, kWindowPageBytes);
       for (VertexId v : w.vertexOrigin) w.field.framePositions.push_back(smooth[v]);
@@ -176,7 +195,7 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
     }
     folder.countRead("untangle", cornerWedge.bytesRead() + wedgeValues.bytesRead());
   }
-  WedgeMap uv = WedgeMap::fromCorners(w.mesh.triangles, values);
+  WedgeMap uv(std::move(localWedge), std::move(localValues));
   std::vector<std::complex<double>> windowT(w.seamOrigin.size());
   for (std::size_t j = 0; j < windowT.size(); ++j) windowT[j] = seamT[w.seamOrigin[j]];
   // The border keeps its values: its faces outside the window hold them too.

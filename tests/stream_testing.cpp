@@ -6,6 +6,7 @@
 
 #include "core/basis/islands.h"
 #include "core/cut/cut.h"
+#include "core/field/field_proxy.h"
 #include "core/synth/generate.h"
 #include "stream/clean_stream.h"
 #include "stream/mesh_stream.h"
@@ -72,6 +73,11 @@ StageInputs prepareStageInputs(ScratchFolder& folder, const CleanScratch& scratc
   const ScratchSingularities singularities = computeScratchSingularities(folder, scratch, in.field, pass);
   in.cut = cutScratchToDisk(folder, scratch, singularities, pass);
   in.inMemoryField.direction = readPositions(folder, in.field.directions);
+  // The smoothed surface the field was computed on, as the pipeline's field holds it.
+  if (in.field.framePositions.bytes > 0) {
+    in.inMemoryField.framePositions = readPositions(folder, in.field.framePositions);
+    in.inMemoryField.frameSmoothing = kFieldSmoothingIterations;
+  }
   in.inMemoryCut = cutToDisk(cleaned.mesh, cleaned.topology, in.inMemoryField,
                              inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
   in.options.gridResolution = resolution;

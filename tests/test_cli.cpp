@@ -174,12 +174,12 @@ TEST(Cli, ParamRetriesAPassWhoseRepairLeavesFlipsAtCloseCones) {
   if (scan.empty()) GTEST_SKIP() << testing::missingSharedMessage("cheburashka.off");
   TempDir dir;
   const std::string noisy = dir.path("noisy.ply"), output = dir.path("o.ply"), report = dir.path("r.json");
-  run("subdivide " + scan + " --levels 1 --noise 0.3 -o " + noisy + " --quiet", 0);
+  run("subdivide " + scan + " --levels 1 --noise 0.5 -o " + noisy + " --quiet", 0);
   // Without the smoothed evaluation, the hat re-solve of the repair's leftovers and the cones'
   // own re-solves, which all remove the flips at close cones on this scan before a retry would
   // be needed.
   const std::string common =
-      " --solver voxloc --merge-cones 0.25 --cells 150 --no-smoothed-evaluation --no-leftover-resolve"
+      " --solver voxloc --merge-cones 0.25 --cells 100 --no-smoothed-evaluation --no-leftover-resolve"
       " --no-cone-resolve --quiet";
   const std::string out = run("param " + noisy + " -o " + output + common + " --report " + report, 0);
   EXPECT_TRUE(contains(out, ": seamless")) << out;

@@ -179,7 +179,7 @@ TEST(ParamStream, LaterConePassesAsInMemory) {
     ASSERT_FALSE(r.conePassFlips.empty());
     EXPECT_EQ(r.flipped, *std::min_element(r.conePassFlips.begin(), r.conePassFlips.end()));
   }
-  for (const char* cells : {"45", "50"}) {
+  for (const char* cells : {"40", "60"}) {
     EXPECT_GE(expectPathsAgree(readMesh(scan), {std::string(" --grid 32 --cells ") + cells + " --quiet"}).at(0).conePasses,
               2.0);
   }

@@ -85,7 +85,13 @@ TEST_P(PipelineSolvers, MapDoesNotDependOnTheThreadCount) {
     runs.push_back(parameterize(TriangleMesh(raw), options));
   }
   ASSERT_TRUE(runs[0].isSeamless());
-  EXPECT_GT(runs[0].untangle.flippedBefore, 0u) << "no repair ran: its groups are not compared";
+  // voxloc's refinement, solved on the smoothed surface, leaves this scan no flip to repair: its
+  // own groups are compared (the repair's are, with hat and vox).
+  if (GetParam() == ParamSolver::VoxLoc) {
+    EXPECT_GT(runs[0].solved.refine.solves, 1u) << "no refinement in groups: they are not compared";
+  } else {
+    EXPECT_GT(runs[0].untangle.flippedBefore, 0u) << "no repair ran: its groups are not compared";
+  }
   ASSERT_EQ(runs[0].mesh.cornerUV.size(), runs[1].mesh.cornerUV.size());
   std::size_t differ = 0;
   for (CornerId c = 0; c < runs[0].mesh.cornerUV.size(); ++c) differ += runs[0].mesh.cornerUV[c] != runs[1].mesh.cornerUV[c];

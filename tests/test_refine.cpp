@@ -1232,5 +1232,96 @@ TEST(SplineRoundFlips, FlipsLeftByTheSplineRoundGoToTheRepairWhenOneFollows) {
   if (left.stats.rounds.size() == 1) EXPECT_EQ(left.stats.flippedAfter, first.flipped);
 }
 
+// A flat grid with interior vertices pushed past a neighbour: faces of their fans fold over, as a
+// scan's tangential noise folds them. The field was computed on the grid before the push (its
+// framePositions), and is constant. Solved on that surface, the region reproduces the linear map
+// of the grid exactly, the pushed vertices at their grid points, and nothing flips; on the mesh's
+// own folded faces the solve follows their frames and does not.
+TEST(RefineSurface, RegionOnTheFieldSurfaceUnfoldsFoldsOfTheMesh) {
+  const int n = 10;
+  const double h = 4.0;
+  const TriangleMesh flat = testing::gridMesh(n, n);
+  TriangleMesh folded = flat;
+  const std::vector<VertexId> pushed = {VertexId(3 * (n + 1) + 3), VertexId(6 * (n + 1) + 5)};
+  for (VertexId v : pushed) folded.positions[v] += Vec3f(1.4f, 0.3f, 0.0f);
+  const testing::Surface s = testing::makeSurface(folded);
+  CrossField field;
+  field.direction.assign(s.mesh.numFaces(), Vec3f(1.0f, 0.0f, 0.0f));  // tangent to every face (all in z = 0)
+  field.framePositions = flat.positions;
+  const FieldSingularities singularities = computeSingularities(s.mesh, s.topology, field);
+  EXPECT_TRUE(singularities.cones.empty()) << "the fold puts no cone on the surface";
+  const CutResult cut = cutToDisk(s.mesh, s.topology, field, singularities);
+  // The map to improve: the grid's linear map with the pushed vertices at their own positions.
+  std::vector<Vec2d> values(3 * s.mesh.numFaces());
+  for (CornerId c = 0; c < values.size(); ++c) {
+    const Vec3f p = s.mesh.positions[s.mesh.triangles[c / 3][c % 3]];
+    values[c] = Vec2d(p.x(), p.y()) / h;
+  }
+  const WedgeMap input = WedgeMap::fromCorners(s.mesh.triangles, values);
+  std::vector<FaceId> all(s.mesh.numFaces());
+  std::iota(all.begin(), all.end(), FaceId(0));
+  std::size_t foldedFaces = 0;
+  for (FaceId f = 0; f < s.mesh.numFaces(); ++f) foldedFaces += parameterAreaRatio(s.mesh, input, f, h) < 0.0;
+  ASSERT_GT(foldedFaces, 0u) << "the push folds no face";
+
+  const RegionMesh onSurface = extractRegionOnFieldSurface(s.mesh, s.topology, field, cut, all);
+  const RegionMesh own = extractRegion(s.mesh, s.topology, field, cut, all);
+  for (VertexId v = 0; v < onSurface.mesh.numVertices(); ++v) {
+    EXPECT_EQ(onSurface.mesh.positions[v], flat.positions[onSurface.vertexOrigin[v]]);
+    EXPECT_EQ(own.mesh.positions[v], folded.positions[own.vertexOrigin[v]]);
+  }
+  // Faces whose (u, v) triangle turns clockwise.
+  const auto flips = [&](const RegionMesh& region, const WedgeMap& uv) {
+    std::size_t count = 0;
+    for (FaceId f = 0; f < region.mesh.numFaces(); ++f) {
+      const Vec2d a = uv[3 * f], b = uv[3 * f + 1], c = uv[3 * f + 2];
+      count += (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x() < 0.0;
+    }
+    return count;
+  };
+  const RegionSolution smooth = solveRegion(onSurface, input, {}, h);
+  EXPECT_EQ(flips(onSurface, smooth.cornerUV), 0u);
+  double largest = 0.0;
+  for (CornerId c = 0; c < smooth.cornerUV.size(); ++c) {
+    const Vec3f p = flat.positions[onSurface.vertexOrigin[onSurface.mesh.triangles[c / 3][c % 3]]];
+    largest = std::max(largest, (smooth.cornerUV[c] - Vec2d(p.x(), p.y()) / h).norm());
+  }
+  EXPECT_LT(largest, 1e-9) << "the grid's linear map, reproduced on the surface";
+  const RegionSolution ownSolve = solveRegion(own, input, {}, h);
+  EXPECT_GT(flips(own, ownSolve.cornerUV), 0u) << "on its own folded faces the solve keeps them flipped";
+}
+
+TEST(RefineSurface, PlacingARegionTurnsItsDirectionsOntoTheSurface) {
+  // A grid tilted about the x axis on the surface: directions along y turn with it, stay unit and
+  // tangent; a direction along x (the axis) stays; a wrong count of positions is refused.
+  const testing::Surface s = testing::makeSurface(testing::gridMesh(3, 3));
+  CrossField field;
+  field.direction.assign(s.mesh.numFaces(), Vec3f(0.0f, 1.0f, 0.0f));
+  field.direction[0] = Vec3f(1.0f, 0.0f, 0.0f);
+  CutResult cut = cutToDisk(s.mesh, s.topology, field, computeSingularities(s.mesh, s.topology, field));
+  std::vector<FaceId> all(s.mesh.numFaces());
+  std::iota(all.begin(), all.end(), FaceId(0));
+  RegionMesh region = extractRegion(s.mesh, s.topology, field, cut, all);
+  std::vector<Vec3f> tilted(region.mesh.numVertices());
+  const double angle = 0.6;
+  for (VertexId v = 0; v < tilted.size(); ++v) {
+    const Vec3f p = region.mesh.positions[v];
+    tilted[v] = Vec3f(p.x(), float(p.y() * std::cos(angle)), float(p.y() * std::sin(angle)));
+  }
+  EXPECT_THROW(placeRegionOnSurface(region, std::vector<Vec3f>(tilted.size() + 1)), InputError);
+  placeRegionOnSurface(region, tilted);
+  EXPECT_EQ(region.mesh.positions, tilted);
+  for (FaceId f = 0; f < region.mesh.numFaces(); ++f) {
+    const Triangle& t = region.mesh.triangles[f];
+    const Vec3d n = (region.mesh.position(t[1]) - region.mesh.position(t[0]))
+                        .cross(region.mesh.position(t[2]) - region.mesh.position(t[0])).normalized();
+    const Vec3d d = region.field.at(f);
+    EXPECT_NEAR(d.norm(), 1.0, 1e-6);
+    EXPECT_NEAR(d.dot(n), 0.0, 1e-6);
+    const Vec3d want = region.faceOrigin[f] == 0 ? Vec3d(1, 0, 0) : Vec3d(0, std::cos(angle), std::sin(angle));
+    EXPECT_LT((d - want).norm(), 1e-6) << "face " << f;
+  }
+}
+
 }  // namespace
 }  // namespace seamvox

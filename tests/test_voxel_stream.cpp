@@ -269,6 +269,17 @@ TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
     const RegionMesh want = extractRegion(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut, region);
     const RegionMesh got = extractScratchRegion(scratch, in.field, in.cut, region, kTinyPass);
     expectSameRegion(got, want);
+    // On the field's smoothed surface: read from its file out of core, in memory from the field's
+    // positions or, released, smoothed again at the region's vertices.
+    ASSERT_GT(in.field.framePositions.bytes, 0u);
+    CrossField released = in.inMemoryField;
+    released.framePositions.clear();
+    const RegionMesh onSurface = extractScratchRegion(scratch, in.field, in.cut, region, kTinyPass, nullptr, true);
+    expectSameRegion(onSurface, extractRegionOnFieldSurface(cleaned.mesh, cleaned.topology, in.inMemoryField,
+                                                            in.inMemoryCut, region));
+    expectSameRegion(onSurface,
+                     extractRegionOnFieldSurface(cleaned.mesh, cleaned.topology, released, in.inMemoryCut, region));
+    EXPECT_NE(onSurface.mesh.positions, got.mesh.positions);
     // The refinement region selected from the map out of core: the same faces and counts.
     for (const bool fromMap : {true, false}) {
       for (const std::uint32_t rings : {1u, 3u}) {

@@ -198,6 +198,38 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
       [&](FaceId f) { return cut.faceRotation[f]; }, cut.corners, cut.seams, cut.cones, regionFaces);
 }
 
+RegionMesh extractRegionOnFieldSurface(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                                       const CutResult& cut, const std::vector<FaceId>& regionFaces) {
+  RegionMesh out = extractRegion(mesh, topology, field, cut, regionFaces);
+  if (field.framePositions.size() == mesh.numVertices()) {
+    std::vector<Vec3f> surface(out.vertexOrigin.size());
+    for (std::size_t i = 0; i < surface.size(); ++i) surface[i] = field.framePositions[out.vertexOrigin[i]];
+    placeRegionOnSurface(out, std::move(surface));
+  } else if (field.frameSmoothing > 0) {
+    placeRegionOnSurface(out, smoothPositionsAt(mesh, topology, field.frameSmoothing, out.vertexOrigin));
+  }
+  return out;
+}
+
+void placeRegionOnSurface(RegionMesh& region, std::vector<Vec3f> surface) {
+  if (surface.size() != region.mesh.numVertices()) {
+    throw InputError("refine: " + std::to_string(surface.size()) + " surface positions for a region of " +
+                     std::to_string(region.mesh.numVertices()) + " vertices");
+  }
+  const auto normal = [](const std::vector<Vec3f>& points, const Triangle& t) {
+    const Vec3d a = points[t[0]].cast<double>();
+    return Vec3d((points[t[1]].cast<double>() - a).cross(points[t[2]].cast<double>() - a));
+  };
+  for (FaceId f = 0; f < region.mesh.numFaces(); ++f) {
+    const Triangle& t = region.mesh.triangles[f];
+    const Vec3d own = normal(region.mesh.positions, t), there = normal(surface, t);
+    const double a = own.norm(), b = there.norm();
+    if (!(a > 0.0) || !(b > 0.0) || !std::isfinite(a) || !std::isfinite(b)) continue;
+    region.field.set(f, rotateBetween(own / a, there / b, region.field.at(f)));
+  }
+  region.mesh.positions = std::move(surface);
+}
+
 namespace {
 
 /// A region's hat basis and reduction with what every phase of solveRegion reads: the locked
@@ -817,7 +849,7 @@ class MeshReads {
     Readers* operator->() { return this; }
     Readers& operator*() { return *this; }
     RegionMesh extract(const std::vector<FaceId>& faces) const {
-      return extractRegion(source->mesh_, source->topology_, source->field_, source->cut_, faces);
+      return extractRegionOnFieldSurface(source->mesh_, source->topology_, source->field_, source->cut_, faces);
     }
     Vec2d value(CornerId c) const { return source->cornerUV_[c]; }
   };

@@ -220,6 +220,21 @@ std::vector<FaceId> selectRefineRegion(const TriangleMesh& mesh, const Topology&
 RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
                          const CrossField& field, const CutResult& cut,
                          const std::vector<FaceId>& regionFaces);
+/// extractRegion, then on the surface the field was computed on (placeRegionOnSurface) when it
+/// was a smoothed one: field.framePositions when the field holds them, else smoothPositionsAt
+/// with field.frameSmoothing steps at the region's vertices. What the refinement's and the
+/// repair's local solves work on.
+RegionMesh extractRegionOnFieldSurface(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                                       const CutResult& cut, const std::vector<FaceId>& regionFaces);
+
+/// Moves a region onto the surface its field was computed on: positions become `surface` (one
+/// per sub vertex, vertexOrigin order) and each face's direction is turned onto the face there
+/// by rotateBetween their normals, as computeSingularities reads the field (a face of zero area
+/// on either surface keeps its direction). A local solve then measures the map on the smooth
+/// surface: on a noisy scan the faces the noise folds in 3D are not folded there, so the solve
+/// does not flip them as it would following their own frames. The written mesh keeps its own
+/// positions; only the region's solve sees these.
+void placeRegionOnSurface(RegionMesh& region, std::vector<Vec3f> surface);
 
 /// The region's corner values (3 #sub faces) and translations (per local seam) after the solve.
 struct RegionSolution {

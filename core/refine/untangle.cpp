@@ -216,12 +216,15 @@ Vec2d quarterTurns(const Vec2d& p, int k) {
 // The fan of interior vertex v with, per corner, the quarter turns from the chart of the first
 // corner into the corner's own (composed across the seams, from the edge both faces share). False
 // for a cone (the turns do not close), an edge too short in (u, v) to tell the turn, or a wedge
-// whose corners disagree.
+// whose corners disagree. A closed fan starts at its smallest corner, whatever corner the table
+// starts it at: the moves' arithmetic follows this order, and the out-of-core repair's window
+// (faces in mesh order) then computes what the whole mesh in memory does.
 bool fanTurns(const Topology& topology, const WedgeMap& uv, VertexId v, std::vector<CornerId>& corners,
               std::vector<int>& turns) {
   corners.clear();
   turns.clear();
   topology.forEachCornerAround(v, [&](CornerId c) { corners.push_back(c); });
+  if (!topology.isBoundaryVertex(v)) std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
   int turn = 0;
   for (std::size_t i = 0; i < corners.size(); ++i) {
     turns.push_back(turn);
@@ -910,7 +913,7 @@ struct GroupRepair {
 GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                         const CutResult& cut, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
                         const std::vector<FaceId>& faces, const UntangleOptions& options) {
-  RegionMesh region = extractRegion(mesh, topology, field, cut, faces);
+  RegionMesh region = extractRegionOnFieldSurface(mesh, topology, field, cut, faces);
   if (options.pinnedVertices) {
     for (VertexId v = 0; v < region.vertexOrigin.size(); ++v) {
       if ((*options.pinnedVertices)[region.vertexOrigin[v]]) region.vertexFree[v] = 0;
