@@ -36,7 +36,7 @@ ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topolo
   }
   MemorySingularities s{singularities};
   return detail::mergeCloseConesWith([&](VertexId v) { return mesh.position(v); }, topology, s, singularities.cones,
-                                     options.maxDistance);
+                                     options.maxDistance, true);
 }
 
 std::vector<std::pair<VertexId, VertexId>> coincidentConeEdges(const Topology& topology,

@@ -72,8 +72,9 @@ struct ConeMergeResult {
 /// Greedily, closest pair first, moves the whole index of one cone onto another no farther than
 /// options.maxDistance along interior edges, when the sum keeps |index4| <= kMaxMergedIndex4 (the
 /// cone with the larger |index4|, or the smaller id, stays). Changes matchings, index4 and cones
-/// in place; the index sum (Poincare-Hopf) is unchanged. Cost: one bounded search per cone and
-/// per merge (ConeMergeResult::searchedVertices), independent of how many cones there are.
+/// in place; the index sum (Poincare-Hopf) is unchanged. Cost: one bounded search per cone
+/// (ConeMergeResult::searchedVertices; in parallel), whose shortest paths the merges then take,
+/// independent of how many cones there are.
 ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topology,
                                 FieldSingularities& singularities, const ConeMergeOptions& options);
 

@@ -10,6 +10,7 @@
 
 #include "core/field/cone_merge.h"
 #include "core/quality/metrics.h"
+#include "core/system/parallel.h"
 
 namespace seamvox::detail {
 
@@ -71,43 +72,75 @@ void moveIndex(Table& table, Singularities& s, VertexId keep, VertexId gone, con
   ++(s.index(keep) == 0 ? out.cancelledPairs : out.mergedPairs);
 }
 
-/// mergeCloseCones on these interfaces; cones: the cones, increasing, updated.
+/// mergeCloseCones on these interfaces; cones: the cones, increasing, updated. parallel: the
+/// searches around the cones run in parallel (a table that several threads may read).
 template <class PositionOf, class Table, class Singularities>
 ConeMergeResult mergeCloseConesWith(PositionOf&& positionOf, Table& table, Singularities& s,
-                                    std::vector<VertexId>& cones, double maxDistance) {
+                                    std::vector<VertexId>& cones, double maxDistance, bool parallel = false) {
   ConeMergeResult out;
   if (!(maxDistance > 0.0) || cones.size() < 2) return out;
   const auto mergeable = [&](VertexId a, VertexId b) {
     const std::int32_t ia = s.index(a), ib = s.index(b);
     return ia != 0 && ib != 0 && std::abs(ia + ib) <= kMaxMergedIndex4;
   };
+  // A pair within reach and the shortest path from a to b its search found: directed edges,
+  // paths[pathBegin, pathEnd). The searches depend on the mesh alone, not on the indices the
+  // merges change, so a merge takes its pair's path instead of searching again.
   struct Candidate {
     double distance;
     VertexId a, b;
+    std::size_t pathBegin, pathEnd;
+  };
+  struct Found {
+    std::vector<Candidate> candidates;
+    std::vector<CornerId> paths;
+    std::uint64_t searched = 0;
   };
   // Pairs within reach: the cones each ball settles (the index tells a cone in O(1)), so the work
   // is the balls' size, linear in the number of cones, not quadratic.
-  std::vector<Candidate> candidates;
-  for (VertexId a : cones) {
+  std::vector<Found> found(cones.size());
+  const auto search = [&](std::uint64_t i) {
+    const VertexId a = cones[i];
+    Found& f = found[i];
     const Ball ball = searchBall(positionOf, table, a, maxDistance);
-    out.searchedVertices += ball.distance.size();
+    f.searched = ball.distance.size();
     for (const auto& [b, distance] : ball.distance) {
-      if (b > a && mergeable(a, b)) candidates.push_back({distance, a, b});
+      if (!(b > a && mergeable(a, b))) continue;
+      const std::size_t begin = f.paths.size();
+      for (VertexId y = b; y != a; y = table.vertex(nextCorner(f.paths.back()))) f.paths.push_back(ball.pred.at(y));
+      f.candidates.push_back({distance, a, b, begin, f.paths.size()});
     }
+  };
+  if (parallel) {
+    parallelForEach(cones.size(), 1, search);
+  } else {
+    for (std::uint64_t i = 0; i < cones.size(); ++i) search(i);
+  }
+  std::vector<Candidate> candidates;
+  std::vector<CornerId> paths;
+  for (Found& f : found) {
+    out.searchedVertices += f.searched;
+    for (Candidate c : f.candidates) {
+      c.pathBegin += paths.size(), c.pathEnd += paths.size();
+      candidates.push_back(c);
+    }
+    paths.insert(paths.end(), f.paths.begin(), f.paths.end());
+    f = Found();
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
     return x.distance != y.distance ? x.distance < y.distance : (x.a != y.a ? x.a < y.a : x.b < y.b);
   });
+  std::vector<CornerId> path;
   for (const Candidate& pair : candidates) {
     if (!mergeable(pair.a, pair.b)) continue;  // an earlier merge changed one of them
     // keep = the cone that stays (larger |index4|, then smaller id); gone = the one moved onto it.
     const bool keepA = std::abs(s.index(pair.a)) >= std::abs(s.index(pair.b));
     const VertexId keep = keepA ? pair.a : pair.b, gone = keepA ? pair.b : pair.a;
-    const Ball ball = searchBall(positionOf, table, keep, maxDistance, gone);
-    out.searchedVertices += ball.distance.size();
-    if (!ball.pred.count(gone)) continue;  // the same search reached it before: cannot happen
-    std::vector<CornerId> path;
-    for (VertexId y = gone; y != keep; y = table.vertex(nextCorner(path.back()))) path.push_back(ball.pred.at(y));
+    // The path from a to b, or the same edges the other way (their opposite corners).
+    path.assign(paths.begin() + pair.pathBegin, paths.begin() + pair.pathEnd);
+    if (!keepA) {
+      for (CornerId& edge : path) edge = table.opposite(edge);
+    }
     moveIndex(table, s, keep, gone, path, out);
     out.longestPath = std::max(out.longestPath, pair.distance);
   }
