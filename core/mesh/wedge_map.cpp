@@ -60,67 +60,90 @@ void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Ve
     }
   }
   if (corners.empty()) return;
-  // Corners per touched wedge: in the assignment, and in the whole map (one pass, counting only
-  // the touched wedges).
-  std::vector<bool> touched(value_.size(), false);
-  std::unordered_map<std::uint32_t, std::pair<std::uint32_t, std::uint32_t>> count;  // given, all
-  for (CornerId c : corners) {
-    touched[wedge_[c]] = true;
-    ++count[wedge_[c]].first;
-  }
-  for (std::uint32_t w : wedge_) {
-    if (touched[w]) ++count[w].second;
-  }
-  // Repeated corners count once too many; a wedge is wholly assigned when every corner of it is
-  // given, which then also holds with the repeats removed.
-  std::vector<std::pair<CornerId, std::uint32_t>> order(corners.size());
-  for (std::size_t k = 0; k < corners.size(); ++k) order[k] = {corners[k], static_cast<std::uint32_t>(k)};
-  std::stable_sort(order.begin(), order.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (std::size_t k = 1; k < order.size(); ++k) {
-    if (order[k].first == order[k - 1].first) --count[wedge_[order[k].first]].first;
-  }
-  // The last value given for a corner wins.
+  // The last value given for each corner, in corner order.
   std::vector<std::pair<CornerId, Vec2d>> last;
-  last.reserve(order.size());
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    if (k + 1 < order.size() && order[k + 1].first == order[k].first) continue;
-    last.emplace_back(order[k].first, values[order[k].second]);
+  {
+    std::vector<std::pair<CornerId, std::uint32_t>> order(corners.size());
+    for (std::size_t k = 0; k < corners.size(); ++k) order[k] = {corners[k], static_cast<std::uint32_t>(k)};
+    std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    last.reserve(order.size());
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      if (k + 1 < order.size() && order[k + 1].first == order[k].first) continue;
+      last.emplace_back(order[k].first, values[order[k].second]);
+    }
   }
-  // Per wedge: the first new value reuses the wedge when all its corners are given; any other
-  // new value gets a wedge of its own (shared by the corners of that wedge given that value).
-  std::unordered_map<std::uint32_t, std::vector<std::pair<Vec2d, std::uint32_t>>> made;
-  // At most one new wedge per corner given: grown by that much and 1/8 more, not doubled (a
-  // map's values are 8 bytes per face; the untouched reserve is not resident).
-  if (value_.capacity() < value_.size() + last.size()) {
+  // The touched wedges (sorted) with, per wedge, its corners given and all its corners (one pass
+  // over the map, counting only the touched wedges): flat arrays, a few bytes per wedge.
+  std::vector<std::uint32_t> touched(last.size());
+  for (std::size_t k = 0; k < last.size(); ++k) touched[k] = wedge_[last[k].first];
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  const auto slot = [&](std::uint32_t w) {
+    return static_cast<std::size_t>(std::lower_bound(touched.begin(), touched.end(), w) - touched.begin());
+  };
+  std::vector<std::uint32_t> given(touched.size(), 0), all(touched.size(), 0);
+  for (const auto& [c, q] : last) ++given[slot(wedge_[c])];
+  {
+    std::vector<bool> isTouched(value_.size(), false);
+    for (std::uint32_t w : touched) isTouched[w] = true;
+    for (std::uint32_t w : wedge_) {
+      if (isTouched[w]) ++all[slot(w)];
+    }
+  }
+  // Per wedge, in corner order: the first new value reuses the wedge when all its corners are
+  // given; any other new value gets a wedge of its own (shared by the corners of that wedge
+  // given that value). A wedge's first value is kept flat, further ones (rare) in a map; the new
+  // wedges are counted first, so the values grow once by exactly that many (a reallocation
+  // would hold them twice: 16 bytes per vertex).
+  struct Option {
+    Vec2d q;
+    std::uint32_t target = 0;
+    bool set = false;
+  };
+  std::vector<Option> first(touched.size());
+  std::unordered_map<std::size_t, std::vector<std::pair<Vec2d, std::uint32_t>>> more;
+  std::vector<Vec2d> fresh;
+  const std::uint32_t numOld = numWedges();
+  for (const auto& [c, q] : last) {
+    const std::uint32_t w = wedge_[c];
+    const std::size_t i = slot(w);
+    Option& head = first[i];
+    if (head.set && head.q == q) {
+      wedge_[c] = head.target;
+      continue;
+    }
+    if (head.set) {
+      auto& rest = more[i];
+      const auto found = std::find_if(rest.begin(), rest.end(), [&](const auto& o) { return o.first == q; });
+      if (found != rest.end()) {
+        wedge_[c] = found->second;
+        continue;
+      }
+    }
+    std::uint32_t target;
+    if (!head.set && given[i] == all[i]) {
+      target = w;
+      value_[w] = q;
+    } else if (value_[w] == q && given[i] != all[i]) {
+      target = w;  // unchanged value on a partly assigned wedge: stays
+    } else {
+      target = numOld + static_cast<std::uint32_t>(fresh.size());
+      fresh.push_back(q);
+    }
+    if (!head.set) {
+      head = {q, target, true};
+    } else {
+      more[i].emplace_back(q, target);
+    }
+    wedge_[c] = target;
+  }
+  if (value_.capacity() < value_.size() + fresh.size()) {
     std::vector<Vec2d> grown;
-    grown.reserve(value_.size() + last.size() + value_.size() / 8);
+    grown.reserve(value_.size() + fresh.size() + value_.size() / 8);
     grown.assign(value_.begin(), value_.end());
     value_.swap(grown);
   }
-  for (const auto& [c, q] : last) {
-    const std::uint32_t w = wedge_[c];
-    auto& options = made[w];
-    const auto found = std::find_if(options.begin(), options.end(),
-                                    [&](const auto& o) { return o.first == q; });
-    if (found != options.end()) {
-      wedge_[c] = found->second;
-      continue;
-    }
-    const auto& n = count[w];
-    std::uint32_t target;
-    if (options.empty() && n.first == n.second) {
-      target = w;
-      value_[w] = q;
-    } else if (value_[w] == q && n.first != n.second) {
-      target = w;  // unchanged value on a partly assigned wedge: stays
-    } else {
-      target = numWedges();
-      value_.push_back(q);
-    }
-    options.emplace_back(q, target);
-    wedge_[c] = target;
-  }
+  value_.insert(value_.end(), fresh.begin(), fresh.end());
 }
 
 void checkCorners(const WedgeMap& map, std::size_t corners, const std::string& what) {
