@@ -598,13 +598,24 @@ RegionSolution solveInSplines(const RegionProblem& p, const Reduction& system, c
     ComplexSparse lower;
     ComplexVector b;
     {
-      const LinearSystem ls = assembleSystem(p.basis, system);
-      const ComplexSparse K = ls.lower.selfadjointView<Eigen::Lower>();
-      ComplexVector x0(np);
-      for (std::uint32_t j = 0; j < np; ++j) x0[j] = x[j];
+      // A = P^H K P as P^H (K P), each operand freed once used: the hat system's lower half, its
+      // full copy and K P are the group's largest blocks (a 454K-face piece of a noisy scan's
+      // region runs at the pipeline's peak).
+      ComplexSparse KP;
+      ComplexVector residual;
+      {
+        LinearSystem ls = assembleSystem(p.basis, system);
+        const ComplexSparse K = ls.lower.selfadjointView<Eigen::Lower>();
+        ls.lower = ComplexSparse();
+        ComplexVector x0(np);
+        for (std::uint32_t j = 0; j < np; ++j) x0[j] = x[j];
+        residual = ls.rhs - K * x0;
+        KP = K * P;
+      }
       const ComplexSparse PH = P.adjoint();
-      const ComplexSparse A = PH * K * P;
-      b = PH * (ls.rhs - K * x0);
+      b = PH * residual;
+      const ComplexSparse A = PH * KP;
+      KP = ComplexSparse();
       lower = A.triangularView<Eigen::Lower>();
     }
     for (int i = 0; i < static_cast<int>(m); ++i) {
