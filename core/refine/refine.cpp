@@ -577,7 +577,7 @@ std::vector<Complex> inputUnknowns(const RegionProblem& p, const Reduction& syst
 /// energy, P^H K P c = P^H (rhs - K x0). Restricted B-splines can be linearly dependent (a flat
 /// patch inside a cell), so the diagonal gets a relative 1e-9: it picks one of equal-energy
 /// combinations and changes nothing else measurable.
-RegionSolution solveInSplines(const RegionProblem& p, const Reduction& system, const detail::SplineSpace& space,
+RegionSolution solveInSplines(const RegionProblem& p, const Reduction& system, detail::SplineSpace& space,
                               const std::vector<Complex>& seamT, RefineStats& local) {
   std::vector<Complex> x = inputUnknowns(p, system);
   const std::uint32_t np = system.numPositional, m = space.numColumns;
@@ -595,6 +595,10 @@ RegionSolution solveInSplines(const RegionProblem& p, const Reduction& system, c
       }
       P.setFromTriplets(triplets.begin(), triplets.end());
     }
+    // P holds the space's rows from here on (its ownUnknown flags stay for the caller).
+    std::vector<std::uint64_t>().swap(space.rowStart);
+    std::vector<std::uint32_t>().swap(space.column);
+    std::vector<Complex>().swap(space.value);
     ComplexSparse lower;
     ComplexVector b;
     {
