@@ -41,11 +41,7 @@ struct RegionReaders {
     RegionMesh out = detail::extractRegionFrom(
         table, [&](VertexId v) { return positions[v]; }, [&](FaceId f) { return directions[f]; },
         [&](FaceId f) { return rotations[f]; }, corners, cut.seams, cut.cones, regionFaces);
-    if (surface) {
-      std::vector<Vec3f> points(out.vertexOrigin.size());
-      for (std::size_t i = 0; i < points.size(); ++i) points[i] = (*surface)[out.vertexOrigin[i]];
-      placeRegionOnSurface(out, std::move(points));
-    }
+    if (surface) detail::placeRegionOnSurfaceOf(out, [&](VertexId v) { return (*surface)[v]; });
     return out;
   }
   std::uint64_t bytesRead() const {

@@ -144,4 +144,13 @@ RegionMesh extractRegionFrom(Table& topology, Position&& position, Direction&& d
   return out;
 }
 
+/// placeRegionOnSurface with the surface point of each sub vertex read at its whole-mesh vertex:
+/// surfaceOf(v) (Vec3f) for v in vertexOrigin.
+template <class SurfaceOf>
+void placeRegionOnSurfaceOf(RegionMesh& region, SurfaceOf&& surfaceOf) {
+  std::vector<Vec3f> surface(region.vertexOrigin.size());
+  for (std::size_t i = 0; i < surface.size(); ++i) surface[i] = surfaceOf(region.vertexOrigin[i]);
+  placeRegionOnSurface(region, std::move(surface));
+}
+
 }  // namespace seamvox::detail

@@ -202,9 +202,7 @@ RegionMesh extractRegionOnFieldSurface(const TriangleMesh& mesh, const Topology&
                                        const CutResult& cut, const std::vector<FaceId>& regionFaces) {
   RegionMesh out = extractRegion(mesh, topology, field, cut, regionFaces);
   if (field.framePositions.size() == mesh.numVertices()) {
-    std::vector<Vec3f> surface(out.vertexOrigin.size());
-    for (std::size_t i = 0; i < surface.size(); ++i) surface[i] = field.framePositions[out.vertexOrigin[i]];
-    placeRegionOnSurface(out, std::move(surface));
+    detail::placeRegionOnSurfaceOf(out, [&](VertexId v) { return field.framePositions[v]; });
   } else if (field.frameSmoothing > 0) {
     placeRegionOnSurface(out, smoothPositionsAt(mesh, topology, field.frameSmoothing, out.vertexOrigin));
   }
