@@ -166,7 +166,7 @@ int main(int argc, char** argv) {
       sameSeams = cut.seams[i].corners == cutExpected.seams[i].corners && cut.seams[i].matching == cutExpected.seams[i].matching;
     }
     std::printf("  cut corners equal to the in-memory cut: %s; seams equal: %s (%zu)\n",
-                corners == cutExpected.corners.bytes() ? "yes" : "NO", sameSeams ? "yes" : "NO", cutExpected.seams.size());
+                corners == cutExpected.corners.cornerBytes() ? "yes" : "NO", sameSeams ? "yes" : "NO", cutExpected.seams.size());
     const VoxelBuildResult built = buildVoxelBasis(cleaned.mesh, cleaned.topology, inMemory, cutExpected, voxelOptions);
     auto t10 = Clock::now();
     line("in memory: voxel basis", t9, t10);

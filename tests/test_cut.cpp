@@ -256,14 +256,17 @@ TEST(Cut, ClosedSphereWithAtMostOneConeKeepsOneEdge) {
 }
 
 TEST(Cut, PackedCornerFlagsKeepCutAndMatchingApart) {
-  // One byte per corner holds both: every sequence of edits reads back like two separate arrays.
-  CutCorners packed(64, true);
-  std::vector<bool> cut(64, true);
-  std::vector<std::uint8_t> matching(64, 0);
+  // Four bits per corner, two corners to a byte, hold both: every sequence of edits reads back like
+  // two separate arrays, and an edit never touches the corner that shares its byte. An odd count
+  // leaves the last byte half used.
+  constexpr CornerId n = 65;
+  CutCorners packed(n, true);
+  std::vector<bool> cut(n, true);
+  std::vector<std::uint8_t> matching(n, 0);
   std::uint32_t state = 12345;
   for (int step = 0; step < 2000; ++step) {
     state = state * 1664525u + 1013904223u;
-    const CornerId c = (state >> 8) % 64;
+    const CornerId c = (state >> 8) % n;
     if ((state >> 20) & 1) {
       cut[c] = (state >> 21) & 1;
       packed.setCut(c, cut[c]);
@@ -271,12 +274,18 @@ TEST(Cut, PackedCornerFlagsKeepCutAndMatchingApart) {
       matching[c] = (state >> 21) & 3;
       packed.setMatching(c, static_cast<std::uint8_t>((state >> 21) & 7));  // taken mod 4
     }
-    for (CornerId k = 0; k < 64; ++k) {
+    for (CornerId k = 0; k < n; ++k) {
       ASSERT_EQ(packed.isCut(k), cut[k]) << "step " << step;
       ASSERT_EQ(packed.matching(k), matching[k]) << "step " << step;
     }
   }
-  EXPECT_EQ(packed.memoryBytes(), 64u);  // one byte per corner
+  const std::vector<std::uint8_t> bytes = packed.cornerBytes();
+  ASSERT_EQ(bytes.size(), n);
+  for (CornerId k = 0; k < n; ++k) EXPECT_EQ(bytes[k], CutCorners::byteOf(cut[k], matching[k])) << "corner " << k;
+  EXPECT_EQ(packed.size(), n);
+  EXPECT_EQ(packed.numBytes(), 33u);
+  EXPECT_EQ(packed.memoryBytes(), 33u);  // half a byte per corner
+  EXPECT_EQ(CutCorners(n, false).cornerBytes(), std::vector<std::uint8_t>(n, 0));
 }
 
 TEST(Cut, SeamIndexRejectsCornersOffInteriorEdges) {

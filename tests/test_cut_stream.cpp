@@ -32,7 +32,7 @@ void expectSameCut(ScratchFolder& folder, const CleanScratch& scratch, const Cle
       cutToDisk(cleaned.mesh, cleaned.topology, field, testing::inMemorySingularities(folder, singularities, cleaned.topology.numVertices()));
   const std::uint64_t onDisk = folder.bytesInUse();
   const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, kTinyPass);
-  EXPECT_EQ(readBytes(folder, cut.corners), expected.corners.bytes());
+  EXPECT_EQ(readBytes(folder, cut.corners), expected.corners.cornerBytes());
   EXPECT_EQ(readBytes(folder, cut.faceRotation), expected.faceRotation);
   ASSERT_EQ(cut.seams.size(), expected.seams.size());
   for (std::size_t i = 0; i < cut.seams.size(); ++i) {

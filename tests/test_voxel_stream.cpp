@@ -215,7 +215,7 @@ void expectSameRegion(const RegionMesh& got, const RegionMesh& want) {
   EXPECT_EQ(got.mesh.positions, want.mesh.positions);
   EXPECT_EQ(got.mesh.triangles, want.mesh.triangles);
   EXPECT_EQ(got.field.direction, want.field.direction);
-  EXPECT_EQ(got.cut.corners.bytes(), want.cut.corners.bytes());
+  EXPECT_EQ(got.cut.corners.cornerBytes(), want.cut.corners.cornerBytes());
   EXPECT_EQ(got.cut.faceRotation, want.cut.faceRotation);
   EXPECT_EQ(got.cut.cones, want.cut.cones);
   ASSERT_EQ(got.cut.seams.size(), want.cut.seams.size());

@@ -75,8 +75,11 @@ void pruneCutInParallel(const Topology& topology, const std::vector<std::uint8_t
   std::vector<std::uint8_t> vanished(remaining.size(), 0);
   bool anyVanished = false;
   for (std::size_t k = 0; k < remaining.size(); ++k) anyVanished |= (vanished[k] = remaining[k] == 0) != 0;
-  parallelForEach(numCorners, 1u << 16, [&](std::uint64_t c) {
-    if (!vanished[component[cornerFace(static_cast<CornerId>(c))]]) cut.setCut(static_cast<CornerId>(c), flag[canonical(static_cast<CornerId>(c))]);
+  // Whole bytes per task: two corners share one (CutCorners).
+  parallelForEach(cut.numBytes(), 1u << 15, [&](std::uint64_t b) {
+    for (std::uint64_t c = 2 * b; c < std::min<std::uint64_t>(2 * b + 2, numCorners); ++c) {
+      if (!vanished[component[cornerFace(static_cast<CornerId>(c))]]) cut.setCut(static_cast<CornerId>(c), flag[canonical(static_cast<CornerId>(c))]);
+    }
   });
   if (!anyVanished) return;
   // The vanished components have their whole cut back: degrees and counts again, then the serial
@@ -90,6 +93,12 @@ void pruneCutInParallel(const Topology& topology, const std::vector<std::uint8_t
 }
 
 }  // namespace
+
+std::vector<std::uint8_t> CutCorners::cornerBytes() const {
+  std::vector<std::uint8_t> out(size_);
+  for (std::size_t c = 0; c < size_; ++c) out[c] = byteOfCorner(static_cast<CornerId>(c));
+  return out;
+}
 
 CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                     const FieldSingularities& singularities, const CutOptions& options) {

@@ -33,26 +33,32 @@ struct CutOptions {
   ProgressFn progress;
 };
 
-/// Per corner, one byte: whether the edge of corner c is cut (boundary edges included) and the
-/// combed matching across it (0 on every non-cut edge). 3 #F bytes.
+/// Per corner, four bits: whether the edge of corner c is cut (boundary edges included) and the
+/// combed matching across it (0 on every non-cut edge). Two corners to a byte (1.5 #F bytes): the
+/// table lives from the cut to the end of the map's repair, beside the map. A corner's bits are
+/// written by one thread at a time, and two corners that share a byte are never written by two
+/// threads at once (a parallel writer goes over whole bytes, numBytes).
 class CutCorners {
  public:
   CutCorners() = default;
   /// n corners, every edge cut or none, matchings 0.
-  CutCorners(std::size_t n, bool cut) : bits_(n, cut ? kCutBit : 0) {}
-  std::size_t size() const { return bits_.size(); }
-  bool isCut(CornerId c) const { return (bits_[c] & kCutBit) != 0; }
-  std::uint8_t matching(CornerId c) const { return bits_[c] & kMatchingBits; }
-  void setCut(CornerId c, bool cut) {
-    bits_[c] = static_cast<std::uint8_t>(cut ? bits_[c] | kCutBit : bits_[c] & ~kCutBit);
-  }
+  CutCorners(std::size_t n, bool cut)
+      : size_(n), bits_((n + 1) / 2, cut ? static_cast<std::uint8_t>(kCutBit | kCutBit << 4) : 0) {}
+  std::size_t size() const { return size_; }
+  bool isCut(CornerId c) const { return (byteOfCorner(c) & kCutBit) != 0; }
+  std::uint8_t matching(CornerId c) const { return byteOfCorner(c) & kMatchingBits; }
+  void setCut(CornerId c, bool cut) { setBits(c, kCutBit, cut ? kCutBit : 0); }
   /// k in 0..3 (taken mod 4).
-  void setMatching(CornerId c, std::uint8_t k) {
-    bits_[c] = static_cast<std::uint8_t>((bits_[c] & ~kMatchingBits) | (k & kMatchingBits));
-  }
+  void setMatching(CornerId c, std::uint8_t k) { setBits(c, kMatchingBits, k & kMatchingBits); }
   std::size_t memoryBytes() const { return bits_.capacity(); }
-  /// The per-corner bytes (the out-of-core cut writes the same bytes to a file).
-  const std::vector<std::uint8_t>& bytes() const { return bits_; }
+  /// Corner c's bits in byteOf's form (the out-of-core cut writes these bytes, one per corner).
+  std::uint8_t byteOfCorner(CornerId c) const {
+    return static_cast<std::uint8_t>((bits_[c >> 1] >> ((c & 1u) * 4)) & kNibble);
+  }
+  /// One byte per corner, byteOf's form (what the out-of-core cut's file holds).
+  std::vector<std::uint8_t> cornerBytes() const;
+  /// Number of packed bytes; byte b holds corners 2b and 2b + 1.
+  std::size_t numBytes() const { return bits_.size(); }
   static std::uint8_t byteOf(bool cut, std::uint8_t k) {
     return static_cast<std::uint8_t>((cut ? kCutBit : 0) | (k & kMatchingBits));
   }
@@ -60,7 +66,13 @@ class CutCorners {
   static std::uint8_t matchingOfByte(std::uint8_t byte) { return byte & kMatchingBits; }
 
  private:
-  static constexpr std::uint8_t kMatchingBits = 3, kCutBit = 4;
+  static constexpr std::uint8_t kMatchingBits = 3, kCutBit = 4, kNibble = 15;
+  void setBits(CornerId c, std::uint8_t mask, std::uint8_t value) {
+    const unsigned shift = (c & 1u) * 4;
+    std::uint8_t& b = bits_[c >> 1];
+    b = static_cast<std::uint8_t>((b & ~(mask << shift)) | (value << shift));
+  }
+  std::size_t size_ = 0;
   std::vector<std::uint8_t> bits_;
 };
 
