@@ -963,6 +963,15 @@ TEST(SmoothedEvaluation, NoiseFoldsFewerFacesAndOnlyOneWedgeVerticesMove) {
   }
   EXPECT_GT(moved, 0u);
   EXPECT_LE(moved, smoothed.smoothedEvaluation.vertices);
+  // A few vertices at a time (a noisy scan's millions go in batches): the same map, bit for bit.
+  options.smoothedBatchVertices = 7;
+  const VoxelParamResult batched = parameterizeMeshVoxel(mesh, topology, field, cut, options, 32);
+  ASSERT_GT(smoothed.smoothedEvaluation.vertices, 10u * options.smoothedBatchVertices);
+  EXPECT_EQ(batched.smoothedEvaluation.vertices, smoothed.smoothedEvaluation.vertices);
+  EXPECT_EQ(batched.smoothedEvaluation.keptForStretch, smoothed.smoothedEvaluation.keptForStretch);
+  for (CornerId c = 0; c < topology.numCorners(); ++c) {
+    ASSERT_EQ(batched.param.cornerUV[c], smoothed.param.cornerUV[c]) << "corner " << c;
+  }
 }
 
 }  // namespace

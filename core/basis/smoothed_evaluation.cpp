@@ -4,9 +4,11 @@
 #include <algorithm>
 
 #include "core/field/field_proxy.h"
+#include "core/system/errors.h"
 #include "core/system/parallel.h"
 
 namespace seamvox {
+
 
 namespace {
 
@@ -22,7 +24,8 @@ std::array<Vec3d, 3> facePoints(const TriangleMesh& mesh, FaceId f) {
 SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh, const Topology& topology,
                                                         const CrossField& field, const VoxelBasis& basis,
                                                         const std::vector<std::complex<double>>& coefficients,
-                                                        double h, WedgeMap& cornerUV) {
+                                                        double h, WedgeMap& cornerUV, std::size_t batchVertices) {
+  if (batchVertices == 0) throw InputError("smoothed evaluation: a batch needs at least one vertex");
   SmoothedEvaluationStats stats;
   const FaceId nf = topology.numFaces();
   const std::uint32_t steps = field.frameSmoothing > 0 ? field.frameSmoothing : kFieldSmoothingIterations;
@@ -58,32 +61,40 @@ SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh,
     };
     vertices.erase(std::remove_if(vertices.begin(), vertices.end(), seamOrIsolated), vertices.end());
     if (vertices.empty()) break;
-    const std::vector<Vec3f> smoothed = smoothPositionsAt(mesh, topology, steps, vertices);
     const VoxelGridGeometry& grid = basis.grid();
-    // New values in parallel; then, vertex by vertex in increasing order, each set unless it
-    // stretches a face of its fan at the values so far (as the out-of-core pass goes).
-    std::vector<std::uint8_t> keep(vertices.size(), 0);
-    std::vector<Vec2d> value(vertices.size());
-    parallelFor(vertices.size(), 1024, [&](const IndexRange& range) {
-      for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-        const VertexId v = vertices[i];
-        // The wedge's value comes from its smallest corner's element (VoxelBasis::evaluateCorners).
-        CornerId smallest = kInvalidId;
-        topology.forEachCornerAround(v, [&](CornerId c) { smallest = std::min(smallest, c); });
-        const std::uint32_t e = basis.cornerElement(smallest);
-        keep[i] = e == kInvalidId;
-        if (keep[i]) continue;
-        const std::complex<double> q = basis.evaluateAt(e, grid.toGrid(smoothed[i].cast<double>()), coefficients);
-        value[i] = Vec2d(q.real(), q.imag());
-      }
-    });
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-      topology.forEachCornerAround(vertices[i], [&](CornerId c) {
-        const FaceId f = cornerFace(c);
-        keep[i] = keep[i] || movingStretches(facePoints(mesh, f), faceValues(cornerUV, f), c % 3, value[i], h);
+    // A batch of vertices at a time, in increasing order: a noisy scan folds millions of faces,
+    // and the smoothed ball around them all (3 rings, two positions per vertex) would sit on the
+    // pipeline's peak next to the basis and the map. A vertex's smoothed position and value do
+    // not depend on the batch; the decisions below go in increasing order either way.
+    for (std::size_t first = 0; first < vertices.size(); first += batchVertices) {
+      const std::size_t count = std::min(batchVertices, vertices.size() - first);
+      const std::vector<VertexId> batch(vertices.begin() + first, vertices.begin() + first + count);
+      const std::vector<Vec3f> smoothed = smoothPositionsAt(mesh, topology, steps, batch);
+      // New values in parallel; then, vertex by vertex in increasing order, each set unless it
+      // stretches a face of its fan at the values so far (as the out-of-core pass goes).
+      std::vector<std::uint8_t> keep(count, 0);
+      std::vector<Vec2d> value(count);
+      parallelFor(count, 1024, [&](const IndexRange& range) {
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+          const VertexId v = batch[i];
+          // The wedge's value comes from its smallest corner's element (VoxelBasis::evaluateCorners).
+          CornerId smallest = kInvalidId;
+          topology.forEachCornerAround(v, [&](CornerId c) { smallest = std::min(smallest, c); });
+          const std::uint32_t e = basis.cornerElement(smallest);
+          keep[i] = e == kInvalidId;
+          if (keep[i]) continue;
+          const std::complex<double> q = basis.evaluateAt(e, grid.toGrid(smoothed[i].cast<double>()), coefficients);
+          value[i] = Vec2d(q.real(), q.imag());
+        }
       });
-      if (!keep[i]) cornerUV.setWedgeValue(cornerUV.wedge(topology.vertexCorner(vertices[i])), value[i]);
-      stats.keptForStretch += keep[i];
+      for (std::size_t i = 0; i < count; ++i) {
+        topology.forEachCornerAround(batch[i], [&](CornerId c) {
+          const FaceId f = cornerFace(c);
+          keep[i] = keep[i] || movingStretches(facePoints(mesh, f), faceValues(cornerUV, f), c % 3, value[i], h);
+        });
+        if (!keep[i]) cornerUV.setWedgeValue(cornerUV.wedge(topology.vertexCorner(batch[i])), value[i]);
+        stats.keptForStretch += keep[i];
+      }
     }
     detail::finishSmoothedRound(topology, vertices, tried, faces, stats);
   }

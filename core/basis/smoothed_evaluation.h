@@ -29,6 +29,8 @@ namespace seamvox {
 
 /// Rounds of evaluateFoldsAtSmoothedSurface (each after the faces it measured).
 constexpr std::uint32_t kSmoothedEvaluationRounds = 3;
+/// Vertices smoothed and evaluated at once: bounds the smoothed ball's memory (a few tens of MB).
+constexpr std::size_t kSmoothedBatchVertices = std::size_t(1) << 18;
 /// A face is folded here when its parameterAreaRatio is below this (flipped, or collapsed to
 /// under a tenth of its area; a zero-area face, NaN, is not): the refinement's default collapse
 /// threshold, so what this leaves folded is what seeds it.
@@ -96,10 +98,12 @@ void finishSmoothedRound(Table& table, const std::vector<VertexId>& vertices, st
 /// The in-memory pass on cornerUV (the wedges of buildCutWedges, values of basis.evaluateCorners
 /// with these coefficients): the smoothed surface is smoothPositionsAt with field.frameSmoothing
 /// steps (kFieldSmoothingIterations for a field computed on the mesh itself), at the vertices
-/// that move. h: the map's edge length.
+/// that move. h: the map's edge length. batchVertices: how many vertices are smoothed and
+/// evaluated at once (the map does not depend on it).
 SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh, const Topology& topology,
                                                         const CrossField& field, const VoxelBasis& basis,
                                                         const std::vector<std::complex<double>>& coefficients,
-                                                        double h, WedgeMap& cornerUV);
+                                                        double h, WedgeMap& cornerUV,
+                                                        std::size_t batchVertices = kSmoothedBatchVertices);
 
 }  // namespace seamvox

@@ -203,7 +203,9 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   storeSeamlessSolution(basis, reduction, std::move(solution), topology, cut, param);
   if (options.smoothedEvaluation) {
     out.smoothedEvaluation = evaluateFoldsAtSmoothedSurface(mesh, topology, field, basis, coefficients,
-                                                            options.edgeLength, param.cornerUV);
+                                                            options.edgeLength, param.cornerUV,
+                                                            options.smoothedBatchVertices ? options.smoothedBatchVertices
+                                                                                          : kSmoothedBatchVertices);
   }
   return out;
 }

@@ -34,6 +34,9 @@ struct ParamOptions {
   /// Voxel solvers: the map re-evaluated at the smoothed surface at the vertices of the faces it
   /// folds (smoothed_evaluation.h).
   bool smoothedEvaluation = true;
+  /// Vertices smoothed and evaluated at once by that pass (0: kSmoothedBatchVertices). The map
+  /// does not depend on it; tests set a few to cover the batches.
+  std::size_t smoothedBatchVertices = 0;
 };
 
 struct ParamResult {
