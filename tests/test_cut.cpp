@@ -288,6 +288,30 @@ TEST(Cut, PackedCornerFlagsKeepCutAndMatchingApart) {
   EXPECT_EQ(CutCorners(n, false).cornerBytes(), std::vector<std::uint8_t>(n, 0));
 }
 
+TEST(Cut, PackedFaceRotationsReadBackAsABytePerFace) {
+  // Two bits per face, four faces to a byte: random edits read back like a plain array, an edit
+  // never touches the faces that share its byte, and a count not a multiple of 4 is whole.
+  constexpr FaceId n = 37;
+  FaceRotations packed(n);
+  std::vector<std::uint8_t> plain(n, 0);
+  std::uint32_t state = 777;
+  for (int step = 0; step < 1000; ++step) {
+    state = state * 1664525u + 1013904223u;
+    const FaceId f = (state >> 8) % n;
+    plain[f] = (state >> 20) & 3;
+    packed.set(f, static_cast<std::uint8_t>((state >> 20) & 7));  // taken mod 4
+    for (FaceId g = 0; g < n; ++g) ASSERT_EQ(packed[g], plain[g]) << "step " << step;
+  }
+  EXPECT_EQ(packed.faceBytes(), plain);
+  EXPECT_EQ(packed.size(), n);
+  EXPECT_EQ(packed.memoryBytes(), 10u);  // a quarter byte per face
+  FaceRotations copy = packed;
+  EXPECT_TRUE(copy == packed);
+  copy.set(n - 1, static_cast<std::uint8_t>(packed[n - 1] + 1));
+  EXPECT_TRUE(copy != packed);
+  EXPECT_EQ(FaceRotations(5).faceBytes(), std::vector<std::uint8_t>(5, 0));
+}
+
 TEST(Cut, SeamIndexRejectsCornersOffInteriorEdges) {
   const Surface s = makeSurface(testing::gridMesh(3, 3));
   CornerId boundary = 0;

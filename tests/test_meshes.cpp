@@ -155,7 +155,7 @@ CutResult boundaryCut(const Topology& topology) {
   CutResult cut;
   cut.corners = CutCorners(topology.numCorners(), false);
   for (CornerId c = 0; c < topology.numCorners(); ++c) cut.corners.setCut(c, topology.isBoundaryEdge(c));
-  cut.faceRotation.assign(topology.numFaces(), 0);
+  cut.faceRotation = FaceRotations(topology.numFaces());
   return cut;
 }
 

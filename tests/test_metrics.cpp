@@ -35,7 +35,7 @@ SplitGrid splitGrid(int n, Complex r, Complex t, std::uint8_t matching) {
     return x / 3;
   };
   g.cut.corners = CutCorners(g.topology.numCorners(), false);
-  g.cut.faceRotation.assign(g.topology.numFaces(), 0);
+  g.cut.faceRotation = FaceRotations(g.topology.numFaces());
   SeamCurve seam;
   seam.matching = matching;
   for (CornerId c = 0; c < g.topology.numCorners(); ++c) {

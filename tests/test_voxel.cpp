@@ -51,7 +51,7 @@ CutMesh makeSetup(TriangleMesh mesh, const Vec3d& direction) {
   s.field = projectToTangent(s.mesh, vectors);
   const std::uint32_t nc = s.topology.numCorners();
   s.cut.corners = CutCorners(nc, false);
-  s.cut.faceRotation.assign(s.mesh.numFaces(), 0);
+  s.cut.faceRotation = FaceRotations(s.mesh.numFaces());
   for (CornerId c = 0; c < nc; ++c) s.cut.corners.setCut(c, s.topology.isBoundaryEdge(c));
   return s;
 }

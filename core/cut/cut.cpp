@@ -94,6 +94,12 @@ void pruneCutInParallel(const Topology& topology, const std::vector<std::uint8_t
 
 }  // namespace
 
+std::vector<std::uint8_t> FaceRotations::faceBytes() const {
+  std::vector<std::uint8_t> out(size_);
+  for (std::size_t f = 0; f < size_; ++f) out[f] = (*this)[static_cast<FaceId>(f)];
+  return out;
+}
+
 std::vector<std::uint8_t> CutCorners::cornerBytes() const {
   std::vector<std::uint8_t> out(size_);
   for (std::size_t c = 0; c < size_; ++c) out[c] = byteOfCorner(static_cast<CornerId>(c));
@@ -120,9 +126,10 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
 
   reportProgress(options.progress, "cut: dual tree", 0.0);
   cut.corners = CutCorners(topology.numCorners(), true);
-  cut.faceRotation.assign(numFaces, RotationState::kUnvisited);
+  // A byte per face while the tree is built (it marks faces not reached yet); packed after combing.
+  std::vector<std::uint8_t> rotationValues(numFaces, RotationState::kUnvisited);
   std::vector<std::uint32_t> faceComponent(numFaces, kInvalidId);
-  RotationState rotation{cut.faceRotation};
+  RotationState rotation{rotationValues};
   detail::VectorArray<std::uint32_t> component{faceComponent};
   const std::uint32_t numComponents =
       detail::buildDualTree(topology, numFaces, matching, rotation, component, cut.corners);
@@ -137,6 +144,9 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
   reportProgress(options.progress, "cut: comb", 0.6);
   detail::combCorners(topology, topology.numCorners(), matching, rotation, cut.corners,
                       [&](CornerId c, bool, std::uint8_t k) { cut.corners.setMatching(c, k); });
+  cut.faceRotation = FaceRotations(numFaces);
+  for (FaceId f = 0; f < numFaces; ++f) cut.faceRotation.set(f, rotationValues[f]);
+  std::vector<std::uint8_t>().swap(rotationValues);
 
   reportProgress(options.progress, "cut: seams", 0.8);
   const auto isNode = [&](VertexId v) {

@@ -76,9 +76,35 @@ class CutCorners {
   std::vector<std::uint8_t> bits_;
 };
 
+/// Per face the quarter turns combing applied (0..3), two bits each, four faces to a byte. Written
+/// by one thread at a time.
+class FaceRotations {
+ public:
+  FaceRotations() = default;
+  /// n faces, every rotation 0.
+  explicit FaceRotations(std::size_t n) : size_(n), bits_((n + 3) / 4, 0) {}
+  std::size_t size() const { return size_; }
+  std::uint8_t operator[](FaceId f) const { return static_cast<std::uint8_t>((bits_[f >> 2] >> (2 * (f & 3u))) & 3u); }
+  /// r in 0..3 (taken mod 4).
+  void set(FaceId f, std::uint8_t r) {
+    const unsigned shift = 2 * (f & 3u);
+    std::uint8_t& b = bits_[f >> 2];
+    b = static_cast<std::uint8_t>((b & ~(3u << shift)) | ((r & 3u) << shift));
+  }
+  std::size_t memoryBytes() const { return bits_.capacity(); }
+  /// One byte per face (what the out-of-core cut's file holds).
+  std::vector<std::uint8_t> faceBytes() const;
+  bool operator==(const FaceRotations& other) const { return size_ == other.size_ && bits_ == other.bits_; }
+  bool operator!=(const FaceRotations& other) const { return !(*this == other); }
+
+ private:
+  std::size_t size_ = 0;
+  std::vector<std::uint8_t> bits_;
+};
+
 struct CutResult {
   CutCorners corners;                        ///< 3 #F: cut flag and combed matching per corner
-  std::vector<std::uint8_t> faceRotation;    ///< #F, quarter turns applied by combing
+  FaceRotations faceRotation;                ///< #F, quarter turns applied by combing
   std::vector<SeamCurve> seams;
   std::vector<VertexId> cones;  ///< copy of the field's cones; every one lies on the cut
 };

@@ -430,7 +430,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       if (passesLeft && r.untangle.flippedAfter > 0 && (!kept || r.untangle.flippedAfter < kept->untangle.flippedAfter)) {
         const auto pairs = foldedConesAfterRepair(r, coneCut.cut.cones, coneIndex, coincidentDistance);
         const std::uint64_t keptBytes = r.solved.param.cornerUV.memoryBytes() + coneCut.cut.corners.memoryBytes() +
-                                        coneCut.cut.faceRotation.capacity();
+                                        coneCut.cut.faceRotation.memoryBytes();
         if (!pairs.empty() && keptBytes > options.passHeadroomBytes) r.conePassSkippedForMemory = true;
         if (!pairs.empty() && keptBytes <= options.passHeadroomBytes) {
           coincident.insert(coincident.end(), pairs.begin(), pairs.end());

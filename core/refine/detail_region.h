@@ -126,11 +126,11 @@ RegionMesh extractRegionFrom(Table& topology, Position&& position, Direction&& d
   out.field.direction.resize(rf);
   CutResult& subCut = out.cut;
   subCut.corners = CutCorners(3u * rf, false);
-  subCut.faceRotation.resize(rf);
+  subCut.faceRotation = FaceRotations(rf);
   for (std::uint32_t i = 0; i < rf; ++i) {
     const FaceId f = regionFaces[i];
     out.field.direction[i] = direction(f);
-    subCut.faceRotation[i] = rotation(f);
+    subCut.faceRotation.set(i, rotation(f));
     for (int k = 0; k < 3; ++k) {
       const CornerId c = 3 * f + k, sc = 3 * i + k;
       sub.triangles[i][k] = cornerVertex[sc];
