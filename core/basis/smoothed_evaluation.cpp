@@ -9,7 +9,6 @@
 
 namespace seamvox {
 
-
 namespace {
 
 std::array<Vec2d, 3> faceValues(const WedgeMap& uv, FaceId f) { return {uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]}; }
