@@ -54,13 +54,10 @@ std::vector<std::pair<VertexId, VertexId>> scratchFoldedCoincidentCones(ScratchF
   std::vector<Vec3d> centroids;
   {
     ScratchMapFaces faces(folder, scratch, map, "cone passes", pageCacheBytes(pass.memoryBytes));
-    FaceId f = 0;
-    Triangle t;
-    std::array<Vec3d, 3> p;
-    std::array<Vec2d, 3> q;
-    while (faces.next(f, t, p, q)) {
-      if (near.holds(p) && isFlippedRatio(parameterAreaRatio(p, q, h))) centroids.push_back((p[0] + p[1] + p[2]) / 3.0);
-    }
+    faces.forEach([&](const MapFace& x) { return near.holds(x.p) && isFlippedRatio(parameterAreaRatio(x.p, x.q, h)); },
+                  [&](const MapFace& x, bool nearFlip) {
+                    if (nearFlip) centroids.push_back((x.p[0] + x.p[1] + x.p[2]) / 3.0);
+                  });
     folder.countRead("cone passes", faces.cacheBytesRead());
   }
   const auto nearFlip = [&](const Vec3d& p) {

@@ -147,19 +147,59 @@ ScratchMap evaluateScratchVoxelMap(ScratchFolder& folder, const CleanScratch& sc
 
 ScratchMapFaces::ScratchMapFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
                                  const std::string& stage, std::size_t cacheBytes)
-    : map_(map), points_(scratch, scratch.positions, cacheBytes), values_(map.wedgeValues, cacheBytes),
-      faces_(folder, scratch.faces, stage), wedges_(folder, map.cornerWedge, stage) {}
+    : scratch_(scratch), map_(map), cacheBytes_(cacheBytes), faces_(folder, scratch.faces, stage), wedges_(folder, map.cornerWedge, stage),
+      lookups_([this] { return makeLookups(); }) {}
+
+std::unique_ptr<ScratchMapFaces::Lookups> ScratchMapFaces::makeLookups() const {
+  return std::unique_ptr<Lookups>(
+      new Lookups{PagedFacePoints(scratch_, scratch_.positions, cacheBytes_), PagedReader<Vec2d>(map_.wedgeValues, cacheBytes_)});
+}
 
 bool ScratchMapFaces::next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std::array<Vec2d, 3>& q) {
   CleanFace face;
   if (!faces_.read(&face, sizeof face)) return false;
   std::uint32_t w[3];
   if (!wedges_.read(w, sizeof w)) throw IoError(map_.cornerWedge.path + ": scratch file ends early");
+  if (!serial_) serial_ = makeLookups();
   f = next_++;
   t = face.triangle;
-  p = points_.points(t);
-  q = {values_[w[0]], values_[w[1]], values_[w[2]]};
+  p = serial_->points.points(t);
+  q = {serial_->values[w[0]], serial_->values[w[1]], serial_->values[w[2]]};
   return true;
+}
+
+bool ScratchMapFaces::readBlock() {
+  const std::uint64_t count = std::min<std::uint64_t>(kBlockFaces, scratch_.numFaces - std::min<std::uint64_t>(next_, scratch_.numFaces));
+  block_.clear();
+  if (count == 0) return false;
+  std::vector<CleanFace> faces(count);
+  blockWedges_.resize(3 * count);
+  if (!faces_.read(faces.data(), count * sizeof(CleanFace))) throw IoError(scratch_.faces.path + ": scratch file ends early");
+  if (!wedges_.read(blockWedges_.data(), blockWedges_.size() * sizeof(std::uint32_t))) {
+    throw IoError(map_.cornerWedge.path + ": scratch file ends early");
+  }
+  block_.resize(count);
+  for (std::uint64_t i = 0; i < count; ++i) {
+    block_[i].f = next_++;
+    block_[i].t = faces[i].triangle;
+  }
+  return true;
+}
+
+void ScratchMapFaces::lookUp(std::uint64_t begin, std::uint64_t end) {
+  auto r = lookups_.take();
+  for (std::uint64_t i = begin; i != end; ++i) {
+    MapFace& face = block_[i];
+    face.p = r->points.points(face.t);
+    const std::uint32_t* w = &blockWedges_[3 * i];
+    face.q = {r->values[w[0]], r->values[w[1]], r->values[w[2]]};
+  }
+}
+
+std::uint64_t ScratchMapFaces::cacheBytesRead() {
+  std::uint64_t bytes = serial_ ? serial_->points.bytesRead() + serial_->values.bytesRead() : 0;
+  lookups_.forEach([&](Lookups& r) { bytes += r.points.bytesRead() + r.values.bytesRead(); });
+  return bytes;
 }
 
 SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& folder, const CleanScratch& scratch,
@@ -175,13 +215,10 @@ SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& fol
   std::vector<FaceId> faces;
   {
     ScratchMapFaces all(folder, scratch, map, stage, cacheBytes);
-    FaceId f = 0;
-    Triangle t;
-    std::array<Vec3d, 3> p;
-    std::array<Vec2d, 3> q;
-    while (all.next(f, t, p, q)) {
-      if (foldedForSmoothedEvaluation(p, q, h)) faces.push_back(f);
-    }
+    all.forEach([&](const MapFace& x) { return foldedForSmoothedEvaluation(x.p, x.q, h); },
+                [&](const MapFace& x, bool folded) {
+                  if (folded) faces.push_back(x.f);
+                });
     folder.countRead(stage, all.cacheBytesRead());
   }
   stats.foldedBefore = faces.size();

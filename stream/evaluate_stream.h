@@ -5,10 +5,14 @@
 #include <array>
 #include <complex>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "core/basis/smoothed_evaluation.h"
+#include "core/system/parallel.h"
 #include "stream/clean_stream.h"
 #include "stream/cut_stream.h"
 #include "stream/field_stream.h"
@@ -27,6 +31,14 @@ struct ScratchMap {
   std::uint64_t numWedges = 0;
 };
 
+/// One face of an out-of-core map: its corners' vertices, positions (in double) and map values.
+struct MapFace {
+  FaceId f = 0;
+  Triangle t{};
+  std::array<Vec3d, 3> p;
+  std::array<Vec2d, 3> q;
+};
+
 /// The faces of the cleaned mesh in order with their corners' positions (in double) and map
 /// values: the faces and the corners' wedges read in order, positions and values through page
 /// caches. The passes that measure or seed from the whole out-of-core map read it so.
@@ -36,15 +48,47 @@ class ScratchMapFaces {
                   std::size_t cacheBytes);
   /// The next face; false after the last (IoError when the map's file ends first).
   bool next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std::array<Vec2d, 3>& q);
+  /// The remaining faces a block at a time: measure(face) in parallel (the faces' positions and
+  /// values looked up there too), then visit(face, measured) one face after another in face
+  /// order, so what visit gathers is what a serial loop would gather.
+  template <class Measure, class Visit>
+  void forEach(Measure&& measure, Visit&& visit) {
+    using Result = decltype(measure(std::declval<const MapFace&>()));
+    using Stored = std::conditional_t<std::is_same<Result, bool>::value, std::uint8_t, Result>;
+    std::vector<Stored> measured;
+    while (readBlock()) {
+      measured.resize(block_.size());
+      parallelFor(block_.size(), kLookupGrain, [&](const IndexRange& range) {
+        lookUp(range.begin(), range.end());
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) measured[i] = measure(block_[i]);
+      });
+      for (std::size_t i = 0; i < block_.size(); ++i) visit(block_[i], static_cast<Result>(measured[i]));
+    }
+  }
   /// Bytes the page caches read (the sequential reads count themselves).
-  std::uint64_t cacheBytesRead() const { return points_.bytesRead() + values_.bytesRead(); }
+  std::uint64_t cacheBytesRead();
 
  private:
+  static constexpr std::uint64_t kBlockFaces = std::uint64_t(1) << 16, kLookupGrain = 2048;
+  struct Lookups {
+    PagedFacePoints points;
+    PagedReader<Vec2d> values;
+  };
+  std::unique_ptr<Lookups> makeLookups() const;
+  /// The next block's faces and corners' wedges, read in order into block_ (false: none left).
+  bool readBlock();
+  /// Positions and values of block_[begin, end) through a pooled set of page caches.
+  void lookUp(std::uint64_t begin, std::uint64_t end);
+
+  const CleanScratch& scratch_;
   const ScratchMap& map_;
-  PagedFacePoints points_;
-  PagedReader<Vec2d> values_;
+  std::size_t cacheBytes_;
+  std::unique_ptr<Lookups> serial_;  // next()'s, made on its first call
   ScratchReader faces_, wedges_;
   FaceId next_ = 0;
+  std::vector<MapFace> block_;
+  std::vector<std::uint32_t> blockWedges_;
+  ReaderPool<Lookups> lookups_;
 };
 
 /// buildCutWedges and basis.evaluateCorners(coefficients) out of core: the wedges of a block of

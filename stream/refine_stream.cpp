@@ -105,22 +105,19 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
   PagedCornerTable table(scratch, cacheBytes);
   if (options.seedFromMap) {
     ScratchMapFaces faces(folder, scratch, map, "refine region", cacheBytes);
-    FaceId f = 0;
-    Triangle t;
-    std::array<Vec3d, 3> p;
-    std::array<Vec2d, 3> q;
     std::size_t nextMarked = 0;
-    while (faces.next(f, t, p, q)) {
-      if (nextMarked < marked.size() && marked[nextMarked] == f) {
-        seeds.push_back(marked[nextMarked++]);
-        continue;
-      }
-      const RefineSeed seed = classifyRefineSeed(parameterAreaRatio(p, q, options.edgeLength), options.collapseThreshold);
-      if (seed == RefineSeed::None) continue;
-      seeds.push_back(f);
-      counts.collapsedFaces += seed == RefineSeed::Collapsed;
-      counts.flippedFaces += seed == RefineSeed::Flipped;
-    }
+    faces.forEach(
+        [&](const MapFace& x) { return classifyRefineSeed(parameterAreaRatio(x.p, x.q, options.edgeLength), options.collapseThreshold); },
+        [&](const MapFace& x, RefineSeed seed) {
+          if (nextMarked < marked.size() && marked[nextMarked] == x.f) {
+            seeds.push_back(marked[nextMarked++]);
+            return;
+          }
+          if (seed == RefineSeed::None) return;
+          seeds.push_back(x.f);
+          counts.collapsedFaces += seed == RefineSeed::Collapsed;
+          counts.flippedFaces += seed == RefineSeed::Flipped;
+        });
     folder.countRead("refine region", faces.cacheBytesRead());
   } else {
     seeds = marked;
@@ -195,18 +192,15 @@ class ScratchRefineSource {
   detail::FaceCounts countOutside(const std::vector<FaceId>& touched, const std::vector<VertexId>& cones, double h) {
     detail::FaceCounts counts;
     ScratchMapFaces faces(folder_, scratch_, map_, "refine", cacheBytes_);
-    FaceId f = 0;
-    Triangle t;
-    std::array<Vec3d, 3> p;
-    std::array<Vec2d, 3> q;
     auto next = touched.begin();
-    while (faces.next(f, t, p, q)) {
-      if (next != touched.end() && *next == f) {
-        ++next;
-        continue;
-      }
-      counts.add(parameterAreaRatio(p, q, h), [&] { return detail::collapsesBetweenListedCones(t, q, cones); });
-    }
+    faces.forEach([&](const MapFace& x) { return parameterAreaRatio(x.p, x.q, h); },
+                  [&](const MapFace& x, double ratio) {
+                    if (next != touched.end() && *next == x.f) {
+                      ++next;
+                      return;
+                    }
+                    counts.add(ratio, [&] { return detail::collapsesBetweenListedCones(x.t, x.q, cones); });
+                  });
     folder_.countRead("refine", faces.cacheBytesRead());
     return counts;
   }

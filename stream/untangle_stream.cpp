@@ -26,15 +26,12 @@ std::vector<FaceId> flippedFaces(ScratchFolder& folder, const CleanScratch& scra
   ScratchMapFaces faces(folder, scratch, map, "untangle", cacheBytes);
   std::vector<FaceId> flipped;
   double edges = 0.0;
-  FaceId f = 0;
-  Triangle t;
-  std::array<Vec3d, 3> p;
-  std::array<Vec2d, 3> q;
-  while (faces.next(f, t, p, q)) {
-    if (!isFlippedRatio(parameterAreaRatio(p, q, h)) || (only && !only->holds(p))) continue;
-    flipped.push_back(f);
-    for (int k = 0; k < 3; ++k) edges += (p[(k + 1) % 3] - p[k]).norm();
-  }
+  faces.forEach([&](const MapFace& x) { return isFlippedRatio(parameterAreaRatio(x.p, x.q, h)) && (!only || only->holds(x.p)); },
+                [&](const MapFace& x, bool isFlipped) {
+                  if (!isFlipped) return;
+                  flipped.push_back(x.f);
+                  for (int k = 0; k < 3; ++k) edges += (x.p[(k + 1) % 3] - x.p[k]).norm();
+                });
   meanEdge = flipped.empty() ? 0.0 : edges / (3.0 * flipped.size());
   folder.countRead("untangle", faces.cacheBytesRead());
   return flipped;
