@@ -265,39 +265,59 @@ ScratchVoxelBasis buildScratchVoxelBasis(ScratchFolder& folder, const CleanScrat
   detail::VoxelBasisParts parts;
   parts.links.functions = detail::UnionFind(8 * elements.elementVoxel.size());
   {
-    PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
-    PagedReader<std::uint8_t> cutBytes(cut.corners, cacheBytes);
-    PagedFacePoints points(scratch, scratch.positions, cacheBytes);
-    PagedReader<std::uint32_t> faceStart(elements.faceFragmentStart, cacheBytes), element(elements.fragmentElement, cacheBytes);
-    PagedReader<VoxelFragment> fragments(elements.fragments, cacheBytes);
-    const SeamIndex seamIndex(cut.seams, 3 * nf, [&](CornerId c) { return opposite[c]; });
-    const auto fragmentsOf = [&](FaceId f, std::vector<detail::FaceFragment>& into) {
-      into.clear();
-      const std::uint32_t end = faceStart[std::uint64_t(f) + 1];
-      for (std::uint32_t i = faceStart[f]; i < end; ++i) {
-        const VoxelFragment fr = fragments[i];
-        into.push_back({voxelCoords[fr.voxel], element[i], static_cast<std::uint8_t>(fr.edgeMask)});
+    // Chunks of faces linked in parallel, each through a pooled set of page caches, and their
+    // links applied in face order (the same domains and seam links as one pass in order).
+    struct LinkReaders {
+      PagedReader<CornerId> opposite;
+      PagedReader<std::uint8_t> cutBytes;
+      PagedFacePoints points;
+      PagedReader<std::uint32_t> faceStart, element;
+      PagedReader<VoxelFragment> fragments;
+      std::uint64_t bytesRead() const {
+        return opposite.bytesRead() + cutBytes.bytesRead() + points.bytesRead() + faceStart.bytesRead() +
+               element.bytesRead() + fragments.bytesRead();
       }
     };
-    ScratchReader ownFragments(folder, elements.fragments, kStage), ownElements(folder, elements.fragmentElement, kStage);
-    std::vector<detail::FaceFragment> mine, theirs;
-    std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;
-    VoxelFragment fr{};
-    std::uint32_t e = 0;
-    bool pending = ownFragments.read(&fr, sizeof(fr)) && ownElements.read(&e, sizeof(e));
-    for (FaceId f = 0; f < nf; ++f) {
-      mine.clear();
-      for (; pending && fr.face == f; pending = ownFragments.read(&fr, sizeof(fr)) && ownElements.read(&e, sizeof(e))) {
-        mine.push_back({voxelCoords[fr.voxel], e, static_cast<std::uint8_t>(fr.edgeMask)});
-      }
-      if (mine.empty()) continue;
-      detail::linkFaceFragments(
-          f, mine, toGrid(elements.geometry, points.points(f)), [&](CornerId c) { return opposite[c]; },
-          [&](CornerId c) { return CutCorners::isCutByte(cutBytes[c]); }, [&](CornerId c) { return seamIndex.find(c); },
-          fragmentsOf, theirs, sorted, parts.links);
+    ReaderPool<LinkReaders> pool([&] {
+      return std::unique_ptr<LinkReaders>(new LinkReaders{
+          PagedReader<CornerId>(scratch.opposite, cacheBytes), PagedReader<std::uint8_t>(cut.corners, cacheBytes),
+          PagedFacePoints(scratch, scratch.positions, cacheBytes),
+          PagedReader<std::uint32_t>(elements.faceFragmentStart, cacheBytes),
+          PagedReader<std::uint32_t>(elements.fragmentElement, cacheBytes),
+          PagedReader<VoxelFragment>(elements.fragments, cacheBytes)});
+    });
+    std::unique_ptr<SeamIndex> seamIndex;
+    {
+      auto r = pool.take();
+      seamIndex = std::make_unique<SeamIndex>(cut.seams, 3 * nf, [&](CornerId c) { return r->opposite[c]; });
     }
-    folder.countRead(kStage, opposite.bytesRead() + cutBytes.bytesRead() + points.bytesRead() + faceStart.bytesRead() +
-                                 element.bytesRead() + fragments.bytesRead());
+    struct Chunk {
+      FaceId begin = 0, end = 0;
+      detail::RecordedLinks links;
+    };
+    const auto work = [&](Chunk& chunk) {
+      auto r = pool.take();
+      const auto fragmentsOf = [&](FaceId f, std::vector<detail::FaceFragment>& into) {
+        into.clear();
+        const std::uint32_t end = r->faceStart[std::uint64_t(f) + 1];
+        for (std::uint32_t i = r->faceStart[f]; i < end; ++i) {
+          const VoxelFragment fr = r->fragments[i];
+          into.push_back({voxelCoords[fr.voxel], r->element[i], static_cast<std::uint8_t>(fr.edgeMask)});
+        }
+      };
+      std::vector<detail::FaceFragment> mine, theirs;
+      std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;
+      for (FaceId f = chunk.begin; f < chunk.end; ++f) {
+        fragmentsOf(f, mine);
+        if (mine.empty()) continue;
+        detail::linkFaceFragments(
+            f, mine, toGrid(elements.geometry, r->points.points(f)), [&](CornerId c) { return r->opposite[c]; },
+            [&](CornerId c) { return CutCorners::isCutByte(r->cutBytes[c]); },
+            [&](CornerId c) { return seamIndex->find(c); }, fragmentsOf, theirs, sorted, chunk.links);
+      }
+    };
+    detail::facesInOrder<Chunk>(nf, 1u << 14, work, [&](Chunk& chunk) { chunk.links.applyTo(parts.links); });
+    pool.forEach([&](LinkReaders& r) { folder.countRead(kStage, r.bytesRead()); });
   }
   clock.finish("link");
   parts.grid = elements.geometry;

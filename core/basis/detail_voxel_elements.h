@@ -232,6 +232,21 @@ struct DomainLinks {
   std::vector<SeamLink> seamLinks;
 };
 
+/// The links of a chunk of faces, found in parallel and applied in face order (applyTo): the seam
+/// links keep their order, and the union-find's sets (each rooted at its smallest node) do not
+/// depend on the order of the unions.
+struct RecordedLinks {
+  struct Functions {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    void unite(std::uint32_t a, std::uint32_t b) { pairs.emplace_back(a, b); }
+  } functions;
+  std::vector<SeamLink> seamLinks;
+  void applyTo(DomainLinks& links) const {
+    for (const auto& [a, b] : functions.pairs) links.functions.unite(a, b);
+    links.seamLinks.insert(links.seamLinks.end(), seamLinks.begin(), seamLinks.end());
+  }
+};
+
 /// A fragment as the linking sees it.
 struct FaceFragment {
   VoxelCoord voxel;

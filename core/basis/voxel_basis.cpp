@@ -221,19 +221,10 @@ DomainLinks linkElementFunctions(const BasisInput& in, const std::vector<std::ui
       out.push_back({in.voxelCoords[fr.voxel], fragmentElement[i], static_cast<std::uint8_t>(fr.edgeMask)});
     }
   };
-  // The links of a chunk of faces are found in parallel and applied in face order: the seam links
-  // keep their order, and the union-find's sets (each rooted at its smallest node) do not
-  // depend on the order of the unions.
-  struct Recorded {
-    struct Functions {
-      std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
-      void unite(std::uint32_t a, std::uint32_t b) { pairs.emplace_back(a, b); }
-    } functions;
-    std::vector<SeamLink> seamLinks;
-  };
+  // The links of a chunk of faces are found in parallel and applied in face order.
   struct Chunk {
     FaceId begin = 0, end = 0;
-    Recorded links;
+    detail::RecordedLinks links;
   };
   const auto work = [&](Chunk& chunk) {
     std::vector<FaceFragment> mine, theirs;
@@ -247,11 +238,7 @@ DomainLinks linkElementFunctions(const BasisInput& in, const std::vector<std::ui
           fragmentsOf, theirs, sorted, chunk.links);
     }
   };
-  const auto finish = [&](Chunk& chunk) {
-    for (const auto& [a, b] : chunk.links.functions.pairs) links.functions.unite(a, b);
-    links.seamLinks.insert(links.seamLinks.end(), chunk.links.seamLinks.begin(), chunk.links.seamLinks.end());
-  };
-  detail::facesInOrder<Chunk>(in.topology.numFaces(), 1u << 14, work, finish);
+  detail::facesInOrder<Chunk>(in.topology.numFaces(), 1u << 14, work, [&](Chunk& chunk) { chunk.links.applyTo(links); });
   return links;
 }
 
