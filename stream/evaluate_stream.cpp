@@ -196,6 +196,12 @@ void ScratchMapFaces::lookUp(std::uint64_t begin, std::uint64_t end) {
   }
 }
 
+const std::vector<MapFace>* ScratchMapFaces::nextBlock() {
+  if (!readBlock()) return nullptr;
+  parallelFor(block_.size(), kLookupGrain, [&](const IndexRange& range) { lookUp(range.begin(), range.end()); });
+  return &block_;
+}
+
 std::uint64_t ScratchMapFaces::cacheBytesRead() {
   std::uint64_t bytes = serial_ ? serial_->points.bytesRead() + serial_->values.bytesRead() : 0;
   lookups_.forEach([&](Lookups& r) { bytes += r.points.bytesRead() + r.values.bytesRead(); });

@@ -65,6 +65,9 @@ class ScratchMapFaces {
       for (std::size_t i = 0; i < block_.size(); ++i) visit(block_[i], static_cast<Result>(measured[i]));
     }
   }
+  /// The next block of the remaining faces in order (at most 2^16), their positions and values
+  /// looked up in parallel; nullptr after the last. Valid until the next call.
+  const std::vector<MapFace>* nextBlock();
   /// Bytes the page caches read (the sequential reads count themselves).
   std::uint64_t cacheBytesRead();
 

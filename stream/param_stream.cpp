@@ -90,52 +90,45 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
   // Wound vertices: the corners' angles summed per vertex, a corner on an edge without another
   // side marking its vertex as boundary.
   ManifoldWoundCounter wound(folder, scratch.numVertices, pass.memoryBytes / 2, "metrics: wound");
-  PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
+  ReaderPool<PagedReader<CornerId>> opposites(
+      [&] { return std::make_unique<PagedReader<CornerId>>(scratch.opposite, cacheBytes); });
   ScratchReader directions(folder, field.directions, "metrics");
-  // Faces read a block at a time in order, measured in parallel in fixed chunks whose sums are
-  // added in order (the same figures at any thread count); flipped faces tested after.
-  struct MeasuredFace {
-    Triangle t;
-    std::array<Vec3d, 3> p;
-    std::array<Vec2d, 3> q;
-    Vec3d u;
-    std::array<float, 3> angle;  // woundCornerAngle
-    std::uint8_t onBoundary;     // bit j: corner j's vertex is on the boundary
-  };
-  constexpr std::size_t kBlockFaces = std::size_t(1) << 16, kChunkFaces = 4096;
-  std::vector<MeasuredFace> block;
-  block.reserve(kBlockFaces);
+  // Faces a block at a time in order (looked up in parallel), measured in parallel in fixed
+  // chunks whose sums are added in order (the same figures at any thread count); flipped faces
+  // tested after, the corners' angles added to their vertices in order.
+  constexpr std::size_t kChunkFaces = 4096;
+  std::vector<Vec3f> blockDirections;
+  std::vector<std::array<float, 3>> angles;  // woundCornerAngle per corner
   std::vector<MapQualitySums> chunkSums;
   std::vector<std::vector<std::uint32_t>> chunkFlipped;
-  for (bool more = true; more;) {
-    block.clear();
-    MeasuredFace face;
-    FaceId f = 0;
-    Vec3f direction;
-    while (block.size() < kBlockFaces && (more = faces.next(f, face.t, face.p, face.q))) {
-      if (!directions.read(&direction, sizeof direction)) throw IoError(field.directions.path + ": scratch file ends early");
-      face.u = direction.cast<double>();
-      face.onBoundary = 0;
-      for (std::uint32_t j = 0; j < 3; ++j) {
-        const CornerId c = 3 * f + j;
-        if (opposite[nextCorner(c)] == kInvalidId || opposite[prevCorner(c)] == kInvalidId) face.onBoundary |= 1 << j;
-      }
-      block.push_back(face);
+  while (const std::vector<MapFace>* faceBlock = faces.nextBlock()) {
+    const std::vector<MapFace>& block = *faceBlock;
+    blockDirections.resize(block.size());
+    angles.resize(block.size());
+    if (!directions.read(blockDirections.data(), block.size() * sizeof(Vec3f))) {
+      throw IoError(field.directions.path + ": scratch file ends early");
     }
     const std::size_t chunks = (block.size() + kChunkFaces - 1) / kChunkFaces;
     chunkSums.assign(chunks, MapQualitySums(h));
     chunkFlipped.assign(chunks, {});
     parallelForEach(chunks, 1, [&](std::uint64_t c) {
+      auto opposite = opposites.take();
       for (std::size_t i = c * kChunkFaces; i < std::min(block.size(), (c + 1) * kChunkFaces); ++i) {
-        MeasuredFace& x = block[i];
-        if (chunkSums[c].add(x.p, x.q, &x.u) == MapQualitySums::Kind::Flipped) {
+        const MapFace& x = block[i];
+        const Vec3d u = blockDirections[i].cast<double>();
+        if (chunkSums[c].add(x.p, x.q, &u) == MapQualitySums::Kind::Flipped) {
           chunkFlipped[c].push_back(static_cast<std::uint32_t>(i));
         }
-        for (int j = 0; j < 3; ++j) x.angle[j] = woundCornerAngle(x.q[j], x.q[(j + 1) % 3], x.q[(j + 2) % 3], x.onBoundary >> j & 1);
+        for (std::uint32_t j = 0; j < 3; ++j) {
+          const CornerId corner = 3 * x.f + j;
+          const bool onBoundary =
+              (*opposite)[nextCorner(corner)] == kInvalidId || (*opposite)[prevCorner(corner)] == kInvalidId;
+          angles[i][j] = woundCornerAngle(x.q[j], x.q[(j + 1) % 3], x.q[(j + 2) % 3], onBoundary);
+        }
       }
     });
-    for (const MeasuredFace& x : block) {
-      for (int j = 0; j < 3; ++j) wound.add(x.t[j], x.angle[j]);
+    for (std::size_t i = 0; i < block.size(); ++i) {
+      for (int j = 0; j < 3; ++j) wound.add(block[i].t[j], angles[i][j]);
     }
     for (std::size_t c = 0; c < chunks; ++c) {
       sums.merge(chunkSums[c]);
@@ -148,7 +141,9 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
   r.mapQuality = sums.finish();
   r.mapQuality.wound = wound.count();
   r.mapQuality.woundCounted = true;
-  folder.countRead("metrics", faces.cacheBytesRead() + opposite.bytesRead() + (smooth ? smooth->bytesRead() : 0));
+  std::uint64_t oppositeBytes = 0;
+  opposites.forEach([&](PagedReader<CornerId>& opposite) { oppositeBytes += opposite.bytesRead(); });
+  folder.countRead("metrics", faces.cacheBytesRead() + oppositeBytes + (smooth ? smooth->bytesRead() : 0));
 }
 
 /// One cone pass's solve through the cut: voxel basis and Vox solve, then the local refinement;
