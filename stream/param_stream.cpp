@@ -7,6 +7,7 @@
 #include <array>
 #include <chrono>
 #include <complex>
+#include <future>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -150,16 +151,15 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
 /// the map and the seams' translations out.
 void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                       const StreamParamOptions& options, const StreamPassOptions& pass, StageMeter& meter,
-                      StreamParamResult& r, ScratchMap& map, std::vector<std::complex<double>>& translations) {
+                      const std::vector<FaceId>& islands, StreamParamResult& r, ScratchMap& map,
+                      std::vector<std::complex<double>>& translations) {
   const double h = r.edgeLength;
   VoxelBasisOptions basisOptions;
   basisOptions.gridResolution = options.gridResolution;
   basisOptions.edgeLength = h;
   basisOptions.progress = options.progress;
-  const auto islandsStart = std::chrono::steady_clock::now();
-  basisOptions.leftOut = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes);
+  basisOptions.leftOut = islands;
   r.islandFaces = basisOptions.leftOut.size();
-  r.passSeconds.emplace_back("basis: islands", secondsSince(islandsStart));
   RoundOptions round;
   round.progress = options.progress;
   VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason);
@@ -284,6 +284,17 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     std::vector<std::complex<double>> translations;
   };
   std::optional<KeptPass> kept;
+  // The islands (components too small for the voxel basis) depend on the mesh alone: found once,
+  // on a thread of their own while the first cut runs on one core, with a quarter of the pass's
+  // memory beside the cut's page caches (a quarter of the early passes').
+  double islandSeconds = 0.0;
+  std::future<std::vector<FaceId>> islandsAhead = std::async(std::launch::async, [&] {
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<FaceId> faces = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes / 4);
+    islandSeconds = secondsSince(start);
+    return faces;
+  });
+  std::optional<std::vector<FaceId>> islands;
   for (;;) {
     ++r.conePasses;
     cut = cutScratchToDisk(folder, scratch, singularities, early);
@@ -296,7 +307,11 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     r.components = cut.components;
     meter.finish("cut");
     reportProgress(options.progress, "cut", 1.0);
-    solveScratchPass(folder, scratch, field, cut, options, pass, meter, r, map, translations);
+    if (!islands) {
+      islands = islandsAhead.get();
+      r.passSeconds.emplace_back("basis: islands (beside the cut)", islandSeconds);
+    }
+    solveScratchPass(folder, scratch, field, cut, options, pass, meter, *islands, r, map, translations);
 
     const bool passesLeft = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
     // Another pass with these pairs merged: this pass's cut and map go, or are kept (afterRepair:
