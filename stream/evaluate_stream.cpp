@@ -172,16 +172,16 @@ bool ScratchMapFaces::readBlock() {
   const std::uint64_t count = std::min<std::uint64_t>(kBlockFaces, scratch_.numFaces - std::min<std::uint64_t>(next_, scratch_.numFaces));
   block_.clear();
   if (count == 0) return false;
-  std::vector<CleanFace> faces(count);
+  blockFaces_.resize(count);
   blockWedges_.resize(3 * count);
-  if (!faces_.read(faces.data(), count * sizeof(CleanFace))) throw IoError(scratch_.faces.path + ": scratch file ends early");
+  if (!faces_.read(blockFaces_.data(), count * sizeof(CleanFace))) throw IoError(scratch_.faces.path + ": scratch file ends early");
   if (!wedges_.read(blockWedges_.data(), blockWedges_.size() * sizeof(std::uint32_t))) {
     throw IoError(map_.cornerWedge.path + ": scratch file ends early");
   }
   block_.resize(count);
   for (std::uint64_t i = 0; i < count; ++i) {
     block_[i].f = next_++;
-    block_[i].t = faces[i].triangle;
+    block_[i].t = blockFaces_[i].triangle;
   }
   return true;
 }

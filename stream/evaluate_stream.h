@@ -90,6 +90,7 @@ class ScratchMapFaces {
   ScratchReader faces_, wedges_;
   FaceId next_ = 0;
   std::vector<MapFace> block_;
+  std::vector<CleanFace> blockFaces_;
   std::vector<std::uint32_t> blockWedges_;
   ReaderPool<Lookups> lookups_;
 };
