@@ -15,6 +15,7 @@
 
 #include "bench/bench_common.h"
 #include "core/field/field.h"
+#include "core/basis/islands.h"
 #include "core/basis/voxel_grid.h"
 #include "core/cut/cut.h"
 #include "core/field/cone_merge.h"
@@ -101,6 +102,8 @@ int main(int argc, char** argv) {
   std::printf("  components %u, seams %zu, seam edges %zu\n", cut.components, cut.seams.size(), seamEdges);
   VoxelBasisOptions voxelOptions;
   voxelOptions.edgeLength = merge.maxDistance;
+  // As param builds it: the islands left to the local hat solve.
+  voxelOptions.leftOut = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, budget);
   ScratchVoxelBasis voxels = buildScratchVoxelBasis(folder, scratch, field, cut, voxelOptions, StreamPassOptions{budget});
   auto t3e = Clock::now();
   line("voxel basis (grid 128)", t3d, t3e);
@@ -191,6 +194,7 @@ int main(int argc, char** argv) {
                 sameAdjacency ? "equal" : "DIFFERS");
     ParamOptions param;
     param.edgeLength = voxelOptions.edgeLength;
+    param.smoothedEvaluation = false;  // out of core, a later pass of its own
     const VoxelParamResult vox = parameterizeMeshVoxel(cleaned.mesh, cleaned.topology, inMemory, cutExpected, param, 128);
     auto t11 = Clock::now();
     line("in memory: vox solve (whole)", t10, t11);
