@@ -146,13 +146,14 @@ ScratchMap evaluateScratchVoxelMap(ScratchFolder& folder, const CleanScratch& sc
 }
 
 ScratchMapFaces::ScratchMapFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
-                                 const std::string& stage, std::size_t cacheBytes)
-    : scratch_(scratch), map_(map), cacheBytes_(cacheBytes), faces_(folder, scratch.faces, stage), wedges_(folder, map.cornerWedge, stage),
+                                 const std::string& stage, std::size_t cacheBytes, std::uint64_t blockFaces)
+    : scratch_(scratch), map_(map), cacheBytes_(cacheBytes), blockFaces_(std::max<std::uint64_t>(1, blockFaces)),
+      faces_(folder, scratch.faces, stage), wedges_(folder, map.cornerWedge, stage),
       lookups_([this] { return makeLookups(); }) {}
 
 std::unique_ptr<ScratchMapFaces::Lookups> ScratchMapFaces::makeLookups() const {
-  return std::unique_ptr<Lookups>(
-      new Lookups{PagedFacePoints(scratch_, scratch_.positions, cacheBytes_), PagedReader<Vec2d>(map_.wedgeValues, cacheBytes_)});
+  return std::unique_ptr<Lookups>(new Lookups{PagedFacePoints(scratch_, scratch_.positions, cacheBytes_),
+                                              PagedReader<Vec2d>(map_.wedgeValues, cacheBytes_)});
 }
 
 bool ScratchMapFaces::next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std::array<Vec2d, 3>& q) {
@@ -169,19 +170,22 @@ bool ScratchMapFaces::next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std:
 }
 
 bool ScratchMapFaces::readBlock() {
-  const std::uint64_t count = std::min<std::uint64_t>(kBlockFaces, scratch_.numFaces - std::min<std::uint64_t>(next_, scratch_.numFaces));
+  const std::uint64_t left = scratch_.numFaces - std::min<std::uint64_t>(next_, scratch_.numFaces);
+  const std::uint64_t count = std::min(blockFaces_, left);
   block_.clear();
   if (count == 0) return false;
-  blockFaces_.resize(count);
+  faceRecords_.resize(count);
   blockWedges_.resize(3 * count);
-  if (!faces_.read(blockFaces_.data(), count * sizeof(CleanFace))) throw IoError(scratch_.faces.path + ": scratch file ends early");
+  if (!faces_.read(faceRecords_.data(), count * sizeof(CleanFace))) {
+    throw IoError(scratch_.faces.path + ": scratch file ends early");
+  }
   if (!wedges_.read(blockWedges_.data(), blockWedges_.size() * sizeof(std::uint32_t))) {
     throw IoError(map_.cornerWedge.path + ": scratch file ends early");
   }
   block_.resize(count);
   for (std::uint64_t i = 0; i < count; ++i) {
     block_[i].f = next_++;
-    block_[i].t = blockFaces_[i].triangle;
+    block_[i].t = faceRecords_[i].triangle;
   }
   return true;
 }

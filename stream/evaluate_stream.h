@@ -44,8 +44,10 @@ struct MapFace {
 /// caches. The passes that measure or seed from the whole out-of-core map read it so.
 class ScratchMapFaces {
  public:
+  static constexpr std::uint64_t kBlockFaces = std::uint64_t(1) << 16;
+  /// blockFaces: forEach's and nextBlock's faces at a time (tests set a few).
   ScratchMapFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map, const std::string& stage,
-                  std::size_t cacheBytes);
+                  std::size_t cacheBytes, std::uint64_t blockFaces = kBlockFaces);
   /// The next face; false after the last (IoError when the map's file ends first).
   bool next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std::array<Vec2d, 3>& q);
   /// The remaining faces a block at a time: measure(face) in parallel (the faces' positions and
@@ -65,14 +67,14 @@ class ScratchMapFaces {
       for (std::size_t i = 0; i < block_.size(); ++i) visit(block_[i], static_cast<Result>(measured[i]));
     }
   }
-  /// The next block of the remaining faces in order (at most 2^16), their positions and values
+  /// The next block of the remaining faces in order (at most blockFaces), their positions and values
   /// looked up in parallel; nullptr after the last. Valid until the next call.
   const std::vector<MapFace>* nextBlock();
   /// Bytes the page caches read (the sequential reads count themselves).
   std::uint64_t cacheBytesRead();
 
  private:
-  static constexpr std::uint64_t kBlockFaces = std::uint64_t(1) << 16, kLookupGrain = 2048;
+  static constexpr std::uint64_t kLookupGrain = 2048;
   struct Lookups {
     PagedFacePoints points;
     PagedReader<Vec2d> values;
@@ -86,11 +88,12 @@ class ScratchMapFaces {
   const CleanScratch& scratch_;
   const ScratchMap& map_;
   std::size_t cacheBytes_;
+  std::uint64_t blockFaces_;
   std::unique_ptr<Lookups> serial_;  // next()'s, made on its first call
   ScratchReader faces_, wedges_;
   FaceId next_ = 0;
   std::vector<MapFace> block_;
-  std::vector<CleanFace> blockFaces_;
+  std::vector<CleanFace> faceRecords_;
   std::vector<std::uint32_t> blockWedges_;
   ReaderPool<Lookups> lookups_;
 };

@@ -235,6 +235,55 @@ void expectSameRegion(const RegionMesh& got, const RegionMesh& want) {
 
 // The Vox solve out of core: the same seam constraints, translations and map (before any local
 // refinement) as parameterizeMeshVoxel on the cleaned mesh; the written map's seams are seamless.
+// The passes over every face of an out-of-core map read it a block at a time and measure in
+// parallel: forEach and nextBlock give the faces next() gives, in face order, across blocks.
+TEST(VoxelStream, MapFacesInBlocksAreTheFacesInOrder) {
+  const NamedMeshes meshes = testing::stageTestMeshes(23);
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    const Inputs in = prepareInputs(folder, scratch, cleaned, 32);
+    const ScratchVoxelBasis built = buildScratchVoxelBasis(folder, scratch, in.field, in.cut, in.options, kTinyPass);
+    std::mt19937 random(7);
+    std::uniform_real_distribution<double> uniform(-10.0, 10.0);
+    std::vector<std::complex<double>> coefficients(built.basis->numDomains());
+    for (auto& q : coefficients) q = {uniform(random), uniform(random)};
+    const ScratchMap map = evaluateScratchVoxelMap(folder, scratch, in.cut, built, coefficients, kTinyPass);
+    std::vector<MapFace> one;
+    {
+      ScratchMapFaces faces(folder, scratch, map, "test", 4096);
+      MapFace x;
+      while (faces.next(x.f, x.t, x.p, x.q)) one.push_back(x);
+    }
+    ASSERT_EQ(one.size(), scratch.numFaces);
+    const auto same = [](const MapFace& a, const MapFace& b) {
+      return a.f == b.f && a.t == b.t && a.p == b.p && a.q == b.q;
+    };
+    const std::uint64_t blockFaces = 97;  // several blocks, the last one short
+    ASSERT_GT(one.size(), 3 * blockFaces);
+    ScratchMapFaces faces(folder, scratch, map, "test", 4096, blockFaces);
+    std::size_t visited = 0, wrong = 0, wrongMeasure = 0;
+    faces.forEach([](const MapFace& x) { return x.p[0].x() + 3.0 * x.q[1].y() + x.t[2]; },
+                  [&](const MapFace& x, double measured) {
+                    wrong += visited >= one.size() || !same(x, one[visited]);
+                    wrongMeasure += measured != x.p[0].x() + 3.0 * x.q[1].y() + x.t[2];
+                    ++visited;
+                  });
+    EXPECT_EQ(visited, one.size());
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_EQ(wrongMeasure, 0u);
+    ScratchMapFaces blocks(folder, scratch, map, "test", 4096, blockFaces);
+    std::size_t at = 0, count = 0;
+    wrong = 0;
+    while (const std::vector<MapFace>* block = blocks.nextBlock()) {
+      EXPECT_LE(block->size(), blockFaces);
+      for (const MapFace& x : *block) wrong += at >= one.size() || !same(x, one[at++]);
+      ++count;
+    }
+    EXPECT_EQ(at, one.size());
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_EQ(count, (one.size() + blockFaces - 1) / blockFaces);
+  });
+}
+
 TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
   const NamedMeshes meshes = testing::stageTestMeshes(29);
   std::size_t consistentMeshes = 0;
