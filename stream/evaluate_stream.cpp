@@ -149,25 +149,10 @@ ScratchMapFaces::ScratchMapFaces(ScratchFolder& folder, const CleanScratch& scra
                                  const std::string& stage, std::size_t cacheBytes, std::uint64_t blockFaces)
     : scratch_(scratch), map_(map), cacheBytes_(cacheBytes), blockFaces_(std::max<std::uint64_t>(1, blockFaces)),
       faces_(folder, scratch.faces, stage), wedges_(folder, map.cornerWedge, stage),
-      lookups_([this] { return makeLookups(); }) {}
-
-std::unique_ptr<ScratchMapFaces::Lookups> ScratchMapFaces::makeLookups() const {
-  return std::unique_ptr<Lookups>(new Lookups{PagedFacePoints(scratch_, scratch_.positions, cacheBytes_),
-                                              PagedReader<Vec2d>(map_.wedgeValues, cacheBytes_)});
-}
-
-bool ScratchMapFaces::next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std::array<Vec2d, 3>& q) {
-  CleanFace face;
-  if (!faces_.read(&face, sizeof face)) return false;
-  std::uint32_t w[3];
-  if (!wedges_.read(w, sizeof w)) throw IoError(map_.cornerWedge.path + ": scratch file ends early");
-  if (!serial_) serial_ = makeLookups();
-  f = next_++;
-  t = face.triangle;
-  p = serial_->points.points(t);
-  q = {serial_->values[w[0]], serial_->values[w[1]], serial_->values[w[2]]};
-  return true;
-}
+      lookups_([this] {
+        return std::unique_ptr<Lookups>(new Lookups{PagedFacePoints(scratch_, scratch_.positions, cacheBytes_),
+                                                    PagedReader<Vec2d>(map_.wedgeValues, cacheBytes_)});
+      }) {}
 
 bool ScratchMapFaces::readBlock() {
   const std::uint64_t left = scratch_.numFaces - std::min<std::uint64_t>(next_, scratch_.numFaces);
@@ -190,24 +175,22 @@ bool ScratchMapFaces::readBlock() {
   return true;
 }
 
-void ScratchMapFaces::lookUp(std::uint64_t begin, std::uint64_t end) {
-  auto r = lookups_.take();
-  for (std::uint64_t i = begin; i != end; ++i) {
-    MapFace& face = block_[i];
-    face.p = r->points.points(face.t);
-    const std::uint32_t* w = &blockWedges_[3 * i];
-    face.q = {r->values[w[0]], r->values[w[1]], r->values[w[2]]};
-  }
-}
-
 const std::vector<MapFace>* ScratchMapFaces::nextBlock() {
   if (!readBlock()) return nullptr;
-  parallelFor(block_.size(), kLookupGrain, [&](const IndexRange& range) { lookUp(range.begin(), range.end()); });
+  parallelFor(block_.size(), kLookupGrain, [&](const IndexRange& range) {
+    auto r = lookups_.take();
+    for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+      MapFace& face = block_[i];
+      face.p = r->points.points(face.t);
+      const std::uint32_t* w = &blockWedges_[3 * i];
+      face.q = {r->values[w[0]], r->values[w[1]], r->values[w[2]]};
+    }
+  });
   return &block_;
 }
 
 std::uint64_t ScratchMapFaces::cacheBytesRead() {
-  std::uint64_t bytes = serial_ ? serial_->points.bytesRead() + serial_->values.bytesRead() : 0;
+  std::uint64_t bytes = 0;
   lookups_.forEach([&](Lookups& r) { bytes += r.points.bytesRead() + r.values.bytesRead(); });
   return bytes;
 }

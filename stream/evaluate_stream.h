@@ -40,36 +40,34 @@ struct MapFace {
 };
 
 /// The faces of the cleaned mesh in order with their corners' positions (in double) and map
-/// values: the faces and the corners' wedges read in order, positions and values through page
-/// caches. The passes that measure or seed from the whole out-of-core map read it so.
+/// values, a block at a time: the faces and the corners' wedges read in order, positions and
+/// values through pooled page caches in parallel. The passes that measure or seed from the whole
+/// out-of-core map read it so.
 class ScratchMapFaces {
  public:
   static constexpr std::uint64_t kBlockFaces = std::uint64_t(1) << 16;
   /// blockFaces: forEach's and nextBlock's faces at a time (tests set a few).
   ScratchMapFaces(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map, const std::string& stage,
                   std::size_t cacheBytes, std::uint64_t blockFaces = kBlockFaces);
-  /// The next face; false after the last (IoError when the map's file ends first).
-  bool next(FaceId& f, Triangle& t, std::array<Vec3d, 3>& p, std::array<Vec2d, 3>& q);
-  /// The remaining faces a block at a time: measure(face) in parallel (the faces' positions and
-  /// values looked up there too), then visit(face, measured) one face after another in face
-  /// order, so what visit gathers is what a serial loop would gather.
+  /// The next block of the remaining faces in order (at most blockFaces), their positions and
+  /// values looked up in parallel; nullptr after the last (IoError when a file ends first). Valid
+  /// until the next call.
+  const std::vector<MapFace>* nextBlock();
+  /// The remaining faces: measure(face) in parallel, then visit(face, measured) one face after
+  /// another in face order, so what visit gathers is what a serial loop would gather.
   template <class Measure, class Visit>
   void forEach(Measure&& measure, Visit&& visit) {
     using Result = decltype(measure(std::declval<const MapFace&>()));
     using Stored = std::conditional_t<std::is_same<Result, bool>::value, std::uint8_t, Result>;
     std::vector<Stored> measured;
-    while (readBlock()) {
-      measured.resize(block_.size());
-      parallelFor(block_.size(), kLookupGrain, [&](const IndexRange& range) {
-        lookUp(range.begin(), range.end());
-        for (std::uint64_t i = range.begin(); i != range.end(); ++i) measured[i] = measure(block_[i]);
+    while (const std::vector<MapFace>* block = nextBlock()) {
+      measured.resize(block->size());
+      parallelFor(block->size(), kLookupGrain, [&](const IndexRange& range) {
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) measured[i] = measure((*block)[i]);
       });
-      for (std::size_t i = 0; i < block_.size(); ++i) visit(block_[i], static_cast<Result>(measured[i]));
+      for (std::size_t i = 0; i < block->size(); ++i) visit((*block)[i], static_cast<Result>(measured[i]));
     }
   }
-  /// The next block of the remaining faces in order (at most blockFaces), their positions and values
-  /// looked up in parallel; nullptr after the last. Valid until the next call.
-  const std::vector<MapFace>* nextBlock();
   /// Bytes the page caches read (the sequential reads count themselves).
   std::uint64_t cacheBytesRead();
 
@@ -79,17 +77,13 @@ class ScratchMapFaces {
     PagedFacePoints points;
     PagedReader<Vec2d> values;
   };
-  std::unique_ptr<Lookups> makeLookups() const;
   /// The next block's faces and corners' wedges, read in order into block_ (false: none left).
   bool readBlock();
-  /// Positions and values of block_[begin, end) through a pooled set of page caches.
-  void lookUp(std::uint64_t begin, std::uint64_t end);
 
   const CleanScratch& scratch_;
   const ScratchMap& map_;
   std::size_t cacheBytes_;
   std::uint64_t blockFaces_;
-  std::unique_ptr<Lookups> serial_;  // next()'s, made on its first call
   ScratchReader faces_, wedges_;
   FaceId next_ = 0;
   std::vector<MapFace> block_;

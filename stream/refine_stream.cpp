@@ -107,7 +107,9 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
     ScratchMapFaces faces(folder, scratch, map, "refine region", cacheBytes);
     std::size_t nextMarked = 0;
     faces.forEach(
-        [&](const MapFace& x) { return classifyRefineSeed(parameterAreaRatio(x.p, x.q, options.edgeLength), options.collapseThreshold); },
+        [&](const MapFace& x) {
+          return classifyRefineSeed(parameterAreaRatio(x.p, x.q, options.edgeLength), options.collapseThreshold);
+        },
         [&](const MapFace& x, RefineSeed seed) {
           if (nextMarked < marked.size() && marked[nextMarked] == x.f) {
             seeds.push_back(marked[nextMarked++]);

@@ -286,16 +286,13 @@ ScratchVoxelBasis buildScratchVoxelBasis(ScratchFolder& folder, const CleanScrat
           PagedReader<std::uint32_t>(elements.fragmentElement, cacheBytes),
           PagedReader<VoxelFragment>(elements.fragments, cacheBytes)});
     });
-    std::unique_ptr<SeamIndex> seamIndex;
-    {
-      auto r = pool.take();
-      seamIndex = std::make_unique<SeamIndex>(cut.seams, 3 * nf, [&](CornerId c) { return r->opposite[c]; });
-    }
-    struct Chunk {
-      FaceId begin = 0, end = 0;
-      detail::RecordedLinks links;
-    };
-    const auto work = [&](Chunk& chunk) {
+    const SeamIndex seamIndex = [&] {
+      PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
+      SeamIndex index(cut.seams, 3 * nf, [&](CornerId c) { return opposite[c]; });
+      folder.countRead(kStage, opposite.bytesRead());
+      return index;
+    }();
+    const auto work = [&](detail::LinkChunk& chunk) {
       auto r = pool.take();
       const auto fragmentsOf = [&](FaceId f, std::vector<detail::FaceFragment>& into) {
         into.clear();
@@ -313,10 +310,11 @@ ScratchVoxelBasis buildScratchVoxelBasis(ScratchFolder& folder, const CleanScrat
         detail::linkFaceFragments(
             f, mine, toGrid(elements.geometry, r->points.points(f)), [&](CornerId c) { return r->opposite[c]; },
             [&](CornerId c) { return CutCorners::isCutByte(r->cutBytes[c]); },
-            [&](CornerId c) { return seamIndex->find(c); }, fragmentsOf, theirs, sorted, chunk.links);
+            [&](CornerId c) { return seamIndex.find(c); }, fragmentsOf, theirs, sorted, chunk.links);
       }
     };
-    detail::facesInOrder<Chunk>(nf, 1u << 14, work, [&](Chunk& chunk) { chunk.links.applyTo(parts.links); });
+    detail::facesInOrder<detail::LinkChunk>(nf, 1u << 14, work,
+                                            [&](detail::LinkChunk& chunk) { chunk.links.applyTo(parts.links); });
     pool.forEach([&](LinkReaders& r) { folder.countRead(kStage, r.bytesRead()); });
   }
   clock.finish("link");

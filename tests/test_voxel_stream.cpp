@@ -236,7 +236,8 @@ void expectSameRegion(const RegionMesh& got, const RegionMesh& want) {
 // The Vox solve out of core: the same seam constraints, translations and map (before any local
 // refinement) as parameterizeMeshVoxel on the cleaned mesh; the written map's seams are seamless.
 // The passes over every face of an out-of-core map read it a block at a time and measure in
-// parallel: forEach and nextBlock give the faces next() gives, in face order, across blocks.
+// parallel: forEach and nextBlock give every face in order, with the positions and values its
+// corners have in the files, across blocks.
 TEST(VoxelStream, MapFacesInBlocksAreTheFacesInOrder) {
   const NamedMeshes meshes = testing::stageTestMeshes(23);
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
@@ -247,11 +248,18 @@ TEST(VoxelStream, MapFacesInBlocksAreTheFacesInOrder) {
     std::vector<std::complex<double>> coefficients(built.basis->numDomains());
     for (auto& q : coefficients) q = {uniform(random), uniform(random)};
     const ScratchMap map = evaluateScratchVoxelMap(folder, scratch, in.cut, built, coefficients, kTinyPass);
-    std::vector<MapFace> one;
-    {
-      ScratchMapFaces faces(folder, scratch, map, "test", 4096);
-      MapFace x;
-      while (faces.next(x.f, x.t, x.p, x.q)) one.push_back(x);
+    const std::vector<CleanFace> records = readRecords<CleanFace>(folder, scratch.faces);
+    const std::vector<Vec3f> positions = readRecords<Vec3f>(folder, scratch.positions);
+    const std::vector<std::uint32_t> cornerWedge = readRecords<std::uint32_t>(folder, map.cornerWedge);
+    const std::vector<Vec2d> values = readRecords<Vec2d>(folder, map.wedgeValues);
+    std::vector<MapFace> one(records.size());
+    for (FaceId f = 0; f < records.size(); ++f) {
+      one[f].f = f;
+      one[f].t = records[f].triangle;
+      for (int k = 0; k < 3; ++k) {
+        one[f].p[k] = positions[one[f].t[k]].cast<double>();
+        one[f].q[k] = values[cornerWedge[3 * f + k]];
+      }
     }
     ASSERT_EQ(one.size(), scratch.numFaces);
     const auto same = [](const MapFace& a, const MapFace& b) {

@@ -247,6 +247,12 @@ struct RecordedLinks {
   }
 };
 
+/// Faces [begin, end) and the links found in them: facesInOrder's chunk for the linking.
+struct LinkChunk {
+  FaceId begin = 0, end = 0;
+  RecordedLinks links;
+};
+
 /// A fragment as the linking sees it.
 struct FaceFragment {
   VoxelCoord voxel;

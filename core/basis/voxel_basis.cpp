@@ -222,11 +222,7 @@ DomainLinks linkElementFunctions(const BasisInput& in, const std::vector<std::ui
     }
   };
   // The links of a chunk of faces are found in parallel and applied in face order.
-  struct Chunk {
-    FaceId begin = 0, end = 0;
-    detail::RecordedLinks links;
-  };
-  const auto work = [&](Chunk& chunk) {
+  const auto work = [&](detail::LinkChunk& chunk) {
     std::vector<FaceFragment> mine, theirs;
     std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, element) of one face
     for (FaceId f = chunk.begin; f < chunk.end; ++f) {
@@ -238,7 +234,8 @@ DomainLinks linkElementFunctions(const BasisInput& in, const std::vector<std::ui
           fragmentsOf, theirs, sorted, chunk.links);
     }
   };
-  detail::facesInOrder<Chunk>(in.topology.numFaces(), 1u << 14, work, [&](Chunk& chunk) { chunk.links.applyTo(links); });
+  detail::facesInOrder<detail::LinkChunk>(in.topology.numFaces(), 1u << 14, work,
+                                          [&](detail::LinkChunk& chunk) { chunk.links.applyTo(links); });
   return links;
 }
 
