@@ -64,9 +64,13 @@ int main(int argc, char** argv) {
   auto t1 = Clock::now();
   line("weld pass", t0, t1);
   for (const auto& [name, s] : welded.census.stageSeconds) std::printf("  weld: %-21s %8.2f s\n", name.c_str(), s);
-  const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, budget);
+  CleanStreamOptions clean;
+  clean.memoryBytes = budget;
+  const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, clean);
   auto t2 = Clock::now();
   line("clean", t1, t2);
+  std::printf("  clean: gluing %s, largest front %llu vertices, %llu values patched\n", scratch.gluing.c_str(),
+              static_cast<unsigned long long>(scratch.largestFront), static_cast<unsigned long long>(scratch.frontLateValues));
   for (const auto& [name, s] : scratch.stageSeconds) std::printf("  clean: %-20s %8.2f s\n", name.c_str(), s);
   std::fflush(stdout);
   const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), StreamPassOptions{budget});

@@ -17,6 +17,7 @@
 #include "core/mesh/topology.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
+#include "stream/clean_front.h"
 #include "stream/external_sort.h"
 #include "stream/keyed_sort.h"
 #include "stream/paged_corner_table.h"
@@ -103,12 +104,7 @@ struct BoundaryPoint {
   }
 };
 
-/// A corner at its vertex with the corner clockwise of it around the vertex (kInvalidId across a
-/// boundary edge).
-struct CornerAround {
-  VertexId vertex;
-  CornerId corner, clockwise;
-};
+using detail::CornerAround;
 struct CornerAroundLess {
   bool operator()(const CornerAround& a, const CornerAround& b) const {
     return a.vertex != b.vertex ? a.vertex < b.vertex : a.corner < b.corner;
@@ -126,9 +122,10 @@ CornerId flippedCorner(CornerId c) {
 
 class CleanPass {
  public:
-  CleanPass(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census, std::uint64_t memoryBytes,
-            bool renumberBySorts, bool setsOnDisk)
-      : folder_(folder), welded_(welded) {
+  CleanPass(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census, const CleanStreamOptions& options)
+      : folder_(folder), welded_(welded), options_(options) {
+    const std::uint64_t memoryBytes = options.memoryBytes;
+    const bool setsOnDisk = options.setsOnDisk;
     sort_.memoryBytes = std::max(kMinimumSortBytes, memoryBytes / 2);
     // Per-face sets and flags within shares of the memory (on disk beyond them; tests: always):
     // the orientation's union-find alone (half), then the flips (an eighth) for the rest of the
@@ -138,7 +135,7 @@ class CleanPass {
     piecesBytes_ = setsOnDisk ? 0 : memoryBytes / 4;
     // New vertex ids in memory (4 B per welded vertex) while they fit half the sorts' share (a
     // quarter of memoryBytes: 200 MB at 100M faces in a 2 GiB budget), else by sorts.
-    renumberBySorts_ = renumberBySorts || 4 * welded.numVertices > sort_.memoryBytes / 2;
+    renumberBySorts_ = options.renumberBySorts || 4 * welded.numVertices > sort_.memoryBytes / 2;
     out_.numFaces = welded.numFaces;
     out_.origin = census.origin;
     out_.report = weldCleanReport(census);
@@ -150,7 +147,7 @@ class CleanPass {
   CleanScratch run() {
     const std::pair<const char*, void (CleanPass::*)()> passes[] = {
         {"vertices", &CleanPass::renumberVertices}, {"faces", &CleanPass::readFaces},
-        {"glue", &CleanPass::orientAndGlue},
+        {"front", &CleanPass::glueAlongFront},      {"glue", &CleanPass::orientAndGlue},
         {"fans", &CleanPass::splitVertices},        {"write", &CleanPass::writeFaces},
         {"measure", &CleanPass::measure}};
     for (const auto& [name, pass] : passes) {
@@ -310,9 +307,16 @@ class CleanPass {
     cornerNewId_ = cornerIds.finish();
   }
 
-  /// The faces on the new ids (a scratch file) and their edges' sides into a sort by edge.
+  /// The faces on the new ids (a scratch file) and, for the front pass, each vertex's last face;
+  /// without the front pass, their edges' sides into a sort by edge.
   void readFaces() {
-    edges_ = std::make_unique<EdgeSorter>(folder_, out_.numVertices, 3 * out_.numFaces, sortOptions("clean: edges"));
+    tryFront_ = !options_.gluingBySorts && 8 * out_.numVertices <= std::max(kMinimumSortBytes, options_.memoryBytes / 4);
+    if (tryFront_) {
+      lastFace_.assign(out_.numVertices, 0);
+    } else {
+      out_.gluing = options_.gluingBySorts ? "sorts" : "sorts: the front pass's 8 bytes per vertex do not fit a quarter of the memory";
+      edges_ = std::make_unique<EdgeSorter>(folder_, out_.numVertices, 3 * out_.numFaces, sortOptions("clean: edges"));
+    }
     WeldedFaceReader faces(folder_, welded_, "clean: faces");
     ScratchWriter out(folder_, "clean: faces");
     std::unique_ptr<ScratchReader> cornerIds;
@@ -330,6 +334,11 @@ class CleanPass {
           face.triangle = {newId_[f.triangle[0]], newId_[f.triangle[1]], newId_[f.triangle[2]]};
         }
         out.write(&face, sizeof face);
+        if (tryFront_) {
+          for (const VertexId v : face.triangle) lastFace_[v] = corner / 3;
+          corner += 3;
+          continue;
+        }
         for (int k = 0; k < 3; ++k, ++corner) {
           const VertexId a = face.triangle[(k + 1) % 3], b = face.triangle[(k + 2) % 3];
           edges_->add({a, b, corner});
@@ -342,6 +351,49 @@ class CleanPass {
       folder_.remove(cornerNewId_);
     }
     faces_ = out.finish();
+    if (edges_) edges_->finish();
+  }
+
+  /// The gluing and fans in one pass along the faces (stream/clean_front) when the mesh allows it;
+  /// else the edges' sides into their sort for the passes that follow.
+  void glueAlongFront() {
+    if (!tryFront_) return;
+    detail::FrontGlueOptions front;
+    front.memoryBytes = options_.frontBytes > 0 ? options_.frontBytes : std::max(kMinimumSortBytes, options_.memoryBytes / 4);
+    front.windowValues = options_.frontWindow;
+    detail::FrontGlueResult r = detail::glueAlongFront(folder_, faces_, out_.numFaces, out_.numVertices, lastFace_, front);
+    std::vector<FaceId>().swap(lastFace_);
+    out_.largestFront = r.largestFront;
+    out_.frontLateValues = r.lateValues;
+    if (!r.glued) {
+      out_.gluing = "sorts: the front pass met " + r.why;
+      sortEdges();
+      return;
+    }
+    glued_ = true;
+    out_.gluing = "front";
+    out_.opposite = r.opposite;
+    out_.vertexCorner = r.vertexCorner;
+    boundary_ = std::move(r.boundary);
+    out_.report.nonManifoldVertices = r.nonManifoldVertices;
+    moved_ = std::make_unique<ExternalSorter<CornerPair>>(folder_, sortOptions("clean: fans"));
+    std::vector<VertexId> copyOf;
+    for (std::size_t i = 0; i < r.copies.size(); ++i) {
+      copyOf.push_back(r.copies[i].vertex);
+      for (const CornerId c : r.copies[i].corners) moved_->add({c, static_cast<CornerId>(out_.numVertices + i)});
+    }
+    moved_->finish();
+    placeCopies(copyOf);
+  }
+
+  /// The faces' edge sides into the sort by edge (after a front pass that stopped).
+  void sortEdges() {
+    edges_ = std::make_unique<EdgeSorter>(folder_, out_.numVertices, 3 * out_.numFaces, sortOptions("clean: edges"));
+    ScratchReader in(folder_, faces_, "clean: edges");
+    CleanFace face;
+    for (CornerId corner = 0; in.read(&face, sizeof face);) {
+      for (int k = 0; k < 3; ++k, ++corner) edges_->add({face.triangle[(k + 1) % 3], face.triangle[(k + 2) % 3], corner});
+    }
     edges_->finish();
   }
 
@@ -366,6 +418,7 @@ class CleanPass {
   /// one side): the gluing assumes so and stops at the first edge that is not, which is then
   /// counted, oriented and glued in full.
   void orientAndGlue() {
+    if (glued_) return;
     if (glue(true)) return edges_.reset();
     forEachEdge([&](const std::vector<EdgeSide>& sides) {
       clashes_ += sides.size() == 2 && sides[0].forward() == sides[1].forward();
@@ -529,6 +582,7 @@ class CleanPass {
   /// vertex, numbered after all others in the order of their vertices (cleanMesh's
   /// splitNonManifoldVertices). Fan starts as Topology::build picks them.
   void splitVertices() {
+    if (glued_) return;
     KeyedSorter<CornerAround, CornerAroundLess, CornerAroundKey> around(folder_, out_.numVertices, 3 * out_.numFaces,
                                                                          sortOptions("clean: fans"));
     {
@@ -553,43 +607,38 @@ class CleanPass {
     std::vector<CornerId> copyStarts;
     std::vector<VertexId> copyOf;
     std::vector<CornerAround> group;
-    std::vector<std::uint32_t> root, fanOf;  // fansOf's, reused from vertex to vertex
+    std::vector<std::uint32_t> root, fanOf;  // findFans', reused from vertex to vertex
+    std::vector<detail::FanStart> fans;
     CornerAround next{};
     bool more = around.next(next);
     VertexId copy = static_cast<VertexId>(out_.numVertices);
     while (more) {
       group.assign(1, next);
       while ((more = around.next(next)) && next.vertex == group[0].vertex) group.push_back(next);
-      const std::uint32_t fans = fansOf(group, root, fanOf);
-      for (std::uint32_t i = 0; i < fans; ++i) {
-        // The start: the most clockwise corner (an open fan), else the largest corner of a
-        // vertex's only fan or the smallest of one of several (findFans).
-        CornerId first = kInvalidId;
-        for (std::size_t j = 0; j < group.size() && first == kInvalidId; ++j) {
-          if (fanOf[j] == i) first = group[j].corner;
-        }
-        const CornerId start = mostClockwise(group, fans == 1 ? group.back().corner : first);
-        const bool open = clockwiseOf(group, start) == kInvalidId;
-        if (i == 0) {
-          if (open) boundary_.push_back(group[0].vertex);
-          starts.write(&start, sizeof start);
-          continue;
-        }
-        if (open) copyBoundary.push_back(copy);
-        copyStarts.push_back(start);
+      detail::findFans(group, root, fanOf, fans);
+      if (fans[0].open) boundary_.push_back(group[0].vertex);
+      starts.write(&fans[0].start, sizeof fans[0].start);
+      for (std::uint32_t i = 1; i < fans.size(); ++i) {
+        if (fans[i].open) copyBoundary.push_back(copy);
+        copyStarts.push_back(fans[i].start);
         copyOf.push_back(group[0].vertex);
         for (std::size_t j = 0; j < group.size(); ++j) {
           if (fanOf[j] == i) moved.add({group[j].corner, copy});
         }
         ++copy;
       }
-      out_.report.nonManifoldVertices += fans > 1;
+      out_.report.nonManifoldVertices += fans.size() > 1;
     }
     for (const CornerId c : copyStarts) starts.write(&c, sizeof c);
     boundary_.insert(boundary_.end(), copyBoundary.begin(), copyBoundary.end());
     out_.vertexCorner = starts.finish();
     moved.finish();
-    // The copies' positions and origins, after the others'.
+    placeCopies(copyOf);
+  }
+
+  /// The copies of split vertices (copyOf: the vertex each copies, in the copies' order) get
+  /// their vertices' positions and origins, after the others'.
+  void placeCopies(const std::vector<VertexId>& copyOf) {
     if (!copyOf.empty()) {
       ScratchRandomReader positions(folder_, positions_, "clean: fans"), origin(folder_, out_.vertexOrigin, "clean: fans");
       std::vector<Vec3f> p(copyOf.size());
@@ -602,7 +651,7 @@ class CleanPass {
       out_.vertexOrigin = appendTo(out_.vertexOrigin, from.data(), from.size() * sizeof(VertexId), "clean: fans");
     }
     out_.positions = positions_;
-    out_.numVertices = copy;
+    out_.numVertices += copyOf.size();
   }
 
   /// A copy of a scratch file with bytes appended (the old one removed).
@@ -619,58 +668,6 @@ class CleanPass {
   Triangle oriented(FaceId f, Triangle t) {
     if (flip_ && flip_->get(f)) std::swap(t[1], t[2]);
     return t;
-  }
-
-  /// The fans of one vertex's corners (group, sorted by corner): fanOf[i] is group[i]'s fan, the
-  /// fans numbered in the order of their smallest corners. Returns their number. root is room for
-  /// the union-find.
-  static std::uint32_t fansOf(const std::vector<CornerAround>& group, std::vector<std::uint32_t>& root,
-                              std::vector<std::uint32_t>& fanOf) {
-    root.resize(group.size());
-    for (std::uint32_t i = 0; i < root.size(); ++i) root[i] = i;
-    const auto find = [&](std::uint32_t i) {
-      while (root[i] != i) i = root[i] = root[root[i]];
-      return i;
-    };
-    const auto indexOf = [&](CornerId c) {
-      const auto it = std::lower_bound(group.begin(), group.end(), c,
-                                       [](const CornerAround& a, CornerId x) { return a.corner < x; });
-      return it != group.end() && it->corner == c ? std::uint32_t(it - group.begin()) : kInvalidId;
-    };
-    for (std::uint32_t i = 0; i < group.size(); ++i) {
-      if (group[i].clockwise == kInvalidId) continue;
-      const std::uint32_t j = indexOf(group[i].clockwise);
-      if (j == kInvalidId) continue;
-      const std::uint32_t a = find(i), b = find(j);
-      if (a != b) root[std::max(a, b)] = std::min(a, b);
-    }
-    // Roots are the smallest indices of their sets, so a fan's root comes before its other
-    // corners: numbered when met, in the order of the fans' smallest corners.
-    fanOf.assign(group.size(), kInvalidId);
-    std::uint32_t fans = 0;
-    for (std::uint32_t i = 0; i < group.size(); ++i) {
-      const std::uint32_t r = find(i);
-      if (fanOf[r] == kInvalidId) fanOf[r] = fans++;
-      fanOf[i] = fanOf[r];
-    }
-    return fans;
-  }
-
-  /// From corner d clockwise around its vertex to the last corner before a boundary edge, or d
-  /// itself when the fan closes.
-  static CornerId clockwiseOf(const std::vector<CornerAround>& group, CornerId c) {
-    const auto it = std::lower_bound(group.begin(), group.end(), c,
-                                     [](const CornerAround& a, CornerId x) { return a.corner < x; });
-    return it->clockwise;
-  }
-  static CornerId mostClockwise(const std::vector<CornerAround>& group, CornerId d) {
-    CornerId s = d;
-    for (;;) {
-      const CornerId cw = clockwiseOf(group, s);
-      if (cw == kInvalidId) return s;
-      if (cw == d) return d;
-      s = cw;
-    }
   }
 
   /// The final faces: oriented, corners of split fans on their copies.
@@ -834,10 +831,13 @@ class CleanPass {
 
   ScratchFolder& folder_;
   const WeldedScratch& welded_;
+  CleanStreamOptions options_;
   ExternalSortOptions sort_;
   CleanScratch out_;
   std::vector<VertexId> newId_;
   bool renumberBySorts_ = false;
+  bool tryFront_ = false, glued_ = false;  // the front pass runs; it glued the edges and split the fans
+  std::vector<FaceId> lastFace_;           // per vertex, for the front pass
   ScratchFile cornerNewId_;  // with renumberBySorts_: each corner's new vertex id, in face order
   ScratchFile positions_, faces_;
   std::unique_ptr<EdgeSorter> edges_;  // kept until the gluing is done
@@ -852,8 +852,8 @@ class CleanPass {
 }  // namespace
 
 CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
-                             std::uint64_t memoryBytes, bool renumberBySorts, bool setsOnDisk) {
-  return CleanPass(folder, welded, census, memoryBytes, renumberBySorts, setsOnDisk).run();
+                             const CleanStreamOptions& options) {
+  return CleanPass(folder, welded, census, options).run();
 }
 
 namespace {

@@ -42,17 +42,32 @@ struct CleanScratch {
   /// non-manifold edges and vertices and flipped faces (the others 0 for now).
   CleanReport report;
   bool setsOnDisk = false;  ///< a per-face union-find or the flips did not fit its share of the memory
-  /// Wall seconds of the passes: vertices, faces, orient, glue, fans, write, measure.
+  /// How the edges were glued: "front", or "sorts" and why the front pass did not run or stopped.
+  std::string gluing;
+  std::uint64_t largestFront = 0;  ///< the front pass's open vertices at most
+  std::uint64_t frontLateValues = 0;  ///< its values patched in place (set after their window was written)
+  /// Wall seconds of the passes: vertices, faces, front, glue, fans, write, measure.
   std::vector<std::pair<std::string, double>> stageSeconds;
 };
 
-/// Cleans the weld pass's output (kept in folder) into folder within memoryBytes. The vertices
-/// are renumbered in memory (4 B per welded vertex) while that fits a quarter of memoryBytes,
-/// else by four sorts (renumberBySorts: so even when it fits; tests). The per-face union-finds
-/// and flips go on disk beyond their shares (setsOnDisk: always; tests). Throws IoError
+struct CleanStreamOptions {
+  std::uint64_t memoryBytes = std::uint64_t(1) << 30;
+  bool renumberBySorts = false;  ///< vertex ids renumbered by four sorts even when they fit (tests)
+  bool setsOnDisk = false;       ///< the per-face union-finds and flips on disk always (tests)
+  bool gluingBySorts = false;    ///< the gluing and fans by sorts, without the front pass (tests)
+  std::size_t frontWindow = std::size_t(1) << 20;  ///< the front pass's in-order window (tests: small)
+  std::uint64_t frontBytes = 0;  ///< the front pass's open front (0: a quarter of memoryBytes; tests: small)
+};
+
+/// Cleans the weld pass's output (kept in folder) into folder within options.memoryBytes. The
+/// vertices are renumbered in memory (4 B per welded vertex) while that fits a quarter of the
+/// memory, else by four sorts. The edges are glued and the fans split in one pass along the faces'
+/// front (stream/clean_front: 8 B per vertex while that fits a quarter of the memory) when the
+/// mesh has no edge of more than two faces and no orientation clash, else by sorts of edge sides
+/// and corners. The per-face union-finds and flips go on disk beyond their shares. Throws IoError
 /// (scratch, a full disk) naming the folder.
 CleanScratch cleanWeldedMesh(ScratchFolder& folder, const WeldedScratch& welded, const WeldCensus& census,
-                             std::uint64_t memoryBytes, bool renumberBySorts = false, bool setsOnDisk = false);
+                             const CleanStreamOptions& options);
 
 /// The cleaned mesh's components as computeComponents gives them (joined through glued edges, by
 /// decreasing face count, ties in the order of their first faces; faceComponent left empty),

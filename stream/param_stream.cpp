@@ -232,7 +232,9 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     r.inputFaces = welded.census.inputFaces;
     meter.finish("weld");
     for (const auto& [name, seconds] : welded.census.stageSeconds) r.passSeconds.emplace_back("weld: " + name, seconds);
-    CleanScratch cleaned = cleanWeldedMesh(folder, welded.scratch, welded.census, early.memoryBytes);
+    CleanStreamOptions clean;
+    clean.memoryBytes = early.memoryBytes;
+    CleanScratch cleaned = cleanWeldedMesh(folder, welded.scratch, welded.census, clean);
     for (const auto& [name, seconds] : cleaned.stageSeconds) r.passSeconds.emplace_back("clean: " + name, seconds);
     folder.remove(welded.scratch.faces);
     folder.remove(welded.scratch.positions);

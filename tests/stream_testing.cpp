@@ -20,7 +20,9 @@ CleanScratch cleanIntoScratch(ScratchFolder& folder, const TriangleMesh& mesh, s
   WeldStreamOptions weld;
   weld.memoryBytes = memoryBytes;
   const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
-  return cleanWeldedMesh(folder, welded.scratch, welded.census, memoryBytes);
+  CleanStreamOptions clean;
+  clean.memoryBytes = memoryBytes;
+  return cleanWeldedMesh(folder, welded.scratch, welded.census, clean);
 }
 
 std::vector<Vec3f> readPositions(ScratchFolder& folder, const ScratchFile& file) {

@@ -27,22 +27,27 @@ struct Cleaned {
   ComponentsResult streamedComponents;
   std::uint64_t edgeSortWritten = 0, sortedEdgeBytes = 0;  // the edge sort's partitions; the sides' bytes
   bool weldSetsOnDisk = false, cleanSetsOnDisk = false;     // the union-finds beyond their shares
+  std::string gluing;                                       // CleanScratch::gluing
+  std::uint64_t frontLateValues = 0;
 };
 
-Cleaned cleanBothWays(const TriangleMesh& mesh, std::uint64_t memoryBytes, bool renumberBySorts = false) {
+/// The cleaning within options.memoryBytes (also the weld's) and cleanMesh on the same faces.
+Cleaned cleanBothWays(const TriangleMesh& mesh, const CleanStreamOptions& options) {
   testing::TempDir dir;
   ScratchFolder folder(dir.dir());
   const std::unique_ptr<MeshStream> stream =
       makeMemoryStream("mesh", std::make_shared<const TriangleMesh>(mesh), 997);
   WeldStreamOptions weld;
-  weld.memoryBytes = memoryBytes;
+  weld.memoryBytes = options.memoryBytes;
   const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
-  const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, memoryBytes, renumberBySorts);
+  const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, options);
   Cleaned out;
   out.streamed = readCleanScratch(folder, scratch);
-  out.streamedComponents = cleanedComponents(folder, scratch, memoryBytes);
+  out.streamedComponents = cleanedComponents(folder, scratch, options.memoryBytes);
   out.weldSetsOnDisk = welded.census.setsOnDisk;
   out.cleanSetsOnDisk = scratch.setsOnDisk;
+  out.gluing = scratch.gluing;
+  out.frontLateValues = scratch.frontLateValues;
   for (const ScratchTraffic& t : folder.traffic()) {
     if (t.stage == "clean: edges") out.edgeSortWritten = t.bytesWritten;
   }
@@ -70,9 +75,9 @@ Cleaned cleanBothWays(const TriangleMesh& mesh, std::uint64_t memoryBytes, bool 
   std::vector<Vec3f> positions;
   for (VertexId v : oldId) positions.push_back(ordered.positions[v]);
   ordered.positions = std::move(positions);
-  CleanOptions options;
-  options.reorderMinFaces = UINT32_MAX;
-  out.inMemory = cleanMesh(std::move(ordered), options);
+  CleanOptions inMemory;
+  inMemory.reorderMinFaces = UINT32_MAX;
+  out.inMemory = cleanMesh(std::move(ordered), inMemory);
   for (FaceId& f : out.inMemory.faceOrigin) f = inputFace[f];
   for (VertexId& v : out.inMemory.vertexOrigin) v = oldId[v];
   return out;
@@ -120,17 +125,73 @@ void expectEqual(const Cleaned& c) {
   }
 }
 
+CleanStreamOptions withinOneByte(bool renumberBySorts, bool gluingBySorts) {
+  CleanStreamOptions options;
+  options.memoryBytes = 1;
+  options.renumberBySorts = renumberBySorts;
+  options.gluingBySorts = gluingBySorts;
+  return options;
+}
+
 TEST(CleanStream, EqualsCleanMeshOnClosedAndHoledMeshes) {
   for (const MeshKind kind : {MeshKind::Sphere, MeshKind::Scan}) {
     SCOPED_TRACE(static_cast<int>(kind));
+    const TriangleMesh mesh = testing::withOneTriangleHoles(testing::generatedMesh(kind, 80000), 53);
     // The sphere's 40K vertices do not fit the smallest memory beside their new ids: their
     // positions go through a sort (the scan's: by the sorts of every step).
-    const Cleaned c = cleanBothWays(testing::withOneTriangleHoles(testing::generatedMesh(kind, 80000), 53), 1,
-                                    kind == MeshKind::Scan);
+    const bool renumberBySorts = kind == MeshKind::Scan;
+    {
+      SCOPED_TRACE("glued by sorts");
+      const Cleaned c = cleanBothWays(mesh, withinOneByte(renumberBySorts, true));
+      expectEqual(c);
+      EXPECT_EQ(c.gluing, "sorts");
+      EXPECT_EQ(c.streamed.report.nonManifoldEdges, 0u);
+      // The edge sort's partitions went to disk, each side written once.
+      EXPECT_EQ(c.edgeSortWritten, c.sortedEdgeBytes);
+    }
+    // Along the front, with windows of 2^20 values and of 64 (values set after their window was
+    // written are patched in place).
+    for (const std::size_t window : {std::size_t(1) << 20, std::size_t(64)}) {
+      SCOPED_TRACE(window);
+      CleanStreamOptions options = withinOneByte(renumberBySorts, false);
+      options.frontWindow = window;
+      const Cleaned c = cleanBothWays(mesh, options);
+      expectEqual(c);
+      EXPECT_EQ(c.gluing, "front");
+      EXPECT_EQ(c.edgeSortWritten, 0u);
+      EXPECT_EQ(c.frontLateValues > 0, window == 64);
+    }
+  }
+}
+
+// Surfaces that share single vertices (two, three and four fans at one vertex) are glued along the
+// front; the split vertices are cleanMesh's, and a front over its memory leaves it to the sorts.
+TEST(CleanStream, SplitVerticesAlongTheFrontEqualCleanMesh) {
+  TriangleMesh a = testing::withOneTriangleHoles(testing::generatedMesh(MeshKind::Sphere, 20000), 37);
+  std::vector<TriangleMesh> parts{a, a, a, a};
+  for (std::size_t i = 1; i < parts.size(); ++i) {
+    for (Vec3f& p : parts[i].positions) p += Vec3f(2.5f * float(i), 0.0f, 0.0f);
+  }
+  TriangleMesh mesh = testing::concatMeshes(parts);
+  // Vertex k of part i (i > 0) becomes vertex k of part 0 for k a multiple of 997 (parts 1 to 3 at a
+  // third of them, parts 2 and 3 at another, part 3 at the last): two, three and four fans there.
+  const VertexId n = static_cast<VertexId>(a.positions.size());
+  for (Triangle& t : mesh.triangles) {
+    for (VertexId& v : t) {
+      const VertexId part = v / n, k = v % n;
+      if (part > 0 && k % 997 == 0 && (k / 997) % 3 < part) v = k;
+    }
+  }
+  for (const bool smallFront : {false, true}) {
+    SCOPED_TRACE(smallFront ? "front over its memory" : "front");
+    CleanStreamOptions options = withinOneByte(false, false);
+    options.frontWindow = 256;
+    if (smallFront) options.frontBytes = 2000;
+    const Cleaned c = cleanBothWays(mesh, options);
     expectEqual(c);
-    EXPECT_EQ(c.streamed.report.nonManifoldEdges, 0u);
-    // The edge sort's partitions went to disk, each side written once.
-    EXPECT_EQ(c.edgeSortWritten, c.sortedEdgeBytes);
+    EXPECT_GE(c.inMemory.report.nonManifoldVertices, 8u);
+    EXPECT_EQ(c.inMemory.report.nonManifoldEdges, 0u);
+    EXPECT_EQ(c.gluing, smallFront ? "sorts: the front pass met the open front outgrew its memory" : "front");
   }
 }
 
@@ -141,8 +202,13 @@ TEST(CleanStream, EqualsCleanMeshOnNonManifoldAndNonOrientableMeshes) {
     for (const auto& [memory, bySorts] : {std::make_pair(std::uint64_t(1), false), std::make_pair(std::uint64_t(1), true),
                                           std::make_pair(std::uint64_t(64) << 20, false)}) {
       SCOPED_TRACE(bySorts ? "renumbered by sorts" : "renumbered in memory");
-      const Cleaned c = cleanBothWays(testing::damagedMesh(seed), memory, bySorts);
+      CleanStreamOptions options;
+      options.memoryBytes = memory;
+      options.renumberBySorts = bySorts;
+      const Cleaned c = cleanBothWays(testing::damagedMesh(seed), options);
       expectEqual(c);
+      // The front pass meets the first edge of more than two faces or orientation clash.
+      EXPECT_EQ(c.gluing.rfind("sorts: the front pass met ", 0), 0u) << c.gluing;
       // The union-finds of the weld and cleaning (components, loops, orientation, pieces) and the
       // flips in memory within a budget, on disk through page caches beyond it.
       EXPECT_EQ(c.weldSetsOnDisk, memory == 1);
@@ -179,7 +245,9 @@ TEST(CleanStream, WithoutTheWeldCensusTheCleaningIsTheSame) {
       weld.memoryBytes = memory;
       weld.census = withCensus;
       const WeldStreamResult welded = weldMeshStream(*stream, folder, weld);
-      const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, memory);
+      CleanStreamOptions clean;
+      clean.memoryBytes = memory;
+      const CleanScratch scratch = cleanWeldedMesh(folder, welded.scratch, welded.census, clean);
       cleaned[withCensus] = readCleanScratch(folder, scratch);
       census[withCensus] = welded.census;
     }
@@ -215,15 +283,23 @@ TEST(CleanStream, AFullScratchDiskIsAnErrorNamingTheFolder) {
     weldMeshStream(*stream, folder, {});
     weldBytes = folder.bytesWritten();
   }
-  for (const std::uint64_t extra : {std::uint64_t(1000), std::uint64_t(2000000)}) {
-    {
-      ScratchFolder folder(dir.dir());
-      folder.setWriteLimit(weldBytes + extra);
-      const std::unique_ptr<MeshStream> stream = makeMemoryStream("mesh", mesh, 5000);
-      const WeldStreamResult welded = weldMeshStream(*stream, folder, {});
-      testing::expectScratchFull(folder, [&] { cleanWeldedMesh(folder, welded.scratch, welded.census, std::uint64_t(1) << 20); });
+  // Full at the cleaning's first bytes, and once the faces are written (while the edges are
+  // glued along the front or sorted).
+  for (const bool gluingBySorts : {false, true}) {
+    for (const std::uint64_t extra : {std::uint64_t(1000), std::uint64_t(400000)}) {
+      SCOPED_TRACE(gluingBySorts ? "sorts" : "front");
+      {
+        ScratchFolder folder(dir.dir());
+        folder.setWriteLimit(weldBytes + extra);
+        const std::unique_ptr<MeshStream> stream = makeMemoryStream("mesh", mesh, 5000);
+        const WeldStreamResult welded = weldMeshStream(*stream, folder, {});
+        CleanStreamOptions clean;
+        clean.memoryBytes = std::uint64_t(1) << 20;
+        clean.gluingBySorts = gluingBySorts;
+        testing::expectScratchFull(folder, [&] { cleanWeldedMesh(folder, welded.scratch, welded.census, clean); });
+      }
+      EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));
     }
-    EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));
   }
 }
 

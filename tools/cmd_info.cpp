@@ -39,7 +39,9 @@ MeshSummary summarizeOutOfCore(const std::string& path, MeshStream& stream, cons
   const WeldStreamResult result = weldMeshStream(stream, scratch, weld);
   // The cleaning as in memory (splits, orientation, spikes), then the cleaned components.
   const auto cleanStart = std::chrono::steady_clock::now();
-  const CleanScratch cleaned = cleanWeldedMesh(scratch, result.scratch, result.census, weld.memoryBytes);
+  CleanStreamOptions clean;
+  clean.memoryBytes = weld.memoryBytes;
+  const CleanScratch cleaned = cleanWeldedMesh(scratch, result.scratch, result.census, clean);
   const double cleanSeconds = secondsSince(cleanStart);
   const auto componentsStart = std::chrono::steady_clock::now();
   ComponentsResult components = cleanedComponents(scratch, cleaned, weld.memoryBytes);
