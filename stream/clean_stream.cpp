@@ -672,6 +672,10 @@ class CleanPass {
 
   /// The final faces: oriented, corners of split fans on their copies.
   void writeFaces() {
+    if (!flip_ && moved_->size() == 0) {
+      out_.faces = faces_;  // none oriented, none moved: the faces as read are final
+      return;
+    }
     ScratchReader in(folder_, faces_, "clean: write");
     ScratchWriter out(folder_, "clean: write");
     CornerPair next{kInvalidId, kInvalidId};
