@@ -89,12 +89,19 @@ class KeyedSorter {
     writers_[p]->write(&record, sizeof record);
   }
 
-  /// Ends the input; next() then returns the records in order.
-  void finish() {
+  /// Ends the input: the partitions' files written and their buffers freed (the records in memory
+  /// stay), nothing read back yet. finish() does it too.
+  void close() {
     for (std::size_t p = 0; p < writers_.size(); ++p) {
       if (writers_[p]) files_[p] = writers_[p]->finish();
     }
     writers_.clear();
+    writers_.shrink_to_fit();
+  }
+
+  /// Ends the input; next() then returns the records in order.
+  void finish() {
+    close();
     if (partitions_ == 1 && !spilled_) {
       countingSort(slots_[0], 0, keyCount_);
       std::vector<Record>().swap(slots_[0].input);

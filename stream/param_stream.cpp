@@ -41,12 +41,22 @@ struct VoxStage {
   ScratchVoxelSolution solved;
 };
 
+/// The voxel basis' options of a pass (islands: the faces left out).
+VoxelBasisOptions voxelBasisOptions(const StreamParamOptions& options, double h, const std::vector<FaceId>& islands) {
+  VoxelBasisOptions basis;
+  basis.gridResolution = options.gridResolution;
+  basis.edgeLength = h;
+  basis.progress = options.progress;
+  basis.leftOut = islands;
+  return basis;
+}
+
 VoxStage solveVox(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                   VoxelBasisOptions basisOptions, const RoundOptions& round, const StreamPassOptions& pass,
-                  StageMeter& meter, std::string& retryReason) {
+                  StageMeter& meter, std::string& retryReason, ScratchVoxelClip* clip) {
   VoxStage out;
   try {
-    out.basis = buildScratchVoxelBasis(folder, scratch, field, cut, basisOptions, pass);
+    out.basis = buildScratchVoxelBasis(folder, scratch, field, cut, basisOptions, pass, clip);
     meter.finish("basis");
     out.solved = solveScratchVoxelMap(folder, scratch, cut, out.basis, round, pass);
   } catch (const SolverError& first) {
@@ -151,18 +161,14 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
 /// the map and the seams' translations out.
 void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                       const StreamParamOptions& options, const StreamPassOptions& pass, StageMeter& meter,
-                      const std::vector<FaceId>& islands, StreamParamResult& r, ScratchMap& map,
+                      const std::vector<FaceId>& islands, ScratchVoxelClip* clip, StreamParamResult& r, ScratchMap& map,
                       std::vector<std::complex<double>>& translations) {
   const double h = r.edgeLength;
-  VoxelBasisOptions basisOptions;
-  basisOptions.gridResolution = options.gridResolution;
-  basisOptions.edgeLength = h;
-  basisOptions.progress = options.progress;
-  basisOptions.leftOut = islands;
+  const VoxelBasisOptions basisOptions = voxelBasisOptions(options, h, islands);
   r.islandFaces = basisOptions.leftOut.size();
   RoundOptions round;
   round.progress = options.progress;
-  VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason);
+  VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason, clip);
   ScratchVoxelSolution& solved = vox.solved;
   r.solve = solved.stats;
   r.translationConstraints = solved.translationConstraints;
@@ -286,17 +292,27 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     std::vector<std::complex<double>> translations;
   };
   std::optional<KeptPass> kept;
-  // The islands (components too small for the voxel basis) depend on the mesh alone: found once,
-  // on a thread of their own while the first cut runs on one core, with a quarter of the pass's
-  // memory beside the cut's page caches (a quarter of the early passes').
-  double islandSeconds = 0.0;
-  std::future<std::vector<FaceId>> islandsAhead = std::async(std::launch::async, [&] {
-    const auto start = std::chrono::steady_clock::now();
-    std::vector<FaceId> faces = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes / 4);
-    islandSeconds = secondsSince(start);
-    return faces;
+  // The islands (components too small for the voxel basis) and the first pass's voxel clip
+  // depend on the mesh alone: found once, one after the other on a thread of their own while the
+  // first cut runs on one core, each with a quarter of the pass's memory beside the cut's page
+  // caches (a quarter of the early passes'). The clip then waits for the first pass's basis.
+  struct Ahead {
+    std::vector<FaceId> islands;
+    ScratchVoxelClip clip;
+    double islandSeconds = 0.0, clipSeconds = 0.0;
+  };
+  std::future<Ahead> ahead = std::async(std::launch::async, [&] {
+    Ahead a;
+    auto start = std::chrono::steady_clock::now();
+    a.islands = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes / 4);
+    a.islandSeconds = secondsSince(start);
+    start = std::chrono::steady_clock::now();
+    a.clip = clipScratchFaces(folder, scratch, voxelBasisOptions(options, h, a.islands), pass);
+    a.clipSeconds = secondsSince(start);
+    return a;
   });
   std::optional<std::vector<FaceId>> islands;
+  std::optional<ScratchVoxelClip> firstClip;
   for (;;) {
     ++r.conePasses;
     cut = cutScratchToDisk(folder, scratch, singularities, early);
@@ -309,11 +325,17 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     r.components = cut.components;
     meter.finish("cut");
     reportProgress(options.progress, "cut", 1.0);
+    ScratchVoxelClip* clip = nullptr;
     if (!islands) {
-      islands = islandsAhead.get();
-      r.passSeconds.emplace_back("basis: islands (beside the cut)", islandSeconds);
+      Ahead a = ahead.get();
+      islands = std::move(a.islands);
+      firstClip = std::move(a.clip);
+      clip = &*firstClip;
+      r.passSeconds.emplace_back("basis: islands (beside the cut)", a.islandSeconds);
+      r.passSeconds.emplace_back("basis: voxel clip (beside the cut)", a.clipSeconds);
     }
-    solveScratchPass(folder, scratch, field, cut, options, pass, meter, *islands, r, map, translations);
+    solveScratchPass(folder, scratch, field, cut, options, pass, meter, *islands, clip, r, map, translations);
+    firstClip.reset();
 
     const bool passesLeft = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
     // Another pass with these pairs merged: this pass's cut and map go, or are kept (afterRepair:

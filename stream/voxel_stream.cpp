@@ -155,33 +155,36 @@ void buildBlockElements(FragmentBlock& block, ReaderPool<VoxelReaders>& pool, co
 
 }  // namespace
 
-ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const CleanScratch& scratch,
-                                               const ScratchField& field, const ScratchCut& cut,
-                                               const VoxelBasisOptions& options, const StreamPassOptions& pass) {
-  const std::uint64_t nf = scratch.numFaces;
-  if (!(options.edgeLength > 0.0) || !std::isfinite(options.edgeLength)) {
-    throw InputError("voxel basis: edge length must be positive and finite");
-  }
-  if (field.directions.bytes != nf * sizeof(Vec3f) || cut.corners.bytes != 3 * nf || cut.faceRotation.bytes != nf) {
-    throw InputError("voxel basis: field or cut sizes do not match the mesh (" + std::to_string(nf) + " faces)");
-  }
-  ScratchVoxelElements out;
+struct ScratchVoxelClip::ByVoxel {
+  KeyedSorter<VoxelOrderRecord, std::less<VoxelOrderRecord>, VoxelOfRecord> sorter;
+};
+ScratchVoxelClip::ScratchVoxelClip() = default;
+ScratchVoxelClip::ScratchVoxelClip(ScratchVoxelClip&&) noexcept = default;
+ScratchVoxelClip& ScratchVoxelClip::operator=(ScratchVoxelClip&&) noexcept = default;
+ScratchVoxelClip::~ScratchVoxelClip() = default;
+
+ScratchVoxelClip clipScratchFaces(ScratchFolder& folder, const CleanScratch& scratch, const VoxelBasisOptions& options,
+                                  const StreamPassOptions& pass) {
+  ScratchVoxelClip out;
   StageClock clock(out.stageSeconds);
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   ExternalSortOptions sort;
   sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
   sort.stage = kStage;
-
   out.geometry = makeVoxelGrid(scratchBoundingBox(folder, scratch.positions, kStage), options.gridResolution);
   clock.finish("bounds");
-  const ScratchFile raw = clipFaces(folder, scratch, options, cacheBytes, out);
+  ScratchVoxelElements clipped;  // clipFaces fills its geometry's grid
+  clipped.geometry = out.geometry;
+  const ScratchFile raw = clipFaces(folder, scratch, options, cacheBytes, clipped);
+  out.grid = std::move(clipped.grid);
   clock.finish("clip");
 
   // Ids in the tree's block order, as buildVoxelBasis numbers them; the fragments in face order
   // with those ids, and by voxel for the elements.
   const std::vector<std::uint32_t> remap = out.grid.orderByBlocks();
-  KeyedSorter<VoxelOrderRecord, std::less<VoxelOrderRecord>, VoxelOfRecord> byVoxel(
-      folder, out.grid.size(), raw.bytes / sizeof(VoxelFragment), sort);
+  out.byVoxel = std::unique_ptr<ScratchVoxelClip::ByVoxel>(
+      new ScratchVoxelClip::ByVoxel{{folder, out.grid.size(), raw.bytes / sizeof(VoxelFragment), sort}});
+  auto& byVoxel = out.byVoxel->sorter;
   {
     ScratchReader reader(folder, raw, kStage);
     ScratchWriter writer(folder, kStage), starts(folder, kStage);
@@ -206,8 +209,37 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
     out.faceFragmentStart = starts.finish();
   }
   folder.remove(raw);
-  byVoxel.finish();
+  byVoxel.close();
   clock.finish("sort");
+  return out;
+}
+
+ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const CleanScratch& scratch,
+                                               const ScratchField& field, const ScratchCut& cut,
+                                               const VoxelBasisOptions& options, const StreamPassOptions& pass,
+                                               ScratchVoxelClip* ahead) {
+  const std::uint64_t nf = scratch.numFaces;
+  if (!(options.edgeLength > 0.0) || !std::isfinite(options.edgeLength)) {
+    throw InputError("voxel basis: edge length must be positive and finite");
+  }
+  if (field.directions.bytes != nf * sizeof(Vec3f) || cut.corners.bytes != 3 * nf || cut.faceRotation.bytes != nf) {
+    throw InputError("voxel basis: field or cut sizes do not match the mesh (" + std::to_string(nf) + " faces)");
+  }
+  ScratchVoxelClip clip = ahead ? std::move(*ahead) : clipScratchFaces(folder, scratch, options, pass);
+  ScratchVoxelElements out;
+  out.stageSeconds = std::move(clip.stageSeconds);
+  StageClock clock(out.stageSeconds);
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  ExternalSortOptions sort;
+  sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
+  sort.stage = kStage;
+  out.geometry = clip.geometry;
+  out.grid = std::move(clip.grid);
+  out.fragments = clip.fragments;
+  out.faceFragmentStart = clip.faceFragmentStart;
+  out.numFragments = clip.numFragments;
+  auto& byVoxel = clip.byVoxel->sorter;
+  byVoxel.finish();
 
   out.voxelElementStart.assign(std::size_t(out.grid.size()) + 1, 0);
   ReaderPool<VoxelReaders> pool([&] {
@@ -254,8 +286,8 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
 
 ScratchVoxelBasis buildScratchVoxelBasis(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                          const ScratchCut& cut, const VoxelBasisOptions& options,
-                                         const StreamPassOptions& pass) {
-  ScratchVoxelElements elements = buildScratchVoxelElements(folder, scratch, field, cut, options, pass);
+                                         const StreamPassOptions& pass, ScratchVoxelClip* clip) {
+  ScratchVoxelElements elements = buildScratchVoxelElements(folder, scratch, field, cut, options, pass, clip);
   ScratchVoxelBasis out;
   out.stageSeconds = std::move(elements.stageSeconds);
   StageClock clock(out.stageSeconds);

@@ -36,13 +36,38 @@ struct ScratchVoxelElements {
   std::vector<std::pair<std::string, double>> stageSeconds;
 };
 
+/// The voxel basis' first passes, which depend on the mesh and the faces left out alone (not on the
+/// field or the cut): the grid's geometry and voxels, the faces clipped into fragments (in face
+/// order, with each face's first fragment) and the fragments' sort by voxel, its records written
+/// but not yet read back. Memory while it waits: the grid and the sort's write buffers (all its
+/// records while they fit its share, a quarter of the pass's memory).
+struct ScratchVoxelClip {
+  ScratchVoxelClip();
+  ScratchVoxelClip(ScratchVoxelClip&&) noexcept;
+  ScratchVoxelClip& operator=(ScratchVoxelClip&&) noexcept;
+  ~ScratchVoxelClip();
+  VoxelGridGeometry geometry;
+  VoxelGrid grid;
+  ScratchFile fragments, faceFragmentStart;
+  std::uint64_t numFragments = 0;
+  struct ByVoxel;
+  std::unique_ptr<ByVoxel> byVoxel;
+  /// Wall seconds of the passes: bounds, clip, sort.
+  std::vector<std::pair<std::string, double>> stageSeconds;
+};
+/// The clip of buildScratchVoxelElements (options: grid resolution, clip chunks, faces left out).
+ScratchVoxelClip clipScratchFaces(ScratchFolder& folder, const CleanScratch& scratch, const VoxelBasisOptions& options,
+                                  const StreamPassOptions& pass);
+
 /// Clips, sorts and integrates out of core (options: grid resolution and edge length; the
 /// clip chunks). Memory: the grid, the elements' records (about 600 bytes each), the sorts'
 /// and page caches' share, a block of fragments. InputError when the grid has more voxels or
 /// elements than the basis indexes (a coarser grid then); IoError naming the folder on a full disk.
+/// clip: clipScratchFaces' result for these options, made ahead (taken over), else clipped here.
 ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const CleanScratch& scratch,
                                                const ScratchField& field, const ScratchCut& cut,
-                                               const VoxelBasisOptions& options, const StreamPassOptions& pass);
+                                               const VoxelBasisOptions& options, const StreamPassOptions& pass,
+                                               ScratchVoxelClip* clip = nullptr);
 
 /// The whole voxel basis out of core: the elements (buildScratchVoxelElements), then the domains
 /// and seam links face by face (each face's fragments read in order, its neighbours' through page
@@ -59,6 +84,6 @@ struct ScratchVoxelBasis {
 };
 ScratchVoxelBasis buildScratchVoxelBasis(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                          const ScratchCut& cut, const VoxelBasisOptions& options,
-                                         const StreamPassOptions& pass);
+                                         const StreamPassOptions& pass, ScratchVoxelClip* clip = nullptr);
 
 }  // namespace seamvox
