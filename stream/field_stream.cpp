@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <future>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -152,12 +153,30 @@ template <class Faces>
 void piecesOfCell(Faces begin, Faces end, PagedReader<CornerId>& opposite, FaceId* smallest) {
   const auto n = static_cast<std::uint32_t>(end - begin);
   detail::UnionFind sets(n);  // roots are the smallest indices, so the smallest faces
+  // A neighbour's place among the sorted faces, searched outwards from face i's own (neighbours
+  // lie close in the faces' Morton order): doubling steps, then a binary search in the last one.
+  const auto find = [&](std::uint32_t i, FaceId g) -> std::uint32_t {
+    std::uint32_t lo, hi;  // g's place is in [lo, hi]
+    if (g > begin[i]) {
+      std::uint32_t step = 1;
+      lo = i;
+      while (lo + step < n && begin[lo + step] < g) lo += step, step *= 2;
+      hi = std::min(n, lo + step);
+    } else {
+      std::uint32_t step = 1;
+      hi = i;
+      while (hi >= step && begin[hi - step] > g) hi -= step, step *= 2;
+      lo = hi >= step ? hi - step : 0;
+    }
+    const auto it = std::lower_bound(begin + lo, begin + hi, g);
+    return it != end && *it == g ? static_cast<std::uint32_t>(it - begin) : kInvalidId;
+  };
   for (std::uint32_t i = 0; i < n; ++i) {
     for (CornerId c = 3 * begin[i]; c < 3 * begin[i] + 3; ++c) {
       const CornerId o = opposite[c];
       if (o == kInvalidId) continue;
-      const auto it = std::lower_bound(begin, end, cornerFace(o));
-      if (it != end && *it == cornerFace(o)) sets.unite(i, static_cast<std::uint32_t>(it - begin));
+      const std::uint32_t j = find(i, cornerFace(o));
+      if (j != kInvalidId) sets.unite(i, j);
     }
   }
   for (std::uint32_t i = 0; i < n; ++i) smallest[i] = begin[sets.find(i)];
@@ -177,6 +196,42 @@ ScratchFile writeFaceBlocks(ScratchFolder& folder, const char* stage, std::uint6
     writer.write(block.data(), count * sizeof(T));
   }
   return writer.finish();
+}
+
+/// The sweeps' greedy colouring of the faces (one byte each, to a file) and the colours used.
+/// Greedy in face order: a face's earlier neighbours are in this block or, read back, in the
+/// blocks written before. Serial; the corner table alone.
+std::pair<ScratchFile, std::uint32_t> colourFaces(ScratchFolder& folder, const CleanScratch& scratch,
+                                                  std::uint64_t blockFaces, std::size_t cacheBytes) {
+  const std::uint64_t nf = scratch.numFaces;
+  ScratchWriter colourWriter(folder, "field: colour");
+  std::uint32_t used = 0;
+  {
+    PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
+    std::vector<std::uint8_t> block;
+    for (std::uint64_t first = 0; first < nf; first += blockFaces) {
+      const std::uint64_t count = std::min(blockFaces, nf - first);
+      block.assign(count, 0xff);
+      std::unique_ptr<PagedReader<std::uint8_t>> earlier;
+      if (first > 0) earlier = std::make_unique<PagedReader<std::uint8_t>>(colourWriter.written(), cacheBytes);
+      for (std::uint64_t i = 0; i < count; ++i) {
+        const FaceId f = static_cast<FaceId>(first + i);
+        unsigned taken = 0;
+        for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
+          const CornerId o = opposite[c];
+          if (o == kInvalidId || cornerFace(o) >= f) continue;  // not coloured yet
+          const FaceId g = cornerFace(o);
+          taken |= 1u << (g >= first ? block[g - first] : (*earlier)[g]);
+        }
+        block[i] = detail::firstFreeColour(taken);
+        used = std::max<std::uint32_t>(used, block[i] + 1u);
+      }
+      if (earlier) folder.countRead("field: colour", earlier->bytesRead());
+      colourWriter.write(block.data(), count);
+    }
+    folder.countRead("field: colour", opposite.bytesRead());
+  }
+  return {colourWriter.finish(), used};
 }
 
 }  // namespace
@@ -258,12 +313,23 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
     std::sort(smallestFaces.begin(), smallestFaces.end());
     numElements = static_cast<std::uint32_t>(smallestFaces.size());
     byFace.finish();
+    // Each face's element: the rank of its piece's smallest face, looked up a block at a time in
+    // parallel.
     ScratchWriter writer(folder, "field: elements");
+    std::vector<FaceKey> records;
+    std::vector<std::uint32_t> element;
     FaceKey record;
-    while (byFace.next(record)) {
-      const std::uint32_t e = static_cast<std::uint32_t>(
-          std::lower_bound(smallestFaces.begin(), smallestFaces.end(), record.key) - smallestFaces.begin());
-      writer.write(&e, sizeof e);
+    for (bool more = true; more;) {
+      records.clear();
+      while (records.size() < blockFaces && (more = byFace.next(record))) records.push_back(record);
+      element.resize(records.size());
+      parallelFor(records.size(), 4096, [&](const IndexRange& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          element[i] = static_cast<std::uint32_t>(
+              std::lower_bound(smallestFaces.begin(), smallestFaces.end(), records[i].key) - smallestFaces.begin());
+        }
+      });
+      writer.write(element.data(), element.size() * sizeof(std::uint32_t));
     }
     faceElement = writer.finish();
   }
@@ -321,12 +387,16 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   out.elementEdges = elements.neighbours.size() / 2;
   clock.finish("elements");
 
+  // The colouring reads the corner table alone: on a thread of its own beside the solve and the
+  // transfer (a page cache and a block of bytes).
+  const bool sweeps = proxy.smoothingSweeps > 0;
+  std::future<std::pair<ScratchFile, std::uint32_t>> coloured;
+  if (sweeps) coloured = std::async(std::launch::async, [&] { return colourFaces(folder, scratch, blockFaces, cacheBytes); });
   const Eigen::VectorXcd z = detail::solveElementField(elements, proxy.progress, proxy.stats);
   const detail::ElementDirections directions = detail::elementDirections(elements, z);
   clock.finish("solve");
 
   // Transfer: directions and the sweeps' float normals.
-  const bool sweeps = proxy.smoothingSweeps > 0;
   struct TransferReaders {
     PagedFacePoints points;
     PagedReader<std::uint32_t> elementOf;
@@ -356,37 +426,8 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   clock.finish("transfer");
 
   if (sweeps) {
-    // Greedy colouring in face order: a face's earlier neighbours are in this block or, read
-    // back, in the blocks written before.
-    ScratchWriter colourWriter(folder, "field: colour");
-    {
-      PagedReader<CornerId> opposite(scratch.opposite, cacheBytes);
-      std::vector<std::uint8_t> block;
-      std::uint32_t used = 0;
-      for (std::uint64_t first = 0; first < nf; first += blockFaces) {
-        const std::uint64_t count = std::min(blockFaces, nf - first);
-        block.assign(count, 0xff);
-        std::unique_ptr<PagedReader<std::uint8_t>> earlier;
-        if (first > 0) earlier = std::make_unique<PagedReader<std::uint8_t>>(colourWriter.written(), cacheBytes);
-        for (std::uint64_t i = 0; i < count; ++i) {
-          const FaceId f = static_cast<FaceId>(first + i);
-          unsigned taken = 0;
-          for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-            const CornerId o = opposite[c];
-            if (o == kInvalidId || cornerFace(o) >= f) continue;  // not coloured yet
-            const FaceId g = cornerFace(o);
-            taken |= 1u << (g >= first ? block[g - first] : (*earlier)[g]);
-          }
-          block[i] = detail::firstFreeColour(taken);
-          used = std::max<std::uint32_t>(used, block[i] + 1u);
-        }
-        if (earlier) folder.countRead("field: colour", earlier->bytesRead());
-        colourWriter.write(block.data(), count);
-      }
-      folder.countRead("field: colour", opposite.bytesRead());
-      out.colours = used;
-    }
-    const ScratchFile colour = colourWriter.finish();
+    const auto [colour, used] = coloured.get();
+    out.colours = used;
     clock.finish("colour");
 
     // One pass per sweep, in place, in the in-memory sweep's order: blocks of faces, one colour
