@@ -439,19 +439,19 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
     std::vector<Vec3f> all;
     if (held) all = readWholeScratch<Vec3f>(folder, direction, nf, "field: sweeps");
     struct SweepReaders {
-      PagedReader<CornerId> opposite;
-      PagedReader<Vec3f> normal;
+      PagedReader<Vec3f> normal;  // of the neighbours outside the block
       std::unique_ptr<PagedReader<Vec3f>> direction;
     };
     // I/O blocks of whole sweep blocks: the order does not depend on the pass's block size.
     const std::uint64_t sweepBlock = std::max<std::uint64_t>(1, proxy.sweepBlockFaces);
     const std::uint64_t ioFaces = (blockFaces + sweepBlock - 1) / sweepBlock * sweepBlock;
-    std::vector<Vec3f> block;
+    std::vector<Vec3f> block, blockNormal;
+    std::vector<CornerId> blockOpposite;
     std::vector<std::uint8_t> colours;
+    ScratchRandomReader oppositeIn(folder, scratch.opposite, "field: sweeps"), normalIn(folder, sweepNormal, "field: sweeps");
     for (std::int32_t sweep = 0; sweep < proxy.smoothingSweeps; ++sweep) {
       ReaderPool<SweepReaders> pool([&] {
-        auto r = std::unique_ptr<SweepReaders>(new SweepReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes),
-                                                                PagedReader<Vec3f>(sweepNormal, cacheBytes), nullptr});
+        auto r = std::unique_ptr<SweepReaders>(new SweepReaders{PagedReader<Vec3f>(sweepNormal, cacheBytes), nullptr});
         if (!held) r->direction = std::make_unique<PagedReader<Vec3f>>(direction, cacheBytes);
         return r;
       });
@@ -462,6 +462,11 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
         const std::uint64_t count = std::min(ioFaces, nf - first);
         colours.resize(count);
         if (!colourReader.read(colours.data(), count)) throw IoError(colour.path + ": scratch colours end early");
+        // The block's own corner table and normals, read once for all its colours' passes.
+        blockOpposite.resize(3 * count);
+        blockNormal.resize(count);
+        oppositeIn.readAt(3 * first * sizeof(CornerId), blockOpposite.data(), blockOpposite.size() * sizeof(CornerId));
+        normalIn.readAt(first * sizeof(Vec3f), blockNormal.data(), blockNormal.size() * sizeof(Vec3f));
         Vec3f* own = all.data() + first;
         if (!held) {
           block.resize(count);
@@ -480,16 +485,16 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
               auto r = pool.take();
               for (std::uint64_t i = sub + range.begin(); i != sub + range.end(); ++i) {
                 if (colours[i] != k) continue;
-                const FaceId f = static_cast<FaceId>(first + i);
-                const Vec3f faceNormal = r->normal[f];
+                const Vec3f faceNormal = blockNormal[i];
                 if (detail::isZero(faceNormal)) continue;
                 Vec3f neighbourNormal[3];
                 Vec3d neighbourDirections[3];
                 int n = 0;
-                for (CornerId c = 3 * f; c < 3 * f + 3; ++c) {
-                  const CornerId o = r->opposite[c];
+                for (std::uint64_t c = 3 * i; c < 3 * i + 3; ++c) {
+                  const CornerId o = blockOpposite[c];
                   if (o == kInvalidId) continue;
-                  const Vec3f normal = r->normal[cornerFace(o)];
+                  const FaceId g = cornerFace(o);
+                  const Vec3f normal = g >= first && g < first + count ? blockNormal[g - first] : r->normal[g];
                   if (detail::isZero(normal)) continue;
                   neighbourNormal[n] = normal;
                   neighbourDirections[n++] = neighbourDirection(*r, cornerFace(o)).cast<double>();
@@ -509,7 +514,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
         }
       }
       pool.forEach([&](SweepReaders& r) {
-        folder.countRead("field: sweeps", r.opposite.bytesRead() + r.normal.bytesRead() +
+        folder.countRead("field: sweeps", r.normal.bytesRead() +
                                               (r.direction ? r.direction->bytesRead() : 0));
       });
     }
