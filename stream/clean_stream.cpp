@@ -170,17 +170,29 @@ class CleanPass {
   /// that order in memory when they fit beside the new ids (half the sorts' share), else by a sort.
   void renumberVertices() {
     if (renumberBySorts_) return renumberVerticesBySorts();
+    // The faces on their new ids in the same pass (a vertex's id is set where a face first names it).
     newId_.assign(welded_.numVertices, kInvalidId);
+    startFaces(welded_.numVertices);
     WeldedFaceReader faces(folder_, welded_, "clean: vertices");
+    ScratchWriter facesOut(folder_, "clean: vertices");
     std::vector<WeldedFace> chunk;
     std::uint32_t n = 0;
+    CornerId corner = 0;
     while (faces.next(chunk, kChunkFaces)) {
       for (const WeldedFace& f : chunk) {
-        for (const VertexId v : f.triangle) {
-          if (newId_[v] == kInvalidId) newId_[v] = n++;
+        CleanFace face{{}, f.face};
+        for (int k = 0; k < 3; ++k) {
+          VertexId& id = newId_[f.triangle[k]];
+          if (id == kInvalidId) id = n++;
+          face.triangle[k] = id;
         }
+        facesOut.write(&face, sizeof face);
+        addFace(face, corner);
       }
     }
+    faces_ = facesOut.finish();
+    if (tryFront_) lastFace_.resize(n);
+    facesRead_ = true;
     if (std::uint64_t(n) * (sizeof(Vec3f) + sizeof(VertexId)) <= sort_.memoryBytes / 2) {
       std::vector<Vec3f> positions(n);
       std::vector<VertexId> origin(n);
@@ -310,48 +322,55 @@ class CleanPass {
   /// The faces on the new ids (a scratch file) and, for the front pass, each vertex's last face;
   /// without the front pass, their edges' sides into a sort by edge.
   void readFaces() {
-    tryFront_ = !options_.gluingBySorts && 8 * out_.numVertices <= std::max(kMinimumSortBytes, options_.memoryBytes / 4);
+    if (!facesRead_) readFacesByCorner();
+    std::vector<std::uint32_t>().swap(newId_);
+    if (edges_) edges_->finish();
+  }
+
+  /// For the faces on vertices [0, numVertices) about to be read: each vertex's last face (the
+  /// front pass), or their edges' sides into the sort by edge.
+  void startFaces(std::uint64_t numVertices) {
+    tryFront_ = !options_.gluingBySorts && 8 * numVertices <= std::max(kMinimumSortBytes, options_.memoryBytes / 4);
     if (tryFront_) {
-      lastFace_.assign(out_.numVertices, 0);
+      lastFace_.assign(numVertices, 0);
     } else {
       out_.gluing = options_.gluingBySorts ? "sorts" : "sorts: the front pass's 8 bytes per vertex do not fit a quarter of the memory";
-      edges_ = std::make_unique<EdgeSorter>(folder_, out_.numVertices, 3 * out_.numFaces, sortOptions("clean: edges"));
+      edges_ = std::make_unique<EdgeSorter>(folder_, numVertices, 3 * out_.numFaces, sortOptions("clean: edges"));
     }
+  }
+
+  /// The next face read (its first corner `corner`, advanced past it): its vertices' last face, or
+  /// its edge sides into the sort.
+  void addFace(const CleanFace& face, CornerId& corner) {
+    if (tryFront_) {
+      for (const VertexId v : face.triangle) lastFace_[v] = corner / 3;
+      corner += 3;
+      return;
+    }
+    for (int k = 0; k < 3; ++k, ++corner) edges_->add({face.triangle[(k + 1) % 3], face.triangle[(k + 2) % 3], corner});
+  }
+
+  /// The faces on the new ids of renumberVerticesBySorts (each corner's id from its file).
+  void readFacesByCorner() {
+    startFaces(out_.numVertices);
     WeldedFaceReader faces(folder_, welded_, "clean: faces");
     ScratchWriter out(folder_, "clean: faces");
-    std::unique_ptr<ScratchReader> cornerIds;
-    if (renumberBySorts_) cornerIds = std::make_unique<ScratchReader>(folder_, cornerNewId_, "clean: faces");
+    auto cornerIds = std::make_unique<ScratchReader>(folder_, cornerNewId_, "clean: faces");
     std::vector<WeldedFace> chunk;
     CornerId corner = 0;
     while (faces.next(chunk, kChunkFaces)) {
       for (const WeldedFace& f : chunk) {
         CleanFace face{{}, f.face};
-        if (cornerIds) {
-          if (!cornerIds->read(face.triangle.data(), sizeof face.triangle)) {
-            throw IoError(cornerNewId_.path + ": scratch file ends early");
-          }
-        } else {
-          face.triangle = {newId_[f.triangle[0]], newId_[f.triangle[1]], newId_[f.triangle[2]]};
+        if (!cornerIds->read(face.triangle.data(), sizeof face.triangle)) {
+          throw IoError(cornerNewId_.path + ": scratch file ends early");
         }
         out.write(&face, sizeof face);
-        if (tryFront_) {
-          for (const VertexId v : face.triangle) lastFace_[v] = corner / 3;
-          corner += 3;
-          continue;
-        }
-        for (int k = 0; k < 3; ++k, ++corner) {
-          const VertexId a = face.triangle[(k + 1) % 3], b = face.triangle[(k + 2) % 3];
-          edges_->add({a, b, corner});
-        }
+        addFace(face, corner);
       }
     }
-    std::vector<std::uint32_t>().swap(newId_);
-    if (cornerIds) {
-      cornerIds.reset();
-      folder_.remove(cornerNewId_);
-    }
+    cornerIds.reset();
+    folder_.remove(cornerNewId_);
     faces_ = out.finish();
-    if (edges_) edges_->finish();
   }
 
   /// The gluing and fans in one pass along the faces (stream/clean_front) when the mesh allows it;
@@ -840,6 +859,7 @@ class CleanPass {
   CleanScratch out_;
   std::vector<VertexId> newId_;
   bool renumberBySorts_ = false;
+  bool facesRead_ = false;  // renumberVertices wrote the faces on their new ids
   bool tryFront_ = false, glued_ = false;  // the front pass runs; it glued the edges and split the fans
   std::vector<FaceId> lastFace_;           // per vertex, for the front pass
   ScratchFile cornerNewId_;  // with renumberBySorts_: each corner's new vertex id, in face order
