@@ -266,7 +266,8 @@ class FrontPass {
     if ((f & 1023) == 0) {
       opposite_.writeSet();
       starts_.writeSet();
-      if (states_.size() * kOpenVertexBytes + 8 * (opposite_.lateValues() + starts_.lateValues() + copyCorners_) >
+      if (2 * sizeof(CornerId) * options_.windowValues + states_.size() * kOpenVertexBytes +
+              8 * (opposite_.lateValues() + starts_.lateValues() + copyCorners_) >
           options_.memoryBytes) {
         return stop("the open front outgrew its memory");
       }

@@ -379,7 +379,8 @@ class CleanPass {
     if (!tryFront_) return;
     detail::FrontGlueOptions front;
     front.memoryBytes = options_.frontBytes > 0 ? options_.frontBytes : std::max(kMinimumSortBytes, options_.memoryBytes / 4);
-    front.windowValues = options_.frontWindow;
+    // The two in-order windows take at most an eighth of that.
+    front.windowValues = std::min<std::uint64_t>(options_.frontWindow, std::max<std::uint64_t>(64, front.memoryBytes / 64));
     detail::FrontGlueResult r = detail::glueAlongFront(folder_, faces_, out_.numFaces, out_.numVertices, lastFace_, front);
     std::vector<FaceId>().swap(lastFace_);
     out_.largestFront = r.largestFront;

@@ -242,6 +242,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     clean.memoryBytes = early.memoryBytes;
     CleanScratch cleaned = cleanWeldedMesh(folder, welded.scratch, welded.census, clean);
     for (const auto& [name, seconds] : cleaned.stageSeconds) r.passSeconds.emplace_back("clean: " + name, seconds);
+    r.cleanGluing = cleaned.gluing;
     folder.remove(welded.scratch.faces);
     folder.remove(welded.scratch.positions);
     return cleaned;

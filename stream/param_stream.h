@@ -88,6 +88,8 @@ struct StreamParamResult {
   std::uint64_t untangleWindowFaces = 0;  ///< faces paged in around the flips
   /// Seconds of the weld's, cleaning's and field's passes ("weld: read", "clean: faces", ...).
   std::vector<std::pair<std::string, double>> passSeconds;
+  /// How the cleaning glued the edges: CleanScratch::gluing ("front", or "sorts" and why).
+  std::string cleanGluing;
   SeamQuality seamQuality;
   MapQuality mapQuality;  ///< gradient error against the proxy field; flips folded in 3D on its smoothed surface
   bool isSeamless() const { return seamQuality.isSeamless(); }

@@ -159,7 +159,7 @@ TEST(CleanStream, EqualsCleanMeshOnClosedAndHoledMeshes) {
       expectEqual(c);
       EXPECT_EQ(c.gluing, "front");
       EXPECT_EQ(c.edgeSortWritten, 0u);
-      EXPECT_EQ(c.frontLateValues > 0, window == 64);
+      if (window == 64) EXPECT_GT(c.frontLateValues, 0u);
     }
   }
 }

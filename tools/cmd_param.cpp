@@ -345,12 +345,15 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
     std::printf("foldover repair out of core: %llu faces paged in around the flips\n",
                 static_cast<unsigned long long>(streamed.untangleWindowFaces));
   }
+  std::printf("cleaning out of core: edges glued by %s\n",
+              streamed.cleanGluing == "front" ? "one pass along the faces' front" : streamed.cleanGluing.c_str());
   std::printf("%s\n", describeMemoryPath(memoryPath).c_str());
   if (c.reportPath) {
     ParamReportContext context = paramReportContext(c.options, meter, c.input, c.output, c.solverName, c.fieldSource);
     context.memoryPathJson = [&](JsonWriter& j) {
       writeMemoryPathJson(j, memoryPath, false);
       j.key("untangleWindowFaces").value(streamed.untangleWindowFaces);
+      j.key("cleanGluing").value(streamed.cleanGluing);
       j.key("passSeconds").beginObject();
       for (const auto& [name, seconds] : streamed.passSeconds) j.key(name).value(seconds);
       j.endObject();
