@@ -622,16 +622,32 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
     return std::unique_ptr<CrossingReaders>(new CrossingReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes),
                                                                 PagedReader<detail::FaceAngleData>(angles, cacheBytes)});
   });
+  // The block's corner table and angles read once (pread); a neighbour outside the block through
+  // the page cache.
+  std::vector<CornerId> blockOpposite;
+  std::vector<detail::FaceAngleData> blockAngles;
+  ScratchRandomReader oppositeIn(folder, scratch.opposite, "singularities: matching"),
+      anglesIn(folder, angles, "singularities: matching");
   out.matching = writeFaceBlocks<std::array<std::uint8_t, 3>>(
       folder, "singularities: matching", nf, block, [&](std::vector<std::array<std::uint8_t, 3>>& data, std::uint64_t first, std::uint64_t count) {
+        blockOpposite.resize(3 * count);
+        blockAngles.resize(count);
+        oppositeIn.readAt(3 * first * sizeof(CornerId), blockOpposite.data(), blockOpposite.size() * sizeof(CornerId));
+        anglesIn.readAt(first * sizeof(detail::FaceAngleData), blockAngles.data(), count * sizeof(detail::FaceAngleData));
         parallelFor(count, 4096, [&](const IndexRange& range) {
           auto r = crossingPool.take();
+          const auto anglesOf = [&](FaceId g) { return g >= first && g < first + count ? blockAngles[g - first] : r->angles[g]; };
           for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
             for (unsigned k = 0; k < 3; ++k) {
               const CornerId c = static_cast<CornerId>(3 * (first + i) + k);
-              const CornerId o = r->opposite[c];
+              const CornerId o = blockOpposite[3 * i + k];
               std::uint8_t m = 0;
-              if (o != kInvalidId) m = c < o ? r->crossing(c, o).matching : static_cast<std::uint8_t>((4 - r->crossing(o, c).matching) % 4);
+              if (o != kInvalidId) {
+                const detail::FaceAngleData& own = blockAngles[i];
+                const detail::FaceAngleData other = anglesOf(cornerFace(o));
+                m = c < o ? detail::crossingOf(own, k, other, o % 3).matching
+                          : static_cast<std::uint8_t>((4 - detail::crossingOf(other, o % 3, own, k).matching) % 4);
+              }
               data[i][k] = m;
             }
           }
