@@ -4,6 +4,7 @@
 #include <array>
 #include <future>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -180,6 +181,14 @@ void piecesOfCell(Faces begin, Faces end, PagedReader<CornerId>& opposite, FaceI
     }
   }
   for (std::uint32_t i = 0; i < n; ++i) smallest[i] = begin[sets.find(i)];
+}
+
+/// Records [first, first + count) of a per-face scratch file, read at once (pread): a pass over a
+/// block of faces reads them there instead of through a page cache per face.
+template <class T>
+void readFaceBlock(ScratchRandomReader& in, std::uint64_t first, std::uint64_t count, std::vector<T>& out) {
+  out.resize(count);
+  in.readAt(first * sizeof(T), out.data(), count * sizeof(T));
 }
 
 /// Calls fill(block, first, count) for blocks of faces in order, each filling `count` records of
@@ -399,29 +408,35 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   // Transfer: directions and the sweeps' float normals.
   struct TransferReaders {
     PagedFacePoints points;
-    PagedReader<std::uint32_t> elementOf;
   };
   ReaderPool<TransferReaders> transferPool([&] {
-    return std::unique_ptr<TransferReaders>(
-        new TransferReaders{PagedFacePoints(scratch, surface, cacheBytes), PagedReader<std::uint32_t>(faceElement, cacheBytes)});
+    return std::unique_ptr<TransferReaders>(new TransferReaders{PagedFacePoints(scratch, surface, cacheBytes)});
   });
   ScratchWriter normalWriter(folder, "field: transfer");
   std::vector<Vec3f> normalBlock;
+  std::vector<CleanFace> transferFaces;
+  std::vector<std::uint32_t> transferElements;
+  std::optional<ScratchRandomReader> transferFacesIn, transferElementsIn;  // closed before faceElement goes
+  transferFacesIn.emplace(folder, scratch.faces, "field: transfer");
+  transferElementsIn.emplace(folder, faceElement, "field: transfer");
   const ScratchFile direction = writeFaceBlocks<Vec3f>(folder, "field: transfer", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
     normalBlock.resize(count);
+    readFaceBlock(*transferFacesIn, first, count, transferFaces);
+    readFaceBlock(*transferElementsIn, first, count, transferElements);
     parallelFor(count, 2048, [&](const IndexRange& range) {
       auto readers = transferPool.take();
       for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-        const FaceId f = static_cast<FaceId>(first + i);
-        const detail::FaceGeometry g = detail::faceGeometry(readers->points.points(f));
-        block[i] = detail::transferredDirection(elements, directions, g, readers->elementOf[f]).cast<float>();
+        const detail::FaceGeometry g = detail::faceGeometry(readers->points.points(transferFaces[i].triangle));
+        block[i] = detail::transferredDirection(elements, directions, g, transferElements[i]).cast<float>();
         normalBlock[i] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
       }
     });
     if (sweeps) normalWriter.write(normalBlock.data(), count * sizeof(Vec3f));
   });
   const ScratchFile sweepNormal = normalWriter.finish();
-  transferPool.forEach([&](TransferReaders& r) { folder.countRead("field: transfer", r.points.bytesRead() + r.elementOf.bytesRead()); });
+  transferPool.forEach([&](TransferReaders& r) { folder.countRead("field: transfer", r.points.bytesRead()); });
+  transferFacesIn.reset();
+  transferElementsIn.reset();
   folder.remove(faceElement);
   clock.finish("transfer");
 
@@ -529,25 +544,28 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   // The exact tangent planes of the surface (after sweeps), then onto the mesh's own faces.
   struct FinishReaders {
     PagedFacePoints surface, own;
-    PagedReader<Vec3f> direction;
-    std::unique_ptr<PagedReader<Vec3f>> normal;
   };
   ReaderPool<FinishReaders> finishPool([&] {
-    auto r = std::unique_ptr<FinishReaders>(new FinishReaders{PagedFacePoints(scratch, surface, cacheBytes),
-                                                              PagedFacePoints(scratch, scratch.positions, cacheBytes),
-                                                              PagedReader<Vec3f>(direction, cacheBytes), nullptr});
-    if (sweeps) r->normal = std::make_unique<PagedReader<Vec3f>>(sweepNormal, cacheBytes);
-    return r;
+    return std::unique_ptr<FinishReaders>(new FinishReaders{PagedFacePoints(scratch, surface, cacheBytes),
+                                                            PagedFacePoints(scratch, scratch.positions, cacheBytes)});
   });
+  // The block's faces, directions and sweep normals read at once.
+  std::vector<CleanFace> finishFaces;
+  std::vector<Vec3f> finishNormals;
+  auto finishFacesIn = std::make_unique<ScratchRandomReader>(folder, scratch.faces, "field: finish");
+  auto directionIn = std::make_unique<ScratchRandomReader>(folder, direction, "field: finish");
+  std::unique_ptr<ScratchRandomReader> normalIn;
+  if (sweeps) normalIn = std::make_unique<ScratchRandomReader>(folder, sweepNormal, "field: finish");
   out.directions = writeFaceBlocks<Vec3f>(folder, "field: finish", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
+    readFaceBlock(*finishFacesIn, first, count, finishFaces);
+    readFaceBlock(*directionIn, first, count, block);
+    if (sweeps) readFaceBlock(*normalIn, first, count, finishNormals);
     parallelFor(count, 4096, [&](const IndexRange& range) {
       auto r = finishPool.take();
       for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-        const FaceId f = static_cast<FaceId>(first + i);
-        block[i] = r->direction[f];
-        const Triangle t = r->surface.triangle(f);
+        const Triangle t = finishFaces[i].triangle;
         const std::array<Vec3d, 3> p = r->surface.points(t);
-        if (sweeps && !detail::isZero((*r->normal)[f])) {
+        if (sweeps && !detail::isZero(finishNormals[i])) {
           Vec3d tangent;
           if (detail::tangentOf(faceNormal(p[0], p[1], p[2]), block[i].cast<double>(), tangent)) {
             block[i] = tangent.cast<float>();
@@ -560,10 +578,8 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
       }
     });
   });
-  finishPool.forEach([&](FinishReaders& r) {
-    folder.countRead("field: finish", r.surface.bytesRead() + r.own.bytesRead() + r.direction.bytesRead() +
-                                          (r.normal ? r.normal->bytesRead() : 0));
-  });
+  finishPool.forEach([&](FinishReaders& r) { folder.countRead("field: finish", r.surface.bytesRead() + r.own.bytesRead()); });
+  finishFacesIn.reset(), directionIn.reset(), normalIn.reset();  // closed before their files go
   folder.remove(direction);
   folder.remove(sweepNormal);  // empty without sweeps
   clock.finish("finish");
@@ -580,29 +596,37 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
   const ScratchFile& surface = smoothed ? field.framePositions : scratch.positions;
 
   // Per face its angles on the surface.
+  // The block's faces and directions read at once; the corners' positions through page caches.
   struct AngleReaders {
     PagedFacePoints surface, own;
-    PagedReader<Vec3f> direction;
   };
   ReaderPool<AngleReaders> anglePool([&] {
     return std::unique_ptr<AngleReaders>(new AngleReaders{PagedFacePoints(scratch, surface, cacheBytes),
-                                                          PagedFacePoints(scratch, scratch.positions, cacheBytes),
-                                                          PagedReader<Vec3f>(field.directions, cacheBytes)});
+                                                          PagedFacePoints(scratch, scratch.positions, cacheBytes)});
   });
-  const ScratchFile angles = writeFaceBlocks<detail::FaceAngleData>(
-      folder, "singularities: angles", nf, block, [&](std::vector<detail::FaceAngleData>& data, std::uint64_t first, std::uint64_t count) {
-        parallelFor(count, 4096, [&](const IndexRange& range) {
-          auto r = anglePool.take();
-          for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-            const FaceId f = static_cast<FaceId>(first + i);
-            const Triangle t = r->surface.triangle(f);
-            const Vec3d ownNormal = smoothed ? detail::faceFrame(r->own.points(t)).n : Vec3d::Zero();
-            data[i] = detail::faceAngleData(r->surface.points(t), smoothed ? &ownNormal : nullptr, r->direction[f].cast<double>());
-          }
+  std::vector<CleanFace> blockFaces;
+  std::vector<Vec3f> blockDirections;
+  ScratchFile angles;
+  {
+    ScratchRandomReader facesIn(folder, scratch.faces, "singularities: angles"),
+        directionsIn(folder, field.directions, "singularities: angles");
+    angles = writeFaceBlocks<detail::FaceAngleData>(
+        folder, "singularities: angles", nf, block, [&](std::vector<detail::FaceAngleData>& data, std::uint64_t first, std::uint64_t count) {
+          readFaceBlock(facesIn, first, count, blockFaces);
+          readFaceBlock(directionsIn, first, count, blockDirections);
+          parallelFor(count, 4096, [&](const IndexRange& range) {
+            auto r = anglePool.take();
+            for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+              const Triangle t = blockFaces[i].triangle;
+              const Vec3d ownNormal = smoothed ? detail::faceFrame(r->own.points(t)).n : Vec3d::Zero();
+              data[i] = detail::faceAngleData(r->surface.points(t), smoothed ? &ownNormal : nullptr,
+                                              blockDirections[i].cast<double>());
+            }
+          });
         });
-      });
+  }
   anglePool.forEach([&](AngleReaders& r) {
-    folder.countRead("singularities: angles", r.surface.bytesRead() + r.own.bytesRead() + r.direction.bytesRead());
+    folder.countRead("singularities: angles", r.surface.bytesRead() + r.own.bytesRead());
   });
 
   // Per corner the matching, read from the smaller corner of its edge as in memory.
