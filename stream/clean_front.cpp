@@ -12,12 +12,16 @@ namespace seamvox::detail {
 
 namespace {
 
+/// Vertices of more corners than this (rare) go to findFans' union-find at once.
+constexpr std::size_t kOneFanCorners = 32;
+
 /// The usual vertex, one fan: walked clockwise from its last corner round to it (closed), or from
 /// the one corner no other turns to, to the corner before the boundary (open), over all corners.
 /// False when that is not so (several fans, or a walk that does not cover the group).
 bool findOneFan(const std::vector<CornerAround>& group, std::vector<std::uint32_t>& fanOf,
                 std::vector<FanStart>& starts) {
   const std::size_t n = group.size();
+  if (n > kOneFanCorners) return false;  // its searches are quadratic: findFans' own below
   const auto indexOf = [&](CornerId c) {
     for (std::size_t i = 0; i < n; ++i) {
       if (group[i].corner == c) return i;
@@ -243,11 +247,13 @@ class FrontPass {
       const VertexId from = t[(k + 1) % 3], to = t[(k + 2) % 3];
       const bool fromFirst = last_[from] != last_[to] ? last_[from] < last_[to] : from < to;
       const VertexId owner = fromFirst ? from : to, other = fromFirst ? to : from;
+      // Held sorted by the other vertex: a vertex of many open edges (a fan's centre) stays cheap.
       std::vector<OwnedEdge>& edges = vertex(owner).edges;
-      const auto it = std::find_if(edges.begin(), edges.end(), [&](const OwnedEdge& e) { return e.other == other; });
+      const auto it = std::lower_bound(edges.begin(), edges.end(), other,
+                                       [](const OwnedEdge& e, VertexId v) { return e.other < v; });
       const CornerId side = 3 * f + k;
-      if (it == edges.end()) {
-        edges.push_back({other, from, {side, kInvalidId}, 1});
+      if (it == edges.end() || it->other != other) {
+        edges.insert(it, OwnedEdge{other, from, {side, kInvalidId}, 1});
       } else if (it->sides == 2) {
         return stop("an edge of more than two faces");
       } else if (it->from == from) {

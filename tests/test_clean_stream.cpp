@@ -164,6 +164,42 @@ TEST(CleanStream, EqualsCleanMeshOnClosedAndHoledMeshes) {
   }
 }
 
+// Vertices of thousands of corners (the poles of a double cone, the centre of an open fan) are
+// glued along the front as cleanMesh glues them, and by the sorts.
+TEST(CleanStream, HighValenceVerticesEqualCleanMesh) {
+  TriangleMesh mesh;
+  const int n = 6000, m = 3000;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * M_PI * i / n;
+    mesh.positions.push_back(Vec3f(float(std::cos(a)), float(std::sin(a)), 0.0f));
+  }
+  const VertexId top = VertexId(mesh.positions.size()), bottom = top + 1;
+  mesh.positions.push_back(Vec3f(0.0f, 0.0f, 1.0f));
+  mesh.positions.push_back(Vec3f(0.0f, 0.0f, -1.0f));
+  for (int i = 0; i < n; ++i) {
+    const VertexId r = VertexId(i), s = VertexId((i + 1) % n);
+    mesh.triangles.push_back({top, r, s});
+    mesh.triangles.push_back({bottom, s, r});
+  }
+  const VertexId centre = VertexId(mesh.positions.size());
+  mesh.positions.push_back(Vec3f(5.0f, 0.0f, 0.0f));
+  for (int i = 0; i < m; ++i) {
+    const double a = 1.5 * M_PI * i / (m - 1);
+    mesh.positions.push_back(Vec3f(float(5.0 + std::cos(a)), float(std::sin(a)), 0.0f));
+  }
+  for (int i = 0; i + 1 < m; ++i) mesh.triangles.push_back({centre, centre + 1 + VertexId(i), centre + 2 + VertexId(i)});
+  for (const bool gluingBySorts : {false, true}) {
+    SCOPED_TRACE(gluingBySorts ? "sorts" : "front");
+    CleanStreamOptions options;
+    options.memoryBytes = std::uint64_t(64) << 20;
+    options.gluingBySorts = gluingBySorts;
+    const Cleaned c = cleanBothWays(mesh, options);
+    expectEqual(c);
+    EXPECT_EQ(c.gluing, gluingBySorts ? "sorts" : "front");
+    EXPECT_EQ(c.inMemory.report.nonManifoldVertices, 0u);
+  }
+}
+
 // Surfaces that share single vertices (two, three and four fans at one vertex) are glued along the
 // front; the split vertices are cleanMesh's, and a front over its memory leaves it to the sorts.
 TEST(CleanStream, SplitVerticesAlongTheFrontEqualCleanMesh) {
