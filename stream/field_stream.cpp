@@ -461,7 +461,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
     const std::uint64_t sweepBlock = std::max<std::uint64_t>(1, proxy.sweepBlockFaces);
     const std::uint64_t ioFaces = (blockFaces + sweepBlock - 1) / sweepBlock * sweepBlock;
     std::vector<Vec3f> block, blockNormal;
-    std::vector<CornerId> blockOpposite;
+    std::vector<std::array<CornerId, 3>> blockOpposite;
     std::vector<std::uint8_t> colours;
     ScratchRandomReader oppositeIn(folder, scratch.opposite, "field: sweeps"), normalIn(folder, sweepNormal, "field: sweeps");
     for (std::int32_t sweep = 0; sweep < proxy.smoothingSweeps; ++sweep) {
@@ -478,10 +478,8 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
         colours.resize(count);
         if (!colourReader.read(colours.data(), count)) throw IoError(colour.path + ": scratch colours end early");
         // The block's own corner table and normals, read once for all its colours' passes.
-        blockOpposite.resize(3 * count);
-        blockNormal.resize(count);
-        oppositeIn.readAt(3 * first * sizeof(CornerId), blockOpposite.data(), blockOpposite.size() * sizeof(CornerId));
-        normalIn.readAt(first * sizeof(Vec3f), blockNormal.data(), blockNormal.size() * sizeof(Vec3f));
+        readFaceBlock(oppositeIn, first, count, blockOpposite);
+        readFaceBlock(normalIn, first, count, blockNormal);
         Vec3f* own = all.data() + first;
         if (!held) {
           block.resize(count);
@@ -505,8 +503,7 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
                 Vec3f neighbourNormal[3];
                 Vec3d neighbourDirections[3];
                 int n = 0;
-                for (std::uint64_t c = 3 * i; c < 3 * i + 3; ++c) {
-                  const CornerId o = blockOpposite[c];
+                for (const CornerId o : blockOpposite[i]) {
                   if (o == kInvalidId) continue;
                   const FaceId g = cornerFace(o);
                   const Vec3f normal = g >= first && g < first + count ? blockNormal[g - first] : r->normal[g];
@@ -648,23 +645,21 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
   });
   // The block's corner table and angles read once (pread); a neighbour outside the block through
   // the page cache.
-  std::vector<CornerId> blockOpposite;
+  std::vector<std::array<CornerId, 3>> blockOpposite;
   std::vector<detail::FaceAngleData> blockAngles;
   ScratchRandomReader oppositeIn(folder, scratch.opposite, "singularities: matching"),
       anglesIn(folder, angles, "singularities: matching");
   out.matching = writeFaceBlocks<std::array<std::uint8_t, 3>>(
       folder, "singularities: matching", nf, block, [&](std::vector<std::array<std::uint8_t, 3>>& data, std::uint64_t first, std::uint64_t count) {
-        blockOpposite.resize(3 * count);
-        blockAngles.resize(count);
-        oppositeIn.readAt(3 * first * sizeof(CornerId), blockOpposite.data(), blockOpposite.size() * sizeof(CornerId));
-        anglesIn.readAt(first * sizeof(detail::FaceAngleData), blockAngles.data(), count * sizeof(detail::FaceAngleData));
+        readFaceBlock(oppositeIn, first, count, blockOpposite);
+        readFaceBlock(anglesIn, first, count, blockAngles);
         parallelFor(count, 4096, [&](const IndexRange& range) {
           auto r = crossingPool.take();
           const auto anglesOf = [&](FaceId g) { return g >= first && g < first + count ? blockAngles[g - first] : r->angles[g]; };
           for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
             for (unsigned k = 0; k < 3; ++k) {
               const CornerId c = static_cast<CornerId>(3 * (first + i) + k);
-              const CornerId o = blockOpposite[3 * i + k];
+              const CornerId o = blockOpposite[i][k];
               std::uint8_t m = 0;
               if (o != kInvalidId) {
                 const detail::FaceAngleData& own = blockAngles[i];

@@ -60,7 +60,7 @@ std::array<Vec3d, 3> toGrid(const VoxelGridGeometry& geometry, const std::array<
 /// Clips every face (a pipeline: chunks in order, clipped in parallel, their voxels registered in
 /// order); writes the fragments with the voxels' ids of first appearance.
 ScratchFile clipFaces(ScratchFolder& folder, const CleanScratch& scratch, const VoxelBasisOptions& options,
-                      std::size_t cacheBytes, ScratchVoxelElements& out) {
+                      std::size_t cacheBytes, const VoxelGridGeometry& geometry, VoxelGrid& grid) {
   ReaderPool<PagedFacePoints> pool(
       [&] { return std::make_unique<PagedFacePoints>(scratch, scratch.positions, cacheBytes); });
   ScratchWriter writer(folder, kStage);
@@ -68,10 +68,10 @@ ScratchFile clipFaces(ScratchFolder& folder, const CleanScratch& scratch, const 
       scratch.numFaces, options.chunkFaces,
       [&](detail::ClippedChunk& chunk) {
         auto readers = pool.take();
-        detail::clipChunk(out.geometry, [&](FaceId f) { return toGrid(out.geometry, readers->points(f)); }, chunk,
+        detail::clipChunk(geometry, [&](FaceId f) { return toGrid(geometry, readers->points(f)); }, chunk,
                           options.leftOut);
       },
-      out.grid, [&](const VoxelFragment& fragment) { writer.write(&fragment, sizeof(fragment)); },
+      grid, [&](const VoxelFragment& fragment) { writer.write(&fragment, sizeof(fragment)); },
       [](const detail::ClippedChunk&) {});
   pool.forEach([&](PagedFacePoints& r) { folder.countRead(kStage, r.bytesRead()); });
   return writer.finish();
@@ -163,20 +163,27 @@ ScratchVoxelClip::ScratchVoxelClip(ScratchVoxelClip&&) noexcept = default;
 ScratchVoxelClip& ScratchVoxelClip::operator=(ScratchVoxelClip&&) noexcept = default;
 ScratchVoxelClip::~ScratchVoxelClip() = default;
 
+namespace {
+
+/// The voxel passes' sorts: a quarter of the pass's memory each.
+ExternalSortOptions voxelSortOptions(const StreamPassOptions& pass) {
+  ExternalSortOptions sort;
+  sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
+  sort.stage = kStage;
+  return sort;
+}
+
+}  // namespace
+
 ScratchVoxelClip clipScratchFaces(ScratchFolder& folder, const CleanScratch& scratch, const VoxelBasisOptions& options,
                                   const StreamPassOptions& pass) {
   ScratchVoxelClip out;
   StageClock clock(out.stageSeconds);
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
-  ExternalSortOptions sort;
-  sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
-  sort.stage = kStage;
+  const ExternalSortOptions sort = voxelSortOptions(pass);
   out.geometry = makeVoxelGrid(scratchBoundingBox(folder, scratch.positions, kStage), options.gridResolution);
   clock.finish("bounds");
-  ScratchVoxelElements clipped;  // clipFaces fills its geometry's grid
-  clipped.geometry = out.geometry;
-  const ScratchFile raw = clipFaces(folder, scratch, options, cacheBytes, clipped);
-  out.grid = std::move(clipped.grid);
+  const ScratchFile raw = clipFaces(folder, scratch, options, cacheBytes, out.geometry, out.grid);
   clock.finish("clip");
 
   // Ids in the tree's block order, as buildVoxelBasis numbers them; the fragments in face order
@@ -230,9 +237,7 @@ ScratchVoxelElements buildScratchVoxelElements(ScratchFolder& folder, const Clea
   out.stageSeconds = std::move(clip.stageSeconds);
   StageClock clock(out.stageSeconds);
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
-  ExternalSortOptions sort;
-  sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
-  sort.stage = kStage;
+  const ExternalSortOptions sort = voxelSortOptions(pass);
   out.geometry = clip.geometry;
   out.grid = std::move(clip.grid);
   out.fragments = clip.fragments;
