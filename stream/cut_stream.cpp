@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/basis/islands.h"
 #include "core/cut/detail_cut.h"
 #include "core/system/errors.h"
 #include "core/system/stopwatch.h"
@@ -54,7 +55,7 @@ std::size_t cutCacheBytes(std::uint64_t memoryBytes) {
 }  // namespace
 
 ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, const ScratchSingularities& singularities,
-                            const StreamPassOptions& pass) {
+                            const StreamPassOptions& pass, const TreeIslands* islands) {
   const std::uint64_t numFaces = scratch.numFaces, numCorners = 3 * numFaces, numVertices = scratch.numVertices;
   if (singularities.matching.bytes != numCorners) {
     throw InputError("cutToDisk: the singularities' matchings (" + std::to_string(singularities.matching.bytes) +
@@ -73,17 +74,34 @@ ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, 
 
   const ScratchFile rotationFile = folder.zeroFile(numFaces), componentFile = folder.zeroFile(4 * numFaces);
   const ScratchFile workFile = folder.zeroFile(numCorners), degreeFile = folder.zeroFile(4 * numVertices);
+  const ScratchFile edgeXorFile = folder.zeroFile(4 * numVertices);
   PagedArray<std::uint8_t> rotationBytes(folder, rotationFile, kStage, cacheBytes), workBytes(folder, workFile, kStage, cacheBytes);
   PagedArray<std::uint32_t> component(folder, componentFile, kStage, cacheBytes), degree(folder, degreeFile, kStage, cacheBytes);
   PagedRotation rotation{rotationBytes};
   PagedWorkCorners work{workBytes};
 
   StageClock clock(cut.stageSeconds);
-  cut.components = detail::buildDualTree(table, numFaces, matching, rotation, component, work);
+  if (islands) {
+    detail::IslandsInOrder found(islands->maxFaces);
+    cut.components = detail::buildDualTree(table, numFaces, matching, rotation, component, work,
+                                           [&](FaceId f, std::uint32_t k) { found.add(f, k); });
+    islands->found(found.faces());
+  } else {
+    cut.components = detail::buildDualTree(table, numFaces, matching, rotation, component, work);
+  }
   clock.finish("tree");
 
-  std::vector<std::uint64_t> remaining = detail::countCutDegrees(table, numCorners, work, component, cut.components, degree);
-  detail::pruneCut(table, numVertices, isCone, component, remaining, work, degree);
+  {
+    // The pruning's chains find a vertex's last cut edge from the XOR of its edges' corners
+    // rather than by a walk around its fan through the page caches.
+    PagedArray<CornerId> edgeXorValues(folder, edgeXorFile, kStage, cacheBytes);
+    detail::CutEdgeXor<PagedArray<CornerId>> edgeXor{edgeXorValues};
+    std::vector<std::uint64_t> remaining =
+        detail::countCutDegrees(table, numCorners, work, component, cut.components, degree, edgeXor);
+    clock.finish("degrees");
+    detail::pruneCut(table, numVertices, isCone, component, remaining, work, degree, edgeXor);
+    folder.countRead(kStage, edgeXorValues.bytesRead());
+  }
   clock.finish("prune");
 
   {
@@ -112,7 +130,7 @@ ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, 
 
   folder.countRead(kStage, table.bytesRead() + matchingReader.bytesRead() + rotationBytes.bytesRead() +
                                workBytes.bytesRead() + component.bytesRead() + degree.bytesRead());
-  for (const ScratchFile& file : {rotationFile, componentFile, workFile, degreeFile}) folder.remove(file);
+  for (const ScratchFile& file : {rotationFile, componentFile, workFile, degreeFile, edgeXorFile}) folder.remove(file);
   return cut;
 }
 

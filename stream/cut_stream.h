@@ -3,6 +3,7 @@
 /// the out-of-core field's singularities (field_stream), the same steps (core/cut/detail_cut.h)
 /// over page caches of scratch files. Conventions: core/cut/cut.h.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,12 +39,20 @@ class PagedCutCorners {
   PagedReader<std::uint8_t> bytes_;
 };
 
+/// The islands (core/basis/islands.h) read off the first cut's dual tree, which meets the
+/// components one after another: found(faces) is called once the tree is built, while the cut
+/// goes on (the voxel clip, which leaves them out, can start beside it).
+struct TreeIslands {
+  std::uint32_t maxFaces = 0;
+  std::function<void(std::vector<FaceId>)> found;
+};
+
 /// Equal to cutToDisk on readCleanScratch's mesh with the singularities' matchings and cones:
 /// the same cut, rotations and seam curves. Working state in scratch files (1 byte per face for
 /// the rotations, 4 for the components, 1 per corner, 4 per vertex), removed at the end; in
 /// memory the page caches, the tree's front and the seams. TopologyError as cutToDisk's; IoError
 /// naming the folder on a full disk.
 ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, const ScratchSingularities& singularities,
-                            const StreamPassOptions& pass);
+                            const StreamPassOptions& pass, const TreeIslands* islands = nullptr);
 
 }  // namespace seamvox

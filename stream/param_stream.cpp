@@ -294,29 +294,31 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   };
   std::optional<KeptPass> kept;
   // The islands (components too small for the voxel basis) and the first pass's voxel clip
-  // depend on the mesh alone: found once, one after the other on a thread of their own while the
-  // first cut runs on one core, each with a quarter of the pass's memory beside the cut's page
-  // caches (a quarter of the early passes'). The clip then waits for the first pass's basis.
+  // depend on the mesh alone: the islands are read off the first cut's dual tree, then the clip
+  // runs on a thread of its own while the rest of that cut walks on one core, with a quarter of
+  // the pass's memory beside the cut's page caches (a quarter of the early passes'). The clip
+  // then waits for the first pass's basis.
   struct Ahead {
     std::vector<FaceId> islands;
     ScratchVoxelClip clip;
-    double islandSeconds = 0.0, clipSeconds = 0.0;
+    double clipSeconds = 0.0;
   };
-  std::future<Ahead> ahead = std::async(std::launch::async, [&] {
-    Ahead a;
-    auto start = std::chrono::steady_clock::now();
-    a.islands = scratchIslandFaces(folder, scratch, kVoxelIslandFaces, pass.memoryBytes / 4);
-    a.islandSeconds = secondsSince(start);
-    start = std::chrono::steady_clock::now();
-    a.clip = clipScratchFaces(folder, scratch, voxelBasisOptions(options, h, a.islands), pass);
-    a.clipSeconds = secondsSince(start);
-    return a;
-  });
+  std::future<Ahead> ahead;
+  const TreeIslands treeIslands{kVoxelIslandFaces, [&](std::vector<FaceId> faces) {
+    ahead = std::async(std::launch::async, [&, faces = std::move(faces)]() mutable {
+      Ahead a;
+      a.islands = std::move(faces);
+      const auto start = std::chrono::steady_clock::now();
+      a.clip = clipScratchFaces(folder, scratch, voxelBasisOptions(options, h, a.islands), pass);
+      a.clipSeconds = secondsSince(start);
+      return a;
+    });
+  }};
   std::optional<std::vector<FaceId>> islands;
   std::optional<ScratchVoxelClip> firstClip;
   for (;;) {
     ++r.conePasses;
-    cut = cutScratchToDisk(folder, scratch, singularities, early);
+    cut = cutScratchToDisk(folder, scratch, singularities, early, islands ? nullptr : &treeIslands);
     for (const auto& [name, seconds] : cut.stageSeconds) r.passSeconds.emplace_back("cut: " + name, seconds);
     r.cones = cut.cones;
     std::sort(r.cones.begin(), r.cones.end());
@@ -332,7 +334,6 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
       islands = std::move(a.islands);
       firstClip = std::move(a.clip);
       clip = &*firstClip;
-      r.passSeconds.emplace_back("basis: islands (beside the cut)", a.islandSeconds);
       r.passSeconds.emplace_back("basis: voxel clip (beside the cut)", a.clipSeconds);
     }
     solveScratchPass(folder, scratch, field, cut, options, pass, meter, *islands, clip, r, map, translations);

@@ -232,6 +232,69 @@ TEST(Cut, TheParallelPruneIsTheSerialOne) {
   EXPECT_GT(cutEdges, 2 * sing.cones.size());
 }
 
+// The out-of-core cut finds a vertex's last cut edge from the XOR of its edges' corners: the same
+// edges pruned as by the walks around the fans, with boundaries, several components and closed
+// spheres whose cut would vanish (one edge kept, the same one).
+TEST(Cut, PruneByEdgeXorIsPruneByWalks) {
+  const auto prunedBy = [](const Surface& s, const FieldSingularities& sing, bool byXor) {
+    const std::uint32_t nf = s.topology.numFaces(), nv = s.topology.numVertices();
+    CutCorners cut(s.topology.numCorners(), true);
+    std::vector<std::uint8_t> rotationValues(nf, 0xff);
+    struct Rotation {
+      std::vector<std::uint8_t>& values;
+      bool visited(FaceId f) const { return values[f] != 0xff; }
+      std::uint8_t operator[](FaceId f) const { return values[f]; }
+      void set(FaceId f, std::uint8_t r) { values[f] = r; }
+    } rotation{rotationValues};
+    std::vector<std::uint32_t> componentValues(nf), degreeValues(nv, 0), xorValues(nv, 0);
+    detail::VectorArray<std::uint32_t> component{componentValues}, degree{degreeValues}, xorArray{xorValues};
+    const std::uint32_t components = detail::buildDualTree(
+        s.topology, nf, [&](CornerId c) { return sing.matching[c]; }, rotation, component, cut);
+    std::vector<std::uint8_t> isCone(nv, 0);
+    for (VertexId v : sing.cones) isCone[v] = 1;
+    const auto coneAt = [&](VertexId v) { return isCone[v] != 0; };
+    if (byXor) {
+      detail::CutEdgeXor<detail::VectorArray<std::uint32_t>> edges{xorArray};
+      std::vector<std::uint64_t> remaining =
+          detail::countCutDegrees(s.topology, s.topology.numCorners(), cut, component, components, degree, edges);
+      detail::pruneCut(s.topology, nv, coneAt, component, remaining, cut, degree, edges);
+    } else {
+      std::vector<std::uint64_t> remaining =
+          detail::countCutDegrees(s.topology, s.topology.numCorners(), cut, component, components, degree);
+      detail::pruneCut(s.topology, nv, coneAt, component, remaining, cut, degree);
+    }
+    std::vector<bool> out(s.topology.numCorners());
+    for (CornerId c = 0; c < s.topology.numCorners(); ++c) out[c] = cut.isCut(c);
+    return std::make_pair(out, degreeValues);
+  };
+  const Surface scan = makeSurface(cleanMesh(testing::generatedMesh(MeshKind::Scan, 20000), CleanOptions{}).mesh);
+  const Surface parts = makeSurface(testing::concatMeshes({testing::icosphereMesh(2), testing::torusMesh(30, 12),
+                                                           testing::gridMesh(5, 4), testing::cylinderMesh(12, 3),
+                                                           testing::icosphereMesh(1)}));
+  int compared = 0;
+  for (const Surface* s : {&scan, &parts}) {
+    for (const std::uint32_t seed : {3u, 9u}) {
+      const CrossField field = randomField(s->mesh, seed);
+      const FieldSingularities sing = computeSingularities(s->mesh, s->topology, field);
+      const auto walks = prunedBy(*s, sing, false), xors = prunedBy(*s, sing, true);
+      ASSERT_EQ(walks.first, xors.first) << "seed " << seed;
+      ASSERT_EQ(walks.second, xors.second) << "seed " << seed;
+      ++compared;
+    }
+    // No cones: the spheres' cuts would vanish and keep one edge each.
+    FieldSingularities none;
+    none.matching.assign(s->topology.numCorners(), 0);
+    none.index4.assign(s->topology.numVertices(), 0);
+    const auto walks = prunedBy(*s, none, false), xors = prunedBy(*s, none, true);
+    ASSERT_EQ(walks.first, xors.first);
+    std::uint64_t left = 0;
+    for (const bool c : xors.first) left += c;
+    EXPECT_GT(left, 0u);
+    ++compared;
+  }
+  EXPECT_EQ(compared, 6);
+}
+
 TEST(Cut, ClosedSphereWithAtMostOneConeKeepsOneEdge) {
   // Not a valid field on a sphere (Poincare-Hopf wants 8 quarter turns), but the cut must still
   // leave a disk: the pruned cut would vanish, so one edge (at the cone, if any) stays.

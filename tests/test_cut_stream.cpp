@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "core/basis/islands.h"
 #include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/system/errors.h"
@@ -86,6 +87,47 @@ TEST(CutStream, SpheresWithAtMostOneConeKeepOneEdgeAsInMemory) {
       EXPECT_EQ(cut.components, 2u);
       EXPECT_EQ(cut.seams.size(), 2u);  // one edge each
     }
+  });
+}
+
+// The islands read off the first cut's dual tree are islandFaces' on the cleaned mesh: a large
+// piece with specks of 2-40 faces (some larger than maxFaces), and pieces that are all small (the
+// largest then stays); the cut itself is the one without islands asked for.
+TEST(CutStream, TheTreesIslandsAreIslandFaces) {
+  std::vector<TriangleMesh> specks = {testing::icosphereMesh(3)};
+  for (int k = 1; k <= 6; ++k) specks.push_back(testing::gridMesh(k, k % 3 + 1));
+  specks.push_back(testing::icosphereMesh(0));
+  const NamedMeshes meshes = {{"sphere and specks", testing::concatMeshes(specks)},
+                              {"small pieces", testing::concatMeshes({testing::gridMesh(3, 2), testing::gridMesh(2, 2),
+                                                                      testing::icosphereMesh(0), testing::gridMesh(3, 2)})},
+                              {"one piece", testing::generatedMesh(MeshKind::Scan, 3000)}};
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    ScratchSingularities singularities;
+    ScratchWriter writer(folder, "test");
+    const std::vector<std::uint8_t> zeros(3 * std::size_t(scratch.numFaces), 0);
+    writer.write(zeros.data(), zeros.size());
+    singularities.matching = writer.finish();
+    const ScratchCut plain = cutScratchToDisk(folder, scratch, singularities, kTinyPass);
+    std::size_t nonEmpty = 0;
+    for (const std::uint32_t maxFaces : {0u, 7u, 20u, 1024u}) {
+      SCOPED_TRACE(maxFaces);
+      std::vector<FaceId> found;
+      int calls = 0;
+      const TreeIslands islands{maxFaces, [&](std::vector<FaceId> faces) {
+                                  found = std::move(faces);
+                                  ++calls;
+                                }};
+      const ScratchCut cut = cutScratchToDisk(folder, scratch, singularities, kTinyPass, &islands);
+      EXPECT_EQ(calls, 1);
+      EXPECT_EQ(found, islandFaces(cleaned.topology, maxFaces));
+      EXPECT_EQ(found, scratchIslandFaces(folder, scratch, maxFaces, 1 << 20));
+      nonEmpty += !found.empty();
+      EXPECT_EQ(readBytes(folder, cut.corners), readBytes(folder, plain.corners));
+      EXPECT_EQ(readBytes(folder, cut.faceRotation), readBytes(folder, plain.faceRotation));
+      folder.remove(cut.corners);
+      folder.remove(cut.faceRotation);
+    }
+    if (cleaned.topology.numFaces() < 3000) EXPECT_GT(nonEmpty, 0u);
   });
 }
 

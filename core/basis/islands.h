@@ -45,5 +45,49 @@ std::vector<FaceId> islandFacesOf(std::uint64_t numFaces, Sets& sets, Counts& co
   return out;
 }
 
+/// islandFacesOf's faces from a walk that meets the components one after another (a component's
+/// faces before the next one's, as detail::buildDualTree reaches them): add(f, component) for
+/// every face, then faces().
+class IslandsInOrder {
+ public:
+  explicit IslandsInOrder(std::uint32_t maxFaces) : maxFaces_(maxFaces) {}
+  void add(FaceId f, std::uint32_t component) {
+    if (component != current_) {
+      close();
+      current_ = component;
+    }
+    if (++count_ <= maxFaces_) faces_.push_back(f);
+  }
+  /// The faces of the components of at most maxFaces faces and fewer than the largest, increasing.
+  std::vector<FaceId> faces() {
+    close();
+    std::vector<FaceId> out;
+    std::size_t at = 0;
+    for (const std::uint32_t n : small_) {
+      if (n < largest_) out.insert(out.end(), faces_.begin() + at, faces_.begin() + at + n);
+      at += n;
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+
+ private:
+  void close() {
+    if (count_ == 0) return;
+    largest_ = std::max(largest_, static_cast<std::uint32_t>(std::min<std::uint64_t>(count_, maxFaces_ + std::uint64_t(1))));
+    if (count_ <= maxFaces_) {
+      small_.push_back(static_cast<std::uint32_t>(count_));
+    } else {
+      faces_.resize(faces_.size() - maxFaces_);  // too large: its first faces dropped
+    }
+    count_ = 0;
+  }
+  std::uint32_t maxFaces_ = 0, largest_ = 0;
+  std::uint32_t current_ = ~std::uint32_t(0);
+  std::uint64_t count_ = 0;
+  std::vector<FaceId> faces_;         // the small components' faces, in order
+  std::vector<std::uint32_t> small_;  // per small component its faces
+};
+
 }  // namespace detail
 }  // namespace seamvox

@@ -3,6 +3,7 @@
 /// (stream/cut_stream): templates over the corner table (opposite, vertex, forEachCornerAround,
 /// isBoundaryVertex) and the per-face, per-corner and per-vertex state, each a vector in memory or
 /// a page cache of a scratch file. Conventions: cut.h.
+#include <algorithm>
 #include <cstdint>
 #include <deque>
 #include <string>
@@ -22,19 +23,25 @@ struct VectorArray {
   void set(std::size_t i, T value) { values[i] = value; }
 };
 
+/// buildDualTree's default: nothing told of the faces as the tree reaches them.
+struct IgnoreReached {
+  void operator()(FaceId, std::uint32_t) {}
+};
+
 /// Dual spanning tree by BFS per component, roots in face order, neighbours in corner order.
 /// Rotation: visited(f), rotation[f], set(f, r): the combing r_g = r_f - matching(c). Component:
-/// set(f, id). Cut (every edge cut before): the edges the tree crosses set uncut. Returns the
-/// number of components.
-template <class Table, class Matching, class Rotation, class Component, class Cut>
+/// set(f, id). Cut (every edge cut before): the edges the tree crosses set uncut. reached(f, id)
+/// as each face joins (a component's faces before the next's). Returns the number of components.
+template <class Table, class Matching, class Rotation, class Component, class Cut, class Reached = IgnoreReached>
 std::uint32_t buildDualTree(Table& table, std::uint64_t numFaces, Matching&& matching, Rotation& rotation,
-                            Component& component, Cut& cut) {
+                            Component& component, Cut& cut, Reached&& reached = Reached()) {
   std::deque<FaceId> queue;  // the BFS front only (a surface's front is far smaller than it)
   std::uint32_t numComponents = 0;
   for (FaceId root = 0; root < numFaces; ++root) {
     if (rotation.visited(root)) continue;
     rotation.set(root, 0);
     component.set(root, numComponents);
+    reached(root, numComponents);
     queue.push_back(root);
     while (!queue.empty()) {
       const FaceId f = queue.front();
@@ -49,6 +56,7 @@ std::uint32_t buildDualTree(Table& table, std::uint64_t numFaces, Matching&& mat
         cut.setCut(c, false);
         cut.setCut(o, false);
         component.set(g, numComponents);
+        reached(g, numComponents);
         queue.push_back(g);
       }
     }
@@ -69,11 +77,34 @@ CornerId findCutEdgeAt(Table& table, Cut& cut, VertexId v) {
   return found;
 }
 
+/// How pruneCut finds the one cut edge left at a vertex: by a walk around its fan.
+struct WalkForCutEdge {
+  template <class Table, class Cut>
+  CornerId at(Table& table, Cut& cut, VertexId v) {
+    return findCutEdgeAt(table, cut, v);
+  }
+  void toggle(VertexId, CornerId) {}
+};
+
+/// Or by per vertex the XOR of its cut edges' smaller corners (Values: zero before, filled by
+/// countCutDegrees): with one cut edge left, that edge, without a walk (the out-of-core cut, whose
+/// walks go through page caches).
+template <class Values>
+struct CutEdgeXor {
+  Values& values;
+  template <class Table, class Cut>
+  CornerId at(Table&, Cut&, VertexId v) {
+    return values[v];
+  }
+  void toggle(VertexId v, CornerId c) { values.set(v, values[v] ^ c); }
+};
+
 /// Per vertex (Degree: zero before) the number of cut edges at it, boundary edges included;
-/// returns per component its number of cut edges.
-template <class Table, class Cut, class Component, class Degree>
+/// returns per component its number of cut edges. Edges: told each cut edge's smaller corner at
+/// both its ends.
+template <class Table, class Cut, class Component, class Degree, class Edges = WalkForCutEdge>
 std::vector<std::uint64_t> countCutDegrees(Table& table, std::uint64_t numCorners, Cut& cut, Component& component,
-                                           std::uint32_t numComponents, Degree& degree) {
+                                           std::uint32_t numComponents, Degree& degree, Edges&& edges = Edges()) {
   std::vector<std::uint64_t> remaining(numComponents, 0);
   for (CornerId c = 0; c < numCorners; ++c) {
     if (!cut.isCut(c)) continue;
@@ -82,6 +113,8 @@ std::vector<std::uint64_t> countCutDegrees(Table& table, std::uint64_t numCorner
     const VertexId a = table.vertex(nextCorner(c)), b = table.vertex(prevCorner(c));
     degree.set(a, degree[a] + 1);
     degree.set(b, degree[b] + 1);
+    edges.toggle(a, c);
+    edges.toggle(b, c);
     ++remaining[component[cornerFace(c)]];
   }
   return remaining;
@@ -90,14 +123,15 @@ std::vector<std::uint64_t> countCutDegrees(Table& table, std::uint64_t numCorner
 /// Removes dangling cut edges (an end of cut-degree 1 that is not a cone), the chains from the
 /// highest vertex down; boundary edges stay. A component whose cut would vanish (closed genus 0
 /// with at most one cone) keeps one edge, so its cut surface is a disk (the sphere slit along it).
-template <class Table, class IsCone, class Component, class Cut, class Degree>
+/// Edges: as given to countCutDegrees.
+template <class Table, class IsCone, class Component, class Cut, class Degree, class Edges = WalkForCutEdge>
 void pruneCut(Table& table, std::uint64_t numVertices, IsCone&& isCone, Component& component,
-              std::vector<std::uint64_t>& remaining, Cut& cut, Degree& degree) {
+              std::vector<std::uint64_t>& remaining, Cut& cut, Degree& degree, Edges&& edges = Edges()) {
   for (std::uint64_t top = numVertices; top-- > 0;) {
     VertexId v = static_cast<VertexId>(top);
     while (degree[v] == 1 && !isCone(v)) {
-      const CornerId e = findCutEdgeAt(table, cut, v);
-      if (e == kInvalidId) break;
+      const CornerId e = edges.at(table, cut, v);
+      if (e == kInvalidId || !cut.isCut(e)) break;
       const CornerId o = table.opposite(e);
       if (o == kInvalidId) break;  // boundary edges are never pruned
       std::uint64_t& left = remaining[component[cornerFace(e)]];
@@ -109,6 +143,8 @@ void pruneCut(Table& table, std::uint64_t numVertices, IsCone&& isCone, Componen
       const VertexId w = a == v ? b : a;
       degree.set(v, degree[v] - 1);
       degree.set(w, degree[w] - 1);
+      edges.toggle(v, std::min(e, o));
+      edges.toggle(w, std::min(e, o));
       v = w;
     }
   }
