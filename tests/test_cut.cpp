@@ -195,6 +195,41 @@ TEST(Cut, SeveralComponents) {
   checkAll(s, randomField(s.mesh, 9), "components random");
 }
 
+/// The serial steps of cutToDisk up to the prune (the last cut edge at a vertex found by walks or
+/// by byXor): per corner its cut flag, per vertex its cut degree.
+std::pair<std::vector<bool>, std::vector<std::uint32_t>> serialPrune(const Surface& s, const FieldSingularities& sing,
+                                                                   bool byXor) {
+  const std::uint32_t nf = s.topology.numFaces(), nv = s.topology.numVertices();
+  CutCorners cut(s.topology.numCorners(), true);
+  std::vector<std::uint8_t> rotationValues(nf, 0xff);
+  struct Rotation {
+    std::vector<std::uint8_t>& values;
+    bool visited(FaceId f) const { return values[f] != 0xff; }
+    std::uint8_t operator[](FaceId f) const { return values[f]; }
+    void set(FaceId f, std::uint8_t r) { values[f] = r; }
+  } rotation{rotationValues};
+  std::vector<std::uint32_t> componentValues(nf), degreeValues(nv, 0), xorValues(nv, 0);
+  detail::VectorArray<std::uint32_t> component{componentValues}, degree{degreeValues}, xorArray{xorValues};
+  const std::uint32_t components = detail::buildDualTree(
+      s.topology, nf, [&](CornerId c) { return sing.matching[c]; }, rotation, component, cut);
+  std::vector<std::uint8_t> isCone(nv, 0);
+  for (VertexId v : sing.cones) isCone[v] = 1;
+  const auto coneAt = [&](VertexId v) { return isCone[v] != 0; };
+  if (byXor) {
+    detail::CutEdgeXor<detail::VectorArray<std::uint32_t>> edges{xorArray};
+    std::vector<std::uint64_t> remaining =
+        detail::countCutDegrees(s.topology, s.topology.numCorners(), cut, component, components, degree, edges);
+    detail::pruneCut(s.topology, nv, coneAt, component, remaining, cut, degree, edges);
+  } else {
+    std::vector<std::uint64_t> remaining =
+        detail::countCutDegrees(s.topology, s.topology.numCorners(), cut, component, components, degree);
+    detail::pruneCut(s.topology, nv, coneAt, component, remaining, cut, degree);
+  }
+  std::vector<bool> out(s.topology.numCorners());
+  for (CornerId c = 0; c < s.topology.numCorners(); ++c) out[c] = cut.isCut(c);
+  return std::make_pair(out, degreeValues);
+}
+
 // cutToDisk peels the dangling cut edges on every core: the cut is the serial peel's, on a mesh
 // large enough for many blocks, with a random field's many cones.
 TEST(Cut, TheParallelPruneIsTheSerialOne) {
@@ -205,29 +240,11 @@ TEST(Cut, TheParallelPruneIsTheSerialOne) {
   ASSERT_GT(sing.cones.size(), 100u);
   const CutResult cut = cutToDisk(s.mesh, s.topology, field, sing);
 
-  // The serial steps of cutToDisk up to the prune.
-  const std::uint32_t nf = s.topology.numFaces(), nv = s.topology.numVertices();
-  CutCorners serial(s.topology.numCorners(), true);
-  std::vector<std::uint8_t> rotationValues(nf, 0xff);
-  struct Rotation {
-    std::vector<std::uint8_t>& values;
-    bool visited(FaceId f) const { return values[f] != 0xff; }
-    std::uint8_t operator[](FaceId f) const { return values[f]; }
-    void set(FaceId f, std::uint8_t r) { values[f] = r; }
-  } rotation{rotationValues};
-  std::vector<std::uint32_t> componentValues(nf), degreeValues(nv, 0);
-  detail::VectorArray<std::uint32_t> component{componentValues}, degree{degreeValues};
-  const std::uint32_t components = detail::buildDualTree(
-      s.topology, nf, [&](CornerId c) { return sing.matching[c]; }, rotation, component, serial);
-  std::vector<std::uint64_t> remaining =
-      detail::countCutDegrees(s.topology, s.topology.numCorners(), serial, component, components, degree);
-  std::vector<std::uint8_t> isCone(nv, 0);
-  for (VertexId v : sing.cones) isCone[v] = 1;
-  detail::pruneCut(s.topology, nv, [&](VertexId v) { return isCone[v] != 0; }, component, remaining, serial, degree);
+  const std::vector<bool> serial = serialPrune(s, sing, false).first;
   std::uint64_t cutEdges = 0;
   for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
-    ASSERT_EQ(cut.corners.isCut(c), serial.isCut(c)) << "corner " << c;
-    cutEdges += serial.isCut(c);
+    ASSERT_EQ(cut.corners.isCut(c), serial[c]) << "corner " << c;
+    cutEdges += serial[c];
   }
   EXPECT_GT(cutEdges, 2 * sing.cones.size());
 }
@@ -236,37 +253,6 @@ TEST(Cut, TheParallelPruneIsTheSerialOne) {
 // edges pruned as by the walks around the fans, with boundaries, several components and closed
 // spheres whose cut would vanish (one edge kept, the same one).
 TEST(Cut, PruneByEdgeXorIsPruneByWalks) {
-  const auto prunedBy = [](const Surface& s, const FieldSingularities& sing, bool byXor) {
-    const std::uint32_t nf = s.topology.numFaces(), nv = s.topology.numVertices();
-    CutCorners cut(s.topology.numCorners(), true);
-    std::vector<std::uint8_t> rotationValues(nf, 0xff);
-    struct Rotation {
-      std::vector<std::uint8_t>& values;
-      bool visited(FaceId f) const { return values[f] != 0xff; }
-      std::uint8_t operator[](FaceId f) const { return values[f]; }
-      void set(FaceId f, std::uint8_t r) { values[f] = r; }
-    } rotation{rotationValues};
-    std::vector<std::uint32_t> componentValues(nf), degreeValues(nv, 0), xorValues(nv, 0);
-    detail::VectorArray<std::uint32_t> component{componentValues}, degree{degreeValues}, xorArray{xorValues};
-    const std::uint32_t components = detail::buildDualTree(
-        s.topology, nf, [&](CornerId c) { return sing.matching[c]; }, rotation, component, cut);
-    std::vector<std::uint8_t> isCone(nv, 0);
-    for (VertexId v : sing.cones) isCone[v] = 1;
-    const auto coneAt = [&](VertexId v) { return isCone[v] != 0; };
-    if (byXor) {
-      detail::CutEdgeXor<detail::VectorArray<std::uint32_t>> edges{xorArray};
-      std::vector<std::uint64_t> remaining =
-          detail::countCutDegrees(s.topology, s.topology.numCorners(), cut, component, components, degree, edges);
-      detail::pruneCut(s.topology, nv, coneAt, component, remaining, cut, degree, edges);
-    } else {
-      std::vector<std::uint64_t> remaining =
-          detail::countCutDegrees(s.topology, s.topology.numCorners(), cut, component, components, degree);
-      detail::pruneCut(s.topology, nv, coneAt, component, remaining, cut, degree);
-    }
-    std::vector<bool> out(s.topology.numCorners());
-    for (CornerId c = 0; c < s.topology.numCorners(); ++c) out[c] = cut.isCut(c);
-    return std::make_pair(out, degreeValues);
-  };
   const Surface scan = makeSurface(cleanMesh(testing::generatedMesh(MeshKind::Scan, 20000), CleanOptions{}).mesh);
   const Surface parts = makeSurface(testing::concatMeshes({testing::icosphereMesh(2), testing::torusMesh(30, 12),
                                                            testing::gridMesh(5, 4), testing::cylinderMesh(12, 3),
@@ -276,7 +262,7 @@ TEST(Cut, PruneByEdgeXorIsPruneByWalks) {
     for (const std::uint32_t seed : {3u, 9u}) {
       const CrossField field = randomField(s->mesh, seed);
       const FieldSingularities sing = computeSingularities(s->mesh, s->topology, field);
-      const auto walks = prunedBy(*s, sing, false), xors = prunedBy(*s, sing, true);
+      const auto walks = serialPrune(*s, sing, false), xors = serialPrune(*s, sing, true);
       ASSERT_EQ(walks.first, xors.first) << "seed " << seed;
       ASSERT_EQ(walks.second, xors.second) << "seed " << seed;
       ++compared;
@@ -285,7 +271,7 @@ TEST(Cut, PruneByEdgeXorIsPruneByWalks) {
     FieldSingularities none;
     none.matching.assign(s->topology.numCorners(), 0);
     none.index4.assign(s->topology.numVertices(), 0);
-    const auto walks = prunedBy(*s, none, false), xors = prunedBy(*s, none, true);
+    const auto walks = serialPrune(*s, none, false), xors = serialPrune(*s, none, true);
     ASSERT_EQ(walks.first, xors.first);
     std::uint64_t left = 0;
     for (const bool c : xors.first) left += c;
