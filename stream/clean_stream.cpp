@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -381,7 +382,14 @@ class CleanPass {
     front.memoryBytes = options_.frontBytes > 0 ? options_.frontBytes : std::max(kMinimumSortBytes, options_.memoryBytes / 4);
     // The two in-order windows take at most an eighth of that.
     front.windowValues = std::min<std::uint64_t>(options_.frontWindow, std::max<std::uint64_t>(64, front.memoryBytes / 64));
+    // The islands on a thread of their own beside the serial front pass, kept when it splits no fan.
+    std::future<std::vector<FaceId>> islands;
+    if (options_.islandFaces > 0) islands = std::async(std::launch::async, [this] { return islandsBySharedVertices(); });
     detail::FrontGlueResult r = detail::glueAlongFront(folder_, faces_, out_.numFaces, out_.numVertices, lastFace_, front);
+    if (islands.valid()) {
+      std::vector<FaceId> found = islands.get();
+      if (r.glued && r.copies.empty()) out_.islands = std::move(found);
+    }
     std::vector<FaceId>().swap(lastFace_);
     out_.largestFront = r.largestFront;
     out_.frontLateValues = r.lateValues;
@@ -404,6 +412,26 @@ class CleanPass {
     }
     moved_->finish();
     placeCopies(copyOf);
+  }
+
+  /// scratchIslandFaces' islands with the faces joined through their vertices (each face to each
+  /// of its vertices' last face) rather than their glued edges: the same components when no vertex
+  /// has two fans. Within an eighth of the memory for the faces' union-find and one for the counts.
+  std::vector<FaceId> islandsBySharedVertices() {
+    ScratchUnionFind sets(folder_, out_.numFaces, options_.memoryBytes / 8, "clean: islands");
+    {
+      ScratchReader in(folder_, faces_, "clean: islands");
+      std::vector<CleanFace> block(kChunkFaces);
+      for (FaceId f = 0; f < out_.numFaces;) {
+        const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(block.size(), out_.numFaces - f));
+        if (!in.read(block.data(), n * sizeof(CleanFace))) throw IoError(faces_.path + ": scratch faces end early");
+        for (std::size_t i = 0; i < n; ++i, ++f) {
+          for (const VertexId v : block[i].triangle) sets.unite(f, lastFace_[v]);
+        }
+      }
+    }
+    ScratchArray<std::uint32_t> counts(folder_, out_.numFaces, options_.memoryBytes / 8, "clean: islands");
+    return detail::islandFacesOf(out_.numFaces, sets, counts, options_.islandFaces);
   }
 
   /// The faces' edge sides into the sort by edge (after a front pass that stopped).

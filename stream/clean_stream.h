@@ -11,6 +11,7 @@
 /// pieces of edges shared by more than two faces (4 bytes per face) and 1 byte per face for the
 /// flips, each on disk beyond its share. The spike count walks the fans through page caches.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -46,6 +47,9 @@ struct CleanScratch {
   std::string gluing;
   std::uint64_t largestFront = 0;  ///< the front pass's open vertices at most
   std::uint64_t frontLateValues = 0;  ///< its values patched in place (set after their window was written)
+  /// The islands (core/basis/islands.h) of at most CleanStreamOptions::islandFaces faces, found
+  /// beside the front pass when it split no fan; else none (scratchIslandFaces finds them).
+  std::optional<std::vector<FaceId>> islands;
   /// Wall seconds of the passes: vertices, faces, front, glue, fans, write, measure.
   std::vector<std::pair<std::string, double>> stageSeconds;
 };
@@ -57,6 +61,7 @@ struct CleanStreamOptions {
   bool gluingBySorts = false;    ///< the gluing and fans by sorts, without the front pass (tests)
   std::size_t frontWindow = std::size_t(1) << 20;  ///< the front pass's in-order window (tests: small)
   std::uint64_t frontBytes = 0;  ///< the front pass's open front (0: a quarter of memoryBytes; tests: small)
+  std::uint32_t islandFaces = 0;  ///< > 0: the islands of at most this many faces beside the front pass
 };
 
 /// Cleans the weld pass's output (kept in folder) into folder within options.memoryBytes. The

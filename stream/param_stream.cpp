@@ -240,6 +240,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
     for (const auto& [name, seconds] : welded.census.stageSeconds) r.passSeconds.emplace_back("weld: " + name, seconds);
     CleanStreamOptions clean;
     clean.memoryBytes = early.memoryBytes;
+    clean.islandFaces = kVoxelIslandFaces;
     CleanScratch cleaned = cleanWeldedMesh(folder, welded.scratch, welded.census, clean);
     for (const auto& [name, seconds] : cleaned.stageSeconds) r.passSeconds.emplace_back("clean: " + name, seconds);
     r.cleanGluing = cleaned.gluing;
@@ -294,17 +295,17 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   };
   std::optional<KeptPass> kept;
   // The islands (components too small for the voxel basis) and the first pass's voxel clip
-  // depend on the mesh alone: the islands are read off the first cut's dual tree, then the clip
-  // runs on a thread of its own while the rest of that cut walks on one core, with a quarter of
-  // the pass's memory beside the cut's page caches (a quarter of the early passes'). The clip
-  // then waits for the first pass's basis.
+  // depend on the mesh alone. The islands come from the cleaning (found beside its front pass) or
+  // else are read off the first cut's dual tree; then the clip runs on a thread of its own while
+  // the cut walks on one core, with a quarter of the pass's memory beside the cut's page caches (a
+  // quarter of the early passes'). The clip then waits for the first pass's basis.
   struct Ahead {
     std::vector<FaceId> islands;
     ScratchVoxelClip clip;
     double clipSeconds = 0.0;
   };
   std::future<Ahead> ahead;
-  const TreeIslands treeIslands{kVoxelIslandFaces, [&](std::vector<FaceId> faces) {
+  const auto clipAhead = [&](std::vector<FaceId> faces) {
     ahead = std::async(std::launch::async, [&, faces = std::move(faces)]() mutable {
       Ahead a;
       a.islands = std::move(faces);
@@ -313,12 +314,14 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
       a.clipSeconds = secondsSince(start);
       return a;
     });
-  }};
+  };
+  const TreeIslands treeIslands{kVoxelIslandFaces, clipAhead};
+  if (scratch.islands) clipAhead(*scratch.islands);
   std::optional<std::vector<FaceId>> islands;
   std::optional<ScratchVoxelClip> firstClip;
   for (;;) {
     ++r.conePasses;
-    cut = cutScratchToDisk(folder, scratch, singularities, early, islands ? nullptr : &treeIslands);
+    cut = cutScratchToDisk(folder, scratch, singularities, early, islands || scratch.islands ? nullptr : &treeIslands);
     for (const auto& [name, seconds] : cut.stageSeconds) r.passSeconds.emplace_back("cut: " + name, seconds);
     r.cones = cut.cones;
     std::sort(r.cones.begin(), r.cones.end());
