@@ -14,14 +14,12 @@
 #include "core/field/detail_smoothing.h"
 #include "core/field/field_numerics.h"
 #include "core/mesh/detail_union_find.h"
-#include "core/mesh/morton.h"
-#include "stream/external_sort.h"
-#include "stream/keyed_sort.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 #include "core/system/stopwatch.h"
 #include "stream/paged_corner_table.h"
 #include "stream/paged_reader.h"
+#include "stream/scratch_union_find.h"
 
 namespace seamvox {
 
@@ -63,125 +61,6 @@ ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& sc
 
 
 namespace {
-
-/// A cell's key (ProxyCells::cellOf, row by row) as its Morton code: the same groups of faces,
-/// taken in a spatially coherent order, so the page caches of the faces hit.
-std::uint32_t cellOrder(std::uint32_t key, std::uint32_t resolution) {
-  const std::uint32_t x = key % resolution, y = key / resolution % resolution, z = key / resolution / resolution;
-  return static_cast<std::uint32_t>(spreadBits(x) | spreadBits(y) << 1 | spreadBits(z) << 2);
-}
-
-struct CellFace {
-  std::uint32_t cell = 0, face = 0;
-};
-struct CellFaceLess {
-  bool operator()(const CellFace& a, const CellFace& b) const {
-    return a.cell != b.cell ? a.cell < b.cell : a.face < b.face;
-  }
-};
-struct FaceKey {
-  std::uint32_t face = 0, key = 0;
-};
-struct FaceKeyLess {
-  bool operator()(const FaceKey& a, const FaceKey& b) const { return a.face < b.face; }
-};
-/// The keyed sorts' keys: a record's cell (in cellOrder), a record's face.
-struct CellOfRecord {
-  std::uint64_t operator()(const CellFace& r) const { return r.cell; }
-};
-struct FaceOfRecord {
-  std::uint64_t operator()(const FaceKey& r) const { return r.face; }
-};
-
-/// Reads a file of (cell, face) records sorted by cell one cell at a time.
-class CellGroups {
- public:
-  CellGroups(ScratchFolder& folder, const ScratchFile& file, const char* stage) : reader_(folder, file, stage) {
-    more_ = reader_.read(&pending_, sizeof pending_);
-  }
-  bool next(std::uint32_t& cell, std::vector<FaceId>& faces) {
-    faces.clear();
-    if (!more_) return false;
-    cell = pending_.cell;
-    while (more_ && pending_.cell == cell) {
-      faces.push_back(pending_.face);
-      more_ = reader_.read(&pending_, sizeof pending_);
-    }
-    return true;
-  }
-
- private:
-  ScratchReader reader_;
-  CellFace pending_;
-  bool more_ = false;
-};
-
-/// Consecutive cells of a (cell, face) file sorted by cell, read a batch at a time: whole cells,
-/// about `batchFaces` faces (more when one cell has more).
-class CellBatches {
- public:
-  CellBatches(ScratchFolder& folder, const ScratchFile& file, const char* stage, std::uint64_t batchFaces)
-      : groups_(folder, file, stage), batchFaces_(std::max<std::uint64_t>(1, batchFaces)) {
-    more_ = groups_.next(cell_, pending_);
-  }
-  bool next() {
-    faces.clear();
-    start_.assign(1, 0);
-    while (more_ && (faces.empty() || faces.size() + pending_.size() <= batchFaces_)) {
-      faces.insert(faces.end(), pending_.begin(), pending_.end());
-      start_.push_back(faces.size());
-      more_ = groups_.next(cell_, pending_);
-    }
-    return !faces.empty();
-  }
-  std::uint64_t cells() const { return start_.size() - 1; }
-  std::vector<FaceId>::const_iterator begin(std::uint64_t k) const { return faces.begin() + start_[k]; }
-  std::vector<FaceId>::const_iterator end(std::uint64_t k) const { return faces.begin() + start_[k + 1]; }
-  std::vector<FaceId> faces;  ///< the batch's faces, cell after cell
-
- private:
-  CellGroups groups_;
-  std::uint64_t batchFaces_;
-  std::uint32_t cell_ = 0;
-  std::vector<FaceId> pending_;
-  std::vector<std::size_t> start_;
-  bool more_ = false;
-};
-
-/// The pieces of one cell's faces [begin, end) (sorted) joined through their shared edges:
-/// smallest[i] gets the smallest face of the piece of begin[i].
-template <class Faces>
-void piecesOfCell(Faces begin, Faces end, PagedReader<CornerId>& opposite, FaceId* smallest) {
-  const auto n = static_cast<std::uint32_t>(end - begin);
-  detail::UnionFind sets(n);  // roots are the smallest indices, so the smallest faces
-  // A neighbour's place among the sorted faces, searched outwards from face i's own (neighbours
-  // lie close in the faces' Morton order): doubling steps, then a binary search in the last one.
-  const auto find = [&](std::uint32_t i, FaceId g) -> std::uint32_t {
-    std::uint32_t lo, hi;  // g's place is in [lo, hi]
-    if (g > begin[i]) {
-      std::uint32_t step = 1;
-      lo = i;
-      while (lo + step < n && begin[lo + step] < g) lo += step, step *= 2;
-      hi = std::min(n, lo + step);
-    } else {
-      std::uint32_t step = 1;
-      hi = i;
-      while (hi >= step && begin[hi - step] > g) hi -= step, step *= 2;
-      lo = hi >= step ? hi - step : 0;
-    }
-    const auto it = std::lower_bound(begin + lo, begin + hi, g);
-    return it != end && *it == g ? static_cast<std::uint32_t>(it - begin) : kInvalidId;
-  };
-  for (std::uint32_t i = 0; i < n; ++i) {
-    for (CornerId c = 3 * begin[i]; c < 3 * begin[i] + 3; ++c) {
-      const CornerId o = opposite[c];
-      if (o == kInvalidId) continue;
-      const std::uint32_t j = find(i, cornerFace(o));
-      if (j != kInvalidId) sets.unite(i, j);
-    }
-  }
-  for (std::uint32_t i = 0; i < n; ++i) smallest[i] = begin[sets.find(i)];
-}
 
 /// Records [first, first + count) of a per-face scratch file, read at once (pread): a pass over a
 /// block of faces reads them there instead of through a page cache per face.
@@ -246,13 +125,11 @@ std::pair<ScratchFile, std::uint32_t> colourFaces(ScratchFolder& folder, const C
 }  // namespace
 
 ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scratch, const ProxyFieldOptions& proxy,
-                                 const FieldGeometryOptions& geometry, const StreamPassOptions& pass) {
+                                 const FieldGeometryOptions& geometry, const StreamPassOptions& pass, bool withAngles) {
   ScratchField out;
   StageClock clock(out.stageSeconds);
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   const std::uint64_t blockFaces = std::max<std::uint64_t>(1, pass.blockRecords);
-  ExternalSortOptions sort;
-  sort.memoryBytes = std::max<std::uint64_t>(pass.memoryBytes / 4, std::uint64_t(1) << 20);
   const std::uint64_t nf = scratch.numFaces;
   const bool smoothed = geometry.smoothingIterations > 0;
   const ScratchFile surface = smoothed ? smoothScratchPositions(folder, scratch, geometry.smoothingIterations, pass)
@@ -261,137 +138,142 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   clock.finish("smooth");
   if (nf == 0) return out;
 
-  // Cells of the surface's face centroids, sorted by cell.
+  // Each face's cell: the cell of its centroid on the surface.
   const BoundingBox box = scratchBoundingBox(folder, surface, "field: cells");
   const detail::ProxyCells cells = detail::proxyCells(box, proxy.gridResolution);
-  ScratchFile cellFaces;
+  ScratchFile faceCell;
   {
-    const std::uint32_t last = cells.resolution - 1;  // cellOrder grows with each coordinate
-    const std::uint64_t cellKeys = std::uint64_t(cellOrder(last + cells.resolution * (last + cells.resolution * last),
-                                                           cells.resolution)) + 1;
-    KeyedSorter<CellFace, CellFaceLess, CellOfRecord> sorter(folder, cellKeys, nf, sort.named("field: cells"));
     ReaderPool<PagedFacePoints> pool([&] { return std::make_unique<PagedFacePoints>(scratch, surface, cacheBytes); });
-    std::vector<std::uint32_t> block;
-    for (std::uint64_t first = 0; first < nf; first += blockFaces) {
-      const std::uint64_t count = std::min(blockFaces, nf - first);
-      block.resize(count);
+    ScratchRandomReader facesIn(folder, scratch.faces, "field: cells");
+    std::vector<CleanFace> faces;
+    faceCell = writeFaceBlocks<std::uint32_t>(folder, "field: cells", nf, blockFaces, [&](std::vector<std::uint32_t>& block, std::uint64_t first, std::uint64_t count) {
+      readFaceBlock(facesIn, first, count, faces);
       parallelFor(count, 4096, [&](const IndexRange& range) {
         auto points = pool.take();
         for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-          const std::array<Vec3d, 3> p = points->points(static_cast<FaceId>(first + i));
-          block[i] = cellOrder(cells.cellOf((p[0] + p[1] + p[2]) / 3.0), cells.resolution);
+          const std::array<Vec3d, 3> p = points->points(faces[i].triangle);
+          block[i] = cells.cellOf((p[0] + p[1] + p[2]) / 3.0);
         }
       });
-      for (std::uint64_t i = 0; i < count; ++i) sorter.add({block[i], static_cast<FaceId>(first + i)});
-    }
+    });
     pool.forEach([&](PagedFacePoints& points) { folder.countRead("field: cells", points.bytesRead()); });
-    sorter.finish();
-    ScratchWriter writer(folder, "field: cells");
-    CellFace record;
-    while (sorter.next(record)) writer.write(&record, sizeof record);
-    cellFaces = writer.finish();
   }
   clock.finish("cells");
 
-  // Elements: the pieces of each cell, numbered by their smallest faces; face -> element. The
-  // cells of a batch are joined in parallel, their records added in cell order.
+  // Elements as buildElements makes them: the faces of one cell joined through their shared edges
+  // (a union-find of the faces whose roots are the smallest, its links in memory within a quarter
+  // of the pass's memory, else on disk), numbered by their smallest faces.
   ScratchFile faceElement;
   std::uint32_t numElements = 0;
   {
-    std::vector<FaceId> smallestFaces;
-    KeyedSorter<FaceKey, FaceKeyLess, FaceOfRecord> byFace(folder, nf, nf, sort.named("field: elements"));
-    ReaderPool<PagedReader<CornerId>> pool(
-        [&] { return std::make_unique<PagedReader<CornerId>>(scratch.opposite, cacheBytes); });
-    CellBatches batches(folder, cellFaces, "field: elements", blockFaces);
-    std::vector<FaceId> smallest;
-    while (batches.next()) {
-      smallest.resize(batches.faces.size());
-      parallelFor(batches.cells(), 1, [&](const IndexRange& range) {
-        auto opposite = pool.take();
-        for (std::uint64_t k = range.begin(); k != range.end(); ++k) {
-          piecesOfCell(batches.begin(k), batches.end(k), *opposite,
-                       smallest.data() + (batches.begin(k) - batches.faces.begin()));
+    const char* stage = "field: elements";
+    ScratchLinks links(folder, nf, pass.memoryBytes / 4, stage, false);
+    {
+      // A block's joins found in parallel (the neighbour's cell in the block or through a page
+      // cache), then united in face order.
+      ReaderPool<PagedReader<std::uint32_t>> pool([&] { return std::make_unique<PagedReader<std::uint32_t>>(faceCell, cacheBytes); });
+      ScratchRandomReader oppositeIn(folder, scratch.opposite, stage), cellIn(folder, faceCell, stage);
+      std::vector<std::array<CornerId, 3>> opposite;
+      std::vector<std::uint32_t> cell;
+      std::vector<std::array<FaceId, 3>> join;
+      for (std::uint64_t first = 0; first < nf; first += blockFaces) {
+        const std::uint64_t count = std::min(blockFaces, nf - first);
+        readFaceBlock(oppositeIn, first, count, opposite);
+        readFaceBlock(cellIn, first, count, cell);
+        join.resize(count);
+        parallelFor(count, 4096, [&](const IndexRange& range) {
+          auto cellOf = pool.take();
+          for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+            for (unsigned k = 0; k < 3; ++k) {
+              const CornerId c = static_cast<CornerId>(3 * (first + i) + k), o = opposite[i][k];
+              join[i][k] = kInvalidId;
+              if (o == kInvalidId || o < c) continue;
+              const FaceId g = cornerFace(o);
+              if ((g >= first && g < first + count ? cell[g - first] : (*cellOf)[g]) == cell[i]) join[i][k] = g;
+            }
+          }
+        });
+        for (std::uint64_t i = 0; i < count; ++i) {
+          for (const FaceId g : join[i]) {
+            if (g != kInvalidId) detail::uniteRoots(links, static_cast<FaceId>(first + i), g);
+          }
         }
-      });
-      for (std::size_t i = 0; i < batches.faces.size(); ++i) {
-        if (smallest[i] == batches.faces[i]) smallestFaces.push_back(batches.faces[i]);
-        byFace.add({batches.faces[i], smallest[i]});
       }
+      pool.forEach([&](PagedReader<std::uint32_t>& r) { folder.countRead(stage, r.bytesRead()); });
     }
-    pool.forEach([&](PagedReader<CornerId>& r) { folder.countRead("field: elements", r.bytesRead()); });
-    std::sort(smallestFaces.begin(), smallestFaces.end());
-    numElements = static_cast<std::uint32_t>(smallestFaces.size());
-    byFace.finish();
-    // Each face's element: the rank of its piece's smallest face, looked up a block at a time in
-    // parallel.
-    ScratchWriter writer(folder, "field: elements");
-    std::vector<FaceKey> records;
-    std::vector<std::uint32_t> element;
-    FaceKey record;
-    for (bool more = true; more;) {
-      records.clear();
-      while (records.size() < blockFaces && (more = byFace.next(record))) records.push_back(record);
-      element.resize(records.size());
-      parallelFor(records.size(), 4096, [&](const IndexRange& range) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          element[i] = static_cast<std::uint32_t>(
-              std::lower_bound(smallestFaces.begin(), smallestFaces.end(), records[i].key) - smallestFaces.begin());
-        }
-      });
-      writer.write(element.data(), element.size() * sizeof(std::uint32_t));
-    }
-    faceElement = writer.finish();
+    folder.remove(faceCell);
+    // Parents are smaller faces, so one increasing pass turns roots into element ids and every
+    // other face into its parent's id (kept as the face's link from then on).
+    faceElement = writeFaceBlocks<std::uint32_t>(folder, stage, nf, blockFaces, [&](std::vector<std::uint32_t>& block, std::uint64_t first, std::uint64_t count) {
+      for (std::uint64_t i = 0; i < count; ++i) {
+        const FaceId f = static_cast<FaceId>(first + i);
+        const std::uint32_t up = links.parentOf(f);
+        block[i] = up == f ? numElements++ : links.parentOf(up);
+        links.setParent(f, block[i]);
+      }
+    });
   }
-  // Per element its sums over its faces in increasing order (a cell's elements are all in it).
+  // Per element its sums over its faces in increasing order: a block's face geometry and edges to
+  // other elements in parallel, then added in face order.
   detail::ProxyElements elements;
   elements.cellSize = cells.cellSize;
   elements.normal.resize(numElements);
   elements.centroid.resize(numElements);
   elements.area.resize(numElements);
   {
-    std::vector<std::vector<std::pair<std::uint32_t, double>>> lists(numElements);
+    const char* stage = "field: elements";
     struct Readers {
       PagedFacePoints points;
-      PagedReader<CornerId> opposite;
       PagedReader<std::uint32_t> elementOf;
     };
     ReaderPool<Readers> pool([&] {
-      return std::unique_ptr<Readers>(new Readers{PagedFacePoints(scratch, surface, cacheBytes),
-                                                  PagedReader<CornerId>(scratch.opposite, cacheBytes),
-                                                  PagedReader<std::uint32_t>(faceElement, cacheBytes)});
+      return std::unique_ptr<Readers>(
+          new Readers{PagedFacePoints(scratch, surface, cacheBytes), PagedReader<std::uint32_t>(faceElement, cacheBytes)});
     });
-    CellBatches batches(folder, cellFaces, "field: elements", blockFaces);
-    // A cell's elements are its own: the cells of a batch finish theirs in parallel.
-    while (batches.next()) {
-      parallelFor(batches.cells(), 1, [&](const IndexRange& range) {
+    ScratchRandomReader facesIn(folder, scratch.faces, stage), oppositeIn(folder, scratch.opposite, stage),
+        elementIn(folder, faceElement, stage);
+    std::vector<detail::ElementSums> sums(numElements);
+    std::vector<CleanFace> faces;
+    std::vector<std::array<CornerId, 3>> opposite;
+    std::vector<std::uint32_t> element;
+    std::vector<detail::FaceGeometry> geometry;
+    std::vector<std::array<std::pair<std::uint32_t, double>, 3>> across;  // other element (or kInvalidId), edge length
+    const std::uint64_t sumFaces = std::min<std::uint64_t>(blockFaces, std::uint64_t(1) << 16);
+    for (std::uint64_t first = 0; first < nf; first += sumFaces) {
+      const std::uint64_t count = std::min(sumFaces, nf - first);
+      readFaceBlock(facesIn, first, count, faces);
+      readFaceBlock(oppositeIn, first, count, opposite);
+      readFaceBlock(elementIn, first, count, element);
+      geometry.resize(count);
+      across.resize(count);
+      parallelFor(count, 2048, [&](const IndexRange& range) {
         auto r = pool.take();
-        std::vector<std::pair<std::uint32_t, detail::ElementSums>> sums;
-        for (std::uint64_t k = range.begin(); k != range.end(); ++k) {
-          sums.clear();
-          for (auto face = batches.begin(k); face != batches.end(k); ++face) {
-            const FaceId f = *face;
-            const std::uint32_t e = r->elementOf[f];
-            auto it = std::find_if(sums.begin(), sums.end(), [&](const auto& s) { return s.first == e; });
-            if (it == sums.end()) it = sums.emplace(sums.end(), e, detail::ElementSums());
-            const std::array<Vec3d, 3> p = r->points.points(f);
-            it->second.addFace(detail::faceGeometry(p));
-            for (int c = 0; c < 3; ++c) {
-              const CornerId o = r->opposite[3 * f + c];
-              if (o == kInvalidId) continue;
-              const std::uint32_t other = r->elementOf[cornerFace(o)];
-              if (other != e) it->second.addNeighbour(other, (p[(c + 1) % 3] - p[(c + 2) % 3]).norm());
-            }
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+          const std::array<Vec3d, 3> p = r->points.points(faces[i].triangle);
+          geometry[i] = detail::faceGeometry(p);
+          for (unsigned k = 0; k < 3; ++k) {
+            across[i][k] = {kInvalidId, 0.0};
+            const CornerId o = opposite[i][k];
+            if (o == kInvalidId) continue;
+            const FaceId g = cornerFace(o);
+            const std::uint32_t other = g >= first && g < first + count ? element[g - first] : r->elementOf[g];
+            if (other != element[i]) across[i][k] = {other, (p[(k + 1) % 3] - p[(k + 2) % 3]).norm()};
           }
-          for (auto& [e, sum] : sums) lists[e] = sum.finish(elements, e);
         }
       });
+      for (std::uint64_t i = 0; i < count; ++i) {
+        detail::ElementSums& sum = sums[element[i]];
+        sum.addFace(geometry[i]);
+        for (const auto& [other, length] : across[i]) {
+          if (other != kInvalidId) sum.addNeighbour(other, length);
+        }
+      }
     }
-    pool.forEach([&](Readers& r) {
-      folder.countRead("field: elements", r.points.bytesRead() + r.opposite.bytesRead() + r.elementOf.bytesRead());
-    });
+    pool.forEach([&](Readers& r) { folder.countRead(stage, r.points.bytesRead() + r.elementOf.bytesRead()); });
+    std::vector<std::vector<std::pair<std::uint32_t, double>>> lists(numElements);
+    for (std::uint32_t e = 0; e < numElements; ++e) lists[e] = sums[e].finish(elements, e);
     detail::storeNeighbours(lists, elements);
   }
-  folder.remove(cellFaces);
   out.elements = numElements;
   out.elementEdges = elements.neighbours.size() / 2;
   clock.finish("elements");
@@ -553,10 +435,14 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   auto directionIn = std::make_unique<ScratchRandomReader>(folder, direction, "field: finish");
   std::unique_ptr<ScratchRandomReader> normalIn;
   if (sweeps) normalIn = std::make_unique<ScratchRandomReader>(folder, sweepNormal, "field: finish");
+  // With angles: the singularities' per-face angles of the final directions in the same pass.
+  ScratchWriter anglesOut(folder, "field: finish");
+  std::vector<detail::FaceAngleData> angles;
   out.directions = writeFaceBlocks<Vec3f>(folder, "field: finish", nf, blockFaces, [&](std::vector<Vec3f>& block, std::uint64_t first, std::uint64_t count) {
     readFaceBlock(*finishFacesIn, first, count, finishFaces);
     readFaceBlock(*directionIn, first, count, block);
     if (sweeps) readFaceBlock(*normalIn, first, count, finishNormals);
+    if (withAngles) angles.resize(count);
     parallelFor(count, 4096, [&](const IndexRange& range) {
       auto r = finishPool.take();
       for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
@@ -568,13 +454,22 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
             block[i] = tangent.cast<float>();
           }
         }
+        Vec3d ownNormal = Vec3d::Zero();
         if (smoothed) {
-          block[i] = rotateBetween(detail::faceFrame(p).n, detail::faceFrame(r->own.points(t)).n, block[i].cast<double>())
-                         .cast<float>();
+          ownNormal = detail::faceFrame(r->own.points(t)).n;
+          block[i] = rotateBetween(detail::faceFrame(p).n, ownNormal, block[i].cast<double>()).cast<float>();
         }
+        if (withAngles) angles[i] = detail::faceAngleData(p, smoothed ? &ownNormal : nullptr, block[i].cast<double>());
       }
     });
+    if (withAngles) anglesOut.write(angles.data(), count * sizeof(detail::FaceAngleData));
   });
+  const ScratchFile anglesFile = anglesOut.finish();
+  if (withAngles) {
+    out.angles = anglesFile;
+  } else {
+    folder.remove(anglesFile);
+  }
   finishPool.forEach([&](FinishReaders& r) { folder.countRead("field: finish", r.surface.bytesRead() + r.own.bytesRead()); });
   finishFacesIn.reset(), directionIn.reset(), normalIn.reset();  // closed before their files go
   folder.remove(direction);
@@ -603,8 +498,8 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
   });
   std::vector<CleanFace> blockFaces;
   std::vector<Vec3f> blockDirections;
-  ScratchFile angles;
-  {
+  ScratchFile angles = field.angles;
+  if (angles.path.empty()) {
     ScratchRandomReader facesIn(folder, scratch.faces, "singularities: angles"),
         directionsIn(folder, field.directions, "singularities: angles");
     angles = writeFaceBlocks<detail::FaceAngleData>(

@@ -34,20 +34,25 @@ ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& sc
 struct ScratchField {
   ScratchFile directions;      ///< Vec3f per face, tangent to the mesh's own faces
   ScratchFile framePositions;  ///< Vec3f per vertex, the smoothed surface (none without smoothing)
+  /// With angles: the singularities' angles per face (16 bytes), which computeScratchSingularities
+  /// reads instead of computing them and removes.
+  ScratchFile angles;
   std::uint32_t elements = 0, colours = 0;
   std::uint64_t elementEdges = 0;
   /// Wall seconds of the passes: smooth, cells, elements, solve, transfer, colour, sweeps, finish.
   std::vector<std::pair<std::string, double>> stageSeconds;
 };
 
-/// The proxy field out of core: (cell, face) records sorted by cell give the elements (a
-/// union-find per cell) and their sums; the element solve is grid-sized; the transfer, the greedy
-/// colouring in face order, one pass per sweep and colour and the last projection stream the faces.
-/// Equal, bit for bit, to the in-memory field (with the BLAS on one thread, as the seamvox
-/// command runs it). Memory: the sorts and caches, a block of faces, the elements. IoError naming
-/// the folder on a full disk.
+/// The proxy field out of core: the faces' cells (a file), the elements by a union-find of the
+/// faces across edges within a cell (its links in memory within a quarter of the pass's memory,
+/// else on disk) and their sums in face order; the element solve is grid-sized; the transfer, the
+/// greedy colouring in face order, one pass per sweep and colour and the last projection stream
+/// the faces. Equal, bit for bit, to the in-memory field (with the BLAS on one thread, as the
+/// seamvox command runs it). Memory: the links, the caches, a block of faces, the elements.
+/// IoError naming the folder on a full disk.
 ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scratch, const ProxyFieldOptions& proxy,
-                                 const FieldGeometryOptions& geometry, const StreamPassOptions& pass);
+                                 const FieldGeometryOptions& geometry, const StreamPassOptions& pass,
+                                 bool withAngles = false);
 
 /// computeSingularities of the out-of-core field (its smoothed surface when it has one).
 struct ScratchSingularities {
@@ -63,9 +68,9 @@ inline std::int32_t coneIndexOf(const ScratchSingularities& singularities, Verte
   return it != singularities.index4.end() && it->first == v ? it->second : 0;
 }
 
-/// Per face its angles (a file of 16 bytes per face, removed at the end), per corner the matching
-/// across its edge, per vertex the index by a walk around its fan: equal to computeSingularities
-/// of the in-memory field on the cleaned mesh.
+/// Per face its angles (a file of 16 bytes per face, the field's when it has them, removed at the
+/// end), per corner the matching across its edge, per vertex the index by a walk around its fan:
+/// equal to computeSingularities of the in-memory field on the cleaned mesh.
 ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const CleanScratch& scratch,
                                                  const ScratchField& field, const StreamPassOptions& pass);
 

@@ -258,7 +258,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   r.diagonal = scratch.report.diagonalWithoutSpikes;
   r.edgeLength = options.spacing.spacing(r.diagonal);
   const double h = r.edgeLength;
-  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), early);
+  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), early, true);
   r.fieldElements = field.elements;
   for (const auto& [name, seconds] : field.stageSeconds) r.passSeconds.emplace_back("field: " + name, seconds);
   meter.finish("field");

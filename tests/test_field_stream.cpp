@@ -172,7 +172,7 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
     std::uint32_t smoothing, sweepBlock;
   };
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
-    // Grid 4: cells of more faces than a block (a batch of cells then holds one). Sweep blocks:
+    // Grid 4: cells of more faces than a block (elements across blocks). Sweep blocks:
     // the whole mesh in one; 1024 faces, each I/O block of 1000 faces rounded up to one; 300
     // faces, four to an I/O block (neighbours in the block, before it and after it).
     for (const Variant v : {Variant{128, 4, 3, 1u << 16}, Variant{16, 4, 3, 1024}, Variant{32, 0, 3, 1u << 16},
@@ -188,8 +188,9 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
       FieldGeometryOptions geometry;
       geometry.smoothingIterations = v.smoothing;
       const CrossField expected = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, proxy, geometry);
-      // 1 byte: sorts spill at once, every cache holds two pages and the sweeps go through the
-      // file; 1 GiB: the sweeps' directions held in memory. Blocks of 1000 faces.
+      // 1 byte: the elements' union-find on disk, every cache holds two pages and the sweeps go
+      // through the file; 1 GiB: the links and the sweeps' directions held in memory. Blocks of
+      // 1000 faces.
       const std::uint64_t filesBefore = folder.bytesInUse();
       const ScratchField streamed = computeScratchField(folder, scratch, proxy, geometry, StreamPassOptions{memory, 1000});
       EXPECT_EQ(countDiffering(readPositions(folder, streamed.directions), expected.direction), 0u)
@@ -212,15 +213,21 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
 TEST(FieldStream, SingularitiesEqualTheInMemoryOnes) {
   const NamedMeshes meshes = testing::stageTestMeshes(13);
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
-    for (const std::uint32_t smoothing : {3u, 0u}) {
-      SCOPED_TRACE("smoothing " + std::to_string(smoothing));
+    for (const std::uint32_t smoothing : {3u, 0u})
+    for (const bool fieldAngles : {false, true}) {
+      // The angles computed by the singularities, or by the field's last pass and read.
+      SCOPED_TRACE("smoothing " + std::to_string(smoothing) + (fieldAngles ? ", the field's angles" : ""));
       FieldGeometryOptions geometry;
       geometry.smoothingIterations = smoothing;
       const CrossField field = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, {}, geometry);
       const FieldSingularities expected = computeSingularities(cleaned.mesh, cleaned.topology, field);
       const StreamPassOptions pass{1, 1000};
-      const ScratchField streamedField = computeScratchField(folder, scratch, {}, geometry, pass);
+      const ScratchField streamedField = computeScratchField(folder, scratch, {}, geometry, pass, fieldAngles);
+      EXPECT_EQ(streamedField.angles.path.empty(), !fieldAngles);
+      const std::uint64_t before = folder.bytesInUse();
       const ScratchSingularities streamed = computeScratchSingularities(folder, scratch, streamedField, pass);
+      // Only the matchings stay (the field's angles were removed).
+      EXPECT_EQ(folder.bytesInUse() + streamedField.angles.bytes, before + streamed.matching.bytes);
       std::vector<std::uint8_t> matching(streamed.matching.bytes);
       ScratchReader reader(folder, streamed.matching, "test");
       ASSERT_TRUE(reader.read(matching.data(), matching.size()));
