@@ -86,16 +86,6 @@ struct CornerPairKey {
 using EdgeSorter = KeyedSorter<EdgeSide, EdgeSideLess, EdgeSideKey>;
 using PairSorter = KeyedSorter<CornerPair, std::less<CornerPair>, CornerPairKey>;
 
-/// A thread's readers of the cleaned mesh's vertex passes.
-struct VertexReaders {
-  PagedCornerTable table;
-  PagedReader<Vec3f> positions;
-  std::unique_ptr<PagedReader<double>> perVertex;  // a value per vertex, when a pass reads one
-  std::uint64_t bytesRead() const {
-    return table.bytesRead() + positions.bytesRead() + (perVertex ? perVertex->bytesRead() : 0);
-  }
-};
-
 /// A boundary vertex's position and input vertex.
 struct BoundaryPoint {
   float p[3];
@@ -743,95 +733,124 @@ class CleanPass {
     out_.faces = out.finish();
   }
 
-  /// For blocks of 64K vertices: start(first, count), then visit(readers, first + i, i) for each
-  /// of its vertices in parallel (a per-thread set of readers: the final corner table, the
-  /// positions and, when given, a file of one double per vertex), then finish(count).
-  template <class Start, class Visit, class Finish>
-  void forEachVertexInBlocks(const ScratchFile* perVertex, Start&& start, Visit&& visit, Finish&& finish) {
-    const std::size_t cacheBytes = pageCacheBytes(sort_.memoryBytes);
-    ReaderPool<VertexReaders> pool([&] {
-      return std::unique_ptr<VertexReaders>(new VertexReaders{
-          PagedCornerTable(out_, cacheBytes), PagedReader<Vec3f>(out_.positions, cacheBytes),
-          perVertex ? std::make_unique<PagedReader<double>>(*perVertex, cacheBytes) : nullptr});
-    });
-    const std::uint64_t nv = out_.numVertices, blockVertices = std::uint64_t(1) << 16;
-    for (std::uint64_t first = 0; first < nv; first += blockVertices) {
-      const std::size_t count = static_cast<std::size_t>(std::min(blockVertices, nv - first));
-      start(first, count);
-      parallelFor(count, 1024, [&](const IndexRange& range) {
-        auto r = pool.take();
-        std::vector<double> values;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) visit(*r, static_cast<VertexId>(first + i), i, values);
-      });
-      finish(count);
-    }
-    pool.forEach([&](VertexReaders& r) { folder_.countRead("clean: measure", r.bytesRead()); });
-  }
-
-  /// Spikes (cleanMesh's count), by walks around the fans: per vertex the lengths of the two
-  /// edges of each of its corners (as forEachEdgeLength gives them), their median (typical, to a
-  /// file) and least (shortest); then a vertex whose shortest edge is over kSpikeRatio times the
-  /// least and the median of its neighbours' typical lengths, that median positive. Increasing.
+  /// Spikes (cleanMesh's count): per vertex the lengths of the two edges of each of its corners
+  /// (as forEachEdgeLength gives them), their median (typical) and least (shortest); then a
+  /// vertex whose shortest edge is over kSpikeRatio times the least and the median of its
+  /// neighbours' typical lengths, that median positive. Increasing. One walk around each fan, in
+  /// blocks of spikeBlock vertices: a block's neighbour lists and lengths, and its verdicts once
+  /// the next block's are in (a neighbour outside those three blocks: its typical length by a walk
+  /// of its own).
   std::vector<VertexId> findSpikes() {
-    ScratchWriter typicalOut(folder_, "clean: measure"), shortestOut(folder_, "clean: measure");
-    std::vector<double> typical, shortest;
-    forEachVertexInBlocks(
-        nullptr,
-        [&](std::uint64_t, std::size_t count) {
-          typical.assign(count, 0.0);
-          shortest.assign(count, 0.0);
-        },
-        [&](VertexReaders& r, VertexId v, std::size_t i, std::vector<double>& values) {
-          values.clear();
-          const Vec3d p = r.positions[v].cast<double>();
-          // Squared lengths, two roots per vertex: the same values (see findSpikeVertices); each
-          // edge once around an interior vertex, which keeps the least and the median.
-          const bool interior = !r.table.isBoundaryVertex(v);
-          r.table.forEachCornerAround(v, [&](CornerId c) {
-            values.push_back((r.positions[r.table.vertex(nextCorner(c))].cast<double>() - p).squaredNorm());
-            if (!interior) values.push_back((r.positions[r.table.vertex(prevCorner(c))].cast<double>() - p).squaredNorm());
-          });
-          if (values.empty()) return;
-          std::sort(values.begin(), values.end());
-          typical[i] = std::sqrt(values[values.size() / 2]);
-          shortest[i] = std::sqrt(values.front());
-        },
-        [&](std::size_t count) {
-          typicalOut.write(typical.data(), count * sizeof(double));
-          shortestOut.write(shortest.data(), count * sizeof(double));
-        });
-    const ScratchFile typicalFile = typicalOut.finish(), shortestFile = shortestOut.finish();
+    struct Block {
+      std::uint64_t first = 0, count = 0;
+      std::vector<double> typical, shortest;
+      // Per chunk of kChunk vertices their neighbours, as the walk meets them, and where each starts.
+      std::vector<std::vector<VertexId>> neighbours;
+      std::vector<std::vector<std::uint32_t>> start;
+    };
+    const std::uint64_t kBlock = std::max<std::uint64_t>(1, options_.spikeBlock), kChunk = 1024;
+    const std::uint64_t nv = out_.numVertices;
+    const std::size_t cacheBytes = pageCacheBytes(sort_.memoryBytes);
+    struct Readers {
+      PagedCornerTable table;
+      PagedReader<Vec3f> positions;
+      std::vector<VertexId> around;
+      std::vector<double> values;
+    };
+    ReaderPool<Readers> pool([&] {
+      return std::unique_ptr<Readers>(new Readers{PagedCornerTable(out_, cacheBytes), PagedReader<Vec3f>(out_.positions, cacheBytes), {}, {}});
+    });
+    // v's neighbours (each edge once around an interior vertex, both of each corner's on the
+    // boundary) into r.around, and its typical and shortest lengths (squared lengths, two roots:
+    // the same values as findSpikeVertices).
+    const auto walk = [](Readers& r, VertexId v, double& typical, double& shortest) {
+      r.around.clear();
+      r.values.clear();
+      const Vec3d p = r.positions[v].cast<double>();
+      const bool interior = !r.table.isBoundaryVertex(v);
+      r.table.forEachCornerAround(v, [&](CornerId c) {
+        r.around.push_back(r.table.vertex(nextCorner(c)));
+        if (!interior) r.around.push_back(r.table.vertex(prevCorner(c)));
+      });
+      for (const VertexId w : r.around) r.values.push_back((r.positions[w].cast<double>() - p).squaredNorm());
+      typical = shortest = 0.0;
+      if (r.values.empty()) return;
+      std::sort(r.values.begin(), r.values.end());
+      typical = std::sqrt(r.values[r.values.size() / 2]);
+      shortest = std::sqrt(r.values.front());
+    };
+    const auto measureBlock = [&](Block& block, std::uint64_t first) {
+      block.first = first;
+      block.count = std::min(kBlock, nv - first);
+      block.typical.assign(block.count, 0.0);
+      block.shortest.assign(block.count, 0.0);
+      const std::size_t chunks = static_cast<std::size_t>((block.count + kChunk - 1) / kChunk);
+      block.neighbours.resize(chunks);
+      block.start.resize(chunks);
+      parallelFor(chunks, 1, [&](const IndexRange& range) {
+        auto r = pool.take();
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          std::vector<VertexId>& ids = block.neighbours[k];
+          std::vector<std::uint32_t>& start = block.start[k];
+          ids.clear();
+          start.assign(1, 0);
+          for (std::uint64_t i = k * kChunk; i < std::min(block.count, (k + 1) * kChunk); ++i) {
+            walk(*r, static_cast<VertexId>(first + i), block.typical[i], block.shortest[i]);
+            ids.insert(ids.end(), r->around.begin(), r->around.end());
+            start.push_back(static_cast<std::uint32_t>(ids.size()));
+          }
+        }
+      });
+    };
     std::vector<VertexId> spikes;
     std::mutex spikesMutex;
-    {
-      ScratchReader shortestIn(folder_, shortestFile, "clean: measure");
-      forEachVertexInBlocks(
-          &typicalFile,
-          [&](std::uint64_t, std::size_t count) {
-            shortest.resize(count);
-            if (!shortestIn.read(shortest.data(), count * sizeof(double))) {
-              throw IoError(shortestFile.path + ": scratch file ends early");
-            }
-          },
-          [&](VertexReaders& r, VertexId v, std::size_t i, std::vector<double>& around) {
+    Block before, current, after;
+    if (nv > 0) measureBlock(after, 0);
+    for (std::uint64_t first = 0; first < nv; first += kBlock) {
+      std::swap(before, current);
+      std::swap(current, after);
+      if (first + kBlock < nv) {
+        measureBlock(after, first + kBlock);
+      } else {
+        after.count = 0;
+      }
+      const Block* window[3] = {&before, &current, &after};
+      const std::size_t chunks = current.neighbours.size();
+      parallelFor(chunks, 1, [&](const IndexRange& range) {
+        auto r = pool.take();
+        std::vector<double> around;
+        std::vector<VertexId> ids;
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          for (std::uint64_t i = k * kChunk; i < std::min(current.count, (k + 1) * kChunk); ++i) {
+            const std::uint32_t local = static_cast<std::uint32_t>(i - k * kChunk);
+            ids.assign(current.neighbours[k].begin() + current.start[k][local],
+                       current.neighbours[k].begin() + current.start[k][local + 1]);
+            if (ids.empty()) continue;
             around.clear();
-            const bool interior = !r.table.isBoundaryVertex(v);
-            r.table.forEachCornerAround(v, [&](CornerId c) {
-              around.push_back((*r.perVertex)[r.table.vertex(nextCorner(c))]);
-              if (!interior) around.push_back((*r.perVertex)[r.table.vertex(prevCorner(c))]);
-            });
-            if (around.empty()) return;
-            std::sort(around.begin(), around.end());
-            const double scale = around[around.size() / 2];
-            if (shortest[i] > kSpikeRatio * around.front() && scale > 0.0 && shortest[i] > kSpikeRatio * scale) {
-              std::lock_guard<std::mutex> lock(spikesMutex);
-              spikes.push_back(v);
+            for (const VertexId w : ids) {
+              const Block* in = nullptr;
+              for (const Block* b : window) {
+                if (b->count > 0 && w >= b->first && w < b->first + b->count) in = b;
+              }
+              double typical = 0.0, shortest = 0.0;
+              if (in) {
+                typical = in->typical[w - in->first];
+              } else {
+                walk(*r, w, typical, shortest);
+              }
+              around.push_back(typical);
             }
-          },
-          [](std::size_t) {});
+            std::sort(around.begin(), around.end());
+            const double scale = around[around.size() / 2], least = current.shortest[i];
+            if (least > kSpikeRatio * around.front() && scale > 0.0 && least > kSpikeRatio * scale) {
+              std::lock_guard<std::mutex> lock(spikesMutex);
+              spikes.push_back(static_cast<VertexId>(first + i));
+            }
+          }
+        }
+      });
     }
-    folder_.remove(typicalFile);
-    folder_.remove(shortestFile);
+    pool.forEach([&](Readers& r) { folder_.countRead("clean: measure", r.table.bytesRead() + r.positions.bytesRead()); });
     std::sort(spikes.begin(), spikes.end());
     return spikes;
   }

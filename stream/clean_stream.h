@@ -62,6 +62,7 @@ struct CleanStreamOptions {
   std::size_t frontWindow = std::size_t(1) << 20;  ///< the front pass's in-order window (tests: small)
   std::uint64_t frontBytes = 0;  ///< the front pass's open front (0: a quarter of memoryBytes; tests: small)
   std::uint32_t islandFaces = 0;  ///< > 0: the islands of at most this many faces beside the front pass
+  std::uint64_t spikeBlock = std::uint64_t(1) << 16;  ///< vertices per block of the spikes' walk (tests: small)
 };
 
 /// Cleans the weld pass's output (kept in folder) into folder within options.memoryBytes. The
