@@ -539,36 +539,61 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
                                                                 PagedReader<detail::FaceAngleData>(angles, cacheBytes)});
   });
   // The block's corner table and angles read once (pread); a neighbour outside the block through
-  // the page cache.
+  // the page cache. The same pass sums each interior vertex's index terms (vertexIndices': per
+  // corner the residual across the next corner's edge less the corner's angle), in face order,
+  // within a quarter of the pass's memory (on disk beyond it).
+  ScratchArray<double> indexSum(folder, nv, pass.memoryBytes / 4, "singularities: matching");
   std::vector<std::array<CornerId, 3>> blockOpposite;
   std::vector<detail::FaceAngleData> blockAngles;
+  std::vector<std::array<double, 3>> blockTerms;
   ScratchRandomReader oppositeIn(folder, scratch.opposite, "singularities: matching"),
-      anglesIn(folder, angles, "singularities: matching");
+      anglesIn(folder, angles, "singularities: matching"), facesIn(folder, scratch.faces, "singularities: matching");
   out.matching = writeFaceBlocks<std::array<std::uint8_t, 3>>(
       folder, "singularities: matching", nf, block, [&](std::vector<std::array<std::uint8_t, 3>>& data, std::uint64_t first, std::uint64_t count) {
         readFaceBlock(oppositeIn, first, count, blockOpposite);
         readFaceBlock(anglesIn, first, count, blockAngles);
+        readFaceBlock(facesIn, first, count, blockFaces);
+        blockTerms.resize(count);
         parallelFor(count, 4096, [&](const IndexRange& range) {
           auto r = crossingPool.take();
           const auto anglesOf = [&](FaceId g) { return g >= first && g < first + count ? blockAngles[g - first] : r->angles[g]; };
           for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+            float residual[3];
             for (unsigned k = 0; k < 3; ++k) {
               const CornerId c = static_cast<CornerId>(3 * (first + i) + k);
               const CornerId o = blockOpposite[i][k];
               std::uint8_t m = 0;
+              residual[k] = 0.0f;
               if (o != kInvalidId) {
                 const detail::FaceAngleData& own = blockAngles[i];
                 const detail::FaceAngleData other = anglesOf(cornerFace(o));
-                m = c < o ? detail::crossingOf(own, k, other, o % 3).matching
-                          : static_cast<std::uint8_t>((4 - detail::crossingOf(other, o % 3, own, k).matching) % 4);
+                if (c < o) {
+                  const detail::Crossing x = detail::crossingOf(own, k, other, o % 3);
+                  m = x.matching;
+                  residual[k] = x.eps;
+                } else {
+                  const detail::Crossing x = detail::crossingOf(other, o % 3, own, k);
+                  m = static_cast<std::uint8_t>((4 - x.matching) % 4);
+                  residual[k] = -x.eps;
+                }
               }
               data[i][k] = m;
             }
+            double corner[3];
+            detail::cornerAngles(blockAngles[i].edge, corner);
+            for (unsigned k = 0; k < 3; ++k) blockTerms[i][k] = residual[(k + 1) % 3] - corner[k];
           }
         });
+        for (std::uint64_t i = 0; i < count; ++i) {
+          for (unsigned k = 0; k < 3; ++k) {
+            const VertexId v = blockFaces[i].triangle[k];
+            indexSum.set(v, indexSum.get(v) + blockTerms[i][k]);
+          }
+        }
       });
 
-  // Per vertex the index, walking its fan.
+  // Per vertex the index: an interior vertex's from its sum, a boundary vertex's by the walk
+  // around its fan (its first and last corners count).
   struct IndexReaders {
     PagedCornerTable table;
     CrossingReaders crossings;
@@ -579,15 +604,21 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
         CrossingReaders{PagedReader<CornerId>(scratch.opposite, cacheBytes), PagedReader<detail::FaceAngleData>(angles, cacheBytes)}});
   });
   std::vector<std::int32_t> index(block), boundaryIndex(block);
+  std::vector<double> sums(block);
   for (std::uint64_t first = 0; first < nv; first += block) {
     const std::uint64_t count = std::min(block, nv - first);
     std::fill(index.begin(), index.begin() + count, 0);
     std::fill(boundaryIndex.begin(), boundaryIndex.begin() + count, 0);
+    for (std::uint64_t i = 0; i < count; ++i) sums[i] = indexSum.get(first + i);
     parallelFor(count, 4096, [&](const IndexRange& range) {
       auto r = indexPool.take();
       for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
         const VertexId v = static_cast<VertexId>(first + i);
         if (r->table.isIsolatedVertex(v)) continue;
+        if (!r->table.isBoundaryVertex(v)) {
+          index[i] = static_cast<std::int32_t>(std::lround(4.0 * (2.0 * M_PI + sums[i]) / (2.0 * M_PI)));
+          continue;
+        }
         detail::vertexIndices(
             r->table, v, [&](FaceId f) { return r->crossings.angles[f]; },
             [&](CornerId c) { return r->crossings.residual(c); }, index[i], boundaryIndex[i]);

@@ -69,8 +69,10 @@ inline std::int32_t coneIndexOf(const ScratchSingularities& singularities, Verte
 }
 
 /// Per face its angles (a file of 16 bytes per face, the field's when it has them, removed at the
-/// end), per corner the matching across its edge, per vertex the index by a walk around its fan:
-/// equal to computeSingularities of the in-memory field on the cleaned mesh.
+/// end), per corner the matching across its edge, per vertex the index: an interior vertex's from
+/// its corners' terms summed in face order in the matchings' pass (8 bytes per vertex within a
+/// quarter of the pass's memory, else on disk), a boundary vertex's by a walk around its fan.
+/// Equal to computeSingularities of the in-memory field on the cleaned mesh.
 ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const CleanScratch& scratch,
                                                  const ScratchField& field, const StreamPassOptions& pass);
 
