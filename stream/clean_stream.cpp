@@ -756,9 +756,13 @@ class CleanPass {
       PagedReader<Vec3f> positions;
       std::vector<VertexId> around;
       std::vector<double> values;
+      // Typical lengths of neighbours beyond the blocks held, walked once per block (a pole
+      // named early has every vertex of its ring beyond its block).
+      std::unordered_map<VertexId, double> far;
+      std::uint64_t farBlock = ~std::uint64_t(0);
     };
     ReaderPool<Readers> pool([&] {
-      return std::unique_ptr<Readers>(new Readers{PagedCornerTable(out_, cacheBytes), PagedReader<Vec3f>(out_.positions, cacheBytes), {}, {}});
+      return std::unique_ptr<Readers>(new Readers{PagedCornerTable(out_, cacheBytes), PagedReader<Vec3f>(out_.positions, cacheBytes), {}, {}, {}});
     });
     // v's neighbours (each edge once around an interior vertex, both of each corner's on the
     // boundary) into r.around, and its typical and shortest lengths (squared lengths, two roots:
@@ -836,7 +840,10 @@ class CleanPass {
               if (in) {
                 typical = in->typical[w - in->first];
               } else {
-                walk(*r, w, typical, shortest);
+                if (r->farBlock != first) r->far.clear(), r->farBlock = first;
+                const auto [at, added] = r->far.emplace(w, 0.0);
+                if (added) walk(*r, w, at->second, shortest);
+                typical = at->second;
               }
               around.push_back(typical);
             }
