@@ -823,15 +823,15 @@ class CleanPass {
       parallelFor(chunks, 1, [&](const IndexRange& range) {
         auto r = pool.take();
         std::vector<double> around;
-        std::vector<VertexId> ids;
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
           for (std::uint64_t i = k * kChunk; i < std::min(current.count, (k + 1) * kChunk); ++i) {
             const std::uint32_t local = static_cast<std::uint32_t>(i - k * kChunk);
-            ids.assign(current.neighbours[k].begin() + current.start[k][local],
-                       current.neighbours[k].begin() + current.start[k][local + 1]);
-            if (ids.empty()) continue;
+            const VertexId* from = current.neighbours[k].data() + current.start[k][local];
+            const VertexId* to = current.neighbours[k].data() + current.start[k][local + 1];
+            if (from == to) continue;
             around.clear();
-            for (const VertexId w : ids) {
+            for (const VertexId* at = from; at != to; ++at) {
+              const VertexId w = *at;
               const Block* in = nullptr;
               for (const Block* b : window) {
                 if (b->count > 0 && w >= b->first && w < b->first + b->count) in = b;
@@ -841,9 +841,9 @@ class CleanPass {
                 typical = in->typical[w - in->first];
               } else {
                 if (r->farBlock != first) r->far.clear(), r->farBlock = first;
-                const auto [at, added] = r->far.emplace(w, 0.0);
-                if (added) walk(*r, w, at->second, shortest);
-                typical = at->second;
+                const auto [known, added] = r->far.emplace(w, 0.0);
+                if (added) walk(*r, w, known->second, shortest);
+                typical = known->second;
               }
               around.push_back(typical);
             }

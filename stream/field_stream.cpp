@@ -616,7 +616,7 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
         const VertexId v = static_cast<VertexId>(first + i);
         if (r->table.isIsolatedVertex(v)) continue;
         if (!r->table.isBoundaryVertex(v)) {
-          index[i] = static_cast<std::int32_t>(std::lround(4.0 * (2.0 * M_PI + sums[i]) / (2.0 * M_PI)));
+          index[i] = detail::quarterTurns(2.0 * M_PI + sums[i]);
           continue;
         }
         detail::vertexIndices(

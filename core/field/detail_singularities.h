@@ -45,6 +45,9 @@ struct Crossing {
 };
 Crossing crossingOf(const FaceAngleData& f, unsigned cSlot, const FaceAngleData& g, unsigned oSlot);
 
+/// A vertex's index in quarter turns from its turn (radians): the rounding vertexIndices applies.
+inline std::int32_t quarterTurns(double turn) { return static_cast<std::int32_t>(std::lround(4.0 * turn / (2.0 * M_PI))); }
+
 /// Index (and boundary index, field.h) of a vertex that is not isolated, walking its fan
 /// counter-clockwise; dataOf(face) gives a face's angles, residualOf(corner) the residual
 /// rotation across the edge of a corner (0 on a boundary edge).
@@ -63,16 +66,15 @@ void vertexIndices(Table& table, VertexId v, DataOf&& dataOf, ResidualOf&& resid
     if (first == kInvalidId) first = c;
     last = c;
   });
-  const auto index = [&](double turn) { return static_cast<std::int32_t>(std::lround(4.0 * turn / (2.0 * M_PI))); };
   if (!boundary) {
-    index4 = index(sum);
+    index4 = quarterTurns(sum);
     return;
   }
   const FaceAngleData a = dataOf(cornerFace(first));
   const FaceAngleData b = dataOf(cornerFace(last));
   const double deltaFirst = offQuarterTurn(double(a.theta) - a.edge[prevCorner(first) % 3]);
   const double deltaLast = offQuarterTurn(double(b.theta) - b.edge[nextCorner(last) % 3]);
-  boundaryIndex4 = index(sum + deltaFirst - deltaLast);
+  boundaryIndex4 = quarterTurns(sum + deltaFirst - deltaLast);
 }
 
 }  // namespace seamvox::detail
