@@ -339,15 +339,15 @@ ScratchVoxelBasis buildScratchVoxelBasis(ScratchFolder& folder, const CleanScrat
           into.push_back({voxelCoords[fr.voxel], r->element[i], static_cast<std::uint8_t>(fr.edgeMask)});
         }
       };
-      std::vector<detail::FaceFragment> mine, theirs;
-      std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;
+      std::vector<detail::FaceFragment> mine;
+      detail::LinkScratch scratch;
       for (FaceId f = chunk.begin; f < chunk.end; ++f) {
         fragmentsOf(f, mine);
         if (mine.empty()) continue;
         detail::linkFaceFragments(
             f, mine, toGrid(elements.geometry, r->points.points(f)), [&](CornerId c) { return r->opposite[c]; },
             [&](CornerId c) { return CutCorners::isCutByte(r->cutBytes[c]); },
-            [&](CornerId c) { return seamIndex.find(c); }, fragmentsOf, theirs, sorted, chunk.links);
+            [&](CornerId c) { return seamIndex.find(c); }, fragmentsOf, scratch, chunk.links);
       }
     };
     detail::facesInOrder<detail::LinkChunk>(nf, 1u << 14, work,

@@ -23,6 +23,7 @@
 #include "core/solve/seamless_solve.h"
 #include "core/basis/voxel_basis.h"
 #include "core/basis/voxel_clip.h"
+#include "core/basis/detail_voxel_elements.h"
 #include "core/basis/voxel_grid.h"
 #include "core/field/field_proxy.h"
 #include "core/mesh/clean.h"
@@ -604,6 +605,115 @@ TEST(VoxelBasis, SliverSupportsJoinAHeavierDomain) {
       parameterizeMeshVoxel(s.mesh, s.topology, s.field, s.cut, param, resolution);
   EXPECT_EQ(result.failedAttempts, 0u);
   EXPECT_EQ(result.regularization, VoxelBasisOptions{}.regularization);
+}
+
+// The links of one face as every fragment pair across each edge gives them (the plain scan the
+// search by voxel must equal, links in the same order).
+template <class Neighbour>
+void linkByPlainScan(FaceId f, const std::vector<detail::FaceFragment>& mine, const std::array<Vec3d, 3>& g,
+                     const Topology& topology, const std::vector<std::uint8_t>& cut, Neighbour&& neighbour,
+                     detail::RecordedLinks& links) {
+  std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;
+  if (mine.size() >= 2) detail::joinFacePieces(mine, sorted, links.functions);
+  std::vector<detail::FaceFragment> theirs;
+  for (const detail::FaceFragment& fr : mine) {
+    for (int j = 0; j < 3; ++j) {
+      const CornerId c = 3 * f + j, o = topology.opposite(c);
+      if (!(fr.edgeMask >> j & 1) || o == kInvalidId || cornerFace(o) < f) continue;
+      neighbour(cornerFace(o), theirs);
+      for (const detail::FaceFragment& other : theirs) {
+        const VoxelCoord d = detail::voxelDifference(other.voxel, fr.voxel);
+        if (!(other.edgeMask >> (o % 3) & 1) || !detail::isNeighbourOffset(d)) continue;
+        if (d == VoxelCoord{0, 0, 0} && !cut[c]) continue;
+        if (d != VoxelCoord{0, 0, 0}) {
+          Vec3d lo, hi;
+          for (int x = 0; x < 3; ++x) {
+            lo[x] = std::max(fr.voxel[x], other.voxel[x]);
+            hi[x] = std::min(fr.voxel[x], other.voxel[x]) + 1;
+          }
+          if (!segmentOverlapsBox(g[(j + 1) % 3], g[(j + 2) % 3], lo, hi)) continue;
+        }
+        detail::forSharedCorners(d, [&](int k, int k2) {
+          const std::uint32_t a = 8 * fr.element + k, b = 8 * other.element + k2;
+          if (!cut[c]) {
+            links.functions.unite(a, b);
+          } else if (c < o) {
+            links.seamLinks.push_back({a, b, c % 5});
+          } else {
+            links.seamLinks.push_back({b, a, o % 5});
+          }
+        });
+      }
+    }
+  }
+}
+
+TEST(VoxelBasis, LongSliversAreLinkedByVoxelAsByAPlainScan) {
+  // A double cone of long slivers in grid coordinates (two poles of 300 faces each), its poles on
+  // a grid line and one spoke along it (neighbours whose fragments meet along a voxel edge link in
+  // several voxels); some spokes are seams. Every fragment is an element of its own, the
+  // fragments of a face in a random order (the links follow it).
+  const int n = 300, resolution = 64;
+  const Vec3d top(10.0, 32.0, 60.3), bottom(10.0, 32.0, 0.3), centre(30.0, 32.0, 30.3);
+  std::vector<Vec3d> points{top, bottom};
+  for (int i = 0; i < n; ++i) {
+    const double t = 2.0 * M_PI * i / n;
+    points.push_back(i == n / 2 ? Vec3d(10.0, 32.0, 30.3) : centre + 20.0 * Vec3d(std::cos(t), std::sin(t), 0.1));
+  }
+  std::vector<Triangle> triangles;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t a = 2 + i, b = 2 + (i + 1) % n;
+    triangles.push_back({0, a, b});
+    triangles.push_back({1, b, a});
+  }
+  const Topology topology = Topology::build(triangles, static_cast<std::uint32_t>(points.size()));
+  std::vector<std::uint8_t> cut(3 * triangles.size(), 0);
+  for (CornerId c = 0; c < cut.size(); ++c) {
+    const CornerId o = topology.opposite(c);
+    if (std::min(c, o) % 7 == 0 || std::min(c, o) % 7 == 3) cut[c] = 1;
+  }
+  const auto gridCoords = [&](FaceId f) {
+    return std::array<Vec3d, 3>{points[triangles[f][0]], points[triangles[f][1]], points[triangles[f][2]]};
+  };
+  std::vector<std::vector<detail::FaceFragment>> fragments(triangles.size());
+  std::vector<VoxelPiece> pieces;
+  std::uint32_t element = 0, longest = 0;
+  std::mt19937 random(7);
+  for (FaceId f = 0; f < triangles.size(); ++f) {
+    const std::array<Vec3d, 3> g = gridCoords(f);
+    clipTriangleToVoxels(g, resolution, pieces);
+    std::array<std::uint32_t, 3> onEdge{};
+    for (const VoxelPiece& piece : pieces) {
+      const std::uint8_t mask = voxelEdgeMask(g, piece.voxel);
+      fragments[f].push_back({piece.voxel, element++, mask});
+      for (int j = 0; j < 3; ++j) onEdge[j] += mask >> j & 1;
+    }
+    longest = std::max(longest, *std::max_element(onEdge.begin(), onEdge.end()));
+    std::shuffle(fragments[f].begin(), fragments[f].end(), random);
+  }
+  ASSERT_GT(longest, 20u);  // the search by voxel is taken (a plain scan up to 8)
+  const auto neighbour = [&](FaceId h, std::vector<detail::FaceFragment>& out) { out = fragments[h]; };
+  detail::RecordedLinks searched, scanned;
+  detail::LinkScratch scratch;
+  for (FaceId f = 0; f < triangles.size(); ++f) {
+    const std::array<Vec3d, 3> g = gridCoords(f);
+    detail::linkFaceFragments(
+        f, fragments[f], g, [&](CornerId c) { return topology.opposite(c); }, [&](CornerId c) { return cut[c] != 0; },
+        [&](CornerId c) {
+          const CornerId o = topology.opposite(c);
+          return SeamIndex::Side{std::min(c, o) % 5, c < o};
+        },
+        neighbour, scratch, searched);
+    linkByPlainScan(f, fragments[f], g, topology, cut, neighbour, scanned);
+  }
+  EXPECT_GT(searched.seamLinks.size(), 100u);
+  EXPECT_GT(searched.functions.pairs.size(), 1000u);
+  EXPECT_EQ(searched.functions.pairs, scanned.functions.pairs);
+  ASSERT_EQ(searched.seamLinks.size(), scanned.seamLinks.size());
+  for (std::size_t i = 0; i < searched.seamLinks.size(); ++i) {
+    const detail::SeamLink &a = searched.seamLinks[i], &b = scanned.seamLinks[i];
+    ASSERT_TRUE(a.left == b.left && a.right == b.right && a.seam == b.seam) << "seam link " << i;
+  }
 }
 
 TEST(VoxelBasis, RegularizationChangesWithoutRebuilding) {

@@ -300,33 +300,87 @@ void joinFacePieces(const std::vector<FaceFragment>& pieces, std::vector<std::pa
   }
 }
 
+/// Scratch space of linkFaceFragments, one per thread.
+struct LinkScratch {
+  std::vector<FaceFragment> one, theirs;                    // one neighbour; the three on f's edges
+  std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, index in theirs)
+  std::vector<std::uint32_t> near;                           // theirs' indices near one fragment
+};
+
 /// Domains and seam links of face f's fragments (in face order, f after every face before):
 /// (a) its pieces joined (joinFacePieces); (b) two triangles across an edge meet in the support
 /// along the edge's piece: non-cut edges join their domains, seam edges make a seam link.
 /// g: f's corners in grid coordinates; opposite(c), isCut(c), seamSide(c) (SeamIndex::Side);
 /// neighbour(h, out) fills the fragments of face h. Links: DomainLinks, or any type with
 /// functions.unite(a, b) and seamLinks.push_back(link) (a record of them, applied in face order).
+/// A neighbour with many fragments on the edge (a sliver across many voxels) is searched by voxel,
+/// so a fan of long faces costs k log k per face, not k^2; the links come in the same order.
 template <class Opposite, class IsCut, class SeamSide, class Neighbour, class Links>
 void linkFaceFragments(FaceId f, const std::vector<FaceFragment>& mine, const std::array<Vec3d, 3>& g,
                        Opposite&& opposite, IsCut&& isCut, SeamSide&& seamSide, Neighbour&& neighbour,
-                       std::vector<FaceFragment>& theirs, std::vector<std::pair<VoxelCoord, std::uint32_t>>& sorted,
-                       Links& links) {
-  if (mine.size() >= 2) joinFacePieces(mine, sorted, links.functions);
+                       LinkScratch& scratch, Links& links) {
+  constexpr std::uint32_t kScan = 8;  // up to this many fragments on an edge: a plain scan
+  if (mine.size() >= 2) joinFacePieces(mine, scratch.sorted, links.functions);
+  struct Edge {
+    bool cut = false;
+    SeamIndex::Side side{};
+    std::uint32_t begin = 0, end = 0;  // the neighbour's fragments on the edge, in theirs
+  };
+  std::array<Edge, 3> edges;
+  std::uint8_t used = 0;
+  for (const FaceFragment& fr : mine) used |= fr.edgeMask;
+  scratch.theirs.clear();
+  scratch.sorted.clear();
+  bool searched = false;
+  for (int j = 0; j < 3; ++j) {
+    Edge& e = edges[j];
+    e.begin = e.end = static_cast<std::uint32_t>(scratch.theirs.size());
+    if (!(used >> j & 1)) continue;
+    const CornerId c = 3 * f + j;
+    const CornerId o = opposite(c);
+    if (o == kInvalidId || cornerFace(o) < f) continue;
+    e.cut = isCut(c);
+    e.side = e.cut ? seamSide(c) : SeamIndex::Side{};
+    if (e.cut && e.side.seam == kInvalidId) continue;
+    neighbour(cornerFace(o), scratch.one);
+    for (const FaceFragment& other : scratch.one) {
+      if (other.edgeMask >> (o % 3) & 1) scratch.theirs.push_back(other);
+    }
+    e.end = static_cast<std::uint32_t>(scratch.theirs.size());
+    if (e.end - e.begin > kScan) {
+      for (std::uint32_t i = e.begin; i < e.end; ++i) scratch.sorted.emplace_back(scratch.theirs[i].voxel, i);
+      searched = true;
+    }
+  }
+  if (searched) std::sort(scratch.sorted.begin(), scratch.sorted.end());
+  // The indices in theirs of edge e's fragments that may touch voxel a, in theirs' order.
+  const auto nearby = [&](const VoxelCoord& a, const Edge& e) {
+    scratch.near.clear();
+    if (e.end - e.begin <= kScan) {
+      for (std::uint32_t i = e.begin; i < e.end; ++i) scratch.near.push_back(i);
+      return;
+    }
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const VoxelCoord b{a[0] + dx, a[1] + dy, a[2] + dz};
+          auto it = std::lower_bound(scratch.sorted.begin(), scratch.sorted.end(), std::make_pair(b, e.begin));
+          for (; it != scratch.sorted.end() && it->first == b && it->second < e.end; ++it) {
+            scratch.near.push_back(it->second);
+          }
+        }
+    std::sort(scratch.near.begin(), scratch.near.end());
+  };
   for (const FaceFragment& fr : mine) {
     const VoxelCoord& a = fr.voxel;
     for (int j = 0; j < 3; ++j) {
-      const CornerId c = 3 * f + j;
-      if (!(fr.edgeMask >> j & 1)) continue;
-      const CornerId o = opposite(c);
-      if (o == kInvalidId || cornerFace(o) < f) continue;
-      const bool cut = isCut(c);
-      const SeamIndex::Side side = cut ? seamSide(c) : SeamIndex::Side{};
-      if (cut && side.seam == kInvalidId) continue;
+      const Edge& e = edges[j];
+      if (!(fr.edgeMask >> j & 1) || e.begin == e.end) continue;
       const Vec3d& p = g[(j + 1) % 3];
       const Vec3d& q = g[(j + 2) % 3];
-      neighbour(cornerFace(o), theirs);
-      for (const FaceFragment& other : theirs) {
-        if (!(other.edgeMask >> (o % 3) & 1)) continue;
+      nearby(a, e);
+      for (const std::uint32_t i : scratch.near) {
+        const FaceFragment& other = scratch.theirs[i];
         const VoxelCoord& b = other.voxel;
         const VoxelCoord d = voxelDifference(b, a);
         if (!isNeighbourOffset(d)) continue;
@@ -338,17 +392,17 @@ void linkFaceFragments(FaceId f, const std::vector<FaceFragment>& mine, const st
             hi[x] = std::min(a[x], b[x]) + 1;
           }
           if (!segmentOverlapsBox(p, q, lo, hi)) continue;
-        } else if (!cut) {
+        } else if (!e.cut) {
           continue;  // same voxel, joined into one element already
         }
         const std::uint32_t ea = fr.element, eb = other.element;
         forSharedCorners(d, [&](int k, int k2) {
-          if (!cut) {
+          if (!e.cut) {
             links.functions.unite(8 * ea + k, 8 * eb + k2);
-          } else if (side.left) {
-            links.seamLinks.push_back({8 * ea + k, 8 * eb + k2, side.seam});
+          } else if (e.side.left) {
+            links.seamLinks.push_back({8 * ea + k, 8 * eb + k2, e.side.seam});
           } else {
-            links.seamLinks.push_back({8 * eb + k2, 8 * ea + k, side.seam});
+            links.seamLinks.push_back({8 * eb + k2, 8 * ea + k, e.side.seam});
           }
         });
       }

@@ -223,15 +223,15 @@ DomainLinks linkElementFunctions(const BasisInput& in, const std::vector<std::ui
   };
   // The links of a chunk of faces are found in parallel and applied in face order.
   const auto work = [&](detail::LinkChunk& chunk) {
-    std::vector<FaceFragment> mine, theirs;
-    std::vector<std::pair<VoxelCoord, std::uint32_t>> sorted;  // (voxel, element) of one face
+    std::vector<FaceFragment> mine;
+    detail::LinkScratch scratch;
     for (FaceId f = chunk.begin; f < chunk.end; ++f) {
       fragmentsOf(f, mine);
       if (mine.empty()) continue;
       detail::linkFaceFragments(
           f, mine, faceGridCoords(in.mesh, in.grid, f), [&](CornerId c) { return in.topology.opposite(c); },
           [&](CornerId c) { return in.cut.corners.isCut(c); }, [&](CornerId c) { return seamIndex.find(c); },
-          fragmentsOf, theirs, sorted, chunk.links);
+          fragmentsOf, scratch, chunk.links);
     }
   };
   detail::facesInOrder<detail::LinkChunk>(in.topology.numFaces(), 1u << 14, work,
