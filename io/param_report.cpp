@@ -223,6 +223,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("conesBeforeMerge").value(U64{r.conesBeforeMerge});
   j.key("conesCancelled").value(U64{2 * r.merged.cancelledPairs});
   j.key("conesMerged").value(U64{r.merged.mergedPairs});
+  j.key("conesSplit").value(U64{r.merged.splitCones});
   j.key("conePasses").value(U64{r.conePasses});
   j.key("conePassKept").value(U64{r.conePassKept});
   j.key("conePassSkippedForMemory").value(r.conePassSkippedForMemory);

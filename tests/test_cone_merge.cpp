@@ -128,6 +128,40 @@ TEST(ConeMerge, KeepsPoincareHopfAndBoundsTheMergedIndex) {
   }
 }
 
+// A field that turns a full turn or more around one vertex (index4 4, 5, 8 at a vertex of
+// valence 32: a cone of angle <= 0 that no map holds) is split into cones of at most +2, within
+// the merge distance, or farther when no vertex is that close; the index sum stays, the cut goes
+// through the new cones and the map is seamless without collapsed faces.
+TEST(ConeMerge, FullTurnConesAreSplitIntoConesAMapHolds) {
+  for (const double turns : {4.0, 5.0, 8.0}) {
+    for (const double distance : {3.5, 0.5}) {
+      const std::string what = "index4 " + std::to_string(int(turns)) + ", distance " + std::to_string(distance);
+      PairCase c{testing::makeSurface(testing::fanDiskMesh(32, 12)), {}, 0, 0};
+      c.field = testing::turningField(c.s.mesh, turns);
+      FieldSingularities sing = computeSingularities(c.s.mesh, c.s.topology, c.field);
+      ASSERT_EQ(sing.cones, std::vector<VertexId>{c.a}) << what;
+      ASSERT_EQ(sing.index4[c.a], int(turns)) << what;
+      const std::int64_t sum = indexSum(sing);
+      const ConeMergeResult merged = mergeCloseCones(c.s.mesh, c.s.topology, sing, {distance});
+      EXPECT_EQ(merged.splitCones, static_cast<std::uint32_t>((int(turns) - 1) / 2)) << what;
+      EXPECT_EQ(indexSum(sing), sum) << what;
+      EXPECT_TRUE(std::is_sorted(sing.cones.begin(), sing.cones.end())) << what;
+      for (VertexId v = 0; v < c.s.topology.numVertices(); ++v) {
+        EXPECT_LE(sing.index4[v], kMaxMergedIndex4) << what << " vertex " << v;
+        EXPECT_EQ(sing.index4[v] != 0, std::binary_search(sing.cones.begin(), sing.cones.end(), v)) << what;
+        if (sing.index4[v] != 0) EXPECT_FALSE(c.s.topology.isBoundaryVertex(v)) << what << " vertex " << v;
+      }
+      // The new cones are spread: no two closer than the rings' spacing.
+      for (VertexId a : sing.cones) {
+        for (VertexId b : sing.cones) {
+          if (a < b) EXPECT_GE((c.s.mesh.position(a) - c.s.mesh.position(b)).norm(), 1.0 - 1e-6) << what;
+        }
+      }
+      expectSeamlessWithoutCollapse(c.s, c.field, sing, 0.5, what);
+    }
+  }
+}
+
 // Many close cone pairs (a random field on a flat grid: a cone at about every other vertex):
 // the work of the merge grows like the number of cones, four times the grid gives about four
 // times the work (the pairwise scan it replaced gave sixteen).

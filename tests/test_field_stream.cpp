@@ -278,6 +278,45 @@ TEST(FieldStream, MergedConesEqualTheInMemoryMerge) {
   });
 }
 
+// A full-turn cone (index4 5 at the centre of a fan of 40 faces) is split out of core as in memory:
+// the same new cones, matchings and indices.
+TEST(FieldStream, FullTurnConesAreSplitAsInMemory) {
+  const NamedMeshes meshes = {{"fan disk", testing::fanDiskMesh(40, 10)}};
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    const CrossField field = testing::turningField(cleaned.mesh, 5.0);
+    FieldSingularities expected = computeSingularities(cleaned.mesh, cleaned.topology, field);
+    ASSERT_EQ(expected.cones.size(), 1u);
+    ASSERT_EQ(expected.index4[expected.cones[0]], 5);
+    ScratchSingularities streamed;
+    ScratchWriter writer(folder, "test");
+    writer.write(expected.matching.data(), expected.matching.size());
+    streamed.matching = writer.finish();
+    streamed.cones = expected.cones;
+    streamed.index4 = {{expected.cones[0], 5}};
+    for (const double distance : {2.5, 0.5}) {
+      SCOPED_TRACE(distance);
+      FieldSingularities inMemory = expected;
+      ScratchSingularities outOfCore = streamed;
+      ScratchWriter copy(folder, "test");
+      copy.write(expected.matching.data(), expected.matching.size());
+      outOfCore.matching = copy.finish();
+      const ConeMergeResult a = mergeCloseCones(cleaned.mesh, cleaned.topology, inMemory, {distance});
+      const ConeMergeResult b = mergeScratchCones(folder, scratch, outOfCore, {distance}, StreamPassOptions{1, 1000});
+      EXPECT_EQ(a.splitCones, 2u);
+      EXPECT_EQ(b.splitCones, a.splitCones);
+      EXPECT_EQ(b.changedEdges, a.changedEdges);
+      EXPECT_EQ(outOfCore.cones, inMemory.cones);
+      std::vector<std::pair<VertexId, std::int32_t>> index4;
+      for (VertexId v : inMemory.cones) index4.emplace_back(v, inMemory.index4[v]);
+      EXPECT_EQ(outOfCore.index4, index4);
+      std::vector<std::uint8_t> matching(outOfCore.matching.bytes);
+      ScratchReader reader(folder, outOfCore.matching, "test");
+      ASSERT_TRUE(reader.read(matching.data(), matching.size()));
+      EXPECT_EQ(matching, inMemory.matching);
+    }
+  });
+}
+
 // A scratch disk that fills during the field stage (at its start, in the sweeps, at its end) is
 // an IoError naming the folder, and nothing of the run stays on disk.
 TEST(FieldStream, AFullScratchDiskIsAnErrorAndLeavesNothing) {

@@ -211,6 +211,37 @@ TriangleMesh shuffledMesh(const TriangleMesh& mesh, std::uint32_t seed) {
   return out;
 }
 
+TriangleMesh fanDiskMesh(int n, int rings) {
+  TriangleMesh mesh;
+  mesh.positions.push_back(Vec3f::Zero());
+  for (int k = 1; k <= rings; ++k) {
+    for (int j = 0; j < n; ++j) {
+      const double t = 2.0 * M_PI * (j + 0.5 * k) / n;
+      mesh.positions.push_back(Vec3f(float(k * std::cos(t)), float(k * std::sin(t)), 0.f));
+    }
+  }
+  const auto ring = [&](int k, int j) { return VertexId(k == 0 ? 0 : 1 + (k - 1) * n + (j % n)); };
+  for (int j = 0; j < n; ++j) mesh.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
+  for (int k = 1; k < rings; ++k) {
+    for (int j = 0; j < n; ++j) {
+      mesh.triangles.push_back({ring(k, j), ring(k + 1, j), ring(k + 1, j + 1)});
+      mesh.triangles.push_back({ring(k, j), ring(k + 1, j + 1), ring(k, j + 1)});
+    }
+  }
+  return mesh;
+}
+
+CrossField turningField(const TriangleMesh& mesh, double turns) {
+  CrossField field;
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    const Vec3d x = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
+    const double theta = turns * std::atan2(x.y(), x.x()) / 4.0;
+    field.direction.push_back(Vec3f(float(std::cos(theta)), float(std::sin(theta)), 0.f));
+  }
+  return field;
+}
+
 // A Moebius strip of n quads (two triangles each), its last quad glued to the first turned over.
 TriangleMesh moebiusStrip(int n, const Vec3f& at) {
   TriangleMesh m;

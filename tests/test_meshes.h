@@ -59,6 +59,13 @@ CrossField randomField(const TriangleMesh& mesh, std::uint32_t seed);
 
 /// A Moebius strip of n quads (two triangles each) at `at`.
 TriangleMesh moebiusStrip(int n, const Vec3f& at);
+
+/// A flat disk in z = 0: `rings` rings of n vertices (radii 1, 2, ...) around a centre of valence
+/// n (vertex 0), each ring turned by half a step against the one inside.
+TriangleMesh fanDiskMesh(int n, int rings);
+/// Per face, a direction turning turns / 4 times the polar angle of the face's centroid around
+/// the origin: on fanDiskMesh with n > 2 |turns|, index4 `turns` at the centre and no other cone.
+CrossField turningField(const TriangleMesh& mesh, double turns);
 /// A 6K-face scan with fins, bowties, flipped patches, duplicates, a Moebius strip and books of
 /// faces on one edge: every kind of damage cleaning repairs.
 TriangleMesh damagedMesh(std::uint32_t seed);

@@ -2,12 +2,15 @@
 // non-manifold pieces get a seamless map, and what param reports is what check finds in the file.
 #include <gtest/gtest.h>
 
+#include <numeric>
+
 #include <cmath>
 #include <complex>
 #include <string>
 
 #include "core/basis/reduce.h"
 #include "core/cut/cut.h"
+#include "core/field/cone_merge.h"
 #include "core/field/field.h"
 #include "core/mesh/clean.h"
 #include "core/pipeline/parameterize.h"
@@ -240,6 +243,45 @@ PipelineOptions smallRun(ParamSolver solver) {
   options.solver.gridResolution = 32;
   options.spacing.cells = 40;
   return options;
+}
+
+/// A double cone of 2 n long faces: two poles of valence n on a rim of n vertices, a sharp crease.
+TriangleMesh doubleCone(std::uint32_t n) {
+  TriangleMesh mesh;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const double t = 2.0 * M_PI * i / n;
+    mesh.positions.push_back(Vec3f(float(std::cos(t)), float(std::sin(t)), 0.f));
+  }
+  mesh.positions.push_back(Vec3f(0.f, 0.f, 1.f));
+  mesh.positions.push_back(Vec3f(0.f, 0.f, -1.f));
+  for (std::uint32_t i = 0; i < n; ++i) {
+    mesh.triangles.push_back({n, i, (i + 1) % n});
+    mesh.triangles.push_back({n + 1, (i + 1) % n, i});
+  }
+  return mesh;
+}
+
+// The direct field, held along the rim (with the hat solver), turns a full turn around each pole
+// (the many thin faces make that cheap): those cones (angle 0) are split, and the map neither
+// collapses nor flips, with either solver.
+TEST(ValidMeshes, PolesOfHighValenceGetNoConeOfAFullTurn) {
+  for (ParamSolver solver : {ParamSolver::Hat, ParamSolver::VoxLoc}) {
+    const std::string what = paramSolverName(solver);
+    PipelineOptions options;
+    options.solver.solver = solver;
+    options.solver.gridResolution = 32;
+    options.features.autoFeatureAngle = true;  // as param: the rim is a CAD-like crease
+    const PipelineResult r = parameterize(doubleCone(1000), options);
+    if (solver == ParamSolver::Hat) {  // the aligned field (hat only holds the creases)
+      EXPECT_TRUE(r.featureAngleAuto) << what;
+      EXPECT_GT(r.merged.splitCones, 0u) << what;
+    }
+    EXPECT_EQ(std::accumulate(r.coneIndex4.begin(), r.coneIndex4.end(), 0), 8) << what;  // 4 chi
+    for (std::int32_t k : r.coneIndex4) EXPECT_LT(k, kFullTurnIndex4) << what;
+    EXPECT_TRUE(r.isSeamless()) << what;
+    EXPECT_EQ(r.mapQuality.collapsed, 0u) << what;
+    EXPECT_EQ(r.mapQuality.flipped, 0u) << what;
+  }
 }
 
 TEST(ValidMeshes, EveryComponentIsReportedWithHowItWasMapped) {

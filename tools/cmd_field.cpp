@@ -211,6 +211,7 @@ void printFieldJson(const FieldCommand& c, const FieldRun& run, const FieldFigur
   j.key("conesBeforeMerge").value(std::uint64_t{run.coneCut.conesBeforeMerge});
   j.key("conesCancelled").value(std::uint64_t{2 * merged.cancelledPairs});
   j.key("conesMerged").value(std::uint64_t{merged.mergedPairs});
+  j.key("conesSplit").value(std::uint64_t{merged.splitCones});
   j.key("edgeLength").value(run.edgeLength).key("mergeCones").value(c.mergeCones);
   j.key("conesByIndex4").beginObject();
   for (const auto& [k, n] : figures.conesByIndex) j.key(std::to_string(k)).value(n);

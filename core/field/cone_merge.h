@@ -54,6 +54,8 @@ struct ConeMergeOptions {
 struct ConeMergeResult {
   std::uint32_t cancelledPairs = 0;  ///< opposite cones that both vanished
   std::uint32_t mergedPairs = 0;     ///< cones moved onto another one that stays a cone
+  /// Cones of a full turn or more split: +2 moved onto new cones nearby (splitFullTurnCones).
+  std::uint32_t splitCones = 0;
   double longestPath = 0.0;          ///< longest path used (mesh units)
   std::uint32_t changedEdges = 0;
   /// Vertices reached by the bounded searches (mergeCloseCones): the work done, about the
@@ -63,13 +65,21 @@ struct ConeMergeResult {
   void add(const ConeMergeResult& other) {
     cancelledPairs += other.cancelledPairs;
     mergedPairs += other.mergedPairs;
+    splitCones += other.splitCones;
     longestPath = longestPath > other.longestPath ? longestPath : other.longestPath;
     changedEdges += other.changedEdges;
     searchedVertices += other.searchedVertices;
   }
 };
 
-/// Greedily, closest pair first, moves the whole index of one cone onto another no farther than
+/// A cone of index4 >= this has an angle <= 0: no map holds it (the field turns a full turn
+/// around one vertex, as the direct field may around a high-valence vertex of thin faces).
+constexpr std::int32_t kFullTurnIndex4 = 4;
+
+/// First, every cone of index4 >= kFullTurnIndex4 is split: up to +2 at a time moves along
+/// interior edges onto a new cone (an interior vertex without index within options.maxDistance,
+/// or twice that and so on when there is none, the farthest from the cone and its earlier new
+/// cones) until it keeps +2 (a +2 pair is not merged back). Then greedily, closest pair first, moves the whole index of one cone onto another no farther than
 /// options.maxDistance along interior edges, when the sum keeps |index4| <= kMaxMergedIndex4 (the
 /// cone with the larger |index4|, or the smaller id, stays). Changes matchings, index4 and cones
 /// in place; the index sum (Poincare-Hopf) is unchanged. Cost: one bounded search per cone

@@ -3,6 +3,7 @@
 /// (stream/field_stream): positions, corner table and singularities come through small
 /// interfaces. Internal.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <queue>
 #include <unordered_map>
@@ -52,6 +53,19 @@ Ball searchBall(PositionOf&& positionOf, Table& table, VertexId source, double r
   return ball;
 }
 
+/// Adds delta to the matching of every directed edge X -> Y of path (and -delta to its opposite):
+/// each adds delta to index4(X) and takes it from index4(Y). Singularities: matching, setMatching.
+template <class Table, class Singularities>
+void shiftMatchings(Table& table, Singularities& s, const std::vector<CornerId>& path, std::int32_t delta,
+                    ConeMergeResult& out) {
+  for (CornerId edge : path) {
+    const auto moved = static_cast<std::uint8_t>(((s.matching(edge) + delta) % 4 + 4) % 4);
+    s.setMatching(edge, moved);
+    s.setMatching(table.opposite(edge), static_cast<std::uint8_t>((4 - moved) % 4));
+    ++out.changedEdges;
+  }
+}
+
 /// Moves the whole index of `gone` onto `keep` along path (directed edges from keep to gone, in
 /// any order). A matching change of delta on the directed edge X -> Y adds delta to index4(X) and
 /// takes it from index4(Y) (field.cpp's index sums the eps of the edges ending at the vertex), so
@@ -61,15 +75,68 @@ template <class Table, class Singularities>
 void moveIndex(Table& table, Singularities& s, VertexId keep, VertexId gone, const std::vector<CornerId>& path,
                ConeMergeResult& out) {
   const std::int32_t delta = s.index(gone);
-  for (CornerId edge : path) {
-    const auto moved = static_cast<std::uint8_t>(((s.matching(edge) + delta) % 4 + 4) % 4);
-    s.setMatching(edge, moved);
-    s.setMatching(table.opposite(edge), static_cast<std::uint8_t>((4 - moved) % 4));
-    ++out.changedEdges;
-  }
+  shiftMatchings(table, s, path, delta, out);
   s.setIndex(keep, s.index(keep) + delta);
   s.setIndex(gone, 0);
   ++(s.index(keep) == 0 ? out.cancelledPairs : out.mergedPairs);
+}
+
+/// Is v on the boundary (an edge of one of its faces at v without a neighbour)?
+template <class Table>
+bool onBoundary(Table& table, VertexId v) {
+  bool boundary = false;
+  table.forEachCornerAround(v, [&](CornerId c) {
+    boundary = boundary || table.opposite(prevCorner(c)) == kInvalidId || table.opposite(nextCorner(c)) == kInvalidId;
+  });
+  return boundary;
+}
+
+/// How far (in merge distances) a split looks for a vertex to take index.
+constexpr double kSplitReach = 1024.0;
+
+/// The cone split of mergeCloseCones (cone_merge.h) on these interfaces; new cones are appended to
+/// cones (unsorted).
+template <class PositionOf, class Table, class Singularities>
+void splitFullTurnConesWith(PositionOf&& positionOf, Table& table, Singularities& s, std::vector<VertexId>& cones,
+                            double distance, ConeMergeResult& out) {
+  const std::size_t original = cones.size();
+  for (std::size_t i = 0; i < original; ++i) {
+    const VertexId v = cones[i];
+    if (s.index(v) < kFullTurnIndex4) continue;
+    // The ball grows until it holds a vertex that can take index (a fan of long faces has none
+    // within the merge distance).
+    const auto free = [&](VertexId y) { return y != v && s.index(y) == 0 && !onBoundary(table, y); };
+    Ball ball;
+    for (double radius = distance; radius <= kSplitReach * distance; radius *= 2.0) {
+      ball = searchBall(positionOf, table, v, radius);
+      if (std::any_of(ball.distance.begin(), ball.distance.end(), [&](const auto& yd) { return free(yd.first); })) break;
+    }
+    std::vector<Vec3d> taken{positionOf(v)};
+    std::vector<CornerId> path;
+    while (s.index(v) > kMaxMergedIndex4) {
+      // The candidate farthest (in space) from the cone and its new cones; ties to the smaller id.
+      VertexId best = kInvalidId;
+      double bestGap = -1.0;
+      for (const auto& [y, d] : ball.distance) {
+        if (!free(y)) continue;
+        const Vec3d p = positionOf(y);
+        double gap = HUGE_VAL;
+        for (const Vec3d& t : taken) gap = std::min(gap, (p - t).norm());
+        if (gap > bestGap || (gap == bestGap && y < best)) best = y, bestGap = gap;
+      }
+      if (best == kInvalidId || !(bestGap > 0.0)) break;  // no room: the cone stays as it is
+      path.clear();
+      for (VertexId y = best; y != v; y = table.vertex(nextCorner(path.back()))) path.push_back(ball.pred.at(y));
+      // The edges run from v outwards: v gives `moved`, best gets it.
+      const std::int32_t moved = std::min(kMaxMergedIndex4, s.index(v) - kMaxMergedIndex4);
+      shiftMatchings(table, s, path, -moved, out);
+      s.setIndex(v, s.index(v) - moved);
+      s.setIndex(best, moved);
+      cones.push_back(best);
+      taken.push_back(positionOf(best));
+      ++out.splitCones;
+    }
+  }
 }
 
 /// mergeCloseCones on these interfaces; cones: the cones, increasing, updated. parallel: the
@@ -78,7 +145,10 @@ template <class PositionOf, class Table, class Singularities>
 ConeMergeResult mergeCloseConesWith(PositionOf&& positionOf, Table& table, Singularities& s,
                                     std::vector<VertexId>& cones, double maxDistance, bool parallel = false) {
   ConeMergeResult out;
-  if (!(maxDistance > 0.0) || cones.size() < 2) return out;
+  if (!(maxDistance > 0.0)) return out;
+  splitFullTurnConesWith(positionOf, table, s, cones, maxDistance, out);
+  std::sort(cones.begin(), cones.end());
+  if (cones.size() < 2) return out;
   const auto mergeable = [&](VertexId a, VertexId b) {
     const std::int32_t ia = s.index(a), ib = s.index(b);
     return ia != 0 && ib != 0 && std::abs(ia + ib) <= kMaxMergedIndex4;
