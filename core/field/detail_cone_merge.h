@@ -111,15 +111,18 @@ void splitFullTurnConesWith(PositionOf&& positionOf, Table& table, Singularities
       ball = searchBall(positionOf, table, v, radius);
       if (std::any_of(ball.distance.begin(), ball.distance.end(), [&](const auto& yd) { return free(yd.first); })) break;
     }
+    // The free vertices, walked and read once: a vertex taken below is at gap 0 from itself.
+    std::vector<std::pair<VertexId, Vec3d>> candidates;
+    for (const auto& [y, d] : ball.distance) {
+      if (free(y)) candidates.emplace_back(y, positionOf(y));
+    }
     std::vector<Vec3d> taken{positionOf(v)};
     std::vector<CornerId> path;
     while (s.index(v) > kMaxMergedIndex4) {
       // The candidate farthest (in space) from the cone and its new cones; ties to the smaller id.
       VertexId best = kInvalidId;
       double bestGap = -1.0;
-      for (const auto& [y, d] : ball.distance) {
-        if (!free(y)) continue;
-        const Vec3d p = positionOf(y);
+      for (const auto& [y, p] : candidates) {
         double gap = HUGE_VAL;
         for (const Vec3d& t : taken) gap = std::min(gap, (p - t).norm());
         if (gap > bestGap || (gap == bestGap && y < best)) best = y, bestGap = gap;
