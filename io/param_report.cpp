@@ -2,6 +2,7 @@
 #include "io/param_report.h"
 
 #include "core/pipeline/parameterize.h"
+#include "core/system/blas_threads.h"
 #include "io/json.h"
 
 namespace seamvox {
@@ -186,6 +187,9 @@ void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportConte
   j.key("write").value(stageSeconds(c.stages, "write")).key("total").value(c.totalSeconds);
   j.endObject();
   j.key("peakResidentBytes").value(c.peakBytes);
+  // The BLAS kernels of the factorizations (blas_threads.h): they set much of the solves' time.
+  const std::string blasCore = blasCoreName();
+  if (!blasCore.empty()) j.key("blasCore").value(blasCore);
   if (c.memoryPathJson) {
     c.memoryPathJson(j);
   } else if (c.memoryBudget > 0) {

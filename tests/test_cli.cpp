@@ -460,6 +460,36 @@ TEST(Cli, DemoRunsTheMainJobOnAGeneratedScan) {
   EXPECT_TRUE(contains(run("demo --faces 10", 2), "--faces"));
 }
 
+// OpenBLAS falls back to SSE3 kernels on a processor newer than it knows (Debian 12's on an
+// Emerald Rapids Xeon): the command then runs itself again asking for kernels that fit, and a
+// kernel the user named stays.
+TEST(Cli, ParamFactorsWithBlasKernelsThatFitTheProcessor) {
+  TempDir dir;
+  const std::string mesh = dir.path("s.ply"), report = dir.path("r.json");
+  run("gen sphere --faces 2000 -o " + mesh + " --quiet", 0);
+  const auto blasCore = [&] {
+    run("param " + mesh + " -o " + dir.path("s_uv.obj") + " --report " + report + " --quiet", 0);
+    const Json r = parseJson(testing::readFile(report));
+    return r.has("blasCore") ? r.textAt("blasCore") : std::string();
+  };
+  const char* chosen = std::getenv("OPENBLAS_CORETYPE");
+  const std::string userChoice = chosen ? chosen : "";
+  unsetenv("OPENBLAS_CORETYPE");
+  const std::string core = blasCore();
+  setenv("OPENBLAS_CORETYPE", "Prescott", 1);
+  const std::string named = blasCore();
+  if (userChoice.empty()) unsetenv("OPENBLAS_CORETYPE");
+  else setenv("OPENBLAS_CORETYPE", userChoice.c_str(), 1);
+  if (core.empty()) GTEST_SKIP() << "the BLAS is not OpenBLAS: no kernels to choose";
+  EXPECT_EQ(named, "Prescott");
+  std::string lower = core;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    for (const char* generic : {"prescott", "core2", "penryn", "nehalem", "atom"}) EXPECT_NE(lower, generic) << core;
+  }
+}
+
 TEST(Cli, OutputsOfOneRunAreAllOrNothing) {
   TempDir dir;
   const std::string mesh = dir.path("m.ply"), out = dir.path("m_uv.obj");

@@ -1,5 +1,6 @@
 #pragma once
-/// Thread count of the BLAS behind CHOLMOD's supernodal factorization.
+/// The BLAS behind CHOLMOD's supernodal factorization: its thread count and its kernels.
+#include <string>
 
 namespace seamvox {
 
@@ -8,5 +9,18 @@ namespace seamvox {
 /// seamvox's own loops already run in parallel (TBB); a second pool of spinning BLAS threads
 /// on the same cores made factorizations up to 2x slower on a loaded 2-core machine.
 bool limitBlasThreads(int threads);
+
+/// The kernels OpenBLAS chose for this processor (its core name, e.g. "Haswell"), or "" when
+/// the BLAS is not OpenBLAS.
+std::string blasCoreName();
+
+/// The kernels to ask OpenBLAS for (through OPENBLAS_CORETYPE, read when it loads), or "" to
+/// keep its choice. An OpenBLAS older than the processor (Debian 12's 0.3.21 on an Emerald
+/// Rapids Xeon) falls back to its SSE3 "Prescott" kernels, about 1.4x slower in the complex
+/// factorizations; this names the newest family of kernels the processor and the system
+/// support instead: "SkylakeX" (AVX-512 F, BW, DQ, VL), "Haswell" (AVX2, FMA) or
+/// "Sandybridge" (AVX). "" when OPENBLAS_CORETYPE is set, the BLAS is not OpenBLAS or its
+/// choice is not one of the generic fallbacks.
+std::string preferredBlasCore();
 
 }  // namespace seamvox

@@ -71,8 +71,10 @@ def seamvox_command():
     if not binary or not os.path.exists(binary):
         pytest.skip("SEAMVOX_BINARY does not name the seamvox command (ctest sets it)")
 
-    def run(*args, fails=False):
-        done = subprocess.run([binary, *args], capture_output=True, text=True, timeout=120)
+    def run(*args, fails=False, blas_core=None):
+        # blas_core: the OpenBLAS kernels to run with (the command picks its own otherwise).
+        env = dict(os.environ, OPENBLAS_CORETYPE=blas_core) if blas_core else None
+        done = subprocess.run([binary, *args], capture_output=True, text=True, timeout=120, env=env)
         assert (done.returncode != 0) == fails, done.stdout + done.stderr
         return done if fails else done.stdout
 

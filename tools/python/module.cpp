@@ -349,6 +349,15 @@ PYBIND11_MODULE(seamvox, m) {
   options.disable_function_signatures();
   // seamvox's loops run on TBB; a second pool of BLAS threads slows CHOLMOD down (as the command).
   sv::limitBlasThreads(1);
+  // OpenBLAS chose its kernels as it loaded; the command re-runs itself with better ones, a
+  // module can only say so.
+  const std::string blasCore = sv::preferredBlasCore();
+  if (!blasCore.empty()) {
+    const std::string message = "seamvox: OpenBLAS runs its generic '" + sv::blasCoreName() +
+                                "' kernels on this processor; OPENBLAS_CORETYPE=" + blasCore +
+                                " set before Python starts makes the solves faster";
+    PyErr_WarnEx(PyExc_RuntimeWarning, message.c_str(), 1);
+  }
 
   py::class_<ParamOutcome> result(m, "Result", "A seamless parameterization (seamvox.parameterize).");
   addArrayFields(result);
