@@ -120,11 +120,13 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
     out.unknowns = std::max(out.unknowns, stats.unknowns);
     const std::vector<std::uint8_t> state = regionStates(region, solved.cornerUV, h, mesh, topology, field);
     const std::vector<std::uint32_t> flips = flipsPerComponent(state, components);
-    // Keep, per component, the corners of the best solve so far.
+    // Keep, per component, the corners of the best solve so far; a component counts as improved
+    // only below the flips it came in with (a later solve better than a worse first one is not).
     if (out.solution.cornerUV.empty()) {
       out.solution = solved;
-      for (std::size_t c = 0; c < flips.size(); ++c) out.componentImproved[c] = flips[c] < before[c];
-      best = flips;
+      for (std::size_t c = 0; c < flips.size(); ++c) {
+        if (flips[c] < best[c]) best[c] = flips[c], out.componentImproved[c] = 1;
+      }
     } else {
       for (std::uint32_t i = 0; i < region.topology.numFaces(); ++i) {
         const std::uint32_t c = components.faceComponent[i];
