@@ -1,9 +1,7 @@
 // The `seamvox` command: dispatches to the subcommands registered in tools/cmd_*.cpp.
 #include <tbb/global_control.h>
-#include <unistd.h>
 
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -31,11 +29,9 @@ void printHelp() {
 
 int main(int argc, char** argv) {
   using namespace seamvox;
-  // OpenBLAS reads OPENBLAS_CORETYPE once, as it loads: when it fell back to kernels older than
-  // the processor, the command runs itself again with better ones named (same process, arguments
-  // and open files). Should that fail, it goes on with OpenBLAS's own choice.
-  const std::string blasCore = preferredBlasCore();
-  if (!blasCore.empty() && setenv("OPENBLAS_CORETYPE", blasCore.c_str(), 1) == 0) execv("/proc/self/exe", argv);
+  // When OpenBLAS fell back to kernels older than the processor, the command runs itself again
+  // with better ones named (same process, arguments and open files).
+  rerunWithPreferredBlas(argv);
   // SIGINT and SIGTERM remove unfinished outputs and exit 130 and 143, as a cancelled stage
   // (CancelledError) exits 130.
   installInterruptCleanup();

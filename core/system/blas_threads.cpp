@@ -1,6 +1,7 @@
 #include "core/system/blas_threads.h"
 
 #include <dlfcn.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
@@ -46,6 +47,12 @@ std::string preferredBlasCore() {
   if (__builtin_cpu_supports("avx")) return "Sandybridge";
 #endif
   return {};
+}
+
+void rerunWithPreferredBlas(char** argv) {
+  const std::string core = preferredBlasCore();
+  if (core.empty() || setenv("OPENBLAS_CORETYPE", core.c_str(), 1) != 0) return;
+  execv("/proc/self/exe", argv);
 }
 
 }  // namespace seamvox

@@ -23,4 +23,11 @@ std::string blasCoreName();
 /// choice is not one of the generic fallbacks.
 std::string preferredBlasCore();
 
+/// For a program's main, first thing: when preferredBlasCore() names kernels, sets
+/// OPENBLAS_CORETYPE to them and runs the program again in this process (execv of
+/// /proc/self/exe with argv), as OpenBLAS reads the setting only as it loads. Returns when there
+/// is nothing to choose or the new run could not start (the program then goes on with
+/// OpenBLAS's own choice).
+void rerunWithPreferredBlas(char** argv);
+
 }  // namespace seamvox
