@@ -79,10 +79,11 @@ constexpr std::int32_t kFullTurnIndex4 = 4;
 /// First, every cone of index4 >= kFullTurnIndex4 is split: up to +2 at a time moves along
 /// interior edges onto a new cone (an interior vertex without index within options.maxDistance,
 /// or twice that and so on when there is none, the farthest from the cone and its earlier new
-/// cones) until it keeps +2 (a +2 pair is not merged back). Then greedily, closest pair first, moves the whole index of one cone onto another no farther than
-/// options.maxDistance along interior edges, when the sum keeps |index4| <= kMaxMergedIndex4 (the
-/// cone with the larger |index4|, or the smaller id, stays). Changes matchings, index4 and cones
-/// in place; the index sum (Poincare-Hopf) is unchanged. Cost: one bounded search per cone
+/// cones) until it keeps +2 (a +2 pair is not merged back). Then greedily, closest pair first,
+/// moves the whole index of one cone onto another no farther than options.maxDistance along
+/// interior edges, when the sum keeps |index4| <= kMaxMergedIndex4 (the cone with the larger
+/// |index4|, or the smaller id, stays). Changes matchings, index4 and cones in place; the index
+/// sum (Poincare-Hopf) is unchanged. Cost: one bounded search per cone
 /// (ConeMergeResult::searchedVertices; in parallel), whose shortest paths the merges then take,
 /// independent of how many cones there are.
 ConeMergeResult mergeCloseCones(const TriangleMesh& mesh, const Topology& topology,

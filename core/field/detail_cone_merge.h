@@ -81,16 +81,6 @@ void moveIndex(Table& table, Singularities& s, VertexId keep, VertexId gone, con
   ++(s.index(keep) == 0 ? out.cancelledPairs : out.mergedPairs);
 }
 
-/// Is v on the boundary (an edge of one of its faces at v without a neighbour)?
-template <class Table>
-bool onBoundary(Table& table, VertexId v) {
-  bool boundary = false;
-  table.forEachCornerAround(v, [&](CornerId c) {
-    boundary = boundary || table.opposite(prevCorner(c)) == kInvalidId || table.opposite(nextCorner(c)) == kInvalidId;
-  });
-  return boundary;
-}
-
 /// How far (in merge distances) a split looks for a vertex to take index.
 constexpr double kSplitReach = 1024.0;
 
@@ -105,7 +95,7 @@ void splitFullTurnConesWith(PositionOf&& positionOf, Table& table, Singularities
     if (s.index(v) < kFullTurnIndex4) continue;
     // The ball grows until it holds a vertex that can take index (a fan of long faces has none
     // within the merge distance).
-    const auto free = [&](VertexId y) { return y != v && s.index(y) == 0 && !onBoundary(table, y); };
+    const auto free = [&](VertexId y) { return y != v && s.index(y) == 0 && !table.isBoundaryVertex(y); };
     Ball ball;
     for (double radius = distance; radius <= kSplitReach * distance; radius *= 2.0) {
       ball = searchBall(positionOf, table, v, radius);

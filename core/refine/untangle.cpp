@@ -124,9 +124,6 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
     // only below the flips it came in with (a later solve better than a worse first one is not).
     if (out.solution.cornerUV.empty()) {
       out.solution = solved;
-      for (std::size_t c = 0; c < flips.size(); ++c) {
-        if (flips[c] < best[c]) best[c] = flips[c], out.componentImproved[c] = 1;
-      }
     } else {
       for (std::uint32_t i = 0; i < region.topology.numFaces(); ++i) {
         const std::uint32_t c = components.faceComponent[i];
@@ -137,9 +134,9 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
         const std::uint32_t c = components.faceComponent[region.cut.seams[j].corners.front() / 3];
         if (flips[c] < best[c]) out.solution.seamT[j] = solved.seamT[j];
       }
-      for (std::size_t c = 0; c < flips.size(); ++c) {
-        if (flips[c] < best[c]) best[c] = flips[c], out.componentImproved[c] = 1;
-      }
+    }
+    for (std::size_t c = 0; c < flips.size(); ++c) {
+      if (flips[c] < best[c]) best[c] = flips[c], out.componentImproved[c] = 1;
     }
     bool anyFlipped = false;
     for (std::uint32_t i = 0; i < state.size(); ++i) {
