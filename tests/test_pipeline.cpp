@@ -99,6 +99,27 @@ TEST_P(PipelineSolvers, MapDoesNotDependOnTheThreadCount) {
   EXPECT_EQ(runs[0].mapQuality.flipped, runs[1].mapQuality.flipped);
 }
 
+// The map keeps its wedge ids per vertex over the result's own triangles (WedgeMap::
+// viewTriangles): a moved result keeps them, a copied mesh holds ids of its own and outlives
+// the result it came from.
+TEST_P(PipelineSolvers, TheMapViewsTheResultsTrianglesAndACopyOwnsItsIds) {
+  PipelineOptions options;
+  options.solver.solver = GetParam();
+  options.solver.gridResolution = 32;
+  auto owner = std::make_unique<PipelineResult>(parameterize(sphere(6000), options));
+  ASSERT_TRUE(owner->isSeamless());
+  EXPECT_TRUE(owner->mesh.cornerUV.viewsTriangles());
+  const std::vector<Vec2d> values = testing::cornerValues(owner->mesh.cornerUV);
+  PipelineResult moved = std::move(*owner);
+  EXPECT_TRUE(moved.mesh.cornerUV.viewsTriangles());
+  EXPECT_EQ(testing::cornerValues(moved.mesh.cornerUV), values);
+  TriangleMesh copy = moved.mesh;
+  owner.reset();
+  moved = PipelineResult();
+  EXPECT_FALSE(copy.cornerUV.viewsTriangles());
+  EXPECT_EQ(testing::cornerValues(copy.cornerUV), values);
+}
+
 INSTANTIATE_TEST_SUITE_P(Solvers, PipelineSolvers,
                          ::testing::Values(ParamSolver::Hat, ParamSolver::Vox, ParamSolver::VoxLoc));
 

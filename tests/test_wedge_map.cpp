@@ -138,6 +138,67 @@ TEST(WedgeMap, RandomEditsMatchAPerCornerModel) {
   EXPECT_EQ(cornerValues(map), model);
 }
 
+// Wedge ids kept per vertex over the mesh's triangles: the same values under the same edits as
+// ids per corner, copies and corner-table edits back per corner, and many split corners too.
+TEST(WedgeMap, OverTrianglesMatchesIdsPerCorner) {
+  const TriangleMesh mesh = testing::gridMesh(60, 40);
+  const std::vector<Vec2d> start = planarValues(mesh, 30.0, 7.0);
+  WedgeMap perCorner = WedgeMap::fromCorners(mesh.triangles, start);
+  WedgeMap viewing = perCorner;
+  ASSERT_TRUE(viewing.viewTriangles(mesh.triangles.data(), mesh.numVertices()));
+  ASSERT_TRUE(viewing.viewsTriangles());
+  EXPECT_FALSE(perCorner.viewsTriangles());
+  EXPECT_EQ(viewing.size(), perCorner.size());
+  EXPECT_LT(2 * viewing.memoryBytes(), perCorner.memoryBytes() + 16 * perCorner.numWedges());
+  for (CornerId c = 0; c < perCorner.size(); ++c) ASSERT_EQ(viewing.wedge(c), perCorner.wedge(c)) << "corner " << c;
+  EXPECT_EQ(viewing.wedgeCorners(), perCorner.wedgeCorners());
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<CornerId> corner(0, CornerId(start.size() - 1));
+  std::uniform_int_distribution<int> value(0, 3), count(1, 30);
+  for (int round = 0; round < 60; ++round) {
+    std::vector<CornerId> corners;
+    std::vector<Vec2d> values;
+    for (int k = count(rng); k > 0; --k) {
+      corners.push_back(corner(rng));
+      values.push_back(Vec2d(value(rng), 0.25));
+    }
+    if (round % 4 == 3) {
+      perCorner.set(corners[0], values[0]);
+      viewing.set(corners[0], values[0]);
+    } else {
+      perCorner.assign(corners, values);
+      viewing.assign(corners, values);
+    }
+    ASSERT_EQ(cornerValues(viewing), cornerValues(perCorner)) << "round " << round;
+    ASSERT_EQ(viewing.numWedges(), perCorner.numWedges()) << "round " << round;
+  }
+  EXPECT_TRUE(viewing.viewsTriangles());
+  // A copy holds ids per corner; so does the map after a corner-table edit.
+  const WedgeMap copy = viewing;
+  EXPECT_FALSE(copy.viewsTriangles());
+  EXPECT_EQ(cornerValues(copy), cornerValues(perCorner));
+  WedgeMap edited = viewing;
+  ASSERT_TRUE(edited.viewTriangles(mesh.triangles.data(), mesh.numVertices()));
+  edited.keepCorners(300);
+  perCorner.keepCorners(300);
+  EXPECT_FALSE(edited.viewsTriangles());
+  EXPECT_EQ(cornerValues(edited), cornerValues(perCorner));
+  EXPECT_EQ(edited.numWedges(), perCorner.numWedges());
+  // Most corners split from their vertex's wedge: back to ids per corner, the same values.
+  std::vector<CornerId> all(viewing.size());
+  std::vector<Vec2d> distinct(viewing.size());
+  for (CornerId c = 0; c < all.size(); ++c) all[c] = c, distinct[c] = Vec2d(c, -1.0);
+  viewing.assign(all, distinct);
+  EXPECT_FALSE(viewing.viewsTriangles());
+  EXPECT_EQ(cornerValues(viewing), distinct);
+  // Ids out of range are refused.
+  EXPECT_THROW(WedgeMap::overTriangles(mesh.triangles.data(), 3, {0, 5, 0, 0, 0, 0, 0, 0}, {}, {Vec2d::Zero()}),
+               InputError);
+  EXPECT_THROW(WedgeMap::overTriangles(mesh.triangles.data(), 3, std::vector<std::uint32_t>(mesh.numVertices(), 0),
+                                       {{1, 4}}, {Vec2d::Zero()}),
+               InputError);
+}
+
 TEST(WedgeMap, CutWedgesAreTheHatDomains) {
   const testing::Surface s = testing::makeSurface(testing::icosphereMesh(2));
   const CrossField field = testing::randomField(s.mesh, 3);

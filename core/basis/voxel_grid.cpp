@@ -200,7 +200,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   releaseFreedMemory();
   std::vector<std::complex<double>> coefficients;
   if (options.smoothedEvaluation) coefficients = expandCoefficients(reduction, solution.unknowns);
-  storeSeamlessSolution(basis, reduction, std::move(solution), topology, cut, param);
+  storeSeamlessSolution(basis, reduction, std::move(solution), topology, cut, param, options.mapViewsTriangles);
   if (options.smoothedEvaluation) {
     out.smoothedEvaluation = evaluateFoldsAtSmoothedSurface(mesh, topology, field, basis, coefficients,
                                                             options.edgeLength, param.cornerUV,

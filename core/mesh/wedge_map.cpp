@@ -1,11 +1,13 @@
 #include "core/mesh/wedge_map.h"
 
 #include <algorithm>
+#include <atomic>
 #include <string>
 #include <unordered_map>
 #include <utility>
 
 #include "core/system/errors.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -18,6 +20,118 @@ WedgeMap::WedgeMap(std::vector<std::uint32_t> cornerWedge, std::vector<Vec2d> we
                        " wedges");
     }
   }
+}
+
+WedgeMap::WedgeMap(const WedgeMap& other) : value_(other.value_) {
+  if (!other.tris_) {
+    wedge_ = other.wedge_;
+    return;
+  }
+  wedge_.resize(other.corners_);
+  for (std::size_t c = 0; c < wedge_.size(); ++c) wedge_[c] = other.wedge(static_cast<CornerId>(c));
+}
+
+WedgeMap& WedgeMap::operator=(const WedgeMap& other) {
+  if (this != &other) *this = WedgeMap(other);
+  return *this;
+}
+
+WedgeMap WedgeMap::overTriangles(const Triangle* triangles, std::size_t corners, std::vector<std::uint32_t> vertexWedge,
+                                 const std::vector<std::pair<CornerId, std::uint32_t>>& other,
+                                 std::vector<Vec2d> wedgeValues) {
+  if (wedgeValues.size() >= kListed) {
+    throw InputError("wedge map: " + std::to_string(wedgeValues.size()) + " wedges, too many to keep per vertex");
+  }
+  // Every corner's vertex and its wedge in range (the first bad corner named), and the listed ones.
+  std::atomic<std::uint64_t> bad{corners};
+  parallelFor(corners, 1u << 16, [&](const IndexRange& range) {
+    for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
+      const VertexId v = triangles[c / 3][c % 3];
+      if (v < vertexWedge.size() && vertexWedge[v] < wedgeValues.size()) continue;
+      std::uint64_t seen = bad.load();
+      while (c < seen && !bad.compare_exchange_weak(seen, c)) {
+      }
+      break;
+    }
+  });
+  if (bad.load() < corners) {
+    const std::uint64_t c = bad.load();
+    throw InputError("wedge map: corner " + std::to_string(c) + " has vertex " +
+                     std::to_string(triangles[c / 3][c % 3]) + " without a wedge among " +
+                     std::to_string(wedgeValues.size()));
+  }
+  for (const auto& [c, w] : other) {
+    if (c >= corners || w >= wedgeValues.size()) {
+      throw InputError("wedge map: listed corner " + std::to_string(c) + " with wedge " + std::to_string(w) +
+                       " out of range (" + std::to_string(corners) + " corners, " +
+                       std::to_string(wedgeValues.size()) + " wedges)");
+    }
+  }
+  WedgeMap map;
+  map.value_ = std::move(wedgeValues);
+  if (other.size() > maxListed(corners)) {
+    map.wedge_.resize(corners);
+    parallelFor(corners, 1u << 16, [&](const IndexRange& range) {
+      for (std::uint64_t c = range.begin(); c != range.end(); ++c) map.wedge_[c] = vertexWedge[triangles[c / 3][c % 3]];
+    });
+    for (const auto& [c, w] : other) map.wedge_[c] = w;
+    return map;
+  }
+  map.tris_ = reinterpret_cast<const VertexId*>(triangles);
+  map.corners_ = corners;
+  map.vertexWedge_ = std::move(vertexWedge);
+  map.listed_.reserve(other.size());
+  for (const auto& [c, w] : other) map.setCornerWedge(c, w);
+  return map;
+}
+
+bool WedgeMap::viewTriangles(const Triangle* triangles, std::uint32_t numVertices) {
+  if (tris_) return true;
+  if (value_.size() >= kListed) return false;
+  std::vector<std::uint32_t> vertexWedge(numVertices, kInvalidId);
+  for (std::size_t c = 0; c < wedge_.size(); ++c) {
+    const VertexId v = triangles[c / 3][c % 3];
+    if (v >= numVertices) return false;
+    if (vertexWedge[v] == kInvalidId) vertexWedge[v] = wedge_[c];
+  }
+  std::vector<std::pair<CornerId, std::uint32_t>> other;
+  for (std::size_t c = 0; c < wedge_.size(); ++c) {
+    if (wedge_[c] != vertexWedge[triangles[c / 3][c % 3]]) other.emplace_back(static_cast<CornerId>(c), wedge_[c]);
+  }
+  if (other.size() > maxListed(wedge_.size())) return false;
+  for (std::uint32_t& w : vertexWedge) w = w == kInvalidId ? 0 : w;
+  const std::size_t corners = wedge_.size();
+  std::vector<std::uint32_t>().swap(wedge_);
+  *this = overTriangles(triangles, corners, std::move(vertexWedge), other, std::move(value_));
+  return true;
+}
+
+void WedgeMap::setCornerWedge(CornerId c, std::uint32_t w) {
+  if (!tris_) {
+    wedge_[c] = w;
+    return;
+  }
+  std::uint32_t& own = vertexWedge_[tris_[c]];
+  if (w == (own & ~kListed)) {
+    if (own & kListed) listed_.erase(c);
+    return;
+  }
+  listed_[c] = w;
+  own |= kListed;
+  // Many corners split off their vertex's wedge (a map no longer seamless there): ids per corner
+  // hold less.
+  if (listed_.size() > maxListed(corners_)) perCorner();
+}
+
+void WedgeMap::perCorner() {
+  if (!tris_) return;
+  std::vector<std::uint32_t> wedges(corners_);
+  for (std::size_t c = 0; c < corners_; ++c) wedges[c] = wedge(static_cast<CornerId>(c));
+  tris_ = nullptr;
+  corners_ = 0;
+  std::vector<std::uint32_t>().swap(vertexWedge_);
+  std::unordered_map<CornerId, std::uint32_t>().swap(listed_);
+  wedge_ = std::move(wedges);
 }
 
 WedgeMap WedgeMap::fromCorners(const std::vector<Triangle>& triangles, const std::vector<Vec2d>& values) {
@@ -35,17 +149,18 @@ std::vector<CornerId> WedgeMap::wedgeCorners(std::uint32_t begin, std::uint32_t 
   end = std::min(end, numWedges());
   begin = std::min(begin, end);
   std::vector<CornerId> first(end - begin, kInvalidId);
-  for (std::size_t c = wedge_.size(); c-- > 0;) {
-    const std::uint32_t w = wedge_[c];
+  for (std::size_t c = size(); c-- > 0;) {
+    const std::uint32_t w = wedge(static_cast<CornerId>(c));
     if (w >= begin && w < end) first[w - begin] = static_cast<CornerId>(c);
   }
   return first;
 }
 
 void WedgeMap::set(CornerId c, const Vec2d& q) {
-  if (value_[wedge_[c]] == q) return;
-  wedge_[c] = numWedges();
+  if (value_[wedge(c)] == q) return;
+  const std::uint32_t w = numWedges();
   value_.push_back(q);
+  setCornerWedge(c, w);
 }
 
 void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Vec2d>& values) {
@@ -54,9 +169,9 @@ void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Ve
                      std::to_string(values.size()) + " values");
   }
   for (CornerId c : corners) {
-    if (c >= wedge_.size()) {
+    if (c >= size()) {
       throw InputError("wedge map: corner " + std::to_string(c) + " out of range (" +
-                       std::to_string(wedge_.size()) + " corners)");
+                       std::to_string(size()) + " corners)");
     }
   }
   if (corners.empty()) return;
@@ -75,18 +190,19 @@ void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Ve
   // The touched wedges (sorted) with, per wedge, its corners given and all its corners (one pass
   // over the map, counting only the touched wedges): flat arrays, a few bytes per wedge.
   std::vector<std::uint32_t> touched(last.size());
-  for (std::size_t k = 0; k < last.size(); ++k) touched[k] = wedge_[last[k].first];
+  for (std::size_t k = 0; k < last.size(); ++k) touched[k] = wedge(last[k].first);
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   const auto slot = [&](std::uint32_t w) {
     return static_cast<std::size_t>(std::lower_bound(touched.begin(), touched.end(), w) - touched.begin());
   };
   std::vector<std::uint32_t> given(touched.size(), 0), all(touched.size(), 0);
-  for (const auto& [c, q] : last) ++given[slot(wedge_[c])];
+  for (const auto& [c, q] : last) ++given[slot(wedge(c))];
   {
     std::vector<bool> isTouched(value_.size(), false);
     for (std::uint32_t w : touched) isTouched[w] = true;
-    for (std::uint32_t w : wedge_) {
+    for (std::size_t c = 0; c < size(); ++c) {
+      const std::uint32_t w = wedge(static_cast<CornerId>(c));
       if (isTouched[w]) ++all[slot(w)];
     }
   }
@@ -105,18 +221,18 @@ void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Ve
   std::vector<Vec2d> fresh;
   const std::uint32_t numOld = numWedges();
   for (const auto& [c, q] : last) {
-    const std::uint32_t w = wedge_[c];
+    const std::uint32_t w = wedge(c);
     const std::size_t i = slot(w);
     Option& head = first[i];
     if (head.set && head.q == q) {
-      wedge_[c] = head.target;
+      setCornerWedge(c, head.target);
       continue;
     }
     if (head.set) {
       auto& rest = more[i];
       const auto found = std::find_if(rest.begin(), rest.end(), [&](const auto& o) { return o.first == q; });
       if (found != rest.end()) {
-        wedge_[c] = found->second;
+        setCornerWedge(c, found->second);
         continue;
       }
     }
@@ -135,7 +251,7 @@ void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Ve
     } else {
       more[i].emplace_back(q, target);
     }
-    wedge_[c] = target;
+    setCornerWedge(c, target);
   }
   if (value_.capacity() < value_.size() + fresh.size()) {
     std::vector<Vec2d> grown;
@@ -154,12 +270,14 @@ void checkCorners(const WedgeMap& map, std::size_t corners, const std::string& w
 }
 
 void WedgeMap::resizeCorners(std::size_t n) {
+  perCorner();
   wedge_.resize(n);
   wedge_.shrink_to_fit();
 }
 
 void WedgeMap::keepCorners(std::size_t n) {
-  if (n >= wedge_.size()) return;
+  if (n >= size()) return;
+  perCorner();
   wedge_.resize(n);
   std::vector<std::uint32_t> renumber(value_.size(), kInvalidId);
   for (const std::uint32_t w : wedge_) renumber[w] = 0;
@@ -176,10 +294,18 @@ void WedgeMap::keepCorners(std::size_t n) {
 void WedgeMap::clear() {
   std::vector<std::uint32_t>().swap(wedge_);
   std::vector<Vec2d>().swap(value_);
+  tris_ = nullptr;
+  corners_ = 0;
+  std::vector<std::uint32_t>().swap(vertexWedge_);
+  std::unordered_map<CornerId, std::uint32_t>().swap(listed_);
 }
 
 std::size_t WedgeMap::memoryBytes() const {
-  return wedge_.capacity() * sizeof(std::uint32_t) + value_.capacity() * sizeof(Vec2d);
+  // A listed corner: its node (key, value, next pointer, cached hash) and a bucket pointer.
+  const std::size_t listed = listed_.size() * (sizeof(std::pair<CornerId, std::uint32_t>) + 2 * sizeof(void*)) +
+                             listed_.bucket_count() * sizeof(void*);
+  return (wedge_.capacity() + vertexWedge_.capacity()) * sizeof(std::uint32_t) + value_.capacity() * sizeof(Vec2d) +
+         listed;
 }
 
 void WedgeMapBuilder::reserve(std::size_t corners) { map_.wedge_.reserve(corners); }

@@ -313,6 +313,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   param.coneWeightRadius = options.coneWeightRadius;
   param.progress = options.progress;
   param.failsToFactor = options.failsToFactor;
+  param.mapViewsTriangles = true;  // r.mesh and r.topology outlive the map unchanged (uncapForOutput edits per corner)
   SolverOptions solverOptions = options.solver;
   solverOptions.meter = &meter;  // closes "solve" and "refine"
   bool directionsStored = false;

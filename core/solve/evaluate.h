@@ -13,7 +13,10 @@ namespace seamvox {
 /// edges (cut.h CutCorners::isCut, boundary included) form one wedge; a vertex without cut
 /// edges has one.
 /// Wedges are numbered vertex by vertex. Linear time, parallel; 4 bytes per vertex besides the map.
-WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut);
+/// viewTriangles: the map keeps its wedge ids per vertex over the topology's triangles
+/// (WedgeMap::overTriangles, 4 bytes per vertex instead of 12 per face), which must then outlive it
+/// unchanged; the same wedges and ids either way.
+WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut, bool viewTriangles = false);
 
 /// (u, v) in grid units for the reduced unknowns x: coefficients P x + offset, then the basis
 /// evaluated once per wedge of cornerUV, which must hold the cut's wedges (buildCutWedges) on all

@@ -52,7 +52,8 @@ ParamResult parameterizeMesh(const TriangleMesh& mesh, const Topology& topology,
   roundOptions.greedy = options.greedyRounding;
   roundOptions.progress = options.progress;
   roundOptions.failsToFactor = options.failsToFactor;
-  storeSeamlessSolution(basis, reduction, solveSeamless(basis, reduction, roundOptions), topology, cut, out);
+  storeSeamlessSolution(basis, reduction, solveSeamless(basis, reduction, roundOptions), topology, cut, out,
+                        options.mapViewsTriangles);
   return out;
 }
 
@@ -126,12 +127,12 @@ void findComponentFaces(const Basis& basis, const Reduction& reduction, const Se
 }  // namespace
 
 void storeSeamlessSolution(const Basis& basis, const Reduction& reduction, SeamlessSolution solution,
-                           const Topology& topology, const CutResult& cut, ParamResult& out) {
+                           const Topology& topology, const CutResult& cut, ParamResult& out, bool viewTriangles) {
   findComponentFaces(basis, reduction, solution, topology, cut, out);
   out.stats = solution.stats;
   out.translations = std::move(solution.translations);
   const auto start = std::chrono::steady_clock::now();
-  out.cornerUV = buildCutWedges(topology, cut);
+  out.cornerUV = buildCutWedges(topology, cut, viewTriangles);
   evaluateMap(basis, reduction, solution.unknowns, out.cornerUV);
   out.secondsEvaluate = secondsSince(start);
 }

@@ -37,6 +37,10 @@ struct ParamOptions {
   /// Vertices smoothed and evaluated at once by that pass (0: kSmoothedBatchVertices). The map
   /// does not depend on it; tests set a few to cover the batches.
   std::size_t smoothedBatchVertices = 0;
+  /// The map keeps its wedge ids per vertex over the topology's triangles (buildCutWedges'
+  /// viewTriangles: 8 bytes per face less), which must then outlive it unchanged (the pipeline's
+  /// mesh and topology do).
+  bool mapViewsTriangles = false;
 };
 
 struct ParamResult {
@@ -80,9 +84,11 @@ std::vector<std::uint8_t> conesOnFeatures(const Topology& topology, const CutRes
                                           const std::vector<CornerId>& sideCorners);
 
 /// Stores a solved seamless system in out: its stats and translations, and the map evaluated
-/// once per wedge of the cut (timed as secondsEvaluate). Shared by the hat and voxel solvers.
+/// once per wedge of the cut (timed as secondsEvaluate; viewTriangles as buildCutWedges'). Shared
+/// by the hat and voxel solvers.
 void storeSeamlessSolution(const Basis& basis, const Reduction& reduction, SeamlessSolution solution,
-                           const Topology& topology, const CutResult& cut, ParamResult& out);
+                           const Topology& topology, const CutResult& cut, ParamResult& out,
+                           bool viewTriangles = false);
 
 /// The small-hole constraints of ParamOptions::closeHolesWithin (empty when 0), their counts
 /// stored in out.
