@@ -22,14 +22,19 @@ WedgeMap::WedgeMap(std::vector<std::uint32_t> cornerWedge, std::vector<Vec2d> we
   }
 }
 
-WedgeMap::WedgeMap(const WedgeMap& other) : value_(other.value_) {
-  if (!other.tris_) {
-    wedge_ = other.wedge_;
-    return;
-  }
-  wedge_.resize(other.corners_);
-  for (std::size_t c = 0; c < wedge_.size(); ++c) wedge_[c] = other.wedge(static_cast<CornerId>(c));
+namespace {
+
+/// The wedge id of every corner of the map, in corner order.
+std::vector<std::uint32_t> idsPerCorner(const WedgeMap& map) {
+  std::vector<std::uint32_t> ids(map.size());
+  for (std::size_t c = 0; c < ids.size(); ++c) ids[c] = map.wedge(static_cast<CornerId>(c));
+  return ids;
 }
+
+}  // namespace
+
+WedgeMap::WedgeMap(const WedgeMap& other)
+    : wedge_(other.tris_ ? idsPerCorner(other) : other.wedge_), value_(other.value_) {}
 
 WedgeMap& WedgeMap::operator=(const WedgeMap& other) {
   if (this != &other) *this = WedgeMap(other);
@@ -125,8 +130,7 @@ void WedgeMap::setCornerWedge(CornerId c, std::uint32_t w) {
 
 void WedgeMap::perCorner() {
   if (!tris_) return;
-  std::vector<std::uint32_t> wedges(corners_);
-  for (std::size_t c = 0; c < corners_; ++c) wedges[c] = wedge(static_cast<CornerId>(c));
+  std::vector<std::uint32_t> wedges = idsPerCorner(*this);
   tris_ = nullptr;
   corners_ = 0;
   std::vector<std::uint32_t>().swap(vertexWedge_);

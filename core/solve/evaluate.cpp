@@ -63,7 +63,6 @@ WedgeMap buildCutWedges(const Topology& topology, const CutResult& cut, bool vie
     parallelFor(vertexWedge.size(), 1u << 16, [&](const IndexRange& range) {
       for (VertexId v = range.begin(); v != range.end(); ++v) vertexWedge[v] += first[v / kBlock];
     });
-    if (numWedges == 0) std::fill(vertexWedge.begin(), vertexWedge.end(), 0);
     return WedgeMap::overTriangles(topology.triangles().data(), topology.numCorners(), std::move(vertexWedge), other,
                                    std::move(values));
   }
