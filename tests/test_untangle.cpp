@@ -85,23 +85,28 @@ TriangleMesh sphere(std::uint64_t faces) { return generatedMesh(MeshKind::Sphere
 TEST(ConeWeights, SquareRootOfRadiusOverDistanceInsideOneOutside) {
   const TriangleMesh mesh = sphere(4000);
   std::mt19937 random(7);
-  std::vector<VertexId> cones;
-  for (int k = 0; k < 12; ++k) cones.push_back(random() % mesh.numVertices());
-  const double radius = 0.3;
-  const std::vector<double> weight = coneNeighbourhoodWeights(mesh, cones, radius);
-  ASSERT_EQ(weight.size(), mesh.numFaces());
-  std::size_t inside = 0;
-  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
-    const Triangle& t = mesh.triangles[f];
-    const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
-    double nearest = 1e300;
-    for (VertexId v : cones) nearest = std::min(nearest, (mesh.position(v) - c).norm());
-    const double expected = nearest < radius ? std::sqrt(radius / nearest) : 1.0;
-    EXPECT_NEAR(weight[f], expected, 1e-9 * expected) << "face " << f;
-    inside += nearest < radius;
+  // A few cones (each tested) and many (looked up by cell): both against every cone.
+  for (const auto& [count, radius] : {std::pair<int, double>{12, 0.3}, {60, 0.12}}) {
+    std::vector<VertexId> cones;
+    for (int k = 0; k < count; ++k) cones.push_back(random() % mesh.numVertices());
+    const std::vector<double> weight = coneNeighbourhoodWeights(mesh, cones, radius);
+    ASSERT_EQ(weight.size(), mesh.numFaces());
+    std::size_t inside = 0, outside = 0;
+    for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
+      double nearest = 1e300;
+      for (VertexId v : cones) nearest = std::min(nearest, (mesh.position(v) - c).norm());
+      const double expected = nearest < radius ? std::sqrt(radius / nearest) : 1.0;
+      EXPECT_NEAR(weight[f], expected, 1e-9 * expected) << count << " cones, face " << f;
+      inside += nearest < radius;
+      outside += nearest >= radius;
+    }
+    // the checks above covered the weighted part and the ones
+    EXPECT_GT(inside, 100u) << count << " cones";
+    EXPECT_GT(outside, 100u) << count << " cones";
   }
-  EXPECT_GT(inside, 100u);  // the check above covered the weighted part, not only ones
-  EXPECT_EQ(coneNeighbourhoodWeights(mesh, {}, radius), std::vector<double>(mesh.numFaces(), 1.0));
+  EXPECT_EQ(coneNeighbourhoodWeights(mesh, {}, 0.3), std::vector<double>(mesh.numFaces(), 1.0));
 }
 
 TEST(FoldedIn3D, AgainstTheSmoothedCopy) {

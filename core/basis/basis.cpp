@@ -50,6 +50,9 @@ void hatTriangleIntegrals(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, con
   }
 }
 
+/// Cones up to which coneNeighbourhoodWeights tests each one instead of looking up cells.
+constexpr std::size_t kDirectCones = 32;
+
 std::vector<double> coneNeighbourhoodWeights(const TriangleMesh& mesh, const std::vector<VertexId>& cones,
                                              double radius) {
   std::vector<double> weight(mesh.numFaces(), 1.0);
@@ -60,21 +63,35 @@ std::vector<double> coneNeighbourhoodWeights(const TriangleMesh& mesh, const std
                 static_cast<std::int64_t>(std::floor(x.y() / radius)),
                 static_cast<std::int64_t>(std::floor(x.z() / radius))};
   };
+  // Few cones (a local solve's region has a handful): each is tested, cheaper than 27 cell
+  // lookups; either way every cone within the radius is seen, so the weights are the same.
+  const bool direct = cones.size() <= kDirectCones;
+  std::vector<Vec3d> points;
   std::map<Cell, std::vector<Vec3d>> buckets;
-  for (VertexId v : cones) buckets[cellOf(mesh.position(v))].push_back(mesh.position(v));
+  for (VertexId v : cones) {
+    if (direct) {
+      points.push_back(mesh.position(v));
+    } else {
+      buckets[cellOf(mesh.position(v))].push_back(mesh.position(v));
+    }
+  }
   parallelFor(mesh.numFaces(), 1u << 14, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const Triangle& t = mesh.triangles[f];
       const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
-      const Cell cell = cellOf(c);
       double nearest = radius * radius;
-      for (int d = 0; d < 27; ++d) {
+      for (const Vec3d& p : points) nearest = std::min(nearest, (p - c).squaredNorm());
+      const Cell cell = direct ? Cell{} : cellOf(c);
+      for (int d = 0; d < 27 && !direct; ++d) {
         const auto it = buckets.find({cell[0] + d % 3 - 1, cell[1] + d / 3 % 3 - 1, cell[2] + d / 9 - 1});
         if (it == buckets.end()) continue;
         for (const Vec3d& p : it->second) nearest = std::min(nearest, (p - c).squaredNorm());
       }
       // sqrt(R / r) = (R^2 / r^2)^(1/4); capped where a centroid nearly meets its cone.
-      weight[f] = std::pow(radius * radius / std::max(nearest, 1e-12 * radius * radius), 0.25);
+      // No cone within the radius: 1 (what the power gives there, without computing it).
+      if (nearest < radius * radius) {
+        weight[f] = std::pow(radius * radius / std::max(nearest, 1e-12 * radius * radius), 0.25);
+      }
     }
   });
   return weight;

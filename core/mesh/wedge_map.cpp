@@ -203,12 +203,19 @@ void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Ve
   std::vector<std::uint32_t> given(touched.size(), 0), all(touched.size(), 0);
   for (const auto& [c, q] : last) ++given[slot(wedge(c))];
   {
-    std::vector<bool> isTouched(value_.size(), false);
-    for (std::uint32_t w : touched) isTouched[w] = true;
-    for (std::size_t c = 0; c < size(); ++c) {
-      const std::uint32_t w = wedge(static_cast<CornerId>(c));
-      if (isTouched[w]) ++all[slot(w)];
-    }
+    // The pass over the map in parallel: the touched wedges' corners are few, so their counts
+    // are atomic adds that rarely meet.
+    std::vector<std::uint8_t> isTouched(value_.size(), 0);
+    for (std::uint32_t w : touched) isTouched[w] = 1;
+    std::vector<std::atomic<std::uint32_t>> count(touched.size());
+    for (auto& n : count) n.store(0, std::memory_order_relaxed);
+    parallelFor(size(), 1u << 16, [&](const IndexRange& range) {
+      for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
+        const std::uint32_t w = wedge(static_cast<CornerId>(c));
+        if (isTouched[w]) count[slot(w)].fetch_add(1, std::memory_order_relaxed);
+      }
+    });
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = count[i].load(std::memory_order_relaxed);
   }
   // Per wedge, in corner order: the first new value reuses the wedge when all its corners are
   // given; any other new value gets a wedge of its own (shared by the corners of that wedge
