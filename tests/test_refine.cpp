@@ -9,6 +9,7 @@
 #include <deque>
 #include <memory>
 #include <numeric>
+#include <random>
 #include <set>
 
 #include "core/basis/basis.h"
@@ -437,6 +438,46 @@ TEST_F(RefineSphere, TranslationsAmongFreeVerticesAreSolvedAgain) {
   const MapQuality map = measureMap(s.mesh(), refined, &s.field, s.options.edgeLength);
   EXPECT_LE(map.relativeGradientError, 1.02 * hat);  // measured 1.009
   EXPECT_EQ(map.flipped, 0u);
+}
+
+// The repair's stiffened re-solves change only face weights, so each reuses the first one's
+// elimination order (solveRegion's firstOrder): the same map as ordering again, with the seams'
+// translations solved and rounded. An order that is not the pattern's (reversed, with ids out of
+// range) still factors the same system: the same map to rounding.
+TEST_F(RefineSphere, AReSolveWithAnEarlierOrderGivesTheSameMap) {
+  const Scene& s = *scene_;
+  const std::vector<FaceId> faces = allButAFanFarFromTheCut(s, 4);
+  ASSERT_FALSE(faces.empty());
+  const RegionMesh region = extractRegion(s.mesh(), s.topology(), s.field, s.cut, faces);
+  std::vector<Vec2d> values(3 * faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    for (int k = 0; k < 3; ++k) values[3 * i + k] = s.hat.cornerUV[3 * faces[i] + k];
+  }
+  const WedgeMap input = WedgeMap::fromCorners(region.mesh.triangles, values);
+  std::vector<Complex> seamT(region.seamOrigin.size());
+  for (std::size_t j = 0; j < seamT.size(); ++j) seamT[j] = s.hat.translations[region.seamOrigin[j]];
+  const double h = s.options.edgeLength;
+  std::vector<double> weight(faces.size(), 1.0);
+  std::vector<std::uint32_t> order;
+  RefineStats stats;
+  solveRegion(region, input, seamT, h, &stats, weight, 0.0, false, 0.0, &order);
+  ASSERT_GT(stats.freeTranslations, 0u) << "no translation re-solved: the second solve is not tested";
+  ASSERT_FALSE(order.empty());
+  EXPECT_LE(order.size(), stats.unknowns);
+  std::mt19937 random(11);
+  for (double& w : weight) w = 1.0 + 3.0 * std::uniform_real_distribution<double>(0.0, 1.0)(random);
+  const std::vector<std::uint32_t> first = order;
+  const RegionSolution again = solveRegion(region, input, seamT, h, nullptr, weight, 0.0, false, 0.0, &order);
+  EXPECT_EQ(order, first) << "the same pattern keeps its order";
+  const RegionSolution fresh = solveRegion(region, input, seamT, h, nullptr, weight, 0.0, false, 0.0);
+  EXPECT_LE(maxCornerDistance(again.cornerUV, fresh.cornerUV), 1e-12);
+  EXPECT_EQ(again.seamT, fresh.seamT);
+  std::vector<std::uint32_t> other(first.rbegin(), first.rend());
+  other.insert(other.begin(), {stats.unknowns + 5, 0xFFFFFFF0u});
+  const RegionSolution reordered = solveRegion(region, input, seamT, h, nullptr, weight, 0.0, false, 0.0, &other);
+  EXPECT_LE(maxCornerDistance(reordered.cornerUV, fresh.cornerUV), 1e-9);
+  EXPECT_EQ(reordered.seamT, fresh.seamT);
+  EXPECT_TRUE(measureSeams(region.mesh, region.topology, region.cut, again.cornerUV).isSeamless());
 }
 
 // Small holes are held closed in a local re-solve only when the global solve closed them

@@ -513,12 +513,13 @@ void evaluateRegion(const RegionProblem& p, const Reduction& system, const std::
 /// Solves the local system (when it has unknowns), evaluates the map on the region's wedges and
 /// puts the locked corners back exactly as in the input.
 RegionSolution solveRegionSystem(const RegionProblem& p, const Reduction& system, const std::vector<Complex>& seamT,
-                                 RefineStats& local) {
+                                 RefineStats& local, std::vector<std::uint32_t>* firstOrder = nullptr) {
   RegionSolution out;
   std::vector<Complex> x;
   if (system.numUnknowns() > 0) {
     RoundOptions roundOptions;
     roundOptions.dropUnsolvable = false;  // a region's failure is the refinement's, reported whole
+    roundOptions.firstOrder = firstOrder;
     const SeamlessSolution solution = solveSeamless(p.basis, system, roundOptions);
     x = solution.unknowns;
     local.systemNonzeros = solution.stats.systemNonzeros;
@@ -647,7 +648,7 @@ RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerU
                                double edgeLength, RefineStats* stats, const std::vector<double>& faceWeight,
                                double coneWeightRadius, bool keepTranslations, double spacing,
                                std::vector<std::uint8_t>* ownUnknown, double maxColumnFraction,
-                               double closeHolesWithin) {
+                               double closeHolesWithin, std::vector<std::uint32_t>* firstOrder = nullptr) {
   const std::uint32_t rf = region.topology.numFaces();
   const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
   if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
@@ -698,7 +699,7 @@ RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerU
       if (ownUnknown) *ownUnknown = std::move(space.ownUnknown);
     }
   } else {
-    out = solveRegionSystem(problem, buildSystem(freeSeams()), seamT, local);
+    out = solveRegionSystem(problem, buildSystem(freeSeams()), seamT, local, firstOrder);
   }
   if (stats) {
     stats->unknowns = local.unknowns;
@@ -717,9 +718,10 @@ RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerU
 RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<Complex>& seamT, double edgeLength,
                            RefineStats* stats, const std::vector<double>& faceWeight,
-                           double coneWeightRadius, bool keepTranslations, double closeHolesWithin) {
+                           double coneWeightRadius, bool keepTranslations, double closeHolesWithin,
+                           std::vector<std::uint32_t>* firstOrder) {
   return solveRegionWith(region, cornerUV, seamT, edgeLength, stats, faceWeight, coneWeightRadius, keepTranslations,
-                         0.0, nullptr, 0.0, closeHolesWithin);
+                         0.0, nullptr, 0.0, closeHolesWithin, firstOrder);
 }
 
 RegionSolution solveRegionInSplines(const RegionMesh& region, const WedgeMap& cornerUV,

@@ -255,12 +255,16 @@ struct RegionSolution {
 /// two cones in the region can put them on one point). closeHolesWithin > 0: the loop translations
 /// of the holes within it that the region holds whole stay as the input has them, as
 /// ParamOptions::closeHolesWithin holds them closed in the global solve (pass the global solve's
-/// value; 0: solved with the seams). Throws SolverError when a factorization fails.
+/// value; 0: solved with the seams). firstOrder (in and out, RoundOptions::firstOrder): the
+/// elimination order of an earlier solve of the same region with the same flags, other weights
+/// (the same pattern), so this one skips the ordering. Throws SolverError when a factorization
+/// fails.
 RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<std::complex<double>>& seamT, double edgeLength,
                            RefineStats* stats = nullptr,
                            const std::vector<double>& faceWeight = {}, double coneWeightRadius = 0.0,
-                           bool keepTranslations = false, double closeHolesWithin = 0.0);
+                           bool keepTranslations = false, double closeHolesWithin = 0.0,
+                           std::vector<std::uint32_t>* firstOrder = nullptr);
 
 /// solveRegion with its translations kept, in the trilinear B-splines of the given spacing (mesh
 /// units) sampled at the region's vertices (core/refine/spline_space.h) instead of one unknown per

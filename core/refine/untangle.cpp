@@ -102,10 +102,13 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
   out.componentImproved.assign(before.size(), 0);
   std::vector<double> weight(region.topology.numFaces(), 1.0);
   const std::vector<std::uint8_t> collapsedBefore = collapsedFaces(region, regionUV, h);
+  // The re-solves change only weights: each reuses the first one's elimination order (one per
+  // kind of solve: with the seams re-rounded or their translations kept).
+  std::vector<std::uint32_t> order, keptOrder;
   for (std::uint32_t solve = 0; solve < std::max(1u, options.maxSolves); ++solve) {
     RefineStats stats;
-    RegionSolution solved =
-        solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, false, options.closeHolesWithin);
+    RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, false,
+                                        options.closeHolesWithin, &order);
     // Seams whose edges all lie in the patch are re-rounded, which can move two cones onto one
     // point (their faces collapse): then solved again with every translation kept.
     const std::vector<std::uint8_t> collapsed = collapsedFaces(region, solved.cornerUV, h);
@@ -113,7 +116,7 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
     for (std::size_t i = 0; i < collapsed.size() && !collapsesMore; ++i) collapsesMore = collapsed[i] > collapsedBefore[i];
     if (collapsesMore) {
       solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, true,
-                           options.closeHolesWithin);
+                           options.closeHolesWithin, &keptOrder);
       ++out.solves;
     }
     ++out.solves;

@@ -188,7 +188,7 @@ std::vector<std::int64_t> restrictOrder(const std::vector<std::uint32_t>& order,
   std::vector<std::int64_t> out;
   out.reserve(freeUnknowns.size());
   for (std::uint32_t j : order) {
-    if (position[j] >= 0) out.push_back(position[j]), position[j] = -1;
+    if (j < numUnknowns && position[j] >= 0) out.push_back(position[j]), position[j] = -1;
   }
   for (std::size_t k = 0; k < freeUnknowns.size(); ++k) {
     if (position[freeUnknowns[k]] >= 0) out.push_back(std::int64_t(k));

@@ -242,7 +242,10 @@ void solveRounded(const LinearSystem& system, const Reduction& reduction,
   // with a few unknowns fixed or freed, and the ordering is half the cost of a factorization.
   FillOrder order;
   if (anchors.empty()) {
-    solveWithFixed(system, fixed, x, "first solve", stats, {}, &order);
+    FillOrder given;
+    if (options.firstOrder) given.unknowns = *options.firstOrder;
+    solveWithFixed(system, fixed, x, "first solve", stats, given, &order);
+    if (options.firstOrder) *options.firstOrder = order.unknowns;
   } else {
     solveAnchored(system, reduction, anchors, fixed, x, stats, &order);
     stats.anchoredComponents = static_cast<std::uint32_t>(anchors.size());

@@ -34,6 +34,11 @@ struct RoundOptions {
   /// when set and not empty; their figures go to lineStats.
   const std::vector<LineConstraint>* lines = nullptr;
   LineConstraintStats* lineStats = nullptr;
+  /// When set, in and out: the first solve's elimination order (unknown ids). A non-empty one is
+  /// used instead of ordering again (a re-solve of a system with the same pattern, other
+  /// values: the foldover repair's stiffened solves); the order used is written back. Unknowns it
+  /// misses go last. Not used by a first solve with anchored components.
+  std::vector<std::uint32_t>* firstOrder = nullptr;
   ProgressFn progress;
 };
 
