@@ -81,10 +81,7 @@ std::vector<std::uint8_t> collapsedFaces(const RegionMesh& region, const WedgeMa
 
 /// The best stiffened solution of one round's region: re-solves while faces stay flipped, each
 /// time multiplying their energy by options.stiffening; per component the solve with the fewest
-/// flips wins (components are independent: everything around them is locked). A cones' round
-/// (targets: the region's cones left a full turn short) ends at the solve that winds all of them
-/// right and is the best so far of every component holding one: its map is what the round keeps
-/// there, and later solves only trade flips.
+/// flips wins (components are independent: everything around them is locked).
 struct RoundSolution {
   RegionSolution solution;
   ComponentsResult components;  ///< of the region
@@ -92,12 +89,9 @@ struct RoundSolution {
   std::uint32_t solves = 0, unknowns = 0;
 };
 
-bool coneMiswound(const Topology& topology, const WedgeMap& uv, VertexId cone);
-
 RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
                             const std::vector<Complex>& regionT, const TriangleMesh& mesh,
-                            const Topology& topology, const CrossField& field, const UntangleOptions& options,
-                            const std::vector<VertexId>& targets) {
+                            const Topology& topology, const CrossField& field, const UntangleOptions& options) {
   const double h = options.edgeLength;
   RoundSolution out;
   out.components = computeComponents(region.topology);
@@ -111,10 +105,6 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
   // The re-solves change only weights: each reuses the first one's elimination order (one per
   // kind of solve: with the seams re-rounded or their translations kept).
   std::vector<std::uint32_t> order, keptOrder;
-  // Per component, the solve whose map it keeps (-1: none, the input).
-  std::vector<std::int32_t> keptFrom(before.size(), -1);
-  std::vector<std::uint8_t> hasTarget(before.size(), 0);
-  for (VertexId t : targets) hasTarget[components.faceComponent[cornerFace(region.topology.vertexCorner(t))]] = 1;
   for (std::uint32_t solve = 0; solve < std::max(1u, options.maxSolves); ++solve) {
     RefineStats stats;
     RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, false,
@@ -149,16 +139,7 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
       }
     }
     for (std::size_t c = 0; c < flips.size(); ++c) {
-      if (flips[c] >= best[c]) continue;
-      best[c] = flips[c];
-      out.componentImproved[c] = 1;
-      keptFrom[c] = static_cast<std::int32_t>(solve);
-    }
-    if (!targets.empty()) {
-      bool done = true;
-      for (VertexId t : targets) done = done && !coneMiswound(region.topology, solved.cornerUV, t);
-      for (std::size_t c = 0; c < flips.size() && done; ++c) done = !hasTarget[c] || keptFrom[c] == static_cast<std::int32_t>(solve);
-      if (done) break;
+      if (flips[c] < best[c]) best[c] = flips[c], out.componentImproved[c] = 1;
     }
     bool anyFlipped = false;
     for (std::uint32_t i = 0; i < state.size(); ++i) {
@@ -930,12 +911,10 @@ struct GroupRepair {
   std::uint32_t solves = 0, unknowns = 0;
 };
 
-/// Cuts a group out of the map (read only) and stiffens it (stiffenRegion); targets (sorted, or
-/// null): the cones of a cones' round, those free in the group passed on.
+/// Cuts a group out of the map (read only) and stiffens it (stiffenRegion).
 GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                         const CutResult& cut, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
-                        const std::vector<FaceId>& faces, const UntangleOptions& options,
-                        const std::vector<VertexId>* targets) {
+                        const std::vector<FaceId>& faces, const UntangleOptions& options) {
   RegionMesh region = extractRegionOnFieldSurface(mesh, topology, field, cut, faces);
   if (options.pinnedVertices) {
     for (VertexId v = 0; v < region.vertexOrigin.size(); ++v) {
@@ -949,15 +928,7 @@ GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, cons
   const WedgeMap regionUV = WedgeMap::fromCorners(region.mesh.triangles, values);
   std::vector<Complex> regionT(region.seamOrigin.size());
   for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
-  std::vector<VertexId> localTargets;
-  if (targets) {
-    for (VertexId v = 0; v < region.vertexOrigin.size(); ++v) {
-      if (region.vertexFree[v] && std::binary_search(targets->begin(), targets->end(), region.vertexOrigin[v])) {
-        localTargets.push_back(v);
-      }
-    }
-  }
-  const RoundSolution solved = stiffenRegion(region, regionUV, regionT, mesh, topology, field, options, localTargets);
+  const RoundSolution solved = stiffenRegion(region, regionUV, regionT, mesh, topology, field, options);
   GroupRepair out;
   out.solves = solved.solves;
   out.unknowns = solved.unknowns;
@@ -1153,14 +1124,14 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   std::vector<VertexId> moved;
   // Re-solves a patch: its components are independent (everything around them is locked), so
   // groups of them are solved in parallel, and a group's factor stays small.
-  const auto solvePatch = [&](const std::vector<FaceId>& patch, const std::vector<VertexId>* targets) {
+  const auto solvePatch = [&](const std::vector<FaceId>& patch) {
     ++stats.rounds;
     stats.patchFaces += patch.size();
     const std::vector<std::vector<FaceId>> groups =
         splitRegion(topology, patch, std::max<std::size_t>(kMinGroupFaces, patch.size() / 8));
     std::vector<GroupRepair> repairs(groups.size());
     parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
-      repairs[g] = repairGroup(mesh, topology, field, cut, cornerUV, seamT, groups[g], options, targets);
+      repairs[g] = repairGroup(mesh, topology, field, cut, cornerUV, seamT, groups[g], options);
     });
     // One assignment per patch: WedgeMap::assign walks every corner of the map.
     std::vector<CornerId> corners;
@@ -1201,7 +1172,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
       rings = std::max(2u, rings / 2);
       patch = grow();
     }
-    solvePatch(patch, nullptr);
+    solvePatch(patch);
     reportProgress(options.progress, "untangle", double(round + 1) / options.maxRounds);
   }
   stepDone(stats.roundSeconds);
@@ -1255,9 +1226,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     }
     std::sort(seeds.begin(), seeds.end());
     seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
-    std::vector<VertexId> sortedTargets = targets;
-    std::sort(sortedTargets.begin(), sortedTargets.end());
-    solvePatch(growFaces(topology, seeds, rings), &sortedTargets);
+    solvePatch(growFaces(topology, seeds, rings));
   }
   for (VertexId c : cut.cones) stats.miswoundConesAfter += judged(c);
   stepDone(stats.coneSeconds);
