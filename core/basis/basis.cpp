@@ -75,18 +75,25 @@ std::vector<double> coneNeighbourhoodWeights(const TriangleMesh& mesh, const std
       buckets[cellOf(mesh.position(v))].push_back(mesh.position(v));
     }
   }
+  // The squared distance from c to its nearest cone, at most radius^2.
+  const auto nearestSquared = [&](const Vec3d& c) {
+    double nearest = radius * radius;
+    if (direct) {
+      for (const Vec3d& p : points) nearest = std::min(nearest, (p - c).squaredNorm());
+      return nearest;
+    }
+    const Cell cell = cellOf(c);
+    for (int d = 0; d < 27; ++d) {
+      const auto it = buckets.find({cell[0] + d % 3 - 1, cell[1] + d / 3 % 3 - 1, cell[2] + d / 9 - 1});
+      if (it == buckets.end()) continue;
+      for (const Vec3d& p : it->second) nearest = std::min(nearest, (p - c).squaredNorm());
+    }
+    return nearest;
+  };
   parallelFor(mesh.numFaces(), 1u << 14, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const Triangle& t = mesh.triangles[f];
-      const Vec3d c = (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;
-      double nearest = radius * radius;
-      for (const Vec3d& p : points) nearest = std::min(nearest, (p - c).squaredNorm());
-      const Cell cell = direct ? Cell{} : cellOf(c);
-      for (int d = 0; d < 27 && !direct; ++d) {
-        const auto it = buckets.find({cell[0] + d % 3 - 1, cell[1] + d / 3 % 3 - 1, cell[2] + d / 9 - 1});
-        if (it == buckets.end()) continue;
-        for (const Vec3d& p : it->second) nearest = std::min(nearest, (p - c).squaredNorm());
-      }
+      const double nearest = nearestSquared((mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0);
       // sqrt(R / r) = (R^2 / r^2)^(1/4); capped where a centroid nearly meets its cone.
       // No cone within the radius: 1 (what the power gives there, without computing it).
       if (nearest < radius * radius) {
