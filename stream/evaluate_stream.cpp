@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <memory>
 
+#include "core/refine/refine.h"
 #include "core/solve/detail_wedges.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
@@ -200,21 +201,40 @@ SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& fol
                                                               const ScratchVoxelBasis& basis,
                                                               const std::vector<std::complex<double>>& coefficients,
                                                               double h, ScratchMap& map,
-                                                              const StreamPassOptions& pass) {
+                                                              const StreamPassOptions& pass, ScratchMapSeeds* seeds) {
   const char* const stage = "smoothed evaluation";
   SmoothedEvaluationStats stats;
   if (field.framePositions.bytes == 0) return stats;
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  const auto seedOf = [&](const std::array<Vec3d, 3>& p, const std::array<Vec2d, 3>& q) {
+    return classifyRefineSeed(parameterAreaRatio(p, q, seeds->edgeLength), seeds->collapseThreshold);
+  };
   std::vector<FaceId> faces;
   {
     ScratchMapFaces all(folder, scratch, map, stage, cacheBytes);
-    all.forEach([&](const MapFace& x) { return foldedForSmoothedEvaluation(x.p, x.q, h); },
-                [&](const MapFace& x, bool folded) {
-                  if (folded) faces.push_back(x.f);
-                });
+    if (seeds) {
+      seeds->faces.clear();
+      seeds->kinds.clear();
+      // Bit 0: folded; the bits above: the seed.
+      all.forEach(
+          [&](const MapFace& x) {
+            return static_cast<std::uint8_t>(foldedForSmoothedEvaluation(x.p, x.q, h) |
+                                              static_cast<unsigned>(seedOf(x.p, x.q)) << 1);
+          },
+          [&](const MapFace& x, std::uint8_t measured) {
+            if (measured & 1) faces.push_back(x.f);
+            if (measured >> 1) seeds->faces.push_back(x.f), seeds->kinds.push_back(static_cast<RefineSeed>(measured >> 1));
+          });
+    } else {
+      all.forEach([&](const MapFace& x) { return foldedForSmoothedEvaluation(x.p, x.q, h); },
+                  [&](const MapFace& x, bool folded) {
+                    if (folded) faces.push_back(x.f);
+                  });
+    }
     folder.countRead(stage, all.cacheBytesRead());
   }
   stats.foldedBefore = faces.size();
+  if (seeds) seeds->known = true;
   if (faces.empty()) return stats;
   const VoxelBasis& voxels = *basis.basis;
   const VoxelGridGeometry& grid = voxels.grid();
@@ -230,6 +250,7 @@ SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& fol
   };
   const auto folded = [&](FaceId f) { return foldedForSmoothedEvaluation(points.points(f), faceValues(f), h); };
   std::vector<VertexId> tried;  // sorted
+  std::vector<VertexId> moved;  // the vertices whose value changed
   for (std::uint32_t round = 0; round < kSmoothedEvaluationRounds && !faces.empty(); ++round) {
     std::vector<VertexId> vertices =
         detail::smoothedCandidates(faces, tried, folded, [&](FaceId f) { return points.triangle(f); });
@@ -257,11 +278,30 @@ SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& fol
           const FaceId g = cornerFace(c);
           keep = keep || movingStretches(points.points(g), faceValues(g), c % 3, value, h);
         });
-        if (!keep) values.set(wedgeStart[v], value);
+        if (!keep) values.set(wedgeStart[v], value), moved.push_back(v);
       }
       stats.keptForStretch += keep;
     }
     detail::finishSmoothedRound(table, vertices, tried, faces, stats);
+  }
+  if (seeds && !moved.empty()) {
+    // The faces around the moved vertices measured again at the values left.
+    std::vector<FaceId> around;
+    for (VertexId v : moved) table.forEachCornerAround(v, [&](CornerId c) { around.push_back(cornerFace(c)); });
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    ScratchMapSeeds merged;
+    std::size_t i = 0;
+    const auto keepOld = [&] { merged.faces.push_back(seeds->faces[i]), merged.kinds.push_back(seeds->kinds[i]), ++i; };
+    for (FaceId f : around) {
+      while (i < seeds->faces.size() && seeds->faces[i] < f) keepOld();
+      if (i < seeds->faces.size() && seeds->faces[i] == f) ++i;
+      const RefineSeed seed = seedOf(points.points(f), faceValues(f));
+      if (seed != RefineSeed::None) merged.faces.push_back(f), merged.kinds.push_back(seed);
+    }
+    while (i < seeds->faces.size()) keepOld();
+    seeds->faces = std::move(merged.faces);
+    seeds->kinds = std::move(merged.kinds);
   }
   values.flush();
   folder.countRead(stage, table.bytesRead() + points.bytesRead() + smooth.bytesRead() + wedgeStart.bytesRead() +

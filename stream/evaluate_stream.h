@@ -100,16 +100,31 @@ ScratchMap evaluateScratchVoxelMap(ScratchFolder& folder, const CleanScratch& sc
                                    const ScratchVoxelBasis& basis, const std::vector<std::complex<double>>& coefficients,
                                    const StreamPassOptions& pass);
 
+enum class RefineSeed : std::uint8_t;
+
+/// The refinement's seeds read off the map by the smoothed evaluation's pass over the faces, so
+/// that selectScratchRefineRegion need not pass over them again: every face whose
+/// classifyRefineSeed of its parameterAreaRatio at edgeLength is not None, at the values the
+/// pass leaves (the faces around the vertices it moved measured again).
+struct ScratchMapSeeds {
+  double edgeLength = 0.0, collapseThreshold = 0.0;  ///< set by the caller
+  bool known = false;                                ///< set once faces and kinds are filled
+  std::vector<FaceId> faces;                         ///< increasing
+  std::vector<RefineSeed> kinds;                     ///< per face, never None
+};
+
 /// evaluateFoldsAtSmoothedSurface out of core on the map evaluateScratchVoxelMap wrote (its
 /// wedge values changed in place): the faces measured in order, then around the vertices moved
 /// through page caches; the smoothed surface is field.framePositions (nothing moves without it).
-/// Equal, bit for bit, to the in-memory pass with the same field. Memory: the folded faces'
-/// vertices and the caches.
+/// Equal, bit for bit, to the in-memory pass with the same field. With seeds, its pass also fills
+/// them (nothing when there is no smoothed surface: seeds->known stays false). Memory: the folded
+/// faces' vertices, the seeds and the caches.
 SmoothedEvaluationStats evaluateScratchFoldsAtSmoothedSurface(ScratchFolder& folder, const CleanScratch& scratch,
                                                               const ScratchField& field,
                                                               const ScratchVoxelBasis& basis,
                                                               const std::vector<std::complex<double>>& coefficients,
                                                               double h, ScratchMap& map,
-                                                              const StreamPassOptions& pass);
+                                                              const StreamPassOptions& pass,
+                                                              ScratchMapSeeds* seeds = nullptr);
 
 }  // namespace seamvox

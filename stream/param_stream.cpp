@@ -179,9 +179,13 @@ void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const 
   r.basisFunctions = vox.basis.basis->numBasisFunctions();
   r.elements = vox.basis.basis->numElements();
   r.fragments = vox.basis.numFragments;
+  // voxloc's refinement seeds from the map: read off by the smoothed evaluation's pass.
+  ScratchMapSeeds mapSeeds;
+  mapSeeds.edgeLength = h;
+  mapSeeds.collapseThreshold = options.refine.collapseThreshold;
   if (options.smoothedEvaluation) {
     r.smoothedEvaluation = evaluateScratchFoldsAtSmoothedSurface(folder, scratch, field, vox.basis, solved.coefficients,
-                                                                 h, solved.map, pass);
+                                                                 h, solved.map, pass, options.voxLoc ? &mapSeeds : nullptr);
   }
   std::vector<std::complex<double>>().swap(solved.coefficients);
 
@@ -208,7 +212,7 @@ void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const 
     if (options.voxLoc && refine.splineCells > 0) refine.splineSpacing = voxelSize / refine.splineCells;
     if (!refine.progress) refine.progress = options.progress;
     const RefineResult refinement =
-        refineScratchNearCones(folder, scratch, field, cut, solved.map, solved.translations, refine, pass);
+        refineScratchNearCones(folder, scratch, field, cut, solved.map, solved.translations, refine, pass, &mapSeeds);
     applyScratchRefinement(folder, refinement, solved.map, &solved.translations, pass);
     r.refined = true;
     r.refine = refinement.stats;

@@ -81,7 +81,7 @@ RegionMesh extractScratchRegion(const CleanScratch& scratch, const ScratchField&
 
 std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
                                               const RefineOptions& options, const StreamPassOptions& pass,
-                                              RefineStats* stats) {
+                                              RefineStats* stats, const ScratchMapSeeds* known) {
   const std::uint64_t nf = scratch.numFaces;
   if (map.cornerWedge.bytes != 3 * nf * sizeof(std::uint32_t)) {
     throw InputError("refine: the map has " + std::to_string(map.cornerWedge.bytes / sizeof(std::uint32_t)) +
@@ -103,7 +103,24 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
   std::vector<FaceId> seeds;
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   PagedCornerTable table(scratch, cacheBytes);
-  if (options.seedFromMap) {
+  const bool seedsKnown = known && known->known && known->edgeLength == options.edgeLength &&
+                          known->collapseThreshold == options.collapseThreshold;
+  if (options.seedFromMap && seedsKnown) {
+    // The marked faces and the known seeds merged, as the pass below merges them.
+    std::size_t nextMarked = 0;
+    for (std::size_t i = 0; i < known->faces.size(); ++i) {
+      const FaceId f = known->faces[i];
+      while (nextMarked < marked.size() && marked[nextMarked] < f) seeds.push_back(marked[nextMarked++]);
+      if (nextMarked < marked.size() && marked[nextMarked] == f) {
+        seeds.push_back(marked[nextMarked++]);
+        continue;
+      }
+      seeds.push_back(f);
+      counts.collapsedFaces += known->kinds[i] == RefineSeed::Collapsed;
+      counts.flippedFaces += known->kinds[i] == RefineSeed::Flipped;
+    }
+    seeds.insert(seeds.end(), marked.begin() + static_cast<std::ptrdiff_t>(nextMarked), marked.end());
+  } else if (options.seedFromMap) {
     ScratchMapFaces faces(folder, scratch, map, "refine region", cacheBytes);
     std::size_t nextMarked = 0;
     faces.forEach(
@@ -248,14 +265,14 @@ class ScratchRefineSource {
 RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                     const ScratchCut& cut, ScratchMap& map,
                                     const std::vector<std::complex<double>>& seamT, const RefineOptions& options,
-                                    const StreamPassOptions& pass) {
+                                    const StreamPassOptions& pass, const ScratchMapSeeds* mapSeeds) {
   const auto start = std::chrono::steady_clock::now();
   if (seamT.size() != cut.seams.size()) {
     throw InputError("refine: " + std::to_string(seamT.size()) + " translations for " +
                      std::to_string(cut.seams.size()) + " seams");
   }
   RefineResult out;
-  std::vector<FaceId> faces = selectScratchRefineRegion(folder, scratch, map, options, pass, &out.stats);
+  std::vector<FaceId> faces = selectScratchRefineRegion(folder, scratch, map, options, pass, &out.stats, mapSeeds);
   out.stats.secondsRegion = secondsSince(start);
   const std::vector<VertexId> cones = listedCones(cut.cones, scratch.numVertices);
   ScratchRefineSource source(folder, scratch, field, cut, map, pass);

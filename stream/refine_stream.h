@@ -26,10 +26,12 @@ RegionMesh extractScratchRegion(const CleanScratch& scratch, const ScratchField&
 /// map collapses or flips (with options.seedFromMap; one pass over the faces, their corners'
 /// wedges in order, positions and values through page caches), then options.rings rings of
 /// neighbours by fan walks. Equal to selectRefineRegion in memory, with its counts in stats.
-/// Memory: the region. InputError on a marked face out of range or a bad edge length.
+/// known: the seeds the smoothed evaluation read off this map (used instead of the pass when they
+/// are known at options' edge length and threshold). Memory: the region. InputError on a marked
+/// face out of range or a bad edge length.
 std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const CleanScratch& scratch, const ScratchMap& map,
                                               const RefineOptions& options, const StreamPassOptions& pass,
-                                              RefineStats* stats = nullptr);
+                                              RefineStats* stats = nullptr, const ScratchMapSeeds* known = nullptr);
 
 /// refineNearCones and applyRefinement's corners on the out-of-core map: the first region by
 /// selectScratchRefineRegion, then the same rounds (core/refine/detail_refine.h) with the regions
@@ -39,11 +41,11 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
 /// result has no corners: its translations still go in with applyScratchRefinement. The map,
 /// translations and figures equal those of refineNearCones and applyRefinement in memory.
 /// Memory: a batch of corners, the solves, the face lists of the region and a flag per vertex
-/// (within a sixteenth of pass.memoryBytes, else on disk).
+/// (within a sixteenth of pass.memoryBytes, else on disk). mapSeeds: see selectScratchRefineRegion.
 RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                     const ScratchCut& cut, ScratchMap& map,
                                     const std::vector<std::complex<double>>& seamT, const RefineOptions& options,
-                                    const StreamPassOptions& pass);
+                                    const StreamPassOptions& pass, const ScratchMapSeeds* mapSeeds = nullptr);
 
 /// applyRefinement on the out-of-core map: the refined corners' wedges take their values in place
 /// (a wedge whose corners disagree is split as WedgeMap::assign splits it, the new wedges appended

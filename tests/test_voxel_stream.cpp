@@ -400,6 +400,56 @@ TEST(VoxelStream, VoxMapEqualsTheInMemorySolve) {
   EXPECT_GT(islandFacesSeen, 0u);  // the torus's islands
 }
 
+// The refinement's seeds read off the map by the smoothed evaluation's pass (the faces around the
+// vertices it moved measured again) select the region that a pass over the re-evaluated map
+// selects, marked faces first as there; seeds for another edge length are not taken.
+TEST(VoxelStream, SeedsReadBySmoothedEvaluationEqualAPassAfterIt) {
+  const NamedMeshes meshes = testing::stageTestMeshes(29);
+  std::uint64_t moved = 0, seeded = 0, changedByMoves = 0;
+  forEachCleaned(meshes, [&](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    const Inputs in = prepareInputs(folder, scratch, cleaned, 32);
+    ScratchVoxelBasis basis = buildScratchVoxelBasis(folder, scratch, in.field, in.cut, in.options, kTinyPass);
+    ScratchVoxelSolution solved = solveScratchVoxelMap(folder, scratch, in.cut, basis, RoundOptions{}, kTinyPass);
+    RefineOptions refine;
+    refine.edgeLength = in.options.edgeLength;
+    refine.seedFromMap = true;
+    refine.rings = 0;
+    const std::vector<FaceId> seedsBefore = selectScratchRefineRegion(folder, scratch, solved.map, refine, kTinyPass);
+    ScratchMapSeeds seeds;
+    seeds.edgeLength = refine.edgeLength;
+    seeds.collapseThreshold = refine.collapseThreshold;
+    const SmoothedEvaluationStats stats = evaluateScratchFoldsAtSmoothedSurface(
+        folder, scratch, in.field, basis, solved.coefficients, refine.edgeLength, solved.map, kTinyPass, &seeds);
+    ASSERT_TRUE(seeds.known);
+    ASSERT_EQ(seeds.kinds.size(), seeds.faces.size());
+    moved += stats.vertices - stats.keptForStretch;
+    // Marked faces: every 13th, and some of the seeds.
+    for (FaceId f = 0; f < scratch.numFaces; f += 13) refine.markedFaces.push_back(f);
+    for (std::size_t i = 0; i < seeds.faces.size(); i += 3) refine.markedFaces.push_back(seeds.faces[i]);
+    for (const std::uint32_t rings : {0u, 2u}) {
+      SCOPED_TRACE("rings " + std::to_string(rings));
+      refine.rings = rings;
+      RefineStats a, b, c;
+      const std::vector<FaceId> byPass = selectScratchRefineRegion(folder, scratch, solved.map, refine, kTinyPass, &a);
+      EXPECT_EQ(selectScratchRefineRegion(folder, scratch, solved.map, refine, kTinyPass, &b, &seeds), byPass);
+      EXPECT_EQ(std::make_tuple(b.markedFaces, b.collapsedFaces, b.flippedFaces, b.regionFaces),
+                std::make_tuple(a.markedFaces, a.collapsedFaces, a.flippedFaces, a.regionFaces));
+      ScratchMapSeeds other;
+      other.edgeLength = 2.0 * refine.edgeLength;
+      other.collapseThreshold = refine.collapseThreshold;
+      other.known = true;  // and empty: taken, it would drop every seed
+      EXPECT_EQ(selectScratchRefineRegion(folder, scratch, solved.map, refine, kTinyPass, &c, &other), byPass);
+      if (rings == 0) seeded += a.collapsedFaces + a.flippedFaces;
+    }
+    refine.rings = 0;
+    refine.markedFaces.clear();
+    changedByMoves += selectScratchRefineRegion(folder, scratch, solved.map, refine, kTinyPass, nullptr, &seeds) != seedsBefore;
+  });
+  EXPECT_GT(moved, 0u);           // the smoothed evaluation moved vertices
+  EXPECT_GT(seeded, 0u);          // faces collapsed or flipped
+  EXPECT_GT(changedByMoves, 0u);  // and the moves changed the seeds (measured again around them)
+}
+
 TEST(VoxelStream, ElementsEqualTheInMemoryBasis) {
   const NamedMeshes meshes = testing::stageTestMeshes(13);
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
