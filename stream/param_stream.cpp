@@ -8,6 +8,7 @@
 #include <chrono>
 #include <complex>
 #include <future>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -162,7 +163,7 @@ void measureScratchMap(ScratchFolder& folder, const CleanScratch& scratch, const
 void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                       const StreamParamOptions& options, const StreamPassOptions& pass, StageMeter& meter,
                       const std::vector<FaceId>& islands, ScratchVoxelClip* clip, StreamParamResult& r, ScratchMap& map,
-                      std::vector<std::complex<double>>& translations) {
+                      std::vector<std::complex<double>>& translations, std::optional<std::vector<FaceId>>& flipCandidates) {
   const double h = r.edgeLength;
   const VoxelBasisOptions basisOptions = voxelBasisOptions(options, h, islands);
   r.islandFaces = basisOptions.leftOut.size();
@@ -201,6 +202,7 @@ void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const 
   }
   vox.basis = ScratchVoxelBasis();  // the grid-sized basis, before the local solves
   r.markedFaces = seeds.size();
+  std::vector<FaceId> changed;  // by the refinement
   if (options.voxLoc || !seeds.empty()) {
     RefineOptions refine = options.refine;
     refine.edgeLength = h;
@@ -212,7 +214,8 @@ void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const 
     if (options.voxLoc && refine.splineCells > 0) refine.splineSpacing = voxelSize / refine.splineCells;
     if (!refine.progress) refine.progress = options.progress;
     const RefineResult refinement =
-        refineScratchNearCones(folder, scratch, field, cut, solved.map, solved.translations, refine, pass, &mapSeeds);
+        refineScratchNearCones(folder, scratch, field, cut, solved.map, solved.translations, refine, pass, &mapSeeds,
+                               &changed);
     applyScratchRefinement(folder, refinement, solved.map, &solved.translations, pass);
     r.refined = true;
     r.refine = refinement.stats;
@@ -220,6 +223,18 @@ void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const 
   }
   map = solved.map;
   translations = std::move(solved.translations);
+  // The faces the map may flip now, for the repair to read instead of every face: the seeds'
+  // flipped faces and the faces the refinement changed (below a positive threshold every
+  // flipped face is a flipped seed).
+  flipCandidates.reset();
+  if (mapSeeds.known && mapSeeds.collapseThreshold > 0.0) {
+    std::vector<FaceId> flipped, candidates;
+    for (std::size_t i = 0; i < mapSeeds.faces.size(); ++i) {
+      if (mapSeeds.kinds[i] == RefineSeed::Flipped) flipped.push_back(mapSeeds.faces[i]);
+    }
+    std::set_union(flipped.begin(), flipped.end(), changed.begin(), changed.end(), std::back_inserter(candidates));
+    flipCandidates = std::move(candidates);
+  }
 }
 
 }  // namespace
@@ -323,6 +338,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   if (scratch.islands) clipAhead(*scratch.islands);
   std::optional<std::vector<FaceId>> islands;
   std::optional<ScratchVoxelClip> firstClip;
+  std::optional<std::vector<FaceId>> flipCandidates;  // see solveScratchPass
   for (;;) {
     ++r.conePasses;
     cut = cutScratchToDisk(folder, scratch, singularities, early, islands || scratch.islands ? nullptr : &treeIslands);
@@ -343,7 +359,8 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
       clip = &*firstClip;
       r.passSeconds.emplace_back("basis: voxel clip (beside the cut)", a.clipSeconds);
     }
-    solveScratchPass(folder, scratch, field, cut, options, pass, meter, *islands, clip, r, map, translations);
+    solveScratchPass(folder, scratch, field, cut, options, pass, meter, *islands, clip, r, map, translations,
+                     flipCandidates);
     firstClip.reset();
 
     const bool passesLeft = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
@@ -381,12 +398,14 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
         if (!suspects.empty()) {
           const FacesNearPoints near = facesNearConePairs(scratch, suspects, coincidentDistance, pass);
           nearCones = untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass, &near).untangle;
+          flipCandidates.reset();  // that repair changed faces beyond them
           if (nextPass(scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, coincidentDistance, pass))) {
             continue;
           }
         }
       }
-      ScratchUntangleStats repaired = untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass);
+      ScratchUntangleStats repaired = untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle,
+                                                           pass, nullptr, flipCandidates ? &*flipCandidates : nullptr);
       addEarlierRepair(repaired.untangle, nearCones);
       resolveScratchLeftoverFlips(folder, scratch, field, cut, map, translations, options.refine, untangle, pass, repaired);
       r.untangled = true;

@@ -171,11 +171,12 @@ class ScratchRefineSource {
   };
 
   ScratchRefineSource(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
-                      const ScratchCut& cut, ScratchMap& map, const StreamPassOptions& pass)
+                      const ScratchCut& cut, ScratchMap& map, const StreamPassOptions& pass,
+                      std::vector<FaceId>* changedFaces)
       : folder_(folder), scratch_(scratch), field_(field), cut_(cut), map_(map), pass_(pass),
         cacheBytes_(pageCacheBytes(pass.memoryBytes)), table_(scratch, cacheBytes_),
         points_(scratch, scratch.positions, cacheBytes_),
-        flags_(folder, scratch.numVertices, pass.memoryBytes / 16, "refine"), tally_(flags_) {
+        flags_(folder, scratch.numVertices, pass.memoryBytes / 16, "refine"), tally_(flags_), changed_(changedFaces) {
     openMap();
   }
 
@@ -195,6 +196,9 @@ class ScratchRefineSource {
     fresh.erase(std::remove_if(fresh.begin(), fresh.end(), [](const detail::SolvedCorner& s) { return !s.free; }),
                 fresh.end());
     tally_.addFreed(table_, fresh);
+    if (changed_) {
+      for (const detail::SolvedCorner& c : fresh) changed_->push_back(cornerFace(c.corner));
+    }
     closeMap();  // the readers' cached pages of the map are stale once it changes
     applyScratchCorners(folder_, fresh, map_, pass_);
     openMap();
@@ -258,6 +262,7 @@ class ScratchRefineSource {
   std::uint64_t closedBytes_ = 0;
   std::optional<MapValues> values_;
   std::optional<ReaderPool<GroupReaders>> pool_;
+  std::vector<FaceId>* changed_ = nullptr;  ///< the faces of the corners given new values, when wanted
 };
 
 }  // namespace
@@ -265,7 +270,8 @@ class ScratchRefineSource {
 RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                     const ScratchCut& cut, ScratchMap& map,
                                     const std::vector<std::complex<double>>& seamT, const RefineOptions& options,
-                                    const StreamPassOptions& pass, const ScratchMapSeeds* mapSeeds) {
+                                    const StreamPassOptions& pass, const ScratchMapSeeds* mapSeeds,
+                                    std::vector<FaceId>* changedFaces) {
   const auto start = std::chrono::steady_clock::now();
   if (seamT.size() != cut.seams.size()) {
     throw InputError("refine: " + std::to_string(seamT.size()) + " translations for " +
@@ -275,8 +281,12 @@ RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& s
   std::vector<FaceId> faces = selectScratchRefineRegion(folder, scratch, map, options, pass, &out.stats, mapSeeds);
   out.stats.secondsRegion = secondsSince(start);
   const std::vector<VertexId> cones = listedCones(cut.cones, scratch.numVertices);
-  ScratchRefineSource source(folder, scratch, field, cut, map, pass);
+  ScratchRefineSource source(folder, scratch, field, cut, map, pass, changedFaces);
   detail::refineRounds(source, cones, seamT, options, std::move(faces), out);
+  if (changedFaces) {
+    std::sort(changedFaces->begin(), changedFaces->end());
+    changedFaces->erase(std::unique(changedFaces->begin(), changedFaces->end()), changedFaces->end());
+  }
   folder.countRead("refine", source.bytesRead());
   reportProgress(options.progress, "refine", 1.0);
   out.stats.secondsTotal = secondsSince(start);

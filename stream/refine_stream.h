@@ -42,10 +42,13 @@ std::vector<FaceId> selectScratchRefineRegion(ScratchFolder& folder, const Clean
 /// translations and figures equal those of refineNearCones and applyRefinement in memory.
 /// Memory: a batch of corners, the solves, the face lists of the region and a flag per vertex
 /// (within a sixteenth of pass.memoryBytes, else on disk). mapSeeds: see selectScratchRefineRegion.
+/// changedFaces, when given: the faces of every corner the rounds gave a new value (increasing);
+/// no other face of the map changes.
 RefineResult refineScratchNearCones(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field,
                                     const ScratchCut& cut, ScratchMap& map,
                                     const std::vector<std::complex<double>>& seamT, const RefineOptions& options,
-                                    const StreamPassOptions& pass, const ScratchMapSeeds* mapSeeds = nullptr);
+                                    const StreamPassOptions& pass, const ScratchMapSeeds* mapSeeds = nullptr,
+                                    std::vector<FaceId>* changedFaces = nullptr);
 
 /// applyRefinement on the out-of-core map: the refined corners' wedges take their values in place
 /// (a wedge whose corners disagree is split as WedgeMap::assign splits it, the new wedges appended

@@ -4,6 +4,7 @@
 // same wedges and values, also where a wedge is split. Tiny page caches, small solve groups.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <complex>
 #include <random>
 #include <string>
@@ -102,13 +103,23 @@ void damageMaps(ScratchFolder& folder, const Topology& topology, WedgeMap& map, 
   applyScratchRefinement(folder, edits, streamed, nullptr, kTinyPass);
 }
 
+// Every corner's value in a scratch map.
+std::vector<Vec2d> cornerValues(ScratchFolder& folder, const ScratchMap& map) {
+  const std::vector<std::uint32_t> wedge = testing::readRecords<std::uint32_t>(folder, map.cornerWedge);
+  const std::vector<Vec2d> values = testing::readRecords<Vec2d>(folder, map.wedgeValues);
+  std::vector<Vec2d> out(wedge.size());
+  for (std::size_t c = 0; c < wedge.size(); ++c) out[c] = values.at(wedge[c]);
+  return out;
+}
+
 // voxloc (marked faces and the map's bad faces seed, rounds), vox (the inconsistent functions'
 // faces only, one round: the faces outside are counted by a pass over the files) and voxloc with
 // collapses not seeded (the pass counts the faces outside too); voxloc without rings, so that bad
 // faces stay at the region's border and later rounds grow patches around them.
 TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
   const NamedMeshes meshes = testing::stageTestMeshes(31);
-  std::uint64_t solves = 0, laterRounds = 0, outsideCounted = 0, batched = 0, failedSolves = 0, splineMoved = 0;
+  std::uint64_t solves = 0, laterRounds = 0, outsideCounted = 0, batched = 0, failedSolves = 0, splineMoved = 0,
+                changedCorners = 0;
   forEachCleaned(meshes, [&](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
     const testing::StageInputs in = testing::prepareStageInputs(folder, scratch, cleaned, 32, kTinyPass);
     ParamOptions param;
@@ -143,9 +154,23 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
       }
       const RefineResult want = refineNearCones(cleaned.mesh, cleaned.topology, in.inMemoryField, in.inMemoryCut,
                                                 inMemoryMap, expected.param.translations, options);
+      const std::vector<Vec2d> valuesBefore = cornerValues(folder, solved.map);
+      std::vector<FaceId> changed;
       const RefineResult got = refineScratchNearCones(folder, scratch, in.field, in.cut, solved.map,
-                                                      solved.translations, options, kTinyPass);
+                                                      solved.translations, options, kTinyPass, nullptr, &changed);
       expectSameResult(got, want);
+      // The faces it says it changed: increasing, and every corner with a new value on one.
+      EXPECT_TRUE(std::is_sorted(changed.begin(), changed.end()) &&
+                  std::adjacent_find(changed.begin(), changed.end()) == changed.end());
+      const std::vector<Vec2d> valuesAfter = cornerValues(folder, solved.map);
+      ASSERT_EQ(valuesAfter.size(), valuesBefore.size());
+      std::size_t unlisted = 0;
+      for (CornerId k = 0; k < valuesAfter.size(); ++k) {
+        if (valuesAfter[k] == valuesBefore[k]) continue;
+        ++changedCorners;
+        unlisted += !std::binary_search(changed.begin(), changed.end(), cornerFace(k));
+      }
+      EXPECT_EQ(unlisted, 0u);
       failedSolves += want.stats.failedSolves;
       splineMoved += want.stats.splineVertices;
       if (c.failSome) EXPECT_NE(want.stats.failedSolveReason.find("test hook"), std::string::npos);
@@ -170,6 +195,7 @@ TEST(RefineStream, RefinementEqualsTheInMemoryOne) {
   EXPECT_GT(failedSolves, 0u);
   EXPECT_GT(outsideCounted, 0u);
   EXPECT_GT(splineMoved, 0u);
+  EXPECT_GT(changedCorners, 0u);
 }
 
 // Corners given values that split their wedges (part of a wedge, or two values in one wedge):
