@@ -779,9 +779,10 @@ class CleanPass {
       for (const VertexId w : r.around) r.values.push_back((r.positions[w].cast<double>() - p).squaredNorm());
       typical = shortest = 0.0;
       if (r.values.empty()) return;
-      std::sort(r.values.begin(), r.values.end());
-      typical = std::sqrt(r.values[r.values.size() / 2]);
-      shortest = std::sqrt(r.values.front());
+      shortest = std::sqrt(*std::min_element(r.values.begin(), r.values.end()));
+      const auto middle = r.values.begin() + static_cast<std::ptrdiff_t>(r.values.size() / 2);
+      std::nth_element(r.values.begin(), middle, r.values.end());
+      typical = std::sqrt(*middle);
     };
     const auto measureBlock = [&](Block& block, std::uint64_t first) {
       block.first = first;
@@ -847,9 +848,13 @@ class CleanPass {
               }
               around.push_back(typical);
             }
-            std::sort(around.begin(), around.end());
-            const double scale = around[around.size() / 2], least = current.shortest[i];
-            if (least > kSpikeRatio * around.front() && scale > 0.0 && least > kSpikeRatio * scale) {
+            // The median is at least the least value: most vertices are decided without it.
+            const double least = current.shortest[i];
+            if (!(least > kSpikeRatio * *std::min_element(around.begin(), around.end()))) continue;
+            const auto middle = around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2);
+            std::nth_element(around.begin(), middle, around.end());
+            const double scale = *middle;
+            if (scale > 0.0 && least > kSpikeRatio * scale) {
               std::lock_guard<std::mutex> lock(spikesMutex);
               spikes.push_back(static_cast<VertexId>(first + i));
             }
