@@ -28,58 +28,56 @@ struct WedgeReaders {
   }
 };
 
-/// Wedges of a block of vertices [first, first + count): per vertex its wedges and corners
-/// (prefix sums), per wedge its smallest corner, per corner its wedge.
+/// Wedges of a block of vertices [first, first + count), walked once, in chunks of kChunk
+/// vertices each gathered on its own: per vertex its wedges and corners (prefix sums over the
+/// block), per chunk its wedges' smallest corners and its corners with their chunk-local wedge.
 struct WedgeBlock {
-  std::vector<std::uint32_t> wedgeStart, cornerStart;  // count + 1, block-local
-  std::vector<CornerId> smallest;                      // per wedge
-  std::vector<std::pair<CornerId, std::uint32_t>> cornerWedge;  // block-local wedge
-  std::vector<Vec2d> values;                            // per wedge
+  static constexpr std::uint32_t kChunk = 4096;
+  struct Chunk {
+    std::vector<CornerId> smallest;                               // per wedge
+    std::vector<std::pair<CornerId, std::uint32_t>> cornerWedge;  // chunk-local wedge
+    std::uint32_t firstWedge = 0;                                 // in the block
+  };
+  std::vector<std::uint32_t> wedgeStart;  // count + 1, block-local
+  std::vector<Chunk> chunks;
+  std::vector<Vec2d> values;  // per wedge of the block
+  std::uint32_t numWedges() const { return wedgeStart.back(); }
 };
 
 void walkBlock(VertexId first, std::uint32_t count, ReaderPool<WedgeReaders>& pool, WedgeBlock& block) {
   block.wedgeStart.assign(count + 1, 0);
-  block.cornerStart.assign(count + 1, 0);
-  parallelFor(count, 4096, [&](const IndexRange& range) {
+  block.chunks.resize((count + WedgeBlock::kChunk - 1) / WedgeBlock::kChunk);
+  parallelFor(block.chunks.size(), 1, [&](const IndexRange& range) {
     auto r = pool.take();
-    for (std::uint32_t i = range.begin(); i != range.end(); ++i) {
-      std::uint32_t wedges = 0, corners = 0;
-      bool open = false;
-      detail::walkWedges(r->table, r->cut, first + i, [&](CornerId c) {
-        if (c == kInvalidId) {
-          open = false;
-          return;
-        }
-        ++corners;
-        if (!open) open = true, ++wedges;
-      });
-      block.wedgeStart[i + 1] = wedges;
-      block.cornerStart[i + 1] = corners;
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      WedgeBlock::Chunk& chunk = block.chunks[k];
+      chunk.smallest.clear();
+      chunk.cornerWedge.clear();
+      const std::uint32_t begin = static_cast<std::uint32_t>(k) * WedgeBlock::kChunk;
+      for (std::uint32_t i = begin; i < std::min(count, begin + WedgeBlock::kChunk); ++i) {
+        const std::size_t wedgesBefore = chunk.smallest.size();
+        bool open = false;
+        detail::walkWedges(r->table, r->cut, first + i, [&](CornerId c) {
+          if (c == kInvalidId) {
+            open = false;
+            return;
+          }
+          if (!open) {
+            open = true;
+            chunk.smallest.push_back(c);
+          } else {
+            chunk.smallest.back() = std::min(chunk.smallest.back(), c);
+          }
+          chunk.cornerWedge.emplace_back(c, static_cast<std::uint32_t>(chunk.smallest.size() - 1));
+        });
+        block.wedgeStart[i + 1] = static_cast<std::uint32_t>(chunk.smallest.size() - wedgesBefore);
+      }
     }
   });
-  for (std::uint32_t i = 0; i < count; ++i) {
-    block.wedgeStart[i + 1] += block.wedgeStart[i];
-    block.cornerStart[i + 1] += block.cornerStart[i];
+  for (std::uint32_t i = 0; i < count; ++i) block.wedgeStart[i + 1] += block.wedgeStart[i];
+  for (std::size_t k = 0; k < block.chunks.size(); ++k) {
+    block.chunks[k].firstWedge = block.wedgeStart[k * WedgeBlock::kChunk];
   }
-  block.smallest.assign(block.wedgeStart[count], kInvalidId);
-  block.cornerWedge.resize(block.cornerStart[count]);
-  parallelFor(count, 4096, [&](const IndexRange& range) {
-    auto r = pool.take();
-    for (std::uint32_t i = range.begin(); i != range.end(); ++i) {
-      std::uint32_t w = block.wedgeStart[i], k = block.cornerStart[i];
-      bool open = false;
-      detail::walkWedges(r->table, r->cut, first + i, [&](CornerId c) {
-        if (c == kInvalidId) {
-          if (open) ++w;
-          open = false;
-          return;
-        }
-        open = true;
-        block.cornerWedge[k++] = {c, w};
-        block.smallest[w] = std::min(block.smallest[w], c);
-      });
-    }
-  });
 }
 
 }  // namespace
@@ -109,31 +107,38 @@ ScratchMap evaluateScratchVoxelMap(ScratchFolder& folder, const CleanScratch& sc
   for (std::uint64_t first = 0; first < scratch.numVertices; first += blockVertices) {
     const std::uint32_t count = static_cast<std::uint32_t>(std::min(blockVertices, scratch.numVertices - first));
     walkBlock(static_cast<VertexId>(first), count, pool, block);
-    if (out.numWedges + block.smallest.size() >= kInvalidId) {
+    if (out.numWedges + block.numWedges() >= kInvalidId) {
       throw InputError("voxel map: more than 2^32 wedges");
     }
     // Each wedge evaluated at its smallest corner, as VoxelBasis::evaluateCorners does.
-    block.values.assign(block.smallest.size(), Vec2d::Zero());
-    parallelFor(block.smallest.size(), 4096, [&](const IndexRange& range) {
+    block.values.assign(block.numWedges(), Vec2d::Zero());
+    parallelFor(block.chunks.size(), 1, [&](const IndexRange& range) {
       auto r = pool.take();
-      for (std::size_t w = range.begin(); w != range.end(); ++w) {
-        const CornerId c = block.smallest[w];
-        const FaceId f = cornerFace(c);
-        const Vec3d x = grid.toGrid(r->position[r->table.vertex(c)].cast<double>());
-        const std::uint32_t begin = r->faceStart[f], end = r->faceStart[std::uint64_t(f) + 1];
-        const std::uint32_t e = voxels.nearestElement(x, end - begin, [&](std::uint32_t i) { return r->element[begin + i]; });
-        if (e == kInvalidId) continue;
-        const std::complex<double> q = voxels.evaluateAt(e, x, coefficients);
-        block.values[w] = Vec2d(q.real(), q.imag());
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        const WedgeBlock::Chunk& chunk = block.chunks[k];
+        for (std::size_t j = 0; j < chunk.smallest.size(); ++j) {
+          const CornerId c = chunk.smallest[j];
+          const FaceId f = cornerFace(c);
+          const Vec3d x = grid.toGrid(r->position[r->table.vertex(c)].cast<double>());
+          const std::uint32_t begin = r->faceStart[f], end = r->faceStart[std::uint64_t(f) + 1];
+          const std::uint32_t e =
+              voxels.nearestElement(x, end - begin, [&](std::uint32_t i) { return r->element[begin + i]; });
+          if (e == kInvalidId) continue;
+          const std::complex<double> q = voxels.evaluateAt(e, x, coefficients);
+          block.values[chunk.firstWedge + j] = Vec2d(q.real(), q.imag());
+        }
       }
     });
     for (std::uint32_t i = 0; i < count; ++i) {
       const std::uint32_t start = static_cast<std::uint32_t>(out.numWedges + block.wedgeStart[i]);
       starts.write(&start, sizeof(start));
     }
-    for (const auto& [c, w] : block.cornerWedge) cornerWedge.set(c, static_cast<std::uint32_t>(out.numWedges + w));
+    for (const WedgeBlock::Chunk& chunk : block.chunks) {
+      const std::uint32_t base = static_cast<std::uint32_t>(out.numWedges + chunk.firstWedge);
+      for (const auto& [c, w] : chunk.cornerWedge) cornerWedge.set(c, base + w);
+    }
     values.write(block.values.data(), block.values.size() * sizeof(Vec2d));
-    out.numWedges += block.smallest.size();
+    out.numWedges += block.numWedges();
   }
   const std::uint32_t end = static_cast<std::uint32_t>(out.numWedges);
   starts.write(&end, sizeof(end));
