@@ -1,6 +1,7 @@
 #include "stream/cut_stream.h"
 
 #include <algorithm>
+#include <vector>
 
 #include "core/basis/islands.h"
 #include "core/cut/detail_cut.h"
@@ -15,20 +16,36 @@ namespace {
 
 const char* const kStage = "cut";
 
-/// Per face r | kVisited once the tree reached it (a zero file: none visited).
+/// The cut's per-face, per-corner and per-vertex state held in memory (zeros at first), with
+/// PagedArray's reads and writes.
+template <class T>
+class HeldArray {
+ public:
+  explicit HeldArray(std::uint64_t n) : values_(static_cast<std::size_t>(n), T{}) {}
+  T operator[](std::uint64_t i) const { return values_[i]; }
+  void set(std::uint64_t i, const T& value) { values_[i] = value; }
+  std::uint64_t bytesRead() const { return 0; }
+
+ private:
+  std::vector<T> values_;
+};
+
+/// Per face r | kVisited once the tree reached it (zeros: none visited).
+template <class Bytes>
 struct PagedRotation {
   static constexpr std::uint8_t kVisited = 4;
-  PagedArray<std::uint8_t>& bytes;
+  Bytes& bytes;
   bool visited(FaceId f) { return (bytes[f] & kVisited) != 0; }
   std::uint8_t operator[](FaceId f) { return bytes[f] & 3; }
   void set(FaceId f, std::uint8_t r) { bytes.set(f, static_cast<std::uint8_t>(r | kVisited)); }
 };
 
-/// Per corner while cutting: kUncut once the tree crosses or pruning removes its edge (a zero
-/// file: every edge cut), kTraced once a seam took it.
+/// Per corner while cutting: kUncut once the tree crosses or pruning removes its edge (zeros:
+/// every edge cut), kTraced once a seam took it.
+constexpr std::uint8_t kUncut = 1, kTraced = 2;
+template <class Bytes>
 struct PagedWorkCorners {
-  static constexpr std::uint8_t kUncut = 1, kTraced = 2;
-  PagedArray<std::uint8_t>& bytes;
+  Bytes& bytes;
   bool isCut(CornerId c) { return (bytes[c] & kUncut) == 0; }
   void setCut(CornerId c, bool cut) {
     const std::uint8_t b = bytes[c];
@@ -36,12 +53,13 @@ struct PagedWorkCorners {
   }
 };
 
+template <class Bytes>
 struct PagedTraced {
-  PagedArray<std::uint8_t>& bytes;
-  bool operator[](CornerId c) { return (bytes[c] & PagedWorkCorners::kTraced) != 0; }
+  Bytes& bytes;
+  bool operator[](CornerId c) { return (bytes[c] & kTraced) != 0; }
   void set(CornerId c, bool traced) {
     const std::uint8_t b = bytes[c];
-    bytes.set(c, static_cast<std::uint8_t>(traced ? b | PagedWorkCorners::kTraced : b & ~PagedWorkCorners::kTraced));
+    bytes.set(c, static_cast<std::uint8_t>(traced ? b | kTraced : b & ~kTraced));
   }
 };
 
@@ -52,33 +70,54 @@ std::size_t cutCacheBytes(std::uint64_t memoryBytes) {
   return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 32, std::uint64_t(1) << 15, std::uint64_t(1) << 28));
 }
 
-}  // namespace
+/// The cut's state arrays in memory.
+struct HeldCutState {
+  HeldCutState(std::uint64_t numFaces, std::uint64_t numVertices)
+      : rotation(numFaces), work(3 * numFaces), component(numFaces), degree(numVertices), edgeXor(numVertices) {}
+  HeldArray<std::uint8_t> rotation, work;
+  HeldArray<std::uint32_t> component, degree;
+  HeldArray<CornerId> edgeXor;
+  std::uint64_t bytesRead() const { return 0; }
+};
 
-ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, const ScratchSingularities& singularities,
-                            const StreamPassOptions& pass, const TreeIslands* islands) {
-  const std::uint64_t numFaces = scratch.numFaces, numCorners = 3 * numFaces, numVertices = scratch.numVertices;
-  if (singularities.matching.bytes != numCorners) {
-    throw InputError("cutToDisk: the singularities' matchings (" + std::to_string(singularities.matching.bytes) +
-                     " corners) do not match the mesh (" + std::to_string(numFaces) + " faces)");
+/// The cut's state arrays on sparse scratch files (zeros) through page caches; the files go
+/// with the state.
+struct PagedCutState {
+  PagedCutState(ScratchFolder& f, std::uint64_t numFaces, std::uint64_t numVertices, std::size_t cacheBytes)
+      : folder(f),
+        files{f.zeroFile(numFaces), f.zeroFile(3 * numFaces), f.zeroFile(4 * numFaces), f.zeroFile(4 * numVertices),
+              f.zeroFile(4 * numVertices)},
+        rotation(f, files[0], kStage, cacheBytes), work(f, files[1], kStage, cacheBytes),
+        component(f, files[2], kStage, cacheBytes), degree(f, files[3], kStage, cacheBytes),
+        edgeXor(f, files[4], kStage, cacheBytes) {}
+  ~PagedCutState() {
+    for (const ScratchFile& file : files) folder.remove(file);
   }
-  ScratchCut cut;
-  cut.cones = singularities.cones;
-  for (VertexId v : cut.cones) {
-    if (v >= numVertices) throw InputError("cutToDisk: cone vertex " + std::to_string(v) + " out of range");
+  PagedCutState(const PagedCutState&) = delete;
+  PagedCutState& operator=(const PagedCutState&) = delete;
+  std::uint64_t bytesRead() const {
+    return rotation.bytesRead() + work.bytesRead() + component.bytesRead() + degree.bytesRead() + edgeXor.bytesRead();
   }
+  ScratchFolder& folder;
+  ScratchFile files[5];
+  PagedArray<std::uint8_t> rotation, work;
+  PagedArray<std::uint32_t> component, degree;
+  PagedArray<CornerId> edgeXor;
+};
+
+/// cutScratchToDisk's passes on the state arrays given (HeldCutState or PagedCutState).
+template <class State>
+void cutWithState(ScratchFolder& folder, const CleanScratch& scratch, const ScratchSingularities& singularities,
+                  const TreeIslands* islands, std::size_t cacheBytes, PagedCornerTable& table,
+                  PagedReader<std::uint8_t>& matchingReader, State& state, ScratchCut& cut) {
+  const std::uint64_t numFaces = scratch.numFaces, numVertices = scratch.numVertices, numCorners = 3 * numFaces;
   const auto isCone = [&](VertexId v) { return std::binary_search(cut.cones.begin(), cut.cones.end(), v); };
-  const std::size_t cacheBytes = cutCacheBytes(pass.memoryBytes);
-  PagedCornerTable table(scratch, cacheBytes);
-  PagedReader<std::uint8_t> matchingReader(singularities.matching, cacheBytes);
   const auto matching = [&](CornerId c) { return matchingReader[c]; };
-
-  const ScratchFile rotationFile = folder.zeroFile(numFaces), componentFile = folder.zeroFile(4 * numFaces);
-  const ScratchFile workFile = folder.zeroFile(numCorners), degreeFile = folder.zeroFile(4 * numVertices);
-  const ScratchFile edgeXorFile = folder.zeroFile(4 * numVertices);
-  PagedArray<std::uint8_t> rotationBytes(folder, rotationFile, kStage, cacheBytes), workBytes(folder, workFile, kStage, cacheBytes);
-  PagedArray<std::uint32_t> component(folder, componentFile, kStage, cacheBytes), degree(folder, degreeFile, kStage, cacheBytes);
-  PagedRotation rotation{rotationBytes};
-  PagedWorkCorners work{workBytes};
+  using Bytes = decltype(state.rotation);
+  PagedRotation<Bytes> rotation{state.rotation};
+  PagedWorkCorners<Bytes> work{state.work};
+  auto& component = state.component;
+  auto& degree = state.degree;
 
   StageClock clock(cut.stageSeconds);
   if (islands) {
@@ -94,13 +133,11 @@ ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, 
   {
     // The pruning's chains find a vertex's last cut edge from the XOR of its edges' corners
     // rather than by a walk around its fan through the page caches.
-    PagedArray<CornerId> edgeXorValues(folder, edgeXorFile, kStage, cacheBytes);
-    detail::CutEdgeXor<PagedArray<CornerId>> edgeXor{edgeXorValues};
+    detail::CutEdgeXor<decltype(state.edgeXor)> edgeXor{state.edgeXor};
     std::vector<std::uint64_t> remaining =
         detail::countCutDegrees(table, numCorners, work, component, cut.components, degree, edgeXor);
     clock.finish("degrees");
     detail::pruneCut(table, numVertices, isCone, component, remaining, work, degree, edgeXor);
-    folder.countRead(kStage, edgeXorValues.bytesRead());
   }
   clock.finish("prune");
 
@@ -121,16 +158,43 @@ ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, 
 
   {
     PagedCutCorners cutCorners(cut.corners, cacheBytes);
-    PagedTraced traced{workBytes};
+    PagedTraced<Bytes> traced{state.work};
     const auto isNode = [&](VertexId v) { return degree[v] != 2 || isCone(v) || table.isBoundaryVertex(v); };
     detail::traceSeams(table, numVertices, numCorners, isNode, degree, traced, cutCorners, cut.seams);
     folder.countRead(kStage, cutCorners.bytesRead());
   }
   clock.finish("seams");
 
-  folder.countRead(kStage, table.bytesRead() + matchingReader.bytesRead() + rotationBytes.bytesRead() +
-                               workBytes.bytesRead() + component.bytesRead() + degree.bytesRead());
-  for (const ScratchFile& file : {rotationFile, componentFile, workFile, degreeFile, edgeXorFile}) folder.remove(file);
+  folder.countRead(kStage, table.bytesRead() + matchingReader.bytesRead() + state.bytesRead());
+}
+
+}  // namespace
+
+ScratchCut cutScratchToDisk(ScratchFolder& folder, const CleanScratch& scratch, const ScratchSingularities& singularities,
+                            const StreamPassOptions& pass, const TreeIslands* islands) {
+  const std::uint64_t numFaces = scratch.numFaces, numCorners = 3 * numFaces, numVertices = scratch.numVertices;
+  if (singularities.matching.bytes != numCorners) {
+    throw InputError("cutToDisk: the singularities' matchings (" + std::to_string(singularities.matching.bytes) +
+                     " corners) do not match the mesh (" + std::to_string(numFaces) + " faces)");
+  }
+  ScratchCut cut;
+  cut.cones = singularities.cones;
+  for (VertexId v : cut.cones) {
+    if (v >= numVertices) throw InputError("cutToDisk: cone vertex " + std::to_string(v) + " out of range");
+  }
+  const std::size_t cacheBytes = cutCacheBytes(pass.memoryBytes);
+  PagedCornerTable table(scratch, cacheBytes);
+  PagedReader<std::uint8_t> matchingReader(singularities.matching, cacheBytes);
+
+  // The state arrays held in memory when they fit a third of the memory (8 B per face and per
+  // vertex), else on sparse scratch files through page caches.
+  if (8 * (numFaces + numVertices) <= pass.memoryBytes / 3) {
+    HeldCutState state(numFaces, numVertices);
+    cutWithState(folder, scratch, singularities, islands, cacheBytes, table, matchingReader, state, cut);
+  } else {
+    PagedCutState state(folder, numFaces, numVertices, cacheBytes);
+    cutWithState(folder, scratch, singularities, islands, cacheBytes, table, matchingReader, state, cut);
+  }
   return cut;
 }
 
