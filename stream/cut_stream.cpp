@@ -16,23 +16,9 @@ namespace {
 
 const char* const kStage = "cut";
 
-/// The cut's per-face, per-corner and per-vertex state held in memory (zeros at first), with
-/// PagedArray's reads and writes.
-template <class T>
-class HeldArray {
- public:
-  explicit HeldArray(std::uint64_t n) : values_(static_cast<std::size_t>(n), T{}) {}
-  T operator[](std::uint64_t i) const { return values_[i]; }
-  void set(std::uint64_t i, const T& value) { values_[i] = value; }
-  std::uint64_t bytesRead() const { return 0; }
-
- private:
-  std::vector<T> values_;
-};
-
 /// Per face r | kVisited once the tree reached it (zeros: none visited).
 template <class Bytes>
-struct PagedRotation {
+struct CutRotation {
   static constexpr std::uint8_t kVisited = 4;
   Bytes& bytes;
   bool visited(FaceId f) { return (bytes[f] & kVisited) != 0; }
@@ -44,7 +30,7 @@ struct PagedRotation {
 /// every edge cut), kTraced once a seam took it.
 constexpr std::uint8_t kUncut = 1, kTraced = 2;
 template <class Bytes>
-struct PagedWorkCorners {
+struct CutWorkCorners {
   Bytes& bytes;
   bool isCut(CornerId c) { return (bytes[c] & kUncut) == 0; }
   void setCut(CornerId c, bool cut) {
@@ -54,7 +40,7 @@ struct PagedWorkCorners {
 };
 
 template <class Bytes>
-struct PagedTraced {
+struct CutTraced {
   Bytes& bytes;
   bool operator[](CornerId c) { return (bytes[c] & kTraced) != 0; }
   void set(CornerId c, bool traced) {
@@ -70,14 +56,20 @@ std::size_t cutCacheBytes(std::uint64_t memoryBytes) {
   return static_cast<std::size_t>(std::clamp<std::uint64_t>(memoryBytes / 32, std::uint64_t(1) << 15, std::uint64_t(1) << 28));
 }
 
-/// The cut's state arrays in memory.
+/// The cut's state arrays in memory (zeros at first), seen as the steps see them.
 struct HeldCutState {
   HeldCutState(std::uint64_t numFaces, std::uint64_t numVertices)
-      : rotation(numFaces), work(3 * numFaces), component(numFaces), degree(numVertices), edgeXor(numVertices) {}
-  HeldArray<std::uint8_t> rotation, work;
-  HeldArray<std::uint32_t> component, degree;
-  HeldArray<CornerId> edgeXor;
+      : rotationValues(numFaces), workValues(3 * numFaces), componentValues(numFaces), degreeValues(numVertices),
+        edgeXorValues(numVertices) {}
+  HeldCutState(const HeldCutState&) = delete;
+  HeldCutState& operator=(const HeldCutState&) = delete;
   std::uint64_t bytesRead() const { return 0; }
+  std::vector<std::uint8_t> rotationValues, workValues;
+  std::vector<std::uint32_t> componentValues, degreeValues;
+  std::vector<CornerId> edgeXorValues;
+  detail::VectorArray<std::uint8_t> rotation{rotationValues}, work{workValues};
+  detail::VectorArray<std::uint32_t> component{componentValues}, degree{degreeValues};
+  detail::VectorArray<CornerId> edgeXor{edgeXorValues};
 };
 
 /// The cut's state arrays on sparse scratch files (zeros) through page caches; the files go
@@ -114,8 +106,8 @@ void cutWithState(ScratchFolder& folder, const CleanScratch& scratch, const Scra
   const auto isCone = [&](VertexId v) { return std::binary_search(cut.cones.begin(), cut.cones.end(), v); };
   const auto matching = [&](CornerId c) { return matchingReader[c]; };
   using Bytes = decltype(state.rotation);
-  PagedRotation<Bytes> rotation{state.rotation};
-  PagedWorkCorners<Bytes> work{state.work};
+  CutRotation<Bytes> rotation{state.rotation};
+  CutWorkCorners<Bytes> work{state.work};
   auto& component = state.component;
   auto& degree = state.degree;
 
@@ -158,7 +150,7 @@ void cutWithState(ScratchFolder& folder, const CleanScratch& scratch, const Scra
 
   {
     PagedCutCorners cutCorners(cut.corners, cacheBytes);
-    PagedTraced<Bytes> traced{state.work};
+    CutTraced<Bytes> traced{state.work};
     const auto isNode = [&](VertexId v) { return degree[v] != 2 || isCone(v) || table.isBoundaryVertex(v); };
     detail::traceSeams(table, numVertices, numCorners, isNode, degree, traced, cutCorners, cut.seams);
     folder.countRead(kStage, cutCorners.bytesRead());
