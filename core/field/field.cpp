@@ -13,6 +13,7 @@
 #include <unordered_map>
 
 #include "core/field/detail_singularities.h"
+#include "core/field/fast_atan2.h"
 #include "core/field/detail_smoothing.h"
 #include "core/field/field_numerics.h"
 #include "core/solve/assemble.h"
@@ -57,6 +58,13 @@ double frameAngle(const FaceFrame& frame, const Vec3d& v) {
   return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : std::atan2(y, x);
 }
 
+/// frameAngle within 2e-6 rad (fastAtan2), for the singularities' face angles: kept as floats and
+/// rounded to quarter turns, four per face, tens of millions in all.
+double roundedFrameAngle(const FaceFrame& frame, const Vec3d& v) {
+  const double x = v.dot(frame.e1), y = v.dot(frame.e2);
+  return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : detail::fastAtan2(y, x);
+}
+
 FaceAngles faceAngles(const std::array<Vec3d, 3>& p) {
   FaceAngles a;
   a.frame = faceFrame(p);
@@ -83,9 +91,12 @@ double transportAngle(CornerId c, CornerId o, const FaceAngles& from, const Face
 namespace detail {
 
 FaceAngleData faceAngleData(const std::array<Vec3d, 3>& surface, const Vec3d* ownNormal, const Vec3d& direction) {
-  const FaceAngles a = faceAngles(surface);
-  const Vec3d u = ownNormal ? rotateBetween(*ownNormal, a.frame.n, direction) : direction;
-  return {float(frameAngle(a.frame, u)), {float(a.edge[0]), float(a.edge[1]), float(a.edge[2])}};
+  const FaceFrame frame = faceFrame(surface);
+  const Vec3d u = ownNormal ? rotateBetween(*ownNormal, frame.n, direction) : direction;
+  FaceAngleData out{float(roundedFrameAngle(frame, u)), {}};
+  // Corner k names the edge from vertex k+1 to vertex k+2 (topology.h), as in faceAngles.
+  for (int k = 0; k < 3; ++k) out.edge[k] = float(roundedFrameAngle(frame, surface[(k + 2) % 3] - surface[(k + 1) % 3]));
+  return out;
 }
 
 Crossing crossingOf(const FaceAngleData& f, unsigned cSlot, const FaceAngleData& g, unsigned oSlot) {

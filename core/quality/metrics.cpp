@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 
+#include "core/field/fast_atan2.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 #include "core/basis/gaussian_int.h"
@@ -363,29 +364,11 @@ double gradientNormSquared(const std::array<Vec3d, 3>& p, const std::array<Vec2d
   return gradientNormSquared(measureFace(p.data(), c, nullptr));
 }
 
-namespace {
-
-// atan2(y, x) within 2e-6 rad (octant reduction and an odd polynomial of degree 11 for atan on [0, 1]),
-// several times cheaper than std::atan2: a pass over every vertex's fan sums tens of millions.
-// A straight corner (y = 0, x < 0) is pi whatever the sign of the zero.
-double fastAtan2(double y, double x) {
-  const double ax = std::abs(x), ay = std::abs(y);
-  const double big = std::max(ax, ay);
-  if (big == 0.0) return 0.0;
-  const double a = std::min(ax, ay) / big, s = a * a;
-  double r = a * (0.99997726 + s * (-0.33262347 + s * (0.19354346 + s * (-0.11643287 + s * (0.05265332 - s * 0.0117212)))));
-  if (ay > ax) r = 1.5707963267948966 - r;
-  if (x < 0.0) r = 3.141592653589793 - r;
-  return y < 0.0 ? -r : r;
-}
-
-}  // namespace
-
 double cornerUVAngle(const Vec2d& q, const Vec2d& next, const Vec2d& prev) {
   const Vec2d a = next - q, b = prev - q;
   // A corner on a collapsed edge has no angle (atan2 of signed zeros would give +-pi).
   if (a == Vec2d::Zero() || b == Vec2d::Zero()) return 0.0;
-  return fastAtan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+  return detail::fastAtan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
 }
 
 double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, VertexId v) {
