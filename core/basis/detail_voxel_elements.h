@@ -209,15 +209,11 @@ void integrateVoxel(const VoxelCoord& voxel, double voxelSize, double edgeLength
                     Integrand&& integrand, std::vector<FragmentSums>& sums, VoxelIntegrals* records,
                     std::array<double, 36>* normalStiffness) {
   sums.assign(last - first + 1, FragmentSums{});
-  // Pieces per element: many allow the centroid rule for the tiny ones (kCentroidElementPieces).
-  std::vector<std::uint32_t> pieces(last - first + 1, 0);
-  for (std::size_t i = 0; i < faces.size(); ++i) ++pieces[element[i] - first];
   for (std::size_t i = 0; i < faces.size(); ++i) {
     const FaceIntegrand face = integrand(faces[i]);
     if (face.normal.squaredNorm() == 0.0) continue;  // zero-area face: nothing to integrate
     const ClipPolygon piece = clipTriangleToVoxel(face.grid, voxel);
-    accumulateFragment(piece, voxel, voxelSize, face.normal, face.direction, edgeLength, sums[element[i] - first],
-                       pieces[element[i] - first] >= kCentroidElementPieces);
+    accumulateFragment(piece, voxel, voxelSize, face.normal, face.direction, edgeLength, sums[element[i] - first]);
   }
   for (std::uint32_t e = first; e <= last; ++e) {
     finishElement(sums[e - first], records[e - first], 0.0, normalStiffness[e - first].data());

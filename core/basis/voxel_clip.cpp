@@ -117,8 +117,7 @@ constexpr double kW2 = 0.109951743655322, kA2 = 0.091576213509771, kB2 = 0.81684
 constexpr TrianglePoint kRule[6] = {{kA1, kA1, kB1, kW1}, {kA1, kB1, kA1, kW1},
                                     {kB1, kA1, kA1, kW1}, {kA2, kA2, kB2, kW2},
                                     {kA2, kB2, kA2, kW2}, {kB2, kA2, kA2, kW2}};
-// Degree-2 exact rule, for pieces much smaller than a voxel (accumulateFragment); the smallest
-// take their centroid alone.
+// Degree-2 exact rule, for pieces much smaller than a voxel (accumulateFragment).
 constexpr double kA3 = 2.0 / 3.0, kB3 = 1.0 / 6.0, kW3 = 1.0 / 3.0;
 constexpr TrianglePoint kSmallRule[3] = {{kA3, kB3, kB3, kW3}, {kB3, kA3, kB3, kW3}, {kB3, kB3, kA3, kW3}};
 /// Squared diameter (voxel units) below which a piece takes kSmallRule: the integrands are
@@ -126,10 +125,6 @@ constexpr TrianglePoint kSmallRule[3] = {{kA3, kB3, kB3, kW3}, {kB3, kA3, kB3, k
 /// own integral (d < 1/4: below 1e-4 of the largest entry, tests/test_voxel.cpp). Positive weights keep
 /// constants and linear maps exact, as every rule does.
 constexpr double kSmallPieceDiameter2 = 0.0625;
-/// Squared diameter below which a piece of an element of many pieces takes its centroid alone
-/// (FragmentSums; degree 1, error O(d^2): within 3e-3 of the piece's own integral below 1/8 voxel,
-/// tests/test_voxel.cpp). Positive weight: constants and linear maps stay exact.
-constexpr double kTinyPieceDiameter2 = 1.0 / 64.0;
 
 }  // namespace
 
@@ -259,8 +254,7 @@ constexpr PairTable kPairs;
 }  // namespace
 
 void accumulateFragment(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
-                        const Vec3d& n, const Vec3d& u, double edgeLength, FragmentSums& sums,
-                        bool tinyByCentroid) {
+                        const Vec3d& n, const Vec3d& u, double edgeLength, FragmentSums& sums) {
   if (fragment.size < 3) return;
   // B-spline k = (i, j, l) (bits 0, 1, 2 of k) has the 3D gradient
   //   g_k = (s_i Y_j Z_l, X_i s_j Z_l, X_i Y_j s_l),  X_0 = 1 - x, X_1 = x, s_0 = -1, s_1 = +1,
@@ -314,9 +308,7 @@ void accumulateFragment(const ClipPolygon& fragment, const VoxelCoord& voxel, do
     sums.area += area * voxelSize * voxelSize;
     const double diameter2 =
         std::max({(p1 - p0).squaredNorm(), (p2 - p0).squaredNorm(), (p2 - p1).squaredNorm()});
-    if (tinyByCentroid && diameter2 < kTinyPieceDiameter2) {
-      addPoint((p0 + p1 + p2) * (1.0 / 3.0), area);
-    } else if (diameter2 < kSmallPieceDiameter2) {
+    if (diameter2 < kSmallPieceDiameter2) {
       for (const TrianglePoint& q : kSmallRule) addPoint(q.a * p0 + q.b * p1 + q.c * p2, q.w * area);
     } else {
       for (const TrianglePoint& q : kRule) addPoint(q.a * p0 + q.b * p1 + q.c * p2, q.w * area);

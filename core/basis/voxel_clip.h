@@ -99,13 +99,7 @@ void addFragmentIntegrals(const ClipPolygon& fragment, const VoxelCoord& voxel, 
 /// addFragmentIntegrals in two steps, for the many fragments of one element: accumulateFragment
 /// adds a fragment's per-axis weight products, normal-derivative pairs, area and right-hand side
 /// to sums; finishElement assembles the 36 pairs once and adds them to acc. The same figures as
-/// one addFragmentIntegrals per fragment, up to rounding. With tinyByCentroid (for an element of
-/// many pieces, kCentroidElementPieces), pieces under an eighth of a voxel across take their
-/// centroid alone (relative error below 3e-3): a fine scan's faces are a twentieth of a voxel, 400
-/// to 500 in an element, and one point instead of three is a sixth of the basis stage. An element
-/// of few pieces keeps three points each: a single point adds 3 of the 8 functions' constraints,
-/// and a voxel holding a face's tip would lose rank.
-constexpr std::uint32_t kCentroidElementPieces = 32;
+/// one addFragmentIntegrals per fragment, up to rounding.
 struct FragmentSums {
   double yz[10] = {}, xz[10] = {}, xy[10] = {};  ///< per-axis bilinear weight products
   double normal[36] = {};                        ///< (n . g_a)(n . g_b), packedIndex order
@@ -114,8 +108,7 @@ struct FragmentSums {
   bool any = false;  ///< a fragment of positive area was added
 };
 void accumulateFragment(const ClipPolygon& fragment, const VoxelCoord& voxel, double voxelSize,
-                        const Vec3d& n, const Vec3d& u, double edgeLength, FragmentSums& sums,
-                        bool tinyByCentroid = false);
+                        const Vec3d& n, const Vec3d& u, double edgeLength, FragmentSums& sums);
 void finishElement(const FragmentSums& sums, VoxelIntegrals& acc, double normalWeight = 0.0,
                    double* normalAcc = nullptr);
 
