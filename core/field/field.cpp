@@ -13,8 +13,8 @@
 #include <unordered_map>
 
 #include "core/field/detail_singularities.h"
-#include "core/field/fast_atan2.h"
 #include "core/field/detail_smoothing.h"
+#include "core/field/fast_atan2.h"
 #include "core/field/field_numerics.h"
 #include "core/solve/assemble.h"
 #include "core/solve/cholmod_solver.h"
@@ -53,17 +53,20 @@ struct FaceAngles {
 
 Vec3d pointOf(const std::vector<Vec3f>& positions, VertexId v) { return positions[v].cast<double>(); }
 
-double frameAngle(const FaceFrame& frame, const Vec3d& v) {
+/// The angle of v in the frame by atan2 (0 for a zero or non-finite v).
+template <class Atan2>
+double angleInFrame(const FaceFrame& frame, const Vec3d& v, Atan2&& atan2) {
   const double x = v.dot(frame.e1), y = v.dot(frame.e2);
-  return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : std::atan2(y, x);
+  return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : atan2(y, x);
+}
+
+double frameAngle(const FaceFrame& frame, const Vec3d& v) {
+  return angleInFrame(frame, v, [](double y, double x) { return std::atan2(y, x); });
 }
 
 /// frameAngle within 2e-6 rad (fastAtan2), for the singularities' face angles: kept as floats and
 /// rounded to quarter turns, four per face, tens of millions in all.
-double roundedFrameAngle(const FaceFrame& frame, const Vec3d& v) {
-  const double x = v.dot(frame.e1), y = v.dot(frame.e2);
-  return (x == 0.0 && y == 0.0) || !std::isfinite(x) || !std::isfinite(y) ? 0.0 : detail::fastAtan2(y, x);
-}
+double roundedFrameAngle(const FaceFrame& frame, const Vec3d& v) { return angleInFrame(frame, v, detail::fastAtan2); }
 
 FaceAngles faceAngles(const std::array<Vec3d, 3>& p) {
   FaceAngles a;
