@@ -42,7 +42,7 @@ void report(const char* stage, Clock::time_point& mark) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  seamvox::rerunWithPreferredBlas(argv);  // the kernels the seamvox command runs with
+  seamvox::rerunWithPreferredRuntime(argv);  // the kernels and threads the seamvox command runs with
   seamvox::limitBlasThreads(1);
   using namespace seamvox;
   if (argc < 2) {

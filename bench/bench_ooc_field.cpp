@@ -45,7 +45,7 @@ void line(const char* step, Clock::time_point a, Clock::time_point b) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  seamvox::rerunWithPreferredBlas(argv);  // the kernels the seamvox command runs with
+  seamvox::rerunWithPreferredRuntime(argv);  // the kernels and threads the seamvox command runs with
   if (argc < 2) {
     std::fprintf(stderr, "usage: bench_ooc_field MESH [BUDGET_MIB=1024] [SCRATCH=/tmp] [in-memory]\n");
     return 2;

@@ -119,7 +119,7 @@ void runCase(const std::string& label, const TriangleMesh& input, const CrossFie
 }  // namespace
 
 int main(int argc, char** argv) {
-  seamvox::rerunWithPreferredBlas(argv);  // the kernels the seamvox command runs with
+  seamvox::rerunWithPreferredRuntime(argv);  // the kernels and threads the seamvox command runs with
   seamvox::limitBlasThreads(1);
   std::string dir = "../shared/data";
   Options options;

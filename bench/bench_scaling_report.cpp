@@ -885,7 +885,7 @@ int usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  seamvox::rerunWithPreferredBlas(argv);  // the kernels the seamvox command runs with
+  seamvox::rerunWithPreferredRuntime(argv);  // the kernels and threads the seamvox command runs with
   if (argc == 2 && std::string(argv[1]) == "--self-check") return selfCheck();
   if (argc < 2 || argv[1][0] == '-') return usage();
   const std::string dir = argv[1];

@@ -30,7 +30,7 @@ using bench::seconds;
 }  // namespace
 
 int main(int argc, char** argv) {
-  seamvox::rerunWithPreferredBlas(argv);  // the kernels the seamvox command runs with
+  seamvox::rerunWithPreferredRuntime(argv);  // the kernels and threads the seamvox command runs with
   seamvox::limitBlasThreads(1);
   const std::uint64_t faces = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 2000000;
   const int threads = argc > 2 ? std::atoi(argv[2]) : 2;

@@ -190,6 +190,10 @@ void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportConte
   // The BLAS kernels of the factorizations (blas_threads.h): they set much of the solves' time.
   const std::string blasCore = blasCoreName();
   if (!blasCore.empty()) j.key("blasCore").value(blasCore);
+  // The OpenMP thread limit the run had (CHOLMOD's teams; rerunWithPreferredRuntime sets it), or
+  // "unset" (a library caller's process left it to OpenMP).
+  const char* limit = std::getenv("OMP_THREAD_LIMIT");
+  j.key("openmpThreadLimit").value(std::string(limit ? limit : "unset"));
   if (c.memoryPathJson) {
     c.memoryPathJson(j);
   } else if (c.memoryBudget > 0) {

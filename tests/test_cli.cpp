@@ -490,6 +490,40 @@ TEST(Cli, ParamFactorsWithBlasKernelsThatFitTheProcessor) {
   }
 }
 
+// CHOLMOD opens OpenMP teams of 4 threads per large supernode whatever OMP_NUM_THREADS says: the
+// command runs itself again with OMP_THREAD_LIMIT=1 unless the user chose a limit or a count, and
+// the map does not depend on it (OMP_NUM_THREADS, which OpenBLAS reads too, may change it).
+TEST(Cli, ParamLimitsOpenMPTeamsUnlessTheUserChose) {
+  TempDir dir;
+  const std::string mesh = dir.path("s.ply"), report = dir.path("r.json");
+  run("gen sphere --faces 3000 -o " + mesh + " --quiet", 0);
+  const auto limitAndMap = [&](const std::string& tag) {
+    const std::string map = dir.path("s_" + tag + ".obj");
+    run("param " + mesh + " -o " + map + " --report " + report + " --quiet", 0);
+    const Json r = parseJson(testing::readFile(report));
+    return std::make_pair(r.textAt("openmpThreadLimit"),
+                          testing::readFile(map));
+  };
+  std::vector<std::pair<std::string, std::string>> saved;
+  for (const char* name : {"OMP_THREAD_LIMIT", "OMP_NUM_THREADS"}) {
+    const char* value = std::getenv(name);
+    if (value) saved.emplace_back(name, value);
+    unsetenv(name);
+  }
+  const auto [chosenLimit, limitedMap] = limitAndMap("default");
+  setenv("OMP_THREAD_LIMIT", "3", 1);
+  const auto [userLimit, userMap] = limitAndMap("user");
+  unsetenv("OMP_THREAD_LIMIT");
+  setenv("OMP_NUM_THREADS", "2", 1);
+  const std::string countLimit = limitAndMap("count").first;
+  unsetenv("OMP_NUM_THREADS");
+  for (const auto& [name, value] : saved) setenv(name.c_str(), value.c_str(), 1);
+  EXPECT_EQ(chosenLimit, "1");
+  EXPECT_EQ(userLimit, "3");
+  EXPECT_EQ(countLimit, "unset");
+  EXPECT_EQ(limitedMap, userMap);
+}
+
 TEST(Cli, OutputsOfOneRunAreAllOrNothing) {
   TempDir dir;
   const std::string mesh = dir.path("m.ply"), out = dir.path("m_uv.obj");

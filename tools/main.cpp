@@ -29,9 +29,10 @@ void printHelp() {
 
 int main(int argc, char** argv) {
   using namespace seamvox;
-  // When OpenBLAS fell back to kernels older than the processor, the command runs itself again
-  // with better ones named (same process, arguments and open files).
-  rerunWithPreferredBlas(argv);
+  // When OpenBLAS fell back to kernels older than the processor, or the user set no OpenMP
+  // thread limit, the command runs itself again with better kernels named and CHOLMOD's OpenMP
+  // teams limited (same process, arguments and open files).
+  rerunWithPreferredRuntime(argv);
   // SIGINT and SIGTERM remove unfinished outputs and exit 130 and 143, as a cancelled stage
   // (CancelledError) exits 130.
   installInterruptCleanup();

@@ -49,9 +49,16 @@ std::string preferredBlasCore() {
   return {};
 }
 
-void rerunWithPreferredBlas(char** argv) {
-  const std::string core = preferredBlasCore();
-  if (core.empty() || setenv("OPENBLAS_CORETYPE", core.c_str(), 1) != 0) return;
+std::string preferredOpenMPLimit() {
+  if (std::getenv("OMP_THREAD_LIMIT") || std::getenv("OMP_NUM_THREADS")) return {};
+  return "1";
+}
+
+void rerunWithPreferredRuntime(char** argv) {
+  const std::string core = preferredBlasCore(), limit = preferredOpenMPLimit();
+  if (core.empty() && limit.empty()) return;
+  if (!core.empty() && setenv("OPENBLAS_CORETYPE", core.c_str(), 1) != 0) return;
+  if (!limit.empty() && setenv("OMP_THREAD_LIMIT", limit.c_str(), 1) != 0) return;
   execv("/proc/self/exe", argv);
 }
 

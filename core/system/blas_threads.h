@@ -1,5 +1,6 @@
 #pragma once
-/// The BLAS behind CHOLMOD's supernodal factorization: its thread count and its kernels.
+/// The BLAS and OpenMP behind CHOLMOD's supernodal factorization: their thread counts and the
+/// BLAS kernels.
 #include <string>
 
 namespace seamvox {
@@ -23,11 +24,19 @@ std::string blasCoreName();
 /// choice is not one of the generic fallbacks.
 std::string preferredBlasCore();
 
-/// For a program's main, first thing: when preferredBlasCore() names kernels, sets
-/// OPENBLAS_CORETYPE to them and runs the program again in this process (execv of
-/// /proc/self/exe with argv), as OpenBLAS reads the setting only as it loads. Returns when there
-/// is nothing to choose or the new run could not start (the program then goes on with
-/// OpenBLAS's own choice).
-void rerunWithPreferredBlas(char** argv);
+/// The OpenMP thread limit to ask for (through OMP_THREAD_LIMIT, read as libgomp loads): "1",
+/// or "" when the user set OMP_THREAD_LIMIT or OMP_NUM_THREADS. Debian's CHOLMOD opens a team of
+/// 4 OpenMP threads for each large supernode of a supernodal factorization, whatever
+/// OMP_NUM_THREADS says. seamvox factors several repair regions at once on its own (TBB)
+/// threads, each then starting and waking teams on the same cores (futex calls and spinning, not
+/// work). The results do not change.
+std::string preferredOpenMPLimit();
+
+/// For a program's main, first thing: when preferredBlasCore() names kernels or
+/// preferredOpenMPLimit() a limit, sets OPENBLAS_CORETYPE and OMP_THREAD_LIMIT to them and runs
+/// the program again in this process (execv of /proc/self/exe with argv), as both libraries
+/// read their settings only as they load. Returns when there is nothing to set or the new run
+/// could not start (the program then goes on with the libraries' own choices).
+void rerunWithPreferredRuntime(char** argv);
 
 }  // namespace seamvox
