@@ -12,6 +12,7 @@
 #include "core/system/errors.h"
 #include "core/solve/evaluate.h"
 #include "core/field/field.h"
+#include "core/mesh/topology.h"
 #include "core/mesh/wedge_map.h"
 #include "test_meshes.h"
 #include "testing.h"
@@ -103,10 +104,13 @@ TEST(WedgeMap, WholeWedgesChangeInPlaceAndPartlyChangedWedgesSplit) {
   EXPECT_THROW(map.assign({0, 1}, {Vec2d::Zero()}), InputError);
 }
 
+// Also the assignment that counts wedges' corners around their vertices: the same wedges.
 TEST(WedgeMap, RandomEditsMatchAPerCornerModel) {
   const TriangleMesh mesh = testing::torusMesh(10, 6);
+  const Topology topology = Topology::build(mesh.triangles, mesh.numVertices());
   std::vector<Vec2d> model = planarValues(mesh, 0.0, 3.0);
   WedgeMap map = WedgeMap::fromCorners(mesh.triangles, model);
+  WedgeMap counted = map;
   std::mt19937 rng(7);
   std::uniform_int_distribution<CornerId> corner(0, CornerId(model.size() - 1));
   std::uniform_int_distribution<int> value(0, 3), count(1, 40);
@@ -128,14 +132,20 @@ TEST(WedgeMap, RandomEditsMatchAPerCornerModel) {
     }
     if (round % 5 == 4) {
       map.set(corners[0], values[0]);
+      counted.set(corners[0], values[0]);
       model[corners[0]] = values[0];
       continue;
     }
     map.assign(corners, values);
+    counted.assign(corners, values, topology);
     for (std::size_t k = 0; k < corners.size(); ++k) model[corners[k]] = values[k];  // last wins
     ASSERT_EQ(cornerValues(map), model) << "round " << round;
+    ASSERT_EQ(counted.numWedges(), map.numWedges()) << "round " << round;
+    for (CornerId c = 0; c < map.size(); ++c) ASSERT_EQ(counted.wedge(c), map.wedge(c)) << "round " << round;
   }
   EXPECT_EQ(cornerValues(map), model);
+  const Topology other = Topology::build(testing::torusMesh(8, 6).triangles, 48);
+  EXPECT_THROW(counted.assign({0}, {Vec2d::Zero()}, other), InputError);
 }
 
 // Wedge ids kept per vertex over the mesh's triangles: the same values under the same edits as

@@ -6,6 +6,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "core/mesh/topology.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 
@@ -168,6 +169,20 @@ void WedgeMap::set(CornerId c, const Vec2d& q) {
 }
 
 void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Vec2d>& values) {
+  assignCounted(corners, values, nullptr);
+}
+
+void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Vec2d>& values,
+                      const Topology& topology) {
+  if (3u * static_cast<std::size_t>(topology.numFaces()) != size()) {
+    throw InputError("wedge map: " + std::to_string(size()) + " corners but the topology has " +
+                     std::to_string(topology.numFaces()) + " faces");
+  }
+  assignCounted(corners, values, &topology);
+}
+
+void WedgeMap::assignCounted(const std::vector<CornerId>& corners, const std::vector<Vec2d>& values,
+                             const Topology* topology) {
   if (corners.size() != values.size()) {
     throw InputError("wedge map: " + std::to_string(corners.size()) + " corners but " +
                      std::to_string(values.size()) + " values");
@@ -201,8 +216,18 @@ void WedgeMap::assign(const std::vector<CornerId>& corners, const std::vector<Ve
     return static_cast<std::size_t>(std::lower_bound(touched.begin(), touched.end(), w) - touched.begin());
   };
   std::vector<std::uint32_t> given(touched.size(), 0), all(touched.size(), 0);
-  for (const auto& [c, q] : last) ++given[slot(wedge(c))];
-  {
+  std::vector<CornerId> some(touched.size());  // a given corner of each touched wedge
+  for (const auto& [c, q] : last) {
+    const std::size_t i = slot(wedge(c));
+    ++given[i];
+    some[i] = c;
+  }
+  if (topology) {
+    // A wedge's corners are corners of one vertex: its fan holds them all.
+    for (std::size_t i = 0; i < touched.size(); ++i) {
+      topology->forEachCornerAround(topology->vertex(some[i]), [&](CornerId c) { all[i] += wedge(c) == touched[i]; });
+    }
+  } else {
     // The pass over the map in parallel: the touched wedges' corners are few, so their counts
     // are atomic adds that rarely meet.
     std::vector<std::uint8_t> isTouched(value_.size(), 0);

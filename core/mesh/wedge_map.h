@@ -13,6 +13,8 @@
 
 namespace seamvox {
 
+class Topology;
+
 class WedgeMap {
  public:
   WedgeMap() = default;
@@ -64,6 +66,10 @@ class WedgeMap {
   /// changes value; a wedge only part of whose corners change is split (one new wedge per new
   /// value). One pass over the wedge ids of all corners. Throws InputError on a bad corner or sizes.
   void assign(const std::vector<CornerId>& corners, const std::vector<Vec2d>& values);
+  /// The same, counting each touched wedge's corners around its vertex in `topology` (the map's
+  /// mesh: a wedge's corners share one vertex) instead of over all corners: for many small
+  /// assignments on a large map. Throws InputError when the topology's corners are not the map's.
+  void assign(const std::vector<CornerId>& corners, const std::vector<Vec2d>& values, const Topology& topology);
 
   /// Corner-table edits (cleaning): corner `to` takes the wedge of corner `from`; swap two corners'
   /// wedges; keep the first n corners.
@@ -92,6 +98,9 @@ class WedgeMap {
     return it == listed_.end() ? vertexWedge : it->second;
   }
   void setCornerWedge(CornerId c, std::uint32_t w);
+  /// assign(), counting the touched wedges' corners around their vertices in topology when given,
+  /// else over all corners.
+  void assignCounted(const std::vector<CornerId>& corners, const std::vector<Vec2d>& values, const Topology* topology);
   /// Back to one wedge id per corner (the triangles viewed are read once more).
   void perCorner();
   std::vector<std::uint32_t> wedge_;  // #corners (empty when viewing triangles)

@@ -1133,7 +1133,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     parallelForEach(groups.size(), 1, [&](std::uint64_t g) {
       repairs[g] = repairGroup(mesh, topology, field, cut, cornerUV, seamT, groups[g], options);
     });
-    // One assignment per patch: WedgeMap::assign walks every corner of the map.
+    // One assignment per patch, counting wedges' corners around their vertices.
     std::vector<CornerId> corners;
     std::vector<Vec2d> uv;
     for (GroupRepair& repair : repairs) {
@@ -1145,7 +1145,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
       for (const auto& [seam, t] : repair.seams) seamT[seam] = t;
       repair = GroupRepair();
     }
-    cornerUV.assign(corners, uv);
+    cornerUV.assign(corners, uv, topology);
     classifyPatch(patch);
   };
   auto stepStart = SteadyClock::now();
