@@ -304,12 +304,22 @@ std::uint64_t countUnweldedBoundaryVertices(const TriangleMesh& mesh, const Topo
   return count;
 }
 
-/// Median of a small list (reorders it); 0 for an empty one.
+/// Median of a small list (reorders it): the element at size / 2 sorted; 0 for an empty one. A
+/// vertex's few values are sorted by insertion (nth_element's set-up costs more at that size).
 double median(std::vector<double>& values) {
   if (values.empty()) return 0.0;
-  auto middle = values.begin() + values.size() / 2;
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
+  if (values.size() > 16) {
+    auto middle = values.begin() + values.size() / 2;
+    std::nth_element(values.begin(), middle, values.end());
+    return *middle;
+  }
+  for (std::size_t i = 1; i < values.size(); ++i) {
+    const double x = values[i];
+    std::size_t j = i;
+    for (; j > 0 && values[j - 1] > x; --j) values[j] = values[j - 1];
+    values[j] = x;
+  }
+  return values[values.size() / 2];
 }
 
 /// Calls f(squared length) for every edge at v (the two edges of each corner around it).
