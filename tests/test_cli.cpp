@@ -501,8 +501,7 @@ TEST(Cli, ParamLimitsOpenMPTeamsUnlessTheUserChose) {
     const std::string map = dir.path("s_" + tag + ".obj");
     run("param " + mesh + " -o " + map + " --report " + report + " --quiet", 0);
     const Json r = parseJson(testing::readFile(report));
-    return std::make_pair(r.textAt("openmpThreadLimit"),
-                          testing::readFile(map));
+    return std::make_pair(r.textAt("openmpThreadLimit"), testing::readFile(map));
   };
   std::vector<std::pair<std::string, std::string>> saved;
   for (const char* name : {"OMP_THREAD_LIMIT", "OMP_NUM_THREADS"}) {
