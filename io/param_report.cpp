@@ -227,6 +227,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("spikeVertices").value(r.cleanReport.spikeVertices);
   j.key("unweldedBoundaryVertices").value(r.cleanReport.unweldedBoundaryVertices);
   j.key("reorderedForLocality").value(r.cleanReport.reordered);
+  j.key("verticesRenumberedForLocality").value(r.cleanReport.verticesRenumbered);
   j.key("cones").value(static_cast<U64>(r.cones.size()));
   j.key("conesBeforeMerge").value(U64{r.conesBeforeMerge});
   j.key("conesCancelled").value(U64{2 * r.merged.cancelledPairs});

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "core/mesh/clean.h"
+#include "core/mesh/subdivide.h"
 #include "core/mesh/topology.h"
 #include "core/system/errors.h"
 #include "tests/test_meshes.h"
@@ -447,6 +448,51 @@ TEST(Clean, CoherentOrSmallMeshesKeepTheirOrder) {
   // Below the default size a shuffled mesh keeps its order too.
   const CleanResult b = cleanMesh(testing::shuffledMesh(ordered, 3));
   EXPECT_FALSE(b.report.reordered);
+}
+
+// A subdivided mesh keeps its faces together but appends each level's vertices after the last:
+// most faces span far apart ids. Only its vertices are renumbered, in the order the faces first
+// use them; faces, geometry and the cleaning's counts stay those of the input order.
+TEST(Clean, ScatteredVertexIdsAreRenumberedInFaceOrder) {
+  const testing::Surface coarse = testing::makeSurface(testing::generatedMesh(MeshKind::Sphere, 2000));
+  SubdivideOptions levels;
+  levels.levels = 3;
+  TriangleMesh input = subdivideMesh(coarse.mesh, coarse.topology, levels).mesh;
+  input.positions.push_back({9.f, 9.f, 9.f});  // an unreferenced vertex, dropped wherever it goes
+  ASSERT_GT(scatteredFraction(input), 0.5);
+  CleanOptions options;
+  options.reorderMinFaces = 1000;
+  const CleanResult r = cleanMesh(input, options);
+  EXPECT_TRUE(r.report.verticesRenumbered);
+  EXPECT_FALSE(r.report.reordered);
+  EXPECT_LT(scatteredFraction(r.mesh), 0.25);
+  options.reorderMinFaces = std::numeric_limits<std::uint32_t>::max();
+  const CleanResult kept = cleanMesh(input, options);
+  EXPECT_FALSE(kept.report.verticesRenumbered);
+  ASSERT_EQ(r.mesh.numFaces(), input.numFaces());
+  ASSERT_EQ(r.mesh.numVertices(), kept.mesh.numVertices());
+  VertexId next = 0;
+  for (FaceId f = 0; f < r.mesh.numFaces(); ++f) {
+    ASSERT_EQ(r.faceOrigin[f], f);
+    for (int k = 0; k < 3; ++k) {
+      const VertexId v = r.mesh.triangles[f][k];
+      ASSERT_LE(v, next) << "face " << f << " uses a vertex before its turn";
+      if (v == next) ++next;
+      ASSERT_EQ(r.vertexOrigin[v], input.triangles[f][k]);
+      ASSERT_EQ(r.mesh.positions[v], input.positions[input.triangles[f][k]]);
+    }
+  }
+  EXPECT_EQ(next, r.mesh.numVertices());
+  r.topology.validate();
+  EXPECT_EQ(kept.report.unreferencedVertices, 1u);
+  EXPECT_EQ(r.report.unreferencedVertices, 1u);
+  EXPECT_EQ(kept.report.spikeVertices, r.report.spikeVertices);
+  EXPECT_EQ(kept.report.zeroAreaFaces, r.report.zeroAreaFaces);
+  // Ids that already follow the faces stay as they are.
+  options.reorderMinFaces = 1000;
+  const CleanResult again = cleanMesh(r.mesh, options);
+  EXPECT_FALSE(again.report.verticesRenumbered);
+  EXPECT_FALSE(again.report.reordered);
 }
 
 // The spike test by its definition: per vertex the two edges of every corner around it (an

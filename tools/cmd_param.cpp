@@ -104,6 +104,9 @@ void printSummary(const ParamCommand& c, const PipelineResult& r, const StageMet
   if (r.cleanReport.reordered) {
     std::printf("the input's order was scattered: vertices and faces were put in spatial order (so are the output's)\n");
   }
+  if (r.cleanReport.verticesRenumbered) {
+    std::printf("the input's vertex ids were scattered: vertices were renumbered in the order the faces use them (so are the output's)\n");
+  }
   std::printf("unknowns %u (positional %u, translational %u), factor %.1f MB, peak %.1f MB\n",
               st.unknowns, st.positional, st.translational, st.factorBytes / 1048576.0,
               meter.peakBytes() / 1048576.0);

@@ -129,7 +129,9 @@ std::string formatSummaryText(const MeshSummary& s, std::size_t largest) {
                 ull(c.zeroAreaFaces), ull(c.unreferencedVertices), ull(c.nonManifoldEdges),
                 ull(c.nonManifoldVertices), ull(c.flippedFaces), ull(c.spikeVertices),
                 ull(c.unweldedBoundaryVertices), c.unweldedBoundaryVertices ? "; --weld joins it" : "",
-                c.reordered ? ";\n                vertices and faces put in spatial order (the input's was scattered)" : "");
+                c.reordered ? ";\n                vertices and faces put in spatial order (the input's was scattered)"
+                : c.verticesRenumbered ? ";\n                vertices renumbered in the order the faces use them (their ids were scattered)"
+                                       : "");
   if (!s.box.isEmpty()) {
     out += format("bounding box    (%.10g, %.10g, %.10g) - (%.10g, %.10g, %.10g), diagonal %g\n", s.box.min.x(),
                   s.box.min.y(), s.box.min.z(), s.box.max.x(), s.box.max.y(), s.box.max.z(),
@@ -194,6 +196,7 @@ std::string formatSummaryJson(const MeshSummary& s, std::size_t largest) {
   j.key("spikeVertices").value(c.spikeVertices);
   j.key("unweldedBoundaryVertices").value(c.unweldedBoundaryVertices);
   j.key("reorderedForLocality").value(c.reordered);
+  j.key("verticesRenumberedForLocality").value(c.verticesRenumbered);
   j.endObject();
   if (s.outOfCore) {
     j.key("edges").beginObject();

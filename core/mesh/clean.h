@@ -18,7 +18,8 @@ struct CleanOptions {
   bool weldVertices = false;
   double weldTolerance = 0.0;
   /// A mesh of at least this many faces whose order is scattered is put in spatial order
-  /// (CleanReport::reordered); UINT32_MAX keeps every input's order.
+  /// (CleanReport::reordered), or its vertices alone renumbered when only their ids are scattered
+  /// (CleanReport::verticesRenumbered); UINT32_MAX keeps every input's order.
   std::uint32_t reorderMinFaces = kReorderMinFaces;
   ProgressFn progress;
 };
@@ -46,6 +47,9 @@ struct CleanReport {
   /// Vertices and faces were put in spatial order (the input's was scattered): the output's order
   /// differs from the input's (vertexOrigin and faceOrigin map back).
   bool reordered = false;
+  /// Only the vertices were renumbered, in the order the faces first use them (the faces were in
+  /// order, the vertex ids scattered, as in a subdivided mesh): vertexOrigin maps back.
+  bool verticesRenumbered = false;
 };
 
 
