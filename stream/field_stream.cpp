@@ -378,6 +378,8 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
           for (std::uint32_t k = 0; k < out.colours; ++k) {
             parallelFor(subCount, 4096, [&](const IndexRange& range) {
               auto r = pool.take();
+              detail::SweepBatch batch;  // faces of one colour: written after their batch is swept
+              const auto store = [&](std::uint64_t i, const Vec3d& swept) { own[i] = swept.cast<float>(); };
               for (std::uint64_t i = sub + range.begin(); i != sub + range.end(); ++i) {
                 if (colours[i] != k) continue;
                 const Vec3f faceNormal = blockNormal[i];
@@ -393,12 +395,11 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
                   neighbourNormal[n] = normal;
                   neighbourDirections[n++] = neighbourDirection(*r, cornerFace(o)).cast<double>();
                 }
-                Vec3d swept;
-                if (detail::sweptDirection(faceNormal, own[i].cast<double>(), neighbourNormal, neighbourDirections, n,
-                                           swept)) {
-                  own[i] = swept.cast<float>();
+                if (batch.add(i, faceNormal, own[i].cast<double>(), neighbourNormal, neighbourDirections, n)) {
+                  batch.flush(store);
                 }
               }
+              batch.flush(store);
             });
           }
         }

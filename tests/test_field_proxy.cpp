@@ -6,14 +6,19 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdio>
+#include <numeric>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "core/cut/cut.h"
 #include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
+#include "core/field/detail_proxy.h"
 #include "core/field/field.h"
 #include "core/field/field_proxy.h"
 #include "core/synth/generate.h"
@@ -409,6 +414,104 @@ TEST(ProxyField, EmptyAndTinyMeshes) {
       const CrossField field = proxyField(s, grid).field;
       ASSERT_EQ(field.direction.size(), s.mesh.numFaces()) << name;
       for (const Vec3f& u : field.direction) EXPECT_NEAR(u.norm(), 1.0, 1e-6) << name << " grid " << grid;
+    }
+  }
+}
+
+// The sweep step by its definition: the unit 4th powers of the neighbours' directions carried into
+// the face's plane (projected when the normals are within kProjectCosine, else rotated), summed,
+// and the representative of the sum's 4th root in the frame (u, n x u). A batch of faces gives
+// every face the bits it gets alone, whatever its lane and whatever the other lanes hold.
+TEST(ProxySweep, BatchesMatchTheDefinitionAndEachFaceAlone) {
+  using detail::SweepBatch;
+  struct Face {
+    Vec3f normal;
+    Vec3d u;
+    Vec3f neighbourNormal[3];
+    Vec3d neighbourDirection[3];
+    int count = 0;
+  };
+  std::mt19937 random(17);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const auto randomUnit = [&] {
+    Vec3d v(unit(random), unit(random), unit(random));
+    return Vec3d(v.normalized());
+  };
+  std::vector<Face> faces(403);
+  int tilted = 0, cancelled = 0;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    Face& f = faces[i];
+    const Vec3d n = randomUnit();
+    f.normal = n.cast<float>();
+    f.u = n.unitOrthogonal();
+    f.count = static_cast<int>(i % 4);
+    for (int k = 0; k < f.count; ++k) {
+      // Mostly near the face's plane; every seventh neighbour folded well past kProjectCosine.
+      const double tilt = (i + k) % 7 == 0 ? 1.2 : 0.05;
+      const Vec3d m = (n + tilt * randomUnit()).normalized();
+      f.neighbourNormal[k] = m.cast<float>();
+      f.neighbourDirection[k] = m.cross(randomUnit()).normalized();
+      tilted += m.dot(n) < detail::kProjectCosine;
+    }
+    if (i % 50 == 3) f.neighbourDirection[0] = Vec3d::Zero();  // no direction: adds nothing
+    if (i % 50 == 6 && f.count == 2) {
+      // Two neighbours an eighth of a turn apart in the plane: their 4th powers cancel (to rounding).
+      f.neighbourNormal[0] = f.neighbourNormal[1] = f.normal;
+      const Vec3d u = f.u, v = n.cross(u);
+      f.neighbourDirection[0] = u;
+      f.neighbourDirection[1] = (u + v).normalized();
+      ++cancelled;
+    }
+  }
+  ASSERT_GT(tilted, 20);
+  ASSERT_GT(cancelled, 0);
+  // The definition, written with Eigen.
+  const auto reference = [](const Face& f, Vec3d& out) {
+    const Vec3d n = f.normal.cast<double>(), v = n.cross(f.u);
+    std::complex<double> sum = 0.0;
+    for (int k = 0; k < f.count; ++k) {
+      const Vec3d m = f.neighbourNormal[k].cast<double>();
+      const Vec3d w = m.dot(n) >= detail::kProjectCosine ? f.neighbourDirection[k]
+                                                          : rotateBetween(m, n, f.neighbourDirection[k]);
+      const std::complex<double> z(w.dot(f.u), w.dot(v));
+      if (std::norm(z) > 0.0) sum += std::pow(z / std::abs(z), 4);
+    }
+    if (!(std::abs(sum) > 1e-6)) return false;  // cancelled: no direction to compare
+    const double angle = std::arg(sum) / 4.0;
+    out = std::cos(angle) * f.u + std::sin(angle) * v;
+    return true;
+  };
+  std::vector<Vec3d> alone(faces.size());
+  std::vector<std::uint8_t> changed(faces.size(), 0);
+  int compared = 0;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const Face& f = faces[i];
+    changed[i] = detail::sweptDirection(f.normal, f.u, f.neighbourNormal, f.neighbourDirection, f.count, alone[i]);
+    Vec3d expected;
+    const bool has = reference(f, expected);
+    if (f.count == 0) EXPECT_FALSE(changed[i]) << "face " << i;
+    if (!has || !changed[i]) continue;
+    EXPECT_LT((alone[i] - expected).norm(), 1e-9) << "face " << i;
+    ++compared;
+  }
+  EXPECT_GT(compared, 250);
+  // In batches, faces in a shuffled order (so every face sits in several lanes over the runs).
+  for (std::uint32_t run = 0; run < 3; ++run) {
+    std::vector<std::size_t> order(faces.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::shuffle(order.begin(), order.end(), random);
+    std::vector<Vec3d> got(faces.size());
+    std::vector<std::uint8_t> seen(faces.size(), 0);
+    SweepBatch batch;
+    const auto store = [&](std::uint64_t i, const Vec3d& d) { got[i] = d, seen[i] = 1; };
+    for (std::size_t i : order) {
+      const Face& f = faces[i];
+      if (batch.add(i, f.normal, f.u, f.neighbourNormal, f.neighbourDirection, f.count)) batch.flush(store);
+    }
+    batch.flush(store);
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      ASSERT_EQ(seen[i], changed[i]) << "face " << i;
+      if (changed[i]) ASSERT_EQ(got[i], alone[i]) << "face " << i;
     }
   }
 }

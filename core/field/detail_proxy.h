@@ -95,6 +95,37 @@ constexpr double kProjectCosine = 0.95;
 bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal, const Vec3d* neighbourDirection,
                     int count, Vec3d& out);
 
+/// sweptDirection for up to kLanes faces at once, laid out lane by lane for SIMD: every lane
+/// runs sweptDirection's operations in the same order, so a face gets the same bits alone or in
+/// a batch. Faces of one colour share no edge, so they may be swept in any grouping. add() a
+/// face (its id, then sweptDirection's arguments); flush(done) calls done(id, direction) for every
+/// face that changes and empties the batch. sweptDirection itself is a batch of one.
+class SweepBatch {
+ public:
+  static constexpr int kLanes = 8;
+  /// True when the batch is full (flush it before the next add).
+  bool add(std::uint64_t id, const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal,
+           const Vec3d* neighbourDirection, int count);
+  template <class Done>
+  void flush(Done&& done) {
+    if (size_ == 0) return;
+    compute();
+    for (int l = 0; l < size_; ++l) {
+      if (ok_[l] > 0.0) done(id_[l], Vec3d(out_[0][l], out_[1][l], out_[2][l]));
+    }
+    size_ = 0;
+  }
+
+ private:
+  void compute();
+  int size_ = 0;
+  std::uint64_t id_[kLanes];
+  // [coordinate][lane], neighbours [k][coordinate][lane]; lanes past size_ hold no neighbour.
+  // Flags are doubles (1 or 0) so that every loop over lanes is one of doubles.
+  alignas(64) double n_[3][kLanes], u_[3][kLanes], m_[3][3][kLanes], d_[3][3][kLanes], out_[3][kLanes];
+  alignas(64) double weight_[3][kLanes], ok_[kLanes];  ///< neighbour k present; lane's direction changes
+};
+
 /// u projected onto the plane of unit normal n and normalized; false when it cannot be.
 bool tangentOf(const Vec3d& n, const Vec3d& u, Vec3d& out);
 

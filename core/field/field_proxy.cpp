@@ -8,6 +8,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -234,44 +235,97 @@ Vec3d transferredDirection(const ProxyElements& proxy, const ElementDirections& 
   return directionOf(sum, g.e1, g.e2);
 }
 
+bool SweepBatch::add(std::uint64_t id, const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal,
+                     const Vec3d* neighbourDirection, int count) {
+  const int l = size_++;
+  id_[l] = id;
+  for (int i = 0; i < 3; ++i) n_[i][l] = normal[i], u_[i][l] = u[i];
+  for (int k = 0; k < 3; ++k) {
+    weight_[k][l] = k < count ? 1.0 : 0.0;
+    for (int i = 0; i < 3; ++i) {
+      m_[k][i][l] = k < count ? double(neighbourNormal[k][i]) : 0.0;
+      d_[k][i][l] = k < count ? neighbourDirection[k][i] : 0.0;
+    }
+  }
+  return size_ == kLanes;
+}
+
+void SweepBatch::compute() {
+  constexpr int L = kLanes;
+  for (int l = size_; l < L; ++l) {  // idle lanes: no neighbour, so no direction
+    for (int i = 0; i < 3; ++i) n_[i][l] = u_[i][l] = 0.0;
+    for (int k = 0; k < 3; ++k) weight_[k][l] = 0.0;
+  }
+  // Frame (u, v = n x u): the new direction is the representative nearest the current one.
+  double v[3][L], c[3][L], x[3][L], y[3][L], sumRe[L], sumIm[L];
+  for (int l = 0; l < L; ++l) {
+    v[0][l] = n_[1][l] * u_[2][l] - n_[2][l] * u_[1][l];
+    v[1][l] = n_[2][l] * u_[0][l] - n_[0][l] * u_[2][l];
+    v[2][l] = n_[0][l] * u_[1][l] - n_[1][l] * u_[0][l];
+  }
+  // A neighbour's direction in this face's plane. Nearly coplanar (c >= kProjectCosine): its
+  // projection, (x, y) = (d.u, d.v), whose angle differs from the rotated direction's by at most
+  // 1.5 degrees there. Tilted further (a fold of the surface): the rotation between the normals.
+  for (int k = 0; k < 3; ++k) {
+    const double(&m)[3][L] = m_[k];
+    const double(&d)[3][L] = d_[k];
+    for (int l = 0; l < L; ++l) {
+      c[k][l] = m[0][l] * n_[0][l] + m[1][l] * n_[1][l] + m[2][l] * n_[2][l];
+      x[k][l] = d[0][l] * u_[0][l] + d[1][l] * u_[1][l] + d[2][l] * u_[2][l];
+      y[k][l] = d[0][l] * v[0][l] + d[1][l] * v[1][l] + d[2][l] * v[2][l];
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    for (int l = 0; l < L; ++l) {
+      if (!(weight_[k][l] > 0.0) || c[k][l] >= kProjectCosine) continue;
+      const Vec3d w = rotateBetween(Vec3d(m_[k][0][l], m_[k][1][l], m_[k][2][l]), Vec3d(n_[0][l], n_[1][l], n_[2][l]),
+                                    Vec3d(d_[k][0][l], d_[k][1][l], d_[k][2][l]));
+      x[k][l] = w[0] * u_[0][l] + w[1] * u_[1][l] + w[2] * u_[2][l];
+      y[k][l] = w[0] * v[0][l] + w[1] * v[1][l] + w[2] * v[2][l];
+    }
+  }
+  // Their unit 4th powers, (x + iy)^4 / r^4, summed in neighbour order where they have one
+  // (masks with &: no branches).
+  for (int l = 0; l < L; ++l) {
+    double re = 0.0, im = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double r2 = x[k][l] * x[k][l] + y[k][l] * y[k][l];
+      const bool adds = (weight_[k][l] > 0.0) & (r2 > 0.0) & (r2 <= std::numeric_limits<double>::max());
+      const double inverse = 1.0 / r2;
+      const double a = (x[k][l] * x[k][l] - y[k][l] * y[k][l]) * inverse, b = 2.0 * x[k][l] * y[k][l] * inverse;
+      re = adds ? re + (a * a - b * b) : re;
+      im = adds ? im + 2.0 * a * b : im;
+    }
+    sumRe[l] = re;
+    sumIm[l] = im;
+  }
+  // The 4th root of the sum's direction by two half-angle steps (unitSqrt, written out).
+  for (int l = 0; l < L; ++l) {
+    const double len = std::sqrt(sumRe[l] * sumRe[l] + sumIm[l] * sumIm[l]);
+    const bool turns = (len > 0.0) & (len <= std::numeric_limits<double>::max());
+    const double inverse = 1.0 / len;
+    const double re0 = sumRe[l] * inverse, im0 = sumIm[l] * inverse;
+    const double h0 = 0.5 * (1.0 + re0), g0 = 0.5 * (1.0 - re0);
+    const double re1 = std::sqrt(0.0 < h0 ? h0 : 0.0), im1 = std::copysign(std::sqrt(0.0 < g0 ? g0 : 0.0), im0);
+    const double h1 = 0.5 * (1.0 + re1), g1 = 0.5 * (1.0 - re1);
+    const double re = std::sqrt(0.0 < h1 ? h1 : 0.0), im = std::copysign(std::sqrt(0.0 < g1 ? g1 : 0.0), im1);
+    // Unit and tangent up to float rounding (u's, and |n| in v): a few 1e-7 after the sweeps,
+    // whose last step projects onto the exact planes and normalizes.
+    const double o0 = re * u_[0][l] + im * v[0][l], o1 = re * u_[1][l] + im * v[1][l],
+                 o2 = re * u_[2][l] + im * v[2][l];
+    out_[0][l] = o0, out_[1][l] = o1, out_[2][l] = o2;
+    constexpr double kMax = std::numeric_limits<double>::max();
+    ok_[l] = turns & (std::abs(o0) <= kMax) & (std::abs(o1) <= kMax) & (std::abs(o2) <= kMax) ? 1.0 : 0.0;
+  }
+}
+
 bool sweptDirection(const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal, const Vec3d* neighbourDirection,
                     int count, Vec3d& out) {
-  // Frame (u, v = n x u): the new direction is the representative nearest the current one.
-  const Vec3d n = normal.cast<double>();
-  const Vec3d v = n.cross(u);
-  double sumRe = 0.0, sumIm = 0.0;
-  for (int i = 0; i < count; ++i) {
-    const Vec3d m = neighbourNormal[i].cast<double>();
-    const Vec3d& d = neighbourDirection[i];
-    const double c = m.dot(n);
-    // A neighbour's direction in this face's plane. Nearly coplanar (c >= kProjectCosine): its
-    // projection, (x, y) = (d.u, d.v), whose angle differs from the rotated direction's by at
-    // most 1.5 degrees there. Tilted further (a fold of the surface): the rotation between the
-    // normals.
-    double x, y;
-    if (c >= kProjectCosine) {
-      x = d.dot(u);
-      y = d.dot(v);
-    } else {
-      const Vec3d w = rotateBetween(m, n, d);
-      x = w.dot(u);
-      y = w.dot(v);
-    }
-    const double r2 = x * x + y * y;
-    if (!(r2 > 0.0) || !std::isfinite(r2)) continue;
-    const double inverse = 1.0 / r2;
-    const double a = (x * x - y * y) * inverse, b = 2.0 * x * y * inverse;  // unit square
-    sumRe += a * a - b * b;
-    sumIm += 2.0 * a * b;
-  }
-  const double len = std::sqrt(sumRe * sumRe + sumIm * sumIm);
-  if (!(len > 0.0 && std::isfinite(len))) return false;
-  const double inverse = 1.0 / len;
-  const Complex r = unitSqrt(unitSqrt(Complex(sumRe * inverse, sumIm * inverse)));
-  // Unit and tangent up to float rounding (u's, and |n| in v): a few 1e-7 after the sweeps, whose
-  // last step projects onto the exact planes and normalizes.
-  out = r.real() * u + r.imag() * v;
-  return std::isfinite(out[0]) && std::isfinite(out[1]) && std::isfinite(out[2]);
+  SweepBatch batch;
+  batch.add(0, normal, u, neighbourNormal, neighbourDirection, count);
+  bool changed = false;
+  batch.flush([&](std::uint64_t, const Vec3d& direction) { out = direction, changed = true; });
+  return changed;
 }
 
 bool tangentOf(const Vec3d& n, const Vec3d& u, Vec3d& out) {
@@ -434,6 +488,8 @@ void smoothSweep(const Topology& topology, const std::vector<std::uint8_t>& colo
     const std::uint64_t count = std::min<std::uint64_t>(blockFaces, numFaces - first);
     for (std::uint32_t k = 0; k < colours; ++k) {
       parallelFor(count, 4096, [&](const IndexRange& range) {
+        detail::SweepBatch batch;
+        const auto store = [&](std::uint64_t f, const Vec3d& next) { field.set(static_cast<FaceId>(f), next); };
         for (FaceId f = static_cast<FaceId>(first + range.begin()); f != first + range.end(); ++f) {
           if (colour[f] != k || isZero(sweepNormal[f])) continue;
           Vec3f normals[3];
@@ -445,9 +501,9 @@ void smoothSweep(const Topology& topology, const std::vector<std::uint8_t>& colo
             normals[n] = sweepNormal[cornerFace(o)];
             directions[n++] = field.at(cornerFace(o));
           }
-          Vec3d next;
-          if (detail::sweptDirection(sweepNormal[f], field.at(f), normals, directions, n, next)) field.set(f, next);
+          if (batch.add(f, sweepNormal[f], field.at(f), normals, directions, n)) batch.flush(store);
         }
+        batch.flush(store);
       });
     }
   }
