@@ -307,11 +307,14 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
     readFaceBlock(*transferElementsIn, first, count, transferElements);
     parallelFor(count, 2048, [&](const IndexRange& range) {
       auto readers = transferPool.take();
+      detail::TransferBatch batch(elements, directions);  // runs of faces of one element
+      const auto store = [&](std::uint64_t i, const Vec3d& d) { block[i] = d.cast<float>(); };
       for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
         const detail::FaceGeometry g = detail::faceGeometry(readers->points.points(transferFaces[i].triangle));
-        block[i] = detail::transferredDirection(elements, directions, g, transferElements[i]).cast<float>();
+        batch.add(i, g, transferElements[i], store);
         normalBlock[i] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
       }
+      batch.flush(store);
     });
     if (sweeps) normalWriter.write(normalBlock.data(), count * sizeof(Vec3f));
   });

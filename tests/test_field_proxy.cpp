@@ -516,5 +516,80 @@ TEST(ProxySweep, BatchesMatchTheDefinitionAndEachFaceAlone) {
   }
 }
 
+
+// The transfer by its definition: per face, its element's and the neighbours' directions rotated
+// onto the face's plane, their unit 4th powers weighted by confidence and a bump of the centroid
+// distance (the own element at least 1e-3), and the 4th root of the sum nearest e1. Faces batched
+// per element get the bits each gets alone, whatever the batch.
+TEST(ProxyTransfer, BatchesMatchTheDefinitionAndEachFaceAlone) {
+  std::mt19937 random(23);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const auto randomUnit = [&] { return Vec3d(Vec3d(unit(random), unit(random), unit(random)).normalized()); };
+  // Six elements in a row of cells, each joined to the next; element 5's normal opposite to 4's.
+  detail::ProxyElements elements;
+  detail::ElementDirections directions;
+  directions.radius = 2.0;
+  for (std::uint32_t e = 0; e < 6; ++e) {
+    const Vec3d n = e == 5 ? Vec3d(-elements.normal[4]) : Vec3d((Vec3d::UnitZ() + 0.3 * randomUnit()).normalized());
+    elements.normal.push_back(n);
+    elements.centroid.push_back(Vec3d(double(e), 0.2 * unit(random), 0.0));
+    elements.area.push_back(1.0);
+    directions.direction.push_back(n.cross(randomUnit()).normalized());
+    directions.confidence.push_back(e == 2 ? 0.0 : 0.5 + 0.5 * std::abs(unit(random)));
+  }
+  elements.neighbourStart = {0};
+  for (std::uint32_t e = 0; e < 6; ++e) {
+    if (e > 0) elements.neighbours.push_back({e - 1, 1.0});
+    if (e < 5) elements.neighbours.push_back({e + 1, 1.0});
+    elements.neighbourStart.push_back(static_cast<std::uint32_t>(elements.neighbours.size()));
+  }
+  struct Face {
+    detail::FaceGeometry g;
+    std::uint32_t own;
+  };
+  std::vector<Face> faces;
+  for (std::uint32_t i = 0; i < 300; ++i) {
+    const std::uint32_t own = (i / 7) % 6;  // runs of one element, of several lengths
+    const Vec3d c = elements.centroid[own] + Vec3d(0.5 * unit(random), 0.5 * unit(random), 0.1 * unit(random));
+    const Vec3d a = randomUnit(), b = randomUnit();
+    faces.push_back({detail::faceGeometry({c, Vec3d(c + 0.1 * a), Vec3d(c + 0.1 * b)}), own});
+  }
+  const auto reference = [&](const Face& f) {
+    std::complex<double> sum = 0.0;
+    const auto add = [&](std::uint32_t e) {
+      const double d = (f.g.centroid - elements.centroid[e]).norm() / directions.radius;
+      const double bump = d < 1.0 ? (1.0 - d * d) * (1.0 - d * d) : 0.0;
+      const double w = directions.confidence[e] * (e == f.own ? std::max(bump, 1e-3) : bump);
+      const Vec3d v = rotateBetween(elements.normal[e], f.g.n, directions.direction[e]);
+      const std::complex<double> z(v.dot(f.g.e1), v.dot(f.g.e2));
+      if (w > 0.0 && std::norm(z) > 0.0) sum += w * std::pow(z / std::abs(z), 4);
+    };
+    add(f.own);
+    for (std::uint32_t i = elements.neighbourStart[f.own]; i < elements.neighbourStart[f.own + 1]; ++i) {
+      add(elements.neighbours[i].first);
+    }
+    if (!(std::abs(sum) > 1e-9)) return f.g.e1;
+    const double angle = std::arg(sum) / 4.0;
+    return Vec3d(std::cos(angle) * f.g.e1 + std::sin(angle) * f.g.e2);
+  };
+  std::vector<Vec3d> alone(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    alone[i] = detail::transferredDirection(elements, directions, faces[i].g, faces[i].own);
+    EXPECT_LT((alone[i] - reference(faces[i])).norm(), 1e-9) << "face " << i;
+  }
+  // Batched in face order (runs of one element) and in a shuffled order (runs of one face).
+  for (const bool shuffled : {false, true}) {
+    std::vector<std::size_t> order(faces.size());
+    std::iota(order.begin(), order.end(), 0);
+    if (shuffled) std::shuffle(order.begin(), order.end(), random);
+    std::vector<Vec3d> got(faces.size(), Vec3d::Constant(7.0));
+    detail::TransferBatch batch(elements, directions);
+    const auto store = [&](std::uint64_t i, const Vec3d& d) { got[i] = d; };
+    for (std::size_t i : order) batch.add(i, faces[i].g, faces[i].own, store);
+    batch.flush(store);
+    for (std::size_t i = 0; i < faces.size(); ++i) ASSERT_EQ(got[i], alone[i]) << "face " << i;
+  }
+}
+
 }  // namespace
 }  // namespace seamvox

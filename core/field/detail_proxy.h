@@ -73,9 +73,45 @@ struct ElementDirections {
   double radius = 0.0;  ///< of the transfer's bump: two cells
 };
 ElementDirections elementDirections(const ProxyElements& elements, const Eigen::VectorXcd& z);
-/// The transferred direction of a face of element own (its geometry g).
+/// The transferred direction of a face of element own (its geometry g): a TransferBatch of one.
 Vec3d transferredDirection(const ProxyElements& elements, const ElementDirections& directions, const FaceGeometry& g,
                            std::uint32_t own);
+
+/// transferredDirection for up to kLanes faces of one element at once, laid out lane by lane for
+/// SIMD: each lane runs the same operations in the same order, so a face gets the same bits alone
+/// or in a batch. add() flushes first when the element changes, and when the batch is full;
+/// flush(done) calls done(id, direction) for every face added since the last flush.
+class TransferBatch {
+ public:
+  static constexpr int kLanes = 8;
+  TransferBatch(const ProxyElements& elements, const ElementDirections& directions)
+      : elements_(elements), directions_(directions) {}
+  template <class Done>
+  void add(std::uint64_t id, const FaceGeometry& g, std::uint32_t own, Done&& done) {
+    if (size_ > 0 && own != own_) flush(done);
+    own_ = own;
+    const int l = size_++;
+    id_[l] = id;
+    for (int i = 0; i < 3; ++i) n_[i][l] = g.n[i], e1_[i][l] = g.e1[i], e2_[i][l] = g.e2[i], centroid_[i][l] = g.centroid[i];
+    if (size_ == kLanes) flush(done);
+  }
+  template <class Done>
+  void flush(Done&& done) {
+    if (size_ == 0) return;
+    compute();
+    for (int l = 0; l < size_; ++l) done(id_[l], Vec3d(out_[0][l], out_[1][l], out_[2][l]));
+    size_ = 0;
+  }
+
+ private:
+  void compute();
+  const ProxyElements& elements_;
+  const ElementDirections& directions_;
+  std::uint32_t own_ = 0;
+  int size_ = 0;
+  std::uint64_t id_[kLanes];
+  alignas(64) double n_[3][kLanes], e1_[3][kLanes], e2_[3][kLanes], centroid_[3][kLanes], out_[3][kLanes];
+};
 
 /// The greedy colouring's choice: the smallest colour not in `taken` (a bit per colour).
 inline std::uint8_t firstFreeColour(unsigned taken) {

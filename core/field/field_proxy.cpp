@@ -218,21 +218,81 @@ ElementDirections elementDirections(const ProxyElements& proxy, const VectorC& z
   return out;
 }
 
+void TransferBatch::compute() {
+  constexpr int L = kLanes;
+  constexpr double kMax = std::numeric_limits<double>::max();
+  for (int l = size_; l < L; ++l) {  // idle lanes repeat the first face
+    for (int i = 0; i < 3; ++i) n_[i][l] = n_[i][0], e1_[i][l] = e1_[i][0], e2_[i][l] = e2_[i][0], centroid_[i][l] = centroid_[i][0];
+  }
+  // Each face averages the unit 4th powers of its element's and the neighbours' directions,
+  // carried onto its plane, weighted by confidence and a bump of the centroid distance.
+  double sumRe[L], sumIm[L];
+  for (int l = 0; l < L; ++l) sumRe[l] = 0.0, sumIm[l] = 0.0;
+  const auto add = [&](std::uint32_t e) {
+    const Vec3d& ce = elements_.centroid[e];
+    const Vec3d& ne = elements_.normal[e];
+    const Vec3d& de = directions_.direction[e];
+    const double confidence = directions_.confidence[e], radius = directions_.radius;
+    const bool own = e == own_;
+    double w[L], r[3][L], c[L];
+    for (int l = 0; l < L; ++l) {
+      const double dx = centroid_[0][l] - ce[0], dy = centroid_[1][l] - ce[1], dz = centroid_[2][l] - ce[2];
+      const double d = std::sqrt(dx * dx + dy * dy + dz * dz) / radius;
+      const double bump = d < 1.0 ? (1.0 - d * d) * (1.0 - d * d) : 0.0;
+      // The own element always counts a little, so no face is left without a value.
+      w[l] = confidence * (own ? (bump < 1e-3 ? 1e-3 : bump) : bump);
+      // rotateBetween(ne, n, de): about k = ne x n by the angle whose cosine is c.
+      const double nx = n_[0][l], ny = n_[1][l], nz = n_[2][l];
+      c[l] = ne[0] * nx + ne[1] * ny + ne[2] * nz;
+      const double kx = ne[1] * nz - ne[2] * ny, ky = ne[2] * nx - ne[0] * nz, kz = ne[0] * ny - ne[1] * nx;
+      const double t = (kx * de[0] + ky * de[1] + kz * de[2]) / (1.0 + c[l]);
+      r[0][l] = c[l] * de[0] + (ky * de[2] - kz * de[1]) + t * kx;
+      r[1][l] = c[l] * de[1] + (kz * de[0] - kx * de[2]) + t * ky;
+      r[2][l] = c[l] * de[2] + (kx * de[1] - ky * de[0]) + t * kz;
+    }
+    for (int l = 0; l < L; ++l) {
+      if (c[l] > -1.0 + 1e-9 || !(w[l] > 0.0)) continue;  // opposite normals: rotateBetween's half turn
+      const Vec3d v = rotateBetween(ne, Vec3d(n_[0][l], n_[1][l], n_[2][l]), de);
+      for (int i = 0; i < 3; ++i) r[i][l] = v[i];
+    }
+    for (int l = 0; l < L; ++l) {
+      // fourthPower in the face's frame: (x + iy)^4 / r^4, 0 for a zero vector.
+      const double x = r[0][l] * e1_[0][l] + r[1][l] * e1_[1][l] + r[2][l] * e1_[2][l];
+      const double y = r[0][l] * e2_[0][l] + r[1][l] * e2_[1][l] + r[2][l] * e2_[2][l];
+      const double r2 = x * x + y * y;
+      const bool adds = (w[l] > 0.0) & (r2 > 0.0) & (r2 <= kMax);
+      const double inverse = 1.0 / r2;
+      const double a = (x * x - y * y) * inverse, b = 2.0 * x * y * inverse;  // unit square
+      sumRe[l] = adds ? sumRe[l] + w[l] * (a * a - b * b) : sumRe[l];
+      sumIm[l] = adds ? sumIm[l] + w[l] * (2.0 * a * b) : sumIm[l];
+    }
+  };
+  add(own_);
+  for (std::uint32_t i = elements_.neighbourStart[own_]; i < elements_.neighbourStart[own_ + 1]; ++i) {
+    add(elements_.neighbours[i].first);
+  }
+  // directionOf: the quarter-turn representative nearest e1 of the sum's 4th root (e1 for 0).
+  for (int l = 0; l < L; ++l) {
+    const double len = std::sqrt(sumRe[l] * sumRe[l] + sumIm[l] * sumIm[l]);
+    const bool turns = (len > 0.0) & (len <= kMax);
+    const double inverse = 1.0 / len;
+    const double re0 = sumRe[l] * inverse, im0 = sumIm[l] * inverse;
+    const double h0 = 0.5 * (1.0 + re0), g0 = 0.5 * (1.0 - re0);
+    const double re1 = std::sqrt(0.0 < h0 ? h0 : 0.0), im1 = std::copysign(std::sqrt(0.0 < g0 ? g0 : 0.0), im0);
+    const double h1 = 0.5 * (1.0 + re1), g1 = 0.5 * (1.0 - re1);
+    const double re = std::sqrt(0.0 < h1 ? h1 : 0.0), im = std::copysign(std::sqrt(0.0 < g1 ? g1 : 0.0), im1);
+    for (int i = 0; i < 3; ++i) out_[i][l] = turns ? re * e1_[i][l] + im * e2_[i][l] : e1_[i][l];
+  }
+}
+
 Vec3d transferredDirection(const ProxyElements& proxy, const ElementDirections& directions, const FaceGeometry& g,
                            std::uint32_t own) {
-  Complex sum = 0.0;
-  auto add = [&](std::uint32_t e) {
-    const double d = (g.centroid - proxy.centroid[e]).norm() / directions.radius;
-    const double bump = d < 1.0 ? (1.0 - d * d) * (1.0 - d * d) : 0.0;
-    // The own element always counts a little, so no face is left without a value.
-    const double w = directions.confidence[e] * (e == own ? std::max(bump, 1e-3) : bump);
-    if (w > 0.0) sum += w * fourthPower(rotateBetween(proxy.normal[e], g.n, directions.direction[e]), g.e1, g.e2);
-  };
-  add(own);
-  for (std::uint32_t i = proxy.neighbourStart[own]; i < proxy.neighbourStart[own + 1]; ++i) {
-    add(proxy.neighbours[i].first);
-  }
-  return directionOf(sum, g.e1, g.e2);
+  TransferBatch batch(proxy, directions);
+  Vec3d out;
+  const auto done = [&](std::uint64_t, const Vec3d& direction) { out = direction; };
+  batch.add(0, g, own, done);
+  batch.flush(done);
+  return out;
 }
 
 bool SweepBatch::add(std::uint64_t id, const Vec3f& normal, const Vec3d& u, const Vec3f* neighbourNormal,
@@ -469,11 +529,14 @@ void transferToFaces(const TriangleMesh& mesh, const Proxy& proxy, const VectorC
   const detail::ElementDirections directions = detail::elementDirections(proxy, z);
   field.direction.resize(numFaces);
   parallelFor(numFaces, 2048, [&](const IndexRange& range) {
+    detail::TransferBatch batch(proxy, directions);  // runs of faces of one element
+    const auto store = [&](std::uint64_t f, const Vec3d& direction) { field.set(static_cast<FaceId>(f), direction); };
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const FaceGeometry g = faceGeometry(mesh, f);
-      field.set(f, detail::transferredDirection(proxy, directions, g, proxy.faceElement[f]));
+      batch.add(f, g, proxy.faceElement[f], store);
       if (!sweepNormal.empty()) sweepNormal[f] = g.degenerate ? Vec3f(Vec3f::Zero()) : Vec3f(g.n.cast<float>());
     }
+    batch.flush(store);
   });
 }
 
