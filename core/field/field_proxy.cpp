@@ -62,6 +62,21 @@ void elementFrame(const Vec3d& n, Vec3d& e1, Vec3d& e2) {
   e2 = n.cross(e1);
 }
 
+/// directionOf's root for the batches, branch-free: (re, im) = the principal 4th root of the
+/// unit complex along (sumRe, sumIm), by two half-angle steps (unitSqrt written out); false when
+/// the sum has no direction (zero or not finite).
+inline bool quarterRoot(double sumRe, double sumIm, double& re, double& im) {
+  const double len = std::sqrt(sumRe * sumRe + sumIm * sumIm);
+  const double inverse = 1.0 / len;
+  const double re0 = sumRe * inverse, im0 = sumIm * inverse;
+  const double h0 = 0.5 * (1.0 + re0), g0 = 0.5 * (1.0 - re0);
+  const double re1 = std::sqrt(0.0 < h0 ? h0 : 0.0), im1 = std::copysign(std::sqrt(0.0 < g0 ? g0 : 0.0), im0);
+  const double h1 = 0.5 * (1.0 + re1), g1 = 0.5 * (1.0 - re1);
+  re = std::sqrt(0.0 < h1 ? h1 : 0.0);
+  im = std::copysign(std::sqrt(0.0 < g1 ? g1 : 0.0), im1);
+  return (len > 0.0) & (len <= std::numeric_limits<double>::max());
+}
+
 }  // namespace
 
 FaceGeometry faceGeometry(const std::array<Vec3d, 3>& p) {
@@ -273,14 +288,8 @@ void TransferBatch::compute() {
   }
   // directionOf: the quarter-turn representative nearest e1 of the sum's 4th root (e1 for 0).
   for (int l = 0; l < L; ++l) {
-    const double len = std::sqrt(sumRe[l] * sumRe[l] + sumIm[l] * sumIm[l]);
-    const bool turns = (len > 0.0) & (len <= kMax);
-    const double inverse = 1.0 / len;
-    const double re0 = sumRe[l] * inverse, im0 = sumIm[l] * inverse;
-    const double h0 = 0.5 * (1.0 + re0), g0 = 0.5 * (1.0 - re0);
-    const double re1 = std::sqrt(0.0 < h0 ? h0 : 0.0), im1 = std::copysign(std::sqrt(0.0 < g0 ? g0 : 0.0), im0);
-    const double h1 = 0.5 * (1.0 + re1), g1 = 0.5 * (1.0 - re1);
-    const double re = std::sqrt(0.0 < h1 ? h1 : 0.0), im = std::copysign(std::sqrt(0.0 < g1 ? g1 : 0.0), im1);
+    double re, im;
+    const bool turns = quarterRoot(sumRe[l], sumIm[l], re, im);
     for (int i = 0; i < 3; ++i) out_[i][l] = turns ? re * e1_[i][l] + im * e2_[i][l] : e1_[i][l];
   }
 }
@@ -359,16 +368,10 @@ void SweepBatch::compute() {
     sumRe[l] = re;
     sumIm[l] = im;
   }
-  // The 4th root of the sum's direction by two half-angle steps (unitSqrt, written out).
+  // The 4th root of the sum's direction.
   for (int l = 0; l < L; ++l) {
-    const double len = std::sqrt(sumRe[l] * sumRe[l] + sumIm[l] * sumIm[l]);
-    const bool turns = (len > 0.0) & (len <= std::numeric_limits<double>::max());
-    const double inverse = 1.0 / len;
-    const double re0 = sumRe[l] * inverse, im0 = sumIm[l] * inverse;
-    const double h0 = 0.5 * (1.0 + re0), g0 = 0.5 * (1.0 - re0);
-    const double re1 = std::sqrt(0.0 < h0 ? h0 : 0.0), im1 = std::copysign(std::sqrt(0.0 < g0 ? g0 : 0.0), im0);
-    const double h1 = 0.5 * (1.0 + re1), g1 = 0.5 * (1.0 - re1);
-    const double re = std::sqrt(0.0 < h1 ? h1 : 0.0), im = std::copysign(std::sqrt(0.0 < g1 ? g1 : 0.0), im1);
+    double re, im;
+    const bool turns = quarterRoot(sumRe[l], sumIm[l], re, im);
     // Unit and tangent up to float rounding (u's, and |n| in v): a few 1e-7 after the sweeps,
     // whose last step projects onto the exact planes and normalizes.
     const double o0 = re * u_[0][l] + im * v[0][l], o1 = re * u_[1][l] + im * v[1][l],
