@@ -7,6 +7,7 @@
 #include <cmath>
 #include <complex>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -125,6 +126,21 @@ std::unique_ptr<Scene> sphereScene(std::uint64_t faces) {
   options.kind = MeshKind::Sphere;
   options.faces = faces;
   return makeScene(generateMesh(options).mesh, 40.0);
+}
+
+/// The whole map's corners on a region (its input map) and its seams' translations.
+WedgeMap regionCorners(const RegionMesh& region, const WedgeMap& whole) {
+  std::vector<Vec2d> values(3 * region.faceOrigin.size());
+  for (std::size_t i = 0; i < region.faceOrigin.size(); ++i) {
+    for (int k = 0; k < 3; ++k) values[3 * i + k] = whole[3 * region.faceOrigin[i] + k];
+  }
+  return WedgeMap::fromCorners(region.mesh.triangles, values);
+}
+
+std::vector<Complex> regionSeamT(const RegionMesh& region, const std::vector<Complex>& whole) {
+  std::vector<Complex> t(region.seamOrigin.size());
+  for (std::size_t j = 0; j < t.size(); ++j) t[j] = whole[region.seamOrigin[j]];
+  return t;
 }
 
 class RefineSphere : public ::testing::Test {
@@ -440,6 +456,17 @@ TEST_F(RefineSphere, TranslationsAmongFreeVerticesAreSolvedAgain) {
   EXPECT_EQ(map.flipped, 0u);
 }
 
+/// A region of the scene with the hat map's corners and translations on it.
+struct MappedRegion {
+  RegionMesh region;
+  WedgeMap input;
+  std::vector<Complex> seamT;
+  MappedRegion(const Scene& s, const std::vector<FaceId>& faces)
+      : region(extractRegion(s.mesh(), s.topology(), s.field, s.cut, faces)),
+        input(regionCorners(region, s.hat.cornerUV)),
+        seamT(regionSeamT(region, s.hat.translations)) {}
+};
+
 // The repair's stiffened re-solves change only face weights, so each reuses the first one's
 // elimination order (solveRegion's firstOrder): the same map as ordering again, with the seams'
 // translations solved and rounded. An order that is not the pattern's (reversed, with ids out of
@@ -448,14 +475,10 @@ TEST_F(RefineSphere, AReSolveWithAnEarlierOrderGivesTheSameMap) {
   const Scene& s = *scene_;
   const std::vector<FaceId> faces = allButAFanFarFromTheCut(s, 4);
   ASSERT_FALSE(faces.empty());
-  const RegionMesh region = extractRegion(s.mesh(), s.topology(), s.field, s.cut, faces);
-  std::vector<Vec2d> values(3 * faces.size());
-  for (std::size_t i = 0; i < faces.size(); ++i) {
-    for (int k = 0; k < 3; ++k) values[3 * i + k] = s.hat.cornerUV[3 * faces[i] + k];
-  }
-  const WedgeMap input = WedgeMap::fromCorners(region.mesh.triangles, values);
-  std::vector<Complex> seamT(region.seamOrigin.size());
-  for (std::size_t j = 0; j < seamT.size(); ++j) seamT[j] = s.hat.translations[region.seamOrigin[j]];
+  const MappedRegion mapped(s, faces);
+  const RegionMesh& region = mapped.region;
+  const WedgeMap& input = mapped.input;
+  const std::vector<Complex>& seamT = mapped.seamT;
   const double h = s.options.edgeLength;
   std::vector<double> weight(faces.size(), 1.0);
   std::vector<std::uint32_t> order;
@@ -478,6 +501,54 @@ TEST_F(RefineSphere, AReSolveWithAnEarlierOrderGivesTheSameMap) {
   EXPECT_LE(maxCornerDistance(reordered.cornerUV, fresh.cornerUV), 1e-9);
   EXPECT_EQ(reordered.seamT, fresh.seamT);
   EXPECT_TRUE(measureSeams(region.mesh, region.topology, region.cut, again.cornerUV).isSeamless());
+}
+
+// The repair's stiffener builds the basis, the systems at weight 1 and their orders once and adds
+// only the re-weighted faces' part: the same map as solveRegion with those weights (to rounding),
+// with the translations solved and kept, weights above and below 1, cone weights on, and at weight
+// 1 again after stiffened solves.
+TEST_F(RefineSphere, TheStiffenerSolvesAsSolveRegionWithTheSameWeights) {
+  const Scene& s = *scene_;
+  const std::vector<FaceId> faces = allButAFanFarFromTheCut(s, 4);
+  ASSERT_FALSE(faces.empty());
+  const MappedRegion mapped(s, faces);
+  const RegionMesh& region = mapped.region;
+  const WedgeMap& input = mapped.input;
+  const std::vector<Complex>& seamT = mapped.seamT;
+  const double h = s.options.edgeLength, coneRadius = 4.0;
+  RegionStiffener stiffener(region, input, seamT, h, coneRadius);
+  std::mt19937 random(5);
+  std::vector<double> weight(faces.size(), 1.0);
+  std::uint32_t sawFreeTranslations = 0;
+  for (int round = 0; round < 5; ++round) {
+    if (round > 0 && round < 4) {
+      // Some faces stiffened hard, some softened: not only a few entries change.
+      for (double& w : weight) {
+        const double u = std::uniform_real_distribution<double>(0.0, 1.0)(random);
+        w = u < 0.2 ? w * 64.0 : (u < 0.3 ? 0.5 : w);
+      }
+    } else if (round == 4) {
+      std::fill(weight.begin(), weight.end(), 1.0);
+    }
+    for (const bool keep : {false, true}) {
+      RefineStats mine, theirs;
+      const RegionSolution stiffened = stiffener.solve(weight, keep, &mine);
+      const RegionSolution direct = solveRegion(region, input, seamT, h, &theirs, weight, coneRadius, keep);
+      EXPECT_EQ(mine.unknowns, theirs.unknowns);
+      EXPECT_EQ(mine.freeTranslations, theirs.freeTranslations);
+      EXPECT_EQ(mine.systemNonzeros, theirs.systemNonzeros);
+      EXPECT_LE(maxCornerDistance(stiffened.cornerUV, direct.cornerUV), 1e-9) << "round " << round << " keep " << keep;
+      EXPECT_EQ(stiffened.seamT, direct.seamT) << "round " << round << " keep " << keep;
+      EXPECT_TRUE(measureSeams(region.mesh, region.topology, region.cut, stiffened.cornerUV).isSeamless());
+      if (!keep) sawFreeTranslations += mine.freeTranslations;
+    }
+  }
+  EXPECT_GT(sawFreeTranslations, 0u) << "no translation re-solved: the rounded solve is not tested";
+  EXPECT_THROW(stiffener.solve(std::vector<double>(faces.size() + 1, 1.0), false), InputError);
+  std::vector<double> bad(faces.size(), 1.0);
+  bad[0] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(stiffener.solve(bad, false), InputError);
+  EXPECT_THROW(RegionStiffener(region, input, std::vector<Complex>(seamT.size() + 1), h), InputError);
 }
 
 // Small holes are held closed in a local re-solve only when the global solve closed them
@@ -998,17 +1069,9 @@ class SplineRound : public ::testing::Test {
   }
   // The region's input: the whole-mesh map on its corners (sub corner 3 i + k is whole corner
   // 3 faceOrigin[i] + k).
-  static WedgeMap regionMap(const RegionMesh& region, const WedgeMap& whole) {
-    std::vector<Vec2d> values(3 * region.faceOrigin.size());
-    for (std::size_t i = 0; i < region.faceOrigin.size(); ++i) {
-      for (int k = 0; k < 3; ++k) values[3 * i + k] = whole[3 * region.faceOrigin[i] + k];
-    }
-    return WedgeMap::fromCorners(region.mesh.triangles, values);
-  }
+  static WedgeMap regionMap(const RegionMesh& region, const WedgeMap& whole) { return regionCorners(region, whole); }
   static std::vector<Complex> regionTranslations(const RegionMesh& region) {
-    std::vector<Complex> t(region.seamOrigin.size());
-    for (std::size_t j = 0; j < t.size(); ++j) t[j] = scene_->hat.translations[region.seamOrigin[j]];
-    return t;
+    return regionSeamT(region, scene_->hat.translations);
   }
 };
 Scene* SplineRound::scene_ = nullptr;

@@ -510,17 +510,63 @@ Reduction buildRegionSystem(const RegionProblem& p, const std::vector<std::uint8
 void evaluateRegion(const RegionProblem& p, const Reduction& system, const std::vector<Complex>& x,
                     RegionSolution& out);
 
+/// The local system with the given seams' translations free (the rest fixed to seamT, whose part
+/// is fixedPart); its counts go to local.
+Reduction buildLocalSystem(const RegionProblem& p, const std::vector<std::uint8_t>& freeSeam,
+                           const std::vector<Complex>& fixedPart, double closeHolesWithin, RefineStats& local) {
+  RegionComponents components = findRegionComponents(p, freeSeam);
+  const FreeTranslations translations = findFreeTranslations(p, freeSeam, closeHolesWithin);
+  std::vector<std::uint8_t> pinned;
+  std::vector<Complex> pinValue;
+  local.pinned = pinFreeComponents(p, freeSeam, fixedPart, components, pinned, pinValue);
+  Reduction system = buildRegionSystem(p, freeSeam, translations, fixedPart, pinned, pinValue, components);
+  local.unknowns = system.numUnknowns();
+  local.freeTranslations = translations.numS;
+  return system;
+}
+
+/// Elements of a basis, each with its integrals times a scale: assembled over the faces whose
+/// weight w is not 1 with scale w - 1, the part a re-weighted system adds to the basis' own
+/// (the assembly is linear in the integrals). Their area counts 0 (the system's area is the
+/// basis' own).
+class ScaledElements final : public Basis {
+ public:
+  ScaledElements(const Basis& base, std::vector<std::uint64_t> elements, std::vector<double> scale)
+      : base_(base), elements_(std::move(elements)), scale_(std::move(scale)) {}
+  std::uint64_t numElements() const override { return elements_.size(); }
+  std::uint32_t elementDomains(std::uint64_t e, std::uint32_t* out) const override {
+    return base_.elementDomains(elements_[e], out);
+  }
+  void elementIntegrals(std::uint64_t e, ElementIntegrals& out) const override {
+    base_.elementIntegrals(elements_[e], out);
+    const double s = scale_[e];
+    for (std::uint32_t k = 0; k < out.count * out.count; ++k) out.stiffness[k] *= s;
+    for (std::uint32_t k = 0; k < out.count; ++k) out.rhs[k] *= s;
+    out.area = 0.0;
+  }
+  void evaluateCorners(const std::vector<Complex>&, WedgeMap&) const override {
+    throw InputError("scaled elements: not a basis to evaluate");
+  }
+
+ private:
+  const Basis& base_;
+  std::vector<std::uint64_t> elements_;
+  std::vector<double> scale_;
+};
+
 /// Solves the local system (when it has unknowns), evaluates the map on the region's wedges and
 /// puts the locked corners back exactly as in the input.
 RegionSolution solveRegionSystem(const RegionProblem& p, const Reduction& system, const std::vector<Complex>& seamT,
-                                 RefineStats& local, std::vector<std::uint32_t>* firstOrder = nullptr) {
+                                 RefineStats& local, std::vector<std::uint32_t>* firstOrder = nullptr,
+                                 const LinearSystem* assembled = nullptr) {
   RegionSolution out;
   std::vector<Complex> x;
   if (system.numUnknowns() > 0) {
     RoundOptions roundOptions;
     roundOptions.dropUnsolvable = false;  // a region's failure is the refinement's, reported whole
     roundOptions.firstOrder = firstOrder;
-    const SeamlessSolution solution = solveSeamless(p.basis, system, roundOptions);
+    const SeamlessSolution solution = assembled ? solveSeamlessSystem(*assembled, system, roundOptions)
+                                                : solveSeamless(p.basis, system, roundOptions);
     x = solution.unknowns;
     local.systemNonzeros = solution.stats.systemNonzeros;
     local.factorNonzeros = solution.stats.factorNonzeros;
@@ -643,12 +689,20 @@ RegionSolution solveInSplines(const RegionProblem& p, const Reduction& system, d
   return out;
 }
 
-/// solveRegion, and with spacing > 0 the spline round's solve (solveRegionInSplines).
-RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
-                               double edgeLength, RefineStats* stats, const std::vector<double>& faceWeight,
-                               double coneWeightRadius, bool keepTranslations, double spacing,
-                               std::vector<std::uint8_t>* ownUnknown, double maxColumnFraction,
-                               double closeHolesWithin, std::vector<std::uint32_t>* firstOrder = nullptr) {
+/// A local solve's figures into the caller's stats (when given).
+void copySolveStats(const RefineStats& local, RefineStats* stats) {
+  if (!stats) return;
+  stats->unknowns = local.unknowns;
+  stats->freeTranslations = local.freeTranslations;
+  stats->pinned = local.pinned;
+  stats->systemNonzeros = local.systemNonzeros;
+  stats->factorNonzeros = local.factorNonzeros;
+  stats->factorBytes = local.factorBytes;
+  stats->factorPeakBytes = local.factorPeakBytes;
+}
+
+/// Throws InputError unless cornerUV and seamT fit the region.
+void checkRegionMap(const RegionMesh& region, const WedgeMap& cornerUV, const std::vector<Complex>& seamT) {
   const std::uint32_t rf = region.topology.numFaces();
   const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
   if (cornerUV.size() != 3u * static_cast<std::size_t>(rf) || seamT.size() != ns) {
@@ -656,31 +710,42 @@ RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerU
                      std::to_string(ns) + " seams but got " + std::to_string(cornerUV.size()) +
                      " corner UVs and " + std::to_string(seamT.size()) + " translations");
   }
+}
+
+/// The region's hat basis (weights only around cones) and its reduction without translation
+/// constraints (column np + j of P is t_j itself).
+HatBasisOptions regionBasisOptions(double edgeLength, const std::vector<double>& faceWeight, double coneWeightRadius) {
   HatBasisOptions basisOptions;
   basisOptions.edgeLength = edgeLength;
   basisOptions.faceWeight = faceWeight;
   basisOptions.coneWeightRadius = coneWeightRadius;
-  const HatBasis basis(region.mesh, region.topology, region.field, region.cut, basisOptions);
-  // No translation constraints: then column np + j of P is t_j itself (t = s).
+  return basisOptions;
+}
+
+Reduction reduceRegionBasis(const HatBasis& basis) {
   const std::vector<GaussVector> noConstraints;
   ReduceOptions reduceOptions;
   reduceOptions.translationConstraints = &noConstraints;
-  const Reduction reduction = reduceBasis(basis, reduceOptions);
+  return reduceBasis(basis, reduceOptions);
+}
+
+/// solveRegion, and with spacing > 0 the spline round's solve (solveRegionInSplines).
+RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
+                               double edgeLength, RefineStats* stats, const std::vector<double>& faceWeight,
+                               double coneWeightRadius, bool keepTranslations, double spacing,
+                               std::vector<std::uint8_t>* ownUnknown, double maxColumnFraction,
+                               double closeHolesWithin, std::vector<std::uint32_t>* firstOrder = nullptr) {
+  checkRegionMap(region, cornerUV, seamT);
+  const std::uint32_t ns = static_cast<std::uint32_t>(region.cut.seams.size());
+  const HatBasis basis(region.mesh, region.topology, region.field, region.cut,
+                       regionBasisOptions(edgeLength, faceWeight, coneWeightRadius));
+  const Reduction reduction = reduceRegionBasis(basis);
   const RegionProblem problem(region, cornerUV, basis, reduction);
 
   const std::vector<Complex> fixedPart = fixedTranslationPart(problem, seamT);
   RefineStats local;
-  // The local system with the given seams' translations free (the rest fixed to seamT).
   const auto buildSystem = [&](const std::vector<std::uint8_t>& freeSeam) {
-    RegionComponents components = findRegionComponents(problem, freeSeam);
-    const FreeTranslations translations = findFreeTranslations(problem, freeSeam, closeHolesWithin);
-    std::vector<std::uint8_t> pinned;
-    std::vector<Complex> pinValue;
-    local.pinned = pinFreeComponents(problem, freeSeam, fixedPart, components, pinned, pinValue);
-    Reduction system = buildRegionSystem(problem, freeSeam, translations, fixedPart, pinned, pinValue, components);
-    local.unknowns = system.numUnknowns();
-    local.freeTranslations = translations.numS;
-    return system;
+    return buildLocalSystem(problem, freeSeam, fixedPart, closeHolesWithin, local);
   };
   const auto freeSeams = [&] { return keepTranslations ? std::vector<std::uint8_t>(ns, 0) : findFreeSeams(problem); };
 
@@ -701,15 +766,7 @@ RegionSolution solveRegionWith(const RegionMesh& region, const WedgeMap& cornerU
   } else {
     out = solveRegionSystem(problem, buildSystem(freeSeams()), seamT, local, firstOrder);
   }
-  if (stats) {
-    stats->unknowns = local.unknowns;
-    stats->freeTranslations = local.freeTranslations;
-    stats->pinned = local.pinned;
-    stats->systemNonzeros = local.systemNonzeros;
-    stats->factorNonzeros = local.factorNonzeros;
-    stats->factorBytes = local.factorBytes;
-    stats->factorPeakBytes = local.factorPeakBytes;
-  }
+  copySolveStats(local, stats);
   return out;
 }
 
@@ -731,6 +788,84 @@ RegionSolution solveRegionInSplines(const RegionMesh& region, const WedgeMap& co
   if (!(spacing > 0.0)) throw InputError("refine: spline spacing must be positive");
   return solveRegionWith(region, cornerUV, seamT, edgeLength, stats, {}, coneWeightRadius, false, spacing,
                          &ownUnknown, maxColumnFraction, closeHolesWithin);
+}
+
+struct RegionStiffener::Impl {
+  /// One kind of local system (translations solved or kept): built, assembled at weight 1 and
+  /// ordered at its first solve.
+  struct Kind {
+    bool built = false;
+    Reduction system;
+    LinearSystem assembled;
+    std::vector<std::uint32_t> order;
+    RefineStats local;
+  };
+  const RegionMesh& region;
+  std::vector<Complex> seamT;
+  double closeHolesWithin;
+  HatBasis basis;
+  Reduction reduction;
+  RegionProblem problem;
+  std::vector<Complex> fixedPart;
+  Kind kinds[2];
+
+  Impl(const RegionMesh& r, const WedgeMap& cornerUV, const std::vector<Complex>& t, double edgeLength,
+       double coneWeightRadius, double holes)
+      : region(r),
+        seamT(t),
+        closeHolesWithin(holes),
+        basis(r.mesh, r.topology, r.field, r.cut, regionBasisOptions(edgeLength, {}, coneWeightRadius)),
+        reduction(reduceRegionBasis(basis)),
+        problem(r, cornerUV, basis, reduction),
+        fixedPart(fixedTranslationPart(problem, seamT)) {}
+};
+
+RegionStiffener::RegionStiffener(const RegionMesh& region, const WedgeMap& cornerUV, const std::vector<Complex>& seamT,
+                                 double edgeLength, double coneWeightRadius, double closeHolesWithin) {
+  checkRegionMap(region, cornerUV, seamT);
+  impl_ = std::make_unique<Impl>(region, cornerUV, seamT, edgeLength, coneWeightRadius, closeHolesWithin);
+}
+
+RegionStiffener::~RegionStiffener() = default;
+
+RegionSolution RegionStiffener::solve(const std::vector<double>& faceWeight, bool keepTranslations, RefineStats* stats) {
+  Impl& m = *impl_;
+  const std::uint32_t rf = m.region.topology.numFaces();
+  if (!faceWeight.empty() && faceWeight.size() != rf) {
+    throw InputError("refine: " + std::to_string(faceWeight.size()) + " face weights for a region of " +
+                     std::to_string(rf) + " faces");
+  }
+  Impl::Kind& kind = m.kinds[keepTranslations ? 1 : 0];
+  if (!kind.built) {
+    const std::vector<std::uint8_t> freeSeam =
+        keepTranslations ? std::vector<std::uint8_t>(m.region.cut.seams.size(), 0) : findFreeSeams(m.problem);
+    kind.system = buildLocalSystem(m.problem, freeSeam, m.fixedPart, m.closeHolesWithin, kind.local);
+    kind.assembled = assembleSystem(m.basis, kind.system);
+    kind.built = true;
+  }
+  std::vector<std::uint64_t> elements;
+  std::vector<double> scale;
+  for (std::uint64_t e = 0; e < m.basis.numElements() && !faceWeight.empty(); ++e) {
+    const double w = faceWeight[m.basis.elementFace(e)];
+    if (!std::isfinite(w) || w < 0.0) throw InputError("refine: face weights must be finite and not negative");
+    if (w == 1.0) continue;
+    elements.push_back(e);
+    scale.push_back(w - 1.0);
+  }
+  RefineStats local = kind.local;
+  RegionSolution out;
+  if (elements.empty()) {
+    out = solveRegionSystem(m.problem, kind.system, m.seamT, local, &kind.order, &kind.assembled);
+  } else {
+    const LinearSystem added = assembleSystem(ScaledElements(m.basis, std::move(elements), std::move(scale)), kind.system);
+    LinearSystem weighted;
+    weighted.lower = kind.assembled.lower + added.lower;
+    weighted.rhs = kind.assembled.rhs + added.rhs;
+    weighted.totalArea = kind.assembled.totalArea;
+    out = solveRegionSystem(m.problem, kind.system, m.seamT, local, &kind.order, &weighted);
+  }
+  copySolveStats(local, stats);
+  return out;
 }
 
 namespace detail {

@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -265,6 +266,27 @@ RegionSolution solveRegion(const RegionMesh& region, const WedgeMap& cornerUV,
                            const std::vector<double>& faceWeight = {}, double coneWeightRadius = 0.0,
                            bool keepTranslations = false, double closeHolesWithin = 0.0,
                            std::vector<std::uint32_t>* firstOrder = nullptr);
+
+/// solveRegion repeated on one region with other face weights (the foldover repair's stiffened
+/// solves): the hat basis, its reduction, each kind of local system (translations solved or kept)
+/// and its assembly at weight 1 are built once; a solve assembles only the faces whose weight is
+/// not 1, scaled by weight - 1, adds them, and factors in the elimination order of the kind's
+/// first solve. The same map as solveRegion with those weights, up to rounding. Holds
+/// references: the region and cornerUV must outlive it. Throws as solveRegion does.
+class RegionStiffener {
+ public:
+  RegionStiffener(const RegionMesh& region, const WedgeMap& cornerUV, const std::vector<std::complex<double>>& seamT,
+                  double edgeLength, double coneWeightRadius = 0.0, double closeHolesWithin = 0.0);
+  ~RegionStiffener();
+  RegionStiffener(const RegionStiffener&) = delete;
+  RegionStiffener& operator=(const RegionStiffener&) = delete;
+  /// faceWeight: #sub faces, or empty for all 1.
+  RegionSolution solve(const std::vector<double>& faceWeight, bool keepTranslations, RefineStats* stats = nullptr);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// solveRegion with its translations kept, in the trilinear B-splines of the given spacing (mesh
 /// units) sampled at the region's vertices (core/refine/spline_space.h) instead of one unknown per

@@ -102,21 +102,19 @@ RoundSolution stiffenRegion(const RegionMesh& region, const WedgeMap& regionUV,
   out.componentImproved.assign(before.size(), 0);
   std::vector<double> weight(region.topology.numFaces(), 1.0);
   const std::vector<std::uint8_t> collapsedBefore = collapsedFaces(region, regionUV, h);
-  // The re-solves change only weights: each reuses the first one's elimination order (one per
-  // kind of solve: with the seams re-rounded or their translations kept).
-  std::vector<std::uint32_t> order, keptOrder;
+  // The re-solves change only weights: the basis, the systems at weight 1 and each kind's
+  // elimination order (seams re-rounded, or their translations kept) serve them all.
+  RegionStiffener stiffener(region, regionUV, regionT, h, options.coneWeightRadius, options.closeHolesWithin);
   for (std::uint32_t solve = 0; solve < std::max(1u, options.maxSolves); ++solve) {
     RefineStats stats;
-    RegionSolution solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, false,
-                                        options.closeHolesWithin, &order);
+    RegionSolution solved = stiffener.solve(weight, false, &stats);
     // Seams whose edges all lie in the patch are re-rounded, which can move two cones onto one
     // point (their faces collapse): then solved again with every translation kept.
     const std::vector<std::uint8_t> collapsed = collapsedFaces(region, solved.cornerUV, h);
     bool collapsesMore = false;
     for (std::size_t i = 0; i < collapsed.size() && !collapsesMore; ++i) collapsesMore = collapsed[i] > collapsedBefore[i];
     if (collapsesMore) {
-      solved = solveRegion(region, regionUV, regionT, h, &stats, weight, options.coneWeightRadius, true,
-                           options.closeHolesWithin, &keptOrder);
+      solved = stiffener.solve(weight, true, &stats);
       ++out.solves;
     }
     ++out.solves;

@@ -434,6 +434,18 @@ double roundTranslations(const Reduction& reduction, std::vector<Complex>& x) {
 
 SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
                                const RoundOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  AssembleOptions assembleOptions;
+  assembleOptions.progress = options.progress;
+  const LinearSystem system = assembleSystem(basis, reduction, assembleOptions);
+  const double seconds = secondsSince(start);
+  SeamlessSolution out = solveSeamlessSystem(system, reduction, options);
+  out.stats.secondsAssemble = seconds;
+  return out;
+}
+
+SeamlessSolution solveSeamlessSystem(const LinearSystem& system, const Reduction& reduction,
+                                     const RoundOptions& options) {
   SeamlessSolution out;
   SeamlessStats& stats = out.stats;
   const std::uint32_t n = reduction.numUnknowns();
@@ -443,13 +455,11 @@ SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
   stats.determinedPositions = static_cast<std::uint32_t>(reduction.determinedBasis.size());
   stats.nonUnitConstraints = reduction.nonUnitConstraints;
   stats.components = reduction.numComponents;
-
-  const auto start = std::chrono::steady_clock::now();
-  AssembleOptions assembleOptions;
-  assembleOptions.progress = options.progress;
-  const LinearSystem system = assembleSystem(basis, reduction, assembleOptions);
+  if (system.lower.rows() != static_cast<Eigen::Index>(n) || system.rhs.size() != static_cast<Eigen::Index>(n)) {
+    throw InputError("seamless solve: a system of " + std::to_string(system.lower.rows()) + " unknowns for a reduction of " +
+                     std::to_string(n));
+  }
   stats.systemNonzeros = static_cast<std::uint64_t>(system.lower.nonZeros());
-  stats.secondsAssemble = secondsSince(start);
 
   // Unknowns no element touches (zero diagonal) are fixed at 0: they do not affect the map.
   std::vector<std::uint8_t> excluded(n, 1);

@@ -82,6 +82,14 @@ struct SeamlessSolution {
 SeamlessSolution solveSeamless(const Basis& basis, const Reduction& reduction,
                                const RoundOptions& options = {});
 
+struct LinearSystem;  // core/solve/assemble.h
+
+/// solveSeamless on a system already assembled from `reduction` (assembleSystem): a caller that
+/// solves several systems of one basis and reduction assembles what they share once (the
+/// foldover repair's stiffened solves). Leaves stats.secondsAssemble at 0.
+SeamlessSolution solveSeamlessSystem(const LinearSystem& system, const Reduction& reduction,
+                                     const RoundOptions& options = {});
+
 /// Rounds s (the translational unknowns of x) to the nearest Gaussian integers in place and
 /// returns the largest change.
 double roundTranslations(const Reduction& reduction, std::vector<std::complex<double>>& unknowns);
