@@ -117,6 +117,43 @@ TEST(SeamlessSolve, LinearFunctionIsReproducedExactlyOnAFlatGrid) {
   }
 }
 
+// When the second solve fixes only a few unknowns more than the first (the translations) and
+// frees none, it comes from the first factor (RoundOptions::reuseFirstFactor): the same unknowns
+// as a second factorization, to rounding. The torus's component has rotations, so its second
+// solve frees the first one's pin and factors again; counted as without rotations, both solves
+// pin the same unknown and the first factor serves.
+TEST(SeamlessSolve, TheSecondSolveFromTheFirstFactorEqualsAFactorization) {
+  FieldTorus t;
+  ASSERT_GT(t.reduction.numTranslational, 0u);
+  const Solved rotating = t.solve({});
+  EXPECT_FALSE(rotating.solution.stats.secondFromFirstFactor) << "the first pin is freed: no reuse";
+  ASSERT_EQ(t.reduction.numComponents, 1u);
+  t.reduction.componentHasRotation.assign(1, 0);
+  RoundOptions refactor;
+  refactor.reuseFirstFactor = false;
+  const Solved reused = t.solve({});
+  const Solved factored = t.solve(refactor);
+  EXPECT_TRUE(reused.solution.stats.secondFromFirstFactor);
+  EXPECT_FALSE(factored.solution.stats.secondFromFirstFactor);
+  EXPECT_EQ(reused.solution.stats.pinnedSecond, factored.solution.stats.pinnedSecond);
+  ASSERT_EQ(reused.solution.unknowns.size(), factored.solution.unknowns.size());
+  double scale = 0.0, diff = 0.0;
+  for (std::size_t j = 0; j < reused.solution.unknowns.size(); ++j) {
+    scale = std::max(scale, std::abs(factored.solution.unknowns[j]));
+    diff = std::max(diff, std::abs(reused.solution.unknowns[j] - factored.solution.unknowns[j]));
+  }
+  EXPECT_GT(scale, 1.0);
+  EXPECT_LE(diff, 1e-9 * scale);
+  EXPECT_EQ(reused.solution.translations, factored.solution.translations);
+  // Not a copy of the first solve: the rounding moved the translations, and the map followed.
+  double moved = 0.0;
+  for (std::uint32_t j = t.reduction.numPositional; j < t.reduction.numUnknowns(); ++j) {
+    moved = std::max(moved, gaussianIntegerDistance(reused.solution.unknowns[j]));
+  }
+  EXPECT_EQ(moved, 0.0);
+  EXPECT_GT(reused.solution.stats.maxRoundingShift, 1e-6);
+}
+
 TEST(SeamlessSolve, RoundTranslationsRoundsOnlyTheTranslationalUnknowns) {
   Reduction reduction;
   reduction.numPositional = 2;

@@ -206,6 +206,63 @@ ComponentPins findPins(const Reduction& reduction, const std::vector<std::uint8_
   return pins;
 }
 
+/// The second solve taken from the first one's factor when it fixes at most this many unknowns
+/// more: one solve with the factor per such unknown, against a factorization.
+constexpr std::size_t kSecondFromFirstUnknowns = 24;
+
+/// The second solve's fixed unknowns (excluded, every translation, and the pins of components
+/// whose seams all have r = 1).
+std::vector<std::uint8_t> secondSolveFixed(const Reduction& reduction, const std::vector<std::uint8_t>& excluded,
+                                           const ComponentPins& pins) {
+  std::vector<std::uint8_t> fixed = excluded;
+  for (std::uint32_t j = reduction.numPositional; j < reduction.numUnknowns(); ++j) fixed[j] = 1;
+  for (std::uint32_t c = 0; c < reduction.numComponents; ++c) {
+    const std::uint32_t first = pins.firstPositional[c];
+    if (!reduction.componentHasRotation[c] && first != kInvalidId) fixed[first] = 1;
+  }
+  return fixed;
+}
+
+/// The second solve from the first one's factor A (free unknowns F): the minimiser with the
+/// unknowns D of F that the second solve fixes held at their values t in x is
+/// y = y1 + Z mu, Z = A^-1 E (E: the columns of D), (E^T Z) mu = t - y1_D, y1 the first solution
+/// (firstX on F). Exact up to rounding; |D| solves with the factor instead of a factorization.
+/// Writes the free unknowns of the second solve into x; false (x unchanged) when E^T Z is not
+/// invertible in floating point.
+bool secondFromFirst(const FactoredSystem& first, const std::vector<std::uint8_t>& fixedSecond,
+                     const std::vector<Complex>& firstX, std::vector<Complex>& x) {
+  const std::vector<std::uint32_t>& free = first.restricted.freeUnknowns;
+  const Eigen::Index nf = static_cast<Eigen::Index>(free.size());
+  std::vector<Eigen::Index> held;  // positions in F of D
+  for (Eigen::Index k = 0; k < nf; ++k) {
+    if (fixedSecond[free[k]]) held.push_back(k);
+  }
+  const Eigen::Index m = static_cast<Eigen::Index>(held.size());
+  Eigen::MatrixXcd Z(nf, m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    ComplexVector e = ComplexVector::Zero(nf);
+    e[held[i]] = 1.0;
+    Z.col(i) = first.factor.solve(e);
+  }
+  Eigen::MatrixXcd S(m, m);
+  Eigen::VectorXcd gap(m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    S.row(i) = Z.row(held[i]);
+    gap[i] = x[free[held[i]]] - firstX[free[held[i]]];
+  }
+  const Eigen::FullPivLU<Eigen::MatrixXcd> lu(S);
+  if (m > 0 && !lu.isInvertible()) return false;
+  const Eigen::VectorXcd mu = m > 0 ? Eigen::VectorXcd(lu.solve(gap)) : Eigen::VectorXcd();
+  const Eigen::VectorXcd y = m > 0 ? Eigen::VectorXcd(Z * mu) : Eigen::VectorXcd::Zero(nf);
+  for (Eigen::Index k = 0; k < nf; ++k) {
+    if (!std::isfinite(y[k].real()) || !std::isfinite(y[k].imag())) return false;
+  }
+  for (Eigen::Index k = 0; k < nf; ++k) {
+    if (!fixedSecond[free[k]]) x[free[k]] = firstX[free[k]] + y[k];
+  }
+  return true;
+}
+
 /// First solve, rounding and second solve with the unknowns in `excluded` fixed at their values
 /// in `initial` (0, or solved apart). Throws FactorFailure.
 void solveRounded(const LinearSystem& system, const Reduction& reduction,
@@ -241,10 +298,30 @@ void solveRounded(const LinearSystem& system, const Reduction& reduction,
   // The first solve's fill-reducing order serves the later ones: their systems are its system
   // with a few unknowns fixed or freed, and the ordering is half the cost of a factorization.
   FillOrder order;
+  // When the second solve only fixes a few unknowns more than the first (its translations, in a
+  // local re-solve), the first factor is kept and serves it (secondFromFirst).
+  const bool lines = options.lines && !options.lines->empty();
+  const std::vector<std::uint8_t> fixedSecond = secondSolveFixed(reduction, excluded, pins);
+  bool keepFirst = options.reuseFirstFactor && anchors.empty() && !lines && reduction.numTranslational > 0 &&
+                   !(options.greedy && options.greedyRounds > 1);
+  std::size_t moreFixed = 0;
+  for (std::uint32_t j = 0; j < n && keepFirst; ++j) {
+    if (fixed[j] && !fixedSecond[j]) keepFirst = false;
+    moreFixed += fixedSecond[j] && !fixed[j];
+  }
+  keepFirst = keepFirst && moreFixed <= kSecondFromFirstUnknowns;
+  FactoredSystem first;
+  std::vector<Complex> firstX;
   if (anchors.empty()) {
     FillOrder given;
     if (options.firstOrder) given.unknowns = *options.firstOrder;
-    solveWithFixed(system, fixed, x, "first solve", stats, given, &order);
+    if (keepFirst) {
+      factorSystem(system, fixed, x, {}, "first solve", first, stats, given, &order);
+      solveInto(first, x);
+      firstX = x;
+    } else {
+      solveWithFixed(system, fixed, x, "first solve", stats, given, &order);
+    }
     if (options.firstOrder) *options.firstOrder = order.unknowns;
   } else {
     solveAnchored(system, reduction, anchors, fixed, x, stats, &order);
@@ -253,7 +330,6 @@ void solveRounded(const LinearSystem& system, const Reduction& reduction,
     stats.pinnedFirst += stats.anchoredComponents;
   }
   stats.secondsFirstSolve = secondsSince(start);
-  const bool lines = options.lines && !options.lines->empty();
   LineConstraintStats ownLineStats;
   LineConstraintStats& lineStats = options.lineStats ? *options.lineStats : ownLineStats;
   if (reduction.numTranslational == 0) {
@@ -288,20 +364,22 @@ void solveRounded(const LinearSystem& system, const Reduction& reduction,
   stats.secondsRound = secondsSince(start);
 
   start = std::chrono::steady_clock::now();
-  fixed = excluded;
-  for (std::uint32_t j = reduction.numPositional; j < n; ++j) fixed[j] = 1;
+  fixed = fixedSecond;
   for (std::uint32_t c = 0; c < nc; ++c) {
-    const std::uint32_t first = pins.firstPositional[c];
-    if (reduction.componentHasRotation[c] || first == kInvalidId) continue;
+    const std::uint32_t pin = pins.firstPositional[c];
+    if (reduction.componentHasRotation[c] || pin == kInvalidId) continue;
     // Keep the pinned value of the first solve (0).
-    fixed[first] = 1;
-    x[first] = 0.0;
+    if (keepFirst && x[pin] != Complex(0.0)) keepFirst = false;
+    x[pin] = 0.0;
     ++stats.pinnedSecond;
   }
   reportProgress(options.progress, "solve", 0.5);
   if (lines) {
     solveWithLineConstraints(system, reduction, fixed, x, *options.lines, lineStats);
+  } else if (keepFirst && secondFromFirst(first, fixed, firstX, x)) {
+    stats.secondFromFirstFactor = true;
   } else {
+    first = FactoredSystem();  // freed before the second factorization
     solveWithFixed(system, fixed, x, "second solve", stats, order);
   }
   stats.secondsSecondSolve = secondsSince(start);

@@ -39,6 +39,11 @@ struct RoundOptions {
   /// values: the foldover repair's stiffened solves); the order used is written back. Unknowns it
   /// misses go last. Not used by a first solve with anchored components.
   std::vector<std::uint32_t>* firstOrder = nullptr;
+  /// When the second solve fixes at most a few unknowns more than the first (a local re-solve's
+  /// translations) and nothing the first fixed is freed, it is taken from the first factor (a
+  /// solve per such unknown) instead of a second factorization: the same map up to rounding.
+  /// false: always factor again (tests compare the two).
+  bool reuseFirstFactor = true;
   ProgressFn progress;
 };
 
@@ -59,6 +64,7 @@ struct SeamlessStats {
   std::uint64_t factorBytes = 0;         ///< largest factor
   std::uint64_t factorPeakBytes = 0;     ///< CHOLMOD's peak
   bool realFallback = false;
+  bool secondFromFirstFactor = false;    ///< RoundOptions::reuseFirstFactor took effect
   double maxRoundingShift = 0.0;         ///< max |s - round(s)| after the first solve
   double secondsAssemble = 0.0, secondsFirstSolve = 0.0, secondsRound = 0.0,
          secondsSecondSolve = 0.0;
