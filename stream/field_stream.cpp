@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <string>
 #include <future>
 #include <memory>
 #include <optional>
@@ -10,6 +12,7 @@
 
 #include "core/field/detail_cone_merge.h"
 #include "core/field/detail_proxy.h"
+#include "core/field/detail_rough_spots.h"
 #include "core/field/detail_singularities.h"
 #include "core/field/detail_smoothing.h"
 #include "core/field/field_numerics.h"
@@ -59,6 +62,71 @@ ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& sc
   return current;
 }
 
+ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& scratch, const ScratchFile& surface,
+                                    double gridLength, const StreamPassOptions& pass, ScratchField& counts) {
+  const char* stage = "field: rough spots";
+  if (!(gridLength > 0.0) || !std::isfinite(gridLength)) {
+    throw InputError("smoothRoughSpots: grid edge length " + std::to_string(gridLength) + " is not positive");
+  }
+  const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
+  const std::uint64_t blockRecords = std::max<std::uint64_t>(1, pass.blockRecords);
+  const double spacing = kRoughSpotSpacing * gridLength;
+  // The rough vertices: a pass over the vertices, as smoothRoughSpots finds them.
+  std::vector<VertexId> seeds;
+  {
+    struct Readers {
+      PagedCornerTable table;
+      PagedReader<Vec3f> positions;
+    };
+    ReaderPool<Readers> pool([&] {
+      return std::unique_ptr<Readers>(new Readers{PagedCornerTable(scratch, cacheBytes), PagedReader<Vec3f>(surface, cacheBytes)});
+    });
+    std::vector<std::uint8_t> rough;
+    for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
+      const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
+      rough.assign(count, 0);
+      parallelFor(count, 4096, [&](const IndexRange& range) {
+        auto readers = pool.take();
+        const auto at = [&](VertexId w) -> Vec3d { return readers->positions[w].cast<double>(); };
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+          rough[i] = detail::isRoughVertex(readers->table, static_cast<VertexId>(first + i), at, spacing);
+        }
+      });
+      for (std::uint64_t i = 0; i < count; ++i) {
+        if (rough[i]) seeds.push_back(static_cast<VertexId>(first + i));
+      }
+    }
+    pool.forEach([&](Readers& r) { folder.countRead(stage, r.table.bytesRead() + r.positions.bytesRead()); });
+  }
+  counts.roughVertices = seeds.size();
+  if (seeds.empty()) return surface;
+  std::vector<std::pair<VertexId, Vec3f>> moved;
+  {
+    PagedCornerTable table(scratch, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
+    PagedReader<Vec3f> positions(surface, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
+    std::uint32_t rounds = 0;
+    moved = detail::smoothRoughRounds(
+        table, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, rounds);
+    folder.countRead(stage, table.bytesRead() + positions.bytesRead());
+  }
+  counts.roughSpotVertices = moved.size();
+  // The surface with the moved vertices in place: a copy.
+  ScratchWriter writer(folder, stage);
+  {
+    ScratchRandomReader in(folder, surface, stage);
+    std::vector<Vec3f> block;
+    auto next = moved.begin();
+    for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
+      const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
+      block.resize(count);
+      in.readAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+      for (; next != moved.end() && next->first < first + count; ++next) block[next->first - first] = next->second;
+      writer.write(block.data(), count * sizeof(Vec3f));
+    }
+  }
+  folder.remove(surface);
+  return writer.finish();
+}
 
 namespace {
 
@@ -132,10 +200,14 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   const std::uint64_t blockFaces = std::max<std::uint64_t>(1, pass.blockRecords);
   const std::uint64_t nf = scratch.numFaces;
   const bool smoothed = geometry.smoothingIterations > 0;
-  const ScratchFile surface = smoothed ? smoothScratchPositions(folder, scratch, geometry.smoothingIterations, pass)
-                                       : scratch.positions;
-  if (smoothed) out.framePositions = surface;
+  ScratchFile surface = smoothed ? smoothScratchPositions(folder, scratch, geometry.smoothingIterations, pass)
+                                 : scratch.positions;
   clock.finish("smooth");
+  if (smoothed && geometry.roughSpotGrid > 0.0) {
+    surface = smoothScratchRoughSpots(folder, scratch, surface, geometry.roughSpotGrid, pass, out);
+    clock.finish("rough spots");
+  }
+  if (smoothed) out.framePositions = surface;
   if (nf == 0) return out;
 
   // Each face's cell: the cell of its centroid on the surface.

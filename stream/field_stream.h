@@ -29,6 +29,15 @@ struct StreamPassOptions {
 ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t iterations,
                                    const StreamPassOptions& pass);
 
+struct ScratchField;
+/// smoothRoughSpots on the smoothed surface `surface` (a file of smoothScratchPositions): the
+/// rough vertices found by a pass over the vertices, the rounds on their regions through page
+/// caches (the regions' hash maps in memory: about 100 bytes per vertex moved), then a copy of
+/// the surface with the moved vertices, which replaces it (surface itself when nothing is rough).
+/// The figures go to counts.roughVertices and roughSpotVertices.
+ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& scratch, const ScratchFile& surface,
+                                    double gridLength, const StreamPassOptions& pass, ScratchField& counts);
+
 /// computeCrossField(mesh, topology, FieldMethod::Proxy, {}, proxy, geometry) of the cleaned mesh,
 /// in the scratch folder.
 struct ScratchField {
@@ -39,7 +48,10 @@ struct ScratchField {
   ScratchFile angles;
   std::uint32_t elements = 0, colours = 0;
   std::uint64_t elementEdges = 0;
-  /// Wall seconds of the passes: smooth, cells, elements, solve, transfer, colour, sweeps, finish.
+  /// Rough spots of the surface (FieldGeometryOptions::roughSpotGrid): rough vertices found,
+  /// vertices moved.
+  std::uint64_t roughVertices = 0, roughSpotVertices = 0;
+  /// Wall seconds of the passes: smooth, rough spots (with roughSpotGrid), cells, elements, solve, transfer, colour, sweeps, finish.
   std::vector<std::pair<std::string, double>> stageSeconds;
 };
 

@@ -277,7 +277,11 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   r.diagonal = scratch.report.diagonalWithoutSpikes;
   r.edgeLength = options.spacing.spacing(r.diagonal);
   const double h = r.edgeLength;
-  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), early, true);
+  FieldGeometryOptions geometry;
+  geometry.roughSpotGrid = h;  // as the in-memory pipeline smooths its field's surface
+  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), geometry, early, true);
+  r.roughVertices = field.roughVertices;
+  r.roughSpotVertices = field.roughSpotVertices;
   r.fieldElements = field.elements;
   for (const auto& [name, seconds] : field.stageSeconds) r.passSeconds.emplace_back("field: " + name, seconds);
   meter.finish("field");

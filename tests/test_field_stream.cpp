@@ -210,6 +210,40 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
   });
 }
 
+TEST(FieldStream, RoughSpotsAsInMemory) {
+  // The plane's fine centre crumpled by noise (rough at h = 2), a noisy scan and the damaged mesh
+  // at a grid coarse enough for their noise to be rough somewhere.
+  const NamedMeshes meshes = {{"crumpled fine spot", testing::denseSpotPlane(12, 2, 16, 0.3, 7)},
+                              {"noisy scan with holes", testing::withOneTriangleHoles(noisyScan(30000), 41)},
+                              {"damaged", testing::damagedMesh(19)}};
+  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+    const double diagonal = computeBoundingBox(cleaned.mesh.positions).extent().norm();
+    for (const double grid : {diagonal / 16, diagonal / 100})
+    for (const std::uint64_t memory : {std::uint64_t(1), std::uint64_t(1) << 30}) {
+      SCOPED_TRACE("grid " + std::to_string(grid) + ", memory " + std::to_string(memory));
+      FieldGeometryOptions geometry;
+      geometry.roughSpotGrid = grid;
+      FieldSolveStats stats;
+      ProxyFieldOptions proxy;
+      proxy.stats = &stats;
+      const CrossField expected = computeCrossField(cleaned.mesh, cleaned.topology, FieldMethod::Proxy, {}, proxy, geometry);
+      const std::uint64_t filesBefore = folder.bytesInUse();
+      const ScratchField streamed = computeScratchField(folder, scratch, {}, geometry, StreamPassOptions{memory, 1000});
+      EXPECT_EQ(streamed.roughVertices, stats.roughVertices);
+      EXPECT_EQ(streamed.roughSpotVertices, stats.roughSpotVertices);
+      EXPECT_EQ(streamed.roughSpotVertices, expected.frameOverrides.size());
+      EXPECT_EQ(readPositions(folder, streamed.framePositions), expected.framePositions);
+      EXPECT_EQ(countDiffering(readPositions(folder, streamed.directions), expected.direction), 0u)
+          << "directions differ";
+      // Only the results stay: the surface before the rough spots were smoothed was removed.
+      EXPECT_EQ(folder.bytesInUse() - filesBefore, streamed.directions.bytes + streamed.framePositions.bytes);
+      folder.remove(streamed.directions);
+      folder.remove(streamed.framePositions);
+      if (grid == diagonal / 16) EXPECT_GT(stats.roughSpotVertices, 0u) << "nothing rough to compare";
+    }
+  });
+}
+
 TEST(FieldStream, SingularitiesEqualTheInMemoryOnes) {
   const NamedMeshes meshes = testing::stageTestMeshes(13);
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {

@@ -326,4 +326,39 @@ TriangleMesh damagedMesh(std::uint32_t seed) {
   return concatMeshes({m, moebiusStrip(24, Vec3f(5.0f, 0.0f, 0.0f)), books});
 }
 
+namespace {
+
+/// Coordinates from -outer to outer: steps of 1 outside [-inner, inner], of 1 / `dense` inside.
+std::vector<float> axisSteps(int outer, int inner, int dense) {
+  std::vector<float> out;
+  for (int i = -outer; i < -inner; ++i) out.push_back(static_cast<float>(i));
+  for (int i = -inner * dense; i < inner * dense; ++i) out.push_back(static_cast<float>(i) / dense);
+  for (int i = inner; i <= outer; ++i) out.push_back(static_cast<float>(i));
+  return out;
+}
+
+}  // namespace
+
+TriangleMesh denseSpotPlane(int outer, int inner, int dense, double jitter, std::uint32_t seed) {
+  const std::vector<float> axis = axisSteps(outer, inner, dense);
+  const int n = static_cast<int>(axis.size());
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> noise(-jitter, jitter);
+  TriangleMesh mesh;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const float z = jitter > 0.0 ? static_cast<float>(noise(random)) : 0.0f;
+      mesh.positions.emplace_back(axis[i], axis[j], z);
+    }
+  }
+  const auto id = [n](int i, int j) { return static_cast<VertexId>(j * n + i); };
+  for (int j = 0; j + 1 < n; ++j) {
+    for (int i = 0; i + 1 < n; ++i) {
+      mesh.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  }
+  return mesh;
+}
+
 }  // namespace seamvox::testing

@@ -69,5 +69,10 @@ CrossField turningField(const TriangleMesh& mesh, double turns);
 /// A 6K-face scan with fins, bowties, flipped patches, duplicates, a Moebius strip and books of
 /// faces on one edge: every kind of damage cleaning repairs.
 TriangleMesh damagedMesh(std::uint32_t seed);
+/// A plane of unit cells, 2 * outer across, whose centre square of side 2 * inner is cut into
+/// cells 1 / dense across (a part tessellated far finer than the rest, as an over-sampled part of
+/// a scan). Every vertex moves along z by a uniform amount in [-jitter, jitter] (world units, as a
+/// scanner's depth noise; seeded).
+TriangleMesh denseSpotPlane(int outer, int inner, int dense, double jitter, std::uint32_t seed);
 
 }  // namespace seamvox::testing

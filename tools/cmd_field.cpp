@@ -141,6 +141,10 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   if (c.curvature > 0.0 && run.method == FieldMethod::Proxy) {
     throw UsageError("--curvature needs the direct field (--field smooth): the proxy field is the smoothest field only");
   }
+  // h as param takes it (the diagonal without spikes): both smooth the same rough spots and merge
+  // the same cones.
+  run.edgeLength = c.spacing.spacing(run.clean.report.diagonalWithoutSpikes);
+  source.gridLength = run.edgeLength;
   try {
     const std::optional<FieldSource> aligned =
         alignedFieldSource(topology, findFeatures(mesh, topology, c.features), source, mesh.numFaces());
@@ -152,8 +156,6 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   meter.finish("field");
   // The cones param cuts through: those closer than the merge distance are merged, as param does
   // before its first cut (param may merge a few more pairs that a solve puts on one point).
-  // h as param takes it (the diagonal without spikes), so both merge the same cones.
-  run.edgeLength = c.spacing.spacing(run.clean.report.diagonalWithoutSpikes);
   run.coneCut = cutThroughCones(mesh, topology, run.field, c.mergeCones * run.edgeLength, {}, 0.0, c.progress);
   meter.finish("cut");
   return run;

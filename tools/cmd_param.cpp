@@ -249,6 +249,8 @@ PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver sol
   r.coneIndex4 = s.coneIndex4;
   r.seams = s.seams;
   r.conesBeforeMerge = s.conesBeforeMerge;
+  r.fieldSolve.roughVertices = s.roughVertices;
+  r.fieldSolve.roughSpotVertices = s.roughSpotVertices;
   r.merged = s.merged;
   r.conePasses = s.conePasses;
   r.conePassKept = s.conePassKept;

@@ -68,7 +68,8 @@ SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh,
     for (std::size_t first = 0; first < vertices.size(); first += batchVertices) {
       const std::size_t count = std::min(batchVertices, vertices.size() - first);
       const std::vector<VertexId> batch(vertices.begin() + first, vertices.begin() + first + count);
-      const std::vector<Vec3f> smoothed = smoothPositionsAt(mesh, topology, steps, batch);
+      const std::vector<Vec3f> smoothed = field.frameSmoothing > 0 ? framePositionsAt(mesh, topology, field, batch)
+                                                                    : smoothPositionsAt(mesh, topology, steps, batch);
       // New values in parallel; then, vertex by vertex in increasing order, each set unless it
       // stretches a face of its fan at the values so far (as the out-of-core pass goes).
       std::vector<std::uint8_t> keep(count, 0);

@@ -96,8 +96,8 @@ void finishSmoothedRound(Table& table, const std::vector<VertexId>& vertices, st
 }  // namespace detail
 
 /// The in-memory pass on cornerUV (the wedges of buildCutWedges, values of basis.evaluateCorners
-/// with these coefficients): the smoothed surface is smoothPositionsAt with field.frameSmoothing
-/// steps (kFieldSmoothingIterations for a field computed on the mesh itself), at the vertices
+/// with these coefficients): the smoothed surface is framePositionsAt (smoothPositionsAt with
+/// kFieldSmoothingIterations steps for a field computed on the mesh itself), at the vertices
 /// that move. h: the map's edge length. batchVertices: how many vertices are smoothed and
 /// evaluated at once (the map does not depend on it).
 SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh, const Topology& topology,

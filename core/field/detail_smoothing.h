@@ -5,6 +5,12 @@
 
 namespace seamvox::detail {
 
+/// Halfway from `here` to the mean of `count` neighbours summing to `sum` (here when not finite).
+inline Vec3f smoothingTarget(const Vec3d& here, const Vec3d& sum, std::uint32_t count) {
+  const Vec3d target = 0.5 * (here + sum / count);
+  return target.allFinite() ? Vec3f(target.cast<float>()) : Vec3f(here.cast<float>());
+}
+
 /// One smoothing step at vertex v: halfway to the mean of its neighbours in fan order (valueOf(w)
 /// gives the current position of w in double); boundary and isolated vertices stay. Table: a
 /// corner table with isIsolatedVertex, isBoundaryVertex, forEachCornerAround and vertex.
@@ -18,8 +24,7 @@ Vec3f smoothingStep(Table& table, VertexId v, ValueOf&& valueOf) {
     sum += valueOf(table.vertex(nextCorner(c)));
     ++count;
   });
-  const Vec3d target = 0.5 * (here + sum / count);
-  return target.allFinite() ? Vec3f(target.cast<float>()) : Vec3f(here.cast<float>());
+  return smoothingTarget(here, sum, count);
 }
 
 }  // namespace seamvox::detail

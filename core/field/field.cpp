@@ -654,7 +654,26 @@ void releaseFramePositions(CrossField& field) {
 void restoreFramePositions(const TriangleMesh& mesh, const Topology& topology, CrossField& field) {
   if (field.frameSmoothing > 0 && field.framePositions.empty()) {
     field.framePositions = smoothPositions(mesh, topology, field.frameSmoothing);
+    for (const auto& [v, p] : field.frameOverrides) field.framePositions[v] = p;
   }
+}
+
+std::vector<Vec3f> framePositionsAt(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                                    const std::vector<VertexId>& vertices) {
+  if (field.framePositions.size() == mesh.numVertices()) {
+    std::vector<Vec3f> out(vertices.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) out[i] = field.framePositions[vertices[i]];
+    return out;
+  }
+  if (field.frameSmoothing == 0) return {};
+  std::vector<Vec3f> out = smoothPositionsAt(mesh, topology, field.frameSmoothing, vertices);
+  if (field.frameOverrides.empty()) return out;
+  const auto byVertex = [](const std::pair<VertexId, Vec3f>& a, VertexId v) { return a.first < v; };
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    const auto it = std::lower_bound(field.frameOverrides.begin(), field.frameOverrides.end(), vertices[i], byVertex);
+    if (it != field.frameOverrides.end() && it->first == vertices[i]) out[i] = it->second;
+  }
+  return out;
 }
 
 CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors) {

@@ -36,6 +36,10 @@ struct CrossField {
   /// smoothPositions steps framePositions were made with (0: none). With it, a caller may release
   /// them for the memory (12 bytes per vertex) and recompute them, all or only where needed.
   std::uint32_t frameSmoothing = 0;
+  /// Vertices whose framePositions differ from smoothPositions with frameSmoothing steps (rough
+  /// spots smoothed further, smoothRoughSpots), sorted by vertex; kept when framePositions are
+  /// released, so that they are recomputed exactly (framePositionsAt, restoreFramePositions).
+  std::vector<std::pair<VertexId, Vec3f>> frameOverrides;
   Vec3d at(FaceId f) const { return direction[f].cast<double>(); }
   void set(FaceId f, const Vec3d& u) { direction[f] = u.cast<float>(); }
 };
@@ -83,6 +87,8 @@ struct FieldSolveStats {
   std::uint64_t unknowns = 0, matrixNonzeros = 0, factorNonzeros = 0;
   std::uint64_t factorBytes = 0, factorPeakBytes = 0;
   bool realFallback = false;  ///< the complex factorization failed, the real 2n x 2n form was used
+  /// Rough spots of the field's surface (smoothRoughSpots): rough vertices found, vertices moved.
+  std::uint64_t roughVertices = 0, roughSpotVertices = 0;
 };
 
 struct SmoothFieldOptions {
@@ -124,9 +130,16 @@ std::vector<Vec3f> smoothPositions(const TriangleMesh& mesh, const Topology& top
 std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& topology,
                                      std::uint32_t iterations, const std::vector<VertexId>& vertices);
 
+/// field.framePositions at the given vertices: read when held, else recomputed there
+/// (smoothPositionsAt with frameSmoothing steps, then frameOverrides). Empty when the field has no
+/// smoothed surface.
+std::vector<Vec3f> framePositionsAt(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
+                                    const std::vector<VertexId>& vertices);
+
 /// Frees field.framePositions when they can be recomputed (frameSmoothing > 0).
 void releaseFramePositions(CrossField& field);
-/// Recomputes released framePositions (smoothPositions with frameSmoothing steps).
+/// Recomputes released framePositions (smoothPositions with frameSmoothing steps, then
+/// frameOverrides).
 void restoreFramePositions(const TriangleMesh& mesh, const Topology& topology, CrossField& field);
 
 /// Projects arbitrary per-face 3D vectors onto each face's tangent plane and normalizes them.

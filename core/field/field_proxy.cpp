@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/field/detail_proxy.h"
+#include "core/field/rough_spots.h"
 #include "core/field/field_numerics.h"
 #include "core/mesh/detail_union_find.h"
 #include "core/solve/cholmod_solver.h"
@@ -671,6 +672,15 @@ CrossField computeCrossField(TriangleMesh& mesh, const Topology& topology, Field
   // The mesh itself, with the smoothed positions in place of its own while the field is solved
   // (restored on every exit): the smoothed surface needs no copy of the triangles.
   std::vector<Vec3f> own = smoothPositions(mesh, topology, geometry.smoothingIterations);
+  RoughSpotResult rough;
+  if (geometry.roughSpotGrid > 0.0) {
+    rough = smoothRoughSpots(topology, own, geometry.roughSpotGrid);
+    FieldSolveStats* stats = smooth.stats ? smooth.stats : proxy.stats;
+    if (stats) {
+      stats->roughVertices = rough.roughVertices;
+      stats->roughSpotVertices = rough.moved.size();
+    }
+  }
   struct Restore {
     std::vector<Vec3f>& a;
     std::vector<Vec3f>& b;
@@ -694,6 +704,7 @@ CrossField computeCrossField(TriangleMesh& mesh, const Topology& topology, Field
   field = snap(std::move(field));
   field.framePositions = std::move(own);
   field.frameSmoothing = geometry.smoothingIterations;
+  field.frameOverrides = std::move(rough.moved);
   return field;
 }
 

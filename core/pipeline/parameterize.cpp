@@ -37,7 +37,9 @@ CrossField computeFieldFromSource(TriangleMesh& mesh, const Topology& topology,
   ProxyFieldOptions proxy;
   proxy.progress = progress;
   proxy.stats = stats;
-  return computeCrossField(mesh, topology, resolveFieldMethod(source.method, mesh.numFaces()), smooth, proxy);
+  FieldGeometryOptions geometry;
+  geometry.roughSpotGrid = source.gridLength;
+  return computeCrossField(mesh, topology, resolveFieldMethod(source.method, mesh.numFaces()), smooth, proxy, geometry);
 }
 
 std::optional<FieldSource> alignedFieldSource(const Topology& topology, const FeatureSet& features,
@@ -50,6 +52,7 @@ std::optional<FieldSource> alignedFieldSource(const Topology& topology, const Fe
   aligned.method = source.method;
   aligned.curvatureWeight = source.curvatureWeight;
   aligned.alignCorners = featureSideCorners(topology, features);
+  aligned.gridLength = source.gridLength;
   return aligned;
 }
 
@@ -250,6 +253,10 @@ void uncapForOutput(PipelineResult& r, CrossField& field, CappedHoles& caps) {
   uncapHoles(r.mesh, r.topology, caps);
   field.direction.resize(caps.faces);
   if (!field.framePositions.empty()) field.framePositions.resize(caps.vertices);
+  auto& overrides = field.frameOverrides;  // sorted by vertex: the caps' centres come last
+  overrides.erase(std::lower_bound(overrides.begin(), overrides.end(), std::make_pair(caps.vertices, Vec3f(Vec3f::Zero())),
+                                   [](const auto& a, const auto& b) { return a.first < b.first; }),
+                  overrides.end());
   std::vector<VertexId> cones;
   std::vector<std::int32_t> index4;
   for (std::size_t k = 0; k < r.cones.size(); ++k) {
@@ -534,6 +541,7 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   aligned.reset();
   // The field's method as the mesh's own size picks it (the caps' faces do not count).
   source.method = resolveFieldMethod(source.method, r.mesh.numFaces());
+  source.gridLength = r.edgeLength;
   CappedHoles caps = capForSolve(r, source, options);
   CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces, source,
                                             options.progress, &r.fieldSolve);

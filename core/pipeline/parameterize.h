@@ -36,6 +36,9 @@ struct FieldSource {
   /// Corners of the cleaned mesh whose faces the direct field is held along (featureSideCorners);
   /// unused by the proxy field and an imported one.
   std::vector<CornerId> alignCorners;
+  /// The map's edge length: the computed field's surface is smoothed further at its rough spots
+  /// (FieldGeometryOptions::roughSpotGrid). 0: not.
+  double gridLength = 0.0;
 };
 
 /// The cross field of a cleaned mesh from its source; faceOrigin maps cleaned faces to input

@@ -346,7 +346,7 @@ std::vector<std::uint8_t> facesFoldedIn3D(const TriangleMesh& mesh, const Topolo
   std::vector<VertexId> corners;
   corners.reserve(3 * faces.size());
   for (FaceId f : faces) corners.insert(corners.end(), mesh.triangles[f].begin(), mesh.triangles[f].end());
-  const std::vector<Vec3f> smooth = smoothPositionsAt(mesh, *topology, field->frameSmoothing, corners);
+  const std::vector<Vec3f> smooth = framePositionsAt(mesh, *topology, *field, corners);
   for (std::size_t i = 0; i < faces.size(); ++i) {
     folded[i] = foldedAgainst(mesh, faces[i], smooth[3 * i], smooth[3 * i + 1], smooth[3 * i + 2]);
   }

@@ -102,7 +102,7 @@ bool faceFoldedIn3D(const std::array<Vec3d, 3>& p, const Vec3f& sa, const Vec3f&
 
 /// faceFoldedIn3D for each of `faces` against the field's smoothed surface: its framePositions,
 /// or when they were released (releaseFramePositions) the same positions recomputed around these
-/// faces (smoothPositionsAt; needs the topology, else InputError). All 0 without a smoothed
+/// faces (framePositionsAt; needs the topology, else InputError). All 0 without a smoothed
 /// surface (no field, or a field made on the mesh itself).
 std::vector<std::uint8_t> facesFoldedIn3D(const TriangleMesh& mesh, const Topology* topology,
                                           const CrossField* field, const std::vector<FaceId>& faces);

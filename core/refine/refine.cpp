@@ -204,7 +204,7 @@ RegionMesh extractRegionOnFieldSurface(const TriangleMesh& mesh, const Topology&
   if (field.framePositions.size() == mesh.numVertices()) {
     detail::placeRegionOnSurfaceOf(out, [&](VertexId v) { return field.framePositions[v]; });
   } else if (field.frameSmoothing > 0) {
-    placeRegionOnSurface(out, smoothPositionsAt(mesh, topology, field.frameSmoothing, out.vertexOrigin));
+    placeRegionOnSurface(out, framePositionsAt(mesh, topology, field, out.vertexOrigin));
   }
   return out;
 }

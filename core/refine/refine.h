@@ -222,8 +222,7 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
                          const CrossField& field, const CutResult& cut,
                          const std::vector<FaceId>& regionFaces);
 /// extractRegion, then on the surface the field was computed on (placeRegionOnSurface) when it
-/// was a smoothed one: field.framePositions when the field holds them, else smoothPositionsAt
-/// with field.frameSmoothing steps at the region's vertices. What the refinement's and the
+/// was a smoothed one: framePositionsAt the region's vertices. What the refinement's and the
 /// repair's local solves work on.
 RegionMesh extractRegionOnFieldSurface(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                                        const CutResult& cut, const std::vector<FaceId>& regionFaces);

@@ -1,0 +1,191 @@
+#pragma once
+/// smoothRoughSpots written once for the in-memory corner table and the out-of-core one
+/// (stream/field_stream), so that both move the same vertices to the same floats. Internal.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "core/field/detail_smoothing.h"
+#include "core/field/rough_spots.h"
+#include "core/mesh/detail_union_find.h"
+#include "core/mesh/topology.h"
+#include "core/system/parallel.h"
+
+namespace seamvox::detail {
+
+/// Angle defect at v (0 at boundary and isolated vertices); at(w): position of w in double.
+template <class Table, class At>
+double angleDefectOf(Table& table, VertexId v, At&& at) {
+  if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return 0.0;
+  const Vec3d p = at(v);
+  double sum = 0.0;
+  table.forEachCornerAround(v, [&](CornerId c) {
+    const Vec3d a = at(table.vertex(nextCorner(c))) - p;
+    const Vec3d b = at(table.vertex(prevCorner(c))) - p;
+    sum += std::atan2(a.cross(b).norm(), a.dot(b));
+  });
+  return 2.0 * M_PI - sum;
+}
+
+/// Rough: interior, its edges shorter than `spacing` on average, angle defect above
+/// kRoughSpotDefect.
+template <class Table, class At>
+bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing) {
+  if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return false;
+  const Vec3d p = at(v);
+  double length = 0.0;
+  std::uint32_t count = 0;
+  table.forEachCornerAround(v, [&](CornerId c) {
+    length += (at(table.vertex(nextCorner(c))) - p).norm();
+    ++count;
+  });
+  if (!(length < spacing * count)) return false;
+  return std::abs(angleDefectOf(table, v, at)) > kRoughSpotDefect;
+}
+
+/// Empties the fans of the pieces of the region (active vertices 0..numActive-1 joined along their
+/// fans) that hold no vertex: no neighbour outside the region, no boundary or isolated vertex.
+/// Such a piece is a whole closed component smaller than the region (a scan's crumb, a tiny
+/// tetrahedron), and Laplacian steps would shrink it to a point.
+inline void holdWholeComponents(std::size_t numActive, std::vector<std::uint64_t>& fanStart,
+                                std::vector<std::uint32_t>& fan) {
+  UnionFind pieces(numActive);
+  std::vector<std::uint8_t> held(numActive, 0);
+  for (std::size_t i = 0; i < numActive; ++i) {
+    if (fanStart[i] == fanStart[i + 1]) held[i] = 1;
+    for (std::uint64_t k = fanStart[i]; k < fanStart[i + 1]; ++k) {
+      if (fan[k] < numActive) {
+        pieces.unite(static_cast<std::uint32_t>(i), fan[k]);
+      } else {
+        held[i] = 1;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < numActive; ++i) {
+    if (held[i]) held[pieces.find(static_cast<std::uint32_t>(i))] = 1;
+  }
+  std::vector<std::uint64_t> start(numActive + 1, 0);
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < numActive; ++i) {
+    const bool keep = held[pieces.find(static_cast<std::uint32_t>(i))];
+    for (std::uint64_t k = fanStart[i]; keep && k < fanStart[i + 1]; ++k) fan[out++] = fan[k];
+    start[i + 1] = out;
+  }
+  fan.resize(out);
+  fanStart.swap(start);
+}
+
+/// The rounds of smoothRoughSpots from the rough vertices `seeds` (increasing): base(v) gives the
+/// surface's position of v (Vec3f). Returns the vertices moved (their floats changed) and their
+/// positions, sorted.
+/// Each round: the vertices within kRoughSpotRadius * gridLength of the seeds along edges
+/// (Dijkstra, in float), their fans gathered once, kRoughSpotSteps Jacobi steps on them (in
+/// parallel, the same floats for any thread count), then the seeds still rough.
+template <class Table, class Base>
+std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& base, std::vector<VertexId> seeds,
+                                                          double gridLength, std::uint32_t& rounds) {
+  std::unordered_map<VertexId, Vec3f> moved;
+  const auto current = [&](VertexId v) -> Vec3f {
+    const auto it = moved.find(v);
+    return it == moved.end() ? Vec3f(base(v)) : it->second;
+  };
+  const auto at = [&](VertexId v) -> Vec3d { return current(v).template cast<double>(); };
+  const double spacing = kRoughSpotSpacing * gridLength;
+  const float limit = static_cast<float>(kRoughSpotRadius * gridLength);
+  for (rounds = 0; rounds < kRoughSpotRounds && !seeds.empty(); ++rounds) {
+    // Dijkstra from the seeds, ties broken by vertex id.
+    using Entry = std::pair<float, VertexId>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+    std::unordered_map<VertexId, float> dist;
+    for (VertexId v : seeds) {
+      dist[v] = 0.0f;
+      queue.emplace(0.0f, v);
+    }
+    while (!queue.empty()) {
+      const auto [d, v] = queue.top();
+      queue.pop();
+      if (d > dist[v] || table.isIsolatedVertex(v)) continue;
+      const Vec3d p = at(v);
+      const auto relax = [&, d = d](VertexId w) {
+        const float dw = d + static_cast<float>((at(w) - p).norm());
+        if (!(dw <= limit)) return;
+        const auto [it, added] = dist.emplace(w, dw);
+        if (!added && dw >= it->second) return;
+        it->second = dw;
+        queue.emplace(dw, w);
+      };
+      // Both neighbours of each corner: a boundary vertex's fan has one more than its corners.
+      table.forEachCornerAround(v, [&](CornerId c) {
+        relax(table.vertex(nextCorner(c)));
+        relax(table.vertex(prevCorner(c)));
+      });
+    }
+    std::vector<VertexId> active;
+    active.reserve(dist.size());
+    for (const auto& entry : dist) active.push_back(entry.first);
+    std::unordered_map<VertexId, float>().swap(dist);
+    std::sort(active.begin(), active.end());
+
+    // The fans of the active vertices in fan order (local ids: active first, then the held
+    // neighbours), as smoothingStep walks them; boundary and isolated ones have none and stay.
+    std::unordered_map<VertexId, std::uint32_t> local;
+    local.reserve(active.size());
+    std::vector<Vec3f> value;
+    value.reserve(active.size());
+    for (VertexId v : active) {
+      local.emplace(v, static_cast<std::uint32_t>(value.size()));
+      value.push_back(current(v));
+    }
+    std::vector<std::uint64_t> fanStart(active.size() + 1, 0);
+    std::vector<std::uint32_t> fan;
+    for (std::size_t i = 0; i < active.size(); ++i) {
+      const VertexId v = active[i];
+      if (!table.isIsolatedVertex(v) && !table.isBoundaryVertex(v)) {
+        table.forEachCornerAround(v, [&](CornerId c) {
+          const VertexId w = table.vertex(nextCorner(c));
+          const auto [it, added] = local.emplace(w, static_cast<std::uint32_t>(value.size()));
+          if (added) value.push_back(current(w));
+          fan.push_back(it->second);
+        });
+      }
+      fanStart[i + 1] = fan.size();
+    }
+    std::unordered_map<VertexId, std::uint32_t>().swap(local);
+    holdWholeComponents(active.size(), fanStart, fan);
+    std::vector<Vec3f> next(active.size());
+    for (std::uint32_t step = 0; step < kRoughSpotSteps; ++step) {
+      parallelFor(active.size(), 1024, [&](const IndexRange& range) {
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+          const Vec3d here = value[i].cast<double>();
+          if (fanStart[i] == fanStart[i + 1]) {
+            next[i] = value[i];
+            continue;
+          }
+          Vec3d sum = Vec3d::Zero();
+          for (std::uint64_t k = fanStart[i]; k < fanStart[i + 1]; ++k) sum += value[fan[k]].cast<double>();
+          next[i] = smoothingTarget(here, sum, static_cast<std::uint32_t>(fanStart[i + 1] - fanStart[i]));
+        }
+      });
+      std::copy(next.begin(), next.end(), value.begin());
+    }
+    for (std::size_t i = 0; i < active.size(); ++i) moved[active[i]] = value[i];
+    seeds.clear();
+    for (VertexId v : active) {
+      if (isRoughVertex(table, v, at, spacing)) seeds.push_back(v);
+    }
+  }
+  std::vector<std::pair<VertexId, Vec3f>> out;
+  for (const auto& [v, p] : moved) {
+    if (p != Vec3f(base(v))) out.emplace_back(v, p);  // held ones and boundary vertices stay
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
+}  // namespace seamvox::detail

@@ -1,0 +1,45 @@
+#include "core/field/rough_spots.h"
+
+#include <cmath>
+#include <string>
+
+#include "core/field/detail_rough_spots.h"
+#include "core/system/errors.h"
+#include "core/system/parallel.h"
+
+namespace seamvox {
+
+double angleDefect(const Topology& topology, const std::vector<Vec3f>& positions, VertexId v) {
+  return detail::angleDefectOf(topology, v, [&](VertexId w) -> Vec3d { return positions[w].cast<double>(); });
+}
+
+RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& positions, double gridLength) {
+  const std::uint32_t numVertices = topology.numVertices();
+  if (!(gridLength > 0.0) || !std::isfinite(gridLength)) {
+    throw InputError("smoothRoughSpots: grid edge length " + std::to_string(gridLength) + " is not positive");
+  }
+  if (positions.size() != numVertices) {
+    throw InputError("smoothRoughSpots: " + std::to_string(positions.size()) + " positions for " +
+                     std::to_string(numVertices) + " vertices");
+  }
+  const auto at = [&](VertexId w) -> Vec3d { return positions[w].cast<double>(); };
+  const double spacing = kRoughSpotSpacing * gridLength;
+  std::vector<std::uint8_t> rough(numVertices, 0);
+  parallelFor(numVertices, 4096, [&](const IndexRange& range) {
+    for (VertexId v = range.begin(); v != range.end(); ++v) rough[v] = detail::isRoughVertex(topology, v, at, spacing);
+  });
+  std::vector<VertexId> seeds;
+  for (VertexId v = 0; v < numVertices; ++v) {
+    if (rough[v]) seeds.push_back(v);
+  }
+  std::vector<std::uint8_t>().swap(rough);
+  RoughSpotResult result;
+  result.roughVertices = static_cast<std::uint32_t>(seeds.size());
+  if (seeds.empty()) return result;
+  result.moved = detail::smoothRoughRounds(
+      topology, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, result.rounds);
+  for (const auto& [v, p] : result.moved) positions[v] = p;
+  return result;
+}
+
+}  // namespace seamvox

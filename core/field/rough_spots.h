@@ -1,0 +1,50 @@
+#pragma once
+/// Rough spots of the field's smoothed surface: scan noise on parts tessellated far below the
+/// grid's scale. The noise of a scan is in world units, so where its triangles are much smaller
+/// than elsewhere each vertex moves several of its own edges and the surface crumples there. The
+/// few global smoothing steps of the field's surface (kFieldSmoothingIterations) reach only a few
+/// of those tiny edges, and every crumpled vertex turns the connection enough to put a pair of
+/// cones there. smoothRoughSpots smooths such spots further, within half a grid cell.
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "core/mesh/mesh.h"
+#include "core/mesh/topology.h"
+
+namespace seamvox {
+
+/// A vertex is rough where its angle defect on the smoothed surface exceeds this (radians; a
+/// vertex of a smooth surface sampled finely has a defect far below it, one whose defect nears a
+/// quarter turn is a cone by itself) ...
+constexpr double kRoughSpotDefect = 0.1;
+/// ... and the mean length of its edges there is below this fraction of the grid's edge length
+/// (a spot far below the scale the map can follow; coarse meshes keep their features).
+constexpr double kRoughSpotSpacing = 1.0 / 8.0;
+/// Vertices within this fraction of the grid's edge length of a rough vertex (along edges) are
+/// smoothed ...
+constexpr double kRoughSpotRadius = 0.5;
+/// ... by this many Laplacian steps (each halfway to the mean of the neighbours, as
+/// smoothPositions), the vertices around them held ...
+constexpr std::uint32_t kRoughSpotSteps = 32;
+/// ... for at most this many rounds, each on the vertices still rough after the one before.
+constexpr std::uint32_t kRoughSpotRounds = 2;
+
+struct RoughSpotResult {
+  /// The vertices moved and their new positions, sorted by vertex.
+  std::vector<std::pair<VertexId, Vec3f>> moved;
+  std::uint32_t roughVertices = 0;  ///< rough vertices found before the first round
+  std::uint32_t rounds = 0;         ///< rounds run
+};
+
+/// Smooths the rough spots of `positions` (a smoothed surface of the topology's mesh, changed in
+/// place) for a grid of edge length gridLength (> 0). Interior vertices only; boundary and
+/// isolated vertices stay. Deterministic for any thread count. Memory: a byte per vertex, and
+/// about 100 bytes per vertex a round smooths (hash maps of its region).
+RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& positions, double gridLength);
+
+/// Angle defect at interior vertex v (2 pi minus its corner angles; 0 at boundary and isolated
+/// vertices).
+double angleDefect(const Topology& topology, const std::vector<Vec3f>& positions, VertexId v);
+
+}  // namespace seamvox

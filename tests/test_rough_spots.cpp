@@ -1,0 +1,206 @@
+// Rough spots of the field's surface: noise on a part tessellated far below the grid's scale.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "core/field/field.h"
+#include "core/field/field_proxy.h"
+#include "core/field/rough_spots.h"
+#include "core/system/errors.h"
+#include "test_meshes.h"
+
+namespace seamvox {
+namespace {
+
+using testing::denseSpotPlane;
+using testing::makeSurface;
+using testing::Surface;
+
+constexpr int kOuter = 12, kInner = 2, kDense = 16;
+constexpr double kGrid = 2.0;  // h: the fine cells are 1 / 32 of it, the coarse ones 1 / 2
+
+std::size_t coneCount(const Surface& s, double roughSpotGrid) {
+  FieldGeometryOptions geometry;
+  geometry.roughSpotGrid = roughSpotGrid;
+  const CrossField field = computeCrossField(s.mesh, s.topology, FieldMethod::Direct, {}, {}, geometry);
+  return computeSingularities(s.mesh, s.topology, field).cones.size();
+}
+
+TEST(RoughSpots, FoundOnlyWhereTheSurfaceIsCrumpledBelowTheGridsScale) {
+  // Without noise: nothing is rough, nothing moves.
+  {
+    const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.0, 1));
+    std::vector<Vec3f> positions = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+    const std::vector<Vec3f> before = positions;
+    const RoughSpotResult r = smoothRoughSpots(s.topology, positions, kGrid);
+    EXPECT_EQ(r.roughVertices, 0u);
+    EXPECT_TRUE(r.moved.empty());
+    EXPECT_EQ(positions, before);
+  }
+  // The same noise on a plane of coarse cells only: the spacing keeps it (a coarse mesh's own
+  // features are not smoothed away).
+  {
+    const Surface s = makeSurface(denseSpotPlane(kOuter, 0, kDense, 0.3, 1));
+    std::vector<Vec3f> positions = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+    EXPECT_EQ(smoothRoughSpots(s.topology, positions, kGrid).roughVertices, 0u);
+  }
+  const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, 1));
+  std::vector<Vec3f> positions = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+  const std::vector<Vec3f> before = positions;
+  const auto roughInCentre = [&](const std::vector<Vec3f>& p) {
+    std::size_t count = 0;
+    for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+      count += std::abs(angleDefect(s.topology, p, v)) > kRoughSpotDefect;
+    }
+    return count;
+  };
+  const std::size_t roughBefore = roughInCentre(before);
+  const RoughSpotResult r = smoothRoughSpots(s.topology, positions, kGrid);
+  ASSERT_GT(r.roughVertices, 100u) << "the crumpled centre has rough vertices";
+  EXPECT_GE(roughBefore, r.roughVertices);
+  EXPECT_GE(r.rounds, 1u);
+  EXPECT_LE(r.rounds, kRoughSpotRounds);
+  // Moved: sorted, within h / 2 of the fine square (a rough vertex is in it), never on the
+  // boundary; every other vertex keeps its floats.
+  ASSERT_FALSE(r.moved.empty());
+  std::vector<std::uint8_t> moved(s.topology.numVertices(), 0);
+  const double reach = kInner + kRoughSpotRadius * kGrid + 1e-5;
+  for (std::size_t i = 0; i < r.moved.size(); ++i) {
+    const auto [v, p] = r.moved[i];
+    if (i > 0) ASSERT_LT(r.moved[i - 1].first, v);
+    moved[v] = 1;
+    EXPECT_EQ(positions[v], p) << "vertex " << v;
+    EXPECT_LE(std::abs(before[v].x()), reach) << "vertex " << v;
+    EXPECT_LE(std::abs(before[v].y()), reach) << "vertex " << v;
+    EXPECT_FALSE(s.topology.isBoundaryVertex(v)) << "vertex " << v;
+  }
+  std::size_t changed = 0;
+  for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+    if (!moved[v]) {
+      EXPECT_EQ(positions[v], before[v]) << "vertex " << v;
+    } else {
+      changed += positions[v] != before[v];
+    }
+  }
+  EXPECT_GT(changed, r.roughVertices);
+  // The centre is smooth afterwards: at most a tenth of the rough vertices are left.
+  EXPECT_LE(10 * roughInCentre(positions), roughBefore);
+}
+
+TEST(RoughSpots, TheCrumpledSpotsConesGoAndASmoothMeshKeepsItsField) {
+  // The plane without noise has no cone either way, and the same field.
+  {
+    const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.0, 1));
+    EXPECT_EQ(coneCount(s, 0.0), 0u);
+    EXPECT_EQ(coneCount(s, kGrid), 0u);
+  }
+  // A smooth closed mesh (no rough vertex): the same field, bit for bit.
+  {
+    const Surface sphere = makeSurface(testing::icosphereMesh(4));
+    FieldGeometryOptions geometry;
+    geometry.roughSpotGrid = 0.01;
+    const CrossField plain = computeCrossField(sphere.mesh, sphere.topology, FieldMethod::Direct);
+    const CrossField rough = computeCrossField(sphere.mesh, sphere.topology, FieldMethod::Direct, {}, {}, geometry);
+    EXPECT_EQ(plain.direction, rough.direction);
+    EXPECT_EQ(plain.framePositions, rough.framePositions);
+    EXPECT_TRUE(rough.frameOverrides.empty());
+  }
+  for (const std::uint32_t seed : {1u, 2u, 3u}) {
+    const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, seed));
+    const std::size_t without = coneCount(s, 0.0);
+    const std::size_t with = coneCount(s, kGrid);
+    // The noise crumples the fine square into many cones; smoothed at the grid's scale it has a
+    // few at most.
+    EXPECT_GE(without, 20u) << "seed " << seed;
+    EXPECT_LE(5 * with, without) << "seed " << seed;
+  }
+}
+
+TEST(RoughSpots, ReleasedFramePositionsComeBackExactly) {
+  const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, 4));
+  FieldGeometryOptions geometry;
+  geometry.roughSpotGrid = kGrid;
+  FieldSolveStats stats;
+  ProxyFieldOptions proxy;
+  proxy.stats = &stats;
+  CrossField field = computeCrossField(s.mesh, s.topology, FieldMethod::Proxy, {}, proxy, geometry);
+  ASSERT_FALSE(field.frameOverrides.empty());
+  EXPECT_EQ(stats.roughSpotVertices, field.frameOverrides.size());
+  EXPECT_GT(stats.roughVertices, 0u);
+  const std::vector<Vec3f> held = field.framePositions;
+  // The overrides are exactly where the surface differs from the global smoothing.
+  const std::vector<Vec3f> global = smoothPositions(s.mesh, s.topology, field.frameSmoothing);
+  std::size_t differ = 0;
+  for (VertexId v = 0; v < s.topology.numVertices(); ++v) differ += held[v] != global[v];
+  EXPECT_GT(differ, 0u);
+  EXPECT_EQ(differ, field.frameOverrides.size());
+  for (const auto& [v, p] : field.frameOverrides) EXPECT_EQ(held[v], p) << "vertex " << v;
+
+  std::vector<VertexId> some;
+  for (VertexId v = 0; v < s.topology.numVertices(); v += 7) some.push_back(v);
+  for (const auto& [v, p] : field.frameOverrides) some.push_back(v);
+  const auto expectHeld = [&](const std::vector<Vec3f>& got, const char* what) {
+    ASSERT_EQ(got.size(), some.size()) << what;
+    for (std::size_t i = 0; i < some.size(); ++i) ASSERT_EQ(got[i], held[some[i]]) << what << ", vertex " << some[i];
+  };
+  expectHeld(framePositionsAt(s.mesh, s.topology, field, some), "held");
+  releaseFramePositions(field);
+  ASSERT_TRUE(field.framePositions.empty());
+  expectHeld(framePositionsAt(s.mesh, s.topology, field, some), "released");
+  restoreFramePositions(s.mesh, s.topology, field);
+  EXPECT_EQ(field.framePositions, held);
+}
+
+TEST(RoughSpots, AClosedComponentWithinTheRegionKeepsItsShape) {
+  // A crumb far below the grid's scale: every vertex of it is rough, but smoothing the whole of it
+  // would shrink it to a point. The crumpled plane next to it is smoothed as before.
+  TriangleMesh crumb = testing::icosphereMesh(1);
+  for (Vec3f& p : crumb.positions) p = 0.05f * p + Vec3f(30.0f, 0.0f, 0.0f);
+  const std::uint32_t crumbVertices = static_cast<std::uint32_t>(crumb.positions.size());
+  const Surface s = makeSurface(testing::concatMeshes({denseSpotPlane(kOuter, kInner, kDense, 0.3, 6), crumb}));
+  std::vector<Vec3f> positions = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+  const std::vector<Vec3f> before = positions;
+  const VertexId firstCrumb = s.topology.numVertices() - crumbVertices;
+  for (VertexId v = firstCrumb; v < s.topology.numVertices(); ++v) {
+    ASSERT_GT(std::abs(angleDefect(s.topology, positions, v)), kRoughSpotDefect) << "vertex " << v;
+  }
+  const RoughSpotResult r = smoothRoughSpots(s.topology, positions, kGrid);
+  ASSERT_FALSE(r.moved.empty());
+  EXPECT_LT(r.moved.back().first, firstCrumb) << "the crumb moved";
+  for (VertexId v = firstCrumb; v < s.topology.numVertices(); ++v) EXPECT_EQ(positions[v], before[v]) << "vertex " << v;
+}
+
+TEST(RoughSpots, SameForOneAndTwoThreads) {
+  const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, 5));
+  const std::vector<Vec3f> smoothed = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+  std::vector<Vec3f> serial = smoothed;
+  RoughSpotResult one;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = smoothRoughSpots(s.topology, serial, kGrid);
+  }
+  std::vector<Vec3f> parallel = smoothed;
+  const RoughSpotResult two = smoothRoughSpots(s.topology, parallel, kGrid);
+  ASSERT_FALSE(one.moved.empty());
+  EXPECT_EQ(serial, parallel);
+  EXPECT_EQ(one.moved, two.moved);
+  EXPECT_EQ(one.roughVertices, two.roughVertices);
+  EXPECT_EQ(one.rounds, two.rounds);
+}
+
+TEST(RoughSpots, BadArgumentsThrow) {
+  const Surface s = makeSurface(testing::gridMesh(4, 4));
+  std::vector<Vec3f> positions = s.mesh.positions;
+  for (const double h : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    EXPECT_THROW(smoothRoughSpots(s.topology, positions, h), InputError) << h;
+  }
+  positions.pop_back();
+  EXPECT_THROW(smoothRoughSpots(s.topology, positions, 1.0), InputError);
+}
+
+}  // namespace
+}  // namespace seamvox
