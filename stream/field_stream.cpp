@@ -70,9 +70,10 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
   }
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   const std::uint64_t blockRecords = std::max<std::uint64_t>(1, pass.blockRecords);
-  const double spacing = kRoughSpotSpacing * gridLength;
-  // The rough vertices: a pass over the vertices, as smoothRoughSpots finds them.
+  // The mesh's mean spacing, then the rough vertices: two passes over the vertices, as
+  // smoothRoughSpots finds them (the spacings summed by the same chunks, in vertex order).
   std::vector<VertexId> seeds;
+  double spacing = 0.0;
   {
     struct Readers {
       PagedCornerTable table;
@@ -81,6 +82,24 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
     ReaderPool<Readers> pool([&] {
       return std::unique_ptr<Readers>(new Readers{PagedCornerTable(scratch, cacheBytes), PagedReader<Vec3f>(surface, cacheBytes)});
     });
+    std::vector<std::pair<std::uint64_t, double>> chunks((scratch.numVertices + detail::kSpacingChunk - 1) / detail::kSpacingChunk);
+    std::vector<float> spacings;
+    for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
+      const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
+      spacings.assign(count, 0.0f);
+      parallelFor(count, 4096, [&](const IndexRange& range) {
+        auto readers = pool.take();
+        const auto at = [&](VertexId w) -> Vec3d { return readers->positions[w].cast<double>(); };
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+          spacings[i] = detail::vertexSpacing(readers->table, static_cast<VertexId>(first + i), at);
+        }
+      });
+      for (std::uint64_t i = 0; i < count; ++i) {
+        auto& chunk = chunks[(first + i) / detail::kSpacingChunk];
+        if (spacings[i] > 0.0f) chunk.first += 1, chunk.second += spacings[i];
+      }
+    }
+    spacing = detail::roughSpacingLimit(gridLength, detail::meanSpacingOf(chunks));
     std::vector<std::uint8_t> rough;
     for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
       const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
@@ -106,7 +125,7 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
     PagedReader<Vec3f> positions(surface, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
     std::uint32_t rounds = 0;
     moved = detail::smoothRoughRounds(
-        table, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, rounds);
+        table, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, spacing, rounds);
     folder.countRead(stage, table.bytesRead() + positions.bytesRead());
   }
   counts.roughSpotVertices = moved.size();

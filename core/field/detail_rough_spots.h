@@ -33,11 +33,10 @@ double angleDefectOf(Table& table, VertexId v, At&& at) {
   return 2.0 * M_PI - sum;
 }
 
-/// Rough: interior, its edges shorter than `spacing` on average, angle defect above
-/// kRoughSpotDefect.
+/// Mean length of the edges of interior vertex v (0 at boundary and isolated vertices).
 template <class Table, class At>
-bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing) {
-  if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return false;
+float vertexSpacing(Table& table, VertexId v, At&& at) {
+  if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return 0.0f;
   const Vec3d p = at(v);
   double length = 0.0;
   std::uint32_t count = 0;
@@ -45,7 +44,33 @@ bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing) {
     length += (at(table.vertex(nextCorner(c))) - p).norm();
     ++count;
   });
-  if (!(length < spacing * count)) return false;
+  return static_cast<float>(length / count);
+}
+
+/// Vertices per chunk of the mean spacing's sum: each chunk summed in vertex order, the chunks in
+/// order, so that the sum is the same for any thread count and any pass's blocks.
+constexpr std::uint32_t kSpacingChunk = 1u << 16;
+
+/// The mean spacing of the interior vertices from their chunks' sums (count, sum of spacings).
+inline double meanSpacingOf(const std::vector<std::pair<std::uint64_t, double>>& chunks) {
+  std::uint64_t count = 0;
+  double sum = 0.0;
+  for (const auto& [n, s] : chunks) count += n, sum += s;
+  return count ? sum / count : 0.0;
+}
+
+/// The spacing below which a vertex may be rough: kRoughSpotSpacing of the grid's edge length,
+/// and kRoughSpotRelative of the mesh's mean spacing.
+inline double roughSpacingLimit(double gridLength, double meanSpacing) {
+  return std::min(kRoughSpotSpacing * gridLength, kRoughSpotRelative * meanSpacing);
+}
+
+/// Rough: interior, its edges shorter than `spacing` on average (roughSpacingLimit), angle
+/// defect above kRoughSpotDefect.
+template <class Table, class At>
+bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing) {
+  if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return false;
+  if (!(vertexSpacing(table, v, at) < spacing)) return false;
   return std::abs(angleDefectOf(table, v, at)) > kRoughSpotDefect;
 }
 
@@ -82,21 +107,20 @@ inline void holdWholeComponents(std::size_t numActive, std::vector<std::uint64_t
 }
 
 /// The rounds of smoothRoughSpots from the rough vertices `seeds` (increasing): base(v) gives the
-/// surface's position of v (Vec3f). Returns the vertices moved (their floats changed) and their
+/// surface's position of v (Vec3f), spacing the roughSpacingLimit. Returns the vertices moved (their floats changed) and their
 /// positions, sorted.
 /// Each round: the vertices within kRoughSpotRadius * gridLength of the seeds along edges
 /// (Dijkstra, in float), their fans gathered once, kRoughSpotSteps Jacobi steps on them (in
 /// parallel, the same floats for any thread count), then the seeds still rough.
 template <class Table, class Base>
 std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& base, std::vector<VertexId> seeds,
-                                                          double gridLength, std::uint32_t& rounds) {
+                                                          double gridLength, double spacing, std::uint32_t& rounds) {
   std::unordered_map<VertexId, Vec3f> moved;
   const auto current = [&](VertexId v) -> Vec3f {
     const auto it = moved.find(v);
     return it == moved.end() ? Vec3f(base(v)) : it->second;
   };
   const auto at = [&](VertexId v) -> Vec3d { return current(v).template cast<double>(); };
-  const double spacing = kRoughSpotSpacing * gridLength;
   const float limit = static_cast<float>(kRoughSpotRadius * gridLength);
   for (rounds = 0; rounds < kRoughSpotRounds && !seeds.empty(); ++rounds) {
     // Dijkstra from the seeds, ties broken by vertex id.

@@ -23,7 +23,15 @@ RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& p
                      std::to_string(numVertices) + " vertices");
   }
   const auto at = [&](VertexId w) -> Vec3d { return positions[w].cast<double>(); };
-  const double spacing = kRoughSpotSpacing * gridLength;
+  std::vector<std::pair<std::uint64_t, double>> chunks((numVertices + detail::kSpacingChunk - 1) / detail::kSpacingChunk);
+  parallelForEach(chunks.size(), 1, [&](std::uint64_t k) {
+    const VertexId end = static_cast<VertexId>(std::min<std::uint64_t>(numVertices, (k + 1) * detail::kSpacingChunk));
+    for (VertexId v = static_cast<VertexId>(k * detail::kSpacingChunk); v < end; ++v) {
+      const float spacing = detail::vertexSpacing(topology, v, at);
+      if (spacing > 0.0f) chunks[k].first += 1, chunks[k].second += spacing;
+    }
+  });
+  const double spacing = detail::roughSpacingLimit(gridLength, detail::meanSpacingOf(chunks));
   std::vector<std::uint8_t> rough(numVertices, 0);
   parallelFor(numVertices, 4096, [&](const IndexRange& range) {
     for (VertexId v = range.begin(); v != range.end(); ++v) rough[v] = detail::isRoughVertex(topology, v, at, spacing);
@@ -37,7 +45,7 @@ RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& p
   result.roughVertices = static_cast<std::uint32_t>(seeds.size());
   if (seeds.empty()) return result;
   result.moved = detail::smoothRoughRounds(
-      topology, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, result.rounds);
+      topology, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, spacing, result.rounds);
   for (const auto& [v, p] : result.moved) positions[v] = p;
   return result;
 }

@@ -21,6 +21,9 @@ constexpr double kRoughSpotDefect = 0.1;
 /// ... and the mean length of its edges there is below this fraction of the grid's edge length
 /// (a spot far below the scale the map can follow; coarse meshes keep their features).
 constexpr double kRoughSpotSpacing = 1.0 / 8.0;
+/// ... and below this fraction of the mean over the mesh (a part tessellated finer than the rest:
+/// a uniformly sampled scan, whose noise the global steps handle, keeps its shape).
+constexpr double kRoughSpotRelative = 0.5;
 /// Vertices within this fraction of the grid's edge length of a rough vertex (along edges) are
 /// smoothed ...
 constexpr double kRoughSpotRadius = 0.5;
