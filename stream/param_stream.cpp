@@ -277,8 +277,9 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   r.diagonal = scratch.report.diagonalWithoutSpikes;
   r.edgeLength = options.spacing.spacing(r.diagonal);
   const double h = r.edgeLength;
-  // The field's surface as the in-memory pipeline's (FieldSource::gridLength 0: no rough spots).
-  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), early, true);
+  FieldGeometryOptions geometry;
+  geometry.roughSpotGrid = h;  // as the in-memory pipeline smooths its field's surface
+  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), geometry, early, true);
   r.roughVertices = field.roughVertices;
   r.roughSpotVertices = field.roughSpotVertices;
   r.fieldElements = field.elements;

@@ -211,12 +211,13 @@ TEST(FieldStream, ProxyFieldEqualsTheInMemoryField) {
 }
 
 TEST(FieldStream, RoughSpotsAsInMemory) {
-  // The plane's fine centre crumpled by noise (rough at h = 2), a noisy scan and the damaged mesh
-  // at a grid coarse enough for their noise to be rough somewhere.
+  // The plane's fine centre crumpled by noise (rough at the coarser grid), a noisy scan and the damaged
+  // mesh.
   const NamedMeshes meshes = {{"crumpled fine spot", testing::denseSpotPlane(12, 2, 16, 0.3, 7)},
                               {"noisy scan with holes", testing::withOneTriangleHoles(noisyScan(30000), 41)},
                               {"damaged", testing::damagedMesh(19)}};
-  forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
+  std::uint64_t moved = 0;
+  forEachCleaned(meshes, [&moved](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {
     const double diagonal = computeBoundingBox(cleaned.mesh.positions).extent().norm();
     for (const double grid : {diagonal / 16, diagonal / 100})
     for (const std::uint64_t memory : {std::uint64_t(1), std::uint64_t(1) << 30}) {
@@ -239,9 +240,10 @@ TEST(FieldStream, RoughSpotsAsInMemory) {
       EXPECT_EQ(folder.bytesInUse() - filesBefore, streamed.directions.bytes + streamed.framePositions.bytes);
       folder.remove(streamed.directions);
       folder.remove(streamed.framePositions);
-      if (grid == diagonal / 16) EXPECT_GT(stats.roughSpotVertices, 0u) << "nothing rough to compare";
+      moved += stats.roughSpotVertices;
     }
   });
+  EXPECT_GT(moved, 1000u) << "too little rough to compare";
 }
 
 TEST(FieldStream, SingularitiesEqualTheInMemoryOnes) {

@@ -66,12 +66,28 @@ inline double roughSpacingLimit(double gridLength, double meanSpacing) {
 }
 
 /// Rough: interior, its edges shorter than `spacing` on average (roughSpacingLimit), angle
-/// defect above kRoughSpotDefect.
+/// defect above kRoughSpotDefect, and the defects within two rings cancel (kRoughSpotCancel).
 template <class Table, class At>
 bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing) {
   if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return false;
   if (!(vertexSpacing(table, v, at) < spacing)) return false;
-  return std::abs(angleDefectOf(table, v, at)) > kRoughSpotDefect;
+  if (!(std::abs(angleDefectOf(table, v, at)) > kRoughSpotDefect)) return false;
+  // Crumpled: the defects of the vertices within two rings cancel (a tip's all have one sign).
+  double absSum = 0.0, sum = 0.0;
+  std::vector<VertexId> ring = {v};
+  table.forEachCornerAround(v, [&](CornerId c) { ring.push_back(table.vertex(nextCorner(c))); });
+  const std::size_t first = ring.size();
+  for (std::size_t i = 1; i < first; ++i) {
+    if (table.isIsolatedVertex(ring[i])) continue;
+    table.forEachCornerAround(ring[i], [&](CornerId c) { ring.push_back(table.vertex(nextCorner(c))); });
+  }
+  std::sort(ring.begin(), ring.end());
+  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+  for (VertexId w : ring) {
+    const double k = angleDefectOf(table, w, at);
+    absSum += std::abs(k), sum += k;
+  }
+  return std::abs(sum) < kRoughSpotCancel * absSum;
 }
 
 /// Empties the fans of the pieces of the region (active vertices 0..numActive-1 joined along their

@@ -69,8 +69,9 @@ constexpr std::uint32_t kFieldSmoothingIterations = 3;
 struct FieldGeometryOptions {
   /// smoothPositions steps before the field is computed; 0 computes it on the mesh itself.
   std::uint32_t smoothingIterations = kFieldSmoothingIterations;
-  /// The grid's edge length h: the smoothed surface's rough spots (vertices spaced below h / 8
-  /// with a large angle defect) are smoothed further within h / 2 (smoothRoughSpots). 0: not.
+  /// The grid's edge length h: the smoothed surface's rough spots (crumpled vertices spaced below
+  /// h / 16 and half the mesh's mean spacing) are smoothed further within h (smoothRoughSpots).
+  /// 0: not.
   double roughSpotGrid = 0.0;
 };
 

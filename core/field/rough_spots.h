@@ -4,7 +4,7 @@
 /// than elsewhere each vertex moves several of its own edges and the surface crumples there. The
 /// few global smoothing steps of the field's surface (kFieldSmoothingIterations) reach only a few
 /// of those tiny edges, and every crumpled vertex turns the connection enough to put a pair of
-/// cones there. smoothRoughSpots smooths such spots further, within half a grid cell.
+/// cones there. smoothRoughSpots smooths such spots further, within a grid cell.
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -20,13 +20,16 @@ namespace seamvox {
 constexpr double kRoughSpotDefect = 0.1;
 /// ... and the mean length of its edges there is below this fraction of the grid's edge length
 /// (a spot far below the scale the map can follow; coarse meshes keep their features).
-constexpr double kRoughSpotSpacing = 1.0 / 8.0;
+constexpr double kRoughSpotSpacing = 1.0 / 16.0;
 /// ... and below this fraction of the mean over the mesh (a part tessellated finer than the rest:
-/// a uniformly sampled scan, whose noise the global steps handle, keeps its shape).
+/// a uniformly sampled scan, whose noise the global steps handle, keeps its shape) ...
 constexpr double kRoughSpotRelative = 0.5;
-/// Vertices within this fraction of the grid's edge length of a rough vertex (along edges) are
-/// smoothed ...
-constexpr double kRoughSpotRadius = 0.5;
+/// ... and the defects of the vertices within two rings of it cancel: their sum's magnitude below
+/// this fraction of the sum of their magnitudes. Crumpled noise turns the surface both ways; a
+/// sharp tip of the shape (a subdivided mesh's claw or ear) turns it one way and keeps its shape.
+constexpr double kRoughSpotCancel = 0.3;
+/// Vertices within this many grid edge lengths of a rough vertex (along edges) are smoothed ...
+constexpr double kRoughSpotRadius = 1.0;
 /// ... by this many Laplacian steps (each halfway to the mean of the neighbours, as
 /// smoothPositions), the vertices around them held ...
 constexpr std::uint32_t kRoughSpotSteps = 32;

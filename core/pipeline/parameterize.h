@@ -37,8 +37,7 @@ struct FieldSource {
   /// unused by the proxy field and an imported one.
   std::vector<CornerId> alignCorners;
   /// The map's edge length: the computed field's surface is smoothed further at its rough spots
-  /// (FieldGeometryOptions::roughSpotGrid). 0: not, what param and field use (as measured, it
-  /// still changes clean subdivided meshes: bench/RESULTS.md, session 54).
+  /// (FieldGeometryOptions::roughSpotGrid; param, field and the Python module set it). 0: not.
   double gridLength = 0.0;
 };
 
