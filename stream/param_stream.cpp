@@ -277,9 +277,8 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   r.diagonal = scratch.report.diagonalWithoutSpikes;
   r.edgeLength = options.spacing.spacing(r.diagonal);
   const double h = r.edgeLength;
-  FieldGeometryOptions geometry;
-  geometry.roughSpotGrid = h;  // as the in-memory pipeline smooths its field's surface
-  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), geometry, early, true);
+  // The field's surface as the in-memory pipeline's (FieldSource::gridLength 0: no rough spots).
+  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), early, true);
   r.roughVertices = field.roughVertices;
   r.roughSpotVertices = field.roughSpotVertices;
   r.fieldElements = field.elements;

@@ -141,10 +141,8 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   if (c.curvature > 0.0 && run.method == FieldMethod::Proxy) {
     throw UsageError("--curvature needs the direct field (--field smooth): the proxy field is the smoothest field only");
   }
-  // h as param takes it (the diagonal without spikes): both smooth the same rough spots and merge
-  // the same cones.
+  // h as param takes it (the diagonal without spikes), so both merge the same cones.
   run.edgeLength = c.spacing.spacing(run.clean.report.diagonalWithoutSpikes);
-  source.gridLength = run.edgeLength;
   try {
     const std::optional<FieldSource> aligned =
         alignedFieldSource(topology, findFeatures(mesh, topology, c.features), source, mesh.numFaces());

@@ -541,7 +541,6 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   aligned.reset();
   // The field's method as the mesh's own size picks it (the caps' faces do not count).
   source.method = resolveFieldMethod(source.method, r.mesh.numFaces());
-  source.gridLength = r.edgeLength;
   CappedHoles caps = capForSolve(r, source, options);
   CrossField field = computeFieldFromSource(r.mesh, r.topology, clean.faceOrigin, r.inputFaces, source,
                                             options.progress, &r.fieldSolve);

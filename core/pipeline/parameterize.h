@@ -37,7 +37,8 @@ struct FieldSource {
   /// unused by the proxy field and an imported one.
   std::vector<CornerId> alignCorners;
   /// The map's edge length: the computed field's surface is smoothed further at its rough spots
-  /// (FieldGeometryOptions::roughSpotGrid; param, field and the Python module set it). 0: not.
+  /// (FieldGeometryOptions::roughSpotGrid). 0: not, what param, field and the Python module use:
+  /// on noisy armadillo x16 it brings a second cone pass (bench/RESULTS.md, session 54).
   double gridLength = 0.0;
 };
 

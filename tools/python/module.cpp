@@ -184,7 +184,6 @@ FieldOutcome crossFieldArrays(const py::object& V, const py::object& F, const st
     cleanOptions.progress = progressFn;
     clean = cleanMesh(std::move(raw), cleanOptions);
     const double h = spacing.spacing(clean.report.diagonalWithoutSpikes);
-    source.gridLength = h;
     crossField = computeFieldFromSource(clean.mesh, clean.topology, clean.faceOrigin, inputFaces, source, progressFn);
     coneCut = cutThroughCones(clean.mesh, clean.topology, crossField, merge * h, {}, 0.0, progressFn);
   });
