@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/field/detail_cone_merge.h"
@@ -65,9 +66,7 @@ ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& sc
 ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& scratch, const ScratchFile& surface,
                                     double gridLength, const StreamPassOptions& pass, ScratchField& counts) {
   const char* stage = "field: rough spots";
-  if (!(gridLength > 0.0) || !std::isfinite(gridLength)) {
-    throw InputError("smoothRoughSpots: grid edge length " + std::to_string(gridLength) + " is not positive");
-  }
+  detail::checkRoughSpotGrid(gridLength);
   const std::size_t cacheBytes = pageCacheBytes(pass.memoryBytes);
   const std::uint64_t blockRecords = std::max<std::uint64_t>(1, pass.blockRecords);
   // The mesh's mean spacing, then the rough vertices: two passes over the vertices, as
@@ -82,39 +81,34 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
     ReaderPool<Readers> pool([&] {
       return std::unique_ptr<Readers>(new Readers{PagedCornerTable(scratch, cacheBytes), PagedReader<Vec3f>(surface, cacheBytes)});
     });
+    // value(readers, v) for every vertex, a block at a time in parallel, then use(v, value) in
+    // vertex order.
+    const auto eachVertex = [&](auto value, auto use) {
+      std::vector<decltype(value(std::declval<Readers&>(), VertexId(0)))> block;
+      for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
+        const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
+        block.resize(count);
+        parallelFor(count, 4096, [&](const IndexRange& range) {
+          auto readers = pool.take();
+          for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+            block[i] = value(*readers, static_cast<VertexId>(first + i));
+          }
+        });
+        for (std::uint64_t i = 0; i < count; ++i) use(static_cast<VertexId>(first + i), block[i]);
+      }
+    };
+    const auto atOf = [](Readers& r) { return [&r](VertexId w) -> Vec3d { return r.positions[w].cast<double>(); }; };
     std::vector<std::pair<std::uint64_t, double>> chunks((scratch.numVertices + detail::kSpacingChunk - 1) / detail::kSpacingChunk);
-    std::vector<float> spacings;
-    for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
-      const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
-      spacings.assign(count, 0.0f);
-      parallelFor(count, 4096, [&](const IndexRange& range) {
-        auto readers = pool.take();
-        const auto at = [&](VertexId w) -> Vec3d { return readers->positions[w].cast<double>(); };
-        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-          spacings[i] = detail::vertexSpacing(readers->table, static_cast<VertexId>(first + i), at);
-        }
-      });
-      for (std::uint64_t i = 0; i < count; ++i) {
-        auto& chunk = chunks[(first + i) / detail::kSpacingChunk];
-        if (spacings[i] > 0.0f) chunk.first += 1, chunk.second += spacings[i];
-      }
-    }
+    eachVertex([&](Readers& r, VertexId v) { return detail::vertexSpacing(r.table, v, atOf(r)); },
+               [&](VertexId v, float spacing) {
+                 auto& chunk = chunks[v / detail::kSpacingChunk];
+                 if (spacing > 0.0f) chunk.first += 1, chunk.second += spacing;
+               });
     spacing = detail::roughSpacingLimit(gridLength, detail::meanSpacingOf(chunks));
-    std::vector<std::uint8_t> rough;
-    for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
-      const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
-      rough.assign(count, 0);
-      parallelFor(count, 4096, [&](const IndexRange& range) {
-        auto readers = pool.take();
-        const auto at = [&](VertexId w) -> Vec3d { return readers->positions[w].cast<double>(); };
-        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-          rough[i] = detail::isRoughVertex(readers->table, static_cast<VertexId>(first + i), at, spacing);
-        }
-      });
-      for (std::uint64_t i = 0; i < count; ++i) {
-        if (rough[i]) seeds.push_back(static_cast<VertexId>(first + i));
-      }
-    }
+    eachVertex([&](Readers& r, VertexId v) { return std::uint8_t(detail::isRoughVertex(r.table, v, atOf(r), spacing)); },
+               [&](VertexId v, std::uint8_t rough) {
+                 if (rough) seeds.push_back(v);
+               });
     pool.forEach([&](Readers& r) { folder.countRead(stage, r.table.bytesRead() + r.positions.bytesRead()); });
   }
   counts.roughVertices = seeds.size();

@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <queue>
+#include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -15,9 +16,17 @@
 #include "core/field/rough_spots.h"
 #include "core/mesh/detail_union_find.h"
 #include "core/mesh/topology.h"
+#include "core/system/errors.h"
 #include "core/system/parallel.h"
 
 namespace seamvox::detail {
+
+/// InputError unless the grid's edge length is positive and finite.
+inline void checkRoughSpotGrid(double gridLength) {
+  if (!(gridLength > 0.0) || !std::isfinite(gridLength)) {
+    throw InputError("smoothRoughSpots: grid edge length " + std::to_string(gridLength) + " is not positive");
+  }
+}
 
 /// Angle defect at v (0 at boundary and isolated vertices); at(w): position of w in double.
 template <class Table, class At>

@@ -15,9 +15,7 @@ double angleDefect(const Topology& topology, const std::vector<Vec3f>& positions
 
 RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& positions, double gridLength) {
   const std::uint32_t numVertices = topology.numVertices();
-  if (!(gridLength > 0.0) || !std::isfinite(gridLength)) {
-    throw InputError("smoothRoughSpots: grid edge length " + std::to_string(gridLength) + " is not positive");
-  }
+  detail::checkRoughSpotGrid(gridLength);
   if (positions.size() != numVertices) {
     throw InputError("smoothRoughSpots: " + std::to_string(positions.size()) + " positions for " +
                      std::to_string(numVertices) + " vertices");
