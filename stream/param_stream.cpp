@@ -54,21 +54,23 @@ VoxelBasisOptions voxelBasisOptions(const StreamParamOptions& options, double h,
 
 VoxStage solveVox(ScratchFolder& folder, const CleanScratch& scratch, const ScratchField& field, const ScratchCut& cut,
                   VoxelBasisOptions basisOptions, const RoundOptions& round, const StreamPassOptions& pass,
-                  StageMeter& meter, std::string& retryReason, ScratchVoxelClip* clip) {
+                  StageMeter& meter, std::string& retryReason, ScratchVoxelClip* clip,
+                  const std::function<void()>& beforeSolve) {
   VoxStage out;
   try {
     out.basis = buildScratchVoxelBasis(folder, scratch, field, cut, basisOptions, pass, clip);
     meter.finish("basis");
+    if (beforeSolve) beforeSolve();
     out.solved = solveScratchVoxelMap(folder, scratch, cut, out.basis, round, pass);
   } catch (const SolverError& first) {
-    for (const ScratchFile* file : {&out.basis.fragments, &out.basis.fragmentElement, &out.basis.faceFragmentStart}) {
-      if (!file->path.empty()) folder.remove(*file);
-    }
-    out = VoxStage();
-    basisOptions.minDomainWeight = kRetryMinDomainWeight;
-    out.basis = buildScratchVoxelBasis(folder, scratch, field, cut, basisOptions, pass);
-    out.solved = solveScratchVoxelMap(folder, scratch, cut, out.basis, round, pass);
+    // Nearly dependent B-splines that barely touch the surface: joined to a neighbour and solved
+    // again, the fragments and integrals kept (parameterizeMeshVoxel's second attempt).
+    if (!out.basis.basis || !(basisOptions.minDomainWeight < kRetryMinDomainWeight)) throw;
     retryReason = first.what();
+    out.solved = ScratchVoxelSolution();
+    out.basis.basis->joinDomains(kRetryMinDomainWeight);
+    if (beforeSolve) beforeSolve();
+    out.solved = solveScratchVoxelMap(folder, scratch, cut, out.basis, round, pass);
   }
   meter.finish("solve");
   return out;
@@ -169,7 +171,8 @@ void solveScratchPass(ScratchFolder& folder, const CleanScratch& scratch, const 
   r.islandFaces = basisOptions.leftOut.size();
   RoundOptions round;
   round.progress = options.progress;
-  VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason, clip);
+  VoxStage vox = solveVox(folder, scratch, field, cut, basisOptions, round, pass, meter, r.voxelRetryReason, clip,
+                          options.beforeVoxelSolve);
   ScratchVoxelSolution& solved = vox.solved;
   r.solve = solved.stats;
   r.translationConstraints = solved.translationConstraints;
@@ -403,6 +406,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
           nearCones = untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle, pass, &near).untangle;
           flipCandidates.reset();  // that repair changed faces beyond them
           if (nextPass(scratchFoldedCoincidentCones(folder, scratch, singularities, map, h, coincidentDistance, pass))) {
+            meter.finish("untangle");  // the repair next to the cones, this pass's last step
             continue;
           }
         }

@@ -58,6 +58,9 @@ struct StreamParamOptions {
   /// Writes the map once it is final (e.g. writeScratchMap into the output file), before the
   /// measures; required.
   std::function<void(const CleanScratch&, const ScratchMap&)> writeMap;
+  /// Test hook, run before each voxel solve (the first, and the second with more B-splines
+  /// joined): a SolverError it throws takes the path of a system that cannot be factored.
+  std::function<void()> beforeVoxelSolve;
 };
 
 struct StreamParamResult {
@@ -79,7 +82,7 @@ struct StreamParamResult {
   std::uint32_t translationConstraints = 0, determinedBasis = 0, inconsistentBasis = 0, failedAttempts = 0;
   std::uint64_t domains = 0, basisFunctions = 0, elements = 0, fragments = 0;
   std::uint64_t islandFaces = 0;  ///< faces of the islands, left out of the voxel basis
-  std::string voxelRetryReason;  ///< why the basis was built a second time (empty: once)
+  std::string voxelRetryReason;  ///< why the voxel system was solved a second time, more B-splines joined (empty: once)
   std::uint64_t markedFaces = 0;
   SmoothedEvaluationStats smoothedEvaluation;
   bool refined = false;

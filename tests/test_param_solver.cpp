@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/basis/islands.h"
+#include "core/basis/voxel_grid.h"
 #include "core/cut/cut.h"
 #include "core/field/field.h"
 #include "core/quality/metrics.h"
@@ -86,17 +87,21 @@ TEST(ParamSolver, UnfactorableVoxelSystemFallsBackToTheHatSolver) {
     solverOptions.gridResolution = 16;
     StageMeter meter;
     solverOptions.meter = &meter;
-    solverOptions.beforeVoxelSolve = [] {
-      throw SolverError("CHOLMOD: not positive definite at column 7 (injected)");
+    int attempts = 0;
+    solverOptions.beforeVoxelSolve = [&] {
+      throw SolverError("CHOLMOD: not positive definite at column " + std::to_string(7 + attempts++) + " (injected)");
     };
     const SolverResult result =
         parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, t.options(), solverOptions);
+    EXPECT_EQ(attempts, 2) << "the first solve and the one with more B-splines joined";
     EXPECT_EQ(result.solver, ParamSolver::Hat);
-    EXPECT_NE(result.fallbackReason.find("not positive definite at column 7 (injected)"), std::string::npos)
+    EXPECT_NE(result.fallbackReason.find("not positive definite at column 8 (injected)"), std::string::npos)
         << result.fallbackReason;
     EXPECT_FALSE(result.refined) << "the hat map is not refined";
-    ASSERT_EQ(meter.stages().size(), 1u);
-    EXPECT_EQ(meter.stages()[0].name, "solve");
+    // The voxel basis was built once, then the hat solve ran.
+    ASSERT_EQ(meter.stages().size(), 2u);
+    EXPECT_EQ(meter.stages()[0].name, "basis");
+    EXPECT_EQ(meter.stages()[1].name, "solve");
     // The map is the hat solver's, corner for corner, and seamless.
     ASSERT_EQ(result.param.cornerUV.size(), hat.cornerUV.size());
     for (CornerId c = 0; c < hat.cornerUV.size(); ++c) {
@@ -106,11 +111,17 @@ TEST(ParamSolver, UnfactorableVoxelSystemFallsBackToTheHatSolver) {
   }
 }
 
-TEST(ParamSolver, AVoxelSystemThatFailsOnceIsBuiltAgainWithMoreSplinesJoined) {
-  // The first voxel attempt fails (injected), the second (negligible B-splines joined up to
-  // kRetryMinDomainWeight) factors: the map is the voxel solver's, seamless, the first failure
-  // reported; the field's directions are back before the second basis reads them.
+TEST(ParamSolver, AVoxelSystemThatFailsOnceIsSolvedAgainWithMoreSplinesJoined) {
+  // The first voxel solve fails (injected); the second, with the negligible B-splines joined up to
+  // kRetryMinDomainWeight, factors. The basis is built once (its faces are not clipped again,
+  // the field is not read again), and the map is the one a basis built with that weight gives,
+  // seamless, with the first failure reported.
   const FieldTorus t;
+  ParamOptions joinedOptions = t.options();
+  joinedOptions.smoothedEvaluation = SolverOptions{}.smoothedEvaluation;
+  const VoxelParamResult joined =
+      parameterizeMeshVoxel(t.s.mesh, t.s.topology, t.field, t.cut, joinedOptions, 16, kRetryMinDomainWeight);
+  ASSERT_TRUE(joined.retryReason.empty());
   for (ParamSolver chosen : {ParamSolver::Vox, ParamSolver::VoxLoc}) {
     SCOPED_TRACE(paramSolverName(chosen));
     SolverOptions solverOptions;
@@ -119,17 +130,25 @@ TEST(ParamSolver, AVoxelSystemThatFailsOnceIsBuiltAgainWithMoreSplinesJoined) {
     int attempts = 0, idle = 0, needed = 0;
     solverOptions.beforeVoxelSolve = [&] {
       if (attempts++ == 0) throw SolverError("CHOLMOD: not positive definite at column 7 (injected)");
-      EXPECT_EQ(idle, needed) << "the second basis reads the field";
     };
     solverOptions.fieldIdle = [&] { ++idle; };
-    solverOptions.fieldNeeded = [&] { needed = idle; };
+    solverOptions.fieldNeeded = [&] { ++needed; };
     const SolverResult result =
         parameterizeMeshWithSolver(t.s.mesh, t.s.topology, t.field, t.cut, t.options(), solverOptions);
     EXPECT_EQ(attempts, 2);
+    EXPECT_EQ(idle, 1) << "one basis built";
+    EXPECT_EQ(needed, 1);
     EXPECT_EQ(result.solver, chosen);
     EXPECT_TRUE(result.fallbackReason.empty()) << result.fallbackReason;
     EXPECT_NE(result.voxelRetryReason.find("(injected)"), std::string::npos) << result.voxelRetryReason;
     EXPECT_TRUE(measureSeams(t.s.mesh, t.s.topology, t.cut, result.param.cornerUV).isSeamless(1e-6));
+    if (chosen == ParamSolver::Vox) {
+      ASSERT_EQ(result.param.cornerUV.size(), joined.param.cornerUV.size());
+      for (CornerId c = 0; c < joined.param.cornerUV.size(); ++c) {
+        ASSERT_EQ(result.param.cornerUV[c], joined.param.cornerUV[c]) << "corner " << c;
+      }
+      EXPECT_EQ(result.param.translations, joined.param.translations);
+    }
   }
 }
 

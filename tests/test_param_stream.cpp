@@ -277,15 +277,55 @@ TEST(ParamStream, WhatThePathLacksAndTooSmallBudgetsAreRefusedByName) {
   for (const char* name : {"o.ply", "o.drc", "q.obj", "r.png"}) EXPECT_FALSE(std::filesystem::exists(dir.path(name))) << name;
 }
 
+// A small scan's run: an 8 MiB budget, grid 16, 20 cells on the diagonal.
+StreamParamOptions smallRunOptions() {
+  StreamParamOptions options;
+  options.memoryBytes = std::uint64_t(8) << 20;
+  options.gridResolution = 16;
+  options.spacing.cells = 20;
+  return options;
+}
+
+// A voxel system that cannot be factored (injected) is solved again with more B-splines joined,
+// from the same basis: the map is seamless and the reason reported; failing twice is an error.
+TEST(ParamStream, AVoxelSystemThatFailsOnceIsSolvedAgainWithMoreSplinesJoined) {
+  const auto mesh = std::make_shared<const TriangleMesh>(testing::generatedMesh(MeshKind::Scan, 6000));
+  testing::TempDir dir;
+  StreamParamOptions options = smallRunOptions();
+  options.writeMap = [](const CleanScratch&, const ScratchMap&) {};
+  StageMeter meter;
+  options.meter = &meter;
+  int attempts = 0, failures = 1;
+  options.beforeVoxelSolve = [&] {
+    if (attempts++ < failures) throw SolverError("CHOLMOD: not positive definite at column 7 (injected)");
+  };
+  {
+    ScratchFolder folder(dir.dir());
+    const std::unique_ptr<MeshStream> stream = makeMemoryStream("scan", mesh, 997);
+    const StreamParamResult r = parameterizeOutOfCore(*stream, folder, options);
+    EXPECT_EQ(attempts, 2);
+    EXPECT_TRUE(r.isSeamless());
+    EXPECT_TRUE(contains(r.voxelRetryReason, "(injected)")) << r.voxelRetryReason;
+    std::size_t bases = 0;
+    for (const auto& stage : meter.stages()) bases += stage.name == "basis";
+    EXPECT_EQ(bases, 1u) << "the basis is built once";
+  }
+  attempts = 0, failures = 2;
+  {
+    ScratchFolder folder(dir.dir());
+    const std::unique_ptr<MeshStream> stream = makeMemoryStream("scan", mesh, 997);
+    EXPECT_THROW(parameterizeOutOfCore(*stream, folder, options), SolverError);
+    EXPECT_EQ(attempts, 2);
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir.dir()));
+}
+
 // A scratch disk that fills at any point of the run is an IoError naming the folder; the map is
 // not written and the folder is empty afterwards.
 TEST(ParamStream, AFullScratchDiskIsAnErrorAndNothingIsWritten) {
   const auto mesh = std::make_shared<const TriangleMesh>(testing::generatedMesh(MeshKind::Scan, 6000));
   testing::TempDir dir;
-  StreamParamOptions options;
-  options.memoryBytes = std::uint64_t(8) << 20;
-  options.gridResolution = 16;
-  options.spacing.cells = 20;
+  StreamParamOptions options = smallRunOptions();
   bool written = false;
   options.writeMap = [&](const CleanScratch&, const ScratchMap&) { written = true; };
   std::uint64_t total = 0;

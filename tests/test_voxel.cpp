@@ -607,6 +607,49 @@ TEST(VoxelBasis, SliverSupportsJoinAHeavierDomain) {
   EXPECT_EQ(result.regularization, VoxelBasisOptions{}.regularization);
 }
 
+TEST(VoxelBasis, JoiningAgainGivesTheBasisBuiltWithThatWeight) {
+  // joinDomains(w) on a basis built with another weight: the domains, functions, adjacencies,
+  // corners and regularization of a basis built with w, either way round.
+  const int resolution = 16;
+  const CutMesh s = sliverSquare(resolution);
+  const auto build = [&](double weight) {
+    VoxelBasisOptions options;
+    options.gridResolution = resolution;
+    options.minDomainWeight = weight;
+    return buildVoxelBasis(s.mesh, s.topology, s.field, s.cut, options);
+  };
+  const auto expectSame = [](const VoxelBasis& a, const VoxelBasis& b) {
+    ASSERT_EQ(a.numElements(), b.numElements());
+    EXPECT_EQ(a.numBasisFunctions(), b.numBasisFunctions());
+    EXPECT_EQ(a.domainBasis(), b.domainBasis());
+    EXPECT_EQ(a.basisCorner(), b.basisCorner());
+    EXPECT_EQ(a.stats().joinedDomains, b.stats().joinedDomains);
+    EXPECT_EQ(a.regularization(), b.regularization());
+    ASSERT_EQ(a.adjacencies().size(), b.adjacencies().size());
+    for (std::size_t i = 0; i < a.adjacencies().size(); ++i) {
+      EXPECT_EQ(a.adjacencies()[i].left, b.adjacencies()[i].left);
+      EXPECT_EQ(a.adjacencies()[i].right, b.adjacencies()[i].right);
+      EXPECT_EQ(a.adjacencies()[i].seam, b.adjacencies()[i].seam);
+    }
+    EXPECT_EQ(a.seamRotation(), b.seamRotation());
+    std::uint32_t da[8], db[8];
+    for (std::uint64_t e = 0; e < a.numElements(); ++e) {
+      ASSERT_EQ(a.elementDomains(e, da), b.elementDomains(e, db));
+      ASSERT_TRUE(std::equal(da, da + 8, db)) << "element " << e;
+    }
+  };
+  const double weight = VoxelBasisOptions{}.minDomainWeight;
+  const VoxelBuildResult raw = build(0.0), joined = build(weight);
+  ASSERT_GT(joined.basis->stats().joinedDomains, 0u);
+  ASSERT_NE(raw.basis->numBasisFunctions(), joined.basis->numBasisFunctions());
+  VoxelBuildResult rejoined = build(0.0);
+  rejoined.basis->setRegularization(1e-3);  // as a failed solve leaves it
+  rejoined.basis->joinDomains(weight);
+  expectSame(*rejoined.basis, *joined.basis);
+  rejoined.basis->joinDomains(0.0);
+  expectSame(*rejoined.basis, *raw.basis);
+}
+
 // The links of one face as every fragment pair across each edge gives them (the plain scan the
 // search by voxel must equal, links in the same order).
 template <class Neighbour>

@@ -110,6 +110,10 @@ void Basis::setSeamAdjacencies(const std::vector<SeamCurve>& seams,
   for (std::size_t s = 0; s < seams.size(); ++s) {
     seamRotation_[s] = static_cast<std::uint8_t>((4 - seams[s].matching % 4) % 4);  // r = i^(-k)
   }
+  setDomainAdjacencies(std::move(adjacencies));
+}
+
+void Basis::setDomainAdjacencies(std::vector<DomainAdjacency> adjacencies) {
   auto key = [](const DomainAdjacency& a) { return std::make_tuple(a.left, a.right, a.seam); };
   std::sort(adjacencies.begin(), adjacencies.end(),
             [&](const auto& a, const auto& b) { return key(a) < key(b); });

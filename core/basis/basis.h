@@ -74,6 +74,8 @@ class Basis {
   /// by (left, right, seam) without repeats (one convention for every basis).
   void setSeamAdjacencies(const std::vector<SeamCurve>& seams,
                           std::vector<DomainAdjacency> adjacencies);
+  /// The adjacencies alone (the seams' rotations kept), sorted as setSeamAdjacencies does.
+  void setDomainAdjacencies(std::vector<DomainAdjacency> adjacencies);
 
   std::uint32_t numBasisFunctions_ = 0;
   std::vector<std::uint32_t> domainBasis_;

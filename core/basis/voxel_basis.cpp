@@ -350,22 +350,35 @@ VoxelBasis::VoxelBasis(const TriangleMesh* mesh, detail::VoxelBasisParts parts, 
       parts.links.functions.parent.size() != 8 * elementVoxel_.size()) {
     throw InputError("voxel basis: element parts of mismatched sizes");
   }
-  setRegularization(options.regularization);
-  DomainLinks& links = parts.links;
+  setSeamAdjacencies(seams, {});  // the rotations; the adjacencies come with the domains
+  builtRegularization_ = options.regularization;
+  functionLinks_ = std::move(parts.links.functions.parent);
+  for (const SeamLink& link : parts.links.seamLinks) nodeSeamLinks_.push_back({link.left, link.right, link.seam});
+  parts.links = DomainLinks();
+  joinDomains(options.minDomainWeight);
+  reportProgress(options.progress, "voxel basis", 1.0);
+}
+
+void VoxelBasis::joinDomains(double minDomainWeight) {
+  setRegularization(builtRegularization_);
+  UnionFind functions(0);
+  functions.parent = functionLinks_;
   std::vector<std::uint8_t> joinedNode;
-  joinedDomains_ = joinNegligibleDomains(links.functions, weighNodes(records_, normalStiffness_),
-                                         options.minDomainWeight, joinedNode);
-  const std::uint32_t nd = denseLabels(links.functions, elementDomain_);
-  links.functions = UnionFind(0);
-  numBasisFunctions_ = joinDomainsAcrossSeams(nd, links.seamLinks, elementDomain_, domainBasis_);
+  joinedDomains_ = joinNegligibleDomains(functions, weighNodes(records_, normalStiffness_), minDomainWeight, joinedNode);
+  const std::uint32_t nd = denseLabels(functions, elementDomain_);
+  functions = UnionFind(0);
+  std::vector<SeamLink> seamLinks;
+  seamLinks.reserve(nodeSeamLinks_.size());
+  for (const DomainAdjacency& link : nodeSeamLinks_) seamLinks.push_back({link.left, link.right, link.seam});
+  numBasisFunctions_ = joinDomainsAcrossSeams(nd, seamLinks, elementDomain_, domainBasis_);
   basisCorner_ = cornersOfBasisFunctions(numBasisFunctions_, elementDomain_, domainBasis_,
                                          voxelCoords_, elementVoxel_, joinedNode);
   std::vector<DomainAdjacency> adjacencies;
-  for (const SeamLink& link : links.seamLinks) {
+  adjacencies.reserve(seamLinks.size());
+  for (const SeamLink& link : seamLinks) {
     adjacencies.push_back({elementDomain_[link.left], elementDomain_[link.right], link.seam});
   }
-  setSeamAdjacencies(seams, std::move(adjacencies));
-  reportProgress(options.progress, "voxel basis", 1.0);
+  setDomainAdjacencies(std::move(adjacencies));
 }
 
 const TriangleMesh& VoxelBasis::mesh() const {
@@ -533,7 +546,8 @@ VoxelBasisStats VoxelBasis::stats() const {
   s.joinedDomains = joinedDomains_;
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   s.bytes = bytes(voxelCoords_) + bytes(voxelElementStart_) + bytes(elementVoxel_) +
-            bytes(records_) + bytes(normalStiffness_) + bytes(elementDomain_) + faceFragments_.bytes() +
+            bytes(records_) + bytes(normalStiffness_) + bytes(elementDomain_) + bytes(functionLinks_) +
+            bytes(nodeSeamLinks_) + faceFragments_.bytes() +
             bytes(fragmentElement_) + bytes(basisCorner_) + bytes(domainBasis_) +
             bytes(adjacencies_) + bytes(seamRotation_);
   return s;

@@ -23,6 +23,12 @@ namespace detail {
 struct VoxelBasisParts;
 }
 
+/// VoxelBasisOptions::minDomainWeight of the voxel solver's second attempt, when the first could
+/// not factor its system even at kMaxVoxelRegularization: on a noisy 50M-face scan B-splines that
+/// barely touch the surface (diagonal entries down to 1e-17 against a median 0.17) were nearly
+/// dependent, which a stronger normal regularization does not change.
+constexpr double kRetryMinDomainWeight = 1e-6;
+
 struct VoxelBasisOptions {
   std::int32_t gridResolution = 128;  ///< voxels per axis: 64, 128, 256 or 512 (any 2^D, 4..1024)
   double edgeLength = 1.0;            ///< h: one unit of (u, v) is h on the surface
@@ -176,6 +182,11 @@ class VoxelBasis final : public Basis {
 
   VoxelBasisStats stats() const;
 
+  /// Joins the domains again as a basis built with this VoxelBasisOptions::minDomainWeight (and
+  /// its regularization) would: the same functions, adjacencies and integrals, without clipping
+  /// the faces again. For a second attempt when the first system could not be factored.
+  void joinDomains(double minDomainWeight);
+
  private:
   const TriangleMesh& mesh() const;
   const TriangleMesh* mesh_ = nullptr;
@@ -187,7 +198,10 @@ class VoxelBasis final : public Basis {
   std::vector<VoxelIntegrals> records_;           // #elements, tangential stiffness
   std::vector<std::array<double, 36>> normalStiffness_;  // #elements, unweighted
   double regularization_ = 0.0;
+  double builtRegularization_ = 0.0;                  // VoxelBasisOptions::regularization
   std::uint32_t joinedDomains_ = 0;
+  std::vector<std::uint32_t> functionLinks_;      // 8 #elements: the nodes' union-find before joining
+  std::vector<DomainAdjacency> nodeSeamLinks_;    // seam links between nodes (8 e + k), not domains
   std::vector<std::uint32_t> elementDomain_;      // 8 #elements
   FragmentRanges faceFragments_;                  // #F (empty out of core)
   std::vector<std::uint32_t> fragmentElement_;    // #fragments, ordered by face

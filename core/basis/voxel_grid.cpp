@@ -177,9 +177,34 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   const std::vector<GaussVector> holes = closeSmallHoles(mesh, topology, cut, options, param);
   reduceOptions.extraConstraints = &holes;
   reduceOptions.progress = options.progress;
-  const Reduction reduction = reduceBasis(basis, reduceOptions);
-  param.translationConstraints = static_cast<std::uint32_t>(constraints.size());
+  RoundOptions roundOptions;
+  roundOptions.greedy = options.greedyRounding;
+  roundOptions.progress = options.progress;
+  roundOptions.failsToFactor = options.failsToFactor;
+  Reduction reduction = reduceBasis(basis, reduceOptions);
   param.secondsReduce = secondsSince(start);
+  SeamlessSolution solution;
+  try {
+    if (options.beforeVoxelSolve) options.beforeVoxelSolve();
+    solution = solveVoxelSeamless(basis, reduction, roundOptions, out.failedAttempts);
+  } catch (const SolverError& first) {
+    // Nearly dependent B-splines that barely touch the surface, which no regularization makes
+    // definite: joined to a neighbour (kRetryMinDomainWeight) and solved again, the faces'
+    // fragments and integrals kept.
+    if (!(basisOptions.minDomainWeight < kRetryMinDomainWeight)) throw;
+    out.retryReason = first.what();
+    out.failedAttempts = 0;
+    reduction = Reduction();
+    basis.joinDomains(kRetryMinDomainWeight);
+    param.basisFunctions = basis.numBasisFunctions();
+    param.domains = basis.numDomains();
+    param.seamAdjacencies = static_cast<std::uint32_t>(basis.adjacencies().size());
+    out.basisStats = basis.stats();
+    reduction = reduceBasis(basis, reduceOptions);
+    if (options.beforeVoxelSolve) options.beforeVoxelSolve();
+    solution = solveVoxelSeamless(basis, reduction, roundOptions, out.failedAttempts);
+  }
+  param.translationConstraints = static_cast<std::uint32_t>(constraints.size());
   out.determinedBasis = static_cast<std::uint32_t>(reduction.determinedBasis.size());
   out.inconsistentBasis = static_cast<std::uint32_t>(reduction.inconsistentBasis.size());
   // The islands are mapped by the local hat solve: every face of theirs is marked for it.
@@ -188,12 +213,6 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   out.inconsistentFaces = withFaces(basis.supportFaces(reduction.inconsistentBasis), basisOptions.leftOut);
   out.islands = basisOptions.leftOut;
   out.invisibleTranslations = reduction.invisibleTranslations;
-
-  RoundOptions roundOptions;
-  roundOptions.greedy = options.greedyRounding;
-  roundOptions.progress = options.progress;
-  roundOptions.failsToFactor = options.failsToFactor;
-  SeamlessSolution solution = solveVoxelSeamless(basis, reduction, roundOptions, out.failedAttempts);
   out.regularization = basis.regularization();
   // The factorizations leave many freed blocks in the heap (150 MB at grid 128): back to the
   // system before the map (20 bytes per face) is built next to the basis.

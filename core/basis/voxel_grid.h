@@ -5,6 +5,7 @@
 /// triangles through it in parallel chunks. OpenVDB's headers stay in voxel_grid.cpp.
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "core/solve/hat_solver.h"
@@ -81,6 +82,9 @@ struct VoxelParamResult {
   std::uint32_t failedAttempts = 0;
   std::uint32_t invisibleTranslations = 0;  ///< Reduction::invisibleTranslations
   SmoothedEvaluationStats smoothedEvaluation;  ///< ParamOptions::smoothedEvaluation
+  /// Why the first system could not be factored, when its negligible B-splines were joined
+  /// (kRetryMinDomainWeight) and solved again; empty otherwise.
+  std::string retryReason;
 };
 /// Strongest normal-derivative regularization the Vox solver retries with.
 constexpr double kMaxVoxelRegularization = 1e-3;
@@ -91,7 +95,9 @@ SeamlessSolution solveVoxelSeamless(VoxelBasis& basis, const Reduction& reductio
                                     std::uint32_t& failedAttempts);
 /// The Vox solver. When CHOLMOD finds the system indefinite, it re-assembles and refactors with a
 /// 100x stronger regularization (up to kMaxVoxelRegularization; the basis is built once) before
-/// giving up with the last SolverError. minDomainWeight: VoxelBasisOptions's (< 0: its default).
+/// giving up with the last SolverError. Then, once, with the B-splines of weight below
+/// kRetryMinDomainWeight joined to a neighbour (VoxelBasis::joinDomains; not when minDomainWeight
+/// is that already). minDomainWeight: VoxelBasisOptions's (< 0: its default).
 /// The union of two increasing face lists.
 std::vector<FaceId> withFaces(const std::vector<FaceId>& faces, const std::vector<FaceId>& more);
 

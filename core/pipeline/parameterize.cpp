@@ -420,6 +420,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
           if (!pairs.empty()) {
             coincident.insert(coincident.end(), pairs.begin(), pairs.end());
             r.solved = SolverResult{};
+            meter.finish("untangle");  // the repair next to the cones, this pass's last step
             continue;
           }
         }

@@ -23,6 +23,9 @@ struct ParamOptions {
   double coneWeightRadius = kConeWeightRadius;
   ProgressFn progress;
   std::function<bool(std::uint32_t unknowns)> failsToFactor;  ///< test hook (RoundOptions)
+  /// Test hook (vox): run before each voxel seamless solve (the first, and the second with more
+  /// B-splines joined); a SolverError it throws takes the path of a system that cannot be factored.
+  std::function<void()> beforeVoxelSolve;
   /// Called by the voxel solver once its basis is built (the pipeline closes a "basis" stage).
   std::function<void()> basisBuilt;
   /// When set: corners on either side of feature edges (featureSideCorners, features.h) whose

@@ -104,18 +104,9 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
       if (solverOptions.meter) solverOptions.meter->finish("basis");
       if (solverOptions.fieldIdle) solverOptions.fieldIdle();
     };
-    try {
-      if (solverOptions.beforeVoxelSolve) solverOptions.beforeVoxelSolve();
-      vox = parameterizeMeshVoxel(mesh, topology, field, cut, voxOptions, solverOptions.gridResolution);
-    } catch (const SolverError& first) {
-      // Nearly dependent B-splines that barely touch the surface: built again with more of them
-      // joined to a neighbour (the field's directions back first: the basis reads them).
-      if (solverOptions.fieldNeeded) solverOptions.fieldNeeded();
-      if (solverOptions.beforeVoxelSolve) solverOptions.beforeVoxelSolve();
-      vox = parameterizeMeshVoxel(mesh, topology, field, cut, voxOptions, solverOptions.gridResolution,
-                                  kRetryMinDomainWeight);
-      out.voxelRetryReason = first.what();
-    }
+    if (solverOptions.beforeVoxelSolve) voxOptions.beforeVoxelSolve = solverOptions.beforeVoxelSolve;
+    vox = parameterizeMeshVoxel(mesh, topology, field, cut, voxOptions, solverOptions.gridResolution);
+    out.voxelRetryReason = vox.retryReason;
     if (solverOptions.fieldNeeded) solverOptions.fieldNeeded();
   } catch (const SolverError& e) {
     if (solverOptions.fieldNeeded) solverOptions.fieldNeeded();

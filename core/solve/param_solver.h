@@ -71,11 +71,6 @@ std::uint64_t outOfCoreMinimumBytes(std::int32_t gridResolution);
 /// passes before the grid-sized system may not use of the budget.
 std::uint64_t outOfCoreProgramBytes();
 
-/// VoxelBasisOptions::minDomainWeight of the voxel solver's second attempt, when the first could
-/// not factor its system even at kMaxVoxelRegularization: on a noisy 50M-face scan B-splines that
-/// barely touch the surface (diagonal entries down to 1e-17 against a median 0.17) were nearly
-/// dependent, which a stronger normal regularization does not change.
-constexpr double kRetryMinDomainWeight = 1e-6;
 
 /// Default voxels per axis of the voxel basis's grid (vox, voxloc).
 constexpr std::int32_t kDefaultGridResolution = 128;
@@ -118,8 +113,8 @@ struct SolverResult {
   /// Set when the voxel system could not be factored and the hat solver ran instead (solver is
   /// then Hat): CHOLMOD's message. Reported, never silent.
   std::string fallbackReason;
-  /// Set when the first voxel system could not be factored and the second, built with the
-  /// B-splines of weight below kRetryMinDomainWeight joined to a neighbour, could: the first's
+  /// Set when the first voxel system could not be factored and the second, with the B-splines of
+  /// weight below kRetryMinDomainWeight joined to a neighbour (the same basis), could: the first's
   /// message. Reported.
   std::string voxelRetryReason;
 };
