@@ -334,6 +334,23 @@ TEST(Untangle, FoldedClosedSpecksSmallerThanACellGoOnOnePoint) {
   EXPECT_EQ(stats.flippedAfter, 0u);
   EXPECT_EQ(stats.specks, 1u);
   EXPECT_EQ(stats.speckFaces, mesh.numFaces());
+  // Restricted to a few faces, one of them flipped: the speck holding it still goes on one point.
+  std::vector<std::uint8_t> marked(mesh.numFaces(), 0);
+  for (FaceId f = 0; f < mesh.numFaces(); ++f) {
+    if (isFlippedRatio(parameterAreaRatio(mesh, damaged, f, nothingElse.edgeLength))) {
+      marked[f] = 1;
+      break;
+    }
+  }
+  nothingElse.onlyFaces = &marked;
+  map = damaged;
+  t = d.map.translations;
+  const UntangleStats restricted = untangleFlips(mesh, topology, d.cs.field, d.cs.cut, map, t, nothingElse);
+  EXPECT_EQ(restricted.flippedBefore, 1u);
+  EXPECT_EQ(restricted.flippedAfter, 0u);
+  EXPECT_EQ(restricted.specks, 1u);
+  EXPECT_EQ(restricted.speckFaces, mesh.numFaces());
+  EXPECT_EQ(measureMap(mesh, map, &d.cs.field, nothingElse.edgeLength).flipped, 0u);
 }
 
 // Every face flipped (a map mirrored) on one component larger than a cell: the walks from the

@@ -64,8 +64,9 @@ struct UntangleOptions {
   /// next to a cone that the voxel or spline map put there and no patch opens with the cone fixed.
   /// Voxel maps only (a hat map re-solved locally is itself again); 0: off.
   double leftoverRadius = 1.0;
-  /// When given (one flag per face): only the flipped faces marked here are repaired and counted,
-  /// the others are taken as fine (a repair near a few cones, before deciding on another pass).
+  /// When given (one flag per face): only the flipped faces marked here are repaired (the specks
+  /// among them collapsed) and counted, the others are taken as fine (a repair near a few cones,
+  /// before deciding on another pass).
   const std::vector<std::uint8_t>* onlyFaces = nullptr;
   /// When given (one flag per vertex): vertices never moved, by any step (the border of a window
   /// cut out of a larger mesh, whose faces outside keep their values).
