@@ -67,7 +67,6 @@ VoxStage solveVox(ScratchFolder& folder, const CleanScratch& scratch, const Scra
     // again, the fragments and integrals kept (parameterizeMeshVoxel's second attempt).
     if (!out.basis.basis || !(basisOptions.minDomainWeight < kRetryMinDomainWeight)) throw;
     retryReason = first.what();
-    out.solved = ScratchVoxelSolution();
     out.basis.basis->joinDomains(kRetryMinDomainWeight);
     if (beforeSolve) beforeSolve();
     out.solved = solveScratchVoxelMap(folder, scratch, cut, out.basis, round, pass);

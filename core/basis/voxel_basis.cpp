@@ -254,11 +254,12 @@ std::vector<double> weighNodes(const std::vector<VoxelIntegrals>& records,
 
 // Basis functions: domains of one corner joined across seams (parts of a support that are
 // disconnected on the uncut surface are separate functions). Returns their number.
-std::uint32_t joinDomainsAcrossSeams(std::uint32_t nd, const std::vector<SeamLink>& seamLinks,
+// seamLinks: between nodes 8 e + k.
+std::uint32_t joinDomainsAcrossSeams(std::uint32_t nd, const std::vector<DomainAdjacency>& seamLinks,
                                      const std::vector<std::uint32_t>& elementDomain,
                                      std::vector<std::uint32_t>& domainBasis) {
   UnionFind domains(nd);
-  for (const SeamLink& link : seamLinks) {
+  for (const DomainAdjacency& link : seamLinks) {
     domains.unite(elementDomain[link.left], elementDomain[link.right]);
   }
   return denseLabels(domains, domainBasis);
@@ -367,15 +368,12 @@ void VoxelBasis::joinDomains(double minDomainWeight) {
   joinedDomains_ = joinNegligibleDomains(functions, weighNodes(records_, normalStiffness_), minDomainWeight, joinedNode);
   const std::uint32_t nd = denseLabels(functions, elementDomain_);
   functions = UnionFind(0);
-  std::vector<SeamLink> seamLinks;
-  seamLinks.reserve(nodeSeamLinks_.size());
-  for (const DomainAdjacency& link : nodeSeamLinks_) seamLinks.push_back({link.left, link.right, link.seam});
-  numBasisFunctions_ = joinDomainsAcrossSeams(nd, seamLinks, elementDomain_, domainBasis_);
+  numBasisFunctions_ = joinDomainsAcrossSeams(nd, nodeSeamLinks_, elementDomain_, domainBasis_);
   basisCorner_ = cornersOfBasisFunctions(numBasisFunctions_, elementDomain_, domainBasis_,
                                          voxelCoords_, elementVoxel_, joinedNode);
   std::vector<DomainAdjacency> adjacencies;
-  adjacencies.reserve(seamLinks.size());
-  for (const SeamLink& link : seamLinks) {
+  adjacencies.reserve(nodeSeamLinks_.size());
+  for (const DomainAdjacency& link : nodeSeamLinks_) {
     adjacencies.push_back({elementDomain_[link.left], elementDomain_[link.right], link.seam});
   }
   setDomainAdjacencies(std::move(adjacencies));

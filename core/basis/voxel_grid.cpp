@@ -163,11 +163,14 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
   start = std::chrono::steady_clock::now();
   VoxelBuildResult built = buildVoxelBasis(mesh, topology, field, cut, basisOptions);
   VoxelBasis& basis = *built.basis;
-  param.basisFunctions = basis.numBasisFunctions();
-  param.domains = basis.numDomains();
-  param.seamAdjacencies = static_cast<std::uint32_t>(basis.adjacencies().size());
+  const auto recordBasis = [&] {  // its figures, again after joinDomains
+    param.basisFunctions = basis.numBasisFunctions();
+    param.domains = basis.numDomains();
+    param.seamAdjacencies = static_cast<std::uint32_t>(basis.adjacencies().size());
+    out.basisStats = basis.stats();
+  };
+  recordBasis();
   param.secondsBasis = secondsSince(start);
-  out.basisStats = basis.stats();
   out.voxelSize = basis.grid().voxelSize;
   if (options.basisBuilt) options.basisBuilt();
 
@@ -196,10 +199,7 @@ VoxelParamResult parameterizeMeshVoxel(const TriangleMesh& mesh, const Topology&
     out.failedAttempts = 0;
     reduction = Reduction();
     basis.joinDomains(kRetryMinDomainWeight);
-    param.basisFunctions = basis.numBasisFunctions();
-    param.domains = basis.numDomains();
-    param.seamAdjacencies = static_cast<std::uint32_t>(basis.adjacencies().size());
-    out.basisStats = basis.stats();
+    recordBasis();
     reduction = reduceBasis(basis, reduceOptions);
     if (options.beforeVoxelSolve) options.beforeVoxelSolve();
     solution = solveVoxelSeamless(basis, reduction, roundOptions, out.failedAttempts);
