@@ -277,6 +277,20 @@ TEST(Cli, GenIsByteIdenticalForTheSameSeed) {
   EXPECT_EQ(a, testing::readFile(dir.path("d.ply"))) << "the thread count must not matter";
 }
 
+// --noise-scale local: a noisy mesh other than the mean scale's, said on the noise line; any other
+// scale is refused naming the two.
+TEST(Cli, GenNoiseInEachVertexsOwnEdgeLengths) {
+  TempDir dir;
+  const std::string mean = run("gen scan --faces 3000 --noise 0.3 -o " + dir.path("m.ply"), 0);
+  const std::string local = run("gen scan --faces 3000 --noise 0.3 --noise-scale local -o " + dir.path("l.ply"), 0);
+  EXPECT_TRUE(contains(mean, "scan noise 0.3 mean edge lengths")) << mean;
+  EXPECT_TRUE(contains(local, "scan noise 0.3 local edge lengths")) << local;
+  EXPECT_NE(testing::readFile(dir.path("m.ply")), testing::readFile(dir.path("l.ply")));
+  const std::string bad = run("gen scan --faces 3000 --noise 0.3 --noise-scale median -o " + dir.path("b.ply"), 2);
+  EXPECT_TRUE(contains(bad, "--noise-scale must be mean") && contains(bad, "median")) << bad;
+  EXPECT_FALSE(std::filesystem::exists(dir.path("b.ply")));
+}
+
 TEST(Cli, SubdivideMultipliesFacesAndCarriesTheField) {
   TempDir dir;
   const std::string torus = dir.path("torus.off"), fine = dir.path("fine.ply");

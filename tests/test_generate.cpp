@@ -185,6 +185,47 @@ TEST(ScanNoise, MovesStayWithinTheAmplitudeAlongTheNormalAndAcross) {
   EXPECT_THROW(noisy(generate(MeshKind::Sphere, 12), 0.1, 1, 5, 5), InputError);
 }
 
+// With localScale every vertex moves the same draw as with the mean edge length L, scaled by its
+// own mean edge length over L: on a mesh of two spheres whose triangles differ tenfold in size,
+// the small one's vertices move about a tenth as far, where L moves them as far as the large one's.
+TEST(ScanNoise, LocalScaleMovesEachVertexInUnitsOfItsOwnEdges) {
+  TriangleMesh mesh = generate(MeshKind::Sphere, 4000);
+  const TriangleMesh large = mesh;
+  const VertexId offset = large.numVertices();
+  for (const Vec3f& p : large.positions) mesh.positions.push_back(0.1f * p + Vec3f(5.f, 0.f, 0.f));
+  for (const Triangle& t : large.triangles) mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  std::vector<double> edgeSum(mesh.numVertices(), 0.0), edgeCount(mesh.numVertices(), 0.0);
+  for (const Triangle& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const double len = (mesh.position(t[(k + 1) % 3]) - mesh.position(t[k])).norm();
+      for (const VertexId v : {t[k], t[(k + 1) % 3]}) edgeSum[v] += len, edgeCount[v] += 1.0;
+    }
+  }
+  ScanNoiseOptions options;
+  options.amplitude = 0.3;
+  options.seed = 2;
+  TriangleMesh byMean = mesh, byLocal = mesh;
+  const ScanNoiseResult mean = addScanNoise(byMean, options);
+  options.localScale = true;
+  const ScanNoiseResult local = addScanNoise(byLocal, options);
+  EXPECT_EQ(local.meanEdgeLength, mean.meanEdgeLength);
+  double largest[2][2] = {{0.0, 0.0}, {0.0, 0.0}};  // [small sphere][local scale]
+  for (VertexId v = 0; v < mesh.numVertices(); ++v) {
+    const double own = edgeSum[v] / edgeCount[v];
+    const Vec3d dMean = byMean.position(v) - mesh.position(v), dLocal = byLocal.position(v) - mesh.position(v);
+    const double position = mesh.position(v).norm();
+    EXPECT_LE((dLocal - dMean * (own / mean.meanEdgeLength)).norm(), 1e-4 * dLocal.norm() + 4e-7 * position)
+        << "vertex " << v;
+    EXPECT_LE(dLocal.norm(), std::sqrt(2.0) * 0.3 * own * (1.0 + 1e-4) + 4e-7 * position) << "vertex " << v;
+    const int small = v >= offset;
+    largest[small][0] = std::max(largest[small][0], dMean.norm());
+    largest[small][1] = std::max(largest[small][1], dLocal.norm());
+  }
+  EXPECT_GT(largest[1][0], 0.7 * largest[0][0]);  // L: the small sphere moves as far
+  EXPECT_LT(largest[1][1], 0.15 * largest[0][1]);  // its own edges: about a tenth as far
+  EXPECT_GT(largest[1][1], 0.05 * largest[0][1]);
+}
+
 // The tangential share scales the move across the normal only: 0 moves along the normals alone
 // (a range scanner's depth noise), 0.5 at most half the amplitude across; the normal part is the
 // same draw either way.

@@ -216,13 +216,19 @@ bool parseScanNoise(Args& args, ScanNoiseOptions& options) {
   options.spikes = static_cast<std::uint32_t>(spikes);
   options.folds = static_cast<std::uint32_t>(folds);
   options.tangential = args.number("noise-tangential", 1.0, 0.0, 1.0);
+  const std::string scale = args.value("noise-scale", "mean");
+  if (scale != "mean" && scale != "local") {
+    throw UsageError("--noise-scale must be mean (the whole mesh's mean edge length) or local (each vertex's own "
+                     "edges), not " + scale);
+  }
+  options.localScale = scale == "local";
   return options.amplitude > 0.0 || spikes > 0 || folds > 0;
 }
 
 void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& result) {
-  std::printf("scan noise %.3g mean edge lengths (tangential share %.3g; edge %.4g, largest move %.4g), %u spikes, "
+  std::printf("scan noise %.3g %s edge lengths (tangential share %.3g; edge %.4g, largest move %.4g), %u spikes, "
               "%u folds\n",
-              options.amplitude, options.tangential, result.meanEdgeLength, result.maxDisplacement, result.spikes,
+              options.amplitude, options.localScale ? "local" : "mean", options.tangential, result.meanEdgeLength, result.maxDisplacement, result.spikes,
               result.folds);
 }
 

@@ -88,6 +88,8 @@ void printScanNoise(const ScanNoiseOptions& options, const ScanNoiseResult& resu
   "              and up to A tangentially (deterministic for a seed)\n"                       \
   "  --noise-tangential F  the tangential part up to F A instead (0 to 1, default 1; 0: along\n" \
   "              the normal only, as a range scanner's depth noise)\n"                        \
+  "  --noise-scale mean|local  A in the whole mesh's mean edge length (default) or in each\n"   \
+  "              vertex's own (the edges at it: noise at the scale of uneven triangles)\n"    \
   "  --spikes N  N outlier vertices pushed 2-6 edge lengths along their normal\n"            \
   "  --folds N   N small fold-overs (a vertex and its ring slid over their neighbours)\n"
 

@@ -17,6 +17,8 @@ namespace {
 // Measured peak of the in-memory path: 120 MB for a 4M-face scan (about 26 B per face over the
 // program), 175 MB with --noise; rounded up.
 constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20, kBytesPerFace = 28, kNoiseBytesPerFace = 16;
+// --noise-scale local: a float and a count per vertex, about two vertices per face.
+constexpr std::uint64_t kLocalNoiseBytesPerFace = 4;
 constexpr std::size_t kChunk = std::size_t(1) << 18;
 
 /// Writes the generated mesh chunk by chunk (no scratch: the counts are known up front).
@@ -71,7 +73,7 @@ int runGen(Args& args) {
 
   MemoryPath path;
   path.budget = memory.budget;
-  path.estimate = kProgramBytes + options.faces * (kBytesPerFace + (noisy ? kNoiseBytesPerFace : 0));
+  path.estimate = kProgramBytes + options.faces * (kBytesPerFace + (noisy ? kNoiseBytesPerFace + (noise.localScale ? kLocalNoiseBytesPerFace : 0) : 0));
   path.outOfCore = path.estimate > memory.budget;
   if (path.outOfCore && noisy) {
     throw UsageError("--noise, --spikes and --folds move vertices by normals summed over the whole mesh: about " +
@@ -119,7 +121,8 @@ int runGen(Args& args) {
 
 SEAMVOX_COMMAND({"gen", "generate a synthetic scan-like mesh (sphere, torus, genus2, scan)",
                  "usage: seamvox gen KIND --faces N -o OUT [--seed S] [--ascii]\n"
-                 "                      [--noise A [--noise-tangential F]] [--spikes N] [--folds N]\n"
+                 "                      [--noise A [--noise-tangential F] [--noise-scale mean|local]]\n"
+                 "                      [--spikes N] [--folds N]\n"
                  "\n"
                  "Writes a deterministic synthetic mesh with about N faces (within a few percent):\n"
                  "the same KIND, N and seed give a byte-identical file on every machine.\n"

@@ -20,6 +20,8 @@ namespace {
 // Measured peaks of the in-memory path (armadillo, 86K faces, 3 and 4 levels: 219 and 739 MiB
 // for 5.5M and 22.1M faces, about 33 B per output face over the program; 834 MiB with --noise).
 constexpr std::uint64_t kProgramBytes = std::uint64_t(48) << 20, kBytesPerFace = 36, kNoiseBytesPerFace = 8;
+// --noise-scale local: a float and a count per vertex, about two vertices per face.
+constexpr std::uint64_t kLocalNoiseBytesPerFace = 4;
 // The streamed path holds the cleaned input with its corner table and edge numbers, and a chunk
 // of vertices or faces (about 48 bytes per item with the writer's buffers).
 constexpr std::size_t kChunk = std::size_t(1) << 16;
@@ -111,7 +113,7 @@ int runSubdivide(Args& args) {
   CleanResult cleaned = cleanMeshOf(path, std::move(input), cleanOptions);
 
   const std::uint64_t outputFaces = std::uint64_t(cleaned.mesh.numFaces()) << (2 * levels);
-  memoryPath.estimate = kProgramBytes + outputFaces * (kBytesPerFace + (noisy ? kNoiseBytesPerFace : 0));
+  memoryPath.estimate = kProgramBytes + outputFaces * (kBytesPerFace + (noisy ? kNoiseBytesPerFace + (noise.localScale ? kLocalNoiseBytesPerFace : 0) : 0));
   memoryPath.outOfCore = memoryPath.estimate > memory.budget;
   // Input face -> cleaned face (faceOrigin) -> children (parentFace, or 4^levels in a row).
   std::vector<Vec3d> cleanedField;
@@ -166,7 +168,8 @@ int runSubdivide(Args& args) {
 
 SEAMVOX_COMMAND({"subdivide", "1-to-4 midpoint subdivision (the scaling series), carrying a field",
                  "usage: seamvox subdivide MESH --levels K -o OUT [--field IN --field-out OUT]\n"
-                 "                        [--noise A [--seed S] [--noise-tangential F]] [--spikes N]\n"
+                 "                        [--noise A [--seed S] [--noise-tangential F]\n"
+                 "                        [--noise-scale mean|local]] [--spikes N]\n"
                  "                        [--folds N]\n"
                  "\n"
                  "Cleans MESH, then splits every triangle into four at its edge midpoints, K times\n"

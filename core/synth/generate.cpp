@@ -928,11 +928,14 @@ void checkScanNoiseInput(const TriangleMesh& mesh, const ScanNoiseOptions& optio
 }
 
 /// Area-weighted unit normals per representative (rep) and the mean edge length, summed in face
-/// order.
+/// order. With localEdge, also each representative's mean length of the face edges at it (an
+/// interior edge counted once per face), meanEdgeLength where it has none.
 std::vector<Vec3d> representativeNormals(const TriangleMesh& mesh, const std::vector<VertexId>& rep,
-                                         double& meanEdgeLength) {
+                                         double& meanEdgeLength, std::vector<float>* localEdge = nullptr) {
   const std::uint64_t numVertices = mesh.positions.size();
   std::vector<Vec3d> normal(numVertices, Vec3d::Zero());
+  std::vector<std::uint32_t> localCount;
+  if (localEdge) localEdge->assign(numVertices, 0.f), localCount.assign(numVertices, 0);
   double edgeSum = 0.0;
   std::uint64_t edgeCount = 0;
   for (const Triangle& t : mesh.triangles) {
@@ -944,10 +947,22 @@ std::vector<Vec3d> representativeNormals(const TriangleMesh& mesh, const std::ve
       if (std::isfinite(len)) {
         edgeSum += len;
         ++edgeCount;
+        if (localEdge) {
+          for (const VertexId end : {rep[t[k]], rep[t[(k + 1) % 3]]}) {
+            (*localEdge)[end] += static_cast<float>(len);
+            ++localCount[end];
+          }
+        }
       }
     }
   }
   meanEdgeLength = edgeCount ? edgeSum / edgeCount : 0.0;
+  if (localEdge) {
+    for (std::uint64_t v = 0; v < numVertices; ++v) {
+      float& e = (*localEdge)[v];
+      e = localCount[v] ? e / static_cast<float>(localCount[v]) : static_cast<float>(meanEdgeLength);
+    }
+  }
   parallelRange(numVertices, [&](std::uint64_t begin, std::uint64_t end) {
     for (std::uint64_t v = begin; v < end; ++v) {
       if (rep[v] != v) continue;
@@ -1000,13 +1015,15 @@ ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options
   if (numVertices == 0 || mesh.triangles.empty()) return result;
   const std::vector<VertexId> rep = coincidentRepresentatives(mesh.positions);
   double edge = 0.0;
-  const std::vector<Vec3d> normal = representativeNormals(mesh, rep, edge);
+  std::vector<float> localEdge;  // per representative, with localScale
+  const std::vector<Vec3d> normal =
+      representativeNormals(mesh, rep, edge, options.localScale && options.amplitude > 0.0 ? &localEdge : nullptr);
   result.meanEdgeLength = edge;
   const std::unordered_map<VertexId, Vec3d> extra = spikeAndFoldMoves(mesh, rep, normal, edge, options, result);
 
   // Per-vertex noise from a hash of the seed and the position: coincident copies move alike.
   // Copies move first, reading their representative's position before it moves itself.
-  const double amplitude = options.amplitude * edge;
+  const double meanAmplitude = options.amplitude * edge;
   tbb::combinable<double> largest([] { return 0.0; });
   for (const bool representatives : {false, true}) {
     parallelRange(numVertices, [&](std::uint64_t begin, std::uint64_t end) {
@@ -1015,6 +1032,7 @@ ScanNoiseResult addScanNoise(TriangleMesh& mesh, const ScanNoiseOptions& options
         const VertexId r = rep[v];
         if ((r == v) != representatives) continue;
         Vec3d move = Vec3d::Zero();
+        const double amplitude = localEdge.empty() ? meanAmplitude : options.amplitude * localEdge[r];
         if (amplitude > 0.0) {
           const auto bits = positionBits(mesh.positions[r]);
           const std::uint64_t h0 = mix64(options.seed ^ mix64(bits[0] ^ (std::uint64_t(bits[1]) << 32)) ^

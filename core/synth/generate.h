@@ -85,6 +85,11 @@ struct ScanNoiseOptions {
   /// amplitude * L tangentially (uniform in [-A L, A L] along the normal, uniform in the disc of
   /// radius t A L).
   double amplitude = 0.0;
+  /// The per-vertex noise in units of each vertex's own mean edge length (the edges at it, summed
+  /// over coincident copies) instead of L: a scanner's noise at the scale of its sampling on a
+  /// mesh whose triangles vary in size, where L would move the vertices of small triangles by
+  /// many of their own edges. Spikes and folds stay in units of L.
+  bool localScale = false;
   /// The tangential part's share of the amplitude, 0 to 1 (0: along the normal only, as a range
   /// scanner's depth noise; on uneven triangles the tangential part folds the thin ones in 3D).
   double tangential = 1.0;
