@@ -236,6 +236,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   j.key("conePasses").value(U64{r.conePasses});
   j.key("conePassKept").value(U64{r.conePassKept});
   j.key("conePassSkippedForMemory").value(r.conePassSkippedForMemory);
+  j.key("conePairsMergedInMap").value(U64{r.conesMergedInMap});
   j.key("conePassFlips").beginArray();
   for (const std::uint64_t flips : r.conePassFlips) j.value(U64{flips});
   j.endArray();

@@ -197,6 +197,16 @@ TEST(Cli, ParamRetriesAPassWhoseRepairLeavesFlipsAtCloseCones) {
   ASSERT_GE(kept, 1.0);
   ASSERT_LE(kept, r.numberAt("conePasses"));
   EXPECT_EQ(r.numberAt("conePassSkippedForMemory"), 0.0);
+  EXPECT_EQ(r.numberAt("conePairsMergedInMap"), 0.0);
+
+  // --merge-in-map: pairs on one point merged in the first pass's map (here all of them, three
+  // cones on one point among them), seamless by param's verdict and check's.
+  const std::string inMap =
+      run("param " + noisy + " -o " + output + common + " --merge-in-map --report " + report, 0);
+  EXPECT_TRUE(contains(inMap, ": seamless")) << inMap;
+  const std::string checkInMap = run("check " + output, 0);
+  EXPECT_TRUE(contains(checkInMap, "\nseamless\n") && !contains(checkInMap, "NOT seamless")) << checkInMap;
+  EXPECT_GE(parseJson(testing::readFile(report)).numberAt("conePairsMergedInMap"), 4.0);
 
   // A budget that holds the run's estimate but not the first map besides: no such pass, and the
   // report says why.

@@ -62,6 +62,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.untangle = !args.flag("no-untangle");
   if (args.flag("no-leftover-resolve")) o.untangleOptions.leftoverRadius = 0.0;
   if (args.flag("no-cone-resolve")) o.untangleOptions.coneRepairRadius = 0.0;
+  o.mergeInMap = args.flag("merge-in-map");
   o.solver.smoothedEvaluation = !args.flag("no-smoothed-evaluation");
   o.features.alignBoundary = args.flag("align-boundary");
   o.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
@@ -480,7 +481,7 @@ int runParam(Args& args) {
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--spline-cells N] [--field auto|smooth|proxy|FILE]\n"
-                 "                     [--edge-length H | --cells N] [--merge-cones F]\n"
+                 "                     [--edge-length H | --cells N] [--merge-cones F] [--merge-in-map]\n"
                  "                     [--greedy] [--no-untangle] [--no-leftover-resolve] [--no-cone-resolve]\n"
                  "                     [--no-smoothed-evaluation] [--weld]\n"
                  "                     [--keep-order] [--report R.json]\n"
@@ -526,6 +527,11 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                      F > 0, a cone of a full turn (angle 0: the field may turn so\n"
                  "                      around a pole of many thin faces) is split into cones of at\n"
                  "                      most +2 quarter turns nearby (report conesSplit)\n"
+                 "  --merge-in-map      a pair of cones a solve puts on one point, one of them ending a\n"
+                 "                      single seam, is merged in the map itself (a neighbourhood\n"
+                 "                      solved again) instead of in another pass: faster, may leave\n"
+                 "                      flips next to the merged cone (in memory only; report\n"
+                 "                      conePairsMergedInMap)\n"
                  "  --greedy            round translations in batches, re-solving in between\n"
                  "  --no-untangle       skip the foldover repair (patches around flipped triangles\n"
                  "                      re-solved with stiffening; seams and translations kept)\n"
@@ -582,7 +588,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                        passes, --quads, --render, --close-holes, features or hat\n"
                  "                        solver yet\n"
                  "  --out-of-core         take the out-of-core path whatever the estimate\n",
-                 {"greedy", "no-untangle", "no-leftover-resolve", "no-cone-resolve", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
+                 {"greedy", "merge-in-map", "no-untangle", "no-leftover-resolve", "no-cone-resolve", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
                  &runParam});
 
 }  // namespace seamvox::cli

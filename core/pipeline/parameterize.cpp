@@ -1,6 +1,8 @@
 // The whole pipeline as one call: clean, field, cone passes (merge, cut, solve), quality.
 #include "core/pipeline/parameterize.h"
 
+#include "core/refine/merge_in_map.h"
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -9,6 +11,7 @@
 #include <unordered_map>
 
 #include "core/mesh/hole_caps.h"
+#include "core/refine/merge_in_map.h"
 #include "core/refine/refine.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
@@ -167,6 +170,38 @@ std::vector<std::pair<VertexId, VertexId>> foldedConesAfterRepair(
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   return pairs;
+}
+
+/// Merges each of `pairs` in the pass's map (mergeConesInMap), updating coneIndex and
+/// r.conesMergedInMap. False when one cannot be (its reason on the progress line): the pass must
+/// start again with the pairs merged in the field, and the map as it is is discarded.
+bool mergePairsInMap(PipelineResult& r, const CrossField& field, CutResult& cut,
+                     std::unordered_map<VertexId, std::int32_t>& coneIndex,
+                     const std::vector<std::pair<VertexId, VertexId>>& pairs, const MergeInMapOptions& options) {
+  // A cone merged away stands for the one that took its index (three cones on one point).
+  std::unordered_map<VertexId, VertexId> mergedInto;
+  const auto current = [&](VertexId v) {
+    for (auto it = mergedInto.find(v); it != mergedInto.end(); it = mergedInto.find(v)) v = it->second;
+    return v;
+  };
+  for (const auto& pair : pairs) {
+    const VertexId a = current(pair.first), b = current(pair.second);
+    if (a == b) continue;
+    const auto ia = coneIndex.find(a), ib = coneIndex.find(b);
+    if (ia == coneIndex.end() || ib == coneIndex.end() || !canMergeCoincident(ia->second, ib->second)) return false;
+    const MergeInMapResult merged = mergeConesInMap(r.mesh, r.topology, field, cut, r.solved.param.cornerUV,
+                                                    r.solved.param.translations, a, ia->second, b, ib->second, options);
+    if (!merged.merged) return false;
+    mergedInto[merged.gone] = merged.kept;
+    coneIndex.erase(merged.gone);
+    if (merged.keptIndex4 == 0) {
+      coneIndex.erase(merged.kept);
+    } else {
+      coneIndex[merged.kept] = merged.keptIndex4;
+    }
+    ++r.conesMergedInMap;
+  }
+  return true;
 }
 
 /// Curves of `features` the map could not hold on integer iso-lines without squeezing faces (two
@@ -389,11 +424,17 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
     }
     // Adjacent cones on one point: another pass before any repair (the faces between them collapse).
     const bool passesLeft = options.mergeCones > 0.0 && r.conePasses < options.maxConePasses;
+    MergeInMapOptions inMap;
+    inMap.edgeLength = r.edgeLength;
+    inMap.radius = kCoincidentSearchFraction;
+    inMap.coneWeightRadius = options.coneWeightRadius;
+    inMap.closeHolesWithin = param.closeHolesWithin;
     if (passesLeft) {
       const auto pairs = mergeableCoincidentCones(r.mesh, r.topology, coneCut.cut.cones, coneIndex,
                                                   r.solved.param.cornerUV, 0.0);
-      if (!pairs.empty()) {
-        coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+      // Merged in the map or not, a later pass merges them in the field.
+      coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+      if (!pairs.empty() && !(options.mergeInMap && mergePairsInMap(r, field, coneCut.cut, coneIndex, pairs, inMap))) {
         r.solved = SolverResult{};  // free the map before the next pass
         continue;
       }
@@ -417,8 +458,9 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
           nearCones = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
                                     r.solved.param.translations, local);
           const auto pairs = foldedCoincidentCones(r, coneCut.cut.cones, coneIndex, coincidentDistance);
-          if (!pairs.empty()) {
-            coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+          coincident.insert(coincident.end(), pairs.begin(), pairs.end());
+          if (!pairs.empty() &&
+              !(options.mergeInMap && mergePairsInMap(r, field, coneCut.cut, coneIndex, pairs, inMap))) {
             r.solved = SolverResult{};
             meter.finish("untangle");  // the repair next to the cones, this pass's last step
             continue;

@@ -116,6 +116,12 @@ struct PipelineOptions {
   /// Cut-and-solve passes at most: another pass while a solve puts mergeable adjacent cones on
   /// one point, or leaves flipped faces at both of two close cones after the repair.
   std::uint32_t maxConePasses = 3;
+  /// Cone pairs a solve put on one point, one of them ending a single seam, are merged in that
+  /// pass's map (mergeConesInMap: a neighbourhood solved again) instead of starting another pass;
+  /// other pairs still start one. In memory only. Off by default: faster, but on noisy armadillo
+  /// x4 it left 352 flips next to the merged cone where the second pass left none
+  /// (bench/RESULTS.md, session 56).
+  bool mergeInMap = false;
   /// Memory a pass started after the repair may hold beyond the run's estimate: the earlier
   /// pass's map and cut wait meanwhile (about 24 bytes per face). Such a pass is not started when
   /// they would not fit (`param`: the budget less the estimate); unlimited by default.
@@ -186,6 +192,9 @@ struct PipelineResult {
   /// A pass after the repair was due but not started: the earlier pass's map and cut would not
   /// fit PipelineOptions::passHeadroomBytes.
   bool conePassSkippedForMemory = false;
+  /// Cone pairs a solve put on one point that were merged in its pass's map (mergeConesInMap,
+  /// PipelineOptions::mergeInMap), summed over the passes.
+  std::uint32_t conesMergedInMap = 0;
   /// Small holes capped for the field and the solve (PipelineOptions::closeHoles), not in the
   /// output.
   std::uint32_t fieldCappedHoles = 0;

@@ -126,6 +126,21 @@ std::vector<FaceId> selectFlagged(const TriangleMesh& mesh, const Topology& topo
 
 }  // namespace
 
+WedgeMap regionCornerValues(const RegionMesh& region, const WedgeMap& cornerUV) {
+  std::vector<Vec2d> values(3 * region.faceOrigin.size());
+  for (std::size_t i = 0; i < region.faceOrigin.size(); ++i) {
+    for (int k = 0; k < 3; ++k) values[3 * i + k] = cornerUV[3 * region.faceOrigin[i] + k];
+  }
+  return WedgeMap::fromCorners(region.mesh.triangles, values);
+}
+
+std::vector<std::complex<double>> regionTranslations(const RegionMesh& region,
+                                                     const std::vector<std::complex<double>>& seamT) {
+  std::vector<std::complex<double>> out(region.seamOrigin.size());
+  for (std::size_t j = 0; j < out.size(); ++j) out[j] = seamT[region.seamOrigin[j]];
+  return out;
+}
+
 RefineOptions leftoverRefineOptions(const RefineOptions& base, std::vector<FaceId> flipped, double meanEdge,
                                     double radius) {
   RefineOptions out = base;

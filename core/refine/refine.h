@@ -227,6 +227,13 @@ RegionMesh extractRegion(const TriangleMesh& mesh, const Topology& topology,
 RegionMesh extractRegionOnFieldSurface(const TriangleMesh& mesh, const Topology& topology, const CrossField& field,
                                        const CutResult& cut, const std::vector<FaceId>& regionFaces);
 
+/// The whole map's corner values on a region's faces (their own corners, region face order) and
+/// the translations of the region's seams (seamOrigin): what a local solve of the region starts
+/// from.
+WedgeMap regionCornerValues(const RegionMesh& region, const WedgeMap& cornerUV);
+std::vector<std::complex<double>> regionTranslations(const RegionMesh& region,
+                                                     const std::vector<std::complex<double>>& seamT);
+
 /// Moves a region onto the surface its field was computed on: positions become `surface` (one
 /// per sub vertex, vertexOrigin order) and each face's direction is turned onto the face there
 /// by rotateBetween their normals, as computeSingularities reads the field (a face of zero area

@@ -919,13 +919,8 @@ GroupRepair repairGroup(const TriangleMesh& mesh, const Topology& topology, cons
       if ((*options.pinnedVertices)[region.vertexOrigin[v]]) region.vertexFree[v] = 0;
     }
   }
-  std::vector<Vec2d> values(3 * faces.size());
-  for (std::size_t i = 0; i < faces.size(); ++i) {
-    for (int k = 0; k < 3; ++k) values[3 * i + k] = cornerUV[3 * faces[i] + k];
-  }
-  const WedgeMap regionUV = WedgeMap::fromCorners(region.mesh.triangles, values);
-  std::vector<Complex> regionT(region.seamOrigin.size());
-  for (std::size_t j = 0; j < regionT.size(); ++j) regionT[j] = seamT[region.seamOrigin[j]];
+  const WedgeMap regionUV = regionCornerValues(region, cornerUV);
+  const std::vector<Complex> regionT = regionTranslations(region, seamT);
   const RoundSolution solved = stiffenRegion(region, regionUV, regionT, mesh, topology, field, options);
   GroupRepair out;
   out.solves = solved.solves;
