@@ -7,13 +7,14 @@ The wound column counts vertices the map winds around twice (a fold no flipped f
 issue sets no target for it.
 
     python3 bench/real_scans.py SEAMVOX DATA_DIR OUT_DIR [--noise A] [--noise-tangential F]
-                                [--no-check] [--only NAME,...]
+                                [--noise-scale local] [--no-check] [--only NAME,...]
 
 Inputs, made once in OUT_DIR/inputs and reused: the shared armadillo subdivided 4 times (L4, 22.1M
 faces), fertility 5 times (9.2M), camelhead 5 times (23.2M, one boundary loop) and a generated
 20M-face scan, each as it is and with noise A (default 0.25 mean edge lengths, seed 1;
 `subdivide --noise`, `gen scan --noise`; with --noise-tangential F its part across the normal
-scaled by F, 0: a range scanner's depth noise, label "noise A tF"). One `param X -o OUT_DIR/map.ply --report R.json` per
+scaled by F, 0: a range scanner's depth noise, label "noise A tF"; with --noise-scale local A is in
+each vertex's own mean edge length, label "noise A local"). One `param X -o OUT_DIR/map.ply --report R.json` per
 input, default options, then `seamvox check` on the written map (its verdict must be param's).
 Prints a markdown table; the last column lists the targets a row misses. Peak = the report's
 peakResidentBytes (VmHWM). Reports stay in OUT_DIR/runs.
@@ -30,7 +31,7 @@ def run(cmd, check=True):
     return subprocess.run(cmd, check=check, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
-def inputs(seamvox, data, out, noise, tangential, only):
+def inputs(seamvox, data, out, noise, tangential, only, scale="mean"):
     made = os.path.join(out, "inputs")
     os.makedirs(made, exist_ok=True)
     found = []
@@ -40,29 +41,32 @@ def inputs(seamvox, data, out, noise, tangential, only):
             print(f"skipped {stem}: {source} is missing", file=sys.stderr)
             continue
         for a in ("0", noise):
-            label = f"{stem} L{levels}" + (f" noise {a}{suffix(a, tangential)}" if a != "0" else "")
-            path = os.path.join(made, f"{stem}_L{levels}_n{a}{suffix(a, tangential, '_t')}.ply")
+            label = f"{stem} L{levels}" + (f" noise {a}{suffix(a, tangential, scale=scale)}" if a != "0" else "")
+            path = os.path.join(made, f"{stem}_L{levels}_n{a}{suffix(a, tangential, '_t', scale)}.ply")
             if only and label not in only:
                 continue
             if not os.path.exists(path):
                 run([seamvox, "subdivide", source, "--levels", str(levels), "--noise", a,
-                     "--noise-tangential", tangential, "-o", path, "--quiet"])
+                     "--noise-tangential", tangential, "--noise-scale", scale, "-o", path, "--quiet"])
             found.append((label, path))
     for a in ("0", noise):
-        label = "scan 20M" + (f" noise {a}{suffix(a, tangential)}" if a != "0" else "")
-        path = os.path.join(made, f"scan_20M_n{a}{suffix(a, tangential, '_t')}.ply")
+        label = "scan 20M" + (f" noise {a}{suffix(a, tangential, scale=scale)}" if a != "0" else "")
+        path = os.path.join(made, f"scan_20M_n{a}{suffix(a, tangential, '_t', scale)}.ply")
         if only and label not in only:
             continue
         if not os.path.exists(path):
             run([seamvox, "gen", "scan", "--faces", "20000000", "--noise", a, "--noise-tangential", tangential,
-                 "-o", path, "--quiet"])
+                 "--noise-scale", scale, "-o", path, "--quiet"])
         found.append((label, path))
     return found
 
 
-def suffix(amplitude, tangential, sep=" t"):
-    # Noise with its default tangential share keeps the plain label and file name.
-    return "" if amplitude == "0" or float(tangential) == 1.0 else f"{sep}{tangential}"
+def suffix(amplitude, tangential, sep=" t", scale="mean"):
+    # Noise with its default tangential share and scale keeps the plain label and file name.
+    if amplitude == "0":
+        return ""
+    local = "" if scale == "mean" else (" local" if sep == " t" else "_local")
+    return ("" if float(tangential) == 1.0 else f"{sep}{tangential}") + local
 
 
 def misses(r, noisy, checked, clean_cones=None):
@@ -96,13 +100,14 @@ def main():
     noise = sys.argv[sys.argv.index("--noise") + 1] if "--noise" in sys.argv else "0.25"
     tangential = sys.argv[sys.argv.index("--noise-tangential") + 1] if "--noise-tangential" in sys.argv else "1"
     only = sys.argv[sys.argv.index("--only") + 1].split(",") if "--only" in sys.argv else None
+    scale = sys.argv[sys.argv.index("--noise-scale") + 1] if "--noise-scale" in sys.argv else "mean"
     check = "--no-check" not in sys.argv
     os.makedirs(os.path.join(out, "runs"), exist_ok=True)
     print("| input | faces | time s | peak MiB | cones (before merging) | hat-refined | flips before repair "
           "-> after | stretched | wound | gradient error | largest stage | check | misses |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     clean_cones = {}  # raw cones of each clean input, for its noisy row (issue #15: within 1.5x)
-    for label, path in inputs(seamvox, data, out, noise, tangential, only):
+    for label, path in inputs(seamvox, data, out, noise, tangential, only, scale):
         tag = label.replace(" ", "_")
         report = os.path.join(out, "runs", f"{tag}.json")
         mapped = os.path.join(out, "map.ply")
