@@ -1,8 +1,6 @@
 // The whole pipeline as one call: clean, field, cone passes (merge, cut, solve), quality.
 #include "core/pipeline/parameterize.h"
 
-#include "core/refine/merge_in_map.h"
-
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -173,8 +171,8 @@ std::vector<std::pair<VertexId, VertexId>> foldedConesAfterRepair(
 }
 
 /// Merges each of `pairs` in the pass's map (mergeConesInMap), updating coneIndex and
-/// r.conesMergedInMap. False when one cannot be (its reason on the progress line): the pass must
-/// start again with the pairs merged in the field, and the map as it is is discarded.
+/// r.conesMergedInMap. False when one cannot be: the pass must start again with the pairs merged in
+/// the field, and the map as it is is discarded.
 bool mergePairsInMap(PipelineResult& r, const CrossField& field, CutResult& cut,
                      std::unordered_map<VertexId, std::int32_t>& coneIndex,
                      const std::vector<std::pair<VertexId, VertexId>>& pairs, const MergeInMapOptions& options) {
