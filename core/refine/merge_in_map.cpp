@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <functional>
 #include <queue>
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/field/cone_merge.h"
 #include "core/refine/refine.h"
 #include "core/system/errors.h"
 
@@ -118,7 +118,7 @@ MergeInMapResult mergeConesInMap(const TriangleMesh& mesh, const Topology& topol
     throw InputError("mergeConesInMap: " + std::to_string(seamT.size()) + " translations for " +
                      std::to_string(cut.seams.size()) + " seams");
   }
-  if (ia == 0 || ib == 0 || std::abs(ia + ib) > 3 || a == b) {
+  if (!canMergeCoincident(ia, ib) || a == b) {
     throw InputError("mergeConesInMap: cones " + std::to_string(a) + " and " + std::to_string(b) + " of indices " +
                      std::to_string(ia) + " and " + std::to_string(ib) + " cannot merge");
   }
