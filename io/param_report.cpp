@@ -217,6 +217,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   if (!r.solved.fallbackReason.empty()) j.key("fallbackReason").value(r.solved.fallbackReason);
   if (!r.solved.voxelRetryReason.empty()) j.key("voxelRetryReason").value(r.solved.voxelRetryReason);
   j.key("field").value(c.fieldSource).key("fieldMethod").value(r.fieldMethod);
+  j.key("fieldSmoothing").value(U64{c.fieldSmoothing});
   j.key("faces").value(U64{r.size.faces});
   j.key("vertices").value(U64{r.size.vertices});
   j.key("components").value(U64{r.solved.param.stats.components});
@@ -316,6 +317,7 @@ ParamReportContext paramReportContext(const PipelineOptions& options, const Stag
   c.fieldSource = std::move(fieldSource);
   c.gridResolution = options.solver.gridResolution;
   c.rings = options.solver.refine.rings;
+  c.fieldSmoothing = options.field.importedPerInputFace.empty() ? options.field.smoothingSteps : 0;
   c.maxRounds = options.solver.refine.maxRounds;
   c.stages = meter.stages();
   c.totalSeconds = meter.totalSeconds();

@@ -280,7 +280,9 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   r.edgeLength = options.spacing.spacing(r.diagonal);
   const double h = r.edgeLength;
   // The field's surface as the in-memory pipeline's (FieldSource::gridLength 0: no rough spots).
-  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), FieldGeometryOptions(), early, true);
+  FieldGeometryOptions geometry;
+  geometry.smoothingIterations = options.fieldSmoothing;
+  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), geometry, early, true);
   r.roughVertices = field.roughVertices;
   r.roughSpotVertices = field.roughSpotVertices;
   r.fieldElements = field.elements;

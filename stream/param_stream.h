@@ -14,6 +14,7 @@
 
 #include "core/basis/smoothed_evaluation.h"
 #include "core/field/cone_merge.h"
+#include "core/field/field_proxy.h"
 #include "core/mesh/clean.h"
 #include "core/pipeline/grid_spacing.h"
 #include "core/quality/metrics.h"
@@ -42,6 +43,8 @@ struct StreamParamOptions {
   /// map put on one point; none without merging.
   std::uint32_t maxConePasses = 3;
   std::int32_t gridResolution = 128;
+  /// Smoothing steps of the field's surface (FieldSource::smoothingSteps).
+  std::uint32_t fieldSmoothing = kFieldSmoothingIterations;
   /// voxloc: refine near cones and wherever the map collapses or flips; vox: only the faces of
   /// basis functions the reduction left inconsistent (one round).
   bool voxLoc = true;

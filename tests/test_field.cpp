@@ -477,5 +477,55 @@ TEST(FieldCommand, ShowsTheConesParamCutsThrough) {
   EXPECT_EQ(testing::runSeamvox(common + " --edge-length 1", &out), 2) << out;  // with --cells
 }
 
+// --field-smoothing N sets the steps of the surface the field and its cones are read on, in field
+// and in param alike: on a closed genus-2 surface jittered by half an edge each number of steps
+// gives its own field (Poincare-Hopf held), param reads the same cones as field with the same
+// steps, both reports say the steps; a value out of range or one given with an imported field is
+// refused and writes nothing.
+TEST(FieldCommand, FieldSmoothingStepsReachFieldAndParam) {
+  testing::TempDir dir;
+  std::string out;
+  ASSERT_EQ(testing::runSeamvox("gen genus2 --faces 20000 --noise 0.5 --seed 3 -o " + dir.path("s.ply") + " --quiet", &out), 0)
+      << out;
+  const std::string common = "field " + dir.path("s.ply") + " --json --quiet --merge-cones 0";
+  std::string one, smoothed, more;
+  ASSERT_EQ(testing::runSeamvox(common + " -o " + dir.path("1.field") + " --field-smoothing 1", &one), 0) << one;
+  ASSERT_EQ(testing::runSeamvox(common + " -o " + dir.path("s.field"), &smoothed), 0) << smoothed;
+  ASSERT_EQ(testing::runSeamvox(common + " -o " + dir.path("8.field") + " --field-smoothing 8", &more), 0) << more;
+  EXPECT_EQ(jsonInteger(one, "fieldSmoothing"), 1);
+  EXPECT_EQ(jsonInteger(smoothed, "fieldSmoothing"), 3);
+  EXPECT_EQ(jsonInteger(more, "fieldSmoothing"), 8);
+  EXPECT_NE(testing::readFile(dir.path("1.field")), testing::readFile(dir.path("s.field")));
+  EXPECT_NE(testing::readFile(dir.path("8.field")), testing::readFile(dir.path("s.field")));
+  for (const std::string* json : {&one, &smoothed, &more}) {
+    EXPECT_EQ(jsonInteger(*json, "indexSum4"), 4 * jsonInteger(*json, "eulerCharacteristic")) << *json;
+  }
+  // param with the same steps reads the same cones off the same surface.
+  for (const auto& [steps, json] : {std::pair<const char*, const std::string*>{"1", &one}, {"8", &more}}) {
+    ASSERT_EQ(testing::runSeamvox("param " + dir.path("s.ply") + " -o " + dir.path("o.ply") + " --quiet --merge-cones 0 " +
+                                      "--solver hat --field-smoothing " + steps + " --report " + dir.path("r.json"),
+                                  &out),
+              0)
+        << out;
+    const std::string report = testing::readFile(dir.path("r.json"));
+    EXPECT_EQ(jsonInteger(report, "fieldSmoothing"), std::stol(steps));
+    EXPECT_EQ(jsonInteger(report, "conesBeforeMerge"), jsonInteger(*json, "conesBeforeMerge")) << steps;
+  }
+  std::filesystem::remove(dir.path("o.ply"));
+  for (const std::string& bad : std::vector<std::string>{" --field-smoothing 0", " --field-smoothing 65", " --field-smoothing x",
+                                " --field-smoothing 3 --field " + dir.path("s.field")}) {
+    EXPECT_EQ(testing::runSeamvox("param " + dir.path("s.ply") + " -o " + dir.path("o.ply") + " --quiet" + bad, &out), 2)
+        << bad << "\n" << out;
+    EXPECT_NE(out.find("--field-smoothing"), std::string::npos) << out;
+    EXPECT_FALSE(std::filesystem::exists(dir.path("o.ply"))) << bad;
+  }
+  EXPECT_EQ(testing::runSeamvox("field " + dir.path("s.ply") + " -o " + dir.path("t.field") + " --import " +
+                                    dir.path("s.field") + " --field-smoothing 2",
+                                &out),
+            2)
+      << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.path("t.field")));
+}
+
 }  // namespace
 }  // namespace seamvox

@@ -161,6 +161,29 @@ TEST(ParamStream, EqualsTheInMemoryPipelineAndCheckAgrees) {
   EXPECT_GT(smoothed, 0.0);  // and some voxel map folds that the smoothed surface re-evaluated
 }
 
+// --field-smoothing reaches the out-of-core field: with the field's surface smoothed by 1 and by 8
+// steps, the same map and figures on both paths; and out of core the steps change the map (each
+// written file differs from the default's), the report saying which.
+TEST(ParamStream, FieldSmoothingStepsAsInMemory) {
+  const TriangleMesh scan = testing::stageTestMeshes(43).at(0).second;
+  for (const char* steps : {"1", "8"}) {
+    expectPathsAgree(scan, {std::string(" --grid 32 --cells 20 --quiet --no-untangle --field-smoothing ") + steps});
+  }
+  testing::TempDir dir;
+  writeMesh(dir.path("in.ply"), scan);
+  std::vector<std::string> maps;
+  for (const char* steps : {"3", "1", "8"}) {
+    run("param " + dir.path("in.ply") + " -o " + dir.path("o.ply") + " --out-of-core --memory-budget 150M --scratch " +
+            dir.dir() + " --grid 32 --cells 20 --quiet --no-untangle --field-smoothing " + steps + " --report " +
+            dir.path("r.json"),
+        0);
+    EXPECT_EQ(parseJson(testing::readFile(dir.path("r.json"))).numberAt("fieldSmoothing"), std::stod(steps));
+    maps.push_back(testing::readFile(dir.path("o.ply")));
+  }
+  EXPECT_NE(maps[1], maps[0]) << "1 step gives the default's map";
+  EXPECT_NE(maps[2], maps[0]) << "8 steps give the default's map";
+}
+
 // A real scan whose solve puts two close cones on one point: the second cone pass merges them,
 // out of core as in memory (at two spacings where it happens); and a noisy scan at the
 // default grid, with the repair and the checks after it (the retry of a pass whose repair leaves

@@ -13,6 +13,7 @@
 #include <mutex>
 
 #include "core/field/cone_merge.h"
+#include "core/field/field_proxy.h"
 #include "core/solve/param_solver.h"
 #include "core/system/errors.h"
 #include "core/system/memory_budget.h"
@@ -173,6 +174,13 @@ std::int32_t parseGridResolution(Args& args) {
 
 double parseMergeCones(Args& args) {
   return args.number("merge-cones", kConeMergeFraction, 0.0, 10.0);
+}
+
+std::uint32_t parseFieldSmoothing(Args& args, bool imported) {
+  if (imported && args.value("field-smoothing")) {
+    throw UsageError("--field-smoothing has no effect with an imported field (it smooths the surface a computed field is solved on)");
+  }
+  return static_cast<std::uint32_t>(args.integer("field-smoothing", kFieldSmoothingIterations, 1, 64));
 }
 
 CleanResult cleanMeshOf(const std::string& path, TriangleMesh mesh, const CleanOptions& options) {

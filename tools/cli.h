@@ -73,6 +73,9 @@ GridSpacing parseGridSpacing(Args& args);
 std::int32_t parseGridResolution(Args& args);
 /// --merge-cones F (param, field): cones closer than F * h are merged; default kConeMergeFraction.
 double parseMergeCones(Args& args);
+/// --field-smoothing N (param, field): smoothing steps of the field's surface, 1..64; default
+/// kFieldSmoothingIterations. Refused with an imported field (`imported`), which has no such surface.
+std::uint32_t parseFieldSmoothing(Args& args, bool imported);
 
 /// cleanMesh on a mesh read from path: its errors ("the mesh has no valid faces", a NaN) name
 /// the file.

@@ -71,6 +71,7 @@ struct FieldCommand {
   double curvature = 0.0;
   FieldMethod method = FieldMethod::Auto;
   double mergeCones = 0.0;
+  std::uint32_t fieldSmoothing = kFieldSmoothingIterations;  ///< steps of the field's surface (--field-smoothing)
   GridSpacing spacing;
   bool json = false, weld = false;
   FeatureOptions features;  ///< the curves the field follows, as in param
@@ -93,6 +94,7 @@ FieldCommand parseFieldArgs(Args& args) {
   }
   if (c.curvature > 0.0 && c.method == FieldMethod::Proxy) throw UsageError("--curvature needs --field smooth or auto");
   c.mergeCones = parseMergeCones(args);
+  c.fieldSmoothing = parseFieldSmoothing(args, c.importPath.has_value());
   c.spacing = parseGridSpacing(args);
   c.conesPath = args.value("cones");
   c.seamsPath = args.value("seams");
@@ -127,6 +129,7 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   FieldSource source;
   source.method = c.method;
   source.curvatureWeight = c.curvature;
+  source.smoothingSteps = c.fieldSmoothing;
   if (c.importPath) source.importedPerInputFace = readFieldVectors(*c.importPath, run.inputFaces);
   meter.finish("read");
   CleanOptions cleanOptions;
@@ -205,6 +208,7 @@ void printFieldJson(const FieldCommand& c, const FieldRun& run, const FieldFigur
   j.key("input").value(c.input).key("output").value(*c.output);
   j.key("field").value(c.importPath ? "import" : c.curvature > 0.0 ? "curvature" : "smoothest");
   j.key("fieldMethod").value(c.importPath ? "import" : fieldMethodName(run.method));
+  j.key("fieldSmoothing").value(c.importPath ? 0u : c.fieldSmoothing);
   j.key("faces").value(std::uint64_t{mesh.numFaces()}).key("vertices").value(std::uint64_t{mesh.numVertices()});
   j.key("eulerCharacteristic").value(figures.chi);
   j.key("cones").value(std::uint64_t{sing.cones.size()});
@@ -285,7 +289,7 @@ int runField(Args& args) {
 
 SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "usage: seamvox field MESH -o FIELD [--field auto|smooth|proxy] [--import FILE]\n"
-                 "                     [--curvature W] [--cones OUT.obj]\n"
+                 "                     [--curvature W] [--field-smoothing N] [--cones OUT.obj]\n"
                  "                     [--merge-cones F] [--edge-length H | --cells N]\n"
                  "                     [--seams OUT.obj] [--json] [--weld]\n"
                  "                     [--align-boundary] [--feature-angle DEG]\n"
@@ -301,6 +305,8 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "                    (linear time and memory; massive meshes; no --curvature)\n"
                  "  --import FILE     use the field in FILE (.crossfield `2 F` or plain) instead\n"
                  "  --curvature W     align with principal curvature, weight W > 0 (0: smoothest)\n"
+                 "  --field-smoothing N  smoothing steps of the surface the field and its cones are\n"
+                 "                    read on (1..64, default 3), as in param\n"
                  "  --merge-cones F   merge cones at most F * H apart along edges, as param does\n"
                  "                    (default 1; 0 shows every cone of the field)\n"
                  "  --edge-length H   grid spacing for --merge-cones (as in param)\n"

@@ -57,6 +57,10 @@ ParamCommand parseParamArgs(Args& args) {
   o.solver.refine.splineCells = static_cast<std::uint32_t>(args.integer("spline-cells", 4, 0, 64));
   c.fieldSource = args.value("field", "auto");
   o.mergeCones = parseMergeCones(args);
+  {
+    const bool imported = c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy";
+    o.field.smoothingSteps = parseFieldSmoothing(args, imported);
+  }
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
   o.untangle = !args.flag("no-untangle");
@@ -322,6 +326,7 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
   options.weld = c.options.clean.weldVertices;
   options.spacing = c.options.spacing;
   options.mergeCones = c.options.mergeCones;
+  options.fieldSmoothing = c.options.field.smoothingSteps;
   options.maxConePasses = c.options.maxConePasses;
   options.gridResolution = grid;
   const ParamSolver solver = c.options.solver.solver == ParamSolver::Vox ? ParamSolver::Vox : ParamSolver::VoxLoc;
@@ -481,6 +486,7 @@ int runParam(Args& args) {
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--spline-cells N] [--field auto|smooth|proxy|FILE]\n"
+                 "                     [--field-smoothing N]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F] [--merge-in-map]\n"
                  "                     [--greedy] [--no-untangle] [--no-leftover-resolve] [--no-cone-resolve]\n"
                  "                     [--no-smoothed-evaluation] [--weld]\n"
@@ -514,6 +520,9 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --field proxy       the smoothest cross field solved on a coarse grid proxy, then\n"
                  "                      smoothed on the faces (linear time and memory; massive meshes)\n"
                  "  --field FILE        per-face field (.crossfield or plain, one vector per input face)\n"
+                 "  --field-smoothing N smoothing steps of the surface a computed field and its cones\n"
+                 "                      are read on (1..64, default 3). On strong scan noise 8 takes\n"
+                 "                      most noise cone pairs off the field (bench/RESULTS.md)\n"
                  "  --edge-length H     grid spacing in mesh units\n"
                  "  --cells N           H = bounding-box diagonal / N (default N = 100)\n"
                  "  --merge-cones F     move the index of cones at most F * H apart (along edges) onto\n"

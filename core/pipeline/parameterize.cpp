@@ -40,6 +40,7 @@ CrossField computeFieldFromSource(TriangleMesh& mesh, const Topology& topology,
   proxy.stats = stats;
   FieldGeometryOptions geometry;
   geometry.roughSpotGrid = source.gridLength;
+  geometry.smoothingIterations = source.smoothingSteps;
   return computeCrossField(mesh, topology, resolveFieldMethod(source.method, mesh.numFaces()), smooth, proxy, geometry);
 }
 
@@ -54,6 +55,7 @@ std::optional<FieldSource> alignedFieldSource(const Topology& topology, const Fe
   aligned.curvatureWeight = source.curvatureWeight;
   aligned.alignCorners = featureSideCorners(topology, features);
   aligned.gridLength = source.gridLength;
+  aligned.smoothingSteps = source.smoothingSteps;
   return aligned;
 }
 

@@ -40,6 +40,11 @@ struct FieldSource {
   /// (FieldGeometryOptions::roughSpotGrid). 0: not, what param, field and the Python module use:
   /// on noisy armadillo x16 it brings a second cone pass (bench/RESULTS.md, session 54).
   double gridLength = 0.0;
+  /// Uniform Laplacian steps of the surface the computed field and its cones are read on
+  /// (FieldGeometryOptions::smoothingIterations; 0: the mesh itself). More steps take the cone
+  /// pairs of stronger noise off the field, at some cost in gradient error and map changes
+  /// (`--field-smoothing`; bench/RESULTS.md, session 57).
+  std::uint32_t smoothingSteps = kFieldSmoothingIterations;
 };
 
 /// The cross field of a cleaned mesh from its source; faceOrigin maps cleaned faces to input
