@@ -112,6 +112,8 @@ def test_bad_uv_and_field_arrays(reference):
     (dict(edge_length=-1.0), "edge_length must be a positive finite number"),
     (dict(merge_cones=-0.5), "merge_cones must be a number from 0 to 10"),
     (dict(close_holes=-1.0), "close_holes must be a number from 0 to 1000"),
+    (dict(field_smoothing=0), "field_smoothing must be an integer from 1 to 64, got 0"),
+    (dict(field_smoothing=65), "field_smoothing must be an integer from 1 to 64, got 65"),
     (dict(threads=0), "threads must be a whole number from 1 to 4096, got 0"),
     (dict(threads=2.5), "threads must be a whole number from 1 to 4096, got 2.5"),
     (dict(edge_length="1"), "edge_length must be a positive finite number, got '1'"),

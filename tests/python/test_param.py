@@ -140,6 +140,28 @@ def test_cross_field_is_the_field_commands(tmp_path, seamvox_command):
     assert np.abs(np.einsum("ij,ij->i", n, fr.field)).max() < 1e-5
 
 
+def test_field_smoothing_is_the_commands(tmp_path, seamvox_command):
+    """field_smoothing=N reads the field on the surface `--field-smoothing N` does: the same field as
+    `seamvox field`, another one than the default's, and parameterize's report says the steps."""
+    V, F = sphere(3)
+    rng = np.random.default_rng(5)
+    V = V + rng.uniform(-0.01, 0.01, V.shape)  # some noise, so the smoothing matters
+    mesh, field = tmp_path / "in.off", tmp_path / "f.field"
+    seamvox.write_mesh(str(mesh), V, F)
+    seamvox_command("field", str(mesh), "-o", str(field), "--quiet", "--field-smoothing", "8")
+    V, F = seamvox.read_mesh(str(mesh))
+    fr = seamvox.cross_field(V, F, field_smoothing=8)
+    rows = [w for w in (line.split() for line in field.read_text().splitlines() if not line.startswith("#"))
+            if len(w) == 3]
+    np.testing.assert_allclose(fr.field, np.array(rows, float), rtol=0, atol=1e-6)
+    assert np.abs(fr.field - seamvox.cross_field(V, F).field).max() > 1e-3
+    r = seamvox.parameterize(V, F, field_smoothing=8)
+    assert r.report["fieldSmoothing"] == 8 and r.quality["seamless"]
+    assert seamvox.parameterize(V, F).report["fieldSmoothing"] == 3
+    with pytest.raises(ValueError, match="field_smoothing has no effect with a field array"):
+        seamvox.parameterize(V, F, field=fr.field, field_smoothing=8)
+
+
 def test_a_given_field_drives_the_map():
     V, F = torus()
     fr = seamvox.cross_field(V, F)

@@ -100,6 +100,18 @@ GridSpacing gridSpacing(double cells, const py::object& edgeLength) {
   return spacing;
 }
 
+/// field_smoothing= of parameterize and cross_field (`--field-smoothing`): 1..64 steps, and only for a
+/// computed field (an array has no smoothed surface).
+std::uint32_t fieldSmoothingSteps(std::int64_t steps, const FieldSource& source) {
+  if (steps < 1 || steps > 64) {
+    throw InputError("field_smoothing must be an integer from 1 to 64, got " + std::to_string(steps));
+  }
+  if (!source.importedPerInputFace.empty() && steps != kFieldSmoothingIterations) {
+    throw InputError("field_smoothing has no effect with a field array (it smooths the surface a computed field is solved on)");
+  }
+  return static_cast<std::uint32_t>(steps);
+}
+
 double mergeFraction(double mergeCones) {
   if (!(mergeCones >= 0.0 && mergeCones <= 10.0)) {
     throw InputError("merge_cones must be a number from 0 to 10 (grid spacings), got " + std::to_string(mergeCones));
@@ -123,7 +135,7 @@ std::string fieldSource(const py::object& field, std::size_t faces, FieldSource&
 ParamOutcome parameterizeArrays(const py::object& V, const py::object& F, const std::string& solver, double cells,
                                 const py::object& edgeLength, std::int32_t grid, const py::object& field,
                                 double mergeCones, const py::object& threads, const py::object& progress,
-                                bool untangle, bool weld, double closeHoles) {
+                                bool untangle, bool weld, double closeHoles, std::int64_t fieldSmoothing) {
   TriangleMesh raw = meshFromArrays(V, F);
   if (!(closeHoles >= 0.0 && closeHoles <= 1000.0)) {
     throw InputError("close_holes must be a number from 0 to 1000 (grid spacings), got " + std::to_string(closeHoles));
@@ -140,6 +152,7 @@ ParamOutcome parameterizeArrays(const py::object& V, const py::object& F, const 
   options.clean.weldVertices = weld;
   options.closeHoles = closeHoles;
   const std::string fieldName = fieldSource(field, raw.numFaces(), options.field);
+  options.field.smoothingSteps = fieldSmoothingSteps(fieldSmoothing, options.field);
   Interruptible interruptible(progress, threadCount(threads));
   options.progress = interruptible.progressFn();
   StageMeter meter;
@@ -161,11 +174,12 @@ ParamOutcome parameterizeArrays(const py::object& V, const py::object& F, const 
 
 FieldOutcome crossFieldArrays(const py::object& V, const py::object& F, const std::string& method, double curvature,
                               double mergeCones, double cells, const py::object& edgeLength,
-                              const py::object& threads, const py::object& progress) {
+                              const py::object& threads, const py::object& progress, std::int64_t fieldSmoothing) {
   TriangleMesh raw = meshFromArrays(V, F);
   const std::uint32_t inputFaces = raw.numFaces();
   FieldSource source;
   fieldSource(py::str(method), inputFaces, source);
+  source.smoothingSteps = fieldSmoothingSteps(fieldSmoothing, source);
   if (!(curvature >= 0.0 && std::isfinite(curvature))) {
     throw InputError("curvature must be a finite number >= 0, got " + std::to_string(curvature));
   }
@@ -402,10 +416,10 @@ PYBIND11_MODULE(seamvox, m) {
         py::arg("solver") = "auto", py::arg("cells") = 100.0, py::arg("edge_length") = py::none(),
         py::arg("grid") = 128, py::arg("field") = py::none(), py::arg("merge_cones") = seamvox::kConeMergeFraction,
         py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("untangle") = true,
-        py::arg("weld") = false, py::arg("close_holes") = 0.0,
+        py::arg("weld") = false, py::arg("close_holes") = 0.0, py::arg("field_smoothing") = seamvox::kFieldSmoothingIterations,
         "parameterize(V, F, *, solver='auto', cells=100, edge_length=None, grid=128, field=None,\n"
         "             merge_cones=1, threads=None, progress=None, untangle=True, weld=False,\n"
-        "             close_holes=0) -> Result\n\n"
+        "             close_holes=0, field_smoothing=3) -> Result\n\n"
         "The pipeline of `seamvox param` with the same defaults (so the same map). solver: 'auto',\n"
         "'hat', 'vox' or 'voxloc'; grid spacing h = edge_length, or the bounding-box diagonal / cells;\n"
         "field: None or 'auto', 'smooth', 'proxy', or an (m, 3) array of one direction per face of F;\n"
@@ -413,12 +427,15 @@ PYBIND11_MODULE(seamvox, m) {
         "work as it goes; returning False cancels (seamvox.CancelledError), an exception it raises\n"
         "cancels and is re-raised, and Ctrl-C cancels with KeyboardInterrupt. The GIL is released.\n"
         "close_holes: holes within that many grid spacings carry no seam translation, so quads() can\n"
-        "close them (`seamvox param --close-holes`; 2 is what `param --quads` uses).");
+        "close them (`seamvox param --close-holes`; 2 is what `param --quads` uses).\n"
+        "field_smoothing: smoothing steps (1..64) of the surface a computed field and its cones are\n"
+        "read on (`seamvox param --field-smoothing`).");
   m.def("cross_field", &crossFieldArrays, py::arg("V"), py::arg("F"), py::kw_only(), py::arg("field") = "auto",
         py::arg("curvature") = 0.0, py::arg("merge_cones") = seamvox::kConeMergeFraction, py::arg("cells") = 100.0,
         py::arg("edge_length") = py::none(), py::arg("threads") = py::none(), py::arg("progress") = py::none(),
+        py::arg("field_smoothing") = seamvox::kFieldSmoothingIterations,
         "cross_field(V, F, *, field='auto', curvature=0.0, merge_cones=1, cells=100,\n"
-        "            edge_length=None, threads=None, progress=None) -> FieldResult\n\n"
+        "            edge_length=None, threads=None, progress=None, field_smoothing=3) -> FieldResult\n\n"
         "The cross field, its cones (merged as parameterize merges them before its first cut) and\n"
         "the cut, as `seamvox field` computes them. field: 'auto', 'smooth' or 'proxy'; curvature > 0\n"
         "aligns the direct field with principal curvature. progress and Ctrl-C as in parameterize.");
