@@ -8,6 +8,7 @@ issue sets no target for it.
 
     python3 bench/real_scans.py SEAMVOX DATA_DIR OUT_DIR [--noise A] [--noise-tangential F]
                                 [--noise-scale local] [--no-check] [--only NAME,...]
+                                [--param "OPTIONS"]
 
 Inputs, made once in OUT_DIR/inputs and reused: the shared armadillo subdivided 4 times (L4, 22.1M
 faces), fertility 5 times (9.2M), camelhead 5 times (23.2M, one boundary loop) and a generated
@@ -16,6 +17,7 @@ faces), fertility 5 times (9.2M), camelhead 5 times (23.2M, one boundary loop) a
 scaled by F, 0: a range scanner's depth noise, label "noise A tF"; with --noise-scale local A is in
 each vertex's own mean edge length, label "noise A local"). One `param X -o OUT_DIR/map.ply --report R.json` per
 input, default options, then `seamvox check` on the written map (its verdict must be param's).
+With --param the OPTIONS (e.g. "--field-smoothing 8") go to every param run, clean and noisy.
 Prints a markdown table; the last column lists the targets a row misses. Peak = the report's
 peakResidentBytes (VmHWM). Reports stay in OUT_DIR/runs.
 """
@@ -102,6 +104,7 @@ def main():
     only = sys.argv[sys.argv.index("--only") + 1].split(",") if "--only" in sys.argv else None
     scale = sys.argv[sys.argv.index("--noise-scale") + 1] if "--noise-scale" in sys.argv else "mean"
     check = "--no-check" not in sys.argv
+    extra = sys.argv[sys.argv.index("--param") + 1].split() if "--param" in sys.argv else []
     os.makedirs(os.path.join(out, "runs"), exist_ok=True)
     print("| input | faces | time s | peak MiB | cones (before merging) | hat-refined | flips before repair "
           "-> after | stretched | wound | gradient error | largest stage | check | misses |")
@@ -111,7 +114,7 @@ def main():
         tag = label.replace(" ", "_")
         report = os.path.join(out, "runs", f"{tag}.json")
         mapped = os.path.join(out, "map.ply")
-        done = run([seamvox, "param", path, "-o", mapped, "--report", report, "--quiet"], check=False)
+        done = run([seamvox, "param", path, "-o", mapped, "--report", report, "--quiet"] + extra, check=False)
         if done.returncode != 0:
             print(f"| {label} | - | failed (exit {done.returncode}) | | | | | | | | | | |", flush=True)
             continue
