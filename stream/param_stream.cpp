@@ -412,7 +412,9 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
           }
         }
       }
-      ScratchUntangleStats repaired = untangleScratchFlips(folder, scratch, field, cut, map, translations, untangle,
+      UntangleOptions whole = untangle;
+      whole.conesNotRetried = &nearCones.conesLeftShort;
+      ScratchUntangleStats repaired = untangleScratchFlips(folder, scratch, field, cut, map, translations, whole,
                                                            pass, nullptr, flipCandidates ? &*flipCandidates : nullptr);
       addEarlierRepair(repaired.untangle, nearCones);
       resolveScratchLeftoverFlips(folder, scratch, field, cut, map, translations, options.refine, untangle, pass, repaired);

@@ -200,6 +200,16 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
   for (std::size_t v = 0; v < pinned.size(); ++v) pinned[v] = !w.vertexFree[v];
   UntangleOptions local = options;
   local.pinnedVertices = &pinned;
+  // Cones by mesh id to the window's ids (both increasing: the window keeps the mesh's order).
+  std::vector<VertexId> notRetried;
+  if (options.conesNotRetried) {
+    for (VertexId v = 0; v < w.vertexOrigin.size(); ++v) {
+      if (std::binary_search(options.conesNotRetried->begin(), options.conesNotRetried->end(), w.vertexOrigin[v])) {
+        notRetried.push_back(v);
+      }
+    }
+    local.conesNotRetried = &notRetried;
+  }
   std::vector<std::uint8_t> onlyFaces;
   if (only) {
     onlyFaces.resize(w.mesh.numFaces());
@@ -211,6 +221,7 @@ ScratchUntangleStats untangleScratchFlips(ScratchFolder& folder, const CleanScra
   }
   local.maxPatchFraction = options.maxPatchFraction * double(scratch.numFaces) / double(window.size());
   out.untangle = untangleFlips(w.mesh, w.topology, w.field, w.cut, uv, windowT, local);
+  for (VertexId& v : out.untangle.conesLeftShort) v = w.vertexOrigin[v];
   // The window holds every flipped face: the faces it leaves are the map's, by mesh id.
   double leftEdges = 0.0;
   for (FaceId& f : out.untangle.leftFaces) {
@@ -252,8 +263,10 @@ void resolveScratchLeftoverFlips(ScratchFolder& folder, const CleanScratch& scra
   std::vector<FaceId> candidates;
   std::set_union(flipped.begin(), flipped.end(), resolved.regionFaces.begin(), resolved.regionFaces.end(),
                  std::back_inserter(candidates));
+  UntangleOptions retry = options;
+  retry.conesNotRetried = &repaired.untangle.conesLeftShort;
   ScratchUntangleStats again =
-      untangleScratchFlips(folder, scratch, field, cut, map, seamT, options, pass, nullptr, &candidates);
+      untangleScratchFlips(folder, scratch, field, cut, map, seamT, retry, pass, nullptr, &candidates);
   addLeftoverRepair(again.untangle, repaired.untangle, resolved.stats.regionFaces, resolved.stats.freeVertices, seconds);
   again.windowFaces = std::max(again.windowFaces, repaired.windowFaces);
   repaired = again;

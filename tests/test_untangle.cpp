@@ -691,6 +691,62 @@ TEST(Untangle, ConesLeftAFullTurnShortAreReSolvedNotWound) {
 }
 
 
+// The cone step lists the cones it re-solved and left a full turn short (conesLeftShort), and a
+// later repair of the same map given them (conesNotRetried) does not solve their patches again:
+// the shared armadillo's hat map, the cone step alone with patches of two rings (too small to
+// open every fold), run once from the map as solved, then from that map again with the cones it
+// left short listed (none of them tried again, all still counted), and with every cone listed
+// (nothing changes: no other step runs).
+TEST(Untangle, ConesLeftShortAreNotRetriedWhenListed) {
+  const std::string path = testing::sharedMesh("armadillo.obj");
+  if (path.empty()) GTEST_SKIP() << testing::missingSharedMessage("armadillo.obj");
+  testing::CutSurface cs = testing::makeCutSurface(testing::loadShared(path).mesh);
+  const TriangleMesh& mesh = cs.s.mesh;
+  const double h = computeBoundingBox(mesh.positions).diagonal() / 100.0;
+  ParamOptions param;
+  param.edgeLength = h;
+  const ParamResult solved = parameterizeMesh(mesh, cs.s.topology, cs.field, cs.cut, param);
+  UntangleOptions options;
+  options.edgeLength = h;
+  options.maxRounds = 0;
+  options.relocationPasses = 0;
+  options.jointRings = 0;
+  options.coneRepairRadius = 1e-3;  // two rings
+  WedgeMap first = solved.cornerUV;
+  std::vector<std::complex<double>> t = solved.translations;
+  const UntangleStats once = untangleFlips(mesh, cs.s.topology, cs.field, cs.cut, first, t, options);
+  ASSERT_FALSE(once.conesLeftShort.empty()) << "every cone opened: the case no longer leaves one short";
+  EXPECT_TRUE(std::is_sorted(once.conesLeftShort.begin(), once.conesLeftShort.end()));
+  EXPECT_LE(once.conesLeftShort.size(), once.miswoundConesAfter);
+  bool changed = false;
+  for (CornerId c = 0; c < 3u * mesh.numFaces() && !changed; ++c) changed = first[c] != solved.cornerUV[c];
+  EXPECT_TRUE(changed) << "the cone step re-solved nothing";
+  for (VertexId c : once.conesLeftShort) {
+    EXPECT_NE(std::find(cs.cut.cones.begin(), cs.cut.cones.end(), c), cs.cut.cones.end()) << "not a cone: " << c;
+  }
+  // Again from that map with those cones listed: none of them is re-solved (other cones the first
+  // run's patches left short may be).
+  options.conesNotRetried = &once.conesLeftShort;
+  WedgeMap second = first;
+  std::vector<std::complex<double>> t2 = t;
+  const UntangleStats again = untangleFlips(mesh, cs.s.topology, cs.field, cs.cut, second, t2, options);
+  EXPECT_EQ(again.miswoundCones, once.miswoundConesAfter);  // counted all the same
+  for (VertexId c : again.conesLeftShort) {
+    EXPECT_FALSE(std::binary_search(once.conesLeftShort.begin(), once.conesLeftShort.end(), c)) << "cone " << c;
+  }
+  // With every cone listed the cone step solves nothing: the map and translations stay.
+  std::vector<VertexId> every = cs.cut.cones;
+  std::sort(every.begin(), every.end());
+  options.conesNotRetried = &every;
+  WedgeMap third = first;
+  std::vector<std::complex<double>> t3 = t;
+  const UntangleStats none = untangleFlips(mesh, cs.s.topology, cs.field, cs.cut, third, t3, options);
+  EXPECT_TRUE(none.conesLeftShort.empty());
+  EXPECT_EQ(none.miswoundConesAfter, once.miswoundConesAfter);
+  EXPECT_EQ(t3, t);
+  for (CornerId c = 0; c < 3u * mesh.numFaces(); ++c) ASSERT_EQ(third[c], first[c]) << "corner " << c;
+}
+
 TEST(Untangle, JointPatchesUnfoldAMirroredDiskThatRelocationCannot) {
   // A disk of two rings mirrored in (u, v): its inner fans are reversed, so no vertex alone has a
   // kernel to move into. Relocation alone leaves flips; the joint patches move the disk's

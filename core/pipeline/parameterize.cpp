@@ -334,6 +334,7 @@ void resolveLeftoverFlips(PipelineResult& r, const CrossField& field, const CutR
                  std::back_inserter(candidates));
   UntangleOptions again = untangle;
   again.candidateFaces = &candidates;
+  again.conesNotRetried = &r.untangle.conesLeftShort;
   UntangleStats repaired =
       untangleFlips(r.mesh, r.topology, field, cut, r.solved.param.cornerUV, r.solved.param.translations, again);
   addLeftoverRepair(repaired, r.untangle, resolved.stats.regionFaces, resolved.stats.freeVertices, seconds);
@@ -467,9 +468,11 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
           }
         }
       }
+      untangle.conesNotRetried = &nearCones.conesLeftShort;
       r.untangle = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
                                  r.solved.param.translations, untangle);
       addEarlierRepair(r.untangle, nearCones);
+      untangle.conesNotRetried = nullptr;
       resolveLeftoverFlips(r, field, coneCut.cut, solverOptions.refine, untangle);
       r.untangled = true;
       meter.finish("untangle");

@@ -2,6 +2,7 @@
 #include "core/refine/untangle.h"
 
 #include <algorithm>
+#include <iterator>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -960,6 +961,10 @@ void addRepairWork(UntangleStats& stats, const UntangleStats& earlier) {
   stats.relocationSeconds += earlier.relocationSeconds;
   stats.jointSeconds += earlier.jointSeconds;
   stats.leftoverSeconds += earlier.leftoverSeconds;
+  std::vector<VertexId> cones;
+  std::set_union(stats.conesLeftShort.begin(), stats.conesLeftShort.end(), earlier.conesLeftShort.begin(),
+                 earlier.conesLeftShort.end(), std::back_inserter(cones));
+  stats.conesLeftShort = std::move(cones);
 }
 
 }  // namespace
@@ -1186,10 +1191,15 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     return !(options.pinnedVertices && (*options.pinnedVertices)[c]) && coneMiswound(topology, cornerUV, c);
   };
   std::vector<VertexId> targets;
+  const auto notRetried = [&](VertexId c) {
+    return options.conesNotRetried &&
+           std::binary_search(options.conesNotRetried->begin(), options.conesNotRetried->end(), c);
+  };
   if (options.coneRepairRadius > 0.0) {
     for (VertexId c : cut.cones) {
       if (!judged(c)) continue;
       ++stats.miswoundCones;
+      if (notRetried(c)) continue;
       const std::vector<FaceId> fan = coneFan(c);
       if (fan.empty()) continue;
       const std::vector<FaceId> near = growFaces(topology, fan, patchRings(mesh, fan, h, options.coneRepairRadius));
@@ -1199,6 +1209,7 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   // A round whose rings the clamps of patchRings keep at the last round's would solve that patch
   // again: skipped (noisy armadillo x4: 2h and 4h both 64 rings, the third round gained nothing).
   std::uint32_t lastRings = 0;
+  const std::vector<VertexId> tried = targets;
   for (std::uint32_t round = 0; round < 3 && !targets.empty(); ++round) {
     std::vector<FaceId> seeds;
     std::vector<VertexId> still;
@@ -1222,6 +1233,10 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
     solvePatch(growFaces(topology, seeds, rings));
   }
   for (VertexId c : cut.cones) stats.miswoundConesAfter += judged(c);
+  for (VertexId c : tried) {
+    if (judged(c)) stats.conesLeftShort.push_back(c);
+  }
+  std::sort(stats.conesLeftShort.begin(), stats.conesLeftShort.end());
   stepDone(stats.coneSeconds);
   // The faces whose map the last steps changed: the fans of relocated vertices, the joint
   // patches kept.

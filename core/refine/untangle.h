@@ -75,6 +75,11 @@ struct UntangleOptions {
   /// known fine and not measured (a caller that re-solved a few regions of a map whose flips it
   /// knows). Not with onlyFaces.
   const std::vector<FaceId>* candidateFaces = nullptr;
+  /// When given (increasing): cones an earlier repair of this map re-solved through its last cone
+  /// round and left a full turn short (UntangleStats::conesLeftShort); the cone step skips them
+  /// rather than solving the same patches again (the repair after the one near close cones, and
+  /// the one after the leftovers' re-solve).
+  const std::vector<VertexId>* conesNotRetried = nullptr;
   ProgressFn progress;
 };
 
@@ -109,6 +114,9 @@ struct UntangleStats {
   /// The faces still flipped (folded in 3D or not) at the end, increasing: the whole map's, or
   /// empty with UntangleOptions::onlyFaces.
   std::vector<FaceId> leftFaces;
+  /// The cones the cone step re-solved and left a full turn short, increasing (with those of the
+  /// repairs combined into these figures).
+  std::vector<VertexId> conesLeftShort;
 };
 
 /// stats of a repair that followed an earlier one restricted to some faces (onlyFaces: the faces
