@@ -25,6 +25,11 @@
 namespace seamvox::cli {
 namespace {
 
+/// --field names a file rather than a method (auto, smooth, proxy).
+bool isFieldFile(const std::string& fieldSource) {
+  return fieldSource != "auto" && fieldSource != "smooth" && fieldSource != "proxy";
+}
+
 struct ParamCommand {
   std::string input, output;
   std::string solverName, fieldSource;
@@ -57,10 +62,7 @@ ParamCommand parseParamArgs(Args& args) {
   o.solver.refine.splineCells = static_cast<std::uint32_t>(args.integer("spline-cells", 4, 0, 64));
   c.fieldSource = args.value("field", "auto");
   o.mergeCones = parseMergeCones(args);
-  {
-    const bool imported = c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy";
-    o.field.smoothingSteps = parseFieldSmoothing(args, imported);
-  }
+  o.field.smoothingSteps = parseFieldSmoothing(args, isFieldFile(c.fieldSource));
   o.spacing = parseGridSpacing(args);
   o.greedyRounding = args.flag("greedy");
   o.untangle = !args.flag("no-untangle");
@@ -89,7 +91,7 @@ ParamCommand parseParamArgs(Args& args) {
   if (c.quadsPath && formatFromPath(*c.quadsPath) != MeshFormat::Obj && formatFromPath(*c.quadsPath) != MeshFormat::Ply) {
     throw UsageError("--quads: the quad mesh is written as .obj or .ply: " + *c.quadsPath);
   }
-  const bool fieldFile = c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy";
+  const bool fieldFile = isFieldFile(c.fieldSource);
   checkOutputPaths({{"MESH", c.input}, {"--field", fieldFile ? c.fieldSource : ""}},
                    {{"-o", c.output}, {"--report", c.reportPath.value_or("")}, {"--render", c.renderPath.value_or("")},
                     {"--quads", c.quadsPath.value_or("")}});
@@ -422,7 +424,7 @@ int runParam(Args& args) {
   StageMeter meter;
   c.options.meter = &meter;
   TriangleMesh raw = readMesh(*stream);
-  if (c.fieldSource != "auto" && c.fieldSource != "smooth" && c.fieldSource != "proxy") {
+  if (isFieldFile(c.fieldSource)) {
     // The file has one vector per input face; cleaning may drop or reorder faces.
     c.options.field.importedPerInputFace = readFieldVectors(c.fieldSource, raw.numFaces());
   } else {

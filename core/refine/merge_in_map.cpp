@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/basis/gaussian_int.h"
 #include "core/field/cone_merge.h"
 #include "core/refine/refine.h"
 #include "core/system/errors.h"
@@ -19,12 +20,6 @@ using Complex = std::complex<double>;
 
 /// Map values (grid units) closer than this are one point.
 constexpr double kSamePointDistance = 1e-6;
-
-/// i^k for any integer k.
-Complex quarterTurns(int k) {
-  static const Complex turns[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
-  return turns[((k % 4) + 4) % 4];
-}
 
 /// The number of seam ends at v (a closed seam through v counts twice).
 std::uint32_t seamEnds(const CutResult& cut, VertexId v) {
@@ -225,7 +220,7 @@ MergeInMapResult mergeConesInMap(const TriangleMesh& mesh, const Topology& topol
 
   // D's combing turns by delta; a seam with D on one side composes with R(q) = i^-delta (q - p) + p
   // (T R^-1 with D on its left, R T on its right), one inside D is conjugated (R T R^-1).
-  const Complex turn = quarterTurns(-delta);
+  const Complex turn = unitPower(-delta).toComplex();
   struct SeamChange {
     std::uint32_t seam;
     std::uint8_t matching;
@@ -235,7 +230,7 @@ MergeInMapResult mergeConesInMap(const TriangleMesh& mesh, const Topology& topol
   for (std::uint32_t j = 0; j < cut.seams.size(); ++j) {
     if (sideOf[j] == 0) continue;
     const int m = cut.seams[j].matching;
-    const Complex r = quarterTurns(-m), t = seamT[j];
+    const Complex r = unitPower(-m).toComplex(), t = seamT[j];
     int m2 = m;
     Complex t2 = t;
     if (sideOf[j] == 1) {
