@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/basis/gaussian_int.h"
 #include "core/system/errors.h"
 
 namespace seamvox::detail {
@@ -17,7 +18,7 @@ using Cell = std::array<std::int32_t, 3>;
 enum VertexKind : std::uint8_t { kFree = 0, kLocked = 1, kAtCone = 2 };
 
 /// A unit of Z[i] as its power of i (0..3), or -1 when the value is not a unit.
-int unitPower(const Complex& a) {
+int powerOfUnit(const Complex& a) {
   constexpr double kTolerance = 1e-9;
   const Complex units[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
   for (int k = 0; k < 4; ++k) {
@@ -129,7 +130,7 @@ SplineSpace buildSplineSpace(const TriangleMesh& mesh, const std::vector<std::ui
     std::uint32_t column = kInvalidId;
     int unit = -1;
     for (std::uint64_t k = Q.rowStart[d]; k < Q.rowStart[d + 1]; ++k) {
-      if (Q.column[k] < np) column = Q.column[k], unit = unitPower(Q.value[k]);
+      if (Q.column[k] < np) column = Q.column[k], unit = powerOfUnit(Q.value[k]);
     }
     if (column == kInvalidId || unit < 0 || (vertexColumn[v] != kInvalidId && vertexColumn[v] != column)) {
       kind[v] = kAtCone;  // no positional unknown (a cone, a pin): the B-splines must vanish here
@@ -257,14 +258,13 @@ SplineSpace buildSplineSpace(const TriangleMesh& mesh, const std::vector<std::ui
     Complex value;
   };
   std::vector<Out> out;
-  const Complex units[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
   for (std::size_t e = 0; e < entries.size(); ++e) {
     const VertexId v = entries[e].v;
     if (entryPiece[e] == kInvalidId || kind[v] != kFree || space.ownUnknown[v] ||
         pieceColumn[entryPiece[e]] == kInvalidId) {
       continue;
     }
-    out.push_back({vertexColumn[v], pieceColumn[entryPiece[e]], units[entryPower[e]] * entries[e].w});
+    out.push_back({vertexColumn[v], pieceColumn[entryPiece[e]], unitPower(entryPower[e]).toComplex() * entries[e].w});
   }
   space.numColumns = space.numSplines;
   for (VertexId v = 0; v < nv; ++v) {
