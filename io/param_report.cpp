@@ -194,6 +194,7 @@ void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportConte
   // "unset" (a library caller's process left it to OpenMP).
   const char* limit = std::getenv("OMP_THREAD_LIMIT");
   j.key("openmpThreadLimit").value(std::string(limit ? limit : "unset"));
+  j.key("openmpRegionsInline").value(openmpRegionsInline());
   if (c.memoryPathJson) {
     c.memoryPathJson(j);
   } else if (c.memoryBudget > 0) {

@@ -17,9 +17,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "io/json_reader.h"
@@ -514,37 +517,69 @@ TEST(Cli, ParamFactorsWithBlasKernelsThatFitTheProcessor) {
   }
 }
 
+/// Unsets the named environment variables for its lifetime and restores what they held after.
+class UnsetEnvironment {
+ public:
+  UnsetEnvironment(std::initializer_list<const char*> names) {
+    for (const char* name : names) {
+      const char* value = std::getenv(name);
+      saved_.emplace_back(name, value ? std::optional<std::string>(value) : std::nullopt);
+      unsetenv(name);
+    }
+  }
+  ~UnsetEnvironment() {
+    for (const auto& [name, value] : saved_) {
+      if (value) setenv(name.c_str(), value->c_str(), 1);
+      else unsetenv(name.c_str());
+    }
+  }
+
+ private:
+  std::vector<std::pair<std::string, std::optional<std::string>>> saved_;
+};
+
 // CHOLMOD opens OpenMP teams of 4 threads per large supernode whatever OMP_NUM_THREADS says: the
 // command runs itself again with OMP_THREAD_LIMIT=1 unless the user chose a limit or a count, and
-// the map does not depend on it (OMP_NUM_THREADS, which OpenBLAS reads too, may change it).
-TEST(Cli, ParamLimitsOpenMPTeamsUnlessTheUserChose) {
+// under that limit runs CHOLMOD's one-thread regions inline (tools/openmp_regions.cpp; not with
+// SEAMVOX_OPENMP_INLINE=0). The map depends on neither (OMP_NUM_THREADS, which OpenBLAS reads
+// too, may change it).
+TEST(Cli, ParamLimitsOpenMPTeamsAndRunsOneThreadRegionsInline) {
   TempDir dir;
   const std::string mesh = dir.path("s.ply"), report = dir.path("r.json");
-  run("gen sphere --faces 3000 -o " + mesh + " --quiet", 0);
-  const auto limitAndMap = [&](const std::string& tag) {
-    const std::string map = dir.path("s_" + tag + ".obj");
-    run("param " + mesh + " -o " + map + " --report " + report + " --quiet", 0);
-    const Json r = parseJson(testing::readFile(report));
-    return std::make_pair(r.textAt("openmpThreadLimit"), testing::readFile(map));
+  run("gen genus2 --faces 30000 --seed 3 -o " + mesh + " --quiet", 0);
+  struct Run {
+    std::string limit;
+    bool inlined = false;
+    std::string map;
   };
-  std::vector<std::pair<std::string, std::string>> saved;
-  for (const char* name : {"OMP_THREAD_LIMIT", "OMP_NUM_THREADS"}) {
-    const char* value = std::getenv(name);
-    if (value) saved.emplace_back(name, value);
-    unsetenv(name);
-  }
-  const auto [chosenLimit, limitedMap] = limitAndMap("default");
+  const auto runParam = [&](const std::string& tag) {
+    const std::string map = dir.path("s_" + tag + ".ply");
+    run("param " + mesh + " -o " + map + " --solver hat --report " + report + " --quiet", 0);
+    const Json r = parseJson(testing::readFile(report));
+    return Run{r.textAt("openmpThreadLimit"), r.numberAt("openmpRegionsInline") == 1.0, testing::readFile(map)};
+  };
+  const UnsetEnvironment unset{"OMP_THREAD_LIMIT", "OMP_NUM_THREADS", "SEAMVOX_OPENMP_INLINE"};
+  const Run chosen = runParam("default");
+  setenv("SEAMVOX_OPENMP_INLINE", "0", 1);
+  const Run teams = runParam("teams");
+  unsetenv("SEAMVOX_OPENMP_INLINE");
   setenv("OMP_THREAD_LIMIT", "3", 1);
-  const auto [userLimit, userMap] = limitAndMap("user");
+  const Run user = runParam("user");
   unsetenv("OMP_THREAD_LIMIT");
   setenv("OMP_NUM_THREADS", "2", 1);
-  const std::string countLimit = limitAndMap("count").first;
+  const Run count = runParam("count");
   unsetenv("OMP_NUM_THREADS");
-  for (const auto& [name, value] : saved) setenv(name.c_str(), value.c_str(), 1);
-  EXPECT_EQ(chosenLimit, "1");
-  EXPECT_EQ(userLimit, "3");
-  EXPECT_EQ(countLimit, "unset");
-  EXPECT_EQ(limitedMap, userMap);
+  EXPECT_EQ(chosen.limit, "1");
+  EXPECT_TRUE(chosen.inlined);
+  EXPECT_EQ(teams.limit, "1");
+  EXPECT_FALSE(teams.inlined);
+  EXPECT_EQ(user.limit, "3");
+  EXPECT_FALSE(user.inlined);
+  EXPECT_EQ(count.limit, "unset");
+  EXPECT_FALSE(count.inlined);
+  EXPECT_FALSE(chosen.map.empty());
+  EXPECT_EQ(chosen.map, teams.map);
+  EXPECT_EQ(chosen.map, user.map);
 }
 
 TEST(Cli, OutputsOfOneRunAreAllOrNothing) {

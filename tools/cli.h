@@ -131,6 +131,11 @@ void checkOutputPaths(const std::vector<NamedPath>& inputs, const std::vector<Na
 /// The message of an exception for the user: a std::filesystem error as "PATH: reason" (not the
 /// library's "filesystem error: ..." wording), anything else as what().
 std::string errorMessage(const std::exception& error);
+
+/// Whether this process runs OpenMP parallel regions inline (tools/openmp_regions.cpp): the
+/// thread limit is 1, SEAMVOX_OPENMP_INLINE is not 0, and the command's GOMP_parallel is the one
+/// the dynamic linker binds.
+bool openmpRegionsRunInline();
 /// A UsageError unless path ends in .png (case-insensitive): option names it in the message.
 void requirePngPath(const std::string& option, const std::string& path);
 

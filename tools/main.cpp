@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
   // SIGINT and SIGTERM remove unfinished outputs and exit 130 and 143, as a cancelled stage
   // (CancelledError) exits 130.
   installInterruptCleanup();
+  setOpenMPRegionsInline(cli::openmpRegionsRunInline());
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
     printHelp();

@@ -4,10 +4,18 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cstdlib>
 
 namespace seamvox {
+
+namespace {
+std::atomic<bool> regionsInline{false};
+}  // namespace
+
+void setOpenMPRegionsInline(bool inlined) { regionsInline = inlined; }
+bool openmpRegionsInline() { return regionsInline; }
 
 bool limitBlasThreads(int threads) {
   if (std::getenv("OPENBLAS_NUM_THREADS") || std::getenv("OMP_NUM_THREADS")) return false;

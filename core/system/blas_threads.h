@@ -32,6 +32,12 @@ std::string preferredBlasCore();
 /// work). The results do not change.
 std::string preferredOpenMPLimit();
 
+/// Whether the program runs OpenMP parallel regions inline under a thread limit of 1 (the seamvox
+/// command does, tools/openmp_regions.cpp: libgomp's team per region cost more than CHOLMOD's
+/// small supernode updates); what reports say. false unless the program sets it.
+void setOpenMPRegionsInline(bool inlined);
+bool openmpRegionsInline();
+
 /// For a program's main, first thing: when preferredBlasCore() names kernels or
 /// preferredOpenMPLimit() a limit, sets OPENBLAS_CORETYPE and OMP_THREAD_LIMIT to them and runs
 /// the program again in this process (execv of /proc/self/exe with argv), as both libraries
