@@ -136,6 +136,7 @@ std::string errorMessage(const std::exception& error);
 /// thread limit is 1, SEAMVOX_OPENMP_INLINE is not 0, and the command's GOMP_parallel is the one
 /// the dynamic linker binds.
 bool openmpRegionsRunInline();
+
 /// A UsageError unless path ends in .png (case-insensitive): option names it in the message.
 void requirePngPath(const std::string& option, const std::string& path);
 
