@@ -219,6 +219,7 @@ void writeCounts(JsonWriter& j, const PipelineResult& r, const ParamReportContex
   if (!r.solved.voxelRetryReason.empty()) j.key("voxelRetryReason").value(r.solved.voxelRetryReason);
   j.key("field").value(c.fieldSource).key("fieldMethod").value(r.fieldMethod);
   j.key("fieldSmoothing").value(U64{c.fieldSmoothing});
+  j.key("roughSpots").value(c.roughSpots);
   j.key("faces").value(U64{r.size.faces});
   j.key("vertices").value(U64{r.size.vertices});
   j.key("components").value(U64{r.solved.param.stats.components});
@@ -319,6 +320,7 @@ ParamReportContext paramReportContext(const PipelineOptions& options, const Stag
   c.gridResolution = options.solver.gridResolution;
   c.rings = options.solver.refine.rings;
   c.fieldSmoothing = options.field.importedPerInputFace.empty() ? options.field.smoothingSteps : 0;
+  c.roughSpots = options.field.importedPerInputFace.empty() && options.field.roughSpots;
   c.maxRounds = options.solver.refine.maxRounds;
   c.stages = meter.stages();
   c.totalSeconds = meter.totalSeconds();

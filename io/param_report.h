@@ -24,6 +24,7 @@ struct ParamReportContext {
   std::int32_t gridResolution = 0;
   std::uint32_t rings = 0, maxRounds = 0;
   std::uint32_t fieldSmoothing = 0;  ///< steps of the computed field's surface (0 for an imported field)
+  bool roughSpots = false;  ///< its rough spots smoothed within h (FieldSource::roughSpots; false when imported)
   std::vector<StageFigures> stages;
   double totalSeconds = 0.0;
   std::uint64_t peakBytes = 0;

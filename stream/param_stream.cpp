@@ -279,9 +279,10 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   r.diagonal = scratch.report.diagonalWithoutSpikes;
   r.edgeLength = options.spacing.spacing(r.diagonal);
   const double h = r.edgeLength;
-  // The field's surface as the in-memory pipeline's (FieldSource::gridLength 0: no rough spots).
+  // The field's surface as the in-memory pipeline's (its rough spots smoothed within h).
   FieldGeometryOptions geometry;
   geometry.smoothingIterations = options.fieldSmoothing;
+  geometry.roughSpotGrid = options.roughSpots ? h : 0.0;
   const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), geometry, early, true);
   r.roughVertices = field.roughVertices;
   r.roughSpotVertices = field.roughSpotVertices;

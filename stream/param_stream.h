@@ -45,6 +45,8 @@ struct StreamParamOptions {
   std::int32_t gridResolution = 128;
   /// Smoothing steps of the field's surface (FieldSource::smoothingSteps).
   std::uint32_t fieldSmoothing = kFieldSmoothingIterations;
+  /// Rough spots of the field's surface smoothed within h (FieldSource::roughSpots).
+  bool roughSpots = true;
   /// voxloc: refine near cones and wherever the map collapses or flips; vox: only the faces of
   /// basis functions the reduction left inconsistent (one round).
   bool voxLoc = true;

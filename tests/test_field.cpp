@@ -527,5 +527,58 @@ TEST(FieldCommand, FieldSmoothingStepsReachFieldAndParam) {
   EXPECT_FALSE(std::filesystem::exists(dir.path("t.field")));
 }
 
+/// The JSON boolean after "key": (false when absent).
+bool jsonTrue(const std::string& json, const std::string& key) {
+  return json.find("\"" + key + "\": true") != std::string::npos;
+}
+
+// The rough spots of the field's surface are smoothed within h by default, in field and in param
+// (in memory and out of core) alike: a plane whose finely tessellated centre is crumpled by noise
+// (1/32 of h across) has many cones read off it as it is and a few once smoothed; each command
+// and path reports the same rough vertices and reads the same cones, and --no-rough-spots moves
+// none.
+TEST(FieldCommand, RoughSpotsSmoothedByDefaultInFieldAndParam) {
+  testing::TempDir dir;
+  writeMesh(dir.path("p.ply"), testing::denseSpotPlane(12, 2, 16, 0.3, 1));
+  const std::string field = "field " + dir.path("p.ply") + " -o " + dir.path("p.field") +
+                            " --json --quiet --merge-cones 0 --edge-length 2";
+  std::string smoothed, plain, out;
+  ASSERT_EQ(testing::runSeamvox(field, &smoothed), 0) << smoothed;
+  ASSERT_EQ(testing::runSeamvox(field + " --no-rough-spots", &plain), 0) << plain;
+  EXPECT_TRUE(jsonTrue(smoothed, "roughSpots")) << smoothed;
+  EXPECT_FALSE(jsonTrue(plain, "roughSpots")) << plain;
+  EXPECT_GT(jsonInteger(smoothed, "roughVertices"), 100) << smoothed;
+  EXPECT_GT(jsonInteger(smoothed, "roughSpotVertices"), jsonInteger(smoothed, "roughVertices"));
+  EXPECT_EQ(jsonInteger(plain, "roughVertices"), 0) << plain;
+  EXPECT_EQ(jsonInteger(plain, "roughSpotVertices"), 0) << plain;
+  const long cones = jsonInteger(smoothed, "cones"), noisyCones = jsonInteger(plain, "cones");
+  EXPECT_GE(noisyCones, 20) << plain;
+  EXPECT_LE(5 * cones, noisyCones) << smoothed;
+  // param reads the same cones off the same surface in memory (hat and voxloc); out of core (the
+  // proxy field, faces in another order) it smooths the same vertices, and has fewer cones for it.
+  long outOfCoreCones[2] = {0, 0};
+  for (const std::string options : {"--solver hat", "--solver voxloc", "--out-of-core", "--solver hat --no-rough-spots",
+                                    "--out-of-core --no-rough-spots"}) {
+    const bool rough = options.find("--no-rough-spots") == std::string::npos;
+    ASSERT_EQ(testing::runSeamvox("param " + dir.path("p.ply") + " -o " + dir.path("o.ply") + " --quiet --merge-cones 0 " +
+                                      "--edge-length 2 " + options + " --report " + dir.path("r.json"),
+                                  &out),
+              0)
+        << options << "\n" << out;
+    const std::string report = testing::readFile(dir.path("r.json"));
+    const std::string& json = rough ? smoothed : plain;
+    EXPECT_EQ(jsonTrue(report, "roughSpots"), rough) << options;
+    EXPECT_EQ(jsonInteger(report, "roughVertices"), jsonInteger(json, "roughVertices")) << options;
+    EXPECT_EQ(jsonInteger(report, "roughSpotVertices"), jsonInteger(json, "roughSpotVertices")) << options;
+    if (options.find("--out-of-core") == std::string::npos) {
+      EXPECT_EQ(jsonInteger(report, "conesBeforeMerge"), rough ? cones : noisyCones) << options;
+    } else {
+      outOfCoreCones[rough] = jsonInteger(report, "conesBeforeMerge");
+    }
+    EXPECT_TRUE(jsonTrue(report, "seamless")) << options << "\n" << report;
+  }
+  EXPECT_LT(outOfCoreCones[1], outOfCoreCones[0]);
+}
+
 }  // namespace
 }  // namespace seamvox

@@ -72,6 +72,7 @@ struct FieldCommand {
   FieldMethod method = FieldMethod::Auto;
   double mergeCones = 0.0;
   std::uint32_t fieldSmoothing = kFieldSmoothingIterations;  ///< steps of the field's surface (--field-smoothing)
+  bool roughSpots = true;  ///< its rough spots smoothed within h (--no-rough-spots)
   GridSpacing spacing;
   bool json = false, weld = false;
   FeatureOptions features;  ///< the curves the field follows, as in param
@@ -95,6 +96,7 @@ FieldCommand parseFieldArgs(Args& args) {
   if (c.curvature > 0.0 && c.method == FieldMethod::Proxy) throw UsageError("--curvature needs --field smooth or auto");
   c.mergeCones = parseMergeCones(args);
   c.fieldSmoothing = parseFieldSmoothing(args, c.importPath.has_value());
+  c.roughSpots = !args.flag("no-rough-spots");
   c.spacing = parseGridSpacing(args);
   c.conesPath = args.value("cones");
   c.seamsPath = args.value("seams");
@@ -146,6 +148,8 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   }
   // h as param takes it (the diagonal without spikes), so both merge the same cones.
   run.edgeLength = c.spacing.spacing(run.clean.report.diagonalWithoutSpikes);
+  source.roughSpots = c.roughSpots;
+  source.gridLength = c.roughSpots ? run.edgeLength : 0.0;  // as parameterize sets it
   try {
     const std::optional<FieldSource> aligned =
         alignedFieldSource(topology, findFeatures(mesh, topology, c.features), source, mesh.numFaces());
@@ -209,6 +213,9 @@ void printFieldJson(const FieldCommand& c, const FieldRun& run, const FieldFigur
   j.key("field").value(c.importPath ? "import" : c.curvature > 0.0 ? "curvature" : "smoothest");
   j.key("fieldMethod").value(c.importPath ? "import" : fieldMethodName(run.method));
   j.key("fieldSmoothing").value(c.importPath ? 0u : c.fieldSmoothing);
+  j.key("roughSpots").value(!c.importPath && c.roughSpots);
+  j.key("roughVertices").value(run.fieldSolve.roughVertices);
+  j.key("roughSpotVertices").value(run.fieldSolve.roughSpotVertices);
   j.key("faces").value(std::uint64_t{mesh.numFaces()}).key("vertices").value(std::uint64_t{mesh.numVertices()});
   j.key("eulerCharacteristic").value(figures.chi);
   j.key("cones").value(std::uint64_t{sing.cones.size()});
@@ -289,7 +296,8 @@ int runField(Args& args) {
 
 SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "usage: seamvox field MESH -o FIELD [--field auto|smooth|proxy] [--import FILE]\n"
-                 "                     [--curvature W] [--field-smoothing N] [--cones OUT.obj]\n"
+                 "                     [--curvature W] [--field-smoothing N] [--no-rough-spots]\n"
+                 "                     [--cones OUT.obj]\n"
                  "                     [--merge-cones F] [--edge-length H | --cells N]\n"
                  "                     [--seams OUT.obj] [--json] [--weld]\n"
                  "                     [--align-boundary] [--feature-angle DEG]\n"
@@ -307,6 +315,8 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "  --curvature W     align with principal curvature, weight W > 0 (0: smoothest)\n"
                  "  --field-smoothing N  smoothing steps of the surface the field and its cones are\n"
                  "                    read on (1..64, default 3), as in param\n"
+                 "  --no-rough-spots  leave that surface's crumpled spots as they are (param's\n"
+                 "                    default smooths them further within H)\n"
                  "  --merge-cones F   merge cones at most F * H apart along edges, as param does\n"
                  "                    (default 1; 0 shows every cone of the field)\n"
                  "  --edge-length H   grid spacing for --merge-cones (as in param)\n"
@@ -318,7 +328,7 @@ SEAMVOX_COMMAND({"field", "cross field, cones, cut graph and seams of a mesh",
                  "                    param (boundaries; creases above DEG degrees; default none)\n"
                  "  --weld            weld coincident vertices before cleaning\n"
                  "  --quiet           no progress on stderr\n",
-                 {"json", "weld", "align-boundary"},
+                 {"json", "weld", "align-boundary", "no-rough-spots"},
                  &runField});
 
 }  // namespace seamvox::cli

@@ -69,6 +69,7 @@ ParamCommand parseParamArgs(Args& args) {
   if (args.flag("no-leftover-resolve")) o.untangleOptions.leftoverRadius = 0.0;
   if (args.flag("no-cone-resolve")) o.untangleOptions.coneRepairRadius = 0.0;
   o.mergeInMap = args.flag("merge-in-map");
+  o.field.roughSpots = !args.flag("no-rough-spots");
   o.solver.smoothedEvaluation = !args.flag("no-smoothed-evaluation");
   o.features.alignBoundary = args.flag("align-boundary");
   o.features.featureAngle = args.number("feature-angle", 0.0, 0.0, 179.0);
@@ -329,6 +330,7 @@ int runParamOutOfCore(ParamCommand& c, MeshStream& stream, OutputSet& outputs, A
   options.spacing = c.options.spacing;
   options.mergeCones = c.options.mergeCones;
   options.fieldSmoothing = c.options.field.smoothingSteps;
+  options.roughSpots = c.options.field.roughSpots;
   options.maxConePasses = c.options.maxConePasses;
   options.gridResolution = grid;
   const ParamSolver solver = c.options.solver.solver == ParamSolver::Vox ? ParamSolver::Vox : ParamSolver::VoxLoc;
@@ -488,7 +490,7 @@ int runParam(Args& args) {
 SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)",
                  "usage: seamvox param MESH -o OUT.obj|.ply|.drc [--solver auto|hat|vox|voxloc] [--grid N]\n"
                  "                     [--rings K] [--spline-cells N] [--field auto|smooth|proxy|FILE]\n"
-                 "                     [--field-smoothing N]\n"
+                 "                     [--field-smoothing N] [--no-rough-spots]\n"
                  "                     [--edge-length H | --cells N] [--merge-cones F] [--merge-in-map]\n"
                  "                     [--greedy] [--no-untangle] [--no-leftover-resolve] [--no-cone-resolve]\n"
                  "                     [--no-smoothed-evaluation] [--weld]\n"
@@ -525,6 +527,10 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "  --field-smoothing N smoothing steps of the surface a computed field and its cones\n"
                  "                      are read on (1..64, default 3). On strong scan noise 8 takes\n"
                  "                      most noise cone pairs off the field (bench/RESULTS.md)\n"
+                 "  --no-rough-spots    read the field and its cones on that surface as it is: by\n"
+                 "                      default its crumpled spots (scan noise on parts tessellated\n"
+                 "                      finer than the rest) are smoothed further within H, where\n"
+                 "                      they would put clusters of cone pairs into the field\n"
                  "  --edge-length H     grid spacing in mesh units\n"
                  "  --cells N           H = bounding-box diagonal / N (default N = 100)\n"
                  "  --merge-cones F     move the index of cones at most F * H apart (along edges) onto\n"
@@ -599,7 +605,7 @@ SEAMVOX_COMMAND({"param", "compute a seamless parameterization (per-corner u, v)
                  "                        passes, --quads, --render, --close-holes, features or hat\n"
                  "                        solver yet\n"
                  "  --out-of-core         take the out-of-core path whatever the estimate\n",
-                 {"greedy", "merge-in-map", "no-untangle", "no-leftover-resolve", "no-cone-resolve", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
+                 {"greedy", "merge-in-map", "no-rough-spots", "no-untangle", "no-leftover-resolve", "no-cone-resolve", "no-smoothed-evaluation", "weld", "keep-order", "drop-unsolved", "align-boundary", "out-of-core"},
                  &runParam});
 
 }  // namespace seamvox::cli

@@ -131,12 +131,21 @@ inline void holdWholeComponents(std::size_t numActive, std::vector<std::uint64_t
   fanStart.swap(start);
 }
 
+/// The share of a smoothing step a vertex of a rough region takes at `t` = its distance from the
+/// seeds over the radius: 1 up to 1/2, then a cosine down to 0 at 1.
+inline float roughSpotShare(float t) {
+  if (!(t > 0.5f)) return 1.0f;
+  if (!(t < 1.0f)) return 0.0f;
+  return static_cast<float>(0.5 + 0.5 * std::cos(2.0 * M_PI * (double(t) - 0.5)));
+}
+
 /// The rounds of smoothRoughSpots from the rough vertices `seeds` (increasing): base(v) gives the
 /// surface's position of v (Vec3f), spacing the roughSpacingLimit. Returns the vertices moved (their floats changed) and their
 /// positions, sorted.
 /// Each round: the vertices within kRoughSpotRadius * gridLength of the seeds along edges
-/// (Dijkstra, in float), their fans gathered once, kRoughSpotSteps Jacobi steps on them (in
-/// parallel, the same floats for any thread count), then the seeds still rough.
+/// (Dijkstra, in float), their fans gathered once, kRoughSpotSteps Jacobi steps on them, each
+/// vertex taking roughSpotShare of a step (in parallel, the same floats for any thread count), then
+/// the seeds still rough.
 template <class Table, class Base>
 std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& base, std::vector<VertexId> seeds,
                                                           double gridLength, double spacing, std::uint32_t& rounds) {
@@ -178,8 +187,13 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
     std::vector<VertexId> active;
     active.reserve(dist.size());
     for (const auto& entry : dist) active.push_back(entry.first);
-    std::unordered_map<VertexId, float>().swap(dist);
     std::sort(active.begin(), active.end());
+    // Each vertex's share of a step: whole within half the radius, tapering to none at the rim,
+    // so that the smoothed region joins the held surface without a crease (a crease there would
+    // put new cones on the rim).
+    std::vector<float> share(active.size());
+    for (std::size_t i = 0; i < active.size(); ++i) share[i] = roughSpotShare(dist[active[i]] / limit);
+    std::unordered_map<VertexId, float>().swap(dist);
 
     // The fans of the active vertices in fan order (local ids: active first, then the held
     // neighbours), as smoothingStep walks them; boundary and isolated ones have none and stay.
@@ -218,7 +232,9 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
           }
           Vec3d sum = Vec3d::Zero();
           for (std::uint64_t k = fanStart[i]; k < fanStart[i + 1]; ++k) sum += value[fan[k]].cast<double>();
-          next[i] = smoothingTarget(here, sum, static_cast<std::uint32_t>(fanStart[i + 1] - fanStart[i]));
+          const Vec3d target =
+              smoothingTarget(here, sum, static_cast<std::uint32_t>(fanStart[i + 1] - fanStart[i])).cast<double>();
+          next[i] = (here + double(share[i]) * (target - here)).cast<float>();
         }
       });
       std::copy(next.begin(), next.end(), value.begin());

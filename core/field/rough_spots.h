@@ -31,8 +31,11 @@ constexpr double kRoughSpotCancel = 0.3;
 /// Vertices within this many grid edge lengths of a rough vertex (along edges) are smoothed ...
 constexpr double kRoughSpotRadius = 1.0;
 /// ... by this many Laplacian steps (each halfway to the mean of the neighbours, as
-/// smoothPositions), the vertices around them held ...
-constexpr std::uint32_t kRoughSpotSteps = 32;
+/// smoothPositions; beyond half the radius a share of it tapering to none at the rim, so that the
+/// region joins the held surface around it without a crease), about 8 of their own edges of
+/// smoothing: 32 steps (4 edges) left clusters of cone pairs at camelhead x5's eyes with noise, and
+/// a held rim without the taper put new cones there (bench/RESULTS.md, session 59) ...
+constexpr std::uint32_t kRoughSpotSteps = 128;
 /// ... for at most this many rounds, each on the vertices still rough after the one before.
 constexpr std::uint32_t kRoughSpotRounds = 2;
 

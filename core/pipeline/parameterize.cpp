@@ -55,6 +55,7 @@ std::optional<FieldSource> alignedFieldSource(const Topology& topology, const Fe
   aligned.curvatureWeight = source.curvatureWeight;
   aligned.alignCorners = featureSideCorners(topology, features);
   aligned.gridLength = source.gridLength;
+  aligned.roughSpots = source.roughSpots;
   aligned.smoothingSteps = source.smoothingSteps;
   return aligned;
 }
@@ -585,6 +586,7 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
                       : "file";
   FieldSource source = aligned ? *aligned : options.field;
   aligned.reset();
+  source.gridLength = source.roughSpots ? r.edgeLength : 0.0;
   // The field's method as the mesh's own size picks it (the caps' faces do not count).
   source.method = resolveFieldMethod(source.method, r.mesh.numFaces());
   CappedHoles caps = capForSolve(r, source, options);

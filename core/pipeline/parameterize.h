@@ -37,9 +37,14 @@ struct FieldSource {
   /// unused by the proxy field and an imported one.
   std::vector<CornerId> alignCorners;
   /// The map's edge length: the computed field's surface is smoothed further at its rough spots
-  /// (FieldGeometryOptions::roughSpotGrid). 0: not, what param, field and the Python module use:
-  /// on noisy armadillo x16 it brings a second cone pass (bench/RESULTS.md, session 54).
+  /// (FieldGeometryOptions::roughSpotGrid). 0: not. parameterize sets it to the map's h when
+  /// roughSpots is set.
   double gridLength = 0.0;
+  /// Whether parameterize (and param out of core, and `seamvox field`) smooths the rough spots
+  /// of the field's surface within h: the crumpled spots of a noisy scan otherwise put clusters
+  /// of cone pairs into the field (camelhead x5 with noise: 333 cones before merging against
+  /// the clean 31; bench/RESULTS.md, sessions 54-59). `--no-rough-spots` turns it off.
+  bool roughSpots = true;
   /// Uniform Laplacian steps of the surface the computed field and its cones are read on
   /// (FieldGeometryOptions::smoothingIterations; 0: the mesh itself). More steps take the cone
   /// pairs of stronger noise off the field, at some cost in gradient error and map changes

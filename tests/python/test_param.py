@@ -162,6 +162,46 @@ def test_field_smoothing_is_the_commands(tmp_path, seamvox_command):
         seamvox.parameterize(V, F, field=fr.field, field_smoothing=8)
 
 
+def plane_with_crumpled_fine_patch(seed=1):
+    """A coarse 40 x 40 plane of unit cells and, beside it, a patch 4 across in cells of 1/16 whose
+    inner vertices move up to 0.3 along z: noise on a part tessellated far finer than the rest."""
+    def grid(n, step, x0, jitter, rng):
+        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+        inner = ((i > 0) & (i < n) & (j > 0) & (j < n)).ravel()  # the border stays straight
+        V = np.stack([x0 + step * i.ravel(), step * j.ravel(), inner * rng.uniform(-jitter, jitter, i.size)], axis=1)
+        k = (i[:-1, :-1] * (n + 1) + j[:-1, :-1]).ravel()
+        F = np.concatenate([np.stack([k, k + n + 1, k + n + 2], 1), np.stack([k, k + n + 2, k + 1], 1)])
+        return V, F
+    rng = np.random.default_rng(seed)
+    Vc, Fc = grid(40, 1.0, 0.0, 0.0, rng)
+    Vf, Ff = grid(64, 1.0 / 16, 50.0, 0.3, rng)
+    return np.concatenate([Vc, Vf]), np.concatenate([Fc, Ff + len(Vc)])
+
+
+def test_rough_spots_are_the_commands(tmp_path, seamvox_command):
+    """rough_spots (default True) smooths the crumpled patch of the field's surface within h as
+    `seamvox field` and `param` do: the same cones as the command, fewer than without, and the
+    report says it; rough_spots=False is `--no-rough-spots`."""
+    V, F = plane_with_crumpled_fine_patch()
+    mesh, cones = tmp_path / "in.ply", tmp_path / "cones.obj"
+    seamvox.write_mesh(str(mesh), V, F)
+    V, F = seamvox.read_mesh(str(mesh))
+    for rough, flag in ((True, []), (False, ["--no-rough-spots"])):
+        seamvox_command("field", str(mesh), "-o", str(tmp_path / "f.field"), "--quiet", "--edge-length", "2",
+                        "--merge-cones", "0", "--cones", str(cones), *flag)
+        listed = [line.split() for line in cones.read_text().splitlines() if line.startswith("# cone vertex")]
+        fr = seamvox.cross_field(V, F, edge_length=2, merge_cones=0, rough_spots=rough)
+        expected = np.array([[int(w[3]), int(w[5])] for w in listed], dtype=np.int64).reshape(-1, 2)
+        np.testing.assert_array_equal(fr.cones.reshape(-1, 2), expected)
+    smoothed = seamvox.parameterize(V, F, edge_length=2, merge_cones=0, solver="hat")
+    plain = seamvox.parameterize(V, F, edge_length=2, merge_cones=0, solver="hat", rough_spots=False)
+    assert smoothed.report["roughSpots"] is True and plain.report["roughSpots"] is False
+    assert smoothed.report["fieldSolve"]["roughVertices"] > 100
+    assert plain.report["fieldSolve"]["roughVertices"] == 0
+    assert 5 * smoothed.report["conesBeforeMerge"] <= plain.report["conesBeforeMerge"]
+    assert smoothed.quality["seamless"] and plain.quality["seamless"]
+
+
 def test_a_given_field_drives_the_map():
     V, F = torus()
     fr = seamvox.cross_field(V, F)

@@ -135,7 +135,8 @@ std::string fieldSource(const py::object& field, std::size_t faces, FieldSource&
 ParamOutcome parameterizeArrays(const py::object& V, const py::object& F, const std::string& solver, double cells,
                                 const py::object& edgeLength, std::int32_t grid, const py::object& field,
                                 double mergeCones, const py::object& threads, const py::object& progress,
-                                bool untangle, bool weld, double closeHoles, std::int64_t fieldSmoothing) {
+                                bool untangle, bool weld, double closeHoles, std::int64_t fieldSmoothing,
+                                bool roughSpots) {
   TriangleMesh raw = meshFromArrays(V, F);
   if (!(closeHoles >= 0.0 && closeHoles <= 1000.0)) {
     throw InputError("close_holes must be a number from 0 to 1000 (grid spacings), got " + std::to_string(closeHoles));
@@ -153,6 +154,7 @@ ParamOutcome parameterizeArrays(const py::object& V, const py::object& F, const 
   options.closeHoles = closeHoles;
   const std::string fieldName = fieldSource(field, raw.numFaces(), options.field);
   options.field.smoothingSteps = fieldSmoothingSteps(fieldSmoothing, options.field);
+  options.field.roughSpots = roughSpots;
   Interruptible interruptible(progress, threadCount(threads));
   options.progress = interruptible.progressFn();
   StageMeter meter;
@@ -174,12 +176,14 @@ ParamOutcome parameterizeArrays(const py::object& V, const py::object& F, const 
 
 FieldOutcome crossFieldArrays(const py::object& V, const py::object& F, const std::string& method, double curvature,
                               double mergeCones, double cells, const py::object& edgeLength,
-                              const py::object& threads, const py::object& progress, std::int64_t fieldSmoothing) {
+                              const py::object& threads, const py::object& progress, std::int64_t fieldSmoothing,
+                              bool roughSpots) {
   TriangleMesh raw = meshFromArrays(V, F);
   const std::uint32_t inputFaces = raw.numFaces();
   FieldSource source;
   fieldSource(py::str(method), inputFaces, source);
   source.smoothingSteps = fieldSmoothingSteps(fieldSmoothing, source);
+  source.roughSpots = roughSpots;
   if (!(curvature >= 0.0 && std::isfinite(curvature))) {
     throw InputError("curvature must be a finite number >= 0, got " + std::to_string(curvature));
   }
@@ -198,6 +202,7 @@ FieldOutcome crossFieldArrays(const py::object& V, const py::object& F, const st
     cleanOptions.progress = progressFn;
     clean = cleanMesh(std::move(raw), cleanOptions);
     const double h = spacing.spacing(clean.report.diagonalWithoutSpikes);
+    source.gridLength = source.roughSpots ? h : 0.0;  // as parameterize sets it
     crossField = computeFieldFromSource(clean.mesh, clean.topology, clean.faceOrigin, inputFaces, source, progressFn);
     coneCut = cutThroughCones(clean.mesh, clean.topology, crossField, merge * h, {}, 0.0, progressFn);
   });
@@ -417,9 +422,10 @@ PYBIND11_MODULE(seamvox, m) {
         py::arg("grid") = 128, py::arg("field") = py::none(), py::arg("merge_cones") = seamvox::kConeMergeFraction,
         py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("untangle") = true,
         py::arg("weld") = false, py::arg("close_holes") = 0.0, py::arg("field_smoothing") = seamvox::kFieldSmoothingIterations,
+        py::arg("rough_spots") = true,
         "parameterize(V, F, *, solver='auto', cells=100, edge_length=None, grid=128, field=None,\n"
         "             merge_cones=1, threads=None, progress=None, untangle=True, weld=False,\n"
-        "             close_holes=0, field_smoothing=3) -> Result\n\n"
+        "             close_holes=0, field_smoothing=3, rough_spots=True) -> Result\n\n"
         "The pipeline of `seamvox param` with the same defaults (so the same map). solver: 'auto',\n"
         "'hat', 'vox' or 'voxloc'; grid spacing h = edge_length, or the bounding-box diagonal / cells;\n"
         "field: None or 'auto', 'smooth', 'proxy', or an (m, 3) array of one direction per face of F;\n"
@@ -429,13 +435,15 @@ PYBIND11_MODULE(seamvox, m) {
         "close_holes: holes within that many grid spacings carry no seam translation, so quads() can\n"
         "close them (`seamvox param --close-holes`; 2 is what `param --quads` uses).\n"
         "field_smoothing: smoothing steps (1..64) of the surface a computed field and its cones are\n"
-        "read on (`seamvox param --field-smoothing`).");
+        "read on (`seamvox param --field-smoothing`); rough_spots=False: its crumpled spots are not\n"
+        "smoothed further within h (`seamvox param --no-rough-spots`).");
   m.def("cross_field", &crossFieldArrays, py::arg("V"), py::arg("F"), py::kw_only(), py::arg("field") = "auto",
         py::arg("curvature") = 0.0, py::arg("merge_cones") = seamvox::kConeMergeFraction, py::arg("cells") = 100.0,
         py::arg("edge_length") = py::none(), py::arg("threads") = py::none(), py::arg("progress") = py::none(),
-        py::arg("field_smoothing") = seamvox::kFieldSmoothingIterations,
+        py::arg("field_smoothing") = seamvox::kFieldSmoothingIterations, py::arg("rough_spots") = true,
         "cross_field(V, F, *, field='auto', curvature=0.0, merge_cones=1, cells=100,\n"
-        "            edge_length=None, threads=None, progress=None, field_smoothing=3) -> FieldResult\n\n"
+        "            edge_length=None, threads=None, progress=None, field_smoothing=3,\n"
+        "            rough_spots=True) -> FieldResult\n\n"
         "The cross field, its cones (merged as parameterize merges them before its first cut) and\n"
         "the cut, as `seamvox field` computes them. field: 'auto', 'smooth' or 'proxy'; curvature > 0\n"
         "aligns the direct field with principal curvature. progress and Ctrl-C as in parameterize.");
