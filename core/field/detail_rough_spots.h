@@ -157,69 +157,95 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
   const auto at = [&](VertexId v) -> Vec3d { return current(v).template cast<double>(); };
   const float limit = static_cast<float>(kRoughSpotRadius * gridLength);
   for (rounds = 0; rounds < kRoughSpotRounds && !seeds.empty(); ++rounds) {
-    // Dijkstra from the seeds, ties broken by vertex id.
-    using Entry = std::pair<float, VertexId>;
+    // Dijkstra from the seeds along edges (in float). Each vertex reached gets a local id once,
+    // so that an edge costs one hash lookup; a vertex within the radius gathers its fan (local ids
+    // in fan order, as smoothingStep walks it) when it is settled, its neighbours beyond the
+    // radius becoming held ones. The distances do not depend on the order of ties.
+    std::unordered_map<VertexId, std::uint32_t> local;
+    std::vector<VertexId> ids;   // local id -> vertex
+    std::vector<float> dist;     // local id -> distance (infinite: beyond the radius)
+    std::vector<Vec3f> value;    // local id -> position
+    std::vector<std::uint64_t> fanAt;  // local id -> first entry in fans + 1 (0: no fan gathered)
+    std::vector<std::uint32_t> fans;   // per settled vertex: its fan's size, then its fan
+    const auto localId = [&](VertexId v) {
+      const auto [it, added] = local.emplace(v, static_cast<std::uint32_t>(ids.size()));
+      if (added) {
+        ids.push_back(v);
+        dist.push_back(std::numeric_limits<float>::infinity());
+        value.push_back(current(v));
+        fanAt.push_back(0);
+      }
+      return it->second;
+    };
+    using Entry = std::pair<float, std::uint32_t>;
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-    std::unordered_map<VertexId, float> dist;
     for (VertexId v : seeds) {
-      dist[v] = 0.0f;
-      queue.emplace(0.0f, v);
+      const std::uint32_t i = localId(v);
+      dist[i] = 0.0f;
+      queue.emplace(0.0f, i);
     }
+    std::vector<std::uint32_t> around;
     while (!queue.empty()) {
-      const auto [d, v] = queue.top();
+      const auto [d, i] = queue.top();
       queue.pop();
-      if (d > dist[v] || table.isIsolatedVertex(v)) continue;
-      const Vec3d p = at(v);
-      const auto relax = [&, d = d](VertexId w) {
-        const float dw = d + static_cast<float>((at(w) - p).norm());
-        if (!(dw <= limit)) return;
-        const auto [it, added] = dist.emplace(w, dw);
-        if (!added && dw >= it->second) return;
-        it->second = dw;
-        queue.emplace(dw, w);
-      };
-      // Both neighbours of each corner: a boundary vertex's fan has one more than its corners.
+      if (d > dist[i] || fanAt[i] != 0) continue;
+      const VertexId v = ids[i];
+      fanAt[i] = fans.size() + 1;
+      fans.push_back(0);
+      if (table.isIsolatedVertex(v)) continue;
+      // An interior vertex's neighbours are its corners' next vertices, its fan; a boundary
+      // vertex's are those and the last corner's previous vertex, and it has no fan (it stays).
+      const bool boundary = table.isBoundaryVertex(v);
+      around.clear();
       table.forEachCornerAround(v, [&](CornerId c) {
-        relax(table.vertex(nextCorner(c)));
-        relax(table.vertex(prevCorner(c)));
+        around.push_back(localId(table.vertex(nextCorner(c))));
+        if (boundary) around.push_back(localId(table.vertex(prevCorner(c))));
       });
+      const Vec3d p = value[i].template cast<double>();
+      for (std::uint32_t j : around) {
+        const float dj = d + static_cast<float>((value[j].template cast<double>() - p).norm());
+        if (!(dj <= limit) || !(dj < dist[j])) continue;
+        dist[j] = dj;
+        queue.emplace(dj, j);
+      }
+      if (!boundary) {
+        fans[fanAt[i] - 1] = static_cast<std::uint32_t>(around.size());
+        fans.insert(fans.end(), around.begin(), around.end());
+      }
     }
-    std::vector<VertexId> active;
-    active.reserve(dist.size());
-    for (const auto& entry : dist) active.push_back(entry.first);
-    std::sort(active.begin(), active.end());
+    std::unordered_map<VertexId, std::uint32_t>().swap(local);
+    // Renumbered: the vertices within the radius first, by vertex id, then the held ones.
+    std::vector<std::uint32_t> order(ids.size());
+    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      const bool inA = fanAt[a] != 0, inB = fanAt[b] != 0;
+      return inA != inB ? inA : ids[a] < ids[b];
+    });
+    std::vector<std::uint32_t> renumbered(ids.size());
+    for (std::uint32_t k = 0; k < order.size(); ++k) renumbered[order[k]] = k;
+    std::size_t numActive = 0;
+    while (numActive < order.size() && fanAt[order[numActive]] != 0) ++numActive;
+    std::vector<VertexId> active(numActive);
     // Each vertex's share of a step: whole within half the radius, tapering to none at the rim,
     // so that the smoothed region joins the held surface without a crease (a crease there would
     // put new cones on the rim).
-    std::vector<float> share(active.size());
-    for (std::size_t i = 0; i < active.size(); ++i) share[i] = roughSpotShare(dist[active[i]] / limit);
-    std::unordered_map<VertexId, float>().swap(dist);
-
-    // The fans of the active vertices in fan order (local ids: active first, then the held
-    // neighbours), as smoothingStep walks them; boundary and isolated ones have none and stay.
-    std::unordered_map<VertexId, std::uint32_t> local;
-    local.reserve(active.size());
-    std::vector<Vec3f> value;
-    value.reserve(active.size());
-    for (VertexId v : active) {
-      local.emplace(v, static_cast<std::uint32_t>(value.size()));
-      value.push_back(current(v));
-    }
-    std::vector<std::uint64_t> fanStart(active.size() + 1, 0);
+    std::vector<float> share(numActive);
+    std::vector<std::uint64_t> fanStart(numActive + 1, 0);
     std::vector<std::uint32_t> fan;
-    for (std::size_t i = 0; i < active.size(); ++i) {
-      const VertexId v = active[i];
-      if (!table.isIsolatedVertex(v) && !table.isBoundaryVertex(v)) {
-        table.forEachCornerAround(v, [&](CornerId c) {
-          const VertexId w = table.vertex(nextCorner(c));
-          const auto [it, added] = local.emplace(w, static_cast<std::uint32_t>(value.size()));
-          if (added) value.push_back(current(w));
-          fan.push_back(it->second);
-        });
-      }
-      fanStart[i + 1] = fan.size();
+    fan.reserve(fans.size() - numActive);
+    for (std::size_t k = 0; k < numActive; ++k) {
+      const std::uint32_t i = order[k];
+      active[k] = ids[i];
+      share[k] = roughSpotShare(dist[i] / limit);
+      const std::uint64_t at = fanAt[i] - 1;
+      for (std::uint32_t n = 0; n < fans[at]; ++n) fan.push_back(renumbered[fans[at + 1 + n]]);
+      fanStart[k + 1] = fan.size();
     }
-    std::unordered_map<VertexId, std::uint32_t>().swap(local);
+    {
+      std::vector<Vec3f> sorted(order.size());
+      for (std::uint32_t k = 0; k < order.size(); ++k) sorted[k] = value[order[k]];
+      value.swap(sorted);
+    }
     holdWholeComponents(active.size(), fanStart, fan);
     std::vector<Vec3f> next(active.size());
     for (std::uint32_t step = 0; step < kRoughSpotSteps; ++step) {
