@@ -298,6 +298,7 @@ void writeFieldSolve(JsonWriter& j, const FieldSolveStats& stats) {
   j.key("factorNonzeros").value(stats.factorNonzeros).key("factorBytes").value(stats.factorBytes);
   j.key("factorPeakBytes").value(stats.factorPeakBytes).key("realFallback").value(stats.realFallback);
   j.key("roughVertices").value(stats.roughVertices).key("roughSpotVertices").value(stats.roughSpotVertices);
+  j.key("roughSpotsCapped").value(stats.roughSpotsCapped);
   j.endObject();
 }
 

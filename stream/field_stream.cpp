@@ -63,6 +63,10 @@ ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& sc
   return current;
 }
 
+std::uint64_t roughRegionBound(std::uint64_t memoryBytes) {
+  return std::max<std::uint64_t>(kRoughRegionMinVertices, memoryBytes / 2 / kRoughRegionBytes);
+}
+
 ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& scratch, const ScratchFile& surface,
                                     double gridLength, const StreamPassOptions& pass, ScratchField& counts) {
   const char* stage = "field: rough spots";
@@ -118,8 +122,10 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
     PagedCornerTable table(scratch, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
     PagedReader<Vec3f> positions(surface, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
     std::uint32_t rounds = 0;
-    moved = detail::smoothRoughRounds(
-        table, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, spacing, rounds);
+    bool capped = false;
+    moved = detail::smoothRoughRounds(table, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength,
+                                      spacing, rounds, roughRegionBound(pass.memoryBytes), &capped);
+    counts.roughSpotsCapped = capped;
     folder.countRead(stage, table.bytesRead() + positions.bytesRead());
   }
   counts.roughSpotVertices = moved.size();

@@ -29,10 +29,22 @@ struct StreamPassOptions {
 ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t iterations,
                                    const StreamPassOptions& pass);
 
+/// Bytes a vertex of a rough spot's region holds while the rounds run (hash map, fans, positions,
+/// distances, the renumbering; measured about 250).
+constexpr std::uint64_t kRoughRegionBytes = 256;
+/// A region of this many vertices is smoothed within any budget (16 MiB, inside the passes' own
+/// 64 MiB).
+constexpr std::uint64_t kRoughRegionMinVertices = std::uint64_t(1) << 16;
+/// The most vertices a round's region may hold out of core: half the pass's memory, at
+/// kRoughRegionBytes each, and at least kRoughRegionMinVertices. Above it the rough spots are
+/// left as they are (ScratchField::roughSpotsCapped): a scan crumpled nearly everywhere, which the
+/// global steps are for, within a small budget.
+std::uint64_t roughRegionBound(std::uint64_t memoryBytes);
+
 struct ScratchField;
 /// smoothRoughSpots on the smoothed surface `surface` (a file of smoothScratchPositions): the
 /// rough vertices found by a pass over the vertices, the rounds on their regions through page
-/// caches (the regions' hash maps in memory: about 100 bytes per vertex moved), then a copy of
+/// caches (the regions in memory, at most roughRegionBound(pass.memoryBytes) vertices), then a copy of
 /// the surface with the moved vertices, which replaces it (surface itself when nothing is rough).
 /// The figures go to counts.roughVertices and roughSpotVertices.
 ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& scratch, const ScratchFile& surface,
@@ -51,6 +63,9 @@ struct ScratchField {
   /// Rough spots of the surface (FieldGeometryOptions::roughSpotGrid): rough vertices found,
   /// vertices moved.
   std::uint64_t roughVertices = 0, roughSpotVertices = 0;
+  /// A region exceeded roughRegionBound: the rounds stopped there (roughSpotVertices: those moved
+  /// before it).
+  bool roughSpotsCapped = false;
   /// Wall seconds of the passes: smooth, rough spots (with roughSpotGrid), cells, elements, solve, transfer, colour, sweeps, finish.
   std::vector<std::pair<std::string, double>> stageSeconds;
 };

@@ -286,6 +286,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), geometry, early, true);
   r.roughVertices = field.roughVertices;
   r.roughSpotVertices = field.roughSpotVertices;
+  r.roughSpotsCapped = field.roughSpotsCapped;
   r.fieldElements = field.elements;
   for (const auto& [name, seconds] : field.stageSeconds) r.passSeconds.emplace_back("field: " + name, seconds);
   meter.finish("field");

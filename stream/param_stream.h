@@ -74,6 +74,7 @@ struct StreamParamResult {
   double diagonal = 0.0, edgeLength = 0.0;
   std::uint32_t fieldElements = 0;
   std::uint64_t roughVertices = 0, roughSpotVertices = 0;  ///< ScratchField's
+  bool roughSpotsCapped = false;                           ///< ScratchField's
   std::uint32_t conesBeforeMerge = 0;
   std::uint32_t conePasses = 0;
   std::uint32_t conePassKept = 0;  ///< the pass whose map is written (PipelineResult::conePassKept)

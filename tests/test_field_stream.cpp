@@ -246,6 +246,14 @@ TEST(FieldStream, RoughSpotsAsInMemory) {
   EXPECT_GT(moved, 1000u) << "too little rough to compare";
 }
 
+TEST(FieldStream, RoughRegionsBoundedByHalfThePassMemory) {
+  // Half the pass's memory at kRoughRegionBytes a vertex, and never below the minimum region.
+  EXPECT_EQ(roughRegionBound(1), kRoughRegionMinVertices);
+  EXPECT_EQ(roughRegionBound(0), kRoughRegionMinVertices);
+  EXPECT_EQ(roughRegionBound(std::uint64_t(1) << 30), (std::uint64_t(1) << 29) / kRoughRegionBytes);
+  EXPECT_GT(roughRegionBound(std::uint64_t(1) << 30), kRoughRegionMinVertices);
+}
+
 TEST(FieldStream, SingularitiesEqualTheInMemoryOnes) {
   const NamedMeshes meshes = testing::stageTestMeshes(13);
   forEachCleaned(meshes, [](ScratchFolder& folder, const CleanScratch& scratch, const CleanResult& cleaned) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/field/field.h"
+#include "core/field/detail_rough_spots.h"
 #include "core/field/field_proxy.h"
 #include "core/field/rough_spots.h"
 #include "core/system/errors.h"
@@ -227,6 +228,37 @@ TEST(RoughSpots, SameForOneAndTwoThreads) {
   EXPECT_EQ(one.moved, two.moved);
   EXPECT_EQ(one.roughVertices, two.roughVertices);
   EXPECT_EQ(one.rounds, two.rounds);
+}
+
+TEST(RoughSpots, ARegionAboveItsBoundSmoothsNothingAndSaysSo) {
+  // The rounds' memory bound (out of core: roughRegionBound): a region that would hold more
+  // vertices stops the rounds before any step, nothing moves and `capped` is set; a bound above the
+  // region changes nothing.
+  const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, 8));
+  const std::vector<Vec3f> surface = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+  const auto at = [&](VertexId w) -> Vec3d { return surface[w].cast<double>(); };
+  const double spacing = 1e30;  // every crumpled vertex is rough
+  std::vector<VertexId> seeds;
+  for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+    if (detail::isRoughVertex(s.topology, v, at, spacing)) seeds.push_back(v);
+  }
+  ASSERT_GT(seeds.size(), 100u);
+  const auto base = [&](VertexId v) { return surface[v]; };
+  std::uint32_t rounds = 0;
+  const auto free = detail::smoothRoughRounds(s.topology, base, seeds, kGrid, spacing, rounds);
+  ASSERT_GT(free.size(), seeds.size());
+  ASSERT_GE(rounds, 1u);
+  bool capped = false;
+  std::uint32_t boundedRounds = 0;
+  EXPECT_EQ(detail::smoothRoughRounds(s.topology, base, seeds, kGrid, spacing, boundedRounds,
+                                      s.topology.numVertices() + 1, &capped),
+            free);
+  EXPECT_FALSE(capped);
+  EXPECT_EQ(boundedRounds, rounds);
+  EXPECT_TRUE(detail::smoothRoughRounds(s.topology, base, seeds, kGrid, spacing, boundedRounds, free.size() / 2, &capped)
+                  .empty());
+  EXPECT_TRUE(capped);
+  EXPECT_EQ(boundedRounds, 0u);
 }
 
 TEST(RoughSpots, BadArgumentsThrow) {

@@ -259,6 +259,7 @@ PipelineResult figuresOfOutOfCoreRun(const StreamParamResult& s, ParamSolver sol
   r.conesBeforeMerge = s.conesBeforeMerge;
   r.fieldSolve.roughVertices = s.roughVertices;
   r.fieldSolve.roughSpotVertices = s.roughSpotVertices;
+  r.fieldSolve.roughSpotsCapped = s.roughSpotsCapped;
   r.merged = s.merged;
   r.conePasses = s.conePasses;
   r.conePassKept = s.conePassKept;

@@ -142,13 +142,17 @@ inline float roughSpotShare(float t) {
 /// The rounds of smoothRoughSpots from the rough vertices `seeds` (increasing): base(v) gives the
 /// surface's position of v (Vec3f), spacing the roughSpacingLimit. Returns the vertices moved (their floats changed) and their
 /// positions, sorted.
+/// A round whose region (with its held neighbours) would exceed maxRegion vertices smooths
+/// nothing and ends the rounds, *capped set (the out-of-core pass's memory bound).
 /// Each round: the vertices within kRoughSpotRadius * gridLength of the seeds along edges
 /// (Dijkstra, in float), their fans gathered once, kRoughSpotSteps Jacobi steps on them, each
 /// vertex taking roughSpotShare of a step (in parallel, the same floats for any thread count), then
 /// the seeds still rough.
 template <class Table, class Base>
 std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& base, std::vector<VertexId> seeds,
-                                                          double gridLength, double spacing, std::uint32_t& rounds) {
+                                                          double gridLength, double spacing, std::uint32_t& rounds,
+                                                          std::uint64_t maxRegion = ~std::uint64_t(0),
+                                                          bool* capped = nullptr) {
   std::unordered_map<VertexId, Vec3f> moved;
   const auto current = [&](VertexId v) -> Vec3f {
     const auto it = moved.find(v);
@@ -167,8 +171,10 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
     std::vector<Vec3f> value;    // local id -> position
     std::vector<std::uint64_t> fanAt;  // local id -> first entry in fans + 1 (0: no fan gathered)
     std::vector<std::uint32_t> fans;   // per settled vertex: its fan's size, then its fan
+    bool over = false;
     const auto localId = [&](VertexId v) {
       const auto [it, added] = local.emplace(v, static_cast<std::uint32_t>(ids.size()));
+      over = over || ids.size() >= maxRegion;
       if (added) {
         ids.push_back(v);
         dist.push_back(std::numeric_limits<float>::infinity());
@@ -185,7 +191,7 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
       queue.emplace(0.0f, i);
     }
     std::vector<std::uint32_t> around;
-    while (!queue.empty()) {
+    while (!queue.empty() && !over) {
       const auto [d, i] = queue.top();
       queue.pop();
       if (d > dist[i] || fanAt[i] != 0) continue;
@@ -214,6 +220,10 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
       }
     }
     std::unordered_map<VertexId, std::uint32_t>().swap(local);
+    if (over) {  // a region above the bound: this round smooths nothing, and the rounds stop
+      if (capped) *capped = true;
+      break;
+    }
     // Renumbered: the vertices within the radius first, by vertex id, then the held ones.
     std::vector<std::uint32_t> order(ids.size());
     for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
