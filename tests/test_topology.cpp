@@ -1,7 +1,10 @@
 // Corner table and components: invariants on meshes built in code.
 #include <gtest/gtest.h>
 
+#include <unordered_map>
+
 #include "core/mesh/clean.h"
+#include "core/mesh/detail_id_map.h"
 #include "core/system/errors.h"
 #include "core/mesh/hole_caps.h"
 #include "core/mesh/topology.h"
@@ -254,6 +257,41 @@ INSTANTIATE_TEST_SUITE_P(
       }
       return name;
     });
+
+// IdMap against std::unordered_map: clustered and scattered keys through several growths,
+// missing keys, overwrites, and every entry visited once.
+TEST(IdMap, AgreesWithAStandardMap) {
+  detail::IdMap map;
+  std::unordered_map<std::uint32_t, std::uint32_t> reference;
+  std::uint64_t state = 12345;
+  for (std::uint32_t n = 0; n < 50000; ++n) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    // Half the keys in a run of ids (as a region's vertices are), half anywhere below kEmpty.
+    const std::uint32_t key = n % 2 ? 1000000 + n / 2 : static_cast<std::uint32_t>(state >> 33) % 0xfffffff0u;
+    const auto [value, added] = map.emplace(key, n);
+    const auto [it, refAdded] = reference.emplace(key, n);
+    ASSERT_EQ(added, refAdded) << key;
+    ASSERT_EQ(value, it->second) << key;
+    if (n % 7 == 0) {
+      map.set(key, n + 1);
+      it->second = n + 1;
+    }
+  }
+  EXPECT_EQ(map.size(), reference.size());
+  for (const auto& [key, value] : reference) EXPECT_EQ(map.find(key), value);
+  EXPECT_EQ(map.find(999999), detail::IdMap::kEmpty);
+  EXPECT_EQ(map.find(0xfffffff5u), detail::IdMap::kEmpty);
+  std::size_t visited = 0;
+  map.forEach([&](std::uint32_t key, std::uint32_t value) {
+    ++visited;
+    EXPECT_EQ(reference.at(key), value);
+  });
+  EXPECT_EQ(visited, reference.size());
+  ASSERT_EQ(reference.count(17), 0u);
+  map.set(17, 3);  // set inserts a new key
+  EXPECT_EQ(map.find(17), 3u);
+  EXPECT_EQ(map.size(), reference.size() + 1);
+}
 
 }  // namespace
 }  // namespace seamvox

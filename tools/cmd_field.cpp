@@ -149,7 +149,7 @@ FieldRun computeField(const FieldCommand& c, StageMeter& meter) {
   // h as param takes it (the diagonal without spikes), so both merge the same cones.
   run.edgeLength = c.spacing.spacing(run.clean.report.diagonalWithoutSpikes);
   source.roughSpots = c.roughSpots;
-  source.gridLength = c.roughSpots ? run.edgeLength : 0.0;  // as parameterize sets it
+  source.gridLength = run.edgeLength;  // as parameterize sets it
   try {
     const std::optional<FieldSource> aligned =
         alignedFieldSource(topology, findFeatures(mesh, topology, c.features), source, mesh.numFaces());

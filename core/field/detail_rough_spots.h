@@ -8,12 +8,12 @@
 #include <limits>
 #include <queue>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include "core/field/detail_smoothing.h"
 #include "core/field/rough_spots.h"
+#include "core/mesh/detail_id_map.h"
 #include "core/mesh/detail_union_find.h"
 #include "core/mesh/topology.h"
 #include "core/system/errors.h"
@@ -42,10 +42,10 @@ double angleDefectOf(Table& table, VertexId v, At&& at) {
   return 2.0 * M_PI - sum;
 }
 
-/// Mean length of the edges of interior vertex v (0 at boundary and isolated vertices).
+/// Mean length of the edges of interior vertex v (-1 at boundary and isolated vertices).
 template <class Table, class At>
 float vertexSpacing(Table& table, VertexId v, At&& at) {
-  if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return 0.0f;
+  if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return -1.0f;
   const Vec3d p = at(v);
   double length = 0.0;
   std::uint32_t count = 0;
@@ -74,12 +74,12 @@ inline double roughSpacingLimit(double gridLength, double meanSpacing) {
   return std::min(kRoughSpotSpacing * gridLength, kRoughSpotRelative * meanSpacing);
 }
 
-/// Rough: interior, its edges shorter than `spacing` on average (roughSpacingLimit), angle
-/// defect above kRoughSpotDefect, and the defects within two rings cancel (kRoughSpotCancel).
+/// Rough: interior (`own`, its vertexSpacing, not negative), its edges shorter than `spacing` on
+/// average (roughSpacingLimit), angle defect above kRoughSpotDefect, and the defects within two
+/// rings cancel (kRoughSpotCancel).
 template <class Table, class At>
-bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing) {
-  if (table.isIsolatedVertex(v) || table.isBoundaryVertex(v)) return false;
-  if (!(vertexSpacing(table, v, at) < spacing)) return false;
+bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing, float own) {
+  if (!(own >= 0.0f) || !(own < spacing)) return false;
   if (!(std::abs(angleDefectOf(table, v, at)) > kRoughSpotDefect)) return false;
   // Crumpled: the defects of the vertices within two rings cancel (a tip's all have one sign).
   double absSum = 0.0, sum = 0.0;
@@ -97,6 +97,12 @@ bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing) {
     absSum += std::abs(k), sum += k;
   }
   return std::abs(sum) < kRoughSpotCancel * absSum;
+}
+
+/// isRoughVertex with v's spacing computed here.
+template <class Table, class At>
+bool isRoughVertex(Table& table, VertexId v, At&& at, double spacing) {
+  return isRoughVertex(table, v, at, spacing, vertexSpacing(table, v, at));
 }
 
 /// Empties the fans of the pieces of the region (active vertices 0..numActive-1 joined along their
@@ -153,10 +159,12 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
                                                           double gridLength, double spacing, std::uint32_t& rounds,
                                                           std::uint64_t maxRegion = ~std::uint64_t(0),
                                                           bool* capped = nullptr) {
-  std::unordered_map<VertexId, Vec3f> moved;
+  IdMap moved;                   // vertex -> index in movedIds and movedValues
+  std::vector<VertexId> movedIds;
+  std::vector<Vec3f> movedValues;
   const auto current = [&](VertexId v) -> Vec3f {
-    const auto it = moved.find(v);
-    return it == moved.end() ? Vec3f(base(v)) : it->second;
+    const std::uint32_t k = moved.find(v);
+    return k == IdMap::kEmpty ? Vec3f(base(v)) : movedValues[k];
   };
   const auto at = [&](VertexId v) -> Vec3d { return current(v).template cast<double>(); };
   const float limit = static_cast<float>(kRoughSpotRadius * gridLength);
@@ -165,7 +173,7 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
     // so that an edge costs one hash lookup; a vertex within the radius gathers its fan (local ids
     // in fan order, as smoothingStep walks it) when it is settled, its neighbours beyond the
     // radius becoming held ones. The distances do not depend on the order of ties.
-    std::unordered_map<VertexId, std::uint32_t> local;
+    IdMap local;
     std::vector<VertexId> ids;   // local id -> vertex
     std::vector<float> dist;     // local id -> distance (infinite: beyond the radius)
     std::vector<Vec3f> value;    // local id -> position
@@ -173,7 +181,7 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
     std::vector<std::uint32_t> fans;   // per settled vertex: its fan's size, then its fan
     bool over = false;
     const auto localId = [&](VertexId v) {
-      const auto [it, added] = local.emplace(v, static_cast<std::uint32_t>(ids.size()));
+      const auto [id, added] = local.emplace(v, static_cast<std::uint32_t>(ids.size()));
       over = over || ids.size() >= maxRegion;
       if (added) {
         ids.push_back(v);
@@ -181,7 +189,7 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
         value.push_back(current(v));
         fanAt.push_back(0);
       }
-      return it->second;
+      return id;
     };
     using Entry = std::pair<float, std::uint32_t>;
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
@@ -219,18 +227,21 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
         fans.insert(fans.end(), around.begin(), around.end());
       }
     }
-    std::unordered_map<VertexId, std::uint32_t>().swap(local);
+    local = IdMap();  // freed before the steps
     if (over) {  // a region above the bound: this round smooths nothing, and the rounds stop
       if (capped) *capped = true;
       break;
     }
     // Renumbered: the vertices within the radius first, by vertex id, then the held ones.
+    // Sorted as keys (held bit, vertex) with the local id alongside: a sort of contiguous pairs.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(ids.size());
+    for (std::uint32_t i = 0; i < keyed.size(); ++i) {
+      keyed[i] = {(std::uint64_t(fanAt[i] == 0) << 32) | ids[i], i};
+    }
+    std::sort(keyed.begin(), keyed.end());
     std::vector<std::uint32_t> order(ids.size());
-    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-      const bool inA = fanAt[a] != 0, inB = fanAt[b] != 0;
-      return inA != inB ? inA : ids[a] < ids[b];
-    });
+    for (std::uint32_t k = 0; k < order.size(); ++k) order[k] = keyed[k].second;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(keyed);
     std::vector<std::uint32_t> renumbered(ids.size());
     for (std::uint32_t k = 0; k < order.size(); ++k) renumbered[order[k]] = k;
     std::size_t numActive = 0;
@@ -275,15 +286,24 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
       });
       std::copy(next.begin(), next.end(), value.begin());
     }
-    for (std::size_t i = 0; i < active.size(); ++i) moved[active[i]] = value[i];
+    for (std::size_t i = 0; i < active.size(); ++i) {
+      const auto [k, added] = moved.emplace(active[i], static_cast<std::uint32_t>(movedIds.size()));
+      if (added) {
+        movedIds.push_back(active[i]);
+        movedValues.push_back(value[i]);
+      } else {
+        movedValues[k] = value[i];
+      }
+    }
     seeds.clear();
     for (VertexId v : active) {
       if (isRoughVertex(table, v, at, spacing)) seeds.push_back(v);
     }
   }
   std::vector<std::pair<VertexId, Vec3f>> out;
-  for (const auto& [v, p] : moved) {
-    if (p != Vec3f(base(v))) out.emplace_back(v, p);  // held ones and boundary vertices stay
+  for (std::size_t k = 0; k < movedIds.size(); ++k) {
+    const VertexId v = movedIds[k];
+    if (movedValues[k] != Vec3f(base(v))) out.emplace_back(v, movedValues[k]);  // held ones and boundary vertices stay
   }
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   return out;

@@ -21,19 +21,24 @@ RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& p
                      std::to_string(numVertices) + " vertices");
   }
   const auto at = [&](VertexId w) -> Vec3d { return positions[w].cast<double>(); };
+  // Each vertex's spacing once (4 B a vertex for the two passes), summed by chunks in vertex order.
+  std::vector<float> own(numVertices);
   std::vector<std::pair<std::uint64_t, double>> chunks((numVertices + detail::kSpacingChunk - 1) / detail::kSpacingChunk);
   parallelForEach(chunks.size(), 1, [&](std::uint64_t k) {
     const VertexId end = static_cast<VertexId>(std::min<std::uint64_t>(numVertices, (k + 1) * detail::kSpacingChunk));
     for (VertexId v = static_cast<VertexId>(k * detail::kSpacingChunk); v < end; ++v) {
-      const float spacing = detail::vertexSpacing(topology, v, at);
-      if (spacing > 0.0f) chunks[k].first += 1, chunks[k].second += spacing;
+      own[v] = detail::vertexSpacing(topology, v, at);
+      if (own[v] > 0.0f) chunks[k].first += 1, chunks[k].second += own[v];
     }
   });
   const double spacing = detail::roughSpacingLimit(gridLength, detail::meanSpacingOf(chunks));
   std::vector<std::uint8_t> rough(numVertices, 0);
   parallelFor(numVertices, 4096, [&](const IndexRange& range) {
-    for (VertexId v = range.begin(); v != range.end(); ++v) rough[v] = detail::isRoughVertex(topology, v, at, spacing);
+    for (VertexId v = range.begin(); v != range.end(); ++v) {
+      rough[v] = detail::isRoughVertex(topology, v, at, spacing, own[v]);
+    }
   });
+  std::vector<float>().swap(own);
   std::vector<VertexId> seeds;
   for (VertexId v = 0; v < numVertices; ++v) {
     if (rough[v]) seeds.push_back(v);

@@ -360,11 +360,6 @@ CornerId nextBoundaryCorner(const Topology& topology, CornerId c, std::vector<Co
   return prevCorner(around);
 }
 
-bool Topology::isBoundaryVertex(VertexId v) const {
-  const CornerId c = vertexCorner_[v];
-  return c != kInvalidId && cw(c) == kInvalidId;
-}
-
 std::uint32_t Topology::valence(VertexId v) const {
   std::uint32_t n = 0;
   forEachCornerAround(v, [&](CornerId) { ++n; });

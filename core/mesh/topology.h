@@ -89,7 +89,10 @@ class Topology {
   bool isBoundaryEdge(CornerId c) const { return opposite_[c] == kInvalidId; }
   /// Start corner of the fan of v (see conventions); kInvalidId for an isolated vertex.
   CornerId vertexCorner(VertexId v) const { return vertexCorner_[v]; }
-  bool isBoundaryVertex(VertexId v) const;
+  bool isBoundaryVertex(VertexId v) const {
+    const CornerId c = vertexCorner_[v];
+    return c != kInvalidId && cw(c) == kInvalidId;
+  }
   bool isIsolatedVertex(VertexId v) const { return vertexCorner_[v] == kInvalidId; }
   CornerId ccw(CornerId c) const {
     CornerId o = opposite_[nextCorner(c)];

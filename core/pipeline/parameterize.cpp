@@ -39,7 +39,7 @@ CrossField computeFieldFromSource(TriangleMesh& mesh, const Topology& topology,
   proxy.progress = progress;
   proxy.stats = stats;
   FieldGeometryOptions geometry;
-  geometry.roughSpotGrid = source.gridLength;
+  geometry.roughSpotGrid = source.roughSpots ? source.gridLength : 0.0;
   geometry.smoothingIterations = source.smoothingSteps;
   return computeCrossField(mesh, topology, resolveFieldMethod(source.method, mesh.numFaces()), smooth, proxy, geometry);
 }
@@ -586,7 +586,7 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
                       : "file";
   FieldSource source = aligned ? *aligned : options.field;
   aligned.reset();
-  source.gridLength = source.roughSpots ? r.edgeLength : 0.0;
+  source.gridLength = r.edgeLength;
   // The field's method as the mesh's own size picks it (the caps' faces do not count).
   source.method = resolveFieldMethod(source.method, r.mesh.numFaces());
   CappedHoles caps = capForSolve(r, source, options);

@@ -36,9 +36,9 @@ struct FieldSource {
   /// Corners of the cleaned mesh whose faces the direct field is held along (featureSideCorners);
   /// unused by the proxy field and an imported one.
   std::vector<CornerId> alignCorners;
-  /// The map's edge length: the computed field's surface is smoothed further at its rough spots
-  /// (FieldGeometryOptions::roughSpotGrid). 0: not. parameterize sets it to the map's h when
-  /// roughSpots is set.
+  /// The map's edge length h (parameterize and `seamvox field` set it): with roughSpots, the
+  /// computed field's surface is smoothed further at its rough spots within h
+  /// (FieldGeometryOptions::roughSpotGrid). 0: no h, no rough spots.
   double gridLength = 0.0;
   /// Whether parameterize (and param out of core, and `seamvox field`) smooths the rough spots
   /// of the field's surface within h: the crumpled spots of a noisy scan otherwise put clusters

@@ -202,7 +202,7 @@ FieldOutcome crossFieldArrays(const py::object& V, const py::object& F, const st
     cleanOptions.progress = progressFn;
     clean = cleanMesh(std::move(raw), cleanOptions);
     const double h = spacing.spacing(clean.report.diagonalWithoutSpikes);
-    source.gridLength = source.roughSpots ? h : 0.0;  // as parameterize sets it
+    source.gridLength = h;  // as parameterize sets it
     crossField = computeFieldFromSource(clean.mesh, clean.topology, clean.faceOrigin, inputFaces, source, progressFn);
     coneCut = cutThroughCones(clean.mesh, clean.topology, crossField, merge * h, {}, 0.0, progressFn);
   });
