@@ -11,6 +11,7 @@
 
 #include "core/field/cone_merge.h"
 #include "core/field/field_proxy.h"
+#include "core/field/rough_spots.h"
 #include "stream/clean_stream.h"
 #include "stream/scratch_folder.h"
 
@@ -29,12 +30,6 @@ struct StreamPassOptions {
 ScratchFile smoothScratchPositions(ScratchFolder& folder, const CleanScratch& scratch, std::uint32_t iterations,
                                    const StreamPassOptions& pass);
 
-/// Bytes a vertex of a rough spot's region holds while the rounds run (hash map, fans, positions,
-/// distances, the renumbering; measured about 250).
-constexpr std::uint64_t kRoughRegionBytes = 256;
-/// A region of this many vertices is smoothed within any budget (16 MiB, inside the passes' own
-/// 64 MiB).
-constexpr std::uint64_t kRoughRegionMinVertices = std::uint64_t(1) << 16;
 /// The most vertices a round's region may hold out of core: half the pass's memory, at
 /// kRoughRegionBytes each, and at least kRoughRegionMinVertices. Above it the rough spots are
 /// left as they are (ScratchField::roughSpotsCapped): a scan crumpled nearly everywhere, which the

@@ -261,6 +261,47 @@ TEST(RoughSpots, ARegionAboveItsBoundSmoothsNothingAndSaysSo) {
   EXPECT_EQ(boundedRounds, 0u);
 }
 
+TEST(RoughSpots, InMemoryARegionAboveTheBoundSmoothsNothingAndTheStatsSayIt) {
+  // The bound's arithmetic: a quarter of the vertices plus the headroom at kRoughRegionBytes a
+  // vertex, at least kRoughRegionMinVertices, no overflow with an unlimited headroom.
+  EXPECT_EQ(roughRegionBoundInMemory(1000, 0), kRoughRegionMinVertices);
+  EXPECT_EQ(roughRegionBoundInMemory(4000000, 0), 1000000u);
+  EXPECT_EQ(roughRegionBoundInMemory(4000000, 100 * kRoughRegionBytes + 5), 1000100u);
+  EXPECT_GT(roughRegionBoundInMemory(4000000, ~std::uint64_t(0)), ~std::uint64_t(0) / kRoughRegionBytes);
+  const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, 5));
+  const std::vector<Vec3f> surface = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+  std::vector<Vec3f> unbounded = surface, above = surface, below = surface;
+  const RoughSpotResult free = smoothRoughSpots(s.topology, unbounded, kGrid);
+  ASSERT_GT(free.moved.size(), 100u);
+  EXPECT_FALSE(free.capped);
+  // A bound above every region: the same floats; one below the first region: nothing moves.
+  const RoughSpotResult bounded = smoothRoughSpots(s.topology, above, kGrid, s.topology.numVertices() + 1);
+  EXPECT_FALSE(bounded.capped);
+  EXPECT_EQ(bounded.moved, free.moved);
+  EXPECT_EQ(above, unbounded);
+  const RoughSpotResult capped = smoothRoughSpots(s.topology, below, kGrid, free.moved.size() / 2);
+  EXPECT_TRUE(capped.capped);
+  EXPECT_EQ(capped.roughVertices, free.roughVertices);
+  EXPECT_TRUE(capped.moved.empty());
+  EXPECT_EQ(below, surface);
+  // Through the field: the stats say capped and nothing moved, and the field is the one without
+  // rough spots.
+  FieldGeometryOptions geometry;
+  geometry.roughSpotGrid = kGrid;
+  geometry.roughSpotMaxRegion = free.moved.size() / 2;
+  FieldSolveStats stats;
+  SmoothFieldOptions smooth;
+  smooth.stats = &stats;
+  const CrossField field = computeCrossField(s.mesh, s.topology, FieldMethod::Direct, smooth, {}, geometry);
+  EXPECT_TRUE(stats.roughSpotsCapped);
+  EXPECT_EQ(stats.roughVertices, free.roughVertices);
+  EXPECT_EQ(stats.roughSpotVertices, 0u);
+  FieldGeometryOptions plain;
+  const CrossField withoutRoughSpots = computeCrossField(s.mesh, s.topology, FieldMethod::Direct, {}, {}, plain);
+  EXPECT_EQ(computeSingularities(s.mesh, s.topology, field).cones.size(),
+            computeSingularities(s.mesh, s.topology, withoutRoughSpots).cones.size());
+}
+
 TEST(RoughSpots, BadArgumentsThrow) {
   const Surface s = makeSurface(testing::gridMesh(4, 4));
   std::vector<Vec3f> positions = s.mesh.positions;

@@ -89,8 +89,8 @@ struct FieldSolveStats {
   bool realFallback = false;  ///< the complex factorization failed, the real 2n x 2n form was used
   /// Rough spots of the field's surface (smoothRoughSpots): rough vertices found, vertices moved.
   std::uint64_t roughVertices = 0, roughSpotVertices = 0;
-  /// Out of core: a region exceeded the pass's memory bound and the rounds stopped there
-  /// (stream/field_stream.h, roughRegionBound). Never in memory.
+  /// A region exceeded its memory bound and the rounds stopped there (in memory
+  /// roughRegionBoundInMemory, out of core stream/field_stream.h roughRegionBound).
   bool roughSpotsCapped = false;
 };
 

@@ -674,11 +674,12 @@ CrossField computeCrossField(TriangleMesh& mesh, const Topology& topology, Field
   std::vector<Vec3f> own = smoothPositions(mesh, topology, geometry.smoothingIterations);
   RoughSpotResult rough;
   if (geometry.roughSpotGrid > 0.0) {
-    rough = smoothRoughSpots(topology, own, geometry.roughSpotGrid);
+    rough = smoothRoughSpots(topology, own, geometry.roughSpotGrid, geometry.roughSpotMaxRegion);
     FieldSolveStats* stats = smooth.stats ? smooth.stats : proxy.stats;
     if (stats) {
       stats->roughVertices = rough.roughVertices;
       stats->roughSpotVertices = rough.moved.size();
+      stats->roughSpotsCapped = rough.capped;
     }
   }
   struct Restore {

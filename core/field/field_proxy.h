@@ -73,6 +73,9 @@ struct FieldGeometryOptions {
   /// h / 16 and half the mesh's mean spacing) are smoothed further within h (smoothRoughSpots).
   /// 0: not.
   double roughSpotGrid = 0.0;
+  /// The most vertices a rough spot's region may hold (roughRegionBoundInMemory); above it the
+  /// rounds stop (FieldSolveStats::roughSpotsCapped). Unbounded by default.
+  std::uint64_t roughSpotMaxRegion = ~std::uint64_t(0);
 };
 
 /// The smoothest field by the given method, computed on the mesh smoothed by

@@ -1,5 +1,6 @@
 #include "core/field/rough_spots.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -13,7 +14,14 @@ double angleDefect(const Topology& topology, const std::vector<Vec3f>& positions
   return detail::angleDefectOf(topology, v, [&](VertexId w) -> Vec3d { return positions[w].cast<double>(); });
 }
 
-RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& positions, double gridLength) {
+std::uint64_t roughRegionBoundInMemory(std::uint64_t numVertices, std::uint64_t headroomBytes) {
+  const std::uint64_t spare = headroomBytes / kRoughRegionBytes;
+  const std::uint64_t quarter = numVertices / 4;
+  return std::max(kRoughRegionMinVertices, quarter + std::min(spare, ~std::uint64_t(0) - quarter));
+}
+
+RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& positions, double gridLength,
+                                 std::uint64_t maxRegion) {
   const std::uint32_t numVertices = topology.numVertices();
   detail::checkRoughSpotGrid(gridLength);
   if (positions.size() != numVertices) {
@@ -48,7 +56,8 @@ RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& p
   result.roughVertices = static_cast<std::uint32_t>(seeds.size());
   if (seeds.empty()) return result;
   result.moved = detail::smoothRoughRounds(
-      topology, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, spacing, result.rounds);
+      topology, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, spacing, result.rounds,
+      maxRegion, &result.capped);
   for (const auto& [v, p] : result.moved) positions[v] = p;
   return result;
 }

@@ -39,18 +39,33 @@ constexpr std::uint32_t kRoughSpotSteps = 128;
 /// ... for at most this many rounds, each on the vertices still rough after the one before.
 constexpr std::uint32_t kRoughSpotRounds = 2;
 
+/// Bytes a vertex of a rough spot's region holds at most while the rounds run (id maps, fans,
+/// positions, distances, the renumbering; about 200).
+constexpr std::uint64_t kRoughRegionBytes = 256;
+/// A region of this many vertices is smoothed within any budget (16 MiB).
+constexpr std::uint64_t kRoughRegionMinVertices = std::uint64_t(1) << 16;
+
+/// The most vertices a round's region may hold in memory: a quarter of the mesh's vertices (the
+/// field stage stays below param's estimate by more than that: noisy armadillo x4's field stage
+/// peaked at 1.5 GB against an estimate of 2.3 GB), plus what headroomBytes (the budget less the
+/// estimate) holds at kRoughRegionBytes a vertex, and at least kRoughRegionMinVertices.
+std::uint64_t roughRegionBoundInMemory(std::uint64_t numVertices, std::uint64_t headroomBytes);
+
 struct RoughSpotResult {
   /// The vertices moved and their new positions, sorted by vertex.
   std::vector<std::pair<VertexId, Vec3f>> moved;
   std::uint32_t roughVertices = 0;  ///< rough vertices found before the first round
   std::uint32_t rounds = 0;         ///< rounds run
+  bool capped = false;              ///< a round's region exceeded maxRegion: that round moved nothing
 };
 
 /// Smooths the rough spots of `positions` (a smoothed surface of the topology's mesh, changed in
 /// place) for a grid of edge length gridLength (> 0). Interior vertices only; boundary and
-/// isolated vertices stay. Deterministic for any thread count. Memory: a byte per vertex, and
-/// about 100 bytes per vertex a round smooths (hash maps of its region).
-RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& positions, double gridLength);
+/// isolated vertices stay. Deterministic for any thread count. A round whose region (with its
+/// held neighbours) would exceed maxRegion vertices smooths nothing and ends the rounds (capped).
+/// Memory: 5 bytes per vertex, and up to kRoughRegionBytes per vertex of a round's region.
+RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& positions, double gridLength,
+                                 std::uint64_t maxRegion = ~std::uint64_t(0));
 
 /// Angle defect at interior vertex v (2 pi minus its corner angles; 0 at boundary and isolated
 /// vertices).

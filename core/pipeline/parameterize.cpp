@@ -8,6 +8,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/field/rough_spots.h"
 #include "core/mesh/hole_caps.h"
 #include "core/refine/merge_in_map.h"
 #include "core/refine/refine.h"
@@ -40,6 +41,7 @@ CrossField computeFieldFromSource(TriangleMesh& mesh, const Topology& topology,
   proxy.stats = stats;
   FieldGeometryOptions geometry;
   geometry.roughSpotGrid = source.roughSpots ? source.gridLength : 0.0;
+  geometry.roughSpotMaxRegion = source.roughSpotMaxRegion;
   geometry.smoothingIterations = source.smoothingSteps;
   return computeCrossField(mesh, topology, resolveFieldMethod(source.method, mesh.numFaces()), smooth, proxy, geometry);
 }
@@ -55,6 +57,7 @@ std::optional<FieldSource> alignedFieldSource(const Topology& topology, const Fe
   aligned.curvatureWeight = source.curvatureWeight;
   aligned.alignCorners = featureSideCorners(topology, features);
   aligned.gridLength = source.gridLength;
+  aligned.roughSpotMaxRegion = source.roughSpotMaxRegion;
   aligned.roughSpots = source.roughSpots;
   aligned.smoothingSteps = source.smoothingSteps;
   return aligned;
@@ -587,6 +590,7 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   FieldSource source = aligned ? *aligned : options.field;
   aligned.reset();
   source.gridLength = r.edgeLength;
+  source.roughSpotMaxRegion = roughRegionBoundInMemory(r.mesh.numVertices(), options.passHeadroomBytes);
   // The field's method as the mesh's own size picks it (the caps' faces do not count).
   source.method = resolveFieldMethod(source.method, r.mesh.numFaces());
   CappedHoles caps = capForSolve(r, source, options);

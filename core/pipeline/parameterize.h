@@ -40,6 +40,9 @@ struct FieldSource {
   /// computed field's surface is smoothed further at its rough spots within h
   /// (FieldGeometryOptions::roughSpotGrid). 0: no h, no rough spots.
   double gridLength = 0.0;
+  /// The most vertices a rough spot's region may hold (FieldGeometryOptions::roughSpotMaxRegion):
+  /// parameterize sets roughRegionBoundInMemory with its passHeadroomBytes. Unbounded by default.
+  std::uint64_t roughSpotMaxRegion = ~std::uint64_t(0);
   /// Whether parameterize (and param out of core, and `seamvox field`) smooths the rough spots
   /// of the field's surface within h: the crumpled spots of a noisy scan otherwise put clusters
   /// of cone pairs into the field (camelhead x5 with noise: 333 cones before merging against
