@@ -268,7 +268,8 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
       value.swap(sorted);
     }
     holdWholeComponents(active.size(), fanStart, fan);
-    std::vector<Vec3f> next(active.size());
+    // Both buffers hold the held vertices after the active ones, so that a step swaps them.
+    std::vector<Vec3f> next(value);
     for (std::uint32_t step = 0; step < kRoughSpotSteps; ++step) {
       parallelFor(active.size(), 1024, [&](const IndexRange& range) {
         for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
@@ -284,7 +285,7 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
           next[i] = (here + double(share[i]) * (target - here)).cast<float>();
         }
       });
-      std::copy(next.begin(), next.end(), value.begin());
+      value.swap(next);
     }
     for (std::size_t i = 0; i < active.size(); ++i) {
       const auto [k, added] = moved.emplace(active[i], static_cast<std::uint32_t>(movedIds.size()));
