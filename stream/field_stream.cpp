@@ -129,7 +129,8 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
     folder.countRead(stage, table.bytesRead() + positions.bytesRead());
   }
   counts.roughSpotVertices = moved.size();
-  // The surface with the moved vertices in place: a copy.
+  if (moved.empty()) return surface;
+  // The surface with the moved vertices in place: a copy (`surface` stays).
   ScratchWriter writer(folder, stage);
   {
     ScratchRandomReader in(folder, surface, stage);
@@ -143,7 +144,6 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
       writer.write(block.data(), count * sizeof(Vec3f));
     }
   }
-  folder.remove(surface);
   return writer.finish();
 }
 
@@ -223,7 +223,8 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
                                  : scratch.positions;
   clock.finish("smooth");
   if (smoothed && geometry.roughSpotGrid > 0.0) {
-    surface = smoothScratchRoughSpots(folder, scratch, surface, geometry.roughSpotGrid, pass, out);
+    const ScratchFile rough = smoothScratchRoughSpots(folder, scratch, surface, geometry.roughSpotGrid, pass, out);
+    if (rough.path != surface.path) out.plainPositions = std::exchange(surface, rough);
     clock.finish("rough spots");
   }
   if (smoothed) out.framePositions = surface;

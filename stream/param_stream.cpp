@@ -11,6 +11,7 @@
 #include <iterator>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "core/basis/voxel_basis.h"
@@ -283,7 +284,7 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   FieldGeometryOptions geometry;
   geometry.smoothingIterations = options.fieldSmoothing;
   geometry.roughSpotGrid = options.roughSpots ? h : 0.0;
-  const ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), geometry, early, true);
+  ScratchField field = computeScratchField(folder, scratch, ProxyFieldOptions(), geometry, early, true);
   r.roughVertices = field.roughVertices;
   r.roughSpotVertices = field.roughSpotVertices;
   r.roughSpotsCapped = field.roughSpotsCapped;
@@ -295,6 +296,12 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   std::vector<std::pair<std::string, double>> cutSeconds;
   StageClock cutClock(cutSeconds);
   ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, early);
+  // The cones were read with the rough spots smoothed; the stages after them read the plain
+  // smoothed surface, as in memory (setFrameOverridesAside).
+  if (!field.plainPositions.path.empty()) {
+    folder.remove(field.framePositions);
+    field.framePositions = std::exchange(field.plainPositions, ScratchFile());
+  }
   r.conesBeforeMerge = static_cast<std::uint32_t>(singularities.cones.size());
   cutClock.finish("cut: singularities");
   ConeMergeOptions merge;

@@ -302,6 +302,48 @@ TEST(RoughSpots, InMemoryARegionAboveTheBoundSmoothsNothingAndTheStatsSayIt) {
             computeSingularities(s.mesh, s.topology, withoutRoughSpots).cones.size());
 }
 
+TEST(RoughSpots, SetAsideThePlainSmoothedSurfaceIsReadAndPutBackTheRoughOne) {
+  // The map's stages after the cut read the plain smoothed surface: with the moves set aside,
+  // framePositions (held or recomputed) are smoothPositions' floats; put back, the field's own.
+  const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, 3));
+  FieldGeometryOptions geometry;
+  geometry.roughSpotGrid = kGrid;
+  CrossField field = computeCrossField(s.mesh, s.topology, FieldMethod::Direct, {}, {}, geometry);
+  ASSERT_GT(field.frameOverrides.size(), 100u);
+  const std::vector<Vec3f> plain = smoothPositions(s.mesh, s.topology, field.frameSmoothing);
+  const std::vector<Vec3f> rough = field.framePositions;
+  const auto overrides = field.frameOverrides;
+  ASSERT_NE(rough, plain);
+  std::vector<VertexId> all(s.topology.numVertices());
+  for (VertexId v = 0; v < all.size(); ++v) all[v] = v;
+  std::vector<std::pair<VertexId, Vec3f>> aside = {{0, Vec3f::Zero()}};  // emptied first
+  setFrameOverridesAside(s.mesh, s.topology, field, aside);
+  EXPECT_EQ(aside, overrides);
+  EXPECT_TRUE(field.frameOverrides.empty());
+  EXPECT_EQ(field.framePositions, plain);
+  releaseFramePositions(field);
+  EXPECT_EQ(framePositionsAt(s.mesh, s.topology, field, all), plain);
+  restoreFramePositions(s.mesh, s.topology, field);
+  EXPECT_EQ(field.framePositions, plain);
+  putFrameOverridesBack(field, aside);
+  EXPECT_TRUE(aside.empty());
+  EXPECT_EQ(field.frameOverrides, overrides);
+  EXPECT_EQ(field.framePositions, rough);
+  // Released while set aside, put back, then recomputed: the rough surface again.
+  setFrameOverridesAside(s.mesh, s.topology, field, aside);
+  releaseFramePositions(field);
+  putFrameOverridesBack(field, aside);
+  EXPECT_EQ(framePositionsAt(s.mesh, s.topology, field, all), rough);
+  restoreFramePositions(s.mesh, s.topology, field);
+  EXPECT_EQ(field.framePositions, rough);
+  // Nothing to set aside on a field without rough spots.
+  CrossField smooth = computeCrossField(s.mesh, s.topology, FieldMethod::Direct);
+  const std::vector<Vec3f> held = smooth.framePositions;
+  setFrameOverridesAside(s.mesh, s.topology, smooth, aside);
+  EXPECT_TRUE(aside.empty());
+  EXPECT_EQ(smooth.framePositions, held);
+}
+
 TEST(RoughSpots, BadArgumentsThrow) {
   const Surface s = makeSurface(testing::gridMesh(4, 4));
   std::vector<Vec3f> positions = s.mesh.positions;

@@ -676,6 +676,28 @@ std::vector<Vec3f> framePositionsAt(const TriangleMesh& mesh, const Topology& to
   return out;
 }
 
+void setFrameOverridesAside(const TriangleMesh& mesh, const Topology& topology, CrossField& field,
+                            std::vector<std::pair<VertexId, Vec3f>>& aside) {
+  aside.clear();
+  if (field.frameOverrides.empty()) return;
+  if (field.framePositions.size() == mesh.numVertices()) {
+    std::vector<VertexId> moved(field.frameOverrides.size());
+    for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = field.frameOverrides[i].first;
+    const std::vector<Vec3f> plain = smoothPositionsAt(mesh, topology, field.frameSmoothing, moved);
+    for (std::size_t i = 0; i < moved.size(); ++i) field.framePositions[moved[i]] = plain[i];
+  }
+  aside.swap(field.frameOverrides);
+}
+
+void putFrameOverridesBack(CrossField& field, std::vector<std::pair<VertexId, Vec3f>>& aside) {
+  if (aside.empty()) return;
+  if (!field.framePositions.empty()) {
+    for (const auto& [v, p] : aside) field.framePositions[v] = p;
+  }
+  field.frameOverrides.swap(aside);
+  aside.clear();
+}
+
 CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors) {
   const std::uint32_t numFaces = mesh.numFaces();
   if (vectors.size() != numFaces) {

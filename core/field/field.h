@@ -145,6 +145,17 @@ void releaseFramePositions(CrossField& field);
 /// frameOverrides).
 void restoreFramePositions(const TriangleMesh& mesh, const Topology& topology, CrossField& field);
 
+/// Sets the rough spots' moves (frameOverrides) aside into `aside` (emptied first): framePositions,
+/// when held, and framePositionsAt then give the plain smoothed surface (smoothPositions with
+/// frameSmoothing steps). The map's stages after the cut read that one: the rough spots' steps
+/// drift vertices along the surface, and a map evaluated or solved there folds noisy faces the
+/// plain surface keeps open (bench/RESULTS.md, session 60). putFrameOverridesBack undoes it.
+void setFrameOverridesAside(const TriangleMesh& mesh, const Topology& topology, CrossField& field,
+                            std::vector<std::pair<VertexId, Vec3f>>& aside);
+/// The moves setFrameOverridesAside set aside back in the field (and in framePositions when held);
+/// `aside` is left empty. Nothing happens when it is empty.
+void putFrameOverridesBack(CrossField& field, std::vector<std::pair<VertexId, Vec3f>>& aside);
+
 /// Projects arbitrary per-face 3D vectors onto each face's tangent plane and normalizes them.
 /// Vectors parallel to the normal (or zero) get the face's first edge direction.
 CrossField projectToTangent(const TriangleMesh& mesh, const std::vector<Vec3d>& vectors);

@@ -397,11 +397,17 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
     std::uint32_t pass = 0;
   };
   std::optional<KeptPass> kept;
+  // The cones are read on the field's surface with its rough spots smoothed; the stages after the
+  // cut (smoothed evaluation, refinement, repair, the metrics' fold test) on the plain smoothed
+  // surface (setFrameOverridesAside).
+  std::vector<std::pair<VertexId, Vec3f>> roughMoves;
   for (;;) {
     ++r.conePasses;
+    putFrameOverridesBack(field, roughMoves);
     if (fieldSingularities.empty()) restoreFramePositions(r.mesh, r.topology, field);
     ConeCut coneCut = cutThroughCones(r.mesh, r.topology, field, mergeDistance, coincident, coincidentDistance,
                                       options.progress, keepSingularities ? &fieldSingularities : nullptr);
+    setFrameOverridesAside(r.mesh, r.topology, field, roughMoves);
     // The cut released the smoothed surface: until the next pass's cones only the 3D-fold test of
     // a few flipped faces reads it, and recomputes it around them.
     if (r.conePasses == 1) r.conesBeforeMerge = coneCut.conesBeforeMerge;
