@@ -117,34 +117,39 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
   }
   counts.roughVertices = seeds.size();
   if (seeds.empty()) return surface;
-  std::vector<std::pair<VertexId, Vec3f>> moved;
+  std::vector<std::pair<VertexId, Vec3f>> moved, normal;
   {
     PagedCornerTable table(scratch, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
     PagedReader<Vec3f> positions(surface, windowCacheBytes(pass.memoryBytes), kWindowPageBytes);
     std::uint32_t rounds = 0;
     bool capped = false;
-    moved = detail::smoothRoughRounds(table, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength,
-                                      spacing, rounds, roughRegionBound(pass.memoryBytes), &capped);
+    const auto plainAt = [&](VertexId v) { return positions[v]; };
+    moved = detail::smoothRoughRounds(table, plainAt, std::move(seeds), gridLength, spacing, rounds,
+                                      roughRegionBound(pass.memoryBytes), &capped);
     counts.roughSpotsCapped = capped;
+    normal = detail::normalPartOfMoves(table, moved, plainAt);
     folder.countRead(stage, table.bytesRead() + positions.bytesRead());
   }
   counts.roughSpotVertices = moved.size();
   if (moved.empty()) return surface;
-  // The surface with the moved vertices in place: a copy (`surface` stays).
-  ScratchWriter writer(folder, stage);
-  {
-    ScratchRandomReader in(folder, surface, stage);
+  // Copies of the surface with the moved vertices in place: the rough one (returned) and the
+  // map's (counts.mapPositions); `surface` stays.
+  const auto copyWith = [&](const std::vector<std::pair<VertexId, Vec3f>>& in) {
+    ScratchWriter writer(folder, stage);
+    ScratchRandomReader reader(folder, surface, stage);
     std::vector<Vec3f> block;
-    auto next = moved.begin();
+    auto next = in.begin();
     for (std::uint64_t first = 0; first < scratch.numVertices; first += blockRecords) {
       const std::uint64_t count = std::min(blockRecords, scratch.numVertices - first);
       block.resize(count);
-      in.readAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
-      for (; next != moved.end() && next->first < first + count; ++next) block[next->first - first] = next->second;
+      reader.readAt(first * sizeof(Vec3f), block.data(), count * sizeof(Vec3f));
+      for (; next != in.end() && next->first < first + count; ++next) block[next->first - first] = next->second;
       writer.write(block.data(), count * sizeof(Vec3f));
     }
-  }
-  return writer.finish();
+    return writer.finish();
+  };
+  counts.mapPositions = copyWith(normal);
+  return copyWith(moved);
 }
 
 namespace {
@@ -224,7 +229,10 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
   clock.finish("smooth");
   if (smoothed && geometry.roughSpotGrid > 0.0) {
     const ScratchFile rough = smoothScratchRoughSpots(folder, scratch, surface, geometry.roughSpotGrid, pass, out);
-    if (rough.path != surface.path) out.plainPositions = std::exchange(surface, rough);
+    if (rough.path != surface.path) {
+      folder.remove(surface);
+      surface = rough;
+    }
     clock.finish("rough spots");
   }
   if (smoothed) out.framePositions = surface;

@@ -39,9 +39,10 @@ std::uint64_t roughRegionBound(std::uint64_t memoryBytes);
 struct ScratchField;
 /// smoothRoughSpots on the smoothed surface `surface` (a file of smoothScratchPositions): the
 /// rough vertices found by a pass over the vertices, the rounds on their regions through page
-/// caches (the regions in memory, at most roughRegionBound(pass.memoryBytes) vertices), then a new
-/// file: the surface with the moved vertices (surface itself, unchanged, when nothing moved;
-/// surface stays either way).
+/// caches (the regions in memory, at most roughRegionBound(pass.memoryBytes) vertices), then new
+/// files: the surface with the moved vertices (returned) and with their moves' normal parts
+/// (counts.mapPositions, detail::normalPartOfMoves). surface itself is returned, unchanged, when
+/// nothing moved; it stays either way.
 /// The figures go to counts.roughVertices and roughSpotVertices.
 ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& scratch, const ScratchFile& surface,
                                     double gridLength, const StreamPassOptions& pass, ScratchField& counts);
@@ -51,9 +52,10 @@ ScratchFile smoothScratchRoughSpots(ScratchFolder& folder, const CleanScratch& s
 struct ScratchField {
   ScratchFile directions;      ///< Vec3f per face, tangent to the mesh's own faces
   ScratchFile framePositions;  ///< Vec3f per vertex, the smoothed surface (none without smoothing)
-  /// When rough spots moved vertices: the smoothed surface without them (framePositions has
-  /// them), which the map's stages after the cones read (param: setFrameOverridesAside).
-  ScratchFile plainPositions;
+  /// When rough spots moved vertices: the surface the map's stages after the cones read, the
+  /// smoothed surface with their moves' parts along the normal only (param, as in memory
+  /// setFrameOverridesAside; framePositions has the whole moves).
+  ScratchFile mapPositions;
   /// With angles: the singularities' angles per face (16 bytes), which computeScratchSingularities
   /// reads instead of computing them and removes.
   ScratchFile angles;

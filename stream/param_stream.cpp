@@ -296,11 +296,11 @@ StreamParamResult parameterizeOutOfCore(MeshStream& stream, ScratchFolder& folde
   std::vector<std::pair<std::string, double>> cutSeconds;
   StageClock cutClock(cutSeconds);
   ScratchSingularities singularities = computeScratchSingularities(folder, scratch, field, early);
-  // The cones were read with the rough spots smoothed; the stages after them read the plain
-  // smoothed surface, as in memory (setFrameOverridesAside).
-  if (!field.plainPositions.path.empty()) {
+  // The cones were read with the rough spots smoothed; the stages after them read the smoothed
+  // surface with their moves along the normal only, as in memory (setFrameOverridesAside).
+  if (!field.mapPositions.path.empty()) {
     folder.remove(field.framePositions);
-    field.framePositions = std::exchange(field.plainPositions, ScratchFile());
+    field.framePositions = std::exchange(field.mapPositions, ScratchFile());
   }
   r.conesBeforeMerge = static_cast<std::uint32_t>(singularities.cones.size());
   cutClock.finish("cut: singularities");

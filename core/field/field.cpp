@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <unordered_map>
 
+#include "core/field/detail_rough_spots.h"
 #include "core/field/detail_singularities.h"
 #include "core/field/detail_smoothing.h"
 #include "core/field/fast_atan2.h"
@@ -680,13 +681,27 @@ void setFrameOverridesAside(const TriangleMesh& mesh, const Topology& topology, 
                             std::vector<std::pair<VertexId, Vec3f>>& aside) {
   aside.clear();
   if (field.frameOverrides.empty()) return;
+  // The plain surface at the moved vertices and their neighbours, then the moves' normal parts.
+  std::vector<VertexId> ring;
+  for (const auto& [v, p] : field.frameOverrides) {
+    ring.push_back(v);
+    topology.forEachCornerAround(v, [&](CornerId c) {
+      ring.push_back(topology.vertex(nextCorner(c)));
+      ring.push_back(topology.vertex(prevCorner(c)));
+    });
+  }
+  std::sort(ring.begin(), ring.end());
+  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+  const std::vector<Vec3f> plain = smoothPositionsAt(mesh, topology, field.frameSmoothing, ring);
+  std::vector<std::pair<VertexId, Vec3f>> normal =
+      detail::normalPartOfMoves(topology, field.frameOverrides, [&](VertexId w) {
+        return plain[std::lower_bound(ring.begin(), ring.end(), w) - ring.begin()];
+      });
   if (field.framePositions.size() == mesh.numVertices()) {
-    std::vector<VertexId> moved(field.frameOverrides.size());
-    for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = field.frameOverrides[i].first;
-    const std::vector<Vec3f> plain = smoothPositionsAt(mesh, topology, field.frameSmoothing, moved);
-    for (std::size_t i = 0; i < moved.size(); ++i) field.framePositions[moved[i]] = plain[i];
+    for (const auto& [v, p] : normal) field.framePositions[v] = p;
   }
   aside.swap(field.frameOverrides);
+  field.frameOverrides.swap(normal);
 }
 
 void putFrameOverridesBack(CrossField& field, std::vector<std::pair<VertexId, Vec3f>>& aside) {

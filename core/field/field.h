@@ -145,11 +145,12 @@ void releaseFramePositions(CrossField& field);
 /// frameOverrides).
 void restoreFramePositions(const TriangleMesh& mesh, const Topology& topology, CrossField& field);
 
-/// Sets the rough spots' moves (frameOverrides) aside into `aside` (emptied first): framePositions,
+/// Sets the rough spots' moves (frameOverrides) aside into `aside` (emptied first) and puts their
+/// parts along the rough surface's normal in their place (detail::normalPartOfMoves): framePositions,
 /// when held, and framePositionsAt then give the plain smoothed surface (smoothPositions with
-/// frameSmoothing steps). The map's stages after the cut read that one: the rough spots' steps
-/// drift vertices along the surface, and a map evaluated or solved there folds noisy faces the
-/// plain surface keeps open (bench/RESULTS.md, session 60). putFrameOverridesBack undoes it.
+/// frameSmoothing steps) with those. The map's stages after the cut read that one: the rough
+/// spots' steps also drift vertices along the surface, and a map evaluated or solved there folds
+/// noisy faces (bench/RESULTS.md, session 60). putFrameOverridesBack undoes it.
 void setFrameOverridesAside(const TriangleMesh& mesh, const Topology& topology, CrossField& field,
                             std::vector<std::pair<VertexId, Vec3f>>& aside);
 /// The moves setFrameOverridesAside set aside back in the field (and in framePositions when held);
