@@ -399,7 +399,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   std::optional<KeptPass> kept;
   // The cones are read on the field's surface with its rough spots smoothed; the stages after the
   // cut (smoothed evaluation, refinement, repair, the metrics' fold test) on the plain smoothed
-  // surface (setFrameOverridesAside).
+  // surface with those moves along the normal only (setFrameOverridesAside).
   std::vector<std::pair<VertexId, Vec3f>> roughMoves;
   for (;;) {
     ++r.conePasses;
