@@ -341,37 +341,47 @@ void forEachSquaredEdgeLength(const TriangleMesh& mesh, const Topology& topology
 
 std::vector<VertexId> findSpikeVertices(const TriangleMesh& mesh, const Topology& topology) {
   const std::uint32_t nv = topology.numVertices();
-  std::vector<double> typical(nv, 0.0);   // median edge length at each vertex
   std::vector<double> shortest(nv, 0.0);  // shortest edge at each vertex
   parallelFor(nv, kGrain, [&](const IndexRange& r) {
-    std::vector<double> lengths;
     for (VertexId v = r.begin(); v != r.end(); ++v) {
       if (topology.isIsolatedVertex(v)) continue;
-      lengths.clear();
-      // Squared: the root is monotone and correctly rounded, so the root of the least and of
-      // the median squared length is the least and the median length, two roots per vertex.
-      forEachSquaredEdgeLength(mesh, topology, v, [&](double squared) { lengths.push_back(squared); });
-      shortest[v] = std::sqrt(*std::min_element(lengths.begin(), lengths.end()));
-      typical[v] = std::sqrt(median(lengths));
+      double least = std::numeric_limits<double>::infinity();
+      forEachSquaredEdgeLength(mesh, topology, v, [&](double squared) { least = std::min(least, squared); });
+      shortest[v] = std::sqrt(least);  // the root is monotone and correctly rounded
     }
   });
+  // The median edge length at w (its typical length), only where a vertex needs it.
+  const auto typicalAt = [&](VertexId w, std::vector<double>& lengths) {
+    lengths.clear();
+    forEachSquaredEdgeLength(mesh, topology, w, [&](double squared) { lengths.push_back(squared); });
+    return std::sqrt(median(lengths));
+  };
   std::vector<std::uint8_t> spike(nv, 0);
   parallelFor(nv, kGrain, [&](const IndexRange& r) {
-    std::vector<double> around;
+    std::vector<double> around, lengths;
     for (VertexId v = r.begin(); v != r.end(); ++v) {
       if (topology.isIsolatedVertex(v)) continue;
-      around.clear();
-      double least = std::numeric_limits<double>::infinity();
       // Each neighbour once around an interior vertex (as forEachSquaredEdgeLength's edges).
       const bool interior = !topology.isBoundaryVertex(v);
-      topology.forEachCornerAround(v, [&](CornerId c) {
-        for (CornerId other : {nextCorner(c), prevCorner(c)}) {
-          if (interior && other == prevCorner(c)) continue;
-          around.push_back(typical[topology.vertex(other)]);
-          least = std::min(least, around.back());
-        }
+      const auto forEachNeighbour = [&](auto&& f) {
+        topology.forEachCornerAround(v, [&](CornerId c) {
+          for (CornerId other : {nextCorner(c), prevCorner(c)}) {
+            if (!(interior && other == prevCorner(c))) f(topology.vertex(other));
+          }
+        });
+      };
+      // A neighbour's typical length is at least its shortest edge: most vertices are decided
+      // by the shortest edges alone, without a median.
+      double leastShortest = std::numeric_limits<double>::infinity();
+      forEachNeighbour([&](VertexId w) { leastShortest = std::min(leastShortest, shortest[w]); });
+      if (!(shortest[v] > kSpikeRatio * leastShortest)) continue;
+      around.clear();
+      double least = std::numeric_limits<double>::infinity();
+      forEachNeighbour([&](VertexId w) {
+        around.push_back(typicalAt(w, lengths));
+        least = std::min(least, around.back());
       });
-      // The median is at least the least value: most vertices are decided without it.
+      // The median is at least the least value.
       if (!(shortest[v] > kSpikeRatio * least)) continue;
       const double scale = median(around);
       spike[v] = scale > 0.0 && shortest[v] > kSpikeRatio * scale;
