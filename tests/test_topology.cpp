@@ -1,6 +1,9 @@
 // Corner table and components: invariants on meshes built in code.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
+#include <numeric>
 #include <unordered_map>
 
 #include "core/mesh/clean.h"
@@ -19,6 +22,8 @@ using testing::concatMeshes;
 using testing::cylinderMesh;
 using testing::gridMesh;
 using testing::icosphereMesh;
+using testing::shuffledMesh;
+using testing::torusWithIslands;
 using testing::torusMesh;
 
 Topology buildOf(const TriangleMesh& mesh) { return Topology::build(mesh.triangles, mesh.numVertices()); }
@@ -190,6 +195,62 @@ TEST(Topology, ComponentsAreSortedBySize) {
   EXPECT_EQ(r.components[2].faces, 8u);    // grid
   EXPECT_EQ(r.boundaryLoops, 1u);
   EXPECT_EQ(r.faceComponent[0], 2u);
+}
+
+// computeComponents against a breadth-first search seeded at the first face not reached yet:
+// components numbered in that order, then stably sorted by size. Many islands of equal sizes
+// (ties) with faces shuffled, so that every component's faces and smallest face are scattered
+// over the blocks of both cores.
+TEST(Topology, ComponentsAsASearchFromTheFirstFaceNotReached) {
+  const TriangleMesh mesh = shuffledMesh(torusWithIslands(60, 20, 300, 0.05, 2, 0.3f, 4), 9);
+  const Topology t = buildOf(mesh);
+  const std::uint32_t nf = t.numFaces();
+  std::vector<std::uint32_t> order(nf, kInvalidId), sizes;
+  std::vector<FaceId> queue;
+  for (FaceId seed = 0; seed < nf; ++seed) {
+    if (order[seed] != kInvalidId) continue;
+    const auto id = static_cast<std::uint32_t>(sizes.size());
+    queue.assign(1, seed);
+    order[seed] = id;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      for (int k = 0; k < 3; ++k) {
+        const CornerId o = t.opposite(3 * queue[head] + k);
+        if (o != kInvalidId && order[o / 3] == kInvalidId) order[o / 3] = id, queue.push_back(o / 3);
+      }
+    }
+    sizes.push_back(static_cast<std::uint32_t>(queue.size()));
+  }
+  std::vector<std::uint32_t> byId(sizes.size()), rank(sizes.size());
+  std::iota(byId.begin(), byId.end(), 0u);
+  std::stable_sort(byId.begin(), byId.end(), [&](std::uint32_t a, std::uint32_t b) { return sizes[a] > sizes[b]; });
+  for (std::uint32_t i = 0; i < byId.size(); ++i) rank[byId[i]] = i;
+  for (std::uint32_t& id : order) id = rank[id];
+  ASSERT_GT(sizes.size(), 250u);
+  std::map<std::uint32_t, int> ofSize;
+  for (std::uint32_t n : sizes) ++ofSize[n];
+  ASSERT_GT(ofSize.begin()->second, 50) << "the test needs ties";
+  const ComponentsResult r = computeComponents(t);
+  ASSERT_EQ(r.components.size(), sizes.size());
+  EXPECT_EQ(r.faceComponent, order);
+  // Vertices and edges per component; the specks (at most 8 faces) are disks, the torus (the
+  // largest) has genus 1, the ball genus 0.
+  std::vector<std::uint32_t> vertices(sizes.size(), 0);
+  std::vector<std::uint64_t> edges(sizes.size(), 0);
+  for (VertexId v = 0; v < t.numVertices(); ++v) {
+    if (!t.isIsolatedVertex(v)) ++vertices[order[t.vertexCorner(v) / 3]];
+  }
+  for (CornerId c = 0; c < t.numCorners(); ++c) edges[order[c / 3]] += t.opposite(c) == kInvalidId || c < t.opposite(c);
+  std::uint32_t loops = 0;
+  for (std::uint32_t i = 0; i < byId.size(); ++i) {
+    const ComponentInfo& info = r.components[i];
+    EXPECT_EQ(info.faces, sizes[byId[i]]);
+    EXPECT_EQ(info.vertices, vertices[i]);
+    EXPECT_EQ(info.edges, edges[i]);
+    EXPECT_EQ(info.boundaryLoops, info.faces <= 8 ? 1u : 0u) << i;
+    EXPECT_EQ(info.genus, i == 0 ? 1 : 0) << i;
+    loops += info.faces <= 8;
+  }
+  EXPECT_EQ(r.boundaryLoops, loops);
 }
 
 TEST(Topology, BuildRejectsNonManifoldInput) {

@@ -408,54 +408,122 @@ void Topology::validate() const {
   }
 }
 
-ComponentsResult computeComponents(const Topology& topology) {
-  const std::uint32_t nf = topology.numFaces(), nv = topology.numVertices();
-  ComponentsResult result;
-  result.faceComponent.assign(nf, kInvalidId);
-  std::vector<ComponentInfo> comps;
-  std::vector<FaceId> queue;
-  for (FaceId seed = 0; seed < nf; ++seed) {
-    if (result.faceComponent[seed] != kInvalidId) continue;
-    const std::uint32_t id = static_cast<std::uint32_t>(comps.size());
-    comps.emplace_back();
-    queue.assign(1, seed);
-    result.faceComponent[seed] = id;
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      const FaceId f = queue[head];
+namespace {
+
+/// Per face, the smallest face of its component (faces joined across interior edges): a
+/// union-find over both cores whose links point to smaller ids only, so every root is its set's
+/// smallest face whatever the order of the unions.
+std::vector<FaceId> smallestFaceOfComponents(const Topology& topology) {
+  const std::uint32_t nf = topology.numFaces();
+  std::vector<FaceId> parent(nf);
+  parallelForEach(nf, 1u << 16, [&](std::uint64_t f) { parent[f] = static_cast<FaceId>(f); });
+  const auto load = [&](FaceId x) { return __atomic_load_n(&parent[x], __ATOMIC_RELAXED); };
+  // Path halving: each store writes an ancestor over a non-root (roots change by the CAS only).
+  const auto find = [&](FaceId x) {
+    for (FaceId up = load(x); up != x; up = load(x)) {
+      const FaceId grandparent = load(up);
+      if (grandparent != up) __atomic_store_n(&parent[x], grandparent, __ATOMIC_RELAXED);
+      x = grandparent;
+    }
+    return x;
+  };
+  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
       for (int k = 0; k < 3; ++k) {
         const CornerId o = topology.opposite(3 * f + k);
-        if (o == kInvalidId) continue;
-        const FaceId g = o / 3;
-        if (result.faceComponent[g] == kInvalidId) {
-          result.faceComponent[g] = id;
-          queue.push_back(g);
+        if (o == kInvalidId || o / 3 >= f) continue;  // each pair of faces from its larger one
+        FaceId a = f, b = o / 3;
+        for (;;) {
+          a = find(a), b = find(b);
+          if (a == b) break;
+          if (a < b) std::swap(a, b);
+          FaceId expected = a;  // link the larger root under the smaller, if it is still a root
+          if (__atomic_compare_exchange_n(&parent[a], &expected, b, false, __ATOMIC_ACQ_REL, __ATOMIC_RELAXED)) break;
         }
       }
     }
-    comps[id].faces = static_cast<std::uint32_t>(queue.size());
-  }
-  for (VertexId v = 0; v < nv; ++v) {
-    const CornerId c = topology.vertexCorner(v);
-    if (c != kInvalidId) ++comps[result.faceComponent[c / 3]].vertices;
-  }
-  std::vector<std::uint8_t> seen(topology.numCorners(), 0);
-  for (CornerId c = 0; c < topology.numCorners(); ++c) {
-    ComponentInfo& info = comps[result.faceComponent[c / 3]];
-    const CornerId o = topology.opposite(c);
-    if (o != kInvalidId) {
-      if (c < o) ++info.edges;
-      continue;
+  });
+  parallelForEach(nf, 1u << 14, [&](std::uint64_t f) {
+    const FaceId root = find(static_cast<FaceId>(f));
+    __atomic_store_n(&parent[f], root, __ATOMIC_RELAXED);
+  });
+  return parent;
+}
+
+}  // namespace
+
+ComponentsResult computeComponents(const Topology& topology) {
+  const std::uint32_t nf = topology.numFaces(), nv = topology.numVertices();
+  ComponentsResult result;
+  // Components numbered in the order of their smallest face (as a search seeded at the first
+  // face not reached yet numbers them), then sorted by size below.
+  result.faceComponent = smallestFaceOfComponents(topology);
+  std::vector<FaceId>& component = result.faceComponent;
+  std::vector<ComponentInfo> comps;
+  // In face order a face's root (a smaller face, or itself) is reached first: its entry holds
+  // the component's id by then.
+  for (FaceId f = 0; f < nf; ++f) {
+    if (component[f] == f) {
+      component[f] = static_cast<std::uint32_t>(comps.size());
+      comps.emplace_back();
+    } else {
+      component[f] = component[component[f]];
     }
-    ++info.edges;
-    if (seen[c]) continue;
-    // Trace the boundary loop through c: the next boundary edge starts where this one ends.
-    ++info.boundaryLoops;
-    CornerId b = c;
-    do {
-      seen[b] = 1;
-      const VertexId end = topology.vertex(prevCorner(b));
-      b = prevCorner(topology.vertexCorner(end));
-    } while (b != c && !seen[b]);
+  }
+  // Faces, vertices and edges counted by both cores; a block adds runs of one component at once
+  // (ids vary slowly along a mesh in locality order; one big component would serialise adds).
+  const auto addRuns = [&](std::uint64_t begin, std::uint64_t end, auto&& componentOf, auto&& field) {
+    std::uint32_t current = kInvalidId;
+    std::uint64_t run = 0;
+    const auto flush = [&] {
+      if (run) __atomic_fetch_add(&field(comps[current]), decltype(field(comps[current]))(run), __ATOMIC_RELAXED);
+      run = 0;
+    };
+    for (std::uint64_t i = begin; i < end; ++i) {
+      const std::uint32_t k = componentOf(i);
+      if (k == kInvalidId) continue;
+      if (k != current) flush(), current = k;
+      ++run;
+    }
+    flush();
+  };
+  parallelFor(nf, 1u << 16, [&](const IndexRange& r) {
+    addRuns(r.begin(), r.end(), [&](std::uint64_t f) { return component[f]; },
+            [](ComponentInfo& info) -> std::uint32_t& { return info.faces; });
+  });
+  parallelFor(nv, 1u << 16, [&](const IndexRange& r) {
+    addRuns(r.begin(), r.end(), [&](std::uint64_t v) {
+              const CornerId c = topology.vertexCorner(static_cast<VertexId>(v));
+              return c == kInvalidId ? kInvalidId : component[c / 3];
+            },
+            [](ComponentInfo& info) -> std::uint32_t& { return info.vertices; });
+  });
+  // Each interior edge at its smaller corner, each boundary edge at its corner; the boundary
+  // corners listed in increasing order (blocks in order) for the loops below.
+  std::vector<std::vector<CornerId>> boundaryOfBlock((topology.numCorners() + (1u << 16) - 1) >> 16);
+  parallelForEach(boundaryOfBlock.size(), 1, [&](std::uint64_t block) {
+    const std::uint64_t begin = block << 16, end = std::min<std::uint64_t>(topology.numCorners(), (block + 1) << 16);
+    addRuns(begin, end, [&](std::uint64_t i) {
+              const CornerId c = static_cast<CornerId>(i), o = topology.opposite(c);
+              if (o == kInvalidId) boundaryOfBlock[block].push_back(c);
+              return o == kInvalidId || c < o ? component[c / 3] : kInvalidId;
+            },
+            [](ComponentInfo& info) -> std::uint64_t& { return info.edges; });
+  });
+  std::vector<std::uint8_t> seen;
+  for (const std::vector<CornerId>& boundary : boundaryOfBlock) {
+    if (!boundary.empty() && seen.empty()) seen.assign(topology.numCorners(), 0);
+    for (const CornerId c : boundary) {
+      if (seen[c]) continue;
+      // Trace the boundary loop through c: the next boundary edge starts where this one ends.
+      ++comps[component[c / 3]].boundaryLoops;
+      CornerId b = c;
+      do {
+        seen[b] = 1;
+        const VertexId end = topology.vertex(prevCorner(b));
+        b = prevCorner(topology.vertexCorner(end));
+      } while (b != c && !seen[b]);
+    }
   }
   for (ComponentInfo& info : comps) {
     info.eulerCharacteristic = std::int64_t(info.vertices) - std::int64_t(info.edges) + info.faces;
