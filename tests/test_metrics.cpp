@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <complex>
+#include <random>
 
 #include "core/system/errors.h"
 #include "core/basis/gaussian_int.h"
@@ -304,6 +305,56 @@ TEST(MapMetrics, VerticesTheMapWindsAroundTwiceAreCounted) {
   EXPECT_EQ(cornerAngleSum(topology, point, centre), 0.0);
   EXPECT_TRUE(woundVertices(topology, point).empty());
   EXPECT_THROW(woundVertices(topology, WedgeMap({0, 0, 0}, {Vec2d::Zero()})), InputError);
+}
+
+// woundVertices decides most vertices by bounds on the corners' angles: its list must be the
+// plain test's (the angle sum against kWoundAngleSum at interior vertices) on maps that put
+// corners in every direction, and on fans whose sums lie just below and above the threshold.
+TEST(MapMetrics, WoundVerticesAsThePlainAngleSumTest) {
+  const TriangleMesh torus = testing::torusMesh(24, 12);
+  const Topology topology = Topology::build(torus.triangles, torus.numVertices());
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (const double jitter : {0.0, 0.02, 0.2, 1.0, 5.0}) {
+    std::vector<Vec2d> values;
+    for (CornerId c = 0; c < topology.numCorners(); ++c) {
+      const Vec3f& p = torus.positions[torus.triangles[c / 3][c % 3]];
+      // A smooth map of the torus' angles, each corner moved on its own by up to `jitter`.
+      values.emplace_back(4.0 * std::atan2(p.y(), p.x()) + jitter * unit(random), 3.0 * p.z() + jitter * unit(random));
+    }
+    const WedgeMap uv = WedgeMap::fromCorners(torus.triangles, values);
+    std::vector<VertexId> expected;
+    for (VertexId v = 0; v < topology.numVertices(); ++v) {
+      if (!topology.isBoundaryVertex(v) && cornerAngleSum(topology, uv, v) >= kWoundAngleSum) expected.push_back(v);
+    }
+    EXPECT_EQ(woundVertices(topology, uv), expected) << jitter;
+  }
+  // Fans of random powers (sums of 1 to 6 pi) and valences, their corners jittered.
+  std::vector<TriangleMesh> parts;
+  std::vector<Vec2d> values;
+  for (int k = 0; k < 200; ++k) {
+    const Fan fan = powerFan(4 + int(random() % 30), 1.5 + 1.25 * (1.0 + unit(random)), k % 3 == 0);
+    parts.push_back(fan.mesh);
+    for (CornerId c = 0; c < fan.topology.numCorners(); ++c) {
+      values.push_back(fan.uv[c] + Vec2d(unit(random), unit(random)) * 0.05 * (k % 4));
+    }
+  }
+  const TriangleMesh fans = testing::concatMeshes(parts);
+  const Topology fanTopology = Topology::build(fans.triangles, fans.numVertices());
+  const WedgeMap fanUV = WedgeMap::fromCorners(fans.triangles, values);
+  std::vector<VertexId> expected;
+  for (VertexId v = 0; v < fanTopology.numVertices(); ++v) {
+    if (!fanTopology.isBoundaryVertex(v) && cornerAngleSum(fanTopology, fanUV, v) >= kWoundAngleSum) expected.push_back(v);
+  }
+  EXPECT_GT(expected.size(), 50u);
+  EXPECT_LT(expected.size(), 180u);
+  EXPECT_EQ(woundVertices(fanTopology, fanUV), expected);
+  for (const double s : {1.870, 1.874, 1.876, 1.88}) {
+    for (const int n : {5, 12, 40}) {
+      const Fan fan = powerFan(n, s, false);
+      EXPECT_EQ(woundVertices(fan.topology, fan.uv).size(), s > 1.875 ? 1u : 0u) << n << " " << s;
+    }
+  }
 }
 
 }  // namespace
