@@ -274,6 +274,10 @@ class BinarySource {
     }
   }
   void skip(PlyType t) { take(sizeOf(t)); }
+  /// The next n bytes without taking them, or nullptr when the input ends first; drop(n) takes them.
+  const char* peek(std::size_t n) { return in_.ensure(n) ? in_.data() : nullptr; }
+  void drop(std::size_t n) { in_.advance(n); }
+  bool swaps() const { return swap_; }
   /// Appends one value of type t in native byte order.
   void value(PlyType t, std::vector<std::uint8_t>& into) {
     const std::size_t n = sizeOf(t);
@@ -550,7 +554,47 @@ class PlyReader final : public MeshStream {
     return static_cast<VertexId>(v);
   }
 
+  /// Binary faces whose one property is a list of a one-byte count and 32-bit indices in the
+  /// machine's byte order, read a run at a time while each is a triangle with valid indices: the
+  /// general path's triangles without its per-value dispatch (a scan's faces are almost all
+  /// such). Any other face (a polygon, a bad index, the end of the file) is left to that path,
+  /// which reads it and reports what is wrong.
+  void readTriangleRuns(const PlyElement& e, MeshChunk& chunk) {
+    if constexpr (!Source::kAscii) {
+      if (e.properties.size() != 1 || e.indices != 0 || withUV_ || source_.swaps()) return;
+      const PlyProperty& prop = e.properties[0];
+      const bool signedIndices = prop.type == PlyType::Int32;
+      if (!prop.isList || sizeOf(prop.countType) != 1 || !(signedIndices || prop.type == PlyType::UInt32)) return;
+      constexpr std::size_t kRecord = 13, kRun = 4096;
+      while (instance_ < e.count && chunk.triangles.size() < limit_) {
+        const std::size_t want = static_cast<std::size_t>(
+            std::min<std::uint64_t>({e.count - instance_, limit_ - chunk.triangles.size(), kRun}));
+        const char* p = source_.peek(want * kRecord);
+        if (!p) return;
+        std::size_t k = 0;
+        for (; k < want; ++k, p += kRecord) {
+          if (p[0] != 3) break;
+          Triangle t;
+          bool valid = true;
+          for (int i = 0; i < 3; ++i) {
+            std::uint32_t raw;
+            std::memcpy(&raw, p + 1 + 4 * i, 4);
+            const std::int64_t v = signedIndices ? std::int64_t(static_cast<std::int32_t>(raw)) : std::int64_t(raw);
+            valid = valid && v >= 0 && static_cast<std::uint64_t>(v) < vertexCount_;
+            t[i] = static_cast<VertexId>(raw);
+          }
+          if (!valid) break;
+          chunk.triangles.push_back(t);
+        }
+        source_.drop(k * kRecord);
+        instance_ += k;
+        if (k < want) return;
+      }
+    }
+  }
+
   void readFaces(const PlyElement& e, MeshChunk& chunk) {
+    readTriangleRuns(e, chunk);
     while (instance_ < e.count && chunk.triangles.size() < limit_) {
       readIndexInstance(e, withUV_);
       const std::size_t n = indices_.size();

@@ -880,6 +880,59 @@ TEST(PlyRead, TruncatedBinaryFailsCleanlyAtEveryCut) {
   EXPECT_THAT(messageOf<InputError>([&] { readMesh(dir.path("header.ply")); }), HasSubstr("end_header"));
 }
 
+// Binary faces of a one-byte count and 32-bit indices are read in runs: the same triangles as
+// the general path (ASCII, and big-endian on this machine) with the index types and counts a
+// scan's files use, a quad and a bad index in the middle of a run, runs across chunks, and files
+// cut inside the faces.
+TEST(PlyRead, RunsOfTrianglesAsTheGeneralPath) {
+  TempDir dir;
+  constexpr int kFaces = 9000, kVertices = 40;
+  const auto file = [&](Enc enc, const std::string& list, int quadAt, int badAt) {
+    Body b{enc, {}};
+    for (int v = 0; v < kVertices; ++v) b(float(v))(float(v % 7))(float(v % 3)).end();
+    for (int f = 0; f < kFaces; ++f) {
+      const int n = f == quadAt ? 4 : 3;
+      b(std::uint8_t(n));
+      for (int k = 0; k < n; ++k) {
+        const std::uint32_t v = f == badAt && k == 1 ? kVertices : (f * 7 + k * 13) % kVertices;
+        if (list == "int") b(std::int32_t(v));
+        else b(std::uint32_t(v));
+      }
+      b.end();
+    }
+    return plyFile(enc, "element vertex " + std::to_string(kVertices) +
+                            "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+                            std::to_string(kFaces) + "\nproperty list uchar " + list + " vertex_indices\n",
+                   b.bytes);
+  };
+  ReadOptions chunks;
+  chunks.chunkTriangles = 1000;  // runs end at chunk limits too
+  for (const std::string list : {"int", "uint"}) {
+    for (const int quadAt : {-1, 0, 4095, 4096, 8999}) {
+      SCOPED_TRACE(list + " quad at " + std::to_string(quadAt));
+      writeFile(dir.path("a.ply"), file(Enc::Ascii, list, quadAt, -1));
+      writeFile(dir.path("b.ply"), file(Enc::Big, list, quadAt, -1));
+      writeFile(dir.path("l.ply"), file(Enc::Little, list, quadAt, -1));
+      const TriangleMesh expected = readMesh(dir.path("a.ply"));
+      ASSERT_EQ(expected.numFaces(), std::size_t(kFaces) + (quadAt >= 0));
+      EXPECT_EQ(readMesh(dir.path("b.ply")).triangles, expected.triangles);
+      EXPECT_EQ(readMesh(dir.path("l.ply")).triangles, expected.triangles);
+      EXPECT_EQ(readMesh(dir.path("l.ply"), chunks).triangles, expected.triangles);
+    }
+    for (const int badAt : {0, 2100, 8999}) {
+      writeFile(dir.path("bad.ply"), file(Enc::Little, list, -1, badAt));
+      const std::string message = messageOf<InputError>([&] { readMesh(dir.path("bad.ply")); });
+      EXPECT_THAT(message, HasSubstr("element 'face' " + std::to_string(badAt))) << list;
+      EXPECT_THAT(message, HasSubstr("out of range")) << list;
+    }
+    const std::string whole = file(Enc::Little, list, -1, -1);
+    for (const std::size_t cut : {whole.size() - 1, whole.size() - 13 * 3000 - 5, whole.size() - 13 * 8999}) {
+      writeFile(dir.path("cut.ply"), whole.substr(0, cut));
+      EXPECT_THAT(messageOf<IoError>([&] { readMesh(dir.path("cut.ply")); }), HasSubstr("truncated")) << cut;
+    }
+  }
+}
+
 // --- writing ------------------------------------------------------------------------------------
 
 TEST(MeshIo, FailedWritesLeaveNoFile) {
