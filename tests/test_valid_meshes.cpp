@@ -358,7 +358,22 @@ TEST(ValidMeshes, AnUnsolvableComponentIsReportedByIdAndWrittenUnmappedOrDropped
   PipelineOptions options = smallRun(ParamSolver::Hat);
   // The patch's 49 hat unknowns; a tetrahedron or a triangle has fewer, the sphere more.
   options.failsToFactor = [](std::uint32_t unknowns) { return unknowns >= 20 && unknowns <= 100; };
+  // The final map handed to withFinalMap (param writes it there) is the one returned: beside
+  // the figures when nothing is dropped after them, after them when the patch is dropped.
+  int calls = 0;
+  TriangleMesh handed;
+  options.withFinalMap = [&](const TriangleMesh& map) { handed = map, ++calls; };
+  const auto expectHanded = [&](const PipelineResult& r, bool beside) {
+    EXPECT_EQ(calls, 1);
+    EXPECT_EQ(r.finalMapBesideMetrics, beside);
+    EXPECT_EQ(handed.triangles, r.mesh.triangles);
+    EXPECT_EQ(handed.positions, r.mesh.positions);
+    ASSERT_EQ(handed.cornerUV.size(), r.mesh.cornerUV.size());
+    for (CornerId c = 0; c < r.mesh.cornerUV.size(); ++c) ASSERT_EQ(handed.cornerUV[c], r.mesh.cornerUV[c]) << c;
+    calls = 0;
+  };
   const PipelineResult kept = parameterize(TriangleMesh(input), options);
+  expectHanded(kept, true);
   const auto faces = facesById(kept.topology);
   ASSERT_EQ(kept.components.unsolvedIds.size(), 1u);
   const std::uint32_t patch = kept.components.unsolvedIds[0];
@@ -374,6 +389,7 @@ TEST(ValidMeshes, AnUnsolvableComponentIsReportedByIdAndWrittenUnmappedOrDropped
 
   options.dropUnsolved = true;
   const PipelineResult dropped = parameterize(TriangleMesh(input), options);
+  expectHanded(dropped, false);
   EXPECT_EQ(dropped.components.droppedIds, kept.components.unsolvedIds);
   EXPECT_EQ(dropped.components.droppedFaces, patchFaces);
   EXPECT_EQ(dropped.mesh.numFaces(), input.numFaces() - patchFaces);

@@ -1,6 +1,7 @@
 // seamvox param: seamless parameterization of a mesh (hat, vox or vox + local hat refinement).
 // Parses the options, reads, calls the library pipeline (core/pipeline), prints, writes.
 #include <cstdio>
+#include <exception>
 #include <limits>
 
 #include "core/pipeline/parameterize.h"
@@ -444,12 +445,28 @@ int runParam(Args& args) {
       meter.finish("quads");
     };
   }
+  // The output is written from the final map while its figures are measured (a Draco file
+  // after them: its encoder takes a copy of the mesh, the figures' memory would add to it).
+  // A failed write is reported as the output's, after the pipeline (not in the input's name).
+  bool written = false;
+  std::exception_ptr writeError;
+  if (formatFromPath(c.output) != MeshFormat::Draco) {
+    c.options.withFinalMap = [&](const TriangleMesh& map) {
+      try {
+        writeMesh(meshFile, map);
+        written = true;
+      } catch (...) {
+        writeError = std::current_exception();
+      }
+    };
+  }
   PipelineResult r;
   try {
     r = parameterize(std::move(raw), c.options);
   } catch (...) {
     rethrowWithContext(c.input);
   }
+  if (writeError) std::rethrow_exception(writeError);
   if (c.renderPath) {
     RenderOptions renderOptions;
     renderOptions.drawSeams = renderOptions.drawCones = true;
@@ -460,7 +477,7 @@ int runParam(Args& args) {
   // The writer takes the mesh and its map (r.size keeps their figures): the corner table goes
   // first, and a Draco write frees the mesh as its own copy takes it.
   r.topology = Topology();
-  writeMesh(meshFile, std::move(r.mesh));
+  if (!written) writeMesh(meshFile, std::move(r.mesh));
   meter.finish("write");
   printSummary(c, r, meter);
   // The meter's peak: the stages reset the high-water mark as they close.

@@ -6,7 +6,9 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <unordered_map>
+#include <utility>
 
 #include "core/field/rough_spots.h"
 #include "core/mesh/hole_caps.h"
@@ -528,6 +530,35 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
   }
 }
 
+/// Runs work (if any) on a thread of its own; join() waits and rethrows what it threw. An
+/// exception leaving the scope first still waits for the thread (its own error is then lost).
+class BesideThread {
+ public:
+  explicit BesideThread(std::function<void()> work) {
+    if (!work) return;
+    thread_ = std::thread([this, work = std::move(work)] {
+      try {
+        work();
+      } catch (...) {
+        error_ = std::current_exception();
+      }
+    });
+  }
+  BesideThread(const BesideThread&) = delete;
+  BesideThread& operator=(const BesideThread&) = delete;
+  ~BesideThread() {
+    if (thread_.joinable()) thread_.join();
+  }
+  void join() {
+    if (thread_.joinable()) thread_.join();
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+  }
+
+ private:
+  std::thread thread_;
+  std::exception_ptr error_;
+};
+
 /// Per-component figures, and with options.dropUnsolved the unsolved components removed (the
 /// corner table rebuilt for the smaller mesh).
 void summarizeMappedComponents(PipelineResult& r, const PipelineOptions& options,
@@ -612,11 +643,19 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
     std::swap(r.mesh.cornerUV, r.solved.param.cornerUV);
   }
   uncapForOutput(r, field, caps);
-  std::vector<FaceId> flippedFaces;
-  r.mapQuality = measureMap(r.mesh, r.solved.param.cornerUV, &field, r.edgeLength, nullptr, &r.topology, &flippedFaces);
   r.mesh.cornerUV = std::move(r.solved.param.cornerUV);
-  field = CrossField();  // before the per-component figures (10 bytes per face)
-  summarizeMappedComponents(r, options, flippedFaces);
+  // The final map goes to withFinalMap beside the figures, which only read the mesh, unless
+  // unsolved components are to be dropped from it after them.
+  r.finalMapBesideMetrics = options.withFinalMap && (!options.dropUnsolved || r.solved.param.unsolvedFaces.empty());
+  {
+    BesideThread finalMap(r.finalMapBesideMetrics ? [&] { options.withFinalMap(r.mesh); } : std::function<void()>());
+    std::vector<FaceId> flippedFaces;
+    r.mapQuality = measureMap(r.mesh, r.mesh.cornerUV, &field, r.edgeLength, nullptr, &r.topology, &flippedFaces);
+    field = CrossField();  // before the per-component figures (10 bytes per face)
+    summarizeMappedComponents(r, options, flippedFaces);
+    finalMap.join();
+  }
+  if (options.withFinalMap && !r.finalMapBesideMetrics) options.withFinalMap(r.mesh);
   r.size = {r.mesh.numFaces(), r.mesh.numVertices(), r.mesh.cornerUV.numWedges(), r.mesh.cornerUV.memoryBytes(),
             r.mesh.attributes.describe(), r.mesh.attributes.memoryBytes()};
   meter.finish("metrics");

@@ -126,6 +126,11 @@ struct PipelineOptions {
   /// still capped) before the caps are taken off: `param --quads` extracts there, where the
   /// caps close the holes a quad mesh cannot keep open, with no copy of the map to fill them.
   std::function<void(const TriangleMesh& map, const Topology& topology)> withSolvedMap;
+  /// Called once with the final mesh and map (PipelineResult::mesh as returned): on a thread of
+  /// its own while the map's figures are measured when nothing after them changes the mesh (no
+  /// unsolved component to drop), else after them; parameterize waits for it and rethrows what it
+  /// throws. `param` writes its output there, the file's copy overlapping the figures.
+  std::function<void(const TriangleMesh& map)> withFinalMap;
   /// Cut-and-solve passes at most: another pass while a solve puts mergeable adjacent cones on
   /// one point, or leaves flipped faces at both of two close cones after the repair.
   std::uint32_t maxConePasses = 3;
@@ -184,6 +189,8 @@ struct MeshSize {
 struct PipelineResult {
   /// The cleaned mesh with the map in mesh.cornerUV (grid units, per wedge of the cut).
   TriangleMesh mesh;
+  /// PipelineOptions::withFinalMap ran beside the map's figures (the "metrics" stage holds it).
+  bool finalMapBesideMetrics = false;
   MeshSize size;            ///< of mesh as parameterize returned it
   Topology topology;        ///< of mesh
   CleanReport cleanReport;  ///< what cleaning changed
