@@ -470,11 +470,49 @@ class PlyReader final : public MeshStream {
     if (!unkept.empty()) warn(options.warn, in_->path() + ": not kept: " + unkept);
   }
 
+  /// Binary vertices of three float properties x, y, z in the machine's byte order, read a run
+  /// at a time once the first vertex has decided that no origin is needed: the general path's
+  /// positions without its per-value dispatch. A vertex that is not finite (and the file's end)
+  /// is left to that path, which reports it. False when nothing was read.
+  bool readVertexRuns(const PlyElement& e, MeshChunk& chunk) {
+    if constexpr (!Source::kAscii) {
+      if (e.properties.size() != 3 || e.x != 0 || e.y != 1 || e.z != 2 || shift_.needsDoubles() || source_.swaps()) {
+        return false;
+      }
+      for (const PlyProperty& prop : e.properties) {
+        if (prop.isList || prop.type != PlyType::Float32) return false;
+      }
+      constexpr std::size_t kRecord = 12, kRun = 4096;
+      const std::uint64_t before = instance_;
+      while (instance_ < e.count && chunk.positions.size() < limit_) {
+        const std::size_t want = static_cast<std::size_t>(
+            std::min<std::uint64_t>({e.count - instance_, limit_ - chunk.positions.size(), kRun}));
+        const char* p = source_.peek(want * kRecord);
+        if (!p) break;
+        std::size_t k = 0;
+        for (; k < want; ++k, p += kRecord) {
+          Vec3f f;
+          std::memcpy(f.data(), p, kRecord);
+          if (!std::isfinite(f[0]) || !std::isfinite(f[1]) || !std::isfinite(f[2])) break;
+          chunk.positions.push_back(f);
+        }
+        source_.drop(k * kRecord);
+        instance_ += k;
+        verticesRead_ += k;
+        if (k < want) break;
+      }
+      chunk.origin = shift_.origin();
+      return instance_ > before;
+    }
+    return false;
+  }
+
   void readVertices(const PlyElement& e, MeshChunk& chunk) {
     const std::size_t numProperties = e.properties.size();
     if (chunk.attributes.properties.size() != layout_.properties.size()) chunk.attributes = layout_.emptyCopy();
     std::vector<VertexProperty>& attributes = chunk.attributes.properties;
     while (instance_ < e.count && chunk.positions.size() < limit_) {
+      if (readVertexRuns(e, chunk)) continue;
       Vec3f f;
       Vec3d d;
       for (std::size_t k = 0; k < numProperties; ++k) {

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <functional>
 #include <future>
+#include <limits>
 #include <random>
 #include <set>
 #include <thread>
@@ -887,9 +888,11 @@ TEST(PlyRead, TruncatedBinaryFailsCleanlyAtEveryCut) {
 TEST(PlyRead, RunsOfTrianglesAsTheGeneralPath) {
   TempDir dir;
   constexpr int kFaces = 9000, kVertices = 40;
-  const auto file = [&](Enc enc, const std::string& list, int quadAt, int badAt) {
+  const auto file = [&](Enc enc, const std::string& list, int quadAt, int badAt, int nanAt = -1) {
     Body b{enc, {}};
-    for (int v = 0; v < kVertices; ++v) b(float(v))(float(v % 7))(float(v % 3)).end();
+    for (int v = 0; v < kVertices; ++v) {
+      b(float(v) * 0.37f)(v == nanAt ? std::numeric_limits<float>::quiet_NaN() : float(v % 7))(float(v % 3) - 1e-3f).end();
+    }
     for (int f = 0; f < kFaces; ++f) {
       const int n = f == quadAt ? 4 : 3;
       b(std::uint8_t(n));
@@ -915,9 +918,18 @@ TEST(PlyRead, RunsOfTrianglesAsTheGeneralPath) {
       writeFile(dir.path("l.ply"), file(Enc::Little, list, quadAt, -1));
       const TriangleMesh expected = readMesh(dir.path("a.ply"));
       ASSERT_EQ(expected.numFaces(), std::size_t(kFaces) + (quadAt >= 0));
-      EXPECT_EQ(readMesh(dir.path("b.ply")).triangles, expected.triangles);
-      EXPECT_EQ(readMesh(dir.path("l.ply")).triangles, expected.triangles);
-      EXPECT_EQ(readMesh(dir.path("l.ply"), chunks).triangles, expected.triangles);
+      for (const TriangleMesh& mesh :
+           {readMesh(dir.path("b.ply")), readMesh(dir.path("l.ply")), readMesh(dir.path("l.ply"), chunks)}) {
+        EXPECT_EQ(mesh.triangles, expected.triangles);
+        EXPECT_EQ(mesh.positions, expected.positions);
+      }
+    }
+    // Vertices are read in runs too: a coordinate that is not finite is named by its vertex.
+    for (const int nanAt : {1, 20, kVertices - 1}) {
+      writeFile(dir.path("nan.ply"), file(Enc::Little, list, -1, -1, nanAt));
+      const std::string message = messageOf<InputError>([&] { readMesh(dir.path("nan.ply")); });
+      EXPECT_THAT(message, HasSubstr("element 'vertex' " + std::to_string(nanAt))) << list;
+      EXPECT_THAT(message, HasSubstr("NaN or infinite")) << list;
     }
     for (const int badAt : {0, 2100, 8999}) {
       writeFile(dir.path("bad.ply"), file(Enc::Little, list, -1, badAt));
