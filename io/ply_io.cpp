@@ -470,6 +470,26 @@ class PlyReader final : public MeshStream {
     if (!unkept.empty()) warn(options.warn, in_->path() + ": not kept: " + unkept);
   }
 
+  /// At most `most` binary records of `bytes` bytes each, a run at a time, while take(record)
+  /// accepts them (false: that record is left unread, for the general path); stops at the
+  /// file's end too. Returns how many were taken.
+  template <class Take>
+  std::uint64_t readRuns(std::uint64_t most, std::size_t bytes, Take&& take) {
+    constexpr std::uint64_t kRun = 4096;
+    std::uint64_t done = 0;
+    while (done < most) {
+      const std::size_t want = static_cast<std::size_t>(std::min(most - done, kRun));
+      const char* p = source_.peek(want * bytes);
+      if (!p) break;
+      std::size_t k = 0;
+      while (k < want && take(p + k * bytes)) ++k;
+      source_.drop(k * bytes);
+      done += k;
+      if (k < want) break;
+    }
+    return done;
+  }
+
   /// Binary vertices of three float properties x, y, z in the machine's byte order, read a run
   /// at a time once the first vertex has decided that no origin is needed: the general path's
   /// positions without its per-value dispatch. A vertex that is not finite (and the file's end)
@@ -482,27 +502,18 @@ class PlyReader final : public MeshStream {
       for (const PlyProperty& prop : e.properties) {
         if (prop.isList || prop.type != PlyType::Float32) return false;
       }
-      constexpr std::size_t kRecord = 12, kRun = 4096;
-      const std::uint64_t before = instance_;
-      while (instance_ < e.count && chunk.positions.size() < limit_) {
-        const std::size_t want = static_cast<std::size_t>(
-            std::min<std::uint64_t>({e.count - instance_, limit_ - chunk.positions.size(), kRun}));
-        const char* p = source_.peek(want * kRecord);
-        if (!p) break;
-        std::size_t k = 0;
-        for (; k < want; ++k, p += kRecord) {
-          Vec3f f;
-          std::memcpy(f.data(), p, kRecord);
-          if (!std::isfinite(f[0]) || !std::isfinite(f[1]) || !std::isfinite(f[2])) break;
-          chunk.positions.push_back(f);
-        }
-        source_.drop(k * kRecord);
-        instance_ += k;
-        verticesRead_ += k;
-        if (k < want) break;
-      }
+      const auto take = [&](const char* record) {
+        Vec3f f;
+        std::memcpy(f.data(), record, 12);
+        if (!std::isfinite(f[0]) || !std::isfinite(f[1]) || !std::isfinite(f[2])) return false;
+        chunk.positions.push_back(f);
+        return true;
+      };
+      const std::uint64_t read = readRuns(std::min<std::uint64_t>(e.count - instance_, limit_ - chunk.positions.size()), 12, take);
+      instance_ += read;
+      verticesRead_ += read;
       chunk.origin = shift_.origin();
-      return instance_ > before;
+      return read > 0;
     }
     return false;
   }
@@ -603,31 +614,20 @@ class PlyReader final : public MeshStream {
       const PlyProperty& prop = e.properties[0];
       const bool signedIndices = prop.type == PlyType::Int32;
       if (!prop.isList || sizeOf(prop.countType) != 1 || !(signedIndices || prop.type == PlyType::UInt32)) return;
-      constexpr std::size_t kRecord = 13, kRun = 4096;
-      while (instance_ < e.count && chunk.triangles.size() < limit_) {
-        const std::size_t want = static_cast<std::size_t>(
-            std::min<std::uint64_t>({e.count - instance_, limit_ - chunk.triangles.size(), kRun}));
-        const char* p = source_.peek(want * kRecord);
-        if (!p) return;
-        std::size_t k = 0;
-        for (; k < want; ++k, p += kRecord) {
-          if (p[0] != 3) break;
-          Triangle t;
-          bool valid = true;
-          for (int i = 0; i < 3; ++i) {
-            std::uint32_t raw;
-            std::memcpy(&raw, p + 1 + 4 * i, 4);
-            const std::int64_t v = signedIndices ? std::int64_t(static_cast<std::int32_t>(raw)) : std::int64_t(raw);
-            valid = valid && v >= 0 && static_cast<std::uint64_t>(v) < vertexCount_;
-            t[i] = static_cast<VertexId>(raw);
-          }
-          if (!valid) break;
-          chunk.triangles.push_back(t);
+      const auto take = [&](const char* record) {
+        if (record[0] != 3) return false;
+        Triangle t;
+        for (int i = 0; i < 3; ++i) {
+          std::uint32_t raw;
+          std::memcpy(&raw, record + 1 + 4 * i, 4);
+          const std::int64_t v = signedIndices ? std::int64_t(static_cast<std::int32_t>(raw)) : std::int64_t(raw);
+          if (v < 0 || static_cast<std::uint64_t>(v) >= vertexCount_) return false;
+          t[i] = static_cast<VertexId>(raw);
         }
-        source_.drop(k * kRecord);
-        instance_ += k;
-        if (k < want) return;
-      }
+        chunk.triangles.push_back(t);
+        return true;
+      };
+      instance_ += readRuns(std::min<std::uint64_t>(e.count - instance_, limit_ - chunk.triangles.size()), 13, take);
     }
   }
 
