@@ -202,6 +202,8 @@ void writeSeconds(JsonWriter& j, const PipelineResult& r, const ParamReportConte
     j.key("memoryBudget").value(c.memoryBudget).key("estimatedBytes").value(c.estimatedBytes);
     j.key("fieldBytesOnDisk").value(c.fieldBytesOnDisk);
   }
+  // The output written beside the map's figures (its time in "metrics", "write" only commits).
+  j.key("writtenBesideMetrics").value(r.finalMapBesideMetrics);
   // Wall time, peak and end resident size of each stage, in order.
   j.key("stages").beginArray();
   for (const StageFigures& stage : c.stages) {

@@ -604,7 +604,10 @@ TEST(Cli, OutputsOfOneRunAreAllOrNothing) {
   run("param --quiet --solver hat --cells 20 " + mesh + " -o " + out + " --report " + dir.path("r.json") +
           " --render " + dir.path("p.png"), 0);
   EXPECT_NE(testing::readFile(out), "older map");
-  EXPECT_GT(parseJson(testing::readFile(dir.path("r.json")))["peakResidentBytes"].number, 0);
+  const JsonValue report = parseJson(testing::readFile(dir.path("r.json")));
+  EXPECT_GT(report["peakResidentBytes"].number, 0);
+  EXPECT_TRUE(report["writtenBesideMetrics"].flag) << "the map is written while its figures are measured";
+  EXPECT_TRUE(testing::runSeamvox("check --quiet " + out, &log) == 0) << log;
   EXPECT_EQ(testing::readFile(dir.path("p.png")).substr(1, 3), "PNG");
   EXPECT_TRUE(testing::temporaryFilesIn(dir.dir()).empty());
 }
