@@ -33,10 +33,11 @@ struct TracedCorners {
 /// cones kept, the same whatever the order, so the same cut as the serial peel; except a component
 /// whose cut would vanish (a closed genus-0 surface with at most one cone), where the serial peel
 /// keeps the edge its order reaches last: such components get their edges back and the serial
-/// peel. degree: the cut degrees (countCutDegrees), remaining: cut edges per component.
+/// peel. degree: the cut degrees, edgeXor: per vertex the XOR of its cut edges' smaller corners
+/// (countCutDegrees with CutEdgeXor), remaining: cut edges per component.
 void pruneCutInParallel(const Topology& topology, const std::vector<std::uint8_t>& isCone,
                         detail::VectorArray<std::uint32_t>& component, std::vector<std::uint64_t>& remaining,
-                        CutCorners& cut, std::vector<std::uint32_t>& degree) {
+                        CutCorners& cut, std::vector<std::uint32_t>& degree, std::vector<CornerId>& edgeXor) {
   const std::uint64_t numCorners = topology.numCorners();
   const auto canonical = [&](CornerId c) {
     const CornerId o = topology.opposite(c);
@@ -44,33 +45,45 @@ void pruneCutInParallel(const Topology& topology, const std::vector<std::uint8_t
   };
   std::vector<std::uint8_t> flag(numCorners);  // per edge, at its smaller corner
   parallelForEach(numCorners, 1u << 16, [&](std::uint64_t c) { flag[c] = cut.isCut(static_cast<CornerId>(c)); });
-  struct Flags {
-    std::vector<std::uint8_t>& flag;
-    const decltype(canonical)& canonicalOf;
-    bool isCut(CornerId c) const { return __atomic_load_n(&flag[canonicalOf(c)], __ATOMIC_RELAXED) != 0; }
-  } flags{flag, canonical};
-  const auto load = [](const std::uint32_t& x) { return __atomic_load_n(&x, __ATOMIC_RELAXED); };
+  const auto load = [](const std::uint32_t& x) { return __atomic_load_n(&x, __ATOMIC_ACQUIRE); };
   parallelFor(topology.numVertices(), 1u << 12, [&](const IndexRange& range) {
+    // Edges taken per component, added to `remaining` a run at a time (one shared counter per
+    // edge would pass its cache line between the cores at every step).
+    std::uint32_t runComponent = kInvalidId;
+    std::uint64_t run = 0;
+    const auto flush = [&] {
+      if (run) __atomic_fetch_sub(&remaining[runComponent], run, __ATOMIC_RELAXED);
+      run = 0;
+    };
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       VertexId u = v;
       while (!isCone[u] && load(degree[u]) == 1) {
-        const CornerId e = detail::findCutEdgeAt(topology, flags, u);
-        if (e == kInvalidId) break;
-        const CornerId o = topology.opposite(e);
-        if (o == kInvalidId) break;  // boundary edges are never pruned
-        std::uint8_t expected = 1;
-        if (!__atomic_compare_exchange_n(&flag[std::min(e, o)], &expected, std::uint8_t(0), false, __ATOMIC_ACQ_REL,
-                                         __ATOMIC_RELAXED)) {
-          continue;  // another thread took it: look again
-        }
+        // With one cut edge left at u, the XOR is that edge; read after the degree, it is that
+        // edge or, once another thread has taken it, nothing that touches u as a cut edge.
+        const CornerId e = load(edgeXor[u]);
+        if (e >= numCorners) break;
         const VertexId a = topology.vertex(nextCorner(e)), b = topology.vertex(prevCorner(e));
+        if (a != u && b != u) break;
+        const CornerId o = topology.opposite(e);
+        if (o == kInvalidId || o < e) break;  // boundary edges are never pruned; e is canonical
+        std::uint8_t expected = 1;
+        if (!__atomic_compare_exchange_n(&flag[e], &expected, std::uint8_t(0), false, __ATOMIC_ACQ_REL,
+                                         __ATOMIC_RELAXED)) {
+          break;  // another thread took it from its other end
+        }
         const VertexId w = a == u ? b : a;
-        __atomic_fetch_sub(&degree[u], 1u, __ATOMIC_RELAXED);
-        __atomic_fetch_sub(&degree[w], 1u, __ATOMIC_RELAXED);
-        __atomic_fetch_sub(&remaining[component[cornerFace(e)]], std::uint64_t(1), __ATOMIC_RELAXED);
+        // The XORs before the degrees: a degree read as 1 comes with its vertex's XOR.
+        __atomic_fetch_xor(&edgeXor[u], e, __ATOMIC_RELEASE);
+        __atomic_fetch_xor(&edgeXor[w], e, __ATOMIC_RELEASE);
+        __atomic_fetch_sub(&degree[u], 1u, __ATOMIC_RELEASE);
+        __atomic_fetch_sub(&degree[w], 1u, __ATOMIC_RELEASE);
+        const std::uint32_t k = component[cornerFace(e)];
+        if (k != runComponent) flush(), runComponent = k;
+        ++run;
         u = w;
       }
     }
+    flush();
   });
   std::vector<std::uint8_t> vanished(remaining.size(), 0);
   bool anyVanished = false;
@@ -137,9 +150,13 @@ CutResult cutToDisk(const TriangleMesh& mesh, const Topology& topology, const Cr
   reportProgress(options.progress, "cut: prune", 0.3);
   std::vector<std::uint32_t> degreeValues(numVertices, 0);
   detail::VectorArray<std::uint32_t> degree{degreeValues};
+  std::vector<CornerId> edgeXorValues(numVertices, 0);
+  detail::VectorArray<CornerId> edgeXorArray{edgeXorValues};
   std::vector<std::uint64_t> remaining =
-      detail::countCutDegrees(topology, topology.numCorners(), cut.corners, component, numComponents, degree);
-  pruneCutInParallel(topology, isCone, component, remaining, cut.corners, degreeValues);
+      detail::countCutDegrees(topology, topology.numCorners(), cut.corners, component, numComponents, degree,
+                              detail::CutEdgeXor<detail::VectorArray<CornerId>>{edgeXorArray});
+  pruneCutInParallel(topology, isCone, component, remaining, cut.corners, degreeValues, edgeXorValues);
+  std::vector<CornerId>().swap(edgeXorValues);
 
   reportProgress(options.progress, "cut: comb", 0.6);
   detail::combCorners(topology, topology.numCorners(), matching, rotation, cut.corners,
