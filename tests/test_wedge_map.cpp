@@ -148,6 +148,33 @@ TEST(WedgeMap, RandomEditsMatchAPerCornerModel) {
   EXPECT_THROW(counted.assign({0}, {Vec2d::Zero()}, other), InputError);
 }
 
+// The smallest corner of each wedge, over both cores: a plain scan's, on a shuffled mesh whose
+// vertices have corners in many blocks, in ranges of wedges and whole, per corner and viewing.
+TEST(WedgeMap, WedgeCornersAreTheSmallestCorners) {
+  const TriangleMesh mesh = testing::shuffledMesh(testing::gridMesh(300, 200), 4);
+  std::vector<Vec2d> values(3 * mesh.numFaces());
+  for (CornerId c = 0; c < values.size(); ++c) {
+    const VertexId v = mesh.triangles[c / 3][c % 3];
+    values[c] = Vec2d(v % 97, (c % 5 == 0 && v % 29 == 0) ? 1.0 : 0.0);  // some vertices split in two
+  }
+  WedgeMap perCorner = WedgeMap::fromCorners(mesh.triangles, values);
+  WedgeMap viewing = perCorner;
+  ASSERT_TRUE(viewing.viewTriangles(mesh.triangles.data(), mesh.numVertices()));
+  std::vector<CornerId> expected(perCorner.numWedges(), kInvalidId);
+  for (CornerId c = 0; c < perCorner.size(); ++c) expected[perCorner.wedge(c)] = std::min(expected[perCorner.wedge(c)], c);
+  ASSERT_GT(perCorner.size(), 5u << 16) << "the test needs many blocks";
+  ASSERT_GT(perCorner.numWedges(), mesh.numVertices());
+  for (const WedgeMap* map : {&perCorner, &viewing}) {
+    EXPECT_EQ(map->wedgeCorners(), expected);
+    const std::uint32_t step = 7919;
+    for (std::uint32_t begin = 0; begin < map->numWedges(); begin += step) {
+      const std::vector<CornerId> part = map->wedgeCorners(begin, begin + step);
+      ASSERT_EQ(part, std::vector<CornerId>(expected.begin() + begin,
+                                            expected.begin() + std::min<std::size_t>(expected.size(), begin + step)));
+    }
+  }
+}
+
 // Wedge ids kept per vertex over the mesh's triangles: the same values under the same edits as
 // ids per corner, copies and corner-table edits back per corner, and many split corners too.
 TEST(WedgeMap, OverTrianglesMatchesIdsPerCorner) {

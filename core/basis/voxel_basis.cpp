@@ -477,8 +477,8 @@ void VoxelBasis::evaluateCorners(const std::vector<std::complex<double>>& coeffi
   // One evaluation per wedge, at its smallest corner: the basis is continuous across the
   // non-cut edges inside a wedge. The smallest corners a range of wedges at a time: this runs
   // at the pipeline's peak, next to the basis and the new map (a table for all wedges: 4 bytes
-  // each, 44 MiB at 23M faces).
-  constexpr std::uint32_t kWedgesAtOnce = 1u << 21;
+  // each, 44 MiB at 23M faces; 16 MiB at once, each range a pass over the corners).
+  constexpr std::uint32_t kWedgesAtOnce = 1u << 22;
   for (std::uint32_t begin = 0; begin < cornerUV.numWedges(); begin += kWedgesAtOnce) {
     const std::vector<CornerId> wedgeCorner = cornerUV.wedgeCorners(begin, begin + kWedgesAtOnce);
     parallelFor(wedgeCorner.size(), 4096, [&](const IndexRange& range) {

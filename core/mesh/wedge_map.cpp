@@ -154,10 +154,19 @@ std::vector<CornerId> WedgeMap::wedgeCorners(std::uint32_t begin, std::uint32_t 
   end = std::min(end, numWedges());
   begin = std::min(begin, end);
   std::vector<CornerId> first(end - begin, kInvalidId);
-  for (std::size_t c = size(); c-- > 0;) {
-    const std::uint32_t w = wedge(static_cast<CornerId>(c));
-    if (w >= begin && w < end) first[w - begin] = static_cast<CornerId>(c);
-  }
+  // Both cores, each block in increasing order; a block's corner replaces a smaller-numbered
+  // block's only when smaller (a compare-and-swap minimum), so the result is the least corner.
+  parallelFor(size(), 1u << 16, [&](const IndexRange& range) {
+    for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
+      const std::uint32_t w = wedge(static_cast<CornerId>(c));
+      if (w < begin || w >= end) continue;
+      CornerId* slot = &first[w - begin];
+      CornerId seen = __atomic_load_n(slot, __ATOMIC_RELAXED);
+      while (c < seen && !__atomic_compare_exchange_n(slot, &seen, static_cast<CornerId>(c), true, __ATOMIC_RELAXED,
+                                                      __ATOMIC_RELAXED)) {
+      }
+    }
+  });
   return first;
 }
 
