@@ -1,6 +1,8 @@
 // The whole pipeline as one call: clean, field, cone passes (merge, cut, solve), quality.
 #include "core/pipeline/parameterize.h"
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -645,8 +647,9 @@ PipelineResult parameterize(TriangleMesh raw, const PipelineOptions& options) {
   uncapForOutput(r, field, caps);
   r.mesh.cornerUV = std::move(r.solved.param.cornerUV);
   // The final map goes to withFinalMap beside the figures, which only read the mesh, unless
-  // unsolved components are to be dropped from it after them.
-  r.finalMapBesideMetrics = options.withFinalMap && (!options.dropUnsolved || r.solved.param.unsolvedFaces.empty());
+  // unsolved components are to be dropped from it after them, or the run has one thread.
+  r.finalMapBesideMetrics = options.withFinalMap && (!options.dropUnsolved || r.solved.param.unsolvedFaces.empty()) &&
+                            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
   {
     BesideThread finalMap(r.finalMapBesideMetrics ? [&] { options.withFinalMap(r.mesh); } : std::function<void()>());
     std::vector<FaceId> flippedFaces;

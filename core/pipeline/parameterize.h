@@ -128,8 +128,9 @@ struct PipelineOptions {
   std::function<void(const TriangleMesh& map, const Topology& topology)> withSolvedMap;
   /// Called once with the final mesh and map (PipelineResult::mesh as returned): on a thread of
   /// its own while the map's figures are measured when nothing after them changes the mesh (no
-  /// unsolved component to drop), else after them; parameterize waits for it and rethrows what it
-  /// throws. `param` writes its output there, the file's copy overlapping the figures.
+  /// unsolved component to drop) and the run may use more than one thread, else after them;
+  /// parameterize waits for it and rethrows what it throws. `param` writes its output there, the
+  /// file's copy overlapping the figures.
   std::function<void(const TriangleMesh& map)> withFinalMap;
   /// Cut-and-solve passes at most: another pass while a solve puts mergeable adjacent cones on
   /// one point, or leaves flipped faces at both of two close cones after the repair.
