@@ -261,6 +261,39 @@ TEST(RoughSpots, ARegionAboveItsBoundSmoothsNothingAndSaysSo) {
   EXPECT_EQ(boundedRounds, 0u);
 }
 
+// The rounds in memory (local ids per vertex in an array, the re-test on both cores) or as out of
+// core (hashed, one thread): the same moves over two rounds, and the same cap at the same bound.
+TEST(RoughSpots, InMemoryAndOutOfCoreRoundsGiveTheSameMoves) {
+  const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, 9));
+  const std::vector<Vec3f> surface = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+  const auto at = [&](VertexId w) -> Vec3d { return surface[w].cast<double>(); };
+  const double spacing = 1e30;
+  std::vector<VertexId> seeds;
+  for (VertexId v = 0; v < s.topology.numVertices(); ++v) {
+    if (detail::isRoughVertex(s.topology, v, at, spacing)) seeds.push_back(v);
+  }
+  ASSERT_GT(seeds.size(), 100u);
+  const auto base = [&](VertexId v) { return surface[v]; };
+  const std::uint32_t n = s.topology.numVertices();
+  std::uint32_t hashedRounds = 0, denseRounds = 0;
+  const auto hashed = detail::smoothRoughRounds(s.topology, base, seeds, kGrid, spacing, hashedRounds);
+  const auto dense =
+      detail::smoothRoughRounds(s.topology, base, seeds, kGrid, spacing, denseRounds, ~std::uint64_t(0), nullptr, n);
+  ASSERT_GT(hashed.size(), seeds.size());
+  EXPECT_EQ(hashedRounds, 2u) << "a second round reads the first's moves";
+  EXPECT_EQ(denseRounds, hashedRounds);
+  EXPECT_EQ(dense, hashed);
+  for (const std::uint64_t bound : {std::uint64_t(hashed.size() / 2), std::uint64_t(n) + 1}) {
+    bool hashedCapped = false, denseCapped = false;
+    const auto a = detail::smoothRoughRounds(s.topology, base, seeds, kGrid, spacing, hashedRounds, bound, &hashedCapped);
+    const auto b =
+        detail::smoothRoughRounds(s.topology, base, seeds, kGrid, spacing, denseRounds, bound, &denseCapped, n);
+    EXPECT_EQ(a, b) << "bound " << bound;
+    EXPECT_EQ(hashedCapped, denseCapped) << "bound " << bound;
+    EXPECT_EQ(hashedRounds, denseRounds) << "bound " << bound;
+  }
+}
+
 TEST(RoughSpots, InMemoryARegionAboveTheBoundSmoothsNothingAndTheStatsSayIt) {
   // The bound's arithmetic: a quarter of the vertices plus the headroom at kRoughRegionBytes a
   // vertex, at least kRoughRegionMinVertices, no overflow with an unlimited headroom.

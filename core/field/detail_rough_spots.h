@@ -4,10 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <limits>
+#include <memory>
+#include <new>
 #include <queue>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -150,6 +154,9 @@ inline float roughSpotShare(float t) {
 /// positions, sorted.
 /// A round whose region (with its held neighbours) would exceed maxRegion vertices smooths
 /// nothing and ends the rounds, *capped set (the out-of-core pass's memory bound).
+/// inMemoryVertices: the in-memory table's vertex count (0 out of core, where the table is paged
+/// and read by one thread): local ids per vertex in an array of 4 B a vertex instead of hashed,
+/// and the re-test of the region on both cores; the same moves either way.
 /// Each round: the vertices within kRoughSpotRadius * gridLength of the seeds along edges
 /// (Dijkstra, in float), their fans gathered once, kRoughSpotSteps Jacobi steps on them, each
 /// vertex taking roughSpotShare of a step (in parallel, the same floats for any thread count), then
@@ -158,7 +165,7 @@ template <class Table, class Base>
 std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& base, std::vector<VertexId> seeds,
                                                           double gridLength, double spacing, std::uint32_t& rounds,
                                                           std::uint64_t maxRegion = ~std::uint64_t(0),
-                                                          bool* capped = nullptr) {
+                                                          bool* capped = nullptr, std::uint32_t inMemoryVertices = 0) {
   IdMap moved;                   // vertex -> index in movedIds and movedValues
   std::vector<VertexId> movedIds;
   std::vector<Vec3f> movedValues;
@@ -180,8 +187,24 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
     std::vector<std::uint64_t> fanAt;  // local id -> first entry in fans + 1 (0: no fan gathered)
     std::vector<std::uint32_t> fans;   // per settled vertex: its fan's size, then its fan
     bool over = false;
+    // In memory, local ids sit in a per-vertex array (zero: none, else id + 1), whose
+    // entries for a region are as close together as the region's corner-table entries; the
+    // hashed map scatters every lookup. Untouched pages of the array are never faulted in.
+    std::unique_ptr<std::uint32_t[], void (*)(void*)> dense(
+        static_cast<std::uint32_t*>(inMemoryVertices ? std::calloc(inMemoryVertices, sizeof(std::uint32_t)) : nullptr),
+        std::free);
+    if (inMemoryVertices && !dense) throw std::bad_alloc();
     const auto localId = [&](VertexId v) {
-      const auto [id, added] = local.emplace(v, static_cast<std::uint32_t>(ids.size()));
+      std::uint32_t id = static_cast<std::uint32_t>(ids.size());
+      bool added = true;
+      if (dense) {
+        std::uint32_t& slot = dense[v];
+        added = slot == 0;
+        if (added) slot = id + 1;
+        else id = slot - 1;
+      } else {
+        std::tie(id, added) = local.emplace(v, id);
+      }
       over = over || ids.size() >= maxRegion;
       if (added) {
         ids.push_back(v);
@@ -228,6 +251,7 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
       }
     }
     local = IdMap();  // freed before the steps
+    dense.reset();
     if (over) {  // a region above the bound: this round smooths nothing, and the rounds stop
       if (capped) *capped = true;
       break;
@@ -297,8 +321,18 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
       }
     }
     seeds.clear();
-    for (VertexId v : active) {
-      if (isRoughVertex(table, v, at, spacing)) seeds.push_back(v);
+    if (inMemoryVertices) {  // the in-memory table may be read by both cores at once
+      std::vector<std::uint8_t> still(active.size());
+      parallelFor(active.size(), 1024, [&](const IndexRange& range) {
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) still[i] = isRoughVertex(table, active[i], at, spacing);
+      });
+      for (std::size_t i = 0; i < active.size(); ++i) {
+        if (still[i]) seeds.push_back(active[i]);
+      }
+    } else {
+      for (VertexId v : active) {
+        if (isRoughVertex(table, v, at, spacing)) seeds.push_back(v);
+      }
     }
   }
   std::vector<std::pair<VertexId, Vec3f>> out;

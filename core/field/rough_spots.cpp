@@ -57,7 +57,7 @@ RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& p
   if (seeds.empty()) return result;
   result.moved = detail::smoothRoughRounds(
       topology, [&](VertexId v) { return positions[v]; }, std::move(seeds), gridLength, spacing, result.rounds,
-      maxRegion, &result.capped);
+      maxRegion, &result.capped, numVertices);
   for (const auto& [v, p] : result.moved) positions[v] = p;
   return result;
 }

@@ -63,7 +63,8 @@ struct RoughSpotResult {
 /// place) for a grid of edge length gridLength (> 0). Interior vertices only; boundary and
 /// isolated vertices stay. Deterministic for any thread count. A round whose region (with its
 /// held neighbours) would exceed maxRegion vertices smooths nothing and ends the rounds (capped).
-/// Memory: 5 bytes per vertex, and up to kRoughRegionBytes per vertex of a round's region.
+/// Memory: 5 bytes per vertex (4 during a round's search), and up to kRoughRegionBytes per vertex
+/// of a round's region.
 RoughSpotResult smoothRoughSpots(const Topology& topology, std::vector<Vec3f>& positions, double gridLength,
                                  std::uint64_t maxRegion = ~std::uint64_t(0));
 
