@@ -127,6 +127,41 @@ TriangleMesh noisyScan(std::uint64_t faces, double amplitude, std::uint64_t seed
   return raw;
 }
 
+TEST(FoldedIn3D, SmoothedPositionsAtSomeVerticesAreTheWholeSurfaces) {
+  // smoothPositionsAt against smoothPositions: a few vertices (hashed local ids), many (per
+  // vertex), the boundary's vertices and their neighbours, on a noisy scan and a plane with a
+  // boundary, from no step to five (the ball stops a ring short of what the steps read).
+  for (const bool plane : {false, true}) {
+    CleanResult clean = cleanMesh(plane ? testing::denseSpotPlane(8, 2, 8, 0.3, 3) : noisyScan(20000, 0.6, 5));
+    const TriangleMesh& mesh = clean.mesh;
+    const Topology& topology = clean.topology;
+    std::vector<std::vector<VertexId>> sets(3);
+    for (VertexId v = 0; v < mesh.numVertices(); ++v) {
+      if (v % 31 == 0) sets[0].push_back(v);
+      if (v % 2003 == 5) sets[1].push_back(v);
+      if (topology.isBoundaryVertex(v)) {
+        sets[2].push_back(v);
+        topology.forEachCornerAround(v, [&](CornerId c) { sets[2].push_back(topology.vertex(nextCorner(c))); });
+      }
+    }
+    sets[1].resize(std::min<std::size_t>(sets[1].size(), std::max<std::size_t>(1, mesh.numVertices() / 1024)));
+    if (!plane) ASSERT_LE(sets[1].size(), mesh.numVertices() / 1024) << "the few are hashed";
+    ASSERT_FALSE(sets[1].empty());
+    ASSERT_GT(sets[0].size(), mesh.numVertices() / 1024) << "the many are per vertex";
+    if (plane) ASSERT_FALSE(sets[2].empty()) << "the plane has a boundary";
+    for (std::uint32_t steps : {0u, 1u, 2u, 3u, 5u}) {
+      const std::vector<Vec3f> whole = smoothPositions(mesh, topology, steps);
+      for (const std::vector<VertexId>& vertices : sets) {
+        const std::vector<Vec3f> local = smoothPositionsAt(mesh, topology, steps, vertices);
+        ASSERT_EQ(local.size(), vertices.size());
+        for (std::size_t i = 0; i < vertices.size(); ++i) {
+          ASSERT_EQ(local[i], whole[vertices[i]]) << "vertex " << vertices[i] << ", " << steps << " steps, plane " << plane;
+        }
+      }
+    }
+  }
+}
+
 TEST(FoldedIn3D, ReleasedFramePositionsGiveTheSameFacesAndPositions) {
   // A noisy generated scan folds faces in 3D; the fold test on a field whose smoothed surface was
   // released (recomputed around the asked faces) must equal the test on the whole surface.

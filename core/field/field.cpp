@@ -10,6 +10,9 @@
 #include <functional>
 #include <complex>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <new>
 #include <unordered_map>
 
 #include "core/field/detail_rough_spots.h"
@@ -590,19 +593,25 @@ std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& t
   // values stay the input positions: after step k, values are exact up to `iterations` - k + 1
   // rings deep, so the centre is exact after the last step. Local ids are hashed for a few
   // vertices, kept per vertex of the mesh for many (a noisy scan's folds: 4% of its vertices).
+  // The per-vertex ids are local id + 1 in zeroed memory (calloc): only the pages the ball
+  // touches are written, not the whole mesh's 4 B a vertex at every call (a noisy scan's map
+  // calls this a hundred times).
   const bool dense = vertices.size() > topology.numVertices() / 1024;
   std::unordered_map<VertexId, std::uint32_t> hashed;
-  std::vector<std::uint32_t> denseId(dense ? topology.numVertices() : 0, kInvalidId);
+  std::unique_ptr<std::uint32_t[], void (*)(void*)> denseId(
+      static_cast<std::uint32_t*>(dense ? std::calloc(topology.numVertices(), sizeof(std::uint32_t)) : nullptr),
+      std::free);
+  if (dense && !denseId) throw std::bad_alloc();
   const auto localOf = [&](VertexId v) {
-    if (dense) return denseId[v];
+    if (dense) return denseId[v] - 1;  // 0 (none) wraps to kInvalidId
     const auto it = hashed.find(v);
     return it == hashed.end() ? kInvalidId : it->second;
   };
   std::vector<VertexId> ball;
   const auto enter = [&](VertexId v) {
     if (dense) {
-      if (denseId[v] != kInvalidId) return;
-      denseId[v] = static_cast<std::uint32_t>(ball.size());
+      if (denseId[v] != 0) return;
+      denseId[v] = static_cast<std::uint32_t>(ball.size()) + 1;
     } else if (!hashed.emplace(v, static_cast<std::uint32_t>(ball.size())).second) {
       return;
     }
@@ -612,17 +621,18 @@ std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& t
     if (v >= topology.numVertices()) throw InputError("smoothPositionsAt: vertex " + std::to_string(v) + " out of range");
     enter(v);
   }
-  // ringEnd[r]: the ball's vertices within r rings come first, ball[0, ringEnd[r]).
+  // ringEnd[r]: the ball's vertices within r rings come first, ball[0, ringEnd[r]). The ring
+  // `iterations` deep is only read, at its input positions (what valueOf gives outside the
+  // ball), so the ball stops a ring short of it. Only the corners' next vertices enter: they
+  // are an interior vertex's neighbours (its closed fan), and a boundary vertex's other one (its
+  // last corner's previous) is on the boundary, which keeps its input positions.
   std::vector<std::size_t> ringEnd = {ball.size()};
   std::size_t ringStart = 0;
-  for (std::uint32_t ring = 0; ring < iterations; ++ring) {
+  for (std::uint32_t ring = 0; ring + 1 < iterations; ++ring) {
     const std::size_t end = ball.size();
     for (std::size_t i = ringStart; i < end; ++i) {
       if (topology.isIsolatedVertex(ball[i])) continue;
-      topology.forEachCornerAround(ball[i], [&](CornerId c) {
-        enter(topology.vertex(nextCorner(c)));
-        enter(topology.vertex(prevCorner(c)));
-      });
+      topology.forEachCornerAround(ball[i], [&](CornerId c) { enter(topology.vertex(nextCorner(c))); });
     }
     ringStart = end;
     ringEnd.push_back(ball.size());
