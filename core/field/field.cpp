@@ -628,11 +628,40 @@ std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& t
   // last corner's previous) is on the boundary, which keeps its input positions.
   std::vector<std::size_t> ringEnd = {ball.size()};
   std::size_t ringStart = 0;
+  // A wide ring (per-vertex ids) grows on both cores: a vertex is claimed by a compare-and-swap
+  // of its slot, listed by the block of the ring that claimed it, and numbered block by block.
+  // The ball's order then depends on the threads; nothing below does (values by vertex).
+  constexpr std::size_t kRingBlock = 4096;
+  constexpr std::uint32_t kClaimed = ~std::uint32_t(0);
   for (std::uint32_t ring = 0; ring + 1 < iterations; ++ring) {
     const std::size_t end = ball.size();
-    for (std::size_t i = ringStart; i < end; ++i) {
-      if (topology.isIsolatedVertex(ball[i])) continue;
-      topology.forEachCornerAround(ball[i], [&](CornerId c) { enter(topology.vertex(nextCorner(c))); });
+    if (dense && end - ringStart > 4 * kRingBlock) {
+      std::vector<std::vector<VertexId>> claimed((end - ringStart + kRingBlock - 1) / kRingBlock);
+      parallelForEach(claimed.size(), 1, [&](std::uint64_t b) {
+        const std::size_t last = std::min(end, ringStart + (b + 1) * kRingBlock);
+        for (std::size_t i = ringStart + b * kRingBlock; i < last; ++i) {
+          if (topology.isIsolatedVertex(ball[i])) continue;
+          topology.forEachCornerAround(ball[i], [&](CornerId c) {
+            const VertexId w = topology.vertex(nextCorner(c));
+            std::uint32_t expected = 0;
+            if (__atomic_load_n(&denseId[w], __ATOMIC_RELAXED) == 0 &&
+                __atomic_compare_exchange_n(&denseId[w], &expected, kClaimed, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+              claimed[b].push_back(w);
+            }
+          });
+        }
+      });
+      for (const std::vector<VertexId>& block : claimed) {
+        for (VertexId w : block) {
+          denseId[w] = static_cast<std::uint32_t>(ball.size()) + 1;
+          ball.push_back(w);
+        }
+      }
+    } else {
+      for (std::size_t i = ringStart; i < end; ++i) {
+        if (topology.isIsolatedVertex(ball[i])) continue;
+        topology.forEachCornerAround(ball[i], [&](CornerId c) { enter(topology.vertex(nextCorner(c))); });
+      }
     }
     ringStart = end;
     ringEnd.push_back(ball.size());
