@@ -65,15 +65,22 @@ SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh,
     // and the smoothed ball around them all (3 rings, two positions per vertex) would sit on the
     // pipeline's peak next to the basis and the map. A vertex's smoothed position and value do
     // not depend on the batch; the decisions below go in increasing order either way.
-    for (std::size_t first = 0; first < vertices.size(); first += batchVertices) {
+    // Each batch's smoothed positions and new values (in parallel; they read neither the map nor
+    // the decisions), then its decisions: vertex by vertex in increasing order, each set unless
+    // it stretches a face of its fan at the values so far (as the out-of-core pass goes). The
+    // next batch is prepared while one core decides the current one.
+    struct Prepared {
+      std::vector<std::uint8_t> keep;
+      std::vector<Vec2d> value;
+    };
+    const auto prepare = [&](std::size_t first) {
       const std::size_t count = std::min(batchVertices, vertices.size() - first);
       const std::vector<VertexId> batch(vertices.begin() + first, vertices.begin() + first + count);
       const std::vector<Vec3f> smoothed = field.frameSmoothing > 0 ? framePositionsAt(mesh, topology, field, batch)
                                                                     : smoothPositionsAt(mesh, topology, steps, batch);
-      // New values in parallel; then, vertex by vertex in increasing order, each set unless it
-      // stretches a face of its fan at the values so far (as the out-of-core pass goes).
-      std::vector<std::uint8_t> keep(count, 0);
-      std::vector<Vec2d> value(count);
+      Prepared p;
+      p.keep.assign(count, 0);
+      p.value.resize(count);
       parallelFor(count, 1024, [&](const IndexRange& range) {
         for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
           const VertexId v = batch[i];
@@ -81,20 +88,38 @@ SmoothedEvaluationStats evaluateFoldsAtSmoothedSurface(const TriangleMesh& mesh,
           CornerId smallest = kInvalidId;
           topology.forEachCornerAround(v, [&](CornerId c) { smallest = std::min(smallest, c); });
           const std::uint32_t e = basis.cornerElement(smallest);
-          keep[i] = e == kInvalidId;
-          if (keep[i]) continue;
+          p.keep[i] = e == kInvalidId;
+          if (p.keep[i]) continue;
           const std::complex<double> q = basis.evaluateAt(e, grid.toGrid(smoothed[i].cast<double>()), coefficients);
-          value[i] = Vec2d(q.real(), q.imag());
+          p.value[i] = Vec2d(q.real(), q.imag());
         }
       });
-      for (std::size_t i = 0; i < count; ++i) {
-        topology.forEachCornerAround(batch[i], [&](CornerId c) {
+      return p;
+    };
+    const auto decide = [&](std::size_t first, Prepared& p) {
+      for (std::size_t i = 0; i < p.keep.size(); ++i) {
+        const VertexId v = vertices[first + i];
+        topology.forEachCornerAround(v, [&](CornerId c) {
           const FaceId f = cornerFace(c);
-          keep[i] = keep[i] || movingStretches(facePoints(mesh, f), faceValues(cornerUV, f), c % 3, value[i], h);
+          p.keep[i] = p.keep[i] || movingStretches(facePoints(mesh, f), faceValues(cornerUV, f), c % 3, p.value[i], h);
         });
-        if (!keep[i]) cornerUV.setWedgeValue(cornerUV.wedge(topology.vertexCorner(batch[i])), value[i]);
-        stats.keptForStretch += keep[i];
+        if (!p.keep[i]) cornerUV.setWedgeValue(cornerUV.wedge(topology.vertexCorner(v)), p.value[i]);
+        stats.keptForStretch += p.keep[i];
       }
+    };
+    Prepared current = prepare(0);
+    for (std::size_t first = 0; first < vertices.size(); first += batchVertices) {
+      Prepared next;
+      const std::size_t following = first + batchVertices;
+      if (following < vertices.size()) {
+        parallelForEach(2, 1, [&](std::uint64_t k) {
+          if (k == 0) decide(first, current);
+          else next = prepare(following);
+        });
+      } else {
+        decide(first, current);
+      }
+      current = std::move(next);
     }
     detail::finishSmoothedRound(topology, vertices, tried, faces, stats);
   }
