@@ -4,11 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <functional>
 #include <limits>
-#include <memory>
-#include <new>
 #include <queue>
 #include <string>
 #include <tuple>
@@ -190,10 +187,7 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
     // In memory, local ids sit in a per-vertex array (zero: none, else id + 1), whose
     // entries for a region are as close together as the region's corner-table entries; the
     // hashed map scatters every lookup. Untouched pages of the array are never faulted in.
-    std::unique_ptr<std::uint32_t[], void (*)(void*)> dense(
-        static_cast<std::uint32_t*>(inMemoryVertices ? std::calloc(inMemoryVertices, sizeof(std::uint32_t)) : nullptr),
-        std::free);
-    if (inMemoryVertices && !dense) throw std::bad_alloc();
+    ZeroedIds dense = inMemoryVertices ? zeroedIds(inMemoryVertices) : ZeroedIds(nullptr, std::free);
     const auto localId = [&](VertexId v) {
       std::uint32_t id = static_cast<std::uint32_t>(ids.size());
       bool added = true;

@@ -11,13 +11,12 @@
 #include <complex>
 #include <cstdint>
 #include <cstdlib>
-#include <memory>
-#include <new>
 #include <unordered_map>
 
 #include "core/field/detail_rough_spots.h"
 #include "core/field/detail_singularities.h"
 #include "core/field/detail_smoothing.h"
+#include "core/mesh/detail_id_map.h"
 #include "core/field/fast_atan2.h"
 #include "core/field/field_numerics.h"
 #include "core/solve/assemble.h"
@@ -598,10 +597,7 @@ std::vector<Vec3f> smoothPositionsAt(const TriangleMesh& mesh, const Topology& t
   // calls this a hundred times).
   const bool dense = vertices.size() > topology.numVertices() / 1024;
   std::unordered_map<VertexId, std::uint32_t> hashed;
-  std::unique_ptr<std::uint32_t[], void (*)(void*)> denseId(
-      static_cast<std::uint32_t*>(dense ? std::calloc(topology.numVertices(), sizeof(std::uint32_t)) : nullptr),
-      std::free);
-  if (dense && !denseId) throw std::bad_alloc();
+  const detail::ZeroedIds denseId = dense ? detail::zeroedIds(topology.numVertices()) : detail::ZeroedIds(nullptr, std::free);
   const auto localOf = [&](VertexId v) {
     if (dense) return denseId[v] - 1;  // 0 (none) wraps to kInvalidId
     const auto it = hashed.find(v);

@@ -3,6 +3,9 @@
 /// per-vertex maps of a region (a rough spot's Dijkstra): one probe sequence in one array
 /// instead of a node per entry, 8 B a slot, at most half the slots full. Internal.
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <new>
 #include <utility>
 #include <vector>
 
@@ -82,5 +85,14 @@ class IdMap {
   std::size_t size_ = 0;
   std::vector<Slot> slots_;
 };
+
+/// n zeroed 32-bit slots from calloc: pages are faulted in only where written (a per-vertex
+/// map of a few regions of a large mesh). Throws std::bad_alloc when there is no memory.
+using ZeroedIds = std::unique_ptr<std::uint32_t[], void (*)(void*)>;
+inline ZeroedIds zeroedIds(std::size_t n) {
+  ZeroedIds ids(static_cast<std::uint32_t*>(std::calloc(n, sizeof(std::uint32_t))), std::free);
+  if (n > 0 && !ids) throw std::bad_alloc();
+  return ids;
+}
 
 }  // namespace seamvox::detail
