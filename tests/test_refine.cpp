@@ -26,6 +26,7 @@
 #include "core/basis/reduce.h"
 #include "core/refine/refine.h"
 #include "core/refine/detail_refine.h"
+#include "core/refine/detail_region.h"
 #include "core/refine/spline_space.h"
 #include "core/mesh/subdivide.h"
 #include "core/mesh/topology.h"
@@ -1425,6 +1426,64 @@ TEST(RefineSurface, PlacingARegionTurnsItsDirectionsOntoTheSurface) {
     const Vec3d want = region.faceOrigin[f] == 0 ? Vec3d(1, 0, 0) : Vec3d(0, std::cos(angle), std::sin(angle));
     EXPECT_LT((d - want).norm(), 1e-6) << "face " << f;
   }
+}
+
+// A region's index answers as a binary search of its sorted faces, whether it keeps a bit per
+// face of its span (dense) or searches (sparse), inside, between and outside the span.
+TEST(RegionIndex, RanksAreTheSortedPositions) {
+  std::mt19937 random(7);
+  for (const std::uint32_t spread : {1u, 3u, 64u, 65u, 1000u, 20000u, 1000000u}) {
+    for (const FaceId start : {0u, 5u, 1000003u}) {
+      for (const std::size_t count : {std::size_t(1), std::size_t(2), std::size_t(500)}) {
+        std::vector<FaceId> faces;
+        FaceId f = start;
+        for (std::size_t i = 0; i < count; ++i, f += 1 + random() % spread) faces.push_back(f);
+        const detail::RegionIndex index(faces);
+        // Every id within 70 of a face, and as many anywhere in the span and beyond it.
+        std::vector<FaceId> probes;
+        for (FaceId g : faces) {
+          for (FaceId d = 0; d <= 140; ++d) {
+            if (g + d >= 70) probes.push_back(g + d - 70);
+          }
+          probes.push_back(start + random() % (faces.back() - start + 200));
+        }
+        for (FaceId g : probes) {
+          const auto it = std::lower_bound(faces.begin(), faces.end(), g);
+          const std::uint32_t expected =
+              it != faces.end() && *it == g ? static_cast<std::uint32_t>(it - faces.begin()) : kInvalidId;
+          ASSERT_EQ(index.subFace(g), expected) << "face " << g << ", spread " << spread << ", count " << count;
+          ASSERT_EQ(index.subCorner(3 * g + 2), expected == kInvalidId ? kInvalidId : 3 * expected + 2);
+        }
+        EXPECT_EQ(index.subFace(std::numeric_limits<FaceId>::max() - 1), kInvalidId);
+        EXPECT_EQ(index.subCorner(kInvalidId), kInvalidId);
+      }
+    }
+  }
+}
+
+// Past 16,384 faces the growth tests membership by bits instead of searches: its rings are
+// still every face that shares a vertex with the ring before, on a shuffled mesh whose ids
+// scatter.
+TEST(RegionGrowth, WideGrowthIsEveryFaceSharingAVertex) {
+  const testing::Surface s = testing::makeSurface(testing::shuffledMesh(testing::torusMesh(300, 200), 3));
+  const std::vector<FaceId> seeds = {7, 90001, 45000};
+  std::vector<FaceId> expected = seeds;
+  std::sort(expected.begin(), expected.end());
+  for (std::uint32_t rings = 1; rings <= 45; ++rings) {
+    std::vector<FaceId> next = expected;
+    for (FaceId f : expected) {
+      for (int k = 0; k < 3; ++k) {
+        s.topology.forEachCornerAround(s.topology.vertex(3 * f + k), [&](CornerId c) { next.push_back(cornerFace(c)); });
+      }
+    }
+    std::sort(next.begin(), next.end());
+    next.erase(std::unique(next.begin(), next.end()), next.end());
+    expected.swap(next);
+    if (rings % 15 == 0 || rings == 1) {
+      ASSERT_EQ(detail::growFacesIn(s.topology, seeds, rings), expected) << rings << " rings";
+    }
+  }
+  EXPECT_GT(expected.size(), std::size_t(1) << 15) << "the growth passed the bits' threshold (2^14 faces)";
 }
 
 }  // namespace

@@ -69,6 +69,30 @@ inline bool isSortedUnique(const std::vector<FaceId>& faces) {
   return std::adjacent_find(faces.begin(), faces.end(), [](FaceId a, FaceId b) { return a >= b; }) == faces.end();
 }
 
+/// Membership of ids below no known bound, by a bit each once a set is large enough to pay for
+/// the words (up to the largest id / 8 bytes); below that, a sorted list's binary search.
+class GrowingIdSet {
+ public:
+  explicit GrowingIdSet(const std::vector<std::uint32_t>& sorted) : sorted_(sorted) {}
+  bool contains(std::uint32_t id) const {
+    if (words_.empty()) return std::binary_search(sorted_.begin(), sorted_.end(), id);
+    return id / 64 < words_.size() && (words_[id / 64] >> (id % 64) & 1);
+  }
+  /// To call after the sorted list changed (ids added); switches to bits past kDense ids.
+  void update(const std::vector<std::uint32_t>& added) {
+    if (words_.empty() && sorted_.size() < kDense) return;
+    for (std::uint32_t id : words_.empty() ? sorted_ : added) {
+      if (id / 64 >= words_.size()) words_.resize(id / 64 + 1, 0);
+      words_[id / 64] |= std::uint64_t(1) << (id % 64);
+    }
+  }
+
+ private:
+  static constexpr std::size_t kDense = std::size_t(1) << 14;
+  const std::vector<std::uint32_t>& sorted_;
+  std::vector<std::uint64_t> words_;
+};
+
 /// growFaces over any corner table. It stops early, with more than maxFaces faces, once a ring
 /// takes it past maxFaces (a caller that would refuse so large a patch need not grow it whole).
 template <class Table>
@@ -78,34 +102,39 @@ std::vector<FaceId> growFacesIn(Table& topology, std::vector<FaceId> frontier, s
   std::sort(patch.begin(), patch.end());
   patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
   std::vector<VertexId> seen;  // vertices expanded, sorted
+  GrowingIdSet inPatch(patch), wasSeen(seen);
+  inPatch.update({});
   for (std::uint32_t ring = 0; ring < rings && !frontier.empty() && patch.size() <= maxFaces; ++ring) {
     // The frontier's vertices not expanded yet, each once (a vertex has about six frontier faces).
-    std::vector<VertexId> fresh;
-    fresh.reserve(3 * frontier.size());
-    for (FaceId f : frontier) {
-      for (int k = 0; k < 3; ++k) fresh.push_back(topology.vertex(3 * f + k));
-    }
-    std::sort(fresh.begin(), fresh.end());
-    fresh.erase(std::unique(fresh.begin(), fresh.end()), fresh.end());
     std::vector<VertexId> unseen;
-    std::set_difference(fresh.begin(), fresh.end(), seen.begin(), seen.end(), std::back_inserter(unseen));
+    unseen.reserve(3 * frontier.size());
+    for (FaceId f : frontier) {
+      for (int k = 0; k < 3; ++k) {
+        const VertexId v = topology.vertex(3 * f + k);
+        if (!wasSeen.contains(v)) unseen.push_back(v);
+      }
+    }
+    std::sort(unseen.begin(), unseen.end());
+    unseen.erase(std::unique(unseen.begin(), unseen.end()), unseen.end());
     std::vector<FaceId> added;
     for (VertexId v : unseen) {
       topology.forEachCornerAround(v, [&](CornerId c) {
         const FaceId g = cornerFace(c);
-        if (!std::binary_search(patch.begin(), patch.end(), g)) added.push_back(g);
+        if (!inPatch.contains(g)) added.push_back(g);
       });
     }
     std::vector<VertexId> expanded;
     expanded.reserve(seen.size() + unseen.size());
     std::merge(seen.begin(), seen.end(), unseen.begin(), unseen.end(), std::back_inserter(expanded));
     seen = std::move(expanded);
+    wasSeen.update(unseen);
     std::sort(added.begin(), added.end());
     added.erase(std::unique(added.begin(), added.end()), added.end());
     std::vector<FaceId> grown;
     grown.reserve(patch.size() + added.size());
     std::merge(patch.begin(), patch.end(), added.begin(), added.end(), std::back_inserter(grown));
     patch = std::move(grown);
+    inPatch.update(added);
     frontier = std::move(added);
   }
   return patch;

@@ -13,9 +13,34 @@
 namespace seamvox::detail {
 
 /// Whole-mesh faces and corners to their ids in a region (regionFaces sorted); kInvalidId outside.
+/// A region's faces are looked up for every corner of their fans: a bit per id of their span with
+/// the count of faces before each 64-bit word answers in one cache line (a face's id is its rank),
+/// where the span is at most 4,096 times their count (16 bytes per 64 ids: at most 1 KiB per region
+/// face; a group of a round's patch spans the whole mesh); a wider span is searched.
 struct RegionIndex {
+  explicit RegionIndex(const std::vector<FaceId>& faces) : regionFaces(faces) {
+    if (faces.empty()) return;
+    first_ = faces.front();
+    const std::uint64_t words = (std::uint64_t(faces.back()) - first_) / 64 + 1;
+    if (words > 64 * std::uint64_t(faces.size())) return;
+    words_.assign(words, Word{});
+    for (FaceId f : faces) words_[(f - first_) / 64].bits |= std::uint64_t(1) << ((f - first_) % 64);
+    std::uint32_t before = 0;
+    for (Word& w : words_) {
+      w.before = before;
+      before += static_cast<std::uint32_t>(__builtin_popcountll(w.bits));
+    }
+  }
   const std::vector<FaceId>& regionFaces;
   std::uint32_t subFace(FaceId f) const {
+    if (!words_.empty()) {
+      const std::uint64_t off = std::uint64_t(f) - first_;  // wraps for f < first_
+      if (f < first_ || off / 64 >= words_.size()) return kInvalidId;
+      const Word& w = words_[off / 64];
+      const std::uint64_t below = w.bits & ((std::uint64_t(1) << (off % 64)) - 1);
+      return (w.bits >> (off % 64)) & 1 ? w.before + static_cast<std::uint32_t>(__builtin_popcountll(below))
+                                        : kInvalidId;
+    }
     const auto it = std::lower_bound(regionFaces.begin(), regionFaces.end(), f);
     return it != regionFaces.end() && *it == f ? static_cast<std::uint32_t>(it - regionFaces.begin())
                                                : kInvalidId;
@@ -25,6 +50,14 @@ struct RegionIndex {
     const std::uint32_t i = subFace(cornerFace(c));
     return i == kInvalidId ? kInvalidId : 3 * i + c % 3;
   }
+
+ private:
+  struct Word {
+    std::uint64_t bits = 0;
+    std::uint32_t before = 0;  // region faces in the words before
+  };
+  FaceId first_ = 0;
+  std::vector<Word> words_;  // empty: binary search
 };
 
 /// Sub vertices: one per fan piece of region corners around each whole-mesh vertex (filling
