@@ -354,6 +354,8 @@ TEST(RoughSpots, SetAsideTheMovesAlongTheNormalAreReadAndPutBackTheRoughOnes) {
   setFrameOverridesAside(s.mesh, s.topology, field, aside);
   EXPECT_EQ(aside, overrides);
   ASSERT_EQ(field.frameOverrides.size(), overrides.size());
+  // Bit for bit the vertex-after-vertex computation (the out-of-core one) on the whole plain surface.
+  EXPECT_EQ(field.frameOverrides, detail::normalPartOfMoves(s.topology, overrides, [&](VertexId w) { return plain[w]; }));
   const std::vector<Vec3f> map = field.framePositions;
   std::size_t alongTheNormal = 0;
   for (std::size_t i = 0; i < overrides.size(); ++i) {

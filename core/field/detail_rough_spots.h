@@ -344,27 +344,35 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
 /// plainAt(w): the plain smoothed surface's position of w (Vec3f). The map's stages after the cut
 /// read this surface: the crumpling stays smoothed out of its shape, but not the steps' drift along
 /// it, which folds noisy faces under a map evaluated or solved there (bench/RESULTS.md, session 60).
+/// One moved vertex v at its rough position p: roughAt(w) is the rough surface's position of w (its
+/// move, or plainAt(w) when it has none).
+template <class Table, class RoughAt, class PlainAt>
+Vec3f normalPartOfMove(Table& table, VertexId v, const Vec3f& rough, RoughAt&& roughAt, PlainAt&& plainAt) {
+  const Vec3d p = rough.template cast<double>();
+  Vec3d n = Vec3d::Zero();
+  table.forEachCornerAround(v, [&](CornerId c) {
+    n += (Vec3f(roughAt(table.vertex(nextCorner(c)))).template cast<double>() - p)
+             .cross(Vec3f(roughAt(table.vertex(prevCorner(c)))).template cast<double>() - p);
+  });
+  const Vec3f plain = plainAt(v);
+  const double squared = n.squaredNorm();
+  const Vec3d q = plain.template cast<double>();
+  return squared > 0.0 && std::isfinite(squared) ? Vec3f((q + n * (n.dot(p - q) / squared)).template cast<float>())
+                                                 : plain;
+}
+
+/// Every move's normal part, one vertex after the other (a table and plainAt read by one thread).
 template <class Table, class PlainAt>
 std::vector<std::pair<VertexId, Vec3f>> normalPartOfMoves(Table& table, const std::vector<std::pair<VertexId, Vec3f>>& moved,
                                                           PlainAt&& plainAt) {
-  const auto roughAt = [&](VertexId w) -> Vec3d {
+  const auto roughAt = [&](VertexId w) -> Vec3f {
     const auto it = std::lower_bound(moved.begin(), moved.end(), w,
                                      [](const std::pair<VertexId, Vec3f>& a, VertexId v) { return a.first < v; });
-    return (it != moved.end() && it->first == w ? it->second : Vec3f(plainAt(w))).template cast<double>();
+    return it != moved.end() && it->first == w ? it->second : Vec3f(plainAt(w));
   };
   std::vector<std::pair<VertexId, Vec3f>> out(moved.size());
   for (std::size_t i = 0; i < moved.size(); ++i) {
-    const VertexId v = moved[i].first;
-    const Vec3d p = moved[i].second.template cast<double>();
-    Vec3d n = Vec3d::Zero();
-    table.forEachCornerAround(v, [&](CornerId c) {
-      n += (roughAt(table.vertex(nextCorner(c))) - p).cross(roughAt(table.vertex(prevCorner(c))) - p);
-    });
-    const Vec3f plain = plainAt(v);
-    const double squared = n.squaredNorm();
-    const Vec3d q = plain.template cast<double>();
-    out[i] = {v, squared > 0.0 && std::isfinite(squared) ? Vec3f((q + n * (n.dot(p - q) / squared)).template cast<float>())
-                                                         : plain};
+    out[i] = {moved[i].first, normalPartOfMove(table, moved[i].first, moved[i].second, roughAt, plainAt)};
   }
   return out;
 }

@@ -716,22 +716,51 @@ void setFrameOverridesAside(const TriangleMesh& mesh, const Topology& topology, 
                             std::vector<std::pair<VertexId, Vec3f>>& aside) {
   aside.clear();
   if (field.frameOverrides.empty()) return;
-  // The plain surface at the moved vertices and their neighbours, then the moves' normal parts.
-  std::vector<VertexId> ring;
-  for (const auto& [v, p] : field.frameOverrides) {
-    ring.push_back(v);
-    topology.forEachCornerAround(v, [&](CornerId c) {
-      ring.push_back(topology.vertex(nextCorner(c)));
-      ring.push_back(topology.vertex(prevCorner(c)));
-    });
-  }
-  std::sort(ring.begin(), ring.end());
-  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-  const std::vector<Vec3f> plain = smoothPositionsAt(mesh, topology, field.frameSmoothing, ring);
-  std::vector<std::pair<VertexId, Vec3f>> normal =
-      detail::normalPartOfMoves(topology, field.frameOverrides, [&](VertexId w) {
-        return plain[std::lower_bound(ring.begin(), ring.end(), w) - ring.begin()];
+  // The plain surface at the moved vertices and their neighbours (marked in a per-vertex slot on
+  // both cores, listed in vertex order), then the moves' normal parts, each vertex on its own.
+  const std::vector<std::pair<VertexId, Vec3f>>& moves = field.frameOverrides;
+  const std::uint32_t nv = topology.numVertices();
+  detail::ZeroedIds slot = detail::zeroedIds(nv);  // 1 + the vertex's place in ring; 0 outside
+  std::uint32_t* const slots = slot.get();
+  const auto mark = [&](VertexId w) { __atomic_store_n(&slots[w], 1u, __ATOMIC_RELAXED); };
+  parallelFor(moves.size(), 1u << 12, [&](const IndexRange& range) {
+    for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+      mark(moves[i].first);
+      topology.forEachCornerAround(moves[i].first, [&](CornerId c) {
+        mark(topology.vertex(nextCorner(c)));
+        mark(topology.vertex(prevCorner(c)));
       });
+    }
+  });
+  constexpr std::uint32_t kBlock = 1u << 16;
+  std::vector<std::uint32_t> before((nv + kBlock - 1) / kBlock + 1, 0);
+  parallelFor(before.size() - 1, 1, [&](const IndexRange& range) {
+    for (std::uint64_t b = range.begin(); b != range.end(); ++b) {
+      for (VertexId w = b * kBlock; w < std::min<std::uint64_t>(nv, (b + 1) * kBlock); ++w) before[b + 1] += slots[w] != 0;
+    }
+  });
+  for (std::size_t b = 1; b < before.size(); ++b) before[b] += before[b - 1];
+  std::vector<VertexId> ring(before.back());
+  parallelFor(before.size() - 1, 1, [&](const IndexRange& range) {
+    for (std::uint64_t b = range.begin(); b != range.end(); ++b) {
+      std::uint32_t at = before[b];
+      for (VertexId w = b * kBlock; w < std::min<std::uint64_t>(nv, (b + 1) * kBlock); ++w) {
+        if (slots[w]) ring[at] = w, slots[w] = ++at;
+      }
+    }
+  });
+  const std::vector<Vec3f> plain = smoothPositionsAt(mesh, topology, field.frameSmoothing, ring);
+  std::vector<Vec3f> rough = plain;
+  for (const auto& [v, p] : moves) rough[slots[v] - 1] = p;
+  std::vector<std::pair<VertexId, Vec3f>> normal(moves.size());
+  parallelFor(moves.size(), 1u << 12, [&](const IndexRange& range) {
+    for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+      normal[i] = {moves[i].first, detail::normalPartOfMove(
+                                       topology, moves[i].first, moves[i].second,
+                                       [&](VertexId w) { return rough[slots[w] - 1]; },
+                                       [&](VertexId w) { return plain[slots[w] - 1]; })};
+    }
+  });
   if (field.framePositions.size() == mesh.numVertices()) {
     for (const auto& [v, p] : normal) field.framePositions[v] = p;
   }

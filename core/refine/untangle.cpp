@@ -696,12 +696,18 @@ class JointPatch {
       const FaceId f = c / 3;
       const detail::UntanglingTerms t =
           detail::untanglingTerms(*jv.shapes[i], uv_[3 * f], uv_[3 * f + 1], uv_[3 * f + 2], int(c % 3), eps);
-      Eigen::Matrix2d turn;  // a move d in jv's chart is turn * d in the corner's
-      turn.col(0) = quarterTurns(Vec2d(1.0, 0.0), jv.turns[i]);
-      turn.col(1) = quarterTurns(Vec2d(0.0, 1.0), jv.turns[i]);
+      // A move d in jv's chart is R d in the corner's (R: turns quarter turns), so the terms come
+      // back as R^T g and R^T H R: an odd turn swaps H's diagonal and negates its off-diagonal,
+      // an even one keeps H (entries moved and negated, exactly).
       sum.energy += t.energy;
-      sum.gradient += turn.transpose() * t.gradient;
-      sum.hessian += turn.transpose() * t.hessian * turn;
+      sum.gradient += quarterTurns(t.gradient, -jv.turns[i]);
+      if (jv.turns[i] & 1) {
+        Eigen::Matrix2d turned;
+        turned << t.hessian(1, 1), -t.hessian(1, 0), -t.hessian(0, 1), t.hessian(0, 0);
+        sum.hessian += turned;
+      } else {
+        sum.hessian += t.hessian;
+      }
     }
     return sum;
   }
