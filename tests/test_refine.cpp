@@ -1461,29 +1461,34 @@ TEST(RegionIndex, RanksAreTheSortedPositions) {
   }
 }
 
-// Past 16,384 faces the growth tests membership by bits instead of searches: its rings are
-// still every face that shares a vertex with the ring before, on a shuffled mesh whose ids
-// scatter.
+// Past 16,384 faces the growth tests membership by bits instead of searches, and a ring of more
+// than 16,384 faces or vertices is walked on both cores: its rings are still every face that shares
+// a vertex with the ring before, on a shuffled mesh whose ids scatter, from three seeds (narrow
+// rings) and from every fifth face (wide ones).
 TEST(RegionGrowth, WideGrowthIsEveryFaceSharingAVertex) {
   const testing::Surface s = testing::makeSurface(testing::shuffledMesh(testing::torusMesh(300, 200), 3));
-  const std::vector<FaceId> seeds = {7, 90001, 45000};
-  std::vector<FaceId> expected = seeds;
-  std::sort(expected.begin(), expected.end());
-  for (std::uint32_t rings = 1; rings <= 45; ++rings) {
-    std::vector<FaceId> next = expected;
-    for (FaceId f : expected) {
-      for (int k = 0; k < 3; ++k) {
-        s.topology.forEachCornerAround(s.topology.vertex(3 * f + k), [&](CornerId c) { next.push_back(cornerFace(c)); });
+  std::vector<FaceId> everyFifth;
+  for (FaceId f = 0; f < s.mesh.numFaces(); f += 5) everyFifth.push_back(f);
+  for (const std::vector<FaceId>& seeds : {std::vector<FaceId>{7, 90001, 45000}, everyFifth}) {
+    std::vector<FaceId> expected = seeds;
+    std::sort(expected.begin(), expected.end());
+    const std::uint32_t most = seeds.size() > 3 ? 3 : 45;
+    for (std::uint32_t rings = 1; rings <= most; ++rings) {
+      std::vector<FaceId> next = expected;
+      for (FaceId f : expected) {
+        for (int k = 0; k < 3; ++k) {
+          s.topology.forEachCornerAround(s.topology.vertex(3 * f + k), [&](CornerId c) { next.push_back(cornerFace(c)); });
+        }
+      }
+      std::sort(next.begin(), next.end());
+      next.erase(std::unique(next.begin(), next.end()), next.end());
+      expected.swap(next);
+      if (rings % 15 == 0 || rings <= 3) {
+        ASSERT_EQ(detail::growFacesIn(s.topology, seeds, rings), expected) << rings << " rings";
       }
     }
-    std::sort(next.begin(), next.end());
-    next.erase(std::unique(next.begin(), next.end()), next.end());
-    expected.swap(next);
-    if (rings % 15 == 0 || rings == 1) {
-      ASSERT_EQ(detail::growFacesIn(s.topology, seeds, rings), expected) << rings << " rings";
-    }
+    EXPECT_GT(expected.size(), std::size_t(1) << 15) << "the growth passed the bits' threshold (2^14 faces)";
   }
-  EXPECT_GT(expected.size(), std::size_t(1) << 15) << "the growth passed the bits' threshold (2^14 faces)";
 }
 
 }  // namespace

@@ -11,6 +11,9 @@
 /// stays free once freed), countTouched(touched, cones, h) (FaceCounts of the solved faces with
 /// their latest values) and collect(touched, out) (the result's corners and vertex counts).
 /// Whole-mesh state stays out: the faces ever solved are a sorted list.
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -21,6 +24,7 @@
 #include <complex>
 #include <iterator>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/mesh/detail_union_find.h"
@@ -78,7 +82,9 @@ class GrowingIdSet {
     if (words_.empty()) return std::binary_search(sorted_.begin(), sorted_.end(), id);
     return id / 64 < words_.size() && (words_[id / 64] >> (id % 64) & 1);
   }
-  /// To call after the sorted list changed (ids added); switches to bits past kDense ids.
+  /// By bits: the list need not stay sorted (nor be read again).
+  bool dense() const { return !words_.empty(); }
+  /// To call after `added` joined the list; switches to bits past kDense ids.
   void update(const std::vector<std::uint32_t>& added) {
     if (words_.empty() && sorted_.size() < kDense) return;
     for (std::uint32_t id : words_.empty() ? sorted_ : added) {
@@ -93,50 +99,77 @@ class GrowingIdSet {
   std::vector<std::uint64_t> words_;
 };
 
+/// Sorts ids and drops repeats (on both cores when many: the same list either way).
+inline void sortUniqueIds(std::vector<std::uint32_t>& ids) {
+  if (ids.size() > (std::size_t(1) << 16)) {
+    tbb::parallel_sort(ids.begin(), ids.end());
+  } else {
+    std::sort(ids.begin(), ids.end());
+  }
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+}
+
+/// `added` (sorted, disjoint from `list`) joins `list`: merged while the list is searched, appended
+/// once it is held by bits (sorted at the end).
+inline void joinIds(std::vector<std::uint32_t>& list, GrowingIdSet& set, const std::vector<std::uint32_t>& added) {
+  if (set.dense()) {
+    list.insert(list.end(), added.begin(), added.end());
+  } else {
+    std::vector<std::uint32_t> merged;
+    merged.reserve(list.size() + added.size());
+    std::merge(list.begin(), list.end(), added.begin(), added.end(), std::back_inserter(merged));
+    list = std::move(merged);
+  }
+  set.update(added);
+}
+
 /// growFaces over any corner table. It stops early, with more than maxFaces faces, once a ring
 /// takes it past maxFaces (a caller that would refuse so large a patch need not grow it whole).
+/// Over the in-memory table a wide ring's fans are walked on both cores.
 template <class Table>
 std::vector<FaceId> growFacesIn(Table& topology, std::vector<FaceId> frontier, std::uint32_t rings,
                                 std::size_t maxFaces = std::numeric_limits<std::size_t>::max()) {
+  constexpr bool kShared = std::is_same_v<std::remove_const_t<Table>, Topology>;  // read by threads
   std::vector<FaceId> patch = frontier;
-  std::sort(patch.begin(), patch.end());
-  patch.erase(std::unique(patch.begin(), patch.end()), patch.end());
-  std::vector<VertexId> seen;  // vertices expanded, sorted
+  sortUniqueIds(patch);
+  std::vector<VertexId> seen;  // vertices expanded
   GrowingIdSet inPatch(patch), wasSeen(seen);
   inPatch.update({});
+  // Appends the ids each of `from`'s items gives (on both cores when shared and many).
+  const auto collect = [&](const std::vector<std::uint32_t>& from, auto&& each) {
+    std::vector<std::uint32_t> out;
+    if (kShared && from.size() > (std::size_t(1) << 14)) {
+      tbb::enumerable_thread_specific<std::vector<std::uint32_t>> parts;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.size(), 4096), [&](const auto& range) {
+        std::vector<std::uint32_t>& part = parts.local();
+        for (std::size_t i = range.begin(); i != range.end(); ++i) each(from[i], part);
+      });
+      for (const std::vector<std::uint32_t>& part : parts) out.insert(out.end(), part.begin(), part.end());
+    } else {
+      for (std::uint32_t x : from) each(x, out);
+    }
+    sortUniqueIds(out);
+    return out;
+  };
   for (std::uint32_t ring = 0; ring < rings && !frontier.empty() && patch.size() <= maxFaces; ++ring) {
     // The frontier's vertices not expanded yet, each once (a vertex has about six frontier faces).
-    std::vector<VertexId> unseen;
-    unseen.reserve(3 * frontier.size());
-    for (FaceId f : frontier) {
+    const std::vector<VertexId> unseen = collect(frontier, [&](FaceId f, std::vector<std::uint32_t>& out) {
       for (int k = 0; k < 3; ++k) {
         const VertexId v = topology.vertex(3 * f + k);
-        if (!wasSeen.contains(v)) unseen.push_back(v);
+        if (!wasSeen.contains(v)) out.push_back(v);
       }
-    }
-    std::sort(unseen.begin(), unseen.end());
-    unseen.erase(std::unique(unseen.begin(), unseen.end()), unseen.end());
-    std::vector<FaceId> added;
-    for (VertexId v : unseen) {
+    });
+    std::vector<FaceId> added = collect(unseen, [&](VertexId v, std::vector<std::uint32_t>& out) {
       topology.forEachCornerAround(v, [&](CornerId c) {
         const FaceId g = cornerFace(c);
-        if (!inPatch.contains(g)) added.push_back(g);
+        if (!inPatch.contains(g)) out.push_back(g);
       });
-    }
-    std::vector<VertexId> expanded;
-    expanded.reserve(seen.size() + unseen.size());
-    std::merge(seen.begin(), seen.end(), unseen.begin(), unseen.end(), std::back_inserter(expanded));
-    seen = std::move(expanded);
-    wasSeen.update(unseen);
-    std::sort(added.begin(), added.end());
-    added.erase(std::unique(added.begin(), added.end()), added.end());
-    std::vector<FaceId> grown;
-    grown.reserve(patch.size() + added.size());
-    std::merge(patch.begin(), patch.end(), added.begin(), added.end(), std::back_inserter(grown));
-    patch = std::move(grown);
-    inPatch.update(added);
+    });
+    joinIds(seen, wasSeen, unseen);
+    joinIds(patch, inPatch, added);
     frontier = std::move(added);
   }
+  if (inPatch.dense()) sortUniqueIds(patch);
   return patch;
 }
 
