@@ -24,6 +24,7 @@
 #include "core/mesh/mesh.h"
 #include "core/mesh/topology.h"
 #include "core/quality/metrics.h"
+#include "core/system/parallel.h"
 
 namespace seamvox {
 
@@ -71,8 +72,7 @@ std::vector<VertexId> smoothedCandidates(const std::vector<FaceId>& faces, const
       if (!std::binary_search(tried.begin(), tried.end(), v)) vertices.push_back(v);
     }
   }
-  std::sort(vertices.begin(), vertices.end());
-  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  sortUniqueIds(vertices);
   return vertices;
 }
 
@@ -89,8 +89,7 @@ void finishSmoothedRound(Table& table, const std::vector<VertexId>& vertices, st
   tried = std::move(all);
   faces.clear();
   for (VertexId v : vertices) table.forEachCornerAround(v, [&](CornerId c) { faces.push_back(cornerFace(c)); });
-  std::sort(faces.begin(), faces.end());
-  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  sortUniqueIds(faces);
 }
 
 }  // namespace detail

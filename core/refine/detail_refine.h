@@ -11,9 +11,6 @@
 /// stays free once freed), countTouched(touched, cones, h) (FaceCounts of the solved faces with
 /// their latest values) and collect(touched, out) (the result's corners and vertex counts).
 /// Whole-mesh state stays out: the faces ever solved are a sorted list.
-#include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -99,16 +96,6 @@ class GrowingIdSet {
   std::vector<std::uint64_t> words_;
 };
 
-/// Sorts ids and drops repeats (on both cores when many: the same list either way).
-inline void sortUniqueIds(std::vector<std::uint32_t>& ids) {
-  if (ids.size() > (std::size_t(1) << 16)) {
-    tbb::parallel_sort(ids.begin(), ids.end());
-  } else {
-    std::sort(ids.begin(), ids.end());
-  }
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-}
-
 /// `added` (sorted, disjoint from `list`) joins `list`: merged while the list is searched, appended
 /// once it is held by bits (sorted at the end).
 inline void joinIds(std::vector<std::uint32_t>& list, GrowingIdSet& set, const std::vector<std::uint32_t>& added) {
@@ -135,14 +122,15 @@ std::vector<FaceId> growFacesIn(Table& topology, std::vector<FaceId> frontier, s
   std::vector<VertexId> seen;  // vertices expanded
   GrowingIdSet inPatch(patch), wasSeen(seen);
   inPatch.update({});
-  // Appends the ids each of `from`'s items gives (on both cores when shared and many).
+  // The ids each of `from`'s items gives, sorted and unique (blocks of items on both cores when
+  // shared and many).
   const auto collect = [&](const std::vector<std::uint32_t>& from, auto&& each) {
     std::vector<std::uint32_t> out;
-    if (kShared && from.size() > (std::size_t(1) << 14)) {
-      tbb::enumerable_thread_specific<std::vector<std::uint32_t>> parts;
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.size(), 4096), [&](const auto& range) {
-        std::vector<std::uint32_t>& part = parts.local();
-        for (std::size_t i = range.begin(); i != range.end(); ++i) each(from[i], part);
+    constexpr std::size_t kBlock = 4096;
+    if (kShared && from.size() > 4 * kBlock) {
+      std::vector<std::vector<std::uint32_t>> parts((from.size() + kBlock - 1) / kBlock);
+      parallelForEach(parts.size(), 1, [&](std::uint64_t b) {
+        for (std::size_t i = b * kBlock; i < std::min(from.size(), (b + 1) * kBlock); ++i) each(from[i], parts[b]);
       });
       for (const std::vector<std::uint32_t>& part : parts) out.insert(out.end(), part.begin(), part.end());
     } else {

@@ -5,6 +5,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 namespace seamvox {
 
@@ -17,6 +18,15 @@ void parallelFor(std::uint64_t n, std::uint64_t grain, const std::function<void(
   }
   tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, n, grain),
                     [&](const tbb::blocked_range<std::uint64_t>& r) { body(IndexRange{r.begin(), r.end()}); });
+}
+
+void sortUniqueIds(std::vector<std::uint32_t>& ids) {
+  if (ids.size() > (std::size_t(1) << 16)) {
+    tbb::parallel_sort(ids.begin(), ids.end());
+  } else {
+    std::sort(ids.begin(), ids.end());
+  }
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
 }
 
 }  // namespace seamvox

@@ -4,6 +4,7 @@
 /// by the caller (tools/: tbb::global_control).
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 namespace seamvox {
 
@@ -27,5 +28,8 @@ void parallelForEach(std::uint64_t n, std::uint64_t grain, F&& f) {
     for (std::uint64_t i = r.begin(); i != r.end(); ++i) f(i);
   });
 }
+
+/// Sorts ids and drops repeats, on several threads when they are many (the same list either way).
+void sortUniqueIds(std::vector<std::uint32_t>& ids);
 
 }  // namespace seamvox
