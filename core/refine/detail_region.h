@@ -15,14 +15,15 @@ namespace seamvox::detail {
 /// Whole-mesh faces and corners to their ids in a region (regionFaces sorted); kInvalidId outside.
 /// A region's faces are looked up for every corner of their fans: a bit per id of their span with
 /// the count of faces before each 64-bit word answers in one cache line (a face's id is its rank),
-/// where the span is at most 4,096 times their count (16 bytes per 64 ids: at most 1 KiB per region
-/// face; a group of a round's patch spans the whole mesh); a wider span is searched.
+/// where those words take at most 1 KiB per region face (a group of a round's patch spans the
+/// whole mesh) and 8 MiB in all (an out-of-core window's ids span a billion-face mesh); a wider
+/// span is searched.
 struct RegionIndex {
   explicit RegionIndex(const std::vector<FaceId>& faces) : regionFaces(faces) {
     if (faces.empty()) return;
     first_ = faces.front();
     const std::uint64_t words = (std::uint64_t(faces.back()) - first_) / 64 + 1;
-    if (words > 64 * std::uint64_t(faces.size())) return;
+    if (words > 64 * std::uint64_t(faces.size()) || words > kMaxWords) return;
     words_.assign(words, Word{});
     for (FaceId f : faces) words_[(f - first_) / 64].bits |= std::uint64_t(1) << ((f - first_) % 64);
     std::uint32_t before = 0;
@@ -56,6 +57,7 @@ struct RegionIndex {
     std::uint64_t bits = 0;
     std::uint32_t before = 0;  // region faces in the words before
   };
+  static constexpr std::uint64_t kMaxWords = std::uint64_t(1) << 19;  // 16 bytes each
   FaceId first_ = 0;
   std::vector<Word> words_;  // empty: binary search
 };
