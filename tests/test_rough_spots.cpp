@@ -294,6 +294,47 @@ TEST(RoughSpots, InMemoryAndOutOfCoreRoundsGiveTheSameMoves) {
   }
 }
 
+// A round's region found in waves on both cores (in memory) is the one Dijkstra finds (out of
+// core): the same vertices, distances' shares, fans and positions, and the same cap at the bound
+// the region just fits and one below it; from rough seeds and from seeds on the plane's rim.
+TEST(RoughSpots, TheRegionFoundInWavesIsTheOneDijkstraFinds) {
+  const Surface s = makeSurface(denseSpotPlane(kOuter, kInner, kDense, 0.3, 10));
+  const std::vector<Vec3f> surface = smoothPositions(s.mesh, s.topology, kFieldSmoothingIterations);
+  const auto at = [&](VertexId w) -> Vec3d { return surface[w].cast<double>(); };
+  const auto current = [&](VertexId w) { return surface[w]; };
+  const std::uint32_t n = s.topology.numVertices();
+  std::vector<VertexId> rough, spread;
+  for (VertexId v = 0; v < n; ++v) {
+    if (detail::isRoughVertex(s.topology, v, at, 1e30)) rough.push_back(v);
+    if (v % 97 == 0) spread.push_back(v);
+  }
+  ASSERT_GT(rough.size(), 100u);
+  std::size_t rims = 0;
+  for (VertexId v : spread) rims += s.topology.isBoundaryVertex(v);
+  ASSERT_GT(rims, 0u);
+  for (const auto& [seeds, limit] : {std::pair{rough, float(kGrid)}, std::pair{spread, 1.5f}}) {
+    const detail::RoughRegion dijkstra = detail::searchRoughRegion(s.topology, current, seeds, limit, ~std::uint64_t(0));
+    ASSERT_FALSE(dijkstra.over);
+    const std::size_t size = dijkstra.value.size();
+    ASSERT_GT(dijkstra.active.size(), 2 * seeds.size());
+    ASSERT_GT(size, dijkstra.active.size());
+    for (const std::size_t block : {std::size_t(1024), std::size_t(7)}) {
+      const detail::RoughRegion waves =
+          detail::searchRoughRegionInMemory(s.topology, current, seeds, limit, ~std::uint64_t(0), n, block);
+      EXPECT_FALSE(waves.over);
+      EXPECT_EQ(waves.active, dijkstra.active) << "block " << block;
+      EXPECT_EQ(waves.share, dijkstra.share) << "block " << block;
+      EXPECT_EQ(waves.fanStart, dijkstra.fanStart) << "block " << block;
+      EXPECT_EQ(waves.fan, dijkstra.fan) << "block " << block;
+      EXPECT_EQ(waves.value, dijkstra.value) << "block " << block;
+    }
+    for (const std::uint64_t bound : {std::uint64_t(size - 1), std::uint64_t(size)}) {
+      EXPECT_EQ(detail::searchRoughRegion(s.topology, current, seeds, limit, bound).over, bound < size);
+      EXPECT_EQ(detail::searchRoughRegionInMemory(s.topology, current, seeds, limit, bound, n, 7).over, bound < size);
+    }
+  }
+}
+
 TEST(RoughSpots, InMemoryARegionAboveTheBoundSmoothsNothingAndTheStatsSayIt) {
   // The bound's arithmetic: a quarter of the vertices plus the headroom at kRoughRegionBytes a
   // vertex, at least kRoughRegionMinVertices, no overflow with an unlimited headroom.

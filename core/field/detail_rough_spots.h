@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <queue>
@@ -139,11 +140,267 @@ inline void holdWholeComponents(std::size_t numActive, std::vector<std::uint64_t
 }
 
 /// The share of a smoothing step a vertex of a rough region takes at `t` = its distance from the
-/// seeds over the radius: 1 up to 1/2, then a cosine down to 0 at 1.
+/// seeds over the radius: 1 up to 1/2, then a cosine down to 0 at 1, so that the smoothed region
+/// joins the held surface without a crease (a crease there would put new cones on the rim).
 inline float roughSpotShare(float t) {
   if (!(t > 0.5f)) return 1.0f;
   if (!(t < 1.0f)) return 0.0f;
   return static_cast<float>(0.5 + 0.5 * std::cos(2.0 * M_PI * (double(t) - 0.5)));
+}
+
+/// A round's region of smoothRoughRounds: the vertices within the radius of the seeds (active)
+/// and their neighbours beyond it (held), numbered active first, then held, each by vertex id.
+struct RoughRegion {
+  std::vector<VertexId> active;        ///< increasing
+  std::vector<float> share;            ///< per active vertex: roughSpotShare of its distance
+  std::vector<std::uint64_t> fanStart;  ///< per active vertex + 1: its fan in `fan`
+  std::vector<std::uint32_t> fan;      ///< an interior vertex's neighbours in fan order (local ids)
+  std::vector<Vec3f> value;            ///< positions, active then held
+  bool over = false;                   ///< the region and its held vertices exceed the bound
+};
+
+/// The edge's length from a vertex at distance d and position p to one at q, as every search of
+/// a rough region adds it (in float, so that both searches give the same bits).
+inline float roughStep(float d, const Vec3d& p, const Vec3f& q) {
+  return d + static_cast<float>((q.cast<double>() - p).norm());
+}
+
+/// The region one thread finds (the out-of-core table, read by one thread): Dijkstra from the
+/// seeds along edges in float, each vertex reached given a local id once (hashed), so that an
+/// edge costs one lookup; a vertex within the radius gathers its fan (local ids in fan order, as
+/// smoothingStep walks it) when it is settled, its neighbours beyond the radius becoming held ones.
+/// A vertex's distance is the least over its paths from the seeds (each prefix within `limit`) of
+/// the path's lengths added in order: it does not depend on the order of ties, nor on the search.
+/// Stops as soon as the region holds more than maxRegion vertices (over).
+template <class Table, class Current>
+RoughRegion searchRoughRegion(Table& table, Current&& current, const std::vector<VertexId>& seeds, float limit,
+                              std::uint64_t maxRegion) {
+  RoughRegion region;
+  IdMap local;
+  std::vector<VertexId> ids;   // local id -> vertex
+  std::vector<float> dist;     // local id -> distance (infinite: beyond the radius)
+  std::vector<Vec3f> value;    // local id -> position
+  std::vector<std::uint64_t> fanAt;  // local id -> first entry in fans + 1 (0: no fan gathered)
+  std::vector<std::uint32_t> fans;   // per settled vertex: its fan's size, then its fan
+  const auto localId = [&](VertexId v) {
+    const auto [id, added] = local.emplace(v, static_cast<std::uint32_t>(ids.size()));
+    if (added) {
+      ids.push_back(v);
+      dist.push_back(std::numeric_limits<float>::infinity());
+      value.push_back(current(v));
+      fanAt.push_back(0);
+      region.over = region.over || ids.size() > maxRegion;
+    }
+    return id;
+  };
+  using Entry = std::pair<float, std::uint32_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  for (VertexId v : seeds) {
+    const std::uint32_t i = localId(v);
+    dist[i] = 0.0f;
+    queue.emplace(0.0f, i);
+  }
+  std::vector<std::uint32_t> around;
+  while (!queue.empty() && !region.over) {
+    const auto [d, i] = queue.top();
+    queue.pop();
+    if (d > dist[i] || fanAt[i] != 0) continue;
+    const VertexId v = ids[i];
+    fanAt[i] = fans.size() + 1;
+    fans.push_back(0);
+    if (table.isIsolatedVertex(v)) continue;
+    // An interior vertex's neighbours are its corners' next vertices, its fan; a boundary
+    // vertex's are those and the last corner's previous vertex, and it has no fan (it stays).
+    const bool boundary = table.isBoundaryVertex(v);
+    around.clear();
+    table.forEachCornerAround(v, [&](CornerId c) {
+      around.push_back(localId(table.vertex(nextCorner(c))));
+      if (boundary) around.push_back(localId(table.vertex(prevCorner(c))));
+    });
+    const Vec3d p = value[i].template cast<double>();
+    for (std::uint32_t j : around) {
+      const float dj = roughStep(d, p, value[j]);
+      if (!(dj <= limit) || !(dj < dist[j])) continue;
+      dist[j] = dj;
+      queue.emplace(dj, j);
+    }
+    if (!boundary) {
+      fans[fanAt[i] - 1] = static_cast<std::uint32_t>(around.size());
+      fans.insert(fans.end(), around.begin(), around.end());
+    }
+  }
+  if (region.over) return region;
+  local = IdMap();
+  // Renumbered: the vertices within the radius first, by vertex id, then the held ones.
+  // Sorted as keys (held bit, vertex) with the local id alongside: a sort of contiguous pairs.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(ids.size());
+  for (std::uint32_t i = 0; i < keyed.size(); ++i) {
+    keyed[i] = {(std::uint64_t(fanAt[i] == 0) << 32) | ids[i], i};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> order(ids.size());
+  for (std::uint32_t k = 0; k < order.size(); ++k) order[k] = keyed[k].second;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(keyed);
+  std::vector<std::uint32_t> renumbered(ids.size());
+  for (std::uint32_t k = 0; k < order.size(); ++k) renumbered[order[k]] = k;
+  std::size_t numActive = 0;
+  while (numActive < order.size() && fanAt[order[numActive]] != 0) ++numActive;
+  region.active.resize(numActive);
+  region.share.resize(numActive);
+  region.fanStart.assign(numActive + 1, 0);
+  region.fan.reserve(fans.size() - numActive);
+  for (std::size_t k = 0; k < numActive; ++k) {
+    const std::uint32_t i = order[k];
+    region.active[k] = ids[i];
+    region.share[k] = roughSpotShare(dist[i] / limit);
+    const std::uint64_t at = fanAt[i] - 1;
+    for (std::uint32_t n = 0; n < fans[at]; ++n) region.fan.push_back(renumbered[fans[at + 1 + n]]);
+    region.fanStart[k + 1] = region.fan.size();
+  }
+  region.value.resize(order.size());
+  for (std::uint32_t k = 0; k < order.size(); ++k) region.value[k] = value[order[k]];
+  return region;
+}
+
+/// A distance as a key whose larger values are the nearer distances, 0 for none (a distance is
+/// finite and not negative, so its bits are at most 0x7F7FFFFF): a relaxation is an atomic maximum.
+inline std::uint32_t nearKey(float d) {
+  std::uint32_t bits;
+  std::memcpy(&bits, &d, sizeof bits);
+  return ~bits;
+}
+inline float keyDistance(std::uint32_t key) {
+  const std::uint32_t bits = ~key;
+  float d;
+  std::memcpy(&d, &bits, sizeof d);
+  return d;
+}
+
+/// searchRoughRegion's region on both cores (the in-memory table of numVertices vertices): the
+/// same distances, found in waves (each vertex whose distance fell in one wave relaxes its
+/// neighbours in the next, by atomic maxima of nearKey in a per-vertex array), so the same
+/// region, fans and numbering. The wave in which the region exceeds maxRegion ends the search.
+/// Per-vertex arrays from calloc: only the region's pages are touched. block: vertices a task
+/// takes (the tests' small blocks put small regions on both cores).
+template <class Table, class Current>
+RoughRegion searchRoughRegionInMemory(Table& table, Current&& current, const std::vector<VertexId>& seeds, float limit,
+                                      std::uint64_t maxRegion, std::uint32_t numVertices,
+                                      std::size_t block = 1024) {
+  constexpr std::uint32_t kHeld = 1;  // below any distance's key
+  RoughRegion region;
+  const auto blocksOf = [&](std::size_t n) { return (n + block - 1) / block; };
+  const auto joined = [](std::vector<std::vector<VertexId>>& parts, std::vector<VertexId>& out) {
+    for (std::vector<VertexId>& part : parts) out.insert(out.end(), part.begin(), part.end()), part = {};
+  };
+  const ZeroedIds key = zeroedIds(numVertices);     // nearKey of the distance, later local id + 1
+  const ZeroedIds queued = zeroedIds(numVertices);  // the last wave that queued the vertex
+  std::vector<VertexId> frontier = seeds, reached = seeds;
+  for (VertexId v : seeds) key[v] = nearKey(0.0f);
+  for (std::uint32_t wave = 1; !frontier.empty(); ++wave) {
+    std::vector<std::vector<VertexId>> next(blocksOf(frontier.size())), fresh(next.size());
+    parallelForEach(next.size(), 1, [&](std::uint64_t b) {
+      const std::size_t end = std::min(frontier.size(), (b + 1) * block);
+      for (std::size_t i = b * block; i < end; ++i) {
+        const VertexId v = frontier[i];
+        if (table.isIsolatedVertex(v)) continue;
+        const float d = keyDistance(__atomic_load_n(&key[v], __ATOMIC_RELAXED));
+        const Vec3d p = current(v).template cast<double>();
+        const auto relax = [&](VertexId w) {
+          const float dw = roughStep(d, p, current(w));
+          if (!(dw <= limit)) return;
+          const std::uint32_t k = nearKey(dw);
+          std::uint32_t old = __atomic_load_n(&key[w], __ATOMIC_RELAXED);
+          while (old < k) {
+            if (__atomic_compare_exchange_n(&key[w], &old, k, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+              if (old == 0) fresh[b].push_back(w);
+              if (__atomic_exchange_n(&queued[w], wave, __ATOMIC_RELAXED) != wave) next[b].push_back(w);
+              return;
+            }
+          }
+        };
+        const bool boundary = table.isBoundaryVertex(v);
+        table.forEachCornerAround(v, [&](CornerId c) {
+          relax(table.vertex(nextCorner(c)));
+          if (boundary) relax(table.vertex(prevCorner(c)));
+        });
+      }
+    });
+    frontier.clear();
+    joined(next, frontier);
+    joined(fresh, reached);
+    if (reached.size() > maxRegion) {
+      region.over = true;
+      return region;
+    }
+  }
+  sortUniqueIds(reached);
+  region.active.swap(reached);
+  const std::vector<VertexId>& active = region.active;
+  const std::size_t numActive = active.size();
+  // Shares from the distances; then the held vertices, each claimed once by its slot.
+  region.share.resize(numActive);
+  std::vector<std::vector<VertexId>> heldParts(blocksOf(numActive));
+  parallelForEach(heldParts.size(), 1, [&](std::uint64_t b) {
+    const std::size_t end = std::min(numActive, (b + 1) * block);
+    for (std::size_t k = b * block; k < end; ++k) {
+      region.share[k] = roughSpotShare(keyDistance(key[active[k]]) / limit);
+      const VertexId v = active[k];
+      if (table.isIsolatedVertex(v)) continue;
+      const auto hold = [&](VertexId w) {
+        std::uint32_t expected = 0;
+        if (__atomic_load_n(&key[w], __ATOMIC_RELAXED) == 0 &&
+            __atomic_compare_exchange_n(&key[w], &expected, kHeld, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+          heldParts[b].push_back(w);
+        }
+      };
+      const bool boundary = table.isBoundaryVertex(v);
+      table.forEachCornerAround(v, [&](CornerId c) {
+        hold(table.vertex(nextCorner(c)));
+        if (boundary) hold(table.vertex(prevCorner(c)));
+      });
+    }
+  });
+  std::vector<VertexId> held;
+  joined(heldParts, held);
+  sortUniqueIds(held);
+  if (numActive + held.size() > maxRegion) {
+    region = RoughRegion();
+    region.over = true;
+    return region;
+  }
+  const std::size_t total = numActive + held.size();
+  const auto vertexAt = [&](std::size_t k) { return k < numActive ? active[k] : held[k - numActive]; };
+  region.value.resize(total);
+  parallelFor(total, 4096, [&](const IndexRange& range) {
+    for (std::uint64_t k = range.begin(); k != range.end(); ++k) {
+      const VertexId v = vertexAt(k);
+      key[v] = static_cast<std::uint32_t>(k) + 1;
+      region.value[k] = current(v);
+    }
+  });
+  // Fans by blocks of active vertices, then laid end to end.
+  std::vector<std::vector<std::uint32_t>> fanParts(blocksOf(numActive));
+  region.fanStart.assign(numActive + 1, 0);
+  parallelForEach(fanParts.size(), 1, [&](std::uint64_t b) {
+    const std::size_t end = std::min(numActive, (b + 1) * block);
+    for (std::size_t k = b * block; k < end; ++k) {
+      const VertexId v = active[k];
+      const std::size_t before = fanParts[b].size();
+      if (!table.isIsolatedVertex(v) && !table.isBoundaryVertex(v)) {
+        table.forEachCornerAround(v, [&](CornerId c) { fanParts[b].push_back(key[table.vertex(nextCorner(c))] - 1); });
+      }
+      region.fanStart[k + 1] = fanParts[b].size() - before;
+    }
+  });
+  std::vector<std::uint64_t> partStart(fanParts.size() + 1, 0);
+  for (std::size_t b = 0; b < fanParts.size(); ++b) partStart[b + 1] = partStart[b] + fanParts[b].size();
+  for (std::size_t k = 0; k < numActive; ++k) region.fanStart[k + 1] += region.fanStart[k];
+  region.fan.resize(partStart.back());
+  parallelForEach(fanParts.size(), 1, [&](std::uint64_t b) {
+    std::copy(fanParts[b].begin(), fanParts[b].end(), region.fan.begin() + partStart[b]);
+    fanParts[b] = {};
+  });
+  return region;
 }
 
 /// The rounds of smoothRoughSpots from the rough vertices `seeds` (increasing): base(v) gives the
@@ -152,12 +409,11 @@ inline float roughSpotShare(float t) {
 /// A round whose region (with its held neighbours) would exceed maxRegion vertices smooths
 /// nothing and ends the rounds, *capped set (the out-of-core pass's memory bound).
 /// inMemoryVertices: the in-memory table's vertex count (0 out of core, where the table is paged
-/// and read by one thread): local ids per vertex in an array of 4 B a vertex instead of hashed,
-/// and the re-test of the region on both cores; the same moves either way.
+/// and read by one thread): the region found on both cores (searchRoughRegionInMemory) and its
+/// re-test on both cores; the same moves either way.
 /// Each round: the vertices within kRoughSpotRadius * gridLength of the seeds along edges
-/// (Dijkstra, in float), their fans gathered once, kRoughSpotSteps Jacobi steps on them, each
-/// vertex taking roughSpotShare of a step (in parallel, the same floats for any thread count), then
-/// the seeds still rough.
+/// (searchRoughRegion), kRoughSpotSteps Jacobi steps on them, each vertex taking roughSpotShare
+/// of a step (in parallel, the same floats for any thread count), then the seeds still rough.
 template <class Table, class Base>
 std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& base, std::vector<VertexId> seeds,
                                                           double gridLength, double spacing, std::uint32_t& rounds,
@@ -173,118 +429,18 @@ std::vector<std::pair<VertexId, Vec3f>> smoothRoughRounds(Table& table, Base&& b
   const auto at = [&](VertexId v) -> Vec3d { return current(v).template cast<double>(); };
   const float limit = static_cast<float>(kRoughSpotRadius * gridLength);
   for (rounds = 0; rounds < kRoughSpotRounds && !seeds.empty(); ++rounds) {
-    // Dijkstra from the seeds along edges (in float). Each vertex reached gets a local id once,
-    // so that an edge costs one hash lookup; a vertex within the radius gathers its fan (local ids
-    // in fan order, as smoothingStep walks it) when it is settled, its neighbours beyond the
-    // radius becoming held ones. The distances do not depend on the order of ties.
-    IdMap local;
-    std::vector<VertexId> ids;   // local id -> vertex
-    std::vector<float> dist;     // local id -> distance (infinite: beyond the radius)
-    std::vector<Vec3f> value;    // local id -> position
-    std::vector<std::uint64_t> fanAt;  // local id -> first entry in fans + 1 (0: no fan gathered)
-    std::vector<std::uint32_t> fans;   // per settled vertex: its fan's size, then its fan
-    bool over = false;
-    // In memory, local ids sit in a per-vertex array (zero: none, else id + 1), whose
-    // entries for a region are as close together as the region's corner-table entries; the
-    // hashed map scatters every lookup. Untouched pages of the array are never faulted in.
-    ZeroedIds dense = inMemoryVertices ? zeroedIds(inMemoryVertices) : ZeroedIds(nullptr, std::free);
-    const auto localId = [&](VertexId v) {
-      std::uint32_t id = static_cast<std::uint32_t>(ids.size());
-      bool added = true;
-      if (dense) {
-        std::uint32_t& slot = dense[v];
-        added = slot == 0;
-        if (added) slot = id + 1;
-        else id = slot - 1;
-      } else {
-        std::tie(id, added) = local.emplace(v, id);
-      }
-      over = over || ids.size() >= maxRegion;
-      if (added) {
-        ids.push_back(v);
-        dist.push_back(std::numeric_limits<float>::infinity());
-        value.push_back(current(v));
-        fanAt.push_back(0);
-      }
-      return id;
-    };
-    using Entry = std::pair<float, std::uint32_t>;
-    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-    for (VertexId v : seeds) {
-      const std::uint32_t i = localId(v);
-      dist[i] = 0.0f;
-      queue.emplace(0.0f, i);
-    }
-    std::vector<std::uint32_t> around;
-    while (!queue.empty() && !over) {
-      const auto [d, i] = queue.top();
-      queue.pop();
-      if (d > dist[i] || fanAt[i] != 0) continue;
-      const VertexId v = ids[i];
-      fanAt[i] = fans.size() + 1;
-      fans.push_back(0);
-      if (table.isIsolatedVertex(v)) continue;
-      // An interior vertex's neighbours are its corners' next vertices, its fan; a boundary
-      // vertex's are those and the last corner's previous vertex, and it has no fan (it stays).
-      const bool boundary = table.isBoundaryVertex(v);
-      around.clear();
-      table.forEachCornerAround(v, [&](CornerId c) {
-        around.push_back(localId(table.vertex(nextCorner(c))));
-        if (boundary) around.push_back(localId(table.vertex(prevCorner(c))));
-      });
-      const Vec3d p = value[i].template cast<double>();
-      for (std::uint32_t j : around) {
-        const float dj = d + static_cast<float>((value[j].template cast<double>() - p).norm());
-        if (!(dj <= limit) || !(dj < dist[j])) continue;
-        dist[j] = dj;
-        queue.emplace(dj, j);
-      }
-      if (!boundary) {
-        fans[fanAt[i] - 1] = static_cast<std::uint32_t>(around.size());
-        fans.insert(fans.end(), around.begin(), around.end());
-      }
-    }
-    local = IdMap();  // freed before the steps
-    dense.reset();
-    if (over) {  // a region above the bound: this round smooths nothing, and the rounds stop
+    RoughRegion region = inMemoryVertices
+                             ? searchRoughRegionInMemory(table, current, seeds, limit, maxRegion, inMemoryVertices)
+                             : searchRoughRegion(table, current, seeds, limit, maxRegion);
+    if (region.over) {  // a region above the bound: this round smooths nothing, and the rounds stop
       if (capped) *capped = true;
       break;
     }
-    // Renumbered: the vertices within the radius first, by vertex id, then the held ones.
-    // Sorted as keys (held bit, vertex) with the local id alongside: a sort of contiguous pairs.
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(ids.size());
-    for (std::uint32_t i = 0; i < keyed.size(); ++i) {
-      keyed[i] = {(std::uint64_t(fanAt[i] == 0) << 32) | ids[i], i};
-    }
-    std::sort(keyed.begin(), keyed.end());
-    std::vector<std::uint32_t> order(ids.size());
-    for (std::uint32_t k = 0; k < order.size(); ++k) order[k] = keyed[k].second;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(keyed);
-    std::vector<std::uint32_t> renumbered(ids.size());
-    for (std::uint32_t k = 0; k < order.size(); ++k) renumbered[order[k]] = k;
-    std::size_t numActive = 0;
-    while (numActive < order.size() && fanAt[order[numActive]] != 0) ++numActive;
-    std::vector<VertexId> active(numActive);
-    // Each vertex's share of a step: whole within half the radius, tapering to none at the rim,
-    // so that the smoothed region joins the held surface without a crease (a crease there would
-    // put new cones on the rim).
-    std::vector<float> share(numActive);
-    std::vector<std::uint64_t> fanStart(numActive + 1, 0);
-    std::vector<std::uint32_t> fan;
-    fan.reserve(fans.size() - numActive);
-    for (std::size_t k = 0; k < numActive; ++k) {
-      const std::uint32_t i = order[k];
-      active[k] = ids[i];
-      share[k] = roughSpotShare(dist[i] / limit);
-      const std::uint64_t at = fanAt[i] - 1;
-      for (std::uint32_t n = 0; n < fans[at]; ++n) fan.push_back(renumbered[fans[at + 1 + n]]);
-      fanStart[k + 1] = fan.size();
-    }
-    {
-      std::vector<Vec3f> sorted(order.size());
-      for (std::uint32_t k = 0; k < order.size(); ++k) sorted[k] = value[order[k]];
-      value.swap(sorted);
-    }
+    const std::vector<VertexId>& active = region.active;
+    const std::vector<float>& share = region.share;
+    std::vector<std::uint64_t>& fanStart = region.fanStart;
+    std::vector<std::uint32_t>& fan = region.fan;
+    std::vector<Vec3f>& value = region.value;
     holdWholeComponents(active.size(), fanStart, fan);
     // Both buffers hold the held vertices after the active ones, so that a step swaps them.
     std::vector<Vec3f> next(value);
