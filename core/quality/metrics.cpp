@@ -381,25 +381,32 @@ double cornerAngleSum(const Topology& topology, const WedgeMap& cornerUV, Vertex
 
 namespace {
 
-/// At least cornerUVAngle(q, next, prev) (by over 1e-5 rad, more than fastAtan2's error): the
-/// upper end of the sixteenth of a turn the angle lies in, from comparisons only.
-double cornerUVAngleBound(const Vec2d& q, const Vec2d& next, const Vec2d& prev) {
+/// The sixteenths of a turn that bound cornerUVAngle from above (cornerUVAngleBound): a corner's
+/// bound is kAngleBound[k] for the k its angle lies below.
+constexpr double kEighth = 0.125 * M_PI, kMargin = 1e-5;
+constexpr double kAngleBound[9] = {kMargin,          kEighth + kMargin,     2 * kEighth + kMargin,
+                                   3 * kEighth + kMargin, 4 * kEighth + kMargin, 5 * kEighth + kMargin,
+                                   6 * kEighth + kMargin, 7 * kEighth + kMargin, M_PI + kMargin};
+
+/// The k of kAngleBound[k] >= cornerUVAngle(q, next, prev) (by over 1e-5 rad, more than
+/// fastAtan2's error): the upper end of the eighth of a half turn the angle lies in, from
+/// comparisons only (0: a negative angle or a collapsed edge).
+std::uint8_t cornerUVAngleBound(const Vec2d& q, const Vec2d& next, const Vec2d& prev) {
   const Vec2d a = next - q, b = prev - q;
-  if (a == Vec2d::Zero() || b == Vec2d::Zero()) return 1e-5;
+  if (a == Vec2d::Zero() || b == Vec2d::Zero()) return 0;
   const double y = a.x() * b.y() - a.y() * b.x(), x = a.dot(b);
   constexpr double t = 0.41421356237309503;  // tan(pi / 8), rounded up
-  constexpr double eighth = 0.125 * M_PI, margin = 1e-5;
-  if (y < 0.0) return margin;  // below the axis: a negative angle
+  if (y < 0.0) return 0;  // below the axis: a negative angle
   if (x > 0.0) {
-    if (y <= t * x) return eighth + margin;
-    if (y <= x) return 2 * eighth + margin;
-    if (t * y <= x) return 3 * eighth + margin;
-    return 4 * eighth + margin;
+    if (y <= t * x) return 1;
+    if (y <= x) return 2;
+    if (t * y <= x) return 3;
+    return 4;
   }
-  if (-x <= t * y) return 5 * eighth + margin;
-  if (-x <= y) return 6 * eighth + margin;
-  if (t * -x <= y) return 7 * eighth + margin;
-  return M_PI + margin;
+  if (-x <= t * y) return 5;
+  if (-x <= y) return 6;
+  if (t * -x <= y) return 7;
+  return 8;
 }
 
 }  // namespace
@@ -407,6 +414,15 @@ double cornerUVAngleBound(const Vec2d& q, const Vec2d& next, const Vec2d& prev) 
 std::vector<VertexId> woundVertices(const Topology& topology, const WedgeMap& cornerUV) {
   checkCorners(cornerUV, 3 * static_cast<std::size_t>(topology.numFaces()), "metrics");
   const std::uint32_t nv = topology.numVertices();
+  // Each corner's bound once, by faces (three lookups of the map a face instead of three a corner
+  // around every vertex).
+  std::vector<std::uint8_t> bound(3 * std::size_t(topology.numFaces()));
+  parallelFor(topology.numFaces(), 4096, [&](const IndexRange& range) {
+    for (FaceId f = range.begin(); f != range.end(); ++f) {
+      const Vec2d q[3] = {cornerUV[3 * f], cornerUV[3 * f + 1], cornerUV[3 * f + 2]};
+      for (int k = 0; k < 3; ++k) bound[3 * f + k] = cornerUVAngleBound(q[k], q[(k + 1) % 3], q[(k + 2) % 3]);
+    }
+  });
   constexpr std::uint32_t kBlock = 1u << 16;  // fixed blocks: the list comes out in vertex order
   std::vector<std::vector<VertexId>> found((std::uint64_t(nv) + kBlock - 1) / kBlock);
   parallelForEach(found.size(), 1, [&](std::uint64_t b) {
@@ -415,11 +431,9 @@ std::vector<VertexId> woundVertices(const Topology& topology, const WedgeMap& co
       if (topology.isIsolatedVertex(v)) continue;
       // A sum of upper bounds decides most vertices without an arctangent. The walk from
       // vertexCorner covers a boundary fan too: its sum is tested first (cheaper).
-      double bound = 0.0;
-      topology.forEachCornerAround(v, [&](CornerId c) {
-        bound += cornerUVAngleBound(cornerUV[c], cornerUV[nextCorner(c)], cornerUV[prevCorner(c)]);
-      });
-      if (bound < kWoundAngleSum) continue;
+      double sum = 0.0;
+      topology.forEachCornerAround(v, [&](CornerId c) { sum += kAngleBound[bound[c]]; });
+      if (sum < kWoundAngleSum) continue;
       if (cornerAngleSum(topology, cornerUV, v) >= kWoundAngleSum && !topology.isBoundaryVertex(v)) {
         found[b].push_back(v);
       }
