@@ -560,8 +560,8 @@ ScratchField computeScratchField(ScratchFolder& folder, const CleanScratch& scra
         }
         Vec3d ownNormal = Vec3d::Zero();
         if (smoothed) {
-          ownNormal = detail::faceFrame(r->own.points(t)).n;
-          block[i] = rotateBetween(detail::faceFrame(p).n, ownNormal, block[i].cast<double>()).cast<float>();
+          ownNormal = detail::faceFrameNormal(r->own.points(t));
+          block[i] = rotateBetween(detail::faceFrameNormal(p), ownNormal, block[i].cast<double>()).cast<float>();
         }
         if (withAngles) angles[i] = detail::faceAngleData(p, smoothed ? &ownNormal : nullptr, block[i].cast<double>());
       }
@@ -614,7 +614,7 @@ ScratchSingularities computeScratchSingularities(ScratchFolder& folder, const Cl
             auto r = anglePool.take();
             for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
               const Triangle t = blockFaces[i].triangle;
-              const Vec3d ownNormal = smoothed ? detail::faceFrame(r->own.points(t)).n : Vec3d::Zero();
+              const Vec3d ownNormal = smoothed ? detail::faceFrameNormal(r->own.points(t)) : Vec3d::Zero();
               data[i] = detail::faceAngleData(r->surface.points(t), smoothed ? &ownNormal : nullptr,
                                               blockDirections[i].cast<double>());
             }

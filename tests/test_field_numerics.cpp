@@ -6,6 +6,7 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <random>
 
 #include "core/field/fast_atan2.h"
 #include "core/field/field_numerics.h"
@@ -26,6 +27,36 @@ TEST(FieldNumerics, DualWeightIsEdgeOverBarycentreDistanceWithinBounds) {
   EXPECT_DOUBLE_EQ(detail::dualWeight(1e-9, o, x), 1e-3) << "bounded below";
   EXPECT_DOUBLE_EQ(detail::dualWeight(0.0, o, x), 1e-3) << "zero-length edge";
   EXPECT_DOUBLE_EQ(detail::dualWeight(std::nan(""), o, x), 1e-3);
+}
+
+// faceFrameNormal is faceFrame's normal bit for bit: random faces at many scales, and the
+// zero-area ones (coincident first edge, collinear, a point, tiny, huge, not finite) whose
+// fallback frame it takes.
+TEST(FieldNumerics, FaceFrameNormalIsTheFramesNormalBitForBit) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  const auto same = [](const std::array<Vec3d, 3>& p) {
+    const Vec3d a = detail::faceFrame(p).n, b = detail::faceFrameNormal(p);
+    for (int i = 0; i < 3; ++i) {
+      if (!(a[i] == b[i] || (std::isnan(a[i]) && std::isnan(b[i])))) return false;
+    }
+    return true;
+  };
+  for (int i = 0; i < 20000; ++i) {
+    const double scale = std::pow(10.0, (i % 13) * 25 - 150);
+    std::array<Vec3d, 3> p;
+    for (Vec3d& x : p) x = scale * Vec3d(coordinate(random), coordinate(random), coordinate(random));
+    ASSERT_TRUE(same(p)) << i;
+    const std::array<Vec3d, 3> collinear = {p[0], p[1], p[0] + 2.0 * (p[1] - p[0])};
+    ASSERT_TRUE(same(collinear)) << i;
+    ASSERT_TRUE(same({p[0], p[0], p[2]})) << i;
+    ASSERT_TRUE(same({p[0], p[0], p[0]})) << i;
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  ASSERT_TRUE(same({Vec3d::Zero(), Vec3d(inf, 0, 0), Vec3d(0, 1, 0)}));
+  ASSERT_TRUE(same({Vec3d::Zero(), Vec3d(1e300, 0, 0), Vec3d(0, 1e300, 0)}));
+  ASSERT_TRUE(same({Vec3d::Zero(), Vec3d(1e-170, 0, 0), Vec3d(0, 1e-170, 0)}));
+  ASSERT_TRUE(same({Vec3d::Zero(), Vec3d(1, 0, 0), Vec3d(std::nan(""), 1, 0)}));
 }
 
 // The singularities and the wound-vertex count take their angles from fastAtan2: within 2e-6 rad

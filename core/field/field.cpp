@@ -44,6 +44,7 @@ namespace {
 using detail::cornerAngles;
 using detail::FaceFrame;
 using detail::faceFrame;
+using detail::faceFrameNormal;
 using detail::wrapAngle;
 
 /// A frame, the angles of the three corner edges in it and the three corner angles.
@@ -178,7 +179,7 @@ FieldSingularities singularitiesOf(const TriangleMesh& mesh, const Topology& top
   parallelFor(numFaces, 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const Triangle& t = mesh.triangles[f];
-      const Vec3d ownNormal = ownFrames ? Vec3d::Zero() : faceFrame(mesh, f).n;
+      const Vec3d ownNormal = ownFrames ? Vec3d::Zero() : faceFrameNormal(mesh.positions, t);
       faceData[f] = detail::faceAngleData({pointOf(positions, t[0]), pointOf(positions, t[1]), pointOf(positions, t[2])},
                                           ownFrames ? nullptr : &ownNormal, field.at(f));
     }

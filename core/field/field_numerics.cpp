@@ -44,6 +44,17 @@ FaceFrame faceFrame(const std::array<Vec3d, 3>& p) {
 
 FaceFrame faceFrame(const TriangleMesh& mesh, FaceId f) { return faceFrame(mesh.positions, mesh.triangles[f]); }
 
+Vec3d faceFrameNormal(const std::array<Vec3d, 3>& p) {
+  const Vec3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+  const double area2 = n.norm();
+  if (area2 > 0.0 && (p[1] - p[0]).squaredNorm() > 0.0 && std::isfinite(area2)) return n / area2;
+  return faceFrame(p).n;  // zero-area face: the fallback frame's normal
+}
+
+Vec3d faceFrameNormal(const std::vector<Vec3f>& positions, const Triangle& t) {
+  return faceFrameNormal({positions[t[0]].cast<double>(), positions[t[1]].cast<double>(), positions[t[2]].cast<double>()});
+}
+
 Vec3d faceCentroid(const TriangleMesh& mesh, FaceId f) {
   const Triangle& t = mesh.triangles[f];
   return (mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0;

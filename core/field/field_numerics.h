@@ -25,6 +25,9 @@ struct FaceFrame {
 FaceFrame faceFrame(const std::array<Vec3d, 3>& p);
 FaceFrame faceFrame(const std::vector<Vec3f>& positions, const Triangle& t);
 FaceFrame faceFrame(const TriangleMesh& mesh, FaceId f);
+/// faceFrame(p).n, bit for bit, without the frame's other axes.
+Vec3d faceFrameNormal(const std::array<Vec3d, 3>& p);
+Vec3d faceFrameNormal(const std::vector<Vec3f>& positions, const Triangle& t);
 
 /// Barycentre of a face.
 Vec3d faceCentroid(const TriangleMesh& mesh, FaceId f);

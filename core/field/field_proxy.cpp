@@ -699,7 +699,7 @@ CrossField computeCrossField(TriangleMesh& mesh, const Topology& topology, Field
   parallelFor(topology.numFaces(), 4096, [&](const IndexRange& range) {
     for (FaceId f = range.begin(); f != range.end(); ++f) {
       const Triangle& t = mesh.triangles[f];
-      field.set(f, rotateBetween(detail::faceFrame(flat, t).n, detail::faceFrame(mesh.positions, t).n, field.at(f)));
+      field.set(f, rotateBetween(detail::faceFrameNormal(flat, t), detail::faceFrameNormal(mesh.positions, t), field.at(f)));
     }
   });
   field = snap(std::move(field));
