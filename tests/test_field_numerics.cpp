@@ -7,8 +7,10 @@
 #include <complex>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "core/field/fast_atan2.h"
+#include "core/field/detail_singularities.h"
 #include "core/field/field_numerics.h"
 #include "core/field/field_proxy.h"
 #include "core/system/errors.h"
@@ -57,6 +59,20 @@ TEST(FieldNumerics, FaceFrameNormalIsTheFramesNormalBitForBit) {
   ASSERT_TRUE(same({Vec3d::Zero(), Vec3d(1e300, 0, 0), Vec3d(0, 1e300, 0)}));
   ASSERT_TRUE(same({Vec3d::Zero(), Vec3d(1e-170, 0, 0), Vec3d(0, 1e-170, 0)}));
   ASSERT_TRUE(same({Vec3d::Zero(), Vec3d(1, 0, 0), Vec3d(std::nan(""), 1, 0)}));
+}
+
+// roundHalfAway is std::lround: at and next to every half and integer within 4, at random, and
+// beyond 4 (where it calls lround).
+TEST(FieldNumerics, RoundHalfAwayIsLround) {
+  std::vector<double> xs = {0.0, -0.0, 0.49999999999999994, -0.49999999999999994, 1e-300, -1e-300, 4.0, -4.0, 1e17};
+  for (int k = -8; k <= 8; ++k) {
+    const double x = 0.5 * k;
+    xs.insert(xs.end(), {x, std::nextafter(x, 10.0), std::nextafter(x, -10.0)});
+  }
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> any(-4.5, 4.5);
+  for (int i = 0; i < 100000; ++i) xs.push_back(any(random));
+  for (const double x : xs) ASSERT_EQ(detail::roundHalfAway(x), std::lround(x)) << x;
 }
 
 // The singularities and the wound-vertex count take their angles from fastAtan2: within 2e-6 rad

@@ -12,7 +12,20 @@
 namespace seamvox::detail {
 
 /// a wrapped into (-pi, pi].
-double wrapAngle(double a);
+inline double wrapAngle(double a) {
+  constexpr double kTwoPi = 2.0 * M_PI;
+  if (!(a > -3.0 * M_PI && a <= 3.0 * M_PI)) a = std::fmod(a, kTwoPi);  // rare: far out
+  if (a > M_PI) a -= kTwoPi;
+  if (a <= -M_PI) a += kTwoPi;
+  return a;
+}
+
+/// std::lround(x), without the library call where |x| < 4 (x - trunc(x) is exact there).
+inline long roundHalfAway(double x) {
+  if (!(std::abs(x) < 4.0)) return std::lround(x);
+  const double t = std::trunc(x), f = x - t;
+  return static_cast<long>(t) + (f >= 0.5) - (f <= -0.5);
+}
 
 /// Interior angles at the three corners from the frame angles of their edges. Turning angle at
 /// corner k: from the incoming edge (corner k+1) to the outgoing one (corner k+2). The third is
@@ -43,7 +56,13 @@ struct Crossing {
   std::uint8_t matching;
   float eps;
 };
-Crossing crossingOf(const FaceAngleData& f, unsigned cSlot, const FaceAngleData& g, unsigned oSlot);
+inline Crossing crossingOf(const FaceAngleData& f, unsigned cSlot, const FaceAngleData& g, unsigned oSlot) {
+  // kappa: the edge's angle in g's frame (traversed reversed: plus pi) minus its angle in f's.
+  const double kappa = wrapAngle(double(g.edge[oSlot]) + M_PI - double(f.edge[cSlot]));
+  const double d = wrapAngle(double(g.theta) - double(f.theta) - kappa);
+  const long k = roundHalfAway(d / (0.5 * M_PI));  // in [-2, 2]
+  return Crossing{static_cast<std::uint8_t>(((k % 4) + 4) % 4), static_cast<float>(d - k * (0.5 * M_PI))};
+}
 
 /// A vertex's index in quarter turns from its turn (radians): the rounding vertexIndices applies.
 inline std::int32_t quarterTurns(double turn) { return static_cast<std::int32_t>(std::lround(4.0 * turn / (2.0 * M_PI))); }

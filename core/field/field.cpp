@@ -26,19 +26,6 @@
 
 namespace seamvox {
 
-namespace detail {
-
-/// a wrapped into (-pi, pi].
-double wrapAngle(double a) {
-  constexpr double kTwoPi = 2.0 * M_PI;
-  if (!(a > -3.0 * M_PI && a <= 3.0 * M_PI)) a = std::fmod(a, kTwoPi);  // rare: far out
-  if (a > M_PI) a -= kTwoPi;
-  if (a <= -M_PI) a += kTwoPi;
-  return a;
-}
-
-}  // namespace detail
-
 namespace {
 
 using detail::cornerAngles;
@@ -104,14 +91,6 @@ FaceAngleData faceAngleData(const std::array<Vec3d, 3>& surface, const Vec3d* ow
   // Corner k names the edge from vertex k+1 to vertex k+2 (topology.h), as in faceAngles.
   for (int k = 0; k < 3; ++k) out.edge[k] = float(roundedFrameAngle(frame, surface[(k + 2) % 3] - surface[(k + 1) % 3]));
   return out;
-}
-
-Crossing crossingOf(const FaceAngleData& f, unsigned cSlot, const FaceAngleData& g, unsigned oSlot) {
-  // kappa as in transportAngle.
-  const double kappa = wrapAngle(double(g.edge[oSlot]) + M_PI - double(f.edge[cSlot]));
-  const double d = wrapAngle(double(g.theta) - double(f.theta) - kappa);
-  const long k = std::lround(d / (0.5 * M_PI));  // in [-2, 2]
-  return Crossing{static_cast<std::uint8_t>(((k % 4) + 4) % 4), static_cast<float>(d - k * (0.5 * M_PI))};
 }
 
 }  // namespace detail
