@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
 
 #include <tbb/global_control.h>
@@ -81,6 +83,107 @@ TEST(Untangle, EnergyGradientAndHessianMatchDifferences) {
 using testing::generatedMesh;
 
 TriangleMesh sphere(std::uint64_t faces) { return generatedMesh(MeshKind::Sphere, faces); }
+
+// The relocation's kernel centre against the plain enumeration of every vertex of the linear
+// programme (each feasibility tested in constraint order): the same margin and centre bit for bit,
+// on fans with a kernel, fans without one (Gain's halved, unweighted positives), regular fans
+// whose vertices tie, and random half-planes that are mostly infeasible.
+double enumeratedKernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>& offset,
+                              const std::vector<double>& weight, Vec2d& centre) {
+  const std::size_t n = normal.size();
+  double best = -std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = a + 1; b < n; ++b) {
+      for (std::size_t c = b + 1; c < n; ++c) {
+        Eigen::Matrix3d m;
+        Eigen::Vector3d r;
+        const std::size_t ids[3] = {a, b, c};
+        for (int k = 0; k < 3; ++k) {
+          m.row(k) << normal[ids[k]].x(), normal[ids[k]].y(), -weight[ids[k]];
+          r[k] = -offset[ids[k]];
+        }
+        const Eigen::Vector3d c01 = m.col(1).cross(m.col(2)), c12 = m.col(2).cross(m.col(0)),
+                              c20 = m.col(0).cross(m.col(1));
+        const double det = m.col(0).dot(c01);
+        if (std::abs(det) < 1e-300) continue;
+        const Eigen::Vector3d x(c01.dot(r) / det, c12.dot(r) / det, c20.dot(r) / det);
+        if (!x.allFinite() || x[2] <= best) continue;
+        bool feasible = true;
+        for (std::size_t i = 0; i < n; ++i) {
+          const double need = x[2] * weight[i];
+          feasible = feasible &&
+                     normal[i].dot(x.head<2>()) + offset[i] >= need - 1e-9 * (std::abs(need) + normal[i].norm()) - 1e-300;
+        }
+        if (feasible) best = x[2], centre = x.head<2>();
+      }
+    }
+  }
+  return best;
+}
+
+TEST(Untangle, KernelCentreIsTheEnumeratedOptimumBitForBit) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::size_t withKernel = 0, without = 0, none = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int kind = trial % 4;
+    const int fan = 3 + trial % 9;
+    std::vector<Vec2d> normal;
+    std::vector<double> offset, weight;
+    // The fan's triangles (0, a, b) around the vertex at the origin, as relocateVertex writes
+    // them: ring points at random radii and angles, some pulled across the vertex (folded).
+    std::vector<Vec2d> ring;
+    for (int k = 0; k < fan; ++k) {
+      const double angle = 2.0 * M_PI * (k + (kind == 2 ? 0.0 : 0.4 * unit(random))) / fan;
+      double radius = kind == 2 ? 1.0 : 1.0 + 0.5 * unit(random);
+      if (kind == 1 && k == 0) radius = -0.3;
+      ring.emplace_back(radius * std::cos(angle), radius * std::sin(angle));
+    }
+    Vec2d lo = Vec2d::Constant(1e300), hi = -lo;
+    for (int k = 0; k < fan; ++k) {
+      const Vec2d a = ring[k], b = ring[(k + 1) % fan];
+      if (kind == 3) {
+        normal.emplace_back(unit(random), unit(random));
+        offset.push_back(unit(random));
+        weight.push_back(normal.back().norm());
+      } else {
+        const Vec2d nk(a.y() - b.y(), b.x() - a.x());
+        normal.push_back(nk);
+        offset.push_back(a.x() * b.y() - a.y() * b.x());
+        weight.push_back(nk.norm());
+      }
+      lo = lo.cwiseMin(a).cwiseMin(b), hi = hi.cwiseMax(a).cwiseMax(b);
+    }
+    for (int axis = 0; axis < 2; ++axis) {
+      for (const double sign : {1.0, -1.0}) {
+        normal.push_back(axis == 0 ? Vec2d(sign, 0.0) : Vec2d(0.0, sign));
+        offset.push_back(sign > 0 ? -lo[axis] : hi[axis]);
+        weight.push_back(0.0);
+      }
+    }
+    for (int pass = 0; pass < 2; ++pass) {
+      Vec2d expected(7.0, 7.0), got(7.0, 7.0);
+      const double want = enumeratedKernelCentre(normal, offset, weight, expected);
+      const double have = detail::kernelCentre(normal, offset, weight, got);
+      EXPECT_EQ(std::memcmp(&want, &have, sizeof(double)), 0) << "trial " << trial << " pass " << pass;
+      EXPECT_EQ(std::memcmp(expected.data(), got.data(), sizeof(Vec2d)), 0) << "trial " << trial << " pass " << pass;
+      if (pass == 1) break;
+      if (want > 0.0) {
+        ++withKernel;
+        break;
+      }
+      (std::isfinite(want) ? without : none) += 1;
+      // No kernel: as the Gain move asks again, the positive fan triangles halved and unweighted.
+      for (int k = 0; k < fan; ++k) {
+        if (offset[k] > 0.0) offset[k] *= 0.5, weight[k] = 0.0;
+      }
+    }
+  }
+  // Every kind of programme was met.
+  EXPECT_GT(withKernel, 500u);
+  EXPECT_GT(without, 100u);
+  EXPECT_GT(none + without, 300u);
+}
 
 TEST(ConeWeights, SquareRootOfRadiusOverDistanceInsideOneOutside) {
   const TriangleMesh mesh = sphere(4000);

@@ -1,6 +1,8 @@
 #pragma once
 /// The untangling energy of the foldover repair's joint patches (untangle.cpp; Garanzha et al.
 /// 2021) per face, with its gradient and Hessian in one corner's value: declared here for tests.
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "core/mesh/mesh.h"
@@ -27,5 +29,13 @@ struct UntanglingTerms {
 };
 UntanglingTerms untanglingTerms(const ReferenceShape& shape, const Vec2d& q0, const Vec2d& q1, const Vec2d& q2, int k,
                                 double eps);
+
+/// The point p maximizing min_i (n_i . p + c_i) / w_i over the half-planes n_i . p + c_i >= 0
+/// with weight w_i > 0, subject also to those with weight 0 (a bounding box): a 2D linear
+/// programme solved by its vertices (the fans are small). Returns that margin (<= 0: the
+/// weighted half-planes have no common interior), or -inf when no vertex is feasible; of equal
+/// margins, the first vertex in the order of its constraints' indices.
+double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>& offset,
+                    const std::vector<double>& weight, Vec2d& centre);
 
 }  // namespace seamvox::detail

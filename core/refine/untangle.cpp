@@ -164,45 +164,6 @@ std::uint32_t patchRings(const TriangleMesh& mesh, const std::vector<FaceId>& se
   return static_cast<std::uint32_t>(std::clamp(rings, 2.0, 64.0));
 }
 
-// The point p maximizing min_i (n_i . p + c_i) / w_i over the half-planes n_i . p + c_i >= 0
-// with weight w_i > 0, subject also to those with weight 0 (a bounding box): a 2D linear
-// programme solved by its vertices (the fans are small). Returns that margin (<= 0: the
-// weighted half-planes have no common interior), or -inf when no vertex is feasible.
-double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>& offset,
-                    const std::vector<double>& weight, Vec2d& centre) {
-  const std::size_t n = normal.size();
-  double best = -std::numeric_limits<double>::infinity();
-  // Each candidate is where three constraints (n_i . p + c_i = t w_i) meet: the optimum of a
-  // bounded region is one of them (the box bounds it).
-  for (std::size_t a = 0; a < n; ++a) {
-    for (std::size_t b = a + 1; b < n; ++b) {
-      for (std::size_t c = b + 1; c < n; ++c) {
-        Eigen::Matrix3d m;
-        Eigen::Vector3d r;
-        for (int k = 0; k < 3; ++k) {
-          const std::size_t i = k == 0 ? a : (k == 1 ? b : c);
-          m.row(k) << normal[i].x(), normal[i].y(), -weight[i];
-          r[k] = -offset[i];
-        }
-        // Cramer's rule: the columns' cross products give the determinant and the inverse's rows.
-        const Eigen::Vector3d c01 = m.col(1).cross(m.col(2)), c12 = m.col(2).cross(m.col(0)),
-                              c20 = m.col(0).cross(m.col(1));
-        const double det = m.col(0).dot(c01);
-        if (std::abs(det) < 1e-300) continue;
-        const Eigen::Vector3d x(c01.dot(r) / det, c12.dot(r) / det, c20.dot(r) / det);
-        if (!x.allFinite() || x[2] <= best) continue;
-        bool feasible = true;
-        for (std::size_t i = 0; i < n && feasible; ++i) {
-          const double need = x[2] * weight[i];
-          feasible = normal[i].dot(x.head<2>()) + offset[i] >= need - 1e-9 * (std::abs(need) + normal[i].norm()) - 1e-300;
-        }
-        if (feasible) best = x[2], centre = x.head<2>();
-      }
-    }
-  }
-  return best;
-}
-
 constexpr double kMaxRelocation = 0.25;
 
 Vec2d quarterTurns(const Vec2d& p, int k) {
@@ -312,7 +273,7 @@ bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, co
     }
   }
   Vec2d centre;
-  const double margin = kernelCentre(normal, offset, weight, centre);
+  const double margin = detail::kernelCentre(normal, offset, weight, centre);
   if (!std::isfinite(margin)) return false;
   double s = 1.0;
   if ((margin > 0.0) != (mode != Move::Gain)) return false;
@@ -339,7 +300,7 @@ bool relocateVertex(const Topology& topology, WedgeMap& cornerUV, VertexId v, co
         worst = std::min(worst, offset[i] / weight[i]);
       }
     }
-    const double gained = kernelCentre(normal, offset, weight, centre);
+    const double gained = detail::kernelCentre(normal, offset, weight, centre);
     if (!std::isfinite(gained) || !(gained > worst + 1e-3 * (hi - lo).norm())) return false;
   }
   // Steps toward a kernel that is not there yet, or that only makes room, take at most
@@ -492,6 +453,52 @@ double regularisedDet(double det, double eps) {
 }  // namespace
 
 namespace detail {
+
+// Each candidate is where three constraints (n_i . p + c_i = t w_i) meet: the optimum of a
+// bounded region is one of them (the box bounds it). A candidate's t comes first: most fall at
+// or below the best so far and need neither the other coordinates nor the feasibility test. The
+// test starts at the constraint that refused the last candidate (it often refuses the next) and
+// reads each constraint's norm once: the same conjunction, in a cheaper order.
+double kernelCentre(const std::vector<Vec2d>& normal, const std::vector<double>& offset,
+                    const std::vector<double>& weight, Vec2d& centre) {
+  const std::size_t n = normal.size();
+  std::vector<double> length(n);
+  for (std::size_t i = 0; i < n; ++i) length[i] = normal[i].norm();
+  const auto holds = [&](std::size_t i, const Vec2d& p, double t) {
+    const double need = t * weight[i];
+    return normal[i].dot(p) + offset[i] >= need - 1e-9 * (std::abs(need) + length[i]) - 1e-300;
+  };
+  double best = -std::numeric_limits<double>::infinity();
+  std::size_t refused = 0;
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = a + 1; b < n; ++b) {
+      for (std::size_t c = b + 1; c < n; ++c) {
+        Eigen::Matrix3d m;
+        Eigen::Vector3d r;
+        for (int k = 0; k < 3; ++k) {
+          const std::size_t i = k == 0 ? a : (k == 1 ? b : c);
+          m.row(k) << normal[i].x(), normal[i].y(), -weight[i];
+          r[k] = -offset[i];
+        }
+        // Cramer's rule: the columns' cross products give the determinant and the inverse's rows.
+        const Eigen::Vector3d c01 = m.col(1).cross(m.col(2)), c20 = m.col(0).cross(m.col(1));
+        const double det = m.col(0).dot(c01);
+        if (std::abs(det) < 1e-300) continue;
+        const double t = c20.dot(r) / det;
+        if (!(t > best) || !std::isfinite(t)) continue;
+        const Eigen::Vector3d c12 = m.col(2).cross(m.col(0));
+        const Vec2d p(c01.dot(r) / det, c12.dot(r) / det);
+        if (!p.allFinite() || !holds(refused, p, t)) continue;
+        bool feasible = true;
+        for (std::size_t i = 0; i < n && feasible; ++i) {
+          if (i != refused && !holds(i, p, t)) feasible = false, refused = i;
+        }
+        if (feasible) best = t, centre = p;
+      }
+    }
+  }
+  return best;
+}
 
 ReferenceShape referenceShape(const TriangleMesh& mesh, FaceId f, double h) {
   const Triangle& t = mesh.triangles[f];
