@@ -165,6 +165,19 @@ inline float roughStep(float d, const Vec3d& p, const Vec3f& q) {
   return d + static_cast<float>((q.cast<double>() - p).norm());
 }
 
+/// A region vertex's neighbours in fan order: its corners' next vertices, and at a boundary vertex
+/// their previous ones too (the rim's last vertex is no corner's next). Whether v is a boundary one
+/// (it has no fan to smooth).
+template <class Table, class Visit>
+bool forEachRegionNeighbour(Table& table, VertexId v, Visit&& visit) {
+  const bool boundary = table.isBoundaryVertex(v);
+  table.forEachCornerAround(v, [&](CornerId c) {
+    visit(table.vertex(nextCorner(c)));
+    if (boundary) visit(table.vertex(prevCorner(c)));
+  });
+  return boundary;
+}
+
 /// The region one thread finds (the out-of-core table, read by one thread): Dijkstra from the
 /// seeds along edges in float, each vertex reached given a local id once (hashed), so that an
 /// edge costs one lookup; a vertex within the radius gathers its fan (local ids in fan order, as
@@ -211,12 +224,8 @@ RoughRegion searchRoughRegion(Table& table, Current&& current, const std::vector
     if (table.isIsolatedVertex(v)) continue;
     // An interior vertex's neighbours are its corners' next vertices, its fan; a boundary
     // vertex's are those and the last corner's previous vertex, and it has no fan (it stays).
-    const bool boundary = table.isBoundaryVertex(v);
     around.clear();
-    table.forEachCornerAround(v, [&](CornerId c) {
-      around.push_back(localId(table.vertex(nextCorner(c))));
-      if (boundary) around.push_back(localId(table.vertex(prevCorner(c))));
-    });
+    const bool boundary = forEachRegionNeighbour(table, v, [&](VertexId w) { around.push_back(localId(w)); });
     const Vec3d p = value[i].template cast<double>();
     for (std::uint32_t j : around) {
       const float dj = roughStep(d, p, value[j]);
@@ -318,11 +327,7 @@ RoughRegion searchRoughRegionInMemory(Table& table, Current&& current, const std
             }
           }
         };
-        const bool boundary = table.isBoundaryVertex(v);
-        table.forEachCornerAround(v, [&](CornerId c) {
-          relax(table.vertex(nextCorner(c)));
-          if (boundary) relax(table.vertex(prevCorner(c)));
-        });
+        forEachRegionNeighbour(table, v, relax);
       }
     });
     frontier.clear();
@@ -353,11 +358,7 @@ RoughRegion searchRoughRegionInMemory(Table& table, Current&& current, const std
           heldParts[b].push_back(w);
         }
       };
-      const bool boundary = table.isBoundaryVertex(v);
-      table.forEachCornerAround(v, [&](CornerId c) {
-        hold(table.vertex(nextCorner(c)));
-        if (boundary) hold(table.vertex(prevCorner(c)));
-      });
+      forEachRegionNeighbour(table, v, hold);
     }
   });
   std::vector<VertexId> held;
