@@ -250,6 +250,34 @@ TEST(ProxyField, SameResultForOneAndTwoThreads) {
   }
 }
 
+// The elements' sets, joined on both cores (a union-find by compare-and-swap), against the serial
+// union-find: the same smallest face per face, at one thread and at two, for faces joined by cells
+// of several sizes (many small sets, a few large ones, one set per component).
+TEST(ProxyField, ElementSetsOnBothCoresAreTheSerialOnes) {
+  const Surface s = makeSurface(testing::generatedMesh(MeshKind::Genus2, 200000));
+  const std::uint32_t nf = s.topology.numFaces();
+  std::mt19937 random(3);
+  for (const std::uint32_t cells : {1u << 16, 64u, 1u}) {
+    std::vector<std::uint32_t> cell(nf);
+    for (FaceId f = 0; f < nf; ++f) cell[f] = (f / 97 + random() % 3) % cells;  // runs and noise
+    const auto joined = [&](FaceId f, FaceId g) { return cell[f] == cell[g]; };
+    detail::UnionFind serial(nf);
+    for (CornerId c = 0; c < s.topology.numCorners(); ++c) {
+      const CornerId o = s.topology.opposite(c);
+      if (o != kInvalidId && o > c && joined(c / 3, o / 3)) serial.unite(c / 3, o / 3);
+    }
+    std::size_t sets = 0;
+    for (FaceId f = 0; f < nf; ++f) sets += serial.find(f) == f;
+    if (cells > 1) EXPECT_GT(sets, 1000u);  // cells = 1: one set per component
+    for (const int threads : {1, 2}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+      const std::vector<std::uint32_t> roots = detail::smallestFaceOfSets(s.topology, joined);
+      ASSERT_EQ(roots.size(), nf);
+      for (FaceId f = 0; f < nf; ++f) ASSERT_EQ(roots[f], serial.find(f)) << "face " << f << ", " << threads << " threads";
+    }
+  }
+}
+
 TEST(ProxyField, SweepsLowerTheEnergy) {
   GenerateOptions options;
   options.kind = MeshKind::Sphere;

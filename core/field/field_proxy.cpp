@@ -437,17 +437,11 @@ void buildElements(const TriangleMesh& mesh, const Topology& topology, std::int3
       cell[f] = cells.cellOf((mesh.position(t[0]) + mesh.position(t[1]) + mesh.position(t[2])) / 3.0);
     }
   });
-  detail::UnionFind sets(numFaces);
-  for (CornerId c = 0; c < topology.numCorners(); ++c) {
-    const CornerId o = topology.opposite(c);
-    if (o != kInvalidId && o > c && cell[cornerFace(c)] == cell[cornerFace(o)]) {
-      sets.unite(cornerFace(c), cornerFace(o));
-    }
-  }
+  // Every face points at the smallest face of its element, so one increasing pass numbers the
+  // elements by their smallest face and gives every other face its root's id.
+  std::vector<std::uint32_t> element =
+      detail::smallestFaceOfSets(topology, [&](FaceId f, FaceId g) { return cell[f] == cell[g]; });
   std::vector<std::uint32_t>().swap(cell);
-  // Parents never point to a larger id, so one increasing pass turns roots into element ids
-  // (numbered by their smallest face) and every other face into its root's id.
-  std::vector<std::uint32_t>& element = sets.parent;
   std::uint32_t numElements = 0;
   for (FaceId f = 0; f < numFaces; ++f) element[f] = element[f] == f ? numElements++ : element[element[f]];
   proxy.faceElement = std::move(element);

@@ -9,6 +9,9 @@
 #include <utility>
 #include <vector>
 
+#include "core/mesh/mesh_types.h"
+#include "core/system/parallel.h"
+
 namespace seamvox::detail {
 
 /// The steps of the union-finds below over any store of links (parentOf(x), setParent(x, p)):
@@ -115,5 +118,47 @@ struct ParityUnionFind {
   std::uint8_t parityOf(std::uint32_t x) const { return parity[x]; }
   void setLink(std::uint32_t x, std::uint32_t p, std::uint8_t relation) { parent[x] = p, parity[x] = relation; }
 };
+
+/// Per face, the smallest face of its set: faces f > g sharing an interior edge are joined when
+/// joined(f, g). A union-find over both cores whose links point to smaller ids only (a root is
+/// linked under the other only by a compare-and-swap while it is still a root; path halving writes
+/// an ancestor over a non-root), so every root is its set's smallest face whatever the order of
+/// the unions; each entry ends pointing at its root.
+template <class Table, class Joined>
+std::vector<std::uint32_t> smallestFaceOfSets(const Table& table, Joined&& joined) {
+  const std::uint32_t nf = table.numFaces();
+  std::vector<std::uint32_t> parent(nf);
+  parallelForEach(nf, 1u << 16, [&](std::uint64_t f) { parent[f] = static_cast<std::uint32_t>(f); });
+  const auto load = [&](std::uint32_t x) { return __atomic_load_n(&parent[x], __ATOMIC_RELAXED); };
+  const auto find = [&](std::uint32_t x) {
+    for (std::uint32_t up = load(x); up != x; up = load(x)) {
+      const std::uint32_t grandparent = load(up);
+      if (grandparent != up) __atomic_store_n(&parent[x], grandparent, __ATOMIC_RELAXED);
+      x = grandparent;
+    }
+    return x;
+  };
+  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
+    for (std::uint32_t f = range.begin(); f != range.end(); ++f) {
+      for (int k = 0; k < 3; ++k) {
+        const CornerId o = table.opposite(3 * f + k);
+        if (o == kInvalidId || o / 3 >= f || !joined(f, o / 3)) continue;  // each pair from its larger face
+        std::uint32_t a = f, b = o / 3;
+        for (;;) {
+          a = find(a), b = find(b);
+          if (a == b) break;
+          if (a < b) std::swap(a, b);
+          std::uint32_t expected = a;
+          if (__atomic_compare_exchange_n(&parent[a], &expected, b, false, __ATOMIC_ACQ_REL, __ATOMIC_RELAXED)) break;
+        }
+      }
+    }
+  });
+  parallelForEach(nf, 1u << 14, [&](std::uint64_t f) {
+    const std::uint32_t root = find(static_cast<std::uint32_t>(f));
+    __atomic_store_n(&parent[f], root, __ATOMIC_RELAXED);
+  });
+  return parent;
+}
 
 }  // namespace seamvox::detail

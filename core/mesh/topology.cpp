@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/mesh/detail_corner_table.h"
+#include "core/mesh/detail_union_find.h"
 #include "core/system/errors.h"
 #include "core/system/parallel.h"
 
@@ -410,44 +411,9 @@ void Topology::validate() const {
 
 namespace {
 
-/// Per face, the smallest face of its component (faces joined across interior edges): a
-/// union-find over both cores whose links point to smaller ids only, so every root is its set's
-/// smallest face whatever the order of the unions.
+/// Per face, the smallest face of its component (faces joined across interior edges).
 std::vector<FaceId> smallestFaceOfComponents(const Topology& topology) {
-  const std::uint32_t nf = topology.numFaces();
-  std::vector<FaceId> parent(nf);
-  parallelForEach(nf, 1u << 16, [&](std::uint64_t f) { parent[f] = static_cast<FaceId>(f); });
-  const auto load = [&](FaceId x) { return __atomic_load_n(&parent[x], __ATOMIC_RELAXED); };
-  // Path halving: each store writes an ancestor over a non-root (roots change by the CAS only).
-  const auto find = [&](FaceId x) {
-    for (FaceId up = load(x); up != x; up = load(x)) {
-      const FaceId grandparent = load(up);
-      if (grandparent != up) __atomic_store_n(&parent[x], grandparent, __ATOMIC_RELAXED);
-      x = grandparent;
-    }
-    return x;
-  };
-  parallelFor(nf, 1u << 14, [&](const IndexRange& range) {
-    for (FaceId f = range.begin(); f != range.end(); ++f) {
-      for (int k = 0; k < 3; ++k) {
-        const CornerId o = topology.opposite(3 * f + k);
-        if (o == kInvalidId || o / 3 >= f) continue;  // each pair of faces from its larger one
-        FaceId a = f, b = o / 3;
-        for (;;) {
-          a = find(a), b = find(b);
-          if (a == b) break;
-          if (a < b) std::swap(a, b);
-          FaceId expected = a;  // link the larger root under the smaller, if it is still a root
-          if (__atomic_compare_exchange_n(&parent[a], &expected, b, false, __ATOMIC_ACQ_REL, __ATOMIC_RELAXED)) break;
-        }
-      }
-    }
-  });
-  parallelForEach(nf, 1u << 14, [&](std::uint64_t f) {
-    const FaceId root = find(static_cast<FaceId>(f));
-    __atomic_store_n(&parent[f], root, __ATOMIC_RELAXED);
-  });
-  return parent;
+  return detail::smallestFaceOfSets(topology, [](FaceId, FaceId) { return true; });
 }
 
 }  // namespace
