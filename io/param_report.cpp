@@ -115,6 +115,7 @@ void writeRefine(JsonWriter& j, const RefineStats& refine, const ParamReportCont
 void writeUntangle(JsonWriter& j, const UntangleStats& u) {
   j.key("untangle").beginObject();
   j.key("flippedBefore").value(u.flippedBefore).key("flippedAfter").value(u.flippedAfter);
+  j.key("measuredFaces").value(u.measuredFaces);
   j.key("foldedIn3D").value(u.foldedIn3D);
   j.key("rounds").value(U64{u.rounds}).key("solves").value(U64{u.solves});
   j.key("patchFaces").value(u.patchFaces).key("freeVertices").value(U64{u.freeVertices});

@@ -1169,6 +1169,35 @@ TEST(Untangle, NoisyScanMapHasNoFlipsLeftFoldedFacesIncluded) {
 // The stiffening rounds keep a patch component's re-solve only when it has fewer flips than the
 // component came in with, so on maps with many cones (random fields: the stiffened solves often
 // flip more faces than the first) the rounds alone never add flips and the map stays seamless.
+// A voxloc map's flips all lie in the faces its refinement solved: the repair measures only those
+// and still counts every flip the whole map's measure counts (the map with the repair off), and
+// leaves as many as the final measure counts; the hat map has no such list, every face is measured.
+TEST(Untangle, VoxLocRepairMeasuresTheRefinedFacesOnlyAndMissesNoFlip) {
+  const TriangleMesh raw = noisyScan(60000, 0.5, 7);
+  for (const ParamSolver solver : {ParamSolver::VoxLoc, ParamSolver::Hat}) {
+    SCOPED_TRACE(paramSolverName(solver));
+    PipelineOptions options;
+    options.solver.solver = solver;
+    options.solver.gridResolution = 32;
+    options.maxConePasses = 1;  // no repair next to close cones first (it may move any face)
+    options.untangle = false;
+    const PipelineResult off = parameterize(TriangleMesh(raw), options);
+    ASSERT_GT(off.mapQuality.flipped, 0u) << "no flips: the test tests nothing";
+    options.untangle = true;
+    const PipelineResult on = parameterize(TriangleMesh(raw), options);
+    ASSERT_EQ(on.solved.solver, solver);
+    EXPECT_EQ(on.conePasses, off.conePasses);
+    EXPECT_EQ(on.untangle.flippedBefore, off.mapQuality.flipped);
+    EXPECT_EQ(on.mapQuality.flipped, on.untangle.flippedAfter);
+    if (solver == ParamSolver::VoxLoc) {
+      EXPECT_EQ(on.untangle.measuredFaces, off.solved.refine.regionFaces);
+      EXPECT_LT(on.untangle.measuredFaces, on.mesh.numFaces() / 2);
+    } else {
+      EXPECT_EQ(on.untangle.measuredFaces, on.mesh.numFaces());
+    }
+  }
+}
+
 TEST(Untangle, StiffeningRoundsNeverAddFlips) {
   std::uint64_t repaired = 0;
   for (std::uint32_t seed : {3u, 5u, 8u}) {

@@ -603,7 +603,7 @@ void refineRounds(Source& source, const std::vector<VertexId>& cones, const std:
   if (largest.unknowns > 0) keepLargestSolve(largest, stats);
   measureRefinedMap(source, touched, cones, options, stats);
   source.collect(touched, out);
-  if (options.regionOnly) out.regionFaces = touched;
+  if (options.regionOnly || options.listRegionFaces) out.regionFaces = std::move(touched);
   countIslandVertices(source.table(), options.islandFaces, out.stats);
   collectChangedSeams(currentT, seamT, out);
 }

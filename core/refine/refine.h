@@ -89,6 +89,10 @@ struct RefineOptions {
   /// RefineResult::regionFaces lists the faces solved, and the after-figures (collapsedAfter,
   /// flippedAfter) count only them: for a caller that knows the rest of the map's faces.
   bool regionOnly = false;
+  /// RefineResult::regionFaces lists the faces solved also without regionOnly (the figures still
+  /// the whole map's): with seedFromMap, a caller learns which faces may be flipped
+  /// (SolverResult::flipCandidates).
+  bool listRegionFaces = false;
   ProgressFn progress;
 };
 
@@ -176,7 +180,8 @@ struct RefineResult {
   std::vector<std::uint32_t> seams;
   std::vector<std::complex<double>> seamT;
   RefineStats stats;
-  std::vector<FaceId> regionFaces;  ///< faces solved in some round, increasing (RefineOptions::regionOnly)
+  /// Faces solved in some round, increasing (RefineOptions::regionOnly, listRegionFaces).
+  std::vector<FaceId> regionFaces;
 };
 
 /// The region's triangles as a mesh of their own, with index maps back to the whole mesh. Sub

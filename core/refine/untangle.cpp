@@ -990,6 +990,7 @@ void addEarlierRepair(UntangleStats& stats, const UntangleStats& earlier) {
 void addLeftoverRepair(UntangleStats& stats, const UntangleStats& earlier, std::uint64_t regionFaces,
                        std::uint32_t freeVertices, double seconds) {
   stats.leftoverFlips = earlier.flippedAfter;
+  stats.measuredFaces = earlier.measuredFaces;
   stats.leftoverAfterResolve = stats.flippedBefore;
   stats.leftoverRegionFaces = regionFaces;
   stats.leftoverFreeVertices = freeVertices;
@@ -1130,6 +1131,8 @@ UntangleStats untangleFlips(const TriangleMesh& mesh, const Topology& topology, 
   }
   classifyAll();
   UntangleStats stats;
+  stats.measuredFaces = candidates ? candidates->size()
+                                  : only ? std::uint64_t(std::count_if(only->begin(), only->end(), [](std::uint8_t x) { return x != 0; })) : nf;
   for (FaceId f = 0; f < nf; ++f) stats.flippedBefore += state[f] != kFine;
 
   std::vector<VertexId> moved;

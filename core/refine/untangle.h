@@ -85,6 +85,9 @@ struct UntangleOptions {
 
 struct UntangleStats {
   std::uint64_t flippedBefore = 0, flippedAfter = 0;  ///< whole map, collapsed faces excluded
+  /// Faces measured for flips at the start: every face, or UntangleOptions::candidateFaces (with
+  /// a re-solve of the leftovers, the first repair's).
+  std::uint64_t measuredFaces = 0;
   /// Of flippedAfter: folded in 3D against the field's smoothed surface (0 without one).
   std::uint64_t foldedIn3D = 0;
   std::uint32_t rounds = 0;  ///< patch re-solves, the cones' included

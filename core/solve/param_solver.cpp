@@ -144,11 +144,18 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     if (!voxLoc) refineOptions.maxRounds = 1;
     if (voxLoc && refineOptions.splineCells > 0) refineOptions.splineSpacing = vox.voxelSize / refineOptions.splineCells;
     if (!refineOptions.progress) refineOptions.progress = options.progress;
+    // Seeded from the whole map at a threshold that takes every flipped face: the faces solved are
+    // the only ones that may be flipped after.
+    const bool listCandidates = voxLoc && !refineOptions.regionOnly &&
+                                refineOptions.collapseThreshold >= kCollapsedAreaFraction;
+    refineOptions.listRegionFaces = listCandidates;
     // The solved corners go into the map a batch at a time (at most 96 MB of them held).
-    const RefineResult refinement = refineNearConesInPlace(mesh, topology, field, cut, out.param.cornerUV,
+    RefineResult refinement = refineNearConesInPlace(mesh, topology, field, cut, out.param.cornerUV,
                                                            out.param.translations, refineOptions);
     out.refined = true;
     out.refine = refinement.stats;
+    out.flipCandidates = std::move(refinement.regionFaces);
+    out.flipCandidatesKnown = listCandidates;
     if (solverOptions.meter) solverOptions.meter->finish("refine");
     // A local solve that could not be factored left its components as the voxel map made them
     // (not seamless where functions were inconsistent there): when the map is then not seamless,
@@ -161,6 +168,8 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
       out.solver = ParamSolver::Hat;
       out.solverReason = "a local solve of the voxel map's refinement could not be factored";
       out.refined = false;
+      std::vector<FaceId>().swap(out.flipCandidates);
+      out.flipCandidatesKnown = false;
       out.param = parameterizeMesh(mesh, topology, field, cut, options);
       if (solverOptions.meter) solverOptions.meter->finish("solve");
     }

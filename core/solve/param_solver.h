@@ -105,6 +105,12 @@ struct SolverResult {
   std::uint64_t islandFaces = 0;  ///< faces of the islands (islands.h), mapped by the local hat solve
   bool refined = false;  ///< the local refinement ran (voxloc; vox on inconsistent basis functions)
   RefineStats refine;
+  /// voxloc (flipCandidatesKnown): the faces the refinement solved, increasing. Every other face
+  /// keeps the voxel map's values, which the refinement's seeding measured at or above its collapse
+  /// threshold (every face below it, flipped ones included, seeded the region): none is flipped,
+  /// so a repair of this map may measure these faces only (UntangleOptions::candidateFaces).
+  std::vector<FaceId> flipCandidates;
+  bool flipCandidatesKnown = false;
   /// vox/voxloc: regularization the voxel solve succeeded with and failed factorizations before.
   double regularization = 0.0;
   std::uint32_t failedAttempts = 0;
