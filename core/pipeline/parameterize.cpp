@@ -180,19 +180,13 @@ std::vector<std::pair<VertexId, VertexId>> foldedConesAfterRepair(
   return pairs;
 }
 
-/// The map's flip candidates no longer hold once a step other than the solver moved its values.
-void forgetFlipCandidates(SolverResult& solved) {
-  std::vector<FaceId>().swap(solved.flipCandidates);
-  solved.flipCandidatesKnown = false;
-}
-
 /// Merges each of `pairs` in the pass's map (mergeConesInMap), updating coneIndex and
 /// r.conesMergedInMap. False when one cannot be: the pass must start again with the pairs merged in
 /// the field, and the map as it is is discarded.
 bool mergePairsInMap(PipelineResult& r, const CrossField& field, CutResult& cut,
                      std::unordered_map<VertexId, std::int32_t>& coneIndex,
                      const std::vector<std::pair<VertexId, VertexId>>& pairs, const MergeInMapOptions& options) {
-  forgetFlipCandidates(r.solved);  // the merges re-solve patches of the map
+  r.solved.forgetFlipCandidates();  // the merges re-solve patches of the map
   // A cone merged away stands for the one that took its index (three cones on one point).
   std::unordered_map<VertexId, VertexId> mergedInto;
   const auto current = [&](VertexId v) {
@@ -474,7 +468,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       if (passesLeft) {
         const auto suspects = foldedCoincidentCones(r, coneCut.cut.cones, coneIndex, coincidentDistance);
         if (!suspects.empty()) {
-          forgetFlipCandidates(r.solved);  // the repair next to the cones may move any face
+          r.solved.forgetFlipCandidates();  // the repair next to the cones may move any face
           const std::vector<std::uint8_t> near = facesNearCones(r.mesh, suspects, coincidentDistance);
           UntangleOptions local = untangle;
           local.onlyFaces = &near;
@@ -496,7 +490,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
       r.untangle = untangleFlips(r.mesh, r.topology, field, coneCut.cut, r.solved.param.cornerUV,
                                  r.solved.param.translations, untangle);
       untangle.candidateFaces = nullptr;
-      forgetFlipCandidates(r.solved);
+      r.solved.forgetFlipCandidates();
       addEarlierRepair(r.untangle, nearCones);
       untangle.conesNotRetried = nullptr;
       resolveLeftoverFlips(r, field, coneCut.cut, solverOptions.refine, untangle);
@@ -523,7 +517,7 @@ void solveConePasses(PipelineResult& r, CrossField& field, const PipelineOptions
         }
       }
     }
-    forgetFlipCandidates(r.solved);  // without a repair, nothing reads them
+    r.solved.forgetFlipCandidates();  // without a repair, nothing reads them
     r.conePassKept = r.conePasses;
     if (kept && kept->untangle.flippedAfter <= r.untangle.flippedAfter) {
       r.solved = std::move(kept->solved);

@@ -417,7 +417,7 @@ void measureRefinedMap(Source& source, const std::vector<FaceId>& touched, const
   // Faces never solved keep the input map. With the map's own faces seeded (voxloc), the first
   // region held every face below the collapse threshold: none outside is collapsed or flipped.
   FaceCounts outside;
-  if (!options.regionOnly && (!options.seedFromMap || options.collapseThreshold < kCollapsedAreaFraction)) {
+  if (!options.regionOnly && !regionHoldsEveryFlip(options)) {
     outside = source.countOutside(touched, cones, h);
   }
   stats.collapsedAfter = outside.collapsed + inside.collapsed;

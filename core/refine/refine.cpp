@@ -174,6 +174,10 @@ void copyRegionCounts(const RefineStats& counts, RefineStats* stats) {
   stats->regionFaces = counts.regionFaces;
 }
 
+bool regionHoldsEveryFlip(const RefineOptions& options) {
+  return options.seedFromMap && options.collapseThreshold >= kCollapsedAreaFraction;
+}
+
 RefineSeed classifyRefineSeed(double ratio, double threshold) {
   if (std::isnan(ratio) || ratio >= threshold) return RefineSeed::None;  // NaN: zero-area face, no energy
   return ratio < 0.0 ? RefineSeed::Flipped : RefineSeed::Collapsed;

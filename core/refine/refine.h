@@ -96,6 +96,12 @@ struct RefineOptions {
   ProgressFn progress;
 };
 
+/// Whether the first region holds every face the map flips or collapses: seeded from the whole
+/// map at a threshold at or above the collapse fraction. After the rounds no other face is
+/// flipped (the faces outside keep their values), so the figures skip them and a caller may
+/// take the faces solved as the only ones to repair (RefineOptions::listRegionFaces).
+bool regionHoldsEveryFlip(const RefineOptions& options);
+
 /// One solve of the (grown) region.
 struct RefineRound {
   /// Solved in the B-splines of RefineOptions::splineSpacing (unknowns: their coefficients).

@@ -144,10 +144,8 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
     if (!voxLoc) refineOptions.maxRounds = 1;
     if (voxLoc && refineOptions.splineCells > 0) refineOptions.splineSpacing = vox.voxelSize / refineOptions.splineCells;
     if (!refineOptions.progress) refineOptions.progress = options.progress;
-    // Seeded from the whole map at a threshold that takes every flipped face: the faces solved are
-    // the only ones that may be flipped after.
-    const bool listCandidates = voxLoc && !refineOptions.regionOnly &&
-                                refineOptions.collapseThreshold >= kCollapsedAreaFraction;
+    // Seeded from the whole map: the faces solved are the only ones that may be flipped after.
+    const bool listCandidates = !refineOptions.regionOnly && regionHoldsEveryFlip(refineOptions);
     refineOptions.listRegionFaces = listCandidates;
     // The solved corners go into the map a batch at a time (at most 96 MB of them held).
     RefineResult refinement = refineNearConesInPlace(mesh, topology, field, cut, out.param.cornerUV,
@@ -168,8 +166,7 @@ SolverResult parameterizeMeshWithSolver(const TriangleMesh& mesh, const Topology
       out.solver = ParamSolver::Hat;
       out.solverReason = "a local solve of the voxel map's refinement could not be factored";
       out.refined = false;
-      std::vector<FaceId>().swap(out.flipCandidates);
-      out.flipCandidatesKnown = false;
+      out.forgetFlipCandidates();
       out.param = parameterizeMesh(mesh, topology, field, cut, options);
       if (solverOptions.meter) solverOptions.meter->finish("solve");
     }

@@ -111,6 +111,11 @@ struct SolverResult {
   /// so a repair of this map may measure these faces only (UntangleOptions::candidateFaces).
   std::vector<FaceId> flipCandidates;
   bool flipCandidatesKnown = false;
+  /// Once a step other than the solver moves the map's values, the candidates no longer hold.
+  void forgetFlipCandidates() {
+    std::vector<FaceId>().swap(flipCandidates);
+    flipCandidatesKnown = false;
+  }
   /// vox/voxloc: regularization the voxel solve succeeded with and failed factorizations before.
   double regularization = 0.0;
   std::uint32_t failedAttempts = 0;
